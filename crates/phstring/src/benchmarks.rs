@@ -1,0 +1,48 @@
+//! Ready-made problems: the paper's benchmark (METHOD §4) and verification cases.
+
+use std::f64::consts::{FRAC_1_SQRT_2, PI};
+
+use crate::boundary::{Boundary, Fixed, NodalLoad};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::system::{MassMatrix, Problem, State, Vector};
+
+/// Published values of the paper's benchmark: `Ĥ(0)`, and `Ĥ(1)` for DG and MP [J].
+pub const PAPER_H0: f64 = -3.468359;
+/// `Ĥ(1)` with the discrete-gradient scheme [J].
+pub const PAPER_H1_DG: f64 = -3.403762;
+/// `Ĥ(1)` with the implicit midpoint rule [J].
+pub const PAPER_H1_MP: f64 = -3.398474;
+
+/// The load of the paper's benchmark: `F_N(t) = ρA (1, 1) sin(πt/0.2)` for `t ∈ [0, 0.2]`,
+/// zero after [N].
+pub fn paper_load(rho_a: f64, t: f64) -> Vector<2> {
+    let a = if (0.0..=0.2).contains(&t) {
+        rho_a * (PI * t / 0.2).sin()
+    } else {
+        0.0
+    };
+    Vector::<2>::new(a, a)
+}
+
+/// The paper's string pendulum (METHOD §4) with `n_el` elements: `L = 1 m`, `EA = 20 N`,
+/// `ρA = 1 kg/m`, hyperelastic, left end fixed at the origin, load at the right end,
+/// gravity `9.81 m/s²`. Run it with `h = 0.01 s` to `T = 1 s`.
+pub fn paper_pendulum(n_el: usize) -> Problem<2, Material> {
+    let mesh = Mesh::uniform_chain(n_el.max(1), 1.0).expect("n_el ≥ 1 and L = 1 > 0");
+    let end = Vector::<2>::new(FRAC_1_SQRT_2, -FRAC_1_SQRT_2);
+    let initial = State::straight(&mesh, Vector::zeros(), end);
+    let tip = mesh.n_nodes() - 1;
+    Problem {
+        mesh,
+        material: Material::hyperelastic(20.0),
+        rho_a: 1.0,
+        body_force: Vector::<2>::new(0.0, -9.81),
+        mass: MassMatrix::Consistent,
+        boundary: Boundary {
+            fixed: vec![Fixed::node(0)],
+            loads: vec![NodalLoad::new(tip, |t| paper_load(1.0, t))],
+        },
+        initial,
+    }
+}

@@ -1,0 +1,159 @@
+//! Error types. Each carries the numbers a user needs to find the cause.
+
+use thiserror::Error;
+
+/// An invalid problem definition, found before any time step is taken.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SetupError {
+    /// The mesh has no elements.
+    #[error("the mesh has no elements (need at least 1)")]
+    NoElements,
+    /// Element and length lists differ in size.
+    #[error("{elements} elements but {lengths} reference lengths")]
+    LengthCount {
+        /// Number of elements.
+        elements: usize,
+        /// Number of lengths.
+        lengths: usize,
+    },
+    /// A node index is not in `0..n_nodes`.
+    #[error("{what} refers to node {node}, but the mesh has nodes 0..={}", n_nodes.saturating_sub(1))]
+    NodeOutOfRange {
+        /// Where the index appeared.
+        what: &'static str,
+        /// The bad index.
+        node: usize,
+        /// Number of nodes in the mesh.
+        n_nodes: usize,
+    },
+    /// An element connects a node to itself.
+    #[error("element {element} connects node {node} to itself")]
+    DegenerateElement {
+        /// Element index.
+        element: usize,
+        /// Node index.
+        node: usize,
+    },
+    /// A value that must be positive and finite is not.
+    #[error("{what}{} must be positive and finite, got {value}", index.map(|i| format!(" [{i}]")).unwrap_or_default())]
+    NonPositive {
+        /// Name of the quantity.
+        what: &'static str,
+        /// Index (element, node), if any.
+        index: Option<usize>,
+        /// The value given.
+        value: f64,
+    },
+    /// A value that must be finite is not.
+    #[error("{what} [{index}] is not finite: {value}")]
+    NotFinite {
+        /// Name of the quantity.
+        what: &'static str,
+        /// Index.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
+    /// The initial state has the wrong number of entries.
+    #[error("initial {what} has {got} entries, the mesh needs {expected}")]
+    StateSize {
+        /// Which part of the state.
+        what: &'static str,
+        /// Entries given.
+        got: usize,
+        /// Entries needed.
+        expected: usize,
+    },
+    /// The initial strain is outside the material's domain.
+    #[error("initial strain C = {c} of element {element} is outside the material's domain")]
+    InadmissibleStrain {
+        /// Element index.
+        element: usize,
+        /// Strain value.
+        c: f64,
+    },
+    /// A node is both fixed and loaded in the same component.
+    #[error("node {node} is both fixed and loaded in component {component}")]
+    FixedAndLoaded {
+        /// Node index.
+        node: usize,
+        /// Component index (0 = x).
+        component: usize,
+    },
+    /// The requested linear solver cannot handle this mesh.
+    #[error("the block-tridiagonal solver needs a chain mesh (element e = [e, e+1])")]
+    NotAChain,
+}
+
+/// A failure of the linear solve inside a Newton iteration.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum LinearSolveError {
+    /// A pivot block was singular (or a pivot was zero/NaN).
+    #[error("singular Newton matrix at block {block}")]
+    Singular {
+        /// Block (node) index where elimination broke down.
+        block: usize,
+    },
+    /// The sparse LU backend reported an error.
+    #[error("sparse LU failed: {0}")]
+    Sparse(String),
+}
+
+/// A failure of one time step.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum StepError {
+    /// Newton's method did not reach the tolerance within the iteration limit.
+    #[error(
+        "Newton did not converge in step {step} (t = {t} → {t_next}): residual {residual:.3e} > tolerance {tol:.1e} after {iterations} iterations"
+    )]
+    NewtonDiverged {
+        /// Index of the step that failed (1 = the first step).
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// End time of the step [s].
+        t_next: f64,
+        /// Last residual norm [N].
+        residual: f64,
+        /// Tolerance [N].
+        tol: f64,
+        /// Iterations done.
+        iterations: usize,
+    },
+    /// A Newton iterate produced a strain outside the material's domain (e.g. `C ≤ 0`).
+    #[error(
+        "step {step} (t = {t}): element {element} reached strain C = {c}, outside the material's domain"
+    )]
+    InvalidStrain {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// Element index.
+        element: usize,
+        /// Strain value.
+        c: f64,
+    },
+    /// The residual or the state became NaN or infinite.
+    #[error("step {step} (t = {t}): non-finite value in the {what} at node {node}")]
+    NonFinite {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// `"residual"`, `"state"` or `"load"`.
+        what: &'static str,
+        /// Node index.
+        node: usize,
+    },
+    /// The linear solve failed.
+    #[error("step {step} (t = {t}): {source}")]
+    Linear {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// The cause.
+        source: LinearSolveError,
+    },
+}

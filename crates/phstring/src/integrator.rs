@@ -1,0 +1,181 @@
+//! Time discretization: discrete gradient (DG) and implicit midpoint (MP) (METHOD §3,
+//! paper eqs. (32)–(36)).
+//!
+//! Both schemes solve, per step, for the position increment `Δ = r_{n+1} − r_n`; velocities
+//! and strains are eliminated exactly: `v_{n+1} = 2Δ/h − v_n` and
+//! `C_{e,n+1} = C_{e,n} + (r'_{n+1} + r'_n)·(r'_{n+1} − r'_n)` (paper Remark 5). The
+//! remaining momentum balance, divided by `h`, is the Newton residual [N]:
+//!
+//! `R(Δ) = M_ρ (v_{n+1} − v_n)/h − F_b + K(r_{n+½}) S̄ − F_N(t_{n+½})`.
+
+use nalgebra::SMatrix;
+
+use crate::linsolve::BlockJacobian;
+use crate::material::StoredEnergy;
+use crate::newton::NewtonProblem;
+use crate::system::{PhSystem, Vector};
+
+/// Time-stepping scheme: how the stress `S̄` of a step is formed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Scheme {
+    /// Discrete gradient: `S̄ = 2 (W(C₁) − W(C₀))/(C₁ − C₀)` (Greenspan); exact energy balance.
+    #[default]
+    DiscreteGradient,
+    /// Implicit midpoint: `S̄ = 2 W'((C₀ + C₁)/2)`.
+    Midpoint,
+}
+
+impl Scheme {
+    /// `(S̄/2, ∂(S̄/2)/∂C₁)` for an element going from strain `c0` to `c1`.
+    #[inline]
+    pub fn half_stress<M: StoredEnergy>(self, material: &M, c0: f64, c1: f64) -> (f64, f64) {
+        match self {
+            Scheme::DiscreteGradient => material.quotient(c0, c1),
+            Scheme::Midpoint => {
+                let m = 0.5 * (c0 + c1);
+                (material.dw(m), 0.5 * material.d2w(m))
+            }
+        }
+    }
+    /// Short name: `dg` or `mp`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::DiscreteGradient => "dg",
+            Scheme::Midpoint => "mp",
+        }
+    }
+}
+
+/// Element kinematics of a step from the increments: `(r'_{n+½}, r'_{n+1} − r'_n, ΔC)`.
+#[inline]
+pub(crate) fn element_step<const D: usize>(
+    r0a: &Vector<D>,
+    r0b: &Vector<D>,
+    xa: &Vector<D>,
+    xb: &Vector<D>,
+    l: f64,
+) -> (Vector<D>, Vector<D>, f64) {
+    let inv_l = 1.0 / l;
+    let dr = (xb - xa) * inv_l;
+    let rpm = (r0b - r0a) * inv_l + dr * 0.5;
+    let dc = 2.0 * rpm.dot(&dr);
+    (rpm, dr, dc)
+}
+
+/// A strain outside the material's domain, met while evaluating the step residual.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrainError {
+    /// Element index.
+    pub element: usize,
+    /// Strain value.
+    pub c: f64,
+}
+
+/// The step equations of one time step, as a Newton problem in `Δ`.
+pub(crate) struct StepEquations<'a, const D: usize, M> {
+    pub sys: &'a PhSystem<D, M>,
+    pub scheme: Scheme,
+    pub h: f64,
+    pub r0: &'a [Vector<D>],
+    pub v0: &'a [Vector<D>],
+    pub c0: &'a [f64],
+    /// `F_b + F_N(t_{n+½})` per node [N].
+    pub f_ext: &'a [Vector<D>],
+    /// Reaction forces at the constrained components [N] (output).
+    pub reaction: &'a mut [Vector<D>],
+}
+
+impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, M> {
+    type Error = StrainError;
+
+    fn evaluate(
+        &mut self,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+    ) -> Result<(), StrainError> {
+        let sys = self.sys;
+        let h = self.h;
+        let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
+        for (r, f) in res.iter_mut().zip(self.f_ext) {
+            *r = -f;
+        }
+        if let Some(j) = jac.as_deref_mut() {
+            j.clear();
+        }
+        let eye = SMatrix::<f64, D, D>::identity();
+        for (e, (&[a, b], &l)) in sys
+            .mesh
+            .elements()
+            .iter()
+            .zip(sys.mesh.lengths())
+            .enumerate()
+        {
+            let (md, mo) = sys.element_mass(l);
+            // Inertia: M_ρ (v_{n+1} − v_n)/h with v_{n+1} − v_n = 2 (Δ/h − v_n).
+            let wa = (x[a] * inv_h - self.v0[a]) * (2.0 * inv_h);
+            let wb = (x[b] * inv_h - self.v0[b]) * (2.0 * inv_h);
+            res[a] += wa * md + wb * mo;
+            res[b] += wb * md + wa * mo;
+            // Internal force K(r_{n+½}) S̄.
+            let (rpm, dr, dc) = element_step(&self.r0[a], &self.r0[b], &x[a], &x[b], l);
+            let c0 = self.c0[e];
+            let c1 = c0 + dc;
+            if !sys.material.admissible(c1) {
+                return Err(StrainError { element: e, c: c1 });
+            }
+            let (q, dq) = self.scheme.half_stress(&sys.material, c0, c1);
+            let f = rpm * (2.0 * q);
+            res[a] -= f;
+            res[b] += f;
+            if let Some(j) = jac.as_deref_mut() {
+                // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
+                let rp1 = rpm + dr * 0.5;
+                let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) / l;
+                j.diag[a] += g + eye * (mass_scale * md);
+                j.diag[b] += g + eye * (mass_scale * md);
+                let off = eye * (mass_scale * mo) - g;
+                j.off[e] = [off, off];
+            }
+        }
+        // Dirichlet components: the residual there is the reaction force; the equation is
+        // replaced by Δ_k = 0.
+        for &i in &sys.constrained {
+            let free = &sys.free[i];
+            for k in 0..D {
+                if !free[k] {
+                    self.reaction[i][k] = res[i][k];
+                    res[i][k] = 0.0;
+                }
+            }
+        }
+        if let Some(j) = jac {
+            let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
+                for k in 0..D {
+                    for m in 0..D {
+                        if !row[k] || !col[m] {
+                            blk[(k, m)] = 0.0;
+                        }
+                    }
+                }
+            };
+            for &i in &sys.constrained {
+                let fi = &sys.free[i];
+                mask(&mut j.diag[i], fi, fi);
+                for k in 0..D {
+                    if !fi[k] {
+                        j.diag[i][(k, k)] = 1.0;
+                    }
+                }
+            }
+            if !sys.constrained.is_empty() {
+                for (e, &[a, b]) in sys.mesh.elements().iter().enumerate() {
+                    let (fa, fb) = (&sys.free[a], &sys.free[b]);
+                    mask(&mut j.off[e][0], fa, fb);
+                    mask(&mut j.off[e][1], fb, fa);
+                }
+            }
+        }
+        Ok(())
+    }
+}

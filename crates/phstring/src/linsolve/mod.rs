@@ -1,0 +1,94 @@
+//! Linear solves of the Newton system `J δ = −R` (METHOD §3).
+//!
+//! The Newton matrix is stored as node blocks ([`BlockJacobian`]): one `D×D` diagonal block
+//! per node and two off-diagonal blocks per element. Two solvers implement
+//! [`LinearSolver`]: [`BlockTridiagonal`] (block Thomas, O(N), chain meshes only) and
+//! [`SparseLu`] (faer's sparse LU, any mesh). Both analyse the mesh once at construction and
+//! refactor new values at every call without allocating.
+
+mod block_tridiagonal;
+mod sparse_lu;
+
+pub use block_tridiagonal::BlockTridiagonal;
+pub use sparse_lu::SparseLu;
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::error::{LinearSolveError, SetupError};
+use crate::mesh::Mesh;
+
+/// A `D×D` block of the Newton matrix.
+pub type Block<const D: usize> = SMatrix<f64, D, D>;
+
+/// Newton matrix in node-block form, matching a [`Mesh`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlockJacobian<const D: usize> {
+    /// `∂R_i/∂x_i` per node.
+    pub diag: Vec<Block<D>>,
+    /// Per element `[a, b]`: `[∂R_a/∂x_b, ∂R_b/∂x_a]`.
+    pub off: Vec<[Block<D>; 2]>,
+}
+
+impl<const D: usize> BlockJacobian<D> {
+    /// A zero matrix for `mesh`.
+    pub fn zeros(mesh: &Mesh) -> Self {
+        Self {
+            diag: vec![Block::zeros(); mesh.n_nodes()],
+            off: vec![[Block::zeros(); 2]; mesh.n_elements()],
+        }
+    }
+    /// Sets all blocks to zero.
+    pub fn clear(&mut self) {
+        self.diag.iter_mut().for_each(|b| b.fill(0.0));
+        self.off.iter_mut().for_each(|b| {
+            b[0].fill(0.0);
+            b[1].fill(0.0);
+        });
+    }
+    /// `out = J x`.
+    pub fn mul(&self, mesh: &Mesh, x: &[SVector<f64, D>], out: &mut [SVector<f64, D>]) {
+        for ((o, d), xi) in out.iter_mut().zip(&self.diag).zip(x) {
+            *o = d * xi;
+        }
+        for (&[a, b], off) in mesh.elements().iter().zip(&self.off) {
+            out[a] += off[0] * x[b];
+            out[b] += off[1] * x[a];
+        }
+    }
+}
+
+/// Which linear solver a simulation uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolverKind {
+    /// Block-tridiagonal for chain meshes, sparse LU otherwise.
+    #[default]
+    Auto,
+    /// [`BlockTridiagonal`] (fails at setup for a mesh that is not a chain).
+    BlockTridiagonal,
+    /// [`SparseLu`].
+    SparseLu,
+}
+
+/// A solver for `J x = b` with `J` in [`BlockJacobian`] form.
+pub trait LinearSolver<const D: usize>: Send {
+    /// Factors `jac` and overwrites `rhs` with the solution of `jac · x = rhs`.
+    fn solve(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError>;
+    /// A short name for reports.
+    fn name(&self) -> &'static str;
+}
+
+/// Builds the solver `kind` for `mesh`.
+pub fn make_solver<const D: usize>(
+    kind: SolverKind,
+    mesh: &Mesh,
+) -> Result<Box<dyn LinearSolver<D>>, SetupError> {
+    Ok(match kind {
+        SolverKind::Auto if mesh.is_chain() => Box::new(BlockTridiagonal::new(mesh)?),
+        SolverKind::BlockTridiagonal => Box::new(BlockTridiagonal::new(mesh)?),
+        SolverKind::Auto | SolverKind::SparseLu => Box::new(SparseLu::new(mesh)),
+    })
+}

@@ -1,0 +1,315 @@
+//! Stored-energy functions `W(C)` and their discrete gradients (METHOD §1, §3).
+//!
+//! A material is described by the stored energy per unit reference length `W(C)` [J/m = N]
+//! as a function of the strain `C = r'·r'` (dimensionless), with derivatives `W'(C)` and
+//! `W''(C)`. The stress is `S = 2 W'(C)` [N]. The discrete-gradient scheme needs the
+//! Greenspan quotient `(W(C₁) − W(C₀)) / (C₁ − C₀)`; the built-in laws evaluate it in a form
+//! that has no switch tolerance and no cancellation, so the directionality identity
+//! `S̄ (C₁ − C₀) = 2 (W(C₁) − W(C₀))` holds to a few ulps for every `ΔC`.
+
+use std::fmt::Debug;
+
+/// A hyperelastic stored-energy function `W(C)` of the string (energy per unit reference
+/// length, in N), with its derivatives in `C`.
+///
+/// Implement `w`, `dw`, `d2w` for a custom law. The default [`StoredEnergy::quotient`] is
+/// a plain difference quotient with a Taylor fallback for tiny `ΔC` (accurate to about
+/// `sqrt(eps)`-relative near the switch); override it with an exact form for full accuracy, as
+/// the built-in laws do.
+pub trait StoredEnergy: Debug + Send + Sync {
+    /// Stored energy per unit reference length `W(C)` [N].
+    fn w(&self, c: f64) -> f64;
+    /// First derivative `W'(C)` [N]; the stress is `S = 2 W'(C)`.
+    fn dw(&self, c: f64) -> f64;
+    /// Second derivative `W''(C)` [N].
+    fn d2w(&self, c: f64) -> f64;
+    /// Whether `C` lies in the domain of `W` (for example `C > 0` for the logarithmic law).
+    fn admissible(&self, c: f64) -> bool {
+        c.is_finite()
+    }
+    /// Greenspan quotient `q = (W(C₁) − W(C₀)) / (C₁ − C₀)`, equal to `W'(C₀)` when
+    /// `C₁ = C₀`, together with its partial derivative `∂q/∂C₁` (used by Newton's method).
+    /// The discrete-gradient stress is `S̄ = 2 q` (METHOD §3, paper eq. (36)).
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        let dc = c1 - c0;
+        let m = 0.5 * (c0 + c1);
+        let scale = c0.abs().max(c1.abs()).max(1.0);
+        if dc.abs() > 1e-4 * scale {
+            let q = (self.w(c1) - self.w(c0)) / dc;
+            (q, (self.dw(c1) - q) / dc)
+        } else {
+            // Midpoint Taylor expansion: q = W'(m) + W'''(m) ΔC²/24 + O(ΔC⁴).
+            let d3 = if dc == 0.0 {
+                0.0
+            } else {
+                (self.d2w(c1) - self.d2w(c0)) / dc
+            };
+            (
+                self.dw(m) + d3 * dc * dc / 24.0,
+                0.5 * self.d2w(m) + d3 * dc / 6.0,
+            )
+        }
+    }
+}
+
+/// The paper's hyperelastic law (eq. (7)): `W = EA/4 (C − ln C − 1)`, `S = EA/2 (1 − 1/C)`.
+/// Defined for `C > 0` only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hyperelastic {
+    /// Axial stiffness `EA` [N].
+    pub ea: f64,
+}
+
+/// Linear elastic law (paper Remark 1): `W = EA/2 (√C − 1)²`, `S = EA (1 − 1/√C)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearElastic {
+    /// Axial stiffness `EA` [N].
+    pub ea: f64,
+}
+
+/// St. Venant–Kirchhoff law (paper Remark 2): `W = EA/8 (C − 1)²`, `S = EA/2 (C − 1)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StVenantKirchhoff {
+    /// Axial stiffness `EA` [N].
+    pub ea: f64,
+}
+
+/// `C − 1`, exact for `C ∈ [0.5, 2]` (Sterbenz) and correctly rounded otherwise.
+#[inline]
+fn cm1(c: f64) -> f64 {
+    c - 1.0
+}
+
+/// `Σ_{k≥1} t^{2k} / (2k+1) = atanh(t)/t − 1` without cancellation, for `|t| < 1`.
+#[inline]
+fn atanh_ratio_m1(t: f64) -> f64 {
+    let t2 = t * t;
+    if t2 > 0.25 {
+        return t.atanh() / t - 1.0;
+    }
+    let mut sum = 0.0;
+    let mut p = t2;
+    let mut k = 1.0;
+    // Terms decrease at least geometrically with ratio t² ≤ 1/4.
+    while p > 0.0 {
+        let term = p / (2.0 * k + 1.0);
+        sum += term;
+        if term <= sum * 1e-17 {
+            break;
+        }
+        p *= t2;
+        k += 1.0;
+    }
+    sum
+}
+
+/// Derivative of `atanh(t)/t` in `t`, i.e. `Σ_{k≥1} 2k t^{2k−1}/(2k+1)`.
+#[inline]
+fn atanh_ratio_deriv(t: f64) -> f64 {
+    let t2 = t * t;
+    if t2 > 0.25 {
+        return (1.0 / (1.0 - t2) - t.atanh() / t) / t;
+    }
+    let mut sum = 0.0;
+    let mut p = t;
+    let mut k = 1.0;
+    while p != 0.0 {
+        let term = 2.0 * k * p / (2.0 * k + 1.0);
+        sum += term;
+        if term.abs() <= sum.abs() * 1e-17 {
+            break;
+        }
+        p *= t2;
+        k += 1.0;
+    }
+    sum
+}
+
+impl StoredEnergy for Hyperelastic {
+    fn w(&self, c: f64) -> f64 {
+        // C − ln C − 1 = (C − 1) − log1p(C − 1): accurate near C = 1.
+        let x = cm1(c);
+        0.25 * self.ea * (x - x.ln_1p())
+    }
+    fn dw(&self, c: f64) -> f64 {
+        0.25 * self.ea * cm1(c) / c
+    }
+    fn d2w(&self, c: f64) -> f64 {
+        0.25 * self.ea / (c * c)
+    }
+    fn admissible(&self, c: f64) -> bool {
+        c.is_finite() && c > 0.0
+    }
+    /// Exact form: with `m = (C₀+C₁)/2`, `δ = (C₁−C₀)/2`, `t = δ/m`,
+    /// `ln(C₁/C₀)/(C₁−C₀) = atanh(t)/(t m)`, so
+    /// `q = EA/4 · ((m − 1) − (atanh(t)/t − 1)) / m` with both brackets free of cancellation.
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        let m = 0.5 * (c0 + c1);
+        let mm1 = 0.5 * (cm1(c0) + cm1(c1));
+        let t = 0.5 * (c1 - c0) / m;
+        let a_m1 = atanh_ratio_m1(t);
+        let q = 0.25 * self.ea * (mm1 - a_m1) / m;
+        // ℓ = A(t)/m with A = atanh(t)/t; ∂ℓ/∂C₁ = (A'(t)(1 − t) − A(t)) / (2 m²), q = EA/4 (1 − ℓ).
+        let dl = (atanh_ratio_deriv(t) * (1.0 - t) - (1.0 + a_m1)) / (2.0 * m * m);
+        (q, -0.25 * self.ea * dl)
+    }
+}
+
+impl StoredEnergy for LinearElastic {
+    fn w(&self, c: f64) -> f64 {
+        let e = cm1(c) / (c.sqrt() + 1.0);
+        0.5 * self.ea * e * e
+    }
+    fn dw(&self, c: f64) -> f64 {
+        let s = c.sqrt();
+        0.5 * self.ea * (cm1(c) / (s + 1.0)) / s
+    }
+    fn d2w(&self, c: f64) -> f64 {
+        0.25 * self.ea / (c * c.sqrt())
+    }
+    fn admissible(&self, c: f64) -> bool {
+        c.is_finite() && c > 0.0
+    }
+    /// Exact form: `q = EA/2 · ((√C₀ − 1) + (√C₁ − 1)) / (√C₀ + √C₁)` with
+    /// `√C − 1 = (C − 1)/(√C + 1)`.
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        let (s0, s1) = (c0.sqrt(), c1.sqrt());
+        let sum = s0 + s1;
+        let q = 0.5 * self.ea * (cm1(c0) / (s0 + 1.0) + cm1(c1) / (s1 + 1.0)) / sum;
+        (q, 0.5 * self.ea / (sum * sum * s1))
+    }
+}
+
+impl StoredEnergy for StVenantKirchhoff {
+    fn w(&self, c: f64) -> f64 {
+        let x = cm1(c);
+        0.125 * self.ea * x * x
+    }
+    fn dw(&self, c: f64) -> f64 {
+        0.25 * self.ea * cm1(c)
+    }
+    fn d2w(&self, _c: f64) -> f64 {
+        0.25 * self.ea
+    }
+    /// Exact form: `q = EA/8 ((C₀ − 1) + (C₁ − 1))`.
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        (0.125 * self.ea * (cm1(c0) + cm1(c1)), 0.125 * self.ea)
+    }
+}
+
+/// The built-in material laws as one type (enum dispatch), as chosen in a scenario file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Material {
+    /// [`Hyperelastic`], the paper's default.
+    Hyperelastic(Hyperelastic),
+    /// [`LinearElastic`] (paper Remark 1).
+    LinearElastic(LinearElastic),
+    /// [`StVenantKirchhoff`] (paper Remark 2).
+    StVenantKirchhoff(StVenantKirchhoff),
+}
+
+impl Material {
+    /// The paper's hyperelastic law with axial stiffness `ea` [N].
+    pub fn hyperelastic(ea: f64) -> Self {
+        Self::Hyperelastic(Hyperelastic { ea })
+    }
+    /// The linear elastic law with axial stiffness `ea` [N].
+    pub fn linear_elastic(ea: f64) -> Self {
+        Self::LinearElastic(LinearElastic { ea })
+    }
+    /// The St. Venant–Kirchhoff law with axial stiffness `ea` [N].
+    pub fn st_venant_kirchhoff(ea: f64) -> Self {
+        Self::StVenantKirchhoff(StVenantKirchhoff { ea })
+    }
+    /// Axial stiffness `EA` [N].
+    pub fn ea(&self) -> f64 {
+        match self {
+            Self::Hyperelastic(m) => m.ea,
+            Self::LinearElastic(m) => m.ea,
+            Self::StVenantKirchhoff(m) => m.ea,
+        }
+    }
+    /// Short name as used in scenario files: `hyperelastic`, `linear_elastic`,
+    /// `st_venant_kirchhoff`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Hyperelastic(_) => "hyperelastic",
+            Self::LinearElastic(_) => "linear_elastic",
+            Self::StVenantKirchhoff(_) => "st_venant_kirchhoff",
+        }
+    }
+}
+
+macro_rules! dispatch {
+    ($self:ident, $m:ident => $e:expr) => {
+        match $self {
+            Material::Hyperelastic($m) => $e,
+            Material::LinearElastic($m) => $e,
+            Material::StVenantKirchhoff($m) => $e,
+        }
+    };
+}
+
+impl StoredEnergy for Material {
+    #[inline]
+    fn w(&self, c: f64) -> f64 {
+        dispatch!(self, m => m.w(c))
+    }
+    #[inline]
+    fn dw(&self, c: f64) -> f64 {
+        dispatch!(self, m => m.dw(c))
+    }
+    #[inline]
+    fn d2w(&self, c: f64) -> f64 {
+        dispatch!(self, m => m.d2w(c))
+    }
+    #[inline]
+    fn admissible(&self, c: f64) -> bool {
+        dispatch!(self, m => m.admissible(c))
+    }
+    #[inline]
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        dispatch!(self, m => m.quotient(c0, c1))
+    }
+}
+
+impl<T: StoredEnergy + ?Sized> StoredEnergy for &T {
+    fn w(&self, c: f64) -> f64 {
+        (**self).w(c)
+    }
+    fn dw(&self, c: f64) -> f64 {
+        (**self).dw(c)
+    }
+    fn d2w(&self, c: f64) -> f64 {
+        (**self).d2w(c)
+    }
+    fn admissible(&self, c: f64) -> bool {
+        (**self).admissible(c)
+    }
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        (**self).quotient(c0, c1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quotient_limit_is_derivative() {
+        for m in [
+            Material::hyperelastic(20.0),
+            Material::linear_elastic(20.0),
+            Material::st_venant_kirchhoff(20.0),
+        ] {
+            for c in [0.3, 1.0, 1.7] {
+                let (q, dq) = m.quotient(c, c);
+                assert!(
+                    (q - m.dw(c)).abs() <= 1e-15 * m.dw(c).abs().max(1.0),
+                    "{m:?} {c}"
+                );
+                assert!((dq - 0.5 * m.d2w(c)).abs() <= 1e-14 * m.d2w(c), "{m:?} {c}");
+            }
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! Step reports, run summaries and the observer interface.
+
+use crate::system::Energies;
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    /// Step index (1 = the first step).
+    pub step: usize,
+    /// Time at the end of the step `t_{n+1}` [s].
+    pub t: f64,
+    /// Step size [s].
+    pub h: f64,
+    /// Newton iterations (linear solves).
+    pub newton_iterations: usize,
+    /// Final Newton residual norm [N].
+    pub residual: f64,
+    /// Energies at `t_n` [J].
+    pub before: Energies,
+    /// Energies at `t_{n+1}` [J].
+    pub after: Energies,
+    /// Energy supplied through the ports in this step, `h û_{n+½}·ŷ_{n+½}` [J].
+    pub supplied: f64,
+    /// Energy-balance error `Ĥ_{n+1} − Ĥ_n − h û·ŷ` [J].
+    pub balance_error: f64,
+}
+
+/// Totals over a run.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RunSummary {
+    /// Steps taken.
+    pub steps: usize,
+    /// Newton iterations in all.
+    pub newton_iterations: usize,
+    /// Largest `|balance_error|` [J].
+    pub max_balance_error: f64,
+    /// Largest Newton residual at convergence [N].
+    pub max_residual: f64,
+}
+
+impl RunSummary {
+    /// Adds one step.
+    pub fn record(&mut self, r: &StepReport) {
+        self.steps += 1;
+        self.newton_iterations += r.newton_iterations;
+        self.max_balance_error = self.max_balance_error.max(r.balance_error.abs());
+        self.max_residual = self.max_residual.max(r.residual);
+    }
+}
+
+/// Receives the simulation at the start, after each step and at the end of a run.
+/// Everything that records (files, progress) is an observer; the library never prints.
+pub trait Observer<const D: usize, M> {
+    /// Before the first step.
+    fn on_start(&mut self, _sim: &crate::Simulation<D, M>) {}
+    /// After each successful step.
+    fn on_step(&mut self, _sim: &crate::Simulation<D, M>, _report: &StepReport) {}
+    /// After the last step.
+    fn on_end(&mut self, _sim: &crate::Simulation<D, M>) {}
+}
+
+/// An observer that does nothing.
+impl<const D: usize, M> Observer<D, M> for () {}

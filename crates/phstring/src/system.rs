@@ -1,0 +1,399 @@
+//! The semi-discrete port-Hamiltonian system (METHOD §2, paper eqs. (27)–(31)).
+//!
+//! State `x̂ = (r̂, v̂, Ĉ)`: nodal positions [m], nodal velocities [m/s], element strains
+//! (dimensionless). Efforts `ẑ = (−F_b, v̂, ½ Ŝ)` so that `Eᵀẑ = ∇Ĥ`, with
+//! `E = diag(I, M_ρ, M_S)`.
+
+use nalgebra::SVector;
+
+use crate::boundary::Boundary;
+use crate::error::SetupError;
+use crate::material::StoredEnergy;
+use crate::mesh::Mesh;
+
+/// A nodal vector in `R^D` [m, m/s or N].
+pub type Vector<const D: usize> = SVector<f64, D>;
+
+/// Mass matrix `M_ρ` variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MassMatrix {
+    /// Consistent mass `ρA l_e/6 [[2,1],[1,2]] ⊗ I` (METHOD §2; the default).
+    #[default]
+    Consistent,
+    /// Row-sum lumped mass `ρA l_e/2` per node of each element (an option, not the paper's).
+    Lumped,
+}
+
+/// The state `(r̂, v̂, Ĉ)` of the semi-discrete system.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State<const D: usize> {
+    /// Nodal positions `r̂` [m].
+    pub r: Vec<Vector<D>>,
+    /// Nodal velocities `v̂` [m/s].
+    pub v: Vec<Vector<D>>,
+    /// Element strains `Ĉ` (dimensionless), `C_e = |r'_e|²` for a consistent state.
+    pub c: Vec<f64>,
+}
+
+impl<const D: usize> State<D> {
+    /// A state with velocities `v` and strains consistent with the positions,
+    /// `C_e = |r'_e|²` (paper Remark 5).
+    pub fn consistent(mesh: &Mesh, r: Vec<Vector<D>>, v: Vec<Vector<D>>) -> Self {
+        let c = mesh
+            .elements()
+            .iter()
+            .zip(mesh.lengths())
+            .map(|(&[a, b], &l)| ((r[b] - r[a]) / l).norm_squared())
+            .collect();
+        Self { r, v, c }
+    }
+
+    /// A state at rest (`v̂ = 0`) with consistent strains.
+    pub fn at_rest(mesh: &Mesh, r: Vec<Vector<D>>) -> Self {
+        let v = vec![Vector::<D>::zeros(); r.len()];
+        Self::consistent(mesh, r, v)
+    }
+
+    /// Nodes `from + s (to − from)` at the mesh's cumulative reference arc length
+    /// `s ∈ [0, 1]`, at rest. For a chain mesh this is a straight string from `from` to `to`.
+    pub fn straight(mesh: &Mesh, from: Vector<D>, to: Vector<D>) -> Self {
+        let total = mesh.total_length();
+        let mut r = Vec::with_capacity(mesh.n_nodes());
+        let mut s = 0.0;
+        r.push(from);
+        for &l in mesh.lengths() {
+            s += l;
+            r.push(from + (to - from) * (s / total));
+        }
+        r.truncate(mesh.n_nodes());
+        while r.len() < mesh.n_nodes() {
+            r.push(from);
+        }
+        Self::at_rest(mesh, r)
+    }
+
+    /// Largest deviation `max_e |C_e − |r'_e|²|` from the kinematic relation (Remark 5).
+    pub fn kinematic_defect(&self, mesh: &Mesh) -> f64 {
+        mesh.elements()
+            .iter()
+            .zip(mesh.lengths())
+            .zip(&self.c)
+            .map(|((&[a, b], &l), &c)| (c - ((self.r[b] - self.r[a]) / l).norm_squared()).abs())
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Energies of a state [J].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Energies {
+    /// Kinetic energy `T̂ = ½ v̂ᵀ M_ρ v̂`.
+    pub kinetic: f64,
+    /// Stored (internal) energy `Σ_e l_e W(C_e)`.
+    pub internal: f64,
+    /// External potential `−r̂ᵀ F_b`.
+    pub external: f64,
+}
+
+impl Energies {
+    /// Potential energy `V̂ = internal + external`.
+    pub fn potential(&self) -> f64 {
+        self.internal + self.external
+    }
+    /// Hamiltonian `Ĥ = T̂ + V̂` (paper eq. (29)).
+    pub fn hamiltonian(&self) -> f64 {
+        self.kinetic + self.internal + self.external
+    }
+}
+
+/// The problem: everything that defines the semi-discrete system and its initial state.
+#[derive(Debug, Clone)]
+pub struct Problem<const D: usize, M> {
+    /// Reference configuration.
+    pub mesh: Mesh,
+    /// Stored-energy function.
+    pub material: M,
+    /// Mass per unit reference length `ρA` [kg/m].
+    pub rho_a: f64,
+    /// Constant body force per unit reference length `b` [N/m] (gravity: `−g ρA e_y`).
+    pub body_force: Vector<D>,
+    /// Mass matrix variant.
+    pub mass: MassMatrix,
+    /// Boundary conditions.
+    pub boundary: Boundary<D>,
+    /// Initial state.
+    pub initial: State<D>,
+}
+
+/// The validated semi-discrete PH system with its precomputed constant operators.
+#[derive(Debug, Clone)]
+pub struct PhSystem<const D: usize, M> {
+    pub(crate) mesh: Mesh,
+    pub(crate) material: M,
+    pub(crate) rho_a: f64,
+    pub(crate) mass: MassMatrix,
+    pub(crate) boundary: Boundary<D>,
+    /// `F_b` per node [N].
+    pub(crate) f_body: Vec<Vector<D>>,
+    /// Per node: which components are free (not fixed).
+    pub(crate) free: Vec<[bool; D]>,
+    /// Nodes with at least one fixed component, sorted.
+    pub(crate) constrained: Vec<usize>,
+}
+
+impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
+    /// Validates `problem` and precomputes `F_b`. Returns the system and the initial state.
+    pub fn new(problem: Problem<D, M>) -> Result<(Self, State<D>), SetupError> {
+        let Problem {
+            mesh,
+            material,
+            rho_a,
+            body_force,
+            mass,
+            boundary,
+            initial,
+        } = problem;
+        if !(rho_a > 0.0 && rho_a.is_finite()) {
+            return Err(SetupError::NonPositive {
+                what: "rho_a",
+                index: None,
+                value: rho_a,
+            });
+        }
+        for (i, x) in body_force.iter().enumerate() {
+            if !x.is_finite() {
+                return Err(SetupError::NotFinite {
+                    what: "body force component",
+                    index: i,
+                    value: *x,
+                });
+            }
+        }
+        let n = mesh.n_nodes();
+        for (what, got) in [
+            ("positions", initial.r.len()),
+            ("velocities", initial.v.len()),
+        ] {
+            if got != n {
+                return Err(SetupError::StateSize {
+                    what,
+                    got,
+                    expected: n,
+                });
+            }
+        }
+        if initial.c.len() != mesh.n_elements() {
+            return Err(SetupError::StateSize {
+                what: "strains",
+                got: initial.c.len(),
+                expected: mesh.n_elements(),
+            });
+        }
+        for (i, (r, v)) in initial.r.iter().zip(&initial.v).enumerate() {
+            if let Some(x) = r.iter().chain(v.iter()).find(|x| !x.is_finite()) {
+                return Err(SetupError::NotFinite {
+                    what: "initial position/velocity of node",
+                    index: i,
+                    value: *x,
+                });
+            }
+        }
+        for (e, &c) in initial.c.iter().enumerate() {
+            if !material.admissible(c) {
+                return Err(SetupError::InadmissibleStrain { element: e, c });
+            }
+        }
+        let mut free = vec![[true; D]; n];
+        for fx in &boundary.fixed {
+            if fx.node >= n {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "fixed condition",
+                    node: fx.node,
+                    n_nodes: n,
+                });
+            }
+            for k in 0..D {
+                free[fx.node][k] &= !fx.components[k];
+            }
+        }
+        for load in &boundary.loads {
+            if load.node >= n {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "load",
+                    node: load.node,
+                    n_nodes: n,
+                });
+            }
+        }
+        let constrained = (0..n).filter(|&i| free[i].iter().any(|f| !f)).collect();
+        let mut f_body = vec![Vector::<D>::zeros(); n];
+        for (&[a, b], &l) in mesh.elements().iter().zip(mesh.lengths()) {
+            f_body[a] += body_force * (0.5 * l);
+            f_body[b] += body_force * (0.5 * l);
+        }
+        Ok((
+            Self {
+                mesh,
+                material,
+                rho_a,
+                mass,
+                boundary,
+                f_body,
+                free,
+                constrained,
+            },
+            initial,
+        ))
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+    /// The material.
+    pub fn material(&self) -> &M {
+        &self.material
+    }
+    /// Mass per unit length `ρA` [kg/m].
+    pub fn rho_a(&self) -> f64 {
+        self.rho_a
+    }
+    /// Boundary conditions.
+    pub fn boundary(&self) -> &Boundary<D> {
+        &self.boundary
+    }
+    /// Mass matrix variant.
+    pub fn mass_matrix(&self) -> MassMatrix {
+        self.mass
+    }
+    /// Nodal body-force vector `F_b = ∫ Φᵀ b` [N] (METHOD §2).
+    pub fn body_force_vector(&self) -> &[Vector<D>] {
+        &self.f_body
+    }
+    /// Which components of each node are free.
+    pub fn free_components(&self) -> &[[bool; D]] {
+        &self.free
+    }
+
+    /// Element mass-matrix coefficients `(m_diag, m_off)` [kg]: the element contributes
+    /// `m_diag I` to each diagonal node block and `m_off I` to the two off-diagonal blocks.
+    #[inline]
+    pub(crate) fn element_mass(&self, l: f64) -> (f64, f64) {
+        match self.mass {
+            MassMatrix::Consistent => (self.rho_a * l / 3.0, self.rho_a * l / 6.0),
+            MassMatrix::Lumped => (self.rho_a * l / 2.0, 0.0),
+        }
+    }
+
+    /// `out = M_ρ v` [kg·m/s] (momenta per node).
+    pub fn mass_mul(&self, v: &[Vector<D>], out: &mut [Vector<D>]) {
+        out.iter_mut().for_each(|x| *x = Vector::zeros());
+        for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
+            let (md, mo) = self.element_mass(l);
+            out[a] += v[a] * md + v[b] * mo;
+            out[b] += v[b] * md + v[a] * mo;
+        }
+    }
+
+    /// `out = K(r) S` [N]: element `e` adds `−S_e r'_e` to node `a` and `+S_e r'_e` to node `b`
+    /// (METHOD §2; enters the momentum balance with a minus sign).
+    pub fn k_mul(&self, r: &[Vector<D>], s: &[f64], out: &mut [Vector<D>]) {
+        out.iter_mut().for_each(|x| *x = Vector::zeros());
+        for ((&[a, b], &l), &se) in self.mesh.elements().iter().zip(self.mesh.lengths()).zip(s) {
+            let f = (r[b] - r[a]) * (se / l);
+            out[a] -= f;
+            out[b] += f;
+        }
+    }
+
+    /// `out = K(r)ᵀ v` [m/s]: element `e` gets `r'_e · (v_b − v_a)` (METHOD §2; the
+    /// element's `l_e` and `1/l_e` cancel).
+    pub fn kt_mul(&self, r: &[Vector<D>], v: &[Vector<D>], out: &mut [f64]) {
+        for ((o, &[a, b]), &l) in out
+            .iter_mut()
+            .zip(self.mesh.elements())
+            .zip(self.mesh.lengths())
+        {
+            *o = ((r[b] - r[a]) / l).dot(&(v[b] - v[a]));
+        }
+    }
+
+    /// Stresses `S_e = 2 W'(C_e)` [N] (paper eq. (27d) with element-wise constant `Ψ`).
+    pub fn stresses(&self, c: &[f64], out: &mut [f64]) {
+        for (o, &ce) in out.iter_mut().zip(c) {
+            *o = 2.0 * self.material.dw(ce);
+        }
+    }
+
+    /// Energies `T̂`, `Σ l_e W(C_e)`, `−r̂ᵀF_b` of `state` [J] (paper eq. (29)).
+    pub fn energies(&self, state: &State<D>) -> Energies {
+        let mut kinetic = 0.0;
+        let mut internal = 0.0;
+        for ((&[a, b], &l), &c) in self
+            .mesh
+            .elements()
+            .iter()
+            .zip(self.mesh.lengths())
+            .zip(&state.c)
+        {
+            let (va, vb) = (&state.v[a], &state.v[b]);
+            let (md, mo) = self.element_mass(l);
+            kinetic += 0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(vb);
+            internal += l * self.material.w(c);
+        }
+        let external = -state
+            .r
+            .iter()
+            .zip(&self.f_body)
+            .map(|(r, f)| r.dot(f))
+            .sum::<f64>();
+        Energies {
+            kinetic,
+            internal,
+            external,
+        }
+    }
+
+    /// Linear momentum `Σ M_ρ v̂` [kg·m/s].
+    pub fn linear_momentum(&self, state: &State<D>) -> Vector<D> {
+        let mut p = Vector::zeros();
+        for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
+            let (md, mo) = self.element_mass(l);
+            p += (state.v[a] + state.v[b]) * (md + mo);
+        }
+        p
+    }
+}
+
+impl<M: StoredEnergy> PhSystem<2, M> {
+    /// Angular momentum about the origin `Σ_ij M_ij r_i × v_j` (z-component) [kg·m²/s].
+    pub fn angular_momentum(&self, state: &State<2>) -> f64 {
+        let cross = |r: &Vector<2>, v: &Vector<2>| r[0] * v[1] - r[1] * v[0];
+        self.angular(state, cross)
+    }
+}
+
+impl<M: StoredEnergy> PhSystem<3, M> {
+    /// Angular momentum about the origin `Σ_ij M_ij r_i × v_j` [kg·m²/s].
+    pub fn angular_momentum(&self, state: &State<3>) -> Vector<3> {
+        self.angular(state, |r, v| r.cross(v))
+    }
+}
+
+impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
+    fn angular<
+        T: std::ops::AddAssign + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T> + Default,
+    >(
+        &self,
+        state: &State<D>,
+        cross: impl Fn(&Vector<D>, &Vector<D>) -> T,
+    ) -> T {
+        let mut l_tot = T::default();
+        for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
+            let (md, mo) = self.element_mass(l);
+            let (ra, rb, va, vb) = (&state.r[a], &state.r[b], &state.v[a], &state.v[b]);
+            l_tot += (cross(ra, va) + cross(rb, vb)) * md;
+            l_tot += (cross(ra, vb) + cross(rb, va)) * mo;
+        }
+        l_tot
+    }
+}

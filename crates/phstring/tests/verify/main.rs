@@ -1,0 +1,5 @@
+//! Verification of the method against theorems, closed forms and the paper (METHOD §3–4).
+//! Issue 2's acceptance list, one module each.
+
+mod common;
+mod paper;
