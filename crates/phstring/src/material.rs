@@ -170,12 +170,16 @@ impl StoredEnergy for LinearElastic {
     fn admissible(&self, c: f64) -> bool {
         c.is_finite() && c > 0.0
     }
-    /// Exact form: `q = EA/2 · ((√C₀ − 1) + (√C₁ − 1)) / (√C₀ + √C₁)` with
-    /// `√C − 1 = (C − 1)/(√C + 1)`.
+    /// Exact form: with `a = C₀ − 1`, `b = C₁ − 1` (exact near 1) and `s = √C`,
+    /// `q = EA/2 · (a/(s₀+1) + b/(s₁+1)) / (s₀+s₁)`, evaluated as
+    /// `EA/2 · ((a+b)(1+s₀) + a (C₁−C₀)/(s₀+s₁)) / ((s₀+1)(s₁+1)(s₀+s₁))` so that the
+    /// near-cancellation of the two terms happens exactly in `a + b`.
     fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
         let (s0, s1) = (c0.sqrt(), c1.sqrt());
         let sum = s0 + s1;
-        let q = 0.5 * self.ea * (cm1(c0) / (s0 + 1.0) + cm1(c1) / (s1 + 1.0)) / sum;
+        let (a, b) = (cm1(c0), cm1(c1));
+        let num = (a + b) * (1.0 + s0) + a * ((c1 - c0) / sum);
+        let q = 0.5 * self.ea * num / ((s0 + 1.0) * (s1 + 1.0) * sum);
         (q, 0.5 * self.ea / (sum * sum * s1))
     }
 }

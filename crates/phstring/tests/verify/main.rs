@@ -2,4 +2,8 @@
 //! Issue 2's acceptance list, one module each.
 
 mod common;
+mod momentum;
+mod order;
 mod paper;
+mod quotient;
+mod solvers;

@@ -1,0 +1,130 @@
+//! Acceptance 3: momentum maps of a free–free string (METHOD §3, consequence 3).
+
+use phstring::{
+    Boundary, MassMatrix, Material, Mesh, NewtonParams, Problem, Scheme, Simulation, State,
+    StepParams, Vector,
+};
+
+/// A free string of reference length 1, stretched by 1.3, spinning about the z axis
+/// (and, in 3D, tumbling), with a radial stretching velocity.
+fn spinning<const D: usize>(scheme: Scheme) -> Simulation<D, Material> {
+    let n_el = 12;
+    let mesh = Mesh::uniform_chain(n_el, 1.0).unwrap();
+    let mut r = Vec::new();
+    let mut v = Vec::new();
+    for i in 0..=n_el {
+        let s = i as f64 / n_el as f64 - 0.5;
+        let mut ri = Vector::<D>::zeros();
+        ri[0] = 1.3 * s;
+        let mut vi = Vector::<D>::zeros();
+        vi[0] = -2.5 * s; // stretching
+        vi[1] = 8.0 * ri[0]; // spin about z: ω × r
+        if D == 3 {
+            vi[2] = 1.0 * s + 0.2; // tumbling + drift
+        }
+        r.push(ri);
+        v.push(vi);
+    }
+    let problem = Problem {
+        initial: State::consistent(&mesh, r, v),
+        mesh,
+        material: Material::hyperelastic(20.0),
+        rho_a: 1.0,
+        body_force: Vector::zeros(),
+        mass: MassMatrix::Consistent,
+        boundary: Boundary::default(),
+    };
+    let params = StepParams {
+        h: 0.01,
+        scheme,
+        newton: NewtonParams {
+            tol: 1e-12,
+            max_iter: 25,
+        },
+        ..Default::default()
+    };
+    Simulation::new(problem, params).unwrap()
+}
+
+fn stretch_range<const D: usize>(sim: &Simulation<D, Material>, range: &mut (f64, f64)) {
+    for &c in &sim.state().c {
+        range.0 = range.0.min(c.sqrt());
+        range.1 = range.1.max(c.sqrt());
+    }
+}
+
+#[test]
+fn momentum_maps_2d() {
+    let mut energy_err = [0.0; 2];
+    for (k, scheme) in [Scheme::DiscreteGradient, Scheme::Midpoint]
+        .into_iter()
+        .enumerate()
+    {
+        let mut sim = spinning::<2>(scheme);
+        let p0 = sim.system().linear_momentum(sim.state());
+        let l0 = sim.system().angular_momentum(sim.state());
+        let h0 = sim.energies().hamiltonian();
+        let mut range = (f64::INFINITY, 0.0);
+        let (mut dp, mut dl, mut de) = (0.0_f64, 0.0_f64, 0.0_f64);
+        for _ in 0..200 {
+            sim.step().unwrap();
+            stretch_range(&sim, &mut range);
+            dp = dp.max((sim.system().linear_momentum(sim.state()) - p0).norm());
+            dl = dl.max((sim.system().angular_momentum(sim.state()) - l0).abs() / l0.abs());
+            de = de.max((sim.energies().hamiltonian() - h0).abs() / h0.abs());
+        }
+        eprintln!("2D {scheme:?}: stretch {range:?}, |Δp| {dp:e}, |ΔL|/|L| {dl:e}, |ΔH|/H {de:e}");
+        assert!(range.0 < 0.85 && range.1 > 1.8, "stretch range {range:?}");
+        assert!(dp <= 1e-13, "linear momentum drift {dp:e}");
+        assert!(dl <= 1e-12, "angular momentum drift {dl:e}");
+        energy_err[k] = de;
+    }
+    assert!(
+        energy_err[0] <= 1e-10,
+        "DG energy error {:e}",
+        energy_err[0]
+    );
+    assert!(
+        energy_err[1] >= 1e3 * energy_err[0].max(1e-16),
+        "MP energy error {:e}",
+        energy_err[1]
+    );
+}
+
+#[test]
+fn momentum_maps_3d() {
+    let mut energy_err = [0.0; 2];
+    for (k, scheme) in [Scheme::DiscreteGradient, Scheme::Midpoint]
+        .into_iter()
+        .enumerate()
+    {
+        let mut sim = spinning::<3>(scheme);
+        let p0 = sim.system().linear_momentum(sim.state());
+        let l0 = sim.system().angular_momentum(sim.state());
+        let h0 = sim.energies().hamiltonian();
+        let mut range = (f64::INFINITY, 0.0);
+        let (mut dp, mut dl, mut de) = (0.0_f64, 0.0_f64, 0.0_f64);
+        for _ in 0..200 {
+            sim.step().unwrap();
+            stretch_range(&sim, &mut range);
+            dp = dp.max((sim.system().linear_momentum(sim.state()) - p0).norm());
+            dl = dl.max((sim.system().angular_momentum(sim.state()) - l0).norm() / l0.norm());
+            de = de.max((sim.energies().hamiltonian() - h0).abs() / h0.abs());
+        }
+        eprintln!("3D {scheme:?}: stretch {range:?}, |Δp| {dp:e}, |ΔL|/|L| {dl:e}, |ΔH|/H {de:e}");
+        assert!(range.0 < 0.85 && range.1 > 1.8, "stretch range {range:?}");
+        assert!(dp <= 1e-13, "linear momentum drift {dp:e}");
+        assert!(dl <= 1e-12, "angular momentum drift {dl:e}");
+        energy_err[k] = de;
+    }
+    assert!(
+        energy_err[0] <= 1e-10,
+        "DG energy error {:e}",
+        energy_err[0]
+    );
+    assert!(
+        energy_err[1] >= 1e3 * energy_err[0].max(1e-16),
+        "MP energy error {:e}",
+        energy_err[1]
+    );
+}
