@@ -50,7 +50,7 @@
 //!     mesh, initial,
 //!     material: Material::hyperelastic(20.0),                        // EA = 20 N
 //!     rho_a: 1.0,
-//!     body_force: Vector::new(0.0, -9.81),                           // −g ρA e_y
+//!     body_force: Vector::<2>::new(0.0, -9.81),                      // −g ρA e_y
 //!     mass: MassMatrix::Consistent,
 //!     boundary: Boundary { fixed: vec![Fixed::node(0)], loads: vec![load] },
 //! };
