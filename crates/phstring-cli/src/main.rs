@@ -1,0 +1,354 @@
+//! `phstring`: run scenario files, reproduce the paper's benchmark and figures.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use phstring_io::plot::{self, Series};
+use phstring_io::runner::{self, Progress, RunInfo};
+use phstring_io::scenario::{self, ScenarioFile};
+
+/// The paper's benchmark scenario (also `examples/paper_pendulum.toml`).
+const PAPER_SCENARIO: &str = include_str!("../../../examples/paper_pendulum.toml");
+/// End of the loading phase of the paper's benchmark [s].
+const PAPER_END_OF_LOADING: f64 = 0.2;
+
+#[derive(Parser)]
+#[command(
+    name = "phstring",
+    version,
+    about = "Energy-consistent port-Hamiltonian simulation of strings and cables"
+)]
+struct Cli {
+    /// No progress bar.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the paper's benchmark with DG and MP and redraw its figures.
+    Paper {
+        /// Output folder.
+        #[arg(long, default_value = "out/paper")]
+        out: PathBuf,
+        /// Overwrite a non-empty output folder.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Run a scenario file.
+    Run {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Output folder (default: out/<scenario name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scenario key by its dotted path, e.g. --set mesh.elements=300.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Overwrite a non-empty output folder.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Validate a scenario file and print what would run.
+    Check {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Override a scenario key by its dotted path.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn dispatch(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Paper { out, force } => paper(&out, force, cli.quiet),
+        Command::Run {
+            scenario,
+            out,
+            sets,
+            force,
+        } => {
+            let file = scenario::load(&scenario, &sets)?;
+            let out = out.unwrap_or_else(|| {
+                let stem = scenario
+                    .file_stem()
+                    .map_or("run".into(), |s| s.to_string_lossy().into_owned());
+                Path::new("out").join(stem)
+            });
+            prepare_out(&out, force)?;
+            let info = run_one(&file, &out, cli.quiet, None)?;
+            println!(
+                "{}: {} steps, Ĥ(0) = {:.9} J, Ĥ(T) = {:.9} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
+                info.status,
+                info.steps,
+                info.hamiltonian_initial,
+                info.hamiltonian_final,
+                info.max_balance_error,
+                info.total_newton_iterations,
+                info.time_loop_s
+            );
+            println!("outputs in {}", out.display());
+            Ok(())
+        }
+        Command::Check { scenario, sets } => check(&scenario, &sets),
+    }
+}
+
+/// Refuses a non-empty output folder unless `force`.
+fn prepare_out(out: &Path, force: bool) -> Result<()> {
+    if out.exists() {
+        if !out.is_dir() {
+            bail!("output path {} exists and is not a folder", out.display());
+        }
+        let non_empty = std::fs::read_dir(out)
+            .with_context(|| format!("cannot read output folder {}", out.display()))?
+            .next()
+            .is_some();
+        if non_empty && !force {
+            bail!(
+                "output folder {} is not empty; pass --force to overwrite it, or choose another with --out",
+                out.display()
+            );
+        }
+    }
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("cannot create output folder {}", out.display()))
+}
+
+struct Bar(Option<ProgressBar>);
+
+impl Progress for Bar {
+    fn start(&mut self, total: usize) {
+        if let Some(b) = &self.0 {
+            b.set_length(total as u64);
+        }
+    }
+    fn step(&mut self, step: usize, t: f64) {
+        if let Some(b) = &self.0 {
+            b.set_position(step as u64);
+            if step % 16 == 0 {
+                b.set_message(format!("t = {t:.4} s"));
+            }
+        }
+    }
+    fn finish(&mut self) {
+        if let Some(b) = &self.0 {
+            b.finish_and_clear();
+        }
+    }
+}
+
+fn progress_bar(quiet: bool, label: &str) -> Bar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return Bar(None);
+    }
+    let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+    b.set_style(
+        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} steps, {msg}, ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    b.set_prefix(label.to_string());
+    b.enable_steady_tick(Duration::from_millis(200));
+    Bar(Some(b))
+}
+
+fn run_one(
+    file: &ScenarioFile,
+    out: &Path,
+    quiet: bool,
+    end_of_loading: Option<f64>,
+) -> Result<RunInfo> {
+    let label = file
+        .scenario
+        .title
+        .clone()
+        .unwrap_or_else(|| file.path.display().to_string());
+    let mut bar = progress_bar(quiet, &label);
+    Ok(runner::run(file, out, &mut bar, end_of_loading)?)
+}
+
+fn check(path: &Path, sets: &[String]) -> Result<()> {
+    let file = scenario::load(path, sets)?;
+    let d = file.dimension()?;
+    let text = match d {
+        1 => describe::<1>(&file)?,
+        2 => describe::<2>(&file)?,
+        _ => describe::<3>(&file)?,
+    };
+    println!("{} is valid:\n{text}", path.display());
+    Ok(())
+}
+
+fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
+    let v = file.validate::<D>()?;
+    let p = &v.problem;
+    let s = &v.settings;
+    let mut out = String::new();
+    use std::fmt::Write;
+    let _ = writeln!(
+        out,
+        "  title:     {}",
+        file.scenario.title.as_deref().unwrap_or("(none)")
+    );
+    let _ = writeln!(out, "  dimension: {D}");
+    let _ = writeln!(
+        out,
+        "  mesh:      {} elements, {} nodes, reference length {} m",
+        p.mesh.n_elements(),
+        p.mesh.n_nodes(),
+        p.mesh.total_length()
+    );
+    let _ = writeln!(
+        out,
+        "  material:  {}, EA = {} N, rhoA = {} kg/m, {:?} mass",
+        p.material.name(),
+        p.material.ea(),
+        p.rho_a,
+        p.mass
+    );
+    let _ = writeln!(out, "  body force: {:?} N/m", p.body_force.as_slice());
+    for f in &p.boundary.fixed {
+        let comps: Vec<&str> = ["x", "y", "z"][..D]
+            .iter()
+            .zip(f.components)
+            .filter(|(_, c)| *c)
+            .map(|(n, _)| *n)
+            .collect();
+        let _ = writeln!(out, "  fixed:     node {} ({})", f.node, comps.join(", "));
+    }
+    for (node, exprs) in &v.loads {
+        let _ = writeln!(out, "  force:     node {node}: [{}] N", exprs.join(", "));
+    }
+    let steps = (s.t_end / s.step.h).round() as usize;
+    let _ = writeln!(
+        out,
+        "  time:      {} scheme, h = {} s, T = {} s, {steps} steps",
+        s.step.scheme.name(),
+        s.step.h,
+        s.t_end
+    );
+    let _ = write!(
+        out,
+        "  newton:    tol = {:e} N, max {} iterations, solver {:?}",
+        s.step.newton.tol, s.step.newton.max_iter, s.step.solver
+    );
+    Ok(out)
+}
+
+fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
+    prepare_out(out, force)?;
+    let path = Path::new("examples/paper_pendulum.toml (built in)");
+    let mut infos = Vec::new();
+    for scheme in ["dg", "mp"] {
+        let file = scenario::parse(PAPER_SCENARIO, path, &[format!("time.scheme={scheme}")])?;
+        let dir = out.join(scheme);
+        std::fs::create_dir_all(&dir)?;
+        let info = run_one(&file, &dir, quiet, Some(PAPER_END_OF_LOADING))?;
+        infos.push(info);
+    }
+    let figures = out.join("figures");
+    std::fs::create_dir_all(&figures)?;
+    let (dg, mp) = (&infos[0].history, &infos[1].history);
+    let title = "String pendulum (paper, Section 4)";
+    plot::configuration_plot(
+        &figures.join("fig2_configurations"),
+        "Fig. 2: configurations (DG)",
+        &dg.snapshots,
+    )?;
+    plot::energy_plot(
+        &figures.join("fig3_energies"),
+        "Fig. 3: energies (DG)",
+        &dg.t,
+        &dg.kinetic,
+        &dg.potential,
+        &dg.hamiltonian,
+    )?;
+    plot::series_plot(
+        &figures.join("fig4_hamiltonian"),
+        "Fig. 4: Hamiltonian, DG vs MP",
+        "t [s]",
+        "Ĥ [J]",
+        &[
+            Series {
+                label: "DG",
+                x: &dg.t,
+                y: &dg.hamiltonian,
+            },
+            Series {
+                label: "MP",
+                x: &mp.t,
+                y: &mp.hamiltonian,
+            },
+        ],
+        false,
+        Some((PAPER_END_OF_LOADING, "end of loading")),
+    )?;
+    let (ti_dg, inc_dg) = dg.increments();
+    let (ti_mp, inc_mp) = mp.increments();
+    plot::series_plot(
+        &figures.join("fig5_increments"),
+        "Fig. 5: energy increments, DG vs MP",
+        "t [s]",
+        "|Ĥ(n+1) − Ĥ(n)| [J]",
+        &[
+            Series {
+                label: "DG",
+                x: &ti_dg,
+                y: &inc_dg,
+            },
+            Series {
+                label: "MP",
+                x: &ti_mp,
+                y: &inc_mp,
+            },
+        ],
+        true,
+        Some((PAPER_END_OF_LOADING, "end of loading")),
+    )?;
+    println!("{title}: 30 elements, h = 0.01 s, T = 1 s");
+    println!(
+        "{:<7} {:>13} {:>13} {:>24} {:>17} {:>12}",
+        "scheme", "H(0) [J]", "H(T) [J]", "max |dH| after loading", "Newton it. (avg)", "time loop"
+    );
+    for info in &infos {
+        let (t, inc) = info.history.increments();
+        let max_after = t
+            .iter()
+            .zip(&inc)
+            .filter(|(t, _)| **t > PAPER_END_OF_LOADING + 1e-9)
+            .map(|(_, d)| *d)
+            .fold(0.0, f64::max);
+        println!(
+            "{:<7} {:>13.7} {:>13.7} {:>24.3e} {:>10} ({:.2}) {:>10.2} ms",
+            info.scheme,
+            info.hamiltonian_initial,
+            info.hamiltonian_final,
+            max_after,
+            info.total_newton_iterations,
+            info.total_newton_iterations as f64 / info.steps.max(1) as f64,
+            info.time_loop_s * 1e3
+        );
+    }
+    println!("paper:  H(0) = -3.468359, H(1) = -3.403762 (DG), -3.398474 (MP)");
+    println!("outputs in {} (dg/, mp/, figures/)", out.display());
+    Ok(())
+}

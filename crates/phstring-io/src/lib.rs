@@ -1,0 +1,9 @@
+//! File formats and plots for phstring: scenario files (TOML) validated into problems,
+//! output writers (CSV, JSON, ParaView), plots (SVG/PNG), and the run driver used by the
+//! `phstring` command line.
+
+pub mod output;
+pub mod plot;
+pub mod runner;
+pub mod scenario;
+pub mod vtk;

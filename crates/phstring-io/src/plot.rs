@@ -1,0 +1,1198 @@
+//! Figures as SVG and PNG: energies, string configurations and generic time series.
+//!
+//! Every function takes an output *stem* (a path without extension) and writes both
+//! `<stem>.svg` (vector, for publication) and `<stem>.png` (raster, [`WIDTH`] × [`HEIGHT`] px).
+//! The API is data-only: plain slices in SI units, no dependency on the simulator types.
+//! Text uses the bundled DejaVu Sans font, so no system fonts are needed.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::coord::ranged1d::{BoldPoints, KeyPointHint, KeyPointWeight, Ranged};
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// Width of every figure, in pixels (PNG) or SVG user units.
+pub const WIDTH: u32 = 1000;
+/// Height of every figure, in pixels (PNG) or SVG user units.
+pub const HEIGHT: u32 = 700;
+
+/// Font family name under which the bundled DejaVu Sans is registered.
+const FONT: &str = "sans-serif";
+const TITLE_SIZE: f64 = 28.0;
+const DESC_SIZE: f64 = 22.0;
+const TICK_SIZE: f64 = 18.0;
+const LEGEND_SIZE: f64 = 18.0;
+/// Outer margin of the chart inside its area, in pixels.
+const MARGIN: u32 = 18;
+/// Height of the x tick-label plus axis-description band, in pixels.
+const X_LABEL_AREA: u32 = 70;
+/// Snapshots with more nodes than this are drawn without node markers.
+const MAX_MARKED_NODES: usize = 200;
+
+/// Error while writing a figure.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// The bundled font could not be registered with the plotting library.
+    #[error("cannot register the bundled DejaVu Sans font for plotting")]
+    Font,
+    /// The input slices are inconsistent (e.g. different lengths).
+    #[error("cannot plot {path}: {message}")]
+    Input {
+        /// Output file that was to be written.
+        path: PathBuf,
+        /// What is wrong with the input.
+        message: String,
+    },
+    /// The plotting backend failed (drawing, encoding or writing the PNG).
+    #[error("cannot draw {path}: {message}")]
+    Backend {
+        /// Output file that was being drawn.
+        path: PathBuf,
+        /// Backend error message.
+        message: String,
+    },
+    /// Writing the output file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// Output file that was being written.
+        path: PathBuf,
+        /// Underlying I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// One named curve for [`series_plot`]: `y[i]` plotted against `x[i]` (equal lengths).
+#[derive(Debug, Clone, Copy)]
+pub struct Series<'a> {
+    /// Legend text.
+    pub label: &'a str,
+    /// Abscissae, in the unit of the x label.
+    pub x: &'a [f64],
+    /// Ordinates, in the unit of the y label.
+    pub y: &'a [f64],
+}
+
+/// Plots kinetic, potential and total energy against time (paper Fig. 3).
+///
+/// `t` in s; `kinetic`, `potential`, `hamiltonian` in J, each the same length as `t`.
+/// Non-finite values are skipped. Writes `<stem>.svg` and `<stem>.png`.
+pub fn energy_plot(
+    stem: &Path,
+    title: &str,
+    t: &[f64],
+    kinetic: &[f64],
+    potential: &[f64],
+    hamiltonian: &[f64],
+) -> Result<(), PlotError> {
+    for (name, v) in [
+        ("kinetic", kinetic),
+        ("potential", potential),
+        ("hamiltonian", hamiltonian),
+    ] {
+        if v.len() != t.len() {
+            return Err(PlotError::Input {
+                path: stem.to_path_buf(),
+                message: format!("{name} has {} values but t has {}", v.len(), t.len()),
+            });
+        }
+    }
+    let curves = vec![
+        Curve {
+            label: "T̂ (kinetic)".to_string(),
+            points: finite_points(t, kinetic, false),
+            color: PALETTE[0],
+            width: 2,
+        },
+        Curve {
+            label: "V̂ (potential)".to_string(),
+            points: finite_points(t, potential, false),
+            color: PALETTE[1],
+            width: 2,
+        },
+        Curve {
+            label: "Ĥ (Hamiltonian)".to_string(),
+            points: finite_points(t, hamiltonian, false),
+            color: RGBColor(0, 0, 0),
+            width: 2,
+        },
+    ];
+    let fig = XyFigure {
+        title,
+        x_label: "t [s]",
+        y_label: "energy [J]",
+        curves,
+        log_y: false,
+        vline: None,
+    };
+    write_both(stem, &fig)
+}
+
+/// Plots snapshots of the string shape in the plane with equal aspect ratio (paper Fig. 2).
+///
+/// Each snapshot is `(time in s, node positions [x, y] in m)`, drawn as a polyline with node
+/// markers (markers omitted above 200 nodes) and labelled `t = … s`. Non-finite nodes are skipped.
+/// Writes `<stem>.svg` and `<stem>.png`.
+pub fn configuration_plot(
+    stem: &Path,
+    title: &str,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> Result<(), PlotError> {
+    let colors = distinct_colors(snapshots.len());
+    let curves = snapshots
+        .iter()
+        .zip(colors)
+        .map(|((time, nodes), color)| Curve {
+            label: format!("t = {} s", format_plain(*time)),
+            points: nodes
+                .iter()
+                .filter(|p| p[0].is_finite() && p[1].is_finite())
+                .map(|p| (p[0], p[1]))
+                .collect(),
+            color,
+            width: 2,
+        })
+        .collect();
+    write_both(stem, &ConfigFigure { title, curves })
+}
+
+/// Plots named curves `y(x)` on a shared axis pair (paper Figs. 4 and 5).
+///
+/// With `log_y`, values ≤ 0 or non-finite are skipped and the y axis is logarithmic with
+/// tick labels like `1e-12`; otherwise non-finite values are skipped. `vline = Some((x, label))`
+/// adds a dashed vertical marker at `x` with a legend entry. Writes `<stem>.svg` and `<stem>.png`.
+pub fn series_plot(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series<'_>],
+    log_y: bool,
+    vline: Option<(f64, &str)>,
+) -> Result<(), PlotError> {
+    let colors = distinct_colors(series.len());
+    let mut curves = Vec::with_capacity(series.len());
+    for (s, color) in series.iter().zip(colors) {
+        if s.x.len() != s.y.len() {
+            return Err(PlotError::Input {
+                path: stem.to_path_buf(),
+                message: format!(
+                    "series '{}' has {} x values but {} y values",
+                    s.label,
+                    s.x.len(),
+                    s.y.len()
+                ),
+            });
+        }
+        curves.push(Curve {
+            label: s.label.to_string(),
+            points: finite_points(s.x, s.y, log_y),
+            color,
+            width: 2,
+        });
+    }
+    let fig = XyFigure {
+        title,
+        x_label,
+        y_label,
+        curves,
+        log_y,
+        vline: vline.filter(|(x, _)| x.is_finite()),
+    };
+    write_both(stem, &fig)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rendering infrastructure
+// ---------------------------------------------------------------------------------------------
+
+/// Colour-blind-friendly qualitative palette (Okabe–Ito, without yellow, plus grey).
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+    RGBColor(128, 128, 128),
+];
+
+/// `n` distinct colours: the qualitative palette, or a viridis-like ramp for many curves.
+fn distinct_colors(n: usize) -> Vec<RGBColor> {
+    if n <= PALETTE.len() {
+        return PALETTE[..n].to_vec();
+    }
+    // Viridis control points (truncated before the light yellow end, which is poor on white).
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (180.0, 200.0, 30.0),
+    ];
+    (0..n)
+        .map(|i| {
+            let s = i as f64 / (n - 1) as f64 * (STOPS.len() - 1) as f64;
+            let k = (s.floor() as usize).min(STOPS.len() - 2);
+            let f = s - k as f64;
+            let (a, b) = (STOPS[k], STOPS[k + 1]);
+            let mix = |p: f64, q: f64| (p + (q - p) * f).round().clamp(0.0, 255.0) as u8;
+            RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+        })
+        .collect()
+}
+
+/// A polyline with its legend entry.
+struct Curve {
+    label: String,
+    points: Vec<(f64, f64)>,
+    color: RGBColor,
+    width: u32,
+}
+
+/// Something that can be drawn onto any plotters backend.
+///
+/// `raster` is true for the PNG backend, whose text renderer ignores glyph side bearings, so
+/// combining accents (T̂, V̂) are drawn by hand there; SVG viewers render them natively.
+trait Figure {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+    ) -> Result<(), String>;
+}
+
+/// Registers the bundled font once per process.
+fn ensure_font() -> Result<(), PlotError> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()
+            && plotters::style::register_font(FONT, FontStyle::Bold, dejavu::sans::bold()).is_ok()
+    });
+    if ok { Ok(()) } else { Err(PlotError::Font) }
+}
+
+/// `stem` with `.ext` appended (not replacing any dot already in the file name).
+fn with_extension(stem: &Path, ext: &str) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}
+
+/// Draws `fig` into `<stem>.svg` and `<stem>.png`.
+fn write_both(stem: &Path, fig: &impl Figure) -> Result<(), PlotError> {
+    ensure_font()?;
+    let size = (WIDTH, HEIGHT);
+
+    let svg_path = with_extension(stem, "svg");
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        let backend_err = |message: String| PlotError::Backend {
+            path: svg_path.clone(),
+            message,
+        };
+        fig.draw(&root, false).map_err(backend_err)?;
+        root.present().map_err(|e| backend_err(e.to_string()))?;
+    }
+    std::fs::write(&svg_path, svg).map_err(|source| PlotError::Io {
+        path: svg_path.clone(),
+        source,
+    })?;
+
+    let png_path = with_extension(stem, "png");
+    let backend_err = |message: String| PlotError::Backend {
+        path: png_path.clone(),
+        message,
+    };
+    let root = BitMapBackend::new(&png_path, size).into_drawing_area();
+    fig.draw(&root, true).map_err(backend_err)?;
+    root.present().map_err(|e| backend_err(e.to_string()))?;
+    Ok(())
+}
+
+fn text_style(size: f64) -> TextStyle<'static> {
+    TextStyle::from((FONT, size).into_font())
+}
+
+fn err<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+/// Pairs `(x[i], y[i])` with both finite (and `y > 0` when `positive`).
+fn finite_points(x: &[f64], y: &[f64], positive: bool) -> Vec<(f64, f64)> {
+    x.iter()
+        .zip(y)
+        .filter(|(a, b)| a.is_finite() && b.is_finite() && (!positive || **b > 0.0))
+        .map(|(a, b)| (*a, *b))
+        .collect()
+}
+
+/// Min and max of an iterator of finite values, `None` if empty.
+fn bounds(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    values.fold(None, |acc, v| match acc {
+        None => Some((v, v)),
+        Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
+    })
+}
+
+/// A non-degenerate linear range from data bounds: `pad` is the fraction of the span added on
+/// each side; a (near-)constant value `c` becomes `c ± 10 %` (or ±1 around zero).
+fn linear_range(b: Option<(f64, f64)>, pad: f64) -> (f64, f64) {
+    let Some((lo, hi)) = b else {
+        return (0.0, 1.0);
+    };
+    let span = hi - lo;
+    let mag = lo.abs().max(hi.abs());
+    if !span.is_finite() || span <= 1e-9 * mag {
+        let mid = 0.5 * (lo + hi);
+        let half = if mid.abs() > 0.0 && mid.is_finite() {
+            0.1 * mid.abs()
+        } else {
+            1.0
+        };
+        let mid = if mid.is_finite() { mid } else { 0.0 };
+        return (mid - half, mid + half);
+    }
+    (lo - pad * span, hi + pad * span)
+}
+
+/// Tick-label formatter for a linear axis over `[lo, hi]`: fixed-point with just enough
+/// decimals (trailing zeros trimmed), scientific for very large or very small magnitudes,
+/// and exactly `0` for zero (never `-0`).
+fn linear_formatter(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+    let span = (hi - lo).abs().max(f64::MIN_POSITIVE);
+    let mag = lo.abs().max(hi.abs());
+    // Ticks are at multiples of 1, 2 or 5 × 10^k with at most ~20 per axis.
+    let step_exp = (span / 20.0).log10().floor();
+    let scientific = !(1e-3..1e6).contains(&mag);
+    let decimals = (-step_exp).clamp(0.0, 15.0) as usize;
+    let sig = (mag.log10().floor() - step_exp).clamp(0.0, 12.0) as usize;
+    move |v: &f64| {
+        if v.abs() <= span * 1e-9 {
+            return "0".to_string();
+        }
+        if scientific {
+            trim_scientific(&format!("{:.*e}", sig, v))
+        } else {
+            trim_fixed(&format!("{:.*}", decimals, v))
+        }
+    }
+}
+
+/// Removes trailing zeros (and a trailing dot) from a fixed-point number; `-0` becomes `0`.
+fn trim_fixed(s: &str) -> String {
+    let t = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        s
+    };
+    if t == "-0" {
+        "0".to_string()
+    } else {
+        t.to_string()
+    }
+}
+
+/// Removes trailing zeros from the mantissa of a number formatted with `{:e}`.
+fn trim_scientific(s: &str) -> String {
+    match s.split_once('e') {
+        Some((mantissa, exp)) => format!("{}e{}", trim_fixed(mantissa), exp),
+        None => trim_fixed(s),
+    }
+}
+
+/// Short plain representation of a time for legends (e.g. `0.2`, `1`, `1e-5`).
+fn format_plain(v: f64) -> String {
+    if v == 0.0 {
+        return "0".to_string();
+    }
+    let mag = v.abs();
+    if !(1e-3..1e6).contains(&mag) {
+        return trim_scientific(&format!("{v:.3e}"));
+    }
+    trim_fixed(&format!("{v:.6}"))
+}
+
+/// Logarithmic y axis: plotters' log mapping with ticks at powers of ten
+/// (plus 2× and 5× when the range spans less than two decades).
+struct LogAxis {
+    inner: LogCoord<f64>,
+    lo: f64,
+    hi: f64,
+}
+
+impl LogAxis {
+    fn new(lo: f64, hi: f64) -> Self {
+        Self {
+            inner: (lo..hi).log_scale().into(),
+            lo,
+            hi,
+        }
+    }
+
+    fn decades(&self) -> f64 {
+        (self.hi / self.lo).log10()
+    }
+
+    /// Values `m × 10^k` inside the range, for each mantissa `m` in `mantissas`.
+    fn ticks(&self, mantissas: &[f64], every: i32) -> Vec<f64> {
+        let k0 = self.lo.log10().floor() as i32;
+        let k1 = self.hi.log10().ceil() as i32;
+        let mut out = Vec::new();
+        for k in k0..=k1 {
+            let p = 10f64.powi(k);
+            for &m in mantissas {
+                let v = m * p;
+                let keep = if m == 1.0 {
+                    k.rem_euclid(every) == 0
+                } else {
+                    true
+                };
+                if keep && v >= self.lo * (1.0 - 1e-12) && v <= self.hi * (1.0 + 1e-12) {
+                    out.push(v);
+                }
+            }
+        }
+        out
+    }
+}
+
+impl Ranged for LogAxis {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        let max = hint.max_num_points().max(1);
+        let decades = self.decades();
+        match hint.weight() {
+            KeyPointWeight::Bold => {
+                if decades < 2.0 {
+                    self.ticks(&[1.0, 2.0, 5.0], 1)
+                } else {
+                    let every = ((decades.ceil() as usize).div_ceil(max)).max(1) as i32;
+                    self.ticks(&[1.0], every)
+                }
+            }
+            KeyPointWeight::Any => {
+                if decades <= 8.0 {
+                    self.ticks(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0], 1)
+                } else {
+                    self.ticks(&[1.0], 1)
+                }
+            }
+        }
+    }
+
+    fn range(&self) -> Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+/// Tick label for the logarithmic axis, e.g. `1e-12`, `5e-3`.
+fn log_label(v: &f64) -> String {
+    if *v <= 0.0 || !v.is_finite() {
+        return String::new();
+    }
+    format!("{v:.0e}")
+}
+
+/// Legend entry: a line sample (optionally dashed, optionally with a circle marker) and text.
+struct LegendEntry {
+    label: String,
+    color: RGBColor,
+    dashed: bool,
+    marker: bool,
+}
+
+/// Width in pixels needed by a legend panel holding `entries`.
+fn legend_width<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+) -> Result<u32, String> {
+    let style = text_style(LEGEND_SIZE);
+    let mut w = 0;
+    for e in entries {
+        w = w.max(area.estimate_text_size(&e.label, &style).map_err(err)?.0);
+    }
+    Ok(w + 80)
+}
+
+/// Draws a framed legend at the top of `area`, starting `top` pixels down.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+    top: i32,
+    raster: bool,
+) -> Result<(), String> {
+    if entries.is_empty() {
+        return Ok(());
+    }
+    let (w, _) = area.dim_in_pixel();
+    let row = (LEGEND_SIZE * 1.6) as i32;
+    let x0 = 8;
+    let x1 = w as i32 - 6;
+    let y1 = top + row * entries.len() as i32 + 10;
+    area.draw(&Rectangle::new(
+        [(x0, top), (x1, y1)],
+        ShapeStyle::from(&RGBColor(160, 160, 160)).stroke_width(1),
+    ))
+    .map_err(err)?;
+    for (i, e) in entries.iter().enumerate() {
+        let y = top + 5 + row * i as i32 + row / 2;
+        let (a, b) = (x0 + 10, x0 + 50);
+        let style = ShapeStyle::from(&e.color).stroke_width(2);
+        if e.dashed {
+            let mut x = a;
+            while x < b {
+                area.draw(&PathElement::new(vec![(x, y), ((x + 7).min(b), y)], style))
+                    .map_err(err)?;
+                x += 12;
+            }
+        } else {
+            area.draw(&PathElement::new(vec![(a, y), (b, y)], style))
+                .map_err(err)?;
+        }
+        if e.marker {
+            area.draw(&Circle::new(((a + b) / 2, y), 4, e.color.filled()))
+                .map_err(err)?;
+        }
+        draw_text_left(area, &e.label, LEGEND_SIZE, (b + 10, y), raster)?;
+    }
+    Ok(())
+}
+
+/// Whether `c` is a Unicode combining diacritical mark (U+0300–U+036F).
+fn is_combining(c: char) -> bool {
+    ('\u{300}'..='\u{36f}').contains(&c)
+}
+
+/// Draws `text` left-aligned and vertically centred at `pos`.
+///
+/// On raster backends, combining marks are removed from the text and the common ones
+/// (circumflex U+0302, macron U+0304) are drawn as strokes over their base letter.
+fn draw_text_left<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    text: &str,
+    size: f64,
+    pos: (i32, i32),
+    raster: bool,
+) -> Result<(), String> {
+    let style = text_style(size).pos(Pos::new(HPos::Left, VPos::Center));
+    if !raster || !text.chars().any(is_combining) {
+        return area.draw_text(text, &style, pos).map_err(err);
+    }
+    let plain: String = text.chars().filter(|c| !is_combining(*c)).collect();
+    area.draw_text(&plain, &style, pos).map_err(err)?;
+    // Baseline of the rendered text (plotters' layout: box height size/1.24, glyphs placed
+    // size/2 below its top), and cap / x heights of DejaVu Sans relative to that size.
+    let baseline = pos.1 - (size / 1.24) as i32 / 2 + (size / 2.0) as i32;
+    let mut prefix = String::new();
+    let mut base: Option<(i32, i32, char)> = None;
+    for c in text.chars() {
+        if !is_combining(c) {
+            let x0 = area.estimate_text_size(&prefix, &style).map_err(err)?.0 as i32;
+            prefix.push(c);
+            let x1 = area.estimate_text_size(&prefix, &style).map_err(err)?.0 as i32;
+            base = Some((pos.0 + x0, pos.0 + x1, c));
+            continue;
+        }
+        let Some((x0, x1, b)) = base else { continue };
+        let height = if b.is_uppercase() || b.is_ascii_digit() {
+            0.63
+        } else {
+            0.48
+        };
+        let top = baseline as f64 - height * size;
+        let xc = 0.5 * f64::from(x0 + x1);
+        let hw = (0.22 * size).min(0.45 * f64::from(x1 - x0).max(1.0));
+        let stroke = ShapeStyle::from(&BLACK).stroke_width(((size / 16.0).round() as u32).max(1));
+        let pts: Vec<(i32, i32)> = match c {
+            '\u{302}' => vec![
+                ((xc - hw) as i32, (top - 0.09 * size) as i32),
+                (xc as i32, (top - 0.3 * size) as i32),
+                ((xc + hw) as i32, (top - 0.09 * size) as i32),
+            ],
+            '\u{304}' => vec![
+                ((xc - hw) as i32, (top - 0.2 * size) as i32),
+                ((xc + hw) as i32, (top - 0.2 * size) as i32),
+            ],
+            _ => Vec::new(),
+        };
+        if !pts.is_empty() {
+            area.draw(&PathElement::new(pts, stroke)).map_err(err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Fills white, draws the title, and splits off a right-hand legend panel.
+/// Returns `(chart area, legend area)`.
+#[allow(clippy::type_complexity)]
+fn layout<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    entries: &[LegendEntry],
+) -> Result<(DrawingArea<DB, Shift>, DrawingArea<DB, Shift>), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let body = if title.trim().is_empty() {
+        root.clone()
+    } else {
+        root.margin(8, 0, 0, 0)
+            .titled(title, text_style(TITLE_SIZE))
+            .map_err(err)?
+    };
+    let (w, _) = body.dim_in_pixel();
+    let lw = if entries.is_empty() {
+        0
+    } else {
+        legend_width(&body, entries)?.min(w / 2)
+    };
+    Ok(body.split_horizontally(w - lw))
+}
+
+/// Width of the y label area needed for the given tick labels, in pixels.
+fn y_label_area<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    labels: impl Iterator<Item = String>,
+) -> Result<u32, String> {
+    let style = text_style(TICK_SIZE);
+    let mut w = 0;
+    for l in labels {
+        w = w.max(area.estimate_text_size(&l, &style).map_err(err)?.0);
+    }
+    // tick marks + gap + rotated axis description
+    Ok(w + 22 + (DESC_SIZE * 1.6) as u32)
+}
+
+/// Draws the polylines (and markers) of `curves` into a built chart.
+///
+/// On raster backends wide polylines are drawn segment by segment: plotters joins wide bitmap
+/// paths with unlimited miters, which turns sharp zig-zags (noisy data) into long false spikes.
+fn draw_curves<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    curves: &[Curve],
+    markers: bool,
+    raster: bool,
+) -> Result<(), String>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for c in curves {
+        let style = ShapeStyle::from(&c.color).stroke_width(c.width);
+        if c.points.len() > 1 && raster && c.width > 1 {
+            chart
+                .draw_series(
+                    c.points
+                        .windows(2)
+                        .map(|w| PathElement::new(vec![w[0], w[1]], style)),
+                )
+                .map_err(err)?;
+        } else if c.points.len() > 1 {
+            chart
+                .draw_series(LineSeries::new(c.points.iter().copied(), style))
+                .map_err(err)?;
+        }
+        if markers || c.points.len() == 1 {
+            chart
+                .draw_series(
+                    c.points
+                        .iter()
+                        .map(|&p| Circle::new(p, 3, c.color.filled())),
+                )
+                .map_err(err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Line plot of several curves against a common x axis (linear or log y).
+struct XyFigure<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    curves: Vec<Curve>,
+    log_y: bool,
+    vline: Option<(f64, &'a str)>,
+}
+
+impl XyFigure<'_> {
+    fn legend(&self) -> Vec<LegendEntry> {
+        let mut entries: Vec<LegendEntry> = self
+            .curves
+            .iter()
+            .map(|c| LegendEntry {
+                label: c.label.clone(),
+                color: c.color,
+                dashed: false,
+                marker: false,
+            })
+            .collect();
+        if let Some((_, label)) = self.vline {
+            entries.push(LegendEntry {
+                label: label.to_string(),
+                color: RGBColor(90, 90, 90),
+                dashed: true,
+                marker: false,
+            });
+        }
+        entries
+    }
+}
+
+impl Figure for XyFigure<'_> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+    ) -> Result<(), String> {
+        let entries = self.legend();
+        let (plot_area, legend_area) = layout(root, self.title, &entries)?;
+
+        let xs = self
+            .curves
+            .iter()
+            .flat_map(|c| c.points.iter().map(|p| p.0));
+        let xs = xs.chain(self.vline.map(|v| v.0));
+        let (x0, x1) = linear_range(bounds(xs), 0.0);
+        let x_fmt = linear_formatter(x0, x1);
+        let ys = || {
+            self.curves
+                .iter()
+                .flat_map(|c| c.points.iter().map(|p| p.1))
+        };
+
+        let tick = text_style(TICK_SIZE);
+        let desc = text_style(DESC_SIZE);
+        let vline_style = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(2);
+
+        if self.log_y {
+            let (y0, y1) = match bounds(ys()) {
+                Some((lo, hi)) => (lo / 3.0, hi * 3.0),
+                None => (0.1, 10.0),
+            };
+            let axis = LogAxis::new(y0, y1);
+            let labels = axis.key_points(BoldPoints(12));
+            let yl = y_label_area(&plot_area, labels.iter().map(log_label))?;
+            let mut chart = ChartBuilder::on(&plot_area)
+                .margin(MARGIN)
+                .x_label_area_size(X_LABEL_AREA)
+                .y_label_area_size(yl)
+                .build_cartesian_2d(x0..x1, axis)
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc(self.x_label)
+                .y_desc(self.y_label)
+                .x_labels(10)
+                .y_labels(12)
+                .x_label_formatter(&x_fmt)
+                .y_label_formatter(&log_label)
+                .label_style(tick.clone())
+                .axis_desc_style(desc.clone())
+                .light_line_style(RGBColor(235, 235, 235))
+                .bold_line_style(RGBColor(205, 205, 205))
+                .draw()
+                .map_err(err)?;
+            draw_curves(&mut chart, &self.curves, false, raster)?;
+            if let Some((x, _)) = self.vline {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(x, y0), (x, y1)],
+                        10,
+                        7,
+                        vline_style,
+                    ))
+                    .map_err(err)?;
+            }
+        } else {
+            let (y0, y1) = linear_range(bounds(ys()), 0.05);
+            let y_fmt = linear_formatter(y0, y1);
+            let axis = RangedCoordf64::from(y0..y1);
+            let labels = axis.key_points(10usize);
+            let yl = y_label_area(&plot_area, labels.iter().map(&y_fmt))?;
+            let mut chart = ChartBuilder::on(&plot_area)
+                .margin(MARGIN)
+                .x_label_area_size(X_LABEL_AREA)
+                .y_label_area_size(yl)
+                .build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc(self.x_label)
+                .y_desc(self.y_label)
+                .x_labels(10)
+                .y_labels(10)
+                .x_label_formatter(&x_fmt)
+                .y_label_formatter(&y_fmt)
+                .label_style(tick.clone())
+                .axis_desc_style(desc.clone())
+                .light_line_style(RGBColor(238, 238, 238))
+                .max_light_lines(4)
+                .bold_line_style(RGBColor(210, 210, 210))
+                .draw()
+                .map_err(err)?;
+            draw_curves(&mut chart, &self.curves, false, raster)?;
+            if let Some((x, _)) = self.vline {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(x, y0), (x, y1)],
+                        10,
+                        7,
+                        vline_style,
+                    ))
+                    .map_err(err)?;
+            }
+        }
+        draw_legend(&legend_area, &entries, MARGIN as i32, raster)
+    }
+}
+
+/// Snapshots of the string in the plane, equal aspect ratio.
+struct ConfigFigure<'a> {
+    title: &'a str,
+    curves: Vec<Curve>,
+}
+
+impl Figure for ConfigFigure<'_> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        raster: bool,
+    ) -> Result<(), String> {
+        let markers = self
+            .curves
+            .iter()
+            .all(|c| c.points.len() <= MAX_MARKED_NODES);
+        let entries: Vec<LegendEntry> = self
+            .curves
+            .iter()
+            .map(|c| LegendEntry {
+                label: c.label.clone(),
+                color: c.color,
+                dashed: false,
+                marker: markers,
+            })
+            .collect();
+        let (plot_area, legend_area) = layout(root, self.title, &entries)?;
+
+        // Padded data box, in m.
+        let pts = || self.curves.iter().flat_map(|c| c.points.iter());
+        let bx = bounds(pts().map(|p| p.0));
+        let by = bounds(pts().map(|p| p.1));
+        let ((bx0, bx1), (by0, by1)) = match (bx, by) {
+            (Some(x), Some(y)) => (x, y),
+            _ => ((0.0, 1.0), (0.0, 1.0)),
+        };
+        let span = (bx1 - bx0).max(by1 - by0);
+        let pad = if span > 0.0 {
+            0.06 * span
+        } else {
+            0.1 * bx0.abs().max(by0.abs()).max(1.0)
+        };
+        let (bx0, bx1, by0, by1) = (bx0 - pad, bx1 + pad, by0 - pad, by1 + pad);
+
+        // Label area sized for labels of the padded box (final ranges are similar or wider).
+        let y_fmt_guess = linear_formatter(by0, by1);
+        let guess = RangedCoordf64::from(by0..by1).key_points(10usize);
+        let yl = y_label_area(&plot_area, guess.iter().map(&y_fmt_guess))? + 12;
+
+        // Measure the plotting area to make 1 m in x as long as 1 m in y.
+        let (pw, ph) = {
+            let probe = ChartBuilder::on(&plot_area)
+                .margin(MARGIN)
+                .x_label_area_size(X_LABEL_AREA)
+                .y_label_area_size(yl)
+                .build_cartesian_2d(0.0..1.0, 0.0..1.0)
+                .map_err(err)?;
+            let (w, h) = probe.plotting_area().dim_in_pixel();
+            (f64::from(w.max(1)), f64::from(h.max(1)))
+        };
+        let m_per_px = ((bx1 - bx0) / pw).max((by1 - by0) / ph);
+        let (cx, cy) = (0.5 * (bx0 + bx1), 0.5 * (by0 + by1));
+        let (x0, x1) = (cx - 0.5 * m_per_px * pw, cx + 0.5 * m_per_px * pw);
+        let (y0, y1) = (cy - 0.5 * m_per_px * ph, cy + 0.5 * m_per_px * ph);
+        let x_fmt = linear_formatter(x0, x1);
+        let y_fmt = linear_formatter(y0, y1);
+
+        let mut chart = ChartBuilder::on(&plot_area)
+            .margin(MARGIN)
+            .x_label_area_size(X_LABEL_AREA)
+            .y_label_area_size(yl)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("x [m]")
+            .y_desc("y [m]")
+            .x_labels(10)
+            .y_labels(10)
+            .x_label_formatter(&x_fmt)
+            .y_label_formatter(&y_fmt)
+            .label_style(text_style(TICK_SIZE))
+            .axis_desc_style(text_style(DESC_SIZE))
+            .light_line_style(RGBColor(238, 238, 238))
+            .max_light_lines(4)
+            .bold_line_style(RGBColor(210, 210, 210))
+            .draw()
+            .map_err(err)?;
+        draw_curves(&mut chart, &self.curves, markers, raster)?;
+        draw_legend(&legend_area, &entries, MARGIN as i32, raster)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A fresh, empty directory under the system temp dir.
+    fn temp_dir(name: &str) -> PathBuf {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!(
+            "phstring-plot-{}-{}-{}",
+            std::process::id(),
+            n,
+            name
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// Removes a test directory unless `PHSTRING_KEEP_TEST_PLOTS` is set (to inspect the figures).
+    fn cleanup(dir: &Path) {
+        if std::env::var_os("PHSTRING_KEEP_TEST_PLOTS").is_none() {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
+
+    /// Asserts both files exist, the SVG holds `texts`, the PNG has the right signature and size.
+    fn check_outputs(stem: &Path, texts: &[&str]) {
+        let svg = std::fs::read_to_string(with_extension(stem, "svg")).unwrap();
+        assert!(svg.contains("<svg"), "not an SVG");
+        for t in texts {
+            assert!(svg.contains(t), "SVG lacks {t:?}");
+        }
+        let png = std::fs::read(with_extension(stem, "png")).unwrap();
+        assert!(png.len() > 24);
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+        assert_eq!(&png[12..16], b"IHDR");
+        let w = u32::from_be_bytes([png[16], png[17], png[18], png[19]]);
+        let h = u32::from_be_bytes([png[20], png[21], png[22], png[23]]);
+        assert_eq!((w, h), (WIDTH, HEIGHT));
+    }
+
+    /// Pendulum-like snapshots: 31 nodes of a 1 m string hanging from the origin.
+    fn pendulum_snapshots() -> Vec<(f64, Vec<[f64; 2]>)> {
+        (0..6)
+            .map(|k| {
+                let t = 0.2 * k as f64;
+                let phi0 = -PI / 4.0 + 1.3 * t; // swing from 45° right towards left
+                let nodes = (0..31)
+                    .map(|i| {
+                        let s = i as f64 / 30.0;
+                        let phi = phi0 + 0.6 * t * s * s; // whip-like bending
+                        [
+                            s * (phi + PI / 2.0).cos() * 1.0,
+                            -s * (phi + PI / 2.0).sin(),
+                        ]
+                    })
+                    .collect();
+                (t, nodes)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn formatter_zero_and_trimming() {
+        let f = linear_formatter(-1.0, 1.0);
+        assert_eq!(f(&-0.0), "0");
+        assert_eq!(f(&1e-17), "0");
+        assert_eq!(f(&0.5), "0.5");
+        assert_eq!(f(&0.30000000000000004), "0.3");
+        assert_eq!(f(&-0.2), "-0.2");
+        let g = linear_formatter(0.0, 1e-5);
+        assert_eq!(g(&5e-6), "5e-6");
+        assert_eq!(log_label(&1e-12), "1e-12");
+        let almost = 1e-12 * (1.0 - 1e-15);
+        assert!(almost < 1e-12);
+        assert_eq!(log_label(&almost), "1e-12");
+        assert_eq!(format_plain(0.2), "0.2");
+        assert_eq!(format_plain(1.0), "1");
+    }
+
+    #[test]
+    fn log_axis_ticks_cover_tiny_values() {
+        let axis = LogAxis::new(1.8e-17, 3e-4);
+        let ticks = axis.key_points(BoldPoints(12));
+        assert!(ticks.iter().any(|v| (v / 1e-16 - 1.0).abs() < 1e-9));
+        assert!(ticks.len() <= 12);
+        let narrow = LogAxis::new(3e-6, 3e-5);
+        assert!(narrow.key_points(BoldPoints(12)).len() >= 3);
+    }
+
+    #[test]
+    fn energy_plot_writes_svg_and_png() {
+        let dir = temp_dir("energy");
+        let stem = dir.join("energy");
+        let t: Vec<f64> = (0..=500).map(|i| i as f64 * 0.002).collect();
+        let kin: Vec<f64> = t
+            .iter()
+            .map(|t| 0.5 * (PI * t / 2.0).sin().powi(2))
+            .collect();
+        let pot: Vec<f64> = kin.iter().map(|k| 0.5 - k).collect();
+        let ham: Vec<f64> = kin.iter().zip(&pot).map(|(a, b)| a + b).collect();
+        energy_plot(&stem, "String pendulum: energy", &t, &kin, &pot, &ham).unwrap();
+        check_outputs(&stem, &["t [s]", "energy [J]", "kinetic", "Hamiltonian"]);
+        cleanup(&dir);
+    }
+
+    #[test]
+    fn configuration_plot_writes_svg_and_png() {
+        let dir = temp_dir("config");
+        let stem = dir.join("configuration");
+        configuration_plot(&stem, "String pendulum", &pendulum_snapshots()).unwrap();
+        check_outputs(&stem, &["x [m]", "y [m]", "t = 0.2 s", "t = 1 s"]);
+        cleanup(&dir);
+    }
+
+    #[test]
+    fn series_plot_linear_and_log() {
+        let dir = temp_dir("series");
+        let t: Vec<f64> = (0..=1000).map(|i| i as f64 * 1e-3).collect();
+        let dg: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, _)| {
+                if i % 7 == 0 {
+                    0.0
+                } else {
+                    1e-14 * (1.0 + (i as f64).sin())
+                }
+            })
+            .collect();
+        let mp: Vec<f64> = t
+            .iter()
+            .map(|t| 1e-5 * (1.0 + 0.8 * (20.0 * t).sin()))
+            .collect();
+        let stem = dir.join("increments");
+        series_plot(
+            &stem,
+            "Energy increments",
+            "t [s]",
+            "|Ĥ(n+1) − Ĥ(n)| [J]",
+            &[
+                Series {
+                    label: "DG",
+                    x: &t,
+                    y: &dg,
+                },
+                Series {
+                    label: "MP",
+                    x: &t,
+                    y: &mp,
+                },
+            ],
+            true,
+            Some((0.2, "end of loading")),
+        )
+        .unwrap();
+        check_outputs(&stem, &["t [s]", "DG", "MP", "end of loading", "1e-14"]);
+
+        let h_dg: Vec<f64> = t.iter().map(|_| 0.5).collect();
+        let h_mp: Vec<f64> = t.iter().map(|t| 0.5 - 2e-4 * t).collect();
+        let stem = dir.join("hamiltonian");
+        series_plot(
+            &stem,
+            "Hamiltonian",
+            "t [s]",
+            "Ĥ [J]",
+            &[
+                Series {
+                    label: "DG",
+                    x: &t,
+                    y: &h_dg,
+                },
+                Series {
+                    label: "MP",
+                    x: &t,
+                    y: &h_mp,
+                },
+            ],
+            false,
+            Some((0.2, "end of loading")),
+        )
+        .unwrap();
+        check_outputs(&stem, &["Ĥ [J]", "DG", "MP", "end of loading", "0.4999"]);
+        cleanup(&dir);
+    }
+
+    #[test]
+    fn degenerate_inputs_do_not_panic() {
+        let dir = temp_dir("degenerate");
+        let empty: [f64; 0] = [];
+        energy_plot(&dir.join("e0"), "", &empty, &empty, &empty, &empty).unwrap();
+        check_outputs(&dir.join("e0"), &["energy [J]"]);
+        let t = [0.0, 1.0, 2.0];
+        let c = [1.0, 1.0, 1.0];
+        let nan = [f64::NAN, f64::INFINITY, f64::NAN];
+        energy_plot(&dir.join("e1"), "flat", &t, &c, &nan, &c).unwrap();
+        configuration_plot(&dir.join("c0"), "none", &[]).unwrap();
+        configuration_plot(&dir.join("c1"), "point", &[(0.0, vec![[0.0, 0.0]])]).unwrap();
+        let zeros = [0.0, -1.0, f64::NAN];
+        series_plot(
+            &dir.join("s0"),
+            "all skipped",
+            "t [s]",
+            "y",
+            &[Series {
+                label: "z",
+                x: &t,
+                y: &zeros,
+            }],
+            true,
+            Some((f64::NAN, "bad")),
+        )
+        .unwrap();
+        series_plot(&dir.join("s1"), "", "x", "y", &[], false, None).unwrap();
+        let bad = series_plot(
+            &dir.join("s2"),
+            "",
+            "x",
+            "y",
+            &[Series {
+                label: "m",
+                x: &t,
+                y: &c[..2],
+            }],
+            false,
+            None,
+        );
+        assert!(matches!(bad, Err(PlotError::Input { .. })));
+        cleanup(&dir);
+    }
+
+    #[test]
+    fn missing_directory_is_an_error() {
+        let stem = std::env::temp_dir()
+            .join("phstring-plot-does-not-exist-dir")
+            .join("sub")
+            .join("fig");
+        let r = series_plot(&stem, "", "x", "y", &[], false, None);
+        assert!(r.is_err());
+    }
+}

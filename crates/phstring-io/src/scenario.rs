@@ -1,0 +1,934 @@
+//! Scenario files (TOML): serde data, `--set` overrides, and validation into a
+//! [`phstring::Problem`]. Every key is documented in `docs/scenario.md`.
+//!
+//! Errors name the key and its `line:column` in the file (or the `--set` option that gave
+//! the value).
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use nanoexpr::Math;
+use phstring::{
+    Boundary, Fixed, MassMatrix, Material, Mesh, NewtonParams, NodalLoad, Problem, Scheme,
+    SolverKind, State, StepParams, Vector,
+};
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+/// A scenario as written in the file (before validation).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Free-text title, printed in reports.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// Spatial dimension `d` ∈ {1, 2, 3}.
+    pub dimension: Spanned<i64>,
+    /// Initial (and reference) geometry.
+    pub geometry: Geometry,
+    /// Discretization.
+    pub mesh: MeshSpec,
+    /// Material law and parameters.
+    pub material: MaterialSpec,
+    /// Body force.
+    #[serde(default)]
+    pub body_force: BodyForceSpec,
+    /// Boundary conditions, one table per node.
+    #[serde(default)]
+    pub boundary: Vec<BoundarySpec>,
+    /// Time stepping.
+    pub time: TimeSpec,
+    /// Newton's method and the linear solver.
+    #[serde(default)]
+    pub newton: NewtonSpec,
+    /// What to write.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// Geometry: a straight string from `start` to `end`, or an explicit polyline `nodes`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Geometry {
+    /// First node position [m] (with `end`).
+    #[serde(default)]
+    pub start: Option<Spanned<Vec<f64>>>,
+    /// Last node position [m] (with `start`).
+    #[serde(default)]
+    pub end: Option<Spanned<Vec<f64>>>,
+    /// Explicit node positions [m] of a chain; overrides `mesh.elements`.
+    #[serde(default)]
+    pub nodes: Option<Spanned<Vec<Vec<f64>>>>,
+    /// Unstretched (reference) length `L` [m]; default: the length of the initial polyline
+    /// (no prestretch). Reference lengths of elements are proportional to their initial
+    /// lengths.
+    #[serde(default)]
+    pub length: Option<Spanned<f64>>,
+}
+
+/// Mesh size.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// Number of elements (with `geometry.start`/`end`).
+    #[serde(default)]
+    pub elements: Option<Spanned<i64>>,
+}
+
+/// Material law.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// `hyperelastic` (default), `linear_elastic` or `st_venant_kirchhoff`.
+    #[serde(default = "default_law")]
+    pub law: Spanned<String>,
+    /// Axial stiffness `EA` [N].
+    pub ea: Spanned<f64>,
+    /// Mass per unit length `ρA` [kg/m].
+    pub rho_a: Spanned<f64>,
+    /// Mass matrix: `consistent` (default) or `lumped`.
+    #[serde(default = "default_mass")]
+    pub mass: Spanned<String>,
+}
+
+fn default_law() -> Spanned<String> {
+    Spanned::new(0..0, "hyperelastic".into())
+}
+fn default_mass() -> Spanned<String> {
+    Spanned::new(0..0, "consistent".into())
+}
+
+/// Body force `b = ρA g + per_length`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyForceSpec {
+    /// Gravitational acceleration vector `g` [m/s²], e.g. `[0, -9.81]`.
+    #[serde(default)]
+    pub gravity: Option<Spanned<Vec<f64>>>,
+    /// Additional force per unit reference length [N/m].
+    #[serde(default)]
+    pub per_length: Option<Spanned<Vec<f64>>>,
+}
+
+/// Which components of a node are fixed.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum FixedSpec {
+    /// `true`: all components; `false`: none.
+    All(bool),
+    /// A list of components, e.g. `["x", "z"]`.
+    Components(Vec<String>),
+}
+
+/// A boundary condition at one node.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// Node index; negative values count from the end (`-1` is the last node).
+    pub node: Spanned<i64>,
+    /// Fixed components (Dirichlet): `true` or a list like `["x", "y"]`.
+    #[serde(default)]
+    pub fixed: Option<Spanned<FixedSpec>>,
+    /// Nodal force [N], one expression in `t` [s] per component.
+    #[serde(default)]
+    pub force: Option<Spanned<Vec<String>>>,
+}
+
+/// Time stepping.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// `dg` (discrete gradient, default) or `mp` (implicit midpoint).
+    #[serde(default = "default_scheme")]
+    pub scheme: Spanned<String>,
+    /// Step size `h` [s].
+    pub h: Spanned<f64>,
+    /// End time `T` [s].
+    pub end: Spanned<f64>,
+}
+
+fn default_scheme() -> Spanned<String> {
+    Spanned::new(0..0, "dg".into())
+}
+
+/// Newton's method.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NewtonSpec {
+    /// Residual tolerance [N] (Euclidean norm of the force residual).
+    #[serde(default = "default_tol")]
+    pub tol: Spanned<f64>,
+    /// Iteration limit per step.
+    #[serde(default = "default_max_iter")]
+    pub max_iter: Spanned<i64>,
+    /// Linear solver: `auto` (default), `block_tridiagonal` or `sparse_lu`.
+    #[serde(default = "default_solver")]
+    pub solver: Spanned<String>,
+}
+
+fn default_tol() -> Spanned<f64> {
+    Spanned::new(0..0, 1e-11)
+}
+fn default_max_iter() -> Spanned<i64> {
+    Spanned::new(0..0, 25)
+}
+fn default_solver() -> Spanned<String> {
+    Spanned::new(0..0, "auto".into())
+}
+
+impl Default for NewtonSpec {
+    fn default() -> Self {
+        Self {
+            tol: default_tol(),
+            max_iter: default_max_iter(),
+            solver: default_solver(),
+        }
+    }
+}
+
+/// Output options.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write positions and VTK frames every `stride` steps (energies: every step).
+    #[serde(default = "default_stride")]
+    pub stride: Spanned<i64>,
+    /// Write `positions.csv`.
+    #[serde(default = "yes")]
+    pub positions: bool,
+    /// Write `paraview/string.pvd` and frames.
+    #[serde(default = "yes")]
+    pub vtk: bool,
+    /// Write plots (SVG and PNG).
+    #[serde(default = "yes")]
+    pub plots: bool,
+}
+
+fn default_stride() -> Spanned<i64> {
+    Spanned::new(0..0, 1)
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            stride: default_stride(),
+            positions: true,
+            vtk: true,
+            plots: true,
+        }
+    }
+}
+
+/// Where a value came from, for error messages.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Origin {
+    /// A position in the scenario file.
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based.
+        line: usize,
+        /// Column, 1-based.
+        column: usize,
+    },
+    /// A `--set` option.
+    Set(String),
+    /// A default value (the key was not given).
+    Default,
+}
+
+impl std::fmt::Display for Origin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Origin::File { path, line, column } => write!(f, "{}:{line}:{column}", path.display()),
+            Origin::Set(s) => write!(f, "--set {s}"),
+            Origin::Default => write!(f, "(default value)"),
+        }
+    }
+}
+
+/// Errors while reading or validating a scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("cannot read scenario file {}: {source}", path.display())]
+    Read {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The file is not UTF-8 text.
+    #[error("scenario file {} is not UTF-8 text (byte {valid_up_to} is invalid); is it a TOML file?", path.display())]
+    NotText {
+        /// File.
+        path: PathBuf,
+        /// Bytes before the first invalid one.
+        valid_up_to: usize,
+    },
+    /// TOML syntax or type error (unknown key, wrong type, missing key).
+    #[error("{}: {message}", origin)]
+    Toml {
+        /// Where.
+        origin: Origin,
+        /// The parser's message, with the offending line.
+        message: String,
+    },
+    /// A `--set` option is malformed.
+    #[error("--set {option}: {reason}")]
+    Set {
+        /// The option as given.
+        option: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A value is invalid.
+    #[error("{origin}: `{key}` {reason}")]
+    Invalid {
+        /// Dotted key path, e.g. `material.ea`.
+        key: String,
+        /// Where.
+        origin: Origin,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// A scenario with its source text, so that errors can point into the file.
+#[derive(Debug, Clone)]
+pub struct ScenarioFile {
+    /// The parsed scenario.
+    pub scenario: Scenario,
+    /// Path of the file (for messages).
+    pub path: PathBuf,
+    text: String,
+    /// Dotted keys set with `--set`, with the option text.
+    overrides: BTreeMap<String, String>,
+}
+
+/// Reads `path`, applies `--set key=value` overrides and parses the scenario.
+pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError> {
+    let bytes = std::fs::read(path).map_err(|source| ScenarioError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| ScenarioError::NotText {
+        path: path.to_path_buf(),
+        valid_up_to: e.utf8_error().valid_up_to(),
+    })?;
+    parse(&text, path, sets)
+}
+
+/// Parses scenario `text` (named `path` in messages) with `--set` overrides.
+pub fn parse(text: &str, path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError> {
+    let mut overrides = BTreeMap::new();
+    let text = if sets.is_empty() {
+        text.to_string()
+    } else {
+        let mut doc: toml_edit::DocumentMut = text
+            .parse()
+            .map_err(|e: toml_edit::TomlError| toml_error(path, text, e.span(), e.message()))?;
+        for s in sets {
+            let (key, value) = apply_set(&mut doc, s)?;
+            overrides.insert(
+                key,
+                format!(
+                    "{key_}={value}",
+                    key_ = s.split('=').next().unwrap_or(""),
+                    value = value
+                ),
+            );
+        }
+        doc.to_string()
+    };
+    let scenario: Scenario =
+        toml::from_str(&text).map_err(|e| toml_error(path, &text, e.span(), e.message()))?;
+    Ok(ScenarioFile {
+        scenario,
+        path: path.to_path_buf(),
+        text,
+        overrides,
+    })
+}
+
+fn toml_error(path: &Path, text: &str, span: Option<Range<usize>>, message: &str) -> ScenarioError {
+    let origin = match span {
+        Some(s) => {
+            let (line, column) = line_col(text, s.start);
+            Origin::File {
+                path: path.to_path_buf(),
+                line,
+                column,
+            }
+        }
+        None => Origin::File {
+            path: path.to_path_buf(),
+            line: 1,
+            column: 1,
+        },
+    };
+    let excerpt = match &origin {
+        Origin::File { line, .. } => text
+            .lines()
+            .nth(line - 1)
+            .map(|l| format!("\n  | {l}"))
+            .unwrap_or_default(),
+        _ => String::new(),
+    };
+    ScenarioError::Toml {
+        origin,
+        message: format!("{}{excerpt}", message.trim_end()),
+    }
+}
+
+/// 1-based line and column of byte offset `pos` in `text`.
+fn line_col(text: &str, pos: usize) -> (usize, usize) {
+    let pos = pos.min(text.len());
+    let before = &text[..text.floor_char_boundary(pos)];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+/// Applies one `key.path=value` to the document; returns the dotted key and value text.
+fn apply_set(
+    doc: &mut toml_edit::DocumentMut,
+    option: &str,
+) -> Result<(String, String), ScenarioError> {
+    let err = |reason: &str| ScenarioError::Set {
+        option: option.to_string(),
+        reason: reason.to_string(),
+    };
+    let (key, value) = option
+        .split_once('=')
+        .ok_or_else(|| err("expected key=value, e.g. mesh.elements=300"))?;
+    let key = key.trim();
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err(err("empty key segment"));
+    }
+    // Parse the value as a TOML value; a bare word becomes a string.
+    let parsed: toml_edit::Value = match format!("v = {value}").parse::<toml_edit::DocumentMut>() {
+        Ok(d) => d["v"]
+            .as_value()
+            .cloned()
+            .ok_or_else(|| err("value is not a TOML value"))?,
+        Err(_) => toml_edit::Value::from(value.trim()),
+    };
+    let mut item: &mut toml_edit::Item = doc.as_item_mut();
+    for (i, part) in parts.iter().enumerate() {
+        let last = i + 1 == parts.len();
+        if let Ok(idx) = part.parse::<usize>() {
+            let arr = item.as_array_of_tables_mut().ok_or_else(|| {
+                err(&format!(
+                    "`{}` is not an array of tables",
+                    parts[..i].join(".")
+                ))
+            })?;
+            let len = arr.len();
+            let t = arr
+                .get_mut(idx)
+                .ok_or_else(|| err(&format!("index {idx} out of range ({len} entries)")))?;
+            if last {
+                return Err(err("cannot replace a whole table"));
+            }
+            // Descend into the table.
+            let next = parts[i + 1];
+            if i + 2 == parts.len() {
+                t.insert(next, toml_edit::Item::Value(parsed.clone()));
+                return Ok((key.to_string(), value.to_string()));
+            }
+            item = t
+                .get_mut(next)
+                .ok_or_else(|| err(&format!("no key `{next}`")))?;
+            return set_rest(item, &parts[i + 2..], parsed, key, value, &err);
+        }
+        let table = item
+            .as_table_like_mut()
+            .ok_or_else(|| err(&format!("`{}` is not a table", parts[..i].join("."))))?;
+        if last {
+            table.insert(part, toml_edit::Item::Value(parsed));
+            return Ok((key.to_string(), value.to_string()));
+        }
+        if table.get(part).is_none() {
+            table.insert(part, toml_edit::Item::Table(toml_edit::Table::new()));
+        }
+        item = table
+            .get_mut(part)
+            .ok_or_else(|| err(&format!("no key `{part}`")))?;
+    }
+    Err(err("empty key"))
+}
+
+fn set_rest(
+    mut item: &mut toml_edit::Item,
+    parts: &[&str],
+    parsed: toml_edit::Value,
+    key: &str,
+    value: &str,
+    err: &dyn Fn(&str) -> ScenarioError,
+) -> Result<(String, String), ScenarioError> {
+    for (i, part) in parts.iter().enumerate() {
+        let table = item
+            .as_table_like_mut()
+            .ok_or_else(|| err(&format!("`{part}` is not inside a table")))?;
+        if i + 1 == parts.len() {
+            table.insert(part, toml_edit::Item::Value(parsed));
+            return Ok((key.to_string(), value.to_string()));
+        }
+        item = table
+            .get_mut(part)
+            .ok_or_else(|| err(&format!("no key `{part}`")))?;
+    }
+    Err(err("empty key"))
+}
+
+/// A force expression `t ↦ f(t)` [N].
+#[derive(Debug, Clone)]
+pub struct Expr {
+    text: String,
+}
+
+impl Expr {
+    /// Parses and checks `text` by evaluating it at `t = 0`.
+    pub fn new(text: &str) -> Result<Self, String> {
+        let e = Self {
+            text: text.to_string(),
+        };
+        e.eval(0.0)
+            .map_err(|m| format!("expression \"{text}\" is invalid: {m}"))?;
+        Ok(e)
+    }
+    /// Evaluates at time `t` [s].
+    pub fn eval(&self, t: f64) -> Result<f64, String> {
+        let ctx = ([("t", t)], Math);
+        nanoexpr::evaluate_with::<f64, _>(&self.text, &ctx).map_err(|e| {
+            let s = e.span;
+            let part = self.text.get(s.start..s.end).unwrap_or("");
+            format!(
+                "{} (at \"{part}\", characters {}..{})",
+                e.kind, s.start, s.end
+            )
+        })
+    }
+    /// The expression text.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+}
+
+/// The validated run settings that are not part of the [`Problem`].
+#[derive(Debug, Clone)]
+pub struct RunSettings {
+    /// Stepper parameters.
+    pub step: StepParams,
+    /// End time [s].
+    pub t_end: f64,
+    /// Output stride (steps).
+    pub stride: usize,
+    /// Output switches.
+    pub output: OutputSpec,
+}
+
+/// A validated problem in dimension `D` plus run settings.
+pub struct Validated<const D: usize> {
+    /// The problem.
+    pub problem: Problem<D, Material>,
+    /// Settings.
+    pub settings: RunSettings,
+    /// Force expressions per load (node, component texts), for reports.
+    pub loads: Vec<(usize, Vec<String>)>,
+}
+
+impl ScenarioFile {
+    /// Where the value with `span` under dotted `key` came from.
+    pub fn origin(&self, key: &str, span: Range<usize>) -> Origin {
+        if let Some(set) = self.overrides.get(key) {
+            return Origin::Set(set.clone());
+        }
+        if span.is_empty() && span.start == 0 {
+            return Origin::Default;
+        }
+        let (line, column) = line_col(&self.text, span.start);
+        Origin::File {
+            path: self.path.clone(),
+            line,
+            column,
+        }
+    }
+
+    fn invalid(&self, key: &str, span: Range<usize>, reason: impl Into<String>) -> ScenarioError {
+        ScenarioError::Invalid {
+            key: key.to_string(),
+            origin: self.origin(key, span),
+            reason: reason.into(),
+        }
+    }
+
+    /// The spatial dimension, checked.
+    pub fn dimension(&self) -> Result<usize, ScenarioError> {
+        let d = &self.scenario.dimension;
+        match *d.get_ref() {
+            1 => Ok(1),
+            2 => Ok(2),
+            3 => Ok(3),
+            v => Err(self.invalid("dimension", d.span(), format!("must be 1, 2 or 3, got {v}"))),
+        }
+    }
+
+    fn positive(&self, key: &str, v: &Spanned<f64>) -> Result<f64, ScenarioError> {
+        let x = *v.get_ref();
+        if x > 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.invalid(
+                key,
+                v.span(),
+                format!("must be positive and finite, got {x}"),
+            ))
+        }
+    }
+
+    fn vector<const D: usize>(
+        &self,
+        key: &str,
+        v: &Spanned<Vec<f64>>,
+    ) -> Result<Vector<D>, ScenarioError> {
+        let x = v.get_ref();
+        if x.len() != D {
+            return Err(self.invalid(
+                key,
+                v.span(),
+                format!(
+                    "must have {D} components (dimension = {D}), got {}",
+                    x.len()
+                ),
+            ));
+        }
+        if let Some(bad) = x.iter().find(|c| !c.is_finite()) {
+            return Err(self.invalid(key, v.span(), format!("has a non-finite component {bad}")));
+        }
+        Ok(Vector::<D>::from_column_slice(x))
+    }
+
+    /// Validates everything and builds the problem in dimension `D` (which must equal
+    /// [`Self::dimension`]).
+    pub fn validate<const D: usize>(&self) -> Result<Validated<D>, ScenarioError> {
+        let s = &self.scenario;
+        let dim = self.dimension()?;
+        if dim != D {
+            return Err(self.invalid(
+                "dimension",
+                s.dimension.span(),
+                format!("is {dim}, expected {D}"),
+            ));
+        }
+        // Material.
+        let ea = self.positive("material.ea", &s.material.ea)?;
+        let rho_a = self.positive("material.rho_a", &s.material.rho_a)?;
+        let material = match s.material.law.get_ref().as_str() {
+            "hyperelastic" => Material::hyperelastic(ea),
+            "linear_elastic" => Material::linear_elastic(ea),
+            "st_venant_kirchhoff" => Material::st_venant_kirchhoff(ea),
+            other => {
+                return Err(self.invalid(
+                    "material.law",
+                    s.material.law.span(),
+                    format!("must be hyperelastic, linear_elastic or st_venant_kirchhoff, got \"{other}\""),
+                ));
+            }
+        };
+        let mass = match s.material.mass.get_ref().as_str() {
+            "consistent" => MassMatrix::Consistent,
+            "lumped" => MassMatrix::Lumped,
+            other => {
+                return Err(self.invalid(
+                    "material.mass",
+                    s.material.mass.span(),
+                    format!("must be consistent or lumped, got \"{other}\""),
+                ));
+            }
+        };
+        // Geometry and mesh.
+        let g = &s.geometry;
+        let positions: Vec<Vector<D>> = match (&g.nodes, &g.start, &g.end) {
+            (Some(nodes), None, None) => {
+                if let Some(el) = &s.mesh.elements {
+                    return Err(self.invalid(
+                        "mesh.elements",
+                        el.span(),
+                        "must not be given together with geometry.nodes (the nodes define the elements)",
+                    ));
+                }
+                let list = nodes.get_ref();
+                if list.len() < 2 {
+                    return Err(self.invalid(
+                        "geometry.nodes",
+                        nodes.span(),
+                        "needs at least 2 nodes",
+                    ));
+                }
+                let mut out = Vec::with_capacity(list.len());
+                for (i, p) in list.iter().enumerate() {
+                    if p.len() != D || p.iter().any(|c| !c.is_finite()) {
+                        return Err(self.invalid(
+                            "geometry.nodes",
+                            nodes.span(),
+                            format!("node {i} must have {D} finite components, got {p:?}"),
+                        ));
+                    }
+                    out.push(Vector::<D>::from_column_slice(p));
+                }
+                out
+            }
+            (None, Some(a), Some(b)) => {
+                let a = self.vector::<D>("geometry.start", a)?;
+                let b = self.vector::<D>("geometry.end", b)?;
+                let el = s.mesh.elements.as_ref().ok_or_else(|| {
+                    self.invalid("mesh.elements", 0..0, "is required with geometry.start/end")
+                })?;
+                let n = *el.get_ref();
+                if !(1..=50_000_000).contains(&n) {
+                    return Err(self.invalid(
+                        "mesh.elements",
+                        el.span(),
+                        format!("must be between 1 and 5e7, got {n}"),
+                    ));
+                }
+                let n = n as usize;
+                (0..=n)
+                    .map(|i| a + (b - a) * (i as f64 / n as f64))
+                    .collect()
+            }
+            _ => {
+                return Err(self.invalid(
+                    "geometry",
+                    0..0,
+                    "needs either `start` and `end` (with mesh.elements) or `nodes`",
+                ));
+            }
+        };
+        let n_el = positions.len() - 1;
+        let seg: Vec<f64> = positions.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+        if let Some(i) = seg.iter().position(|&l| !(l > 0.0)) {
+            return Err(self.invalid(
+                "geometry",
+                g.nodes.as_ref().map_or(0..0, |n| n.span()),
+                format!(
+                    "element {i} has zero initial length (nodes {i} and {} coincide)",
+                    i + 1
+                ),
+            ));
+        }
+        let total: f64 = seg.iter().sum();
+        let lengths: Vec<f64> = match &g.length {
+            Some(l) => {
+                let l0 = self.positive("geometry.length", l)?;
+                seg.iter().map(|s| s * l0 / total).collect()
+            }
+            None => seg.clone(),
+        };
+        let mesh = Mesh::new(n_el + 1, (0..n_el).map(|e| [e, e + 1]).collect(), lengths)
+            .map_err(|e| self.invalid("geometry", 0..0, e.to_string()))?;
+        let initial = State::at_rest(&mesh, positions);
+        if let Some((e, c)) = initial
+            .c
+            .iter()
+            .enumerate()
+            .find(|(_, c)| !phstring::StoredEnergy::admissible(&material, **c))
+        {
+            return Err(self.invalid(
+                "geometry",
+                0..0,
+                format!("initial strain C = {c} of element {e} is outside the material's domain"),
+            ));
+        }
+        // Body force.
+        let mut body = Vector::<D>::zeros();
+        if let Some(gv) = &s.body_force.gravity {
+            body += self.vector::<D>("body_force.gravity", gv)? * rho_a;
+        }
+        if let Some(pl) = &s.body_force.per_length {
+            body += self.vector::<D>("body_force.per_length", pl)?;
+        }
+        // Boundary conditions.
+        let n_nodes = n_el + 1;
+        let mut boundary = Boundary::<D>::default();
+        let mut loads_text = Vec::new();
+        let mut fixed_mask: Vec<[bool; D]> = vec![[false; D]; n_nodes];
+        let mut loaded: Vec<(usize, usize, Range<usize>)> = Vec::new();
+        for (k, b) in s.boundary.iter().enumerate() {
+            let key = |f: &str| format!("boundary[{k}].{f}");
+            let raw = *b.node.get_ref();
+            let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
+            if node < 0 || node >= n_nodes as i64 {
+                return Err(self.invalid(
+                    &key("node"),
+                    b.node.span(),
+                    format!("= {raw} is out of range: the mesh has nodes 0..={} (or -1..=-{n_nodes} from the end)", n_nodes - 1),
+                ));
+            }
+            let node = node as usize;
+            if b.fixed.is_none() && b.force.is_none() {
+                return Err(self.invalid(
+                    &key("node"),
+                    b.node.span(),
+                    "has neither `fixed` nor `force`",
+                ));
+            }
+            if let Some(f) = &b.fixed {
+                let comps = match f.get_ref() {
+                    FixedSpec::All(v) => [*v; D],
+                    FixedSpec::Components(list) => {
+                        let mut c = [false; D];
+                        for name in list {
+                            let i = match name.as_str() {
+                                "x" => 0,
+                                "y" => 1,
+                                "z" => 2,
+                                _ => D,
+                            };
+                            if i >= D {
+                                return Err(self.invalid(
+                                    &key("fixed"),
+                                    f.span(),
+                                    format!("component \"{name}\" is not one of x, y, z up to dimension {D}"),
+                                ));
+                            }
+                            c[i] = true;
+                        }
+                        c
+                    }
+                };
+                for i in 0..D {
+                    fixed_mask[node][i] |= comps[i];
+                }
+                if comps.iter().any(|&c| c) {
+                    boundary.fixed.push(Fixed {
+                        node,
+                        components: comps,
+                    });
+                }
+            }
+            if let Some(f) = &b.force {
+                let texts = f.get_ref();
+                if texts.len() != D {
+                    return Err(self.invalid(
+                        &key("force"),
+                        f.span(),
+                        format!(
+                            "must have {D} expressions (dimension = {D}), got {}",
+                            texts.len()
+                        ),
+                    ));
+                }
+                let mut exprs = Vec::with_capacity(D);
+                for txt in texts {
+                    exprs.push(
+                        Expr::new(txt).map_err(|m| self.invalid(&key("force"), f.span(), m))?,
+                    );
+                }
+                let exprs = Arc::new(exprs);
+                loads_text.push((node, texts.clone()));
+                loaded.push((k, node, f.span()));
+                boundary.loads.push(NodalLoad::new(node, move |t| {
+                    Vector::<D>::from_fn(|i, _| exprs[i].eval(t).unwrap_or(f64::NAN))
+                }));
+            }
+        }
+        for &(k, node, ref span) in &loaded {
+            if let Some(i) = (0..D).find(|&i| fixed_mask[node][i]) {
+                return Err(self.invalid(
+                    &format!("boundary[{k}].force"),
+                    span.clone(),
+                    format!(
+                        "node {node} is fixed in component {} and cannot also be loaded there",
+                        ["x", "y", "z"][i]
+                    ),
+                ));
+            }
+        }
+        // Time and Newton.
+        let h = self.positive("time.h", &s.time.h)?;
+        let t_end = self.positive("time.end", &s.time.end)?;
+        let steps = (t_end / h).round();
+        if steps < 1.0 || ((steps * h) - t_end).abs() > 1e-9 * t_end {
+            return Err(self.invalid(
+                "time.h",
+                s.time.h.span(),
+                format!("= {h} does not divide time.end = {t_end} into a whole number of steps"),
+            ));
+        }
+        let scheme = match s.time.scheme.get_ref().as_str() {
+            "dg" => Scheme::DiscreteGradient,
+            "mp" => Scheme::Midpoint,
+            other => {
+                return Err(self.invalid(
+                    "time.scheme",
+                    s.time.scheme.span(),
+                    format!("must be dg or mp, got \"{other}\""),
+                ));
+            }
+        };
+        let tol = self.positive("newton.tol", &s.newton.tol)?;
+        let max_iter = *s.newton.max_iter.get_ref();
+        if !(1..=10_000).contains(&max_iter) {
+            return Err(self.invalid(
+                "newton.max_iter",
+                s.newton.max_iter.span(),
+                format!("must be between 1 and 10000, got {max_iter}"),
+            ));
+        }
+        let solver = match s.newton.solver.get_ref().as_str() {
+            "auto" => SolverKind::Auto,
+            "block_tridiagonal" => SolverKind::BlockTridiagonal,
+            "sparse_lu" => SolverKind::SparseLu,
+            other => {
+                return Err(self.invalid(
+                    "newton.solver",
+                    s.newton.solver.span(),
+                    format!("must be auto, block_tridiagonal or sparse_lu, got \"{other}\""),
+                ));
+            }
+        };
+        let stride = *s.output.stride.get_ref();
+        if stride < 1 {
+            return Err(self.invalid(
+                "output.stride",
+                s.output.stride.span(),
+                format!("must be at least 1, got {stride}"),
+            ));
+        }
+        Ok(Validated {
+            problem: Problem {
+                mesh,
+                material,
+                rho_a,
+                body_force: body,
+                mass,
+                boundary,
+                initial,
+            },
+            settings: RunSettings {
+                step: StepParams {
+                    h,
+                    scheme,
+                    newton: NewtonParams {
+                        tol,
+                        max_iter: max_iter as usize,
+                    },
+                    solver,
+                },
+                t_end,
+                stride: stride as usize,
+                output: s.output.clone(),
+            },
+            loads: loads_text,
+        })
+    }
+}

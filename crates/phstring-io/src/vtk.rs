@@ -1,0 +1,383 @@
+//! ParaView output: polyline meshes as XML PolyData (`.vtp`) and time collections (`.pvd`).
+//!
+//! Coordinates are in m and velocities in m/s; 1D and 2D callers pad with zeros.
+//! Each element (segment) is one VTK line cell, so per-element quantities such as the strain
+//! `C` and the stress `S` are cell data with one value per element.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use vtkio::model::{
+    Attribute, Attributes, ByteOrder, DataSet, PolyDataPiece, Version, VertexNumbers, Vtk,
+};
+
+/// Error while writing or validating VTK output.
+#[derive(Debug, thiserror::Error)]
+pub enum VtkError {
+    /// The arrays passed in are inconsistent (lengths, indices, names, times).
+    #[error("cannot write {path}: {message}")]
+    Input {
+        /// Output file that was to be written.
+        path: PathBuf,
+        /// What is wrong with the input.
+        message: String,
+    },
+    /// The vtkio library failed to write the file.
+    #[error("cannot write {path}: {message}")]
+    Vtk {
+        /// Output file that was being written.
+        path: PathBuf,
+        /// vtkio error message.
+        message: String,
+    },
+    /// Writing the output file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// Output file that was being written.
+        path: PathBuf,
+        /// Underlying I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// Writes a chain polyline (node `i` joined to node `i + 1`) as an XML PolyData `.vtp` file.
+///
+/// `points` are node positions in m, `velocity` the nodal velocities in m/s (point data
+/// `"velocity"`, same length as `points`), and `cell_data` named per-element arrays with
+/// `points.len() - 1` values each (e.g. `("C", strain)`, `("S", stress)`).
+pub fn write_vtp(
+    path: &Path,
+    points: &[[f64; 3]],
+    velocity: &[[f64; 3]],
+    cell_data: &[(&str, &[f64])],
+) -> Result<(), VtkError> {
+    let segments: Vec<[usize; 2]> = (1..points.len()).map(|i| [i - 1, i]).collect();
+    write_vtp_segments(path, points, &segments, velocity, cell_data)
+}
+
+/// Writes a general line mesh as an XML PolyData `.vtp` file: one two-point line cell per
+/// entry of `segments` (pairs of node indices into `points`).
+///
+/// `points` in m; `velocity` in m/s, one per point (point data `"velocity"`); `cell_data`
+/// named arrays with one value per segment. Names must be non-empty and distinct.
+pub fn write_vtp_segments(
+    path: &Path,
+    points: &[[f64; 3]],
+    segments: &[[usize; 2]],
+    velocity: &[[f64; 3]],
+    cell_data: &[(&str, &[f64])],
+) -> Result<(), VtkError> {
+    let input_err = |message: String| VtkError::Input {
+        path: path.to_path_buf(),
+        message,
+    };
+    if velocity.len() != points.len() {
+        return Err(input_err(format!(
+            "{} velocities for {} points",
+            velocity.len(),
+            points.len()
+        )));
+    }
+    if let Some((k, s)) = segments
+        .iter()
+        .enumerate()
+        .find(|(_, s)| s[0] >= points.len() || s[1] >= points.len())
+    {
+        return Err(input_err(format!(
+            "segment {k} = {s:?} refers to a node beyond the {} points",
+            points.len()
+        )));
+    }
+    for (i, (name, values)) in cell_data.iter().enumerate() {
+        if name.is_empty() || name == &"velocity" {
+            return Err(input_err(format!("invalid cell data name {name:?}")));
+        }
+        if cell_data[..i].iter().any(|(other, _)| other == name) {
+            return Err(input_err(format!("duplicate cell data name {name:?}")));
+        }
+        if values.len() != segments.len() {
+            return Err(input_err(format!(
+                "cell data {name:?} has {} values for {} elements",
+                values.len(),
+                segments.len()
+            )));
+        }
+    }
+
+    let coords: Vec<f64> = points.iter().flatten().copied().collect();
+    let vel: Vec<f64> = velocity.iter().flatten().copied().collect();
+    let connectivity: Vec<u64> = segments.iter().flatten().map(|&i| i as u64).collect();
+    let offsets: Vec<u64> = (1..=segments.len() as u64).map(|k| 2 * k).collect();
+    let cell = cell_data
+        .iter()
+        .map(|(name, values)| Attribute::scalars(*name, 1).with_data(values.to_vec()))
+        .collect();
+
+    let piece = PolyDataPiece {
+        points: coords.into(),
+        lines: Some(VertexNumbers::XML {
+            connectivity,
+            offsets,
+        }),
+        data: Attributes {
+            point: vec![Attribute::vectors("velocity").with_data(vel)],
+            cell,
+        },
+        ..Default::default()
+    };
+    let vtk = Vtk {
+        version: Version::new_xml(1, 0),
+        title: String::new(),
+        byte_order: ByteOrder::LittleEndian,
+        data: DataSet::inline(piece),
+        file_path: None,
+    };
+    vtk.export(path).map_err(|e| VtkError::Vtk {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
+/// Writer of a ParaView collection file (`.pvd`) listing one data file per time step.
+///
+/// Call [`PvdWriter::add`] per frame and [`PvdWriter::write`] as often as wanted: each call
+/// rewrites the whole file, so the collection on disk is valid after every frame.
+#[derive(Debug, Clone)]
+pub struct PvdWriter {
+    path: PathBuf,
+    entries: Vec<(f64, String)>,
+}
+
+impl PvdWriter {
+    /// A writer for the collection file at `pvd_path` (nothing is written yet).
+    pub fn new(pvd_path: &Path) -> Self {
+        Self {
+            path: pvd_path.to_path_buf(),
+            entries: Vec::new(),
+        }
+    }
+
+    /// Path of the collection file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Number of data sets added so far.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether no data set has been added yet.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Records the data file for time `time` (in s), given relative to the `.pvd` file's folder.
+    pub fn add(&mut self, time: f64, file_name_relative: &str) {
+        self.entries.push((time, file_name_relative.to_string()));
+    }
+
+    /// The collection XML text for the entries added so far.
+    pub fn to_xml(&self) -> String {
+        let mut s = String::from(
+            "<?xml version=\"1.0\"?>\n\
+             <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  \
+             <Collection>\n",
+        );
+        for (time, file) in &self.entries {
+            // Writing into a String cannot fail.
+            let _ = writeln!(
+                s,
+                "    <DataSet timestep=\"{time:?}\" part=\"0\" file=\"{}\"/>",
+                xml_escape(file)
+            );
+        }
+        s.push_str("  </Collection>\n</VTKFile>\n");
+        s
+    }
+
+    /// Writes (or rewrites) the collection file with all entries added so far.
+    ///
+    /// The file is written to a temporary sibling and renamed, so readers never see a
+    /// half-written collection. Non-finite times are rejected.
+    pub fn write(&self) -> Result<(), VtkError> {
+        if let Some((time, file)) = self.entries.iter().find(|(t, _)| !t.is_finite()) {
+            return Err(VtkError::Input {
+                path: self.path.clone(),
+                message: format!("non-finite time {time} for data set {file:?}"),
+            });
+        }
+        let mut tmp = self.path.as_os_str().to_owned();
+        tmp.push(".tmp");
+        let tmp = PathBuf::from(tmp);
+        std::fs::write(&tmp, self.to_xml()).map_err(|source| VtkError::Io {
+            path: tmp.clone(),
+            source,
+        })?;
+        std::fs::rename(&tmp, &self.path).map_err(|source| VtkError::Io {
+            path: self.path.clone(),
+            source,
+        })
+    }
+}
+
+/// Escapes the five XML special characters for use in an attribute value.
+fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A fresh, empty directory under the system temp dir.
+    fn temp_dir(name: &str) -> PathBuf {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!(
+            "phstring-vtk-{}-{}-{}",
+            std::process::id(),
+            n,
+            name
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn poly_piece(vtk: Vtk) -> PolyDataPiece {
+        match vtk.data {
+            DataSet::PolyData { mut pieces, .. } => {
+                assert_eq!(pieces.len(), 1);
+                match pieces.remove(0) {
+                    vtkio::model::Piece::Inline(p) => *p,
+                    other => panic!("unexpected piece {other:?}"),
+                }
+            }
+            other => panic!("not PolyData: {other:?}"),
+        }
+    }
+
+    fn array(attrs: &[Attribute], name: &str) -> Vec<f64> {
+        let a = attrs
+            .iter()
+            .find(|a| a.name() == name)
+            .unwrap_or_else(|| panic!("no array {name}"));
+        match a {
+            Attribute::DataArray(d) => d.data.cast_into::<f64>().unwrap(),
+            Attribute::Field { .. } => panic!("field attribute"),
+        }
+    }
+
+    #[test]
+    fn vtp_chain_round_trip() {
+        let dir = temp_dir("chain");
+        let path = dir.join("frame_0000.vtp");
+        let n = 5;
+        let points: Vec<[f64; 3]> = (0..n)
+            .map(|i| [0.25 * i as f64, -0.1 * i as f64, 0.0])
+            .collect();
+        let velocity: Vec<[f64; 3]> = (0..n).map(|i| [0.0, i as f64, 0.5]).collect();
+        let c = [1.0, 1.01, 1.02, 1.03];
+        let s = [10.0, 20.0, 30.0, 40.0];
+        write_vtp(&path, &points, &velocity, &[("C", &c), ("S", &s)]).unwrap();
+
+        let piece = poly_piece(Vtk::import(&path).unwrap());
+        assert_eq!(piece.num_points(), n);
+        assert_eq!(piece.num_lines(), n - 1);
+        assert_eq!(piece.num_cells(), n - 1);
+        let pts = piece.points.cast_into::<f64>().unwrap();
+        assert_eq!(pts[3..6], [0.25, -0.1, 0.0]);
+        let (conn, offs) = match piece.lines.clone().unwrap() {
+            VertexNumbers::XML {
+                connectivity,
+                offsets,
+            } => (connectivity, offsets),
+            VertexNumbers::Legacy { .. } => panic!("legacy topology"),
+        };
+        assert_eq!(conn, vec![0, 1, 1, 2, 2, 3, 3, 4]);
+        assert_eq!(offs, vec![2, 4, 6, 8]);
+        let v = array(&piece.data.point, "velocity");
+        assert_eq!(v.len(), 3 * n);
+        assert_eq!(v[3 * 2 + 1], 2.0);
+        let names: Vec<&str> = piece.data.cell.iter().map(|a| a.name()).collect();
+        assert_eq!(names, ["C", "S"]);
+        assert_eq!(array(&piece.data.cell, "S"), s);
+        assert_eq!(array(&piece.data.cell, "C")[2], 1.02);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn vtp_segments_and_validation() {
+        let dir = temp_dir("segments");
+        let path = dir.join("mesh.vtp");
+        let points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let vel = [[0.0; 3]; 3];
+        let segs = [[0, 1], [0, 2]];
+        write_vtp_segments(&path, &points, &segs, &vel, &[("S", &[1.0, 2.0])]).unwrap();
+        let piece = poly_piece(Vtk::import(&path).unwrap());
+        assert_eq!(piece.num_points(), 3);
+        assert_eq!(piece.num_cells(), 2);
+
+        let bad = |r: Result<(), VtkError>| assert!(matches!(r, Err(VtkError::Input { .. })));
+        bad(write_vtp_segments(&path, &points, &[[0, 3]], &vel, &[]));
+        bad(write_vtp(&path, &points, &vel[..2], &[]));
+        bad(write_vtp(&path, &points, &vel, &[("C", &[1.0])]));
+        bad(write_vtp(
+            &path,
+            &points,
+            &vel,
+            &[("C", &[1.0, 2.0]), ("C", &[1.0, 2.0])],
+        ));
+
+        // A single node (no elements) and an empty mesh are still valid files.
+        write_vtp(&dir.join("one.vtp"), &points[..1], &vel[..1], &[("C", &[])]).unwrap();
+        write_vtp(&dir.join("none.vtp"), &[], &[], &[]).unwrap();
+        let err = write_vtp(&dir.join("missing").join("x.vtp"), &points, &vel, &[]);
+        assert!(err.unwrap_err().to_string().contains("x.vtp"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn pvd_lists_all_frames() {
+        let dir = temp_dir("pvd");
+        let path = dir.join("run.pvd");
+        let mut pvd = PvdWriter::new(&path);
+        assert!(pvd.is_empty());
+        pvd.add(0.0, "frames/frame_0000.vtp");
+        pvd.write().unwrap();
+        pvd.add(0.1, "frames/frame_0001.vtp");
+        pvd.add(0.1 + 0.2, "frames/a&b.vtp");
+        pvd.write().unwrap();
+        assert_eq!(pvd.len(), 3);
+
+        let xml = std::fs::read_to_string(&path).unwrap();
+        assert!(xml.contains("<VTKFile type=\"Collection\" version=\"0.1\""));
+        assert!(xml.contains("<Collection>") && xml.contains("</Collection>"));
+        assert!(
+            xml.contains("<DataSet timestep=\"0.0\" part=\"0\" file=\"frames/frame_0000.vtp\"/>")
+        );
+        assert!(xml.contains("timestep=\"0.1\" part=\"0\" file=\"frames/frame_0001.vtp\""));
+        // Round-trip precision: 0.1 + 0.2 is not 0.3 in binary.
+        assert!(xml.contains("timestep=\"0.30000000000000004\""));
+        assert!(xml.contains("file=\"frames/a&amp;b.vtp\""));
+        assert_eq!(xml.matches("<DataSet ").count(), 3);
+        assert!(xml.trim_end().ends_with("</VTKFile>"));
+
+        pvd.add(f64::NAN, "bad.vtp");
+        assert!(matches!(pvd.write(), Err(VtkError::Input { .. })));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
