@@ -87,6 +87,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             force,
         } => {
             let file = scenario::load(&scenario, &sets)?;
+            file.check()?;
             let out = out.unwrap_or_else(|| {
                 let stem = scenario
                     .file_stem()
@@ -144,7 +145,7 @@ impl Progress for Bar {
     fn step(&mut self, step: usize, t: f64) {
         if let Some(b) = &self.0 {
             b.set_position(step as u64);
-            if step % 16 == 0 {
+            if step.is_multiple_of(16) {
                 b.set_message(format!("t = {t:.4} s"));
             }
         }

@@ -197,7 +197,7 @@ impl Writers {
     }
 
     fn frame<const D: usize>(&mut self, sim: &Simulation<D, Material>) -> Result<(), OutputError> {
-        if sim.steps() % self.stride != 0 {
+        if !sim.steps().is_multiple_of(self.stride) {
             return Ok(());
         }
         let t = sim.time();

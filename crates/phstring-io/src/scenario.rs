@@ -570,6 +570,15 @@ impl ScenarioFile {
         }
     }
 
+    /// Validates the whole scenario in its own dimension without running it.
+    pub fn check(&self) -> Result<(), ScenarioError> {
+        match self.dimension()? {
+            1 => self.validate::<1>().map(|_| ()),
+            2 => self.validate::<2>().map(|_| ()),
+            _ => self.validate::<3>().map(|_| ()),
+        }
+    }
+
     /// The spatial dimension, checked.
     pub fn dimension(&self) -> Result<usize, ScenarioError> {
         let d = &self.scenario.dimension;
@@ -715,7 +724,7 @@ impl ScenarioFile {
         };
         let n_el = positions.len() - 1;
         let seg: Vec<f64> = positions.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
-        if let Some(i) = seg.iter().position(|&l| !(l > 0.0)) {
+        if let Some(i) = seg.iter().position(|&l| l.is_nan() || l <= 0.0) {
             return Err(self.invalid(
                 "geometry",
                 g.nodes.as_ref().map_or(0..0, |n| n.span()),

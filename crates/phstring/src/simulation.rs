@@ -63,7 +63,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 value: params.h,
             });
         }
-        if !(params.newton.tol > 0.0) {
+        if params.newton.tol.is_nan() || params.newton.tol <= 0.0 {
             return Err(SetupError::NonPositive {
                 what: "Newton tolerance",
                 index: None,

@@ -1,0 +1,202 @@
+//! Every example runs and writes complete, parseable outputs; the paper example matches
+//! `phstring paper` to the last digit.
+
+use std::path::Path;
+
+use crate::{phstring, temp_dir, workspace_root};
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Parses a CSV file into its header and numeric-or-text rows.
+fn csv_rows(p: &Path) -> (Vec<String>, Vec<csv::StringRecord>) {
+    let mut r = csv::Reader::from_path(p).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r.records().map(|x| x.unwrap()).collect();
+    (header, rows)
+}
+
+fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: usize) {
+    let (h, rows) = csv_rows(&dir.join("energy.csv"));
+    assert_eq!(
+        h.join(","),
+        "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual"
+    );
+    assert_eq!(rows.len(), steps + 1, "{}", dir.display());
+    for row in &rows {
+        for f in row.iter() {
+            let x: f64 = f.parse().unwrap();
+            assert!(x.is_finite());
+        }
+    }
+    // 17 significant digits.
+    assert_eq!(
+        rows[1][3]
+            .split('e')
+            .next()
+            .unwrap()
+            .replace(['-', '.'], "")
+            .len(),
+        17
+    );
+    let (h, rows) = csv_rows(&dir.join("positions.csv"));
+    assert_eq!(h.len(), 2 + dim);
+    assert_eq!(rows.len(), (steps / stride + 1) * n_nodes);
+    let (h, rows) = csv_rows(&dir.join("ports.csv"));
+    assert_eq!(h.len(), 5 + 2 * dim);
+    assert!(!rows.is_empty());
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&dir.join("summary.json"))).unwrap();
+    assert_eq!(summary["status"], "completed");
+    assert_eq!(summary["steps"], steps);
+    assert!(summary["time_loop_s"].as_f64().unwrap() > 0.0);
+    assert!(summary["scenario"]["time"]["h"].as_f64().unwrap() > 0.0);
+    let pvd = read(&dir.join("paraview/string.pvd"));
+    assert_eq!(pvd.matches("<DataSet").count(), steps / stride + 1);
+    let last = format!("frame_{:06}.vtp", steps / stride * stride);
+    assert!(read(&dir.join("paraview").join(&last)).contains("PolyData"));
+    let mut plots = vec!["energy", "increments"];
+    if dim >= 2 {
+        plots.push("configuration");
+    }
+    for stem in plots {
+        assert!(
+            read(&dir.join(format!("{stem}.svg"))).contains("<svg"),
+            "{stem}.svg"
+        );
+        let png = std::fs::read(dir.join(format!("{stem}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{stem}.png");
+    }
+}
+
+#[test]
+fn every_example_runs_and_writes_complete_outputs() {
+    let tmp = temp_dir("examples");
+    // (file, dimension, steps, stride, nodes)
+    let cases = [
+        ("paper_pendulum", 2, 100, 1, 31),
+        ("taut_string", 2, 500, 5, 41),
+        ("hoist_3d", 3, 400, 4, 21),
+        ("axial_rod_1d", 1, 500, 10, 51),
+    ];
+    let mut files: Vec<String> = std::fs::read_dir(workspace_root().join("examples"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
+    files.sort();
+    let mut listed: Vec<String> = cases.iter().map(|c| format!("{}.toml", c.0)).collect();
+    listed.sort();
+    assert_eq!(files, listed, "every example must be covered here");
+    for (name, dim, steps, stride, nodes) in cases {
+        let out = tmp.join(name);
+        let o = phstring(&[
+            "run",
+            &format!("examples/{name}.toml"),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        check_outputs(&out, dim, steps, stride, nodes);
+    }
+}
+
+#[test]
+fn paper_example_matches_paper_command_to_the_last_digit() {
+    let tmp = temp_dir("paper");
+    let o = phstring(&["paper", "--out", tmp.join("paper").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("-3.4683588")
+            && table.contains("-3.4037616")
+            && table.contains("-3.3984740"),
+        "{table}"
+    );
+    for fig in [
+        "fig2_configurations",
+        "fig3_energies",
+        "fig4_hamiltonian",
+        "fig5_increments",
+    ] {
+        for ext in ["svg", "png"] {
+            assert!(
+                tmp.join("paper/figures")
+                    .join(format!("{fig}.{ext}"))
+                    .is_file(),
+                "{fig}.{ext}"
+            );
+        }
+    }
+    let run = tmp.join("run");
+    let o = phstring(&[
+        "run",
+        "examples/paper_pendulum.toml",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["energy.csv", "positions.csv", "ports.csv"] {
+        assert_eq!(
+            read(&tmp.join("paper/dg").join(f)),
+            read(&run.join(f)),
+            "{f} differs"
+        );
+    }
+    // And the published values, from the CSV: H(0) and H(1) within 1e-6.
+    let (_, dg) = csv_rows(&run.join("energy.csv"));
+    let h = |rows: &Vec<csv::StringRecord>, i: usize| rows[i][3].parse::<f64>().unwrap();
+    assert!((h(&dg, 0) - (-3.468359)).abs() < 1e-6);
+    assert!((h(&dg, 100) - (-3.403762)).abs() < 1e-6);
+    let (_, mp) = csv_rows(&tmp.join("paper/mp/energy.csv"));
+    assert!((h(&mp, 100) - (-3.398474)).abs() < 1e-6);
+}
+
+#[test]
+fn set_overrides_a_key_and_check_describes_the_run() {
+    let tmp = temp_dir("set");
+    let o = phstring(&[
+        "check",
+        "examples/paper_pendulum.toml",
+        "--set",
+        "mesh.elements=60",
+        "--set",
+        "time.scheme=mp",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("60 elements, 61 nodes"), "{text}");
+    assert!(text.contains("mp scheme"), "{text}");
+    assert!(text.contains("fixed:     node 0 (x, y)"), "{text}");
+    let out = tmp.join("o");
+    let o = phstring(&[
+        "run",
+        "examples/paper_pendulum.toml",
+        "--set",
+        "mesh.elements=10",
+        "--set",
+        "time.end=0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    assert_eq!(summary["elements"], 10);
+    assert_eq!(summary["steps"], 10);
+    assert_eq!(summary["scenario"]["mesh"]["elements"], 10);
+    // A second run into the same folder needs --force.
+    let o = phstring(&[
+        "run",
+        "examples/paper_pendulum.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
+}

@@ -1,0 +1,33 @@
+//! End-to-end tests of the `phstring` binary (issue 3).
+
+mod broken;
+mod examples;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh temporary folder for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("phstring-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs the binary with `args` in the workspace root.
+pub fn phstring(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_phstring"))
+        .args(args)
+        .current_dir(workspace_root())
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("binary runs")
+}
+
+/// The workspace root (where `examples/` is).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
