@@ -130,3 +130,37 @@ fn paper_sparse_lu_matches_block_tridiagonal() {
     );
     assert!((h_a - h_b).abs() <= 1e-12, "{h_a} vs {h_b}");
 }
+
+/// The port outputs close the momentum balance: over each step,
+/// `Σ M_ρ (v_{n+1} − v_n)/h = Σ F_b + F_N(t_{n+½}) + reaction`, where the reaction is the
+/// output of the support's velocity port and `F_N` the input of the load port.
+#[test]
+fn port_outputs_close_the_momentum_balance() {
+    let params = StepParams {
+        h: 0.01,
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
+    let fb: phstring::Vector<2> = sim.system().body_force_vector().iter().sum();
+    let mut worst = 0.0_f64;
+    for _ in 0..100 {
+        let p0 = sim.system().linear_momentum(sim.state());
+        sim.step().unwrap();
+        let p1 = sim.system().linear_momentum(sim.state());
+        let ports = sim.ports();
+        assert_eq!(ports.len(), 2);
+        assert_eq!(
+            (ports[0].kind, ports[0].node),
+            (phstring::PortKind::Force, 30)
+        );
+        assert_eq!(
+            (ports[1].kind, ports[1].node),
+            (phstring::PortKind::Velocity, 0)
+        );
+        assert_eq!(ports[1].input, phstring::Vector::<2>::zeros()); // fixed support
+        let rhs = fb + ports[0].input + ports[1].output;
+        worst = worst.max(((p1 - p0) / 0.01 - rhs).norm());
+    }
+    // Residual tolerance 1e-11 N per step, plus round-off.
+    assert!(worst <= 1e-10, "momentum balance off by {worst:e} N");
+}
