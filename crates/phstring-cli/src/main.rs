@@ -129,9 +129,50 @@ fn prepare_out(out: &Path, force: bool) -> Result<()> {
                 out.display()
             );
         }
+        if non_empty {
+            clear_outputs(out)?;
+        }
     }
     std::fs::create_dir_all(out)
         .with_context(|| format!("cannot create output folder {}", out.display()))
+}
+
+/// Removes the files a previous run wrote into `out` (and nothing else), so that stale
+/// frames or plots cannot be mistaken for the new run's.
+fn clear_outputs(out: &Path) -> Result<()> {
+    let ours = |name: &str| {
+        matches!(
+            name,
+            "energy.csv" | "positions.csv" | "ports.csv" | "summary.json" | "string.pvd"
+        ) || (name.starts_with("frame_") && name.ends_with(".vtp"))
+            || ["energy", "configuration", "increments"]
+                .iter()
+                .any(|s| name == format!("{s}.svg") || name == format!("{s}.png"))
+            || (name.starts_with("fig") && (name.ends_with(".svg") || name.ends_with(".png")))
+    };
+    for sub in [
+        "",
+        "paraview",
+        "dg",
+        "mp",
+        "dg/paraview",
+        "mp/paraview",
+        "figures",
+    ] {
+        let dir = out.join(sub);
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if entry.path().is_file() && ours(&name) {
+                std::fs::remove_file(entry.path()).with_context(|| {
+                    format!("cannot remove old output {}", entry.path().display())
+                })?;
+            }
+        }
+    }
+    Ok(())
 }
 
 struct Bar(Option<ProgressBar>);
@@ -220,11 +261,14 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
     );
     let _ = writeln!(
         out,
-        "  material:  {}, EA = {} N, rhoA = {} kg/m, {:?} mass",
+        "  material:  {}, EA = {} N, rhoA = {} kg/m, {} mass",
         p.material.name(),
         p.material.ea(),
         p.rho_a,
-        p.mass
+        match p.mass {
+            phstring::MassMatrix::Consistent => "consistent",
+            phstring::MassMatrix::Lumped => "lumped",
+        }
     );
     let _ = writeln!(out, "  body force: {:?} N/m", p.body_force.as_slice());
     for f in &p.boundary.fixed {
@@ -249,8 +293,10 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
     );
     let _ = write!(
         out,
-        "  newton:    tol = {:e} N, max {} iterations, solver {:?}",
-        s.step.newton.tol, s.step.newton.max_iter, s.step.solver
+        "  newton:    tol = {:e} N, max {} iterations, solver {}",
+        s.step.newton.tol,
+        s.step.newton.max_iter,
+        s.step.solver.name()
     );
     Ok(out)
 }

@@ -111,6 +111,7 @@ pub struct Writers {
     /// The recorded series.
     pub history: History,
     dim: usize,
+    last_frame: Option<usize>,
 }
 
 impl Writers {
@@ -162,6 +163,7 @@ impl Writers {
             snapshot_times,
             history: History::default(),
             dim: D,
+            last_frame: None,
         };
         let e = sim.energies();
         w.energy.line(&format!(
@@ -196,10 +198,23 @@ impl Writers {
         Ok(())
     }
 
+    /// Writes positions and a ParaView frame every `stride` steps.
     fn frame<const D: usize>(&mut self, sim: &Simulation<D, Material>) -> Result<(), OutputError> {
-        if !sim.steps().is_multiple_of(self.stride) {
+        self.frame_if(sim, false)
+    }
+
+    /// Writes positions and a ParaView frame on the stride, or for the last step (`last`),
+    /// once per step.
+    fn frame_if<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        last: bool,
+    ) -> Result<(), OutputError> {
+        let wanted = last || sim.steps().is_multiple_of(self.stride);
+        if !wanted || self.last_frame == Some(sim.steps()) {
             return Ok(());
         }
+        self.last_frame = Some(sim.steps());
         let t = sim.time();
         let st = sim.state();
         if let Some(p) = &mut self.positions {
@@ -270,6 +285,16 @@ impl Writers {
         }
         self.record(sim)?;
         self.frame(sim)
+    }
+
+    /// Writes the final state (positions and ParaView frame) if the last step was not on
+    /// the output stride, then flushes all CSV files.
+    pub fn finish<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+    ) -> Result<(), OutputError> {
+        self.frame_if(sim, true)?;
+        self.flush()
     }
 
     /// Flushes all CSV files.

@@ -177,7 +177,7 @@ fn run_dim<const D: usize>(
         }
     }
     progress.finish();
-    writers.flush()?;
+    writers.finish(&sim)?;
     info.time_loop_s = loop_time;
     info.hamiltonian_final = writers
         .history

@@ -29,6 +29,7 @@ pub struct Scenario {
     /// Initial (and reference) geometry.
     pub geometry: Geometry,
     /// Discretization.
+    #[serde(default)]
     pub mesh: MeshSpec,
     /// Material law and parameters.
     pub material: MaterialSpec,
@@ -58,7 +59,8 @@ pub struct Geometry {
     /// Last node position [m] (with `start`).
     #[serde(default)]
     pub end: Option<Spanned<Vec<f64>>>,
-    /// Explicit node positions [m] of a chain; overrides `mesh.elements`.
+    /// Explicit node positions [m] of a chain (instead of `start`/`end` and
+    /// `mesh.elements`).
     #[serde(default)]
     pub nodes: Option<Spanned<Vec<Vec<f64>>>>,
     /// Unstretched (reference) length `L` [m]; default: the length of the initial polyline
@@ -69,7 +71,7 @@ pub struct Geometry {
 }
 
 /// Mesh size.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSpec {
     /// Number of elements (with `geometry.start`/`end`).
@@ -235,19 +237,32 @@ pub enum Origin {
         line: usize,
         /// Column, 1-based.
         column: usize,
+        /// `--set` added keys, so lines refer to the file with those keys inserted.
+        shifted: bool,
     },
     /// A `--set` option.
     Set(String),
-    /// A default value (the key was not given).
-    Default,
+    /// The scenario as a whole (the key was not given, or the error concerns several keys).
+    Scenario(PathBuf),
 }
 
 impl std::fmt::Display for Origin {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Origin::File { path, line, column } => write!(f, "{}:{line}:{column}", path.display()),
+            Origin::File {
+                path,
+                line,
+                column,
+                shifted,
+            } => {
+                write!(f, "{}:{line}:{column}", path.display())?;
+                if *shifted {
+                    write!(f, " (counting the keys added by --set)")?;
+                }
+                Ok(())
+            }
             Origin::Set(s) => write!(f, "--set {s}"),
-            Origin::Default => write!(f, "(default value)"),
+            Origin::Scenario(path) => write!(f, "{}", path.display()),
         }
     }
 }
@@ -309,6 +324,8 @@ pub struct ScenarioFile {
     text: String,
     /// Dotted keys set with `--set`, with the option text.
     overrides: BTreeMap<String, String>,
+    /// Whether `--set` inserted keys that were not in the file (line numbers shift).
+    shifted: bool,
 }
 
 /// Reads `path`, applies `--set key=value` overrides and parses the scenario.
@@ -327,50 +344,46 @@ pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError>
 /// Parses scenario `text` (named `path` in messages) with `--set` overrides.
 pub fn parse(text: &str, path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError> {
     let mut overrides = BTreeMap::new();
+    let mut shifted = false;
     let text = if sets.is_empty() {
         text.to_string()
     } else {
-        let mut doc: toml_edit::DocumentMut = text
-            .parse()
-            .map_err(|e: toml_edit::TomlError| toml_error(path, text, e.span(), e.message()))?;
+        let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
+            toml_error(path, text, e.span(), e.message(), false)
+        })?;
         for s in sets {
-            let (key, value) = apply_set(&mut doc, s)?;
-            overrides.insert(
-                key,
-                format!(
-                    "{key_}={value}",
-                    key_ = s.split('=').next().unwrap_or(""),
-                    value = value
-                ),
-            );
+            let lines_before = doc.to_string().lines().count();
+            let (key, _) = apply_set(&mut doc, s)?;
+            shifted |= doc.to_string().lines().count() != lines_before;
+            overrides.insert(key, s.clone());
         }
         doc.to_string()
     };
-    let scenario: Scenario =
-        toml::from_str(&text).map_err(|e| toml_error(path, &text, e.span(), e.message()))?;
+    let scenario: Scenario = toml::from_str(&text)
+        .map_err(|e| toml_error(path, &text, e.span(), e.message(), shifted))?;
     Ok(ScenarioFile {
         scenario,
         path: path.to_path_buf(),
         text,
         overrides,
+        shifted,
     })
 }
 
-fn toml_error(path: &Path, text: &str, span: Option<Range<usize>>, message: &str) -> ScenarioError {
-    let origin = match span {
-        Some(s) => {
-            let (line, column) = line_col(text, s.start);
-            Origin::File {
-                path: path.to_path_buf(),
-                line,
-                column,
-            }
-        }
-        None => Origin::File {
-            path: path.to_path_buf(),
-            line: 1,
-            column: 1,
-        },
+fn toml_error(
+    path: &Path,
+    text: &str,
+    span: Option<Range<usize>>,
+    message: &str,
+    shifted: bool,
+) -> ScenarioError {
+    let start = span.map_or(0, |s| s.start);
+    let (line, column) = line_col(text, start);
+    let origin = Origin::File {
+        path: path.to_path_buf(),
+        line,
+        column,
+        shifted,
     };
     let excerpt = match &origin {
         Origin::File { line, .. } => text
@@ -488,6 +501,11 @@ fn set_rest(
     Err(err("empty key"))
 }
 
+/// Whether a force expression is the literal zero (`"0"`, `"0.0"`, …).
+fn is_zero(text: &str) -> bool {
+    text.trim().parse::<f64>() == Ok(0.0)
+}
+
 /// A force expression `t ↦ f(t)` [N].
 #[derive(Debug, Clone)]
 pub struct Expr {
@@ -495,12 +513,13 @@ pub struct Expr {
 }
 
 impl Expr {
-    /// Parses and checks `text` by evaluating it at `t = 0`.
-    pub fn new(text: &str) -> Result<Self, String> {
+    /// Parses `text` and checks it by evaluating it at `t_check` [s] (the first time it will
+    /// be used: the mid time of the first step).
+    pub fn new(text: &str, t_check: f64) -> Result<Self, String> {
         let e = Self {
             text: text.to_string(),
         };
-        e.eval(0.0)
+        e.eval(t_check)
             .map_err(|m| format!("expression \"{text}\" is invalid: {m}"))?;
         Ok(e)
     }
@@ -552,13 +571,14 @@ impl ScenarioFile {
             return Origin::Set(set.clone());
         }
         if span.is_empty() && span.start == 0 {
-            return Origin::Default;
+            return Origin::Scenario(self.path.clone());
         }
         let (line, column) = line_col(&self.text, span.start);
         Origin::File {
             path: self.path.clone(),
             line,
             column,
+            shifted: self.shifted,
         }
     }
 
@@ -765,14 +785,19 @@ impl ScenarioFile {
         if let Some(pl) = &s.body_force.per_length {
             body += self.vector::<D>("body_force.per_length", pl)?;
         }
-        // Boundary conditions.
+        // Boundary conditions. Expressions are checked at the first time they are used.
+        let t_check = match *s.time.h.get_ref() {
+            h if h > 0.0 && h.is_finite() => 0.5 * h,
+            _ => 0.0,
+        };
         let n_nodes = n_el + 1;
         let mut boundary = Boundary::<D>::default();
         let mut loads_text = Vec::new();
         let mut fixed_mask: Vec<[bool; D]> = vec![[false; D]; n_nodes];
-        let mut loaded: Vec<(usize, usize, Range<usize>)> = Vec::new();
+        // (boundary index, node, span, components with a non-zero force expression)
+        let mut loaded: Vec<(usize, usize, Range<usize>, Vec<bool>)> = Vec::new();
         for (k, b) in s.boundary.iter().enumerate() {
-            let key = |f: &str| format!("boundary[{k}].{f}");
+            let key = |f: &str| format!("boundary.{k}.{f}");
             let raw = *b.node.get_ref();
             let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
             if node < 0 || node >= n_nodes as i64 {
@@ -839,24 +864,27 @@ impl ScenarioFile {
                 let mut exprs = Vec::with_capacity(D);
                 for txt in texts {
                     exprs.push(
-                        Expr::new(txt).map_err(|m| self.invalid(&key("force"), f.span(), m))?,
+                        Expr::new(txt, t_check)
+                            .map_err(|m| self.invalid(&key("force"), f.span(), m))?,
                     );
                 }
                 let exprs = Arc::new(exprs);
                 loads_text.push((node, texts.clone()));
-                loaded.push((k, node, f.span()));
+                let comps: Vec<bool> = texts.iter().map(|t| !is_zero(t)).collect();
+                loaded.push((k, node, f.span(), comps));
                 boundary.loads.push(NodalLoad::new(node, move |t| {
                     Vector::<D>::from_fn(|i, _| exprs[i].eval(t).unwrap_or(f64::NAN))
                 }));
             }
         }
-        for &(k, node, ref span) in &loaded {
-            if let Some(i) = (0..D).find(|&i| fixed_mask[node][i]) {
+        for (k, node, span, comps) in &loaded {
+            let (k, node) = (*k, *node);
+            if let Some(i) = (0..D).find(|&i| fixed_mask[node][i] && comps[i]) {
                 return Err(self.invalid(
-                    &format!("boundary[{k}].force"),
+                    &format!("boundary.{k}.force"),
                     span.clone(),
                     format!(
-                        "node {node} is fixed in component {} and cannot also be loaded there",
+                        "node {node} is fixed in component {} and cannot also be loaded in it (give \"0\" there)",
                         ["x", "y", "z"][i]
                     ),
                 ));

@@ -155,7 +155,7 @@ fn node_index_out_of_range() {
     rejects(
         "node",
         &with("node = -1", "node = 7"),
-        &["node.toml:14:", "`boundary[1].node`", "0..=4"],
+        &["node.toml:14:", "`boundary.1.node`", "0..=4"],
     );
 }
 
@@ -164,12 +164,56 @@ fn expression_that_does_not_parse() {
     rejects(
         "expr",
         &with("\"sin(t)\"", "\"sin(t\""),
-        &["expr.toml:15:", "`boundary[1].force`", "\"sin(t\""],
+        &["expr.toml:15:", "`boundary.1.force`", "\"sin(t\""],
     );
     rejects(
         "expr2",
         &with("\"sin(t)\"", "\"foo(t)\""),
         &["expr2.toml:15:", "\"foo(t)\""],
+    );
+}
+
+#[test]
+fn node_fixed_and_loaded_in_the_same_component() {
+    let both = with("node = -1\n", "node = -1\nfixed = [\"y\"]\n");
+    rejects(
+        "fixload",
+        &both,
+        &["`boundary.1.force`", "fixed in component y"],
+    );
+    // Fixed in y, loaded in x only: allowed.
+    let tmp = temp_dir("fixload-ok");
+    let file = tmp.join("ok.toml");
+    let ok = String::from_utf8(both)
+        .unwrap()
+        .replace("[\"0\", \"sin(t)\"]", "[\"sin(t)\", \"0\"]");
+    std::fs::write(&file, ok).unwrap();
+    let o = phstring(&["check", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn expression_checked_at_first_use_not_at_t0() {
+    // 1/t is undefined at t = 0 but the load is first evaluated at t = h/2.
+    let tmp = temp_dir("one-over-t");
+    let file = tmp.join("ok.toml");
+    std::fs::write(&file, with("\"sin(t)\"", "\"0.001/t\"")).unwrap();
+    let o = phstring(&["check", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn set_on_a_boundary_key_is_named_as_set() {
+    let o = phstring(&[
+        "check",
+        "examples/paper_pendulum.toml",
+        "--set",
+        "boundary.1.node=99",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--set boundary.1.node=99") && err.contains("`boundary.1.node`"),
+        "{err}"
     );
 }
 

@@ -190,6 +190,15 @@ fn set_overrides_a_key_and_check_describes_the_run() {
     assert_eq!(summary["elements"], 10);
     assert_eq!(summary["steps"], 10);
     assert_eq!(summary["scenario"]["mesh"]["elements"], 10);
+    // Stride 3 over 10 steps: frames at steps 0, 3, 6, 9 and the final state at 10.
+    assert_eq!(
+        read(&out.join("paraview/string.pvd"))
+            .matches("<DataSet")
+            .count(),
+        5
+    );
+    assert!(out.join("paraview/frame_000010.vtp").is_file());
+    assert_eq!(csv_rows(&out.join("positions.csv")).1.len(), 5 * 11);
     // A second run into the same folder needs --force.
     let o = phstring(&[
         "run",

@@ -128,6 +128,6 @@ impl<const D: usize> LinearSolver<D> for BlockTridiagonal<D> {
         Ok(())
     }
     fn name(&self) -> &'static str {
-        "block-tridiagonal"
+        "block_tridiagonal"
     }
 }

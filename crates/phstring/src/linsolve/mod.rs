@@ -69,6 +69,17 @@ pub enum SolverKind {
     SparseLu,
 }
 
+impl SolverKind {
+    /// Name as in scenario files: `auto`, `block_tridiagonal`, `sparse_lu`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::Auto => "auto",
+            SolverKind::BlockTridiagonal => "block_tridiagonal",
+            SolverKind::SparseLu => "sparse_lu",
+        }
+    }
+}
+
 /// A solver for `J x = b` with `J` in [`BlockJacobian`] form.
 pub trait LinearSolver<const D: usize>: Send {
     /// Factors `jac` and overwrites `rhs` with the solution of `jac · x = rhs`.
@@ -77,7 +88,7 @@ pub trait LinearSolver<const D: usize>: Send {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError>;
-    /// A short name for reports.
+    /// Name for reports: `block_tridiagonal` or `sparse_lu`.
     fn name(&self) -> &'static str;
 }
 

@@ -158,6 +158,6 @@ impl<const D: usize> LinearSolver<D> for SparseLu<D> {
         Ok(())
     }
     fn name(&self) -> &'static str {
-        "sparse-lu"
+        "sparse_lu"
     }
 }

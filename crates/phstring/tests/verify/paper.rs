@@ -112,8 +112,8 @@ fn paper_sparse_lu_matches_block_tridiagonal() {
             Simulation::new(paper_pendulum(30), params).unwrap()
         })
         .collect();
-    assert_eq!(sims[0].solver_name(), "block-tridiagonal");
-    assert_eq!(sims[1].solver_name(), "sparse-lu");
+    assert_eq!(sims[0].solver_name(), "block_tridiagonal");
+    assert_eq!(sims[1].solver_name(), "sparse_lu");
     let mut worst = 0.0_f64;
     for _ in 0..100 {
         for sim in &mut sims {
