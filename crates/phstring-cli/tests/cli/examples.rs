@@ -181,6 +181,8 @@ fn set_overrides_a_key_and_check_describes_the_run() {
         "mesh.elements=10",
         "--set",
         "time.end=0.1",
+        "--set",
+        "output.stride=3",
         "--out",
         out.to_str().unwrap(),
     ]);
