@@ -168,12 +168,11 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
                     }
                 }
             }
-            if !sys.constrained.is_empty() {
-                for (e, &[a, b]) in sys.mesh.elements().iter().enumerate() {
-                    let (fa, fb) = (&sys.free[a], &sys.free[b]);
-                    mask(&mut j.off[e][0], fa, fb);
-                    mask(&mut j.off[e][1], fb, fa);
-                }
+            for &e in &sys.constrained_elements {
+                let [a, b] = sys.mesh.elements()[e];
+                let (fa, fb) = (&sys.free[a], &sys.free[b]);
+                mask(&mut j.off[e][0], fa, fb);
+                mask(&mut j.off[e][1], fb, fa);
             }
         }
         Ok(())

@@ -80,49 +80,40 @@ fn cm1(c: f64) -> f64 {
     c - 1.0
 }
 
-/// `Σ_{k≥1} t^{2k} / (2k+1) = atanh(t)/t − 1` without cancellation, for `|t| < 1`.
+/// `1/(2k+1)` for `k = 0 … 31`: enough terms for `t² ≤ 1/4` to reach `1e-17` relative.
+const RECIP_ODD: [f64; 32] = {
+    let mut r = [0.0; 32];
+    let mut k = 0;
+    while k < 32 {
+        r[k] = 1.0 / (2 * k + 1) as f64;
+        k += 1;
+    }
+    r
+};
+
+/// For `|t| < 1`: `A(t) − 1 = atanh(t)/t − 1 = Σ_{k≥1} t^{2k}/(2k+1)` without cancellation,
+/// and its derivative `A'(t) = Σ_{k≥1} 2k t^{2k−1}/(2k+1)`.
 #[inline]
-fn atanh_ratio_m1(t: f64) -> f64 {
+fn atanh_ratio(t: f64) -> (f64, f64) {
     let t2 = t * t;
     if t2 > 0.25 {
-        return t.atanh() / t - 1.0;
+        let a = t.atanh() / t;
+        return (a - 1.0, (1.0 / (1.0 - t2) - a) / t);
     }
-    let mut sum = 0.0;
+    // p = t^{2k}; terms decrease at least geometrically with ratio t² ≤ 1/4.
+    let (mut sum, mut dsum) = (0.0, 0.0);
     let mut p = t2;
-    let mut k = 1.0;
-    // Terms decrease at least geometrically with ratio t² ≤ 1/4.
-    while p > 0.0 {
-        let term = p / (2.0 * k + 1.0);
+    for (k, r) in RECIP_ODD.iter().enumerate().skip(1) {
+        let term = p * r;
         sum += term;
+        dsum += (2 * k) as f64 * term;
         if term <= sum * 1e-17 {
             break;
         }
         p *= t2;
-        k += 1.0;
     }
-    sum
-}
-
-/// Derivative of `atanh(t)/t` in `t`, i.e. `Σ_{k≥1} 2k t^{2k−1}/(2k+1)`.
-#[inline]
-fn atanh_ratio_deriv(t: f64) -> f64 {
-    let t2 = t * t;
-    if t2 > 0.25 {
-        return (1.0 / (1.0 - t2) - t.atanh() / t) / t;
-    }
-    let mut sum = 0.0;
-    let mut p = t;
-    let mut k = 1.0;
-    while p != 0.0 {
-        let term = 2.0 * k * p / (2.0 * k + 1.0);
-        sum += term;
-        if term.abs() <= sum.abs() * 1e-17 {
-            break;
-        }
-        p *= t2;
-        k += 1.0;
-    }
-    sum
+    // dsum = Σ 2k t^{2k}/(2k+1) = t A'(t).
+    (sum, if t == 0.0 { 0.0 } else { dsum / t })
 }
 
 impl StoredEnergy for Hyperelastic {
@@ -147,10 +138,10 @@ impl StoredEnergy for Hyperelastic {
         let m = 0.5 * (c0 + c1);
         let mm1 = 0.5 * (cm1(c0) + cm1(c1));
         let t = 0.5 * (c1 - c0) / m;
-        let a_m1 = atanh_ratio_m1(t);
+        let (a_m1, da) = atanh_ratio(t);
         let q = 0.25 * self.ea * (mm1 - a_m1) / m;
         // ℓ = A(t)/m with A = atanh(t)/t; ∂ℓ/∂C₁ = (A'(t)(1 − t) − A(t)) / (2 m²), q = EA/4 (1 − ℓ).
-        let dl = (atanh_ratio_deriv(t) * (1.0 - t) - (1.0 + a_m1)) / (2.0 * m * m);
+        let dl = (da * (1.0 - t) - (1.0 + a_m1)) / (2.0 * m * m);
         (q, -0.25 * self.ea * dl)
     }
 }

@@ -138,6 +138,8 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) free: Vec<[bool; D]>,
     /// Nodes with at least one fixed component, sorted.
     pub(crate) constrained: Vec<usize>,
+    /// Elements with a node in `constrained`.
+    pub(crate) constrained_elements: Vec<usize>,
 }
 
 impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
@@ -224,7 +226,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 });
             }
         }
-        let constrained = (0..n).filter(|&i| free[i].iter().any(|f| !f)).collect();
+        let is_constrained = |i: usize| free[i].iter().any(|f| !f);
+        let constrained = (0..n).filter(|&i| is_constrained(i)).collect();
+        let constrained_elements = mesh
+            .elements()
+            .iter()
+            .enumerate()
+            .filter(|(_, [a, b])| is_constrained(*a) || is_constrained(*b))
+            .map(|(e, _)| e)
+            .collect();
         let mut f_body = vec![Vector::<D>::zeros(); n];
         for (&[a, b], &l) in mesh.elements().iter().zip(mesh.lengths()) {
             f_body[a] += body_force * (0.5 * l);
@@ -240,6 +250,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 f_body,
                 free,
                 constrained,
+                constrained_elements,
             },
             initial,
         ))
