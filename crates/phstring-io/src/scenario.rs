@@ -83,7 +83,8 @@ pub struct MeshSpec {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
-    /// `hyperelastic` (default), `linear_elastic` or `st_venant_kirchhoff`.
+    /// `hyperelastic` (default), `linear_elastic`, `st_venant_kirchhoff`,
+    /// `tension_only_linear` or `tension_only_hyperelastic`.
     #[serde(default = "default_law")]
     pub law: Spanned<String>,
     /// Axial stiffness `EA` [N].
@@ -660,18 +661,16 @@ impl ScenarioFile {
         // Material.
         let ea = self.positive("material.ea", &s.material.ea)?;
         let rho_a = self.positive("material.rho_a", &s.material.rho_a)?;
-        let material = match s.material.law.get_ref().as_str() {
-            "hyperelastic" => Material::hyperelastic(ea),
-            "linear_elastic" => Material::linear_elastic(ea),
-            "st_venant_kirchhoff" => Material::st_venant_kirchhoff(ea),
-            other => {
-                return Err(self.invalid(
-                    "material.law",
-                    s.material.law.span(),
-                    format!("must be hyperelastic, linear_elastic or st_venant_kirchhoff, got \"{other}\""),
-                ));
-            }
-        };
+        let law = s.material.law.get_ref();
+        let material = Material::from_name(law, ea).ok_or_else(|| {
+            self.invalid(
+                "material.law",
+                s.material.law.span(),
+                format!(
+                    "must be hyperelastic, linear_elastic, st_venant_kirchhoff, tension_only_linear or tension_only_hyperelastic, got \"{law}\""
+                ),
+            )
+        })?;
         let mass = match s.material.mass.get_ref().as_str() {
             "consistent" => MassMatrix::Consistent,
             "lumped" => MassMatrix::Lumped,
@@ -958,8 +957,10 @@ impl ScenarioFile {
                     newton: NewtonParams {
                         tol,
                         max_iter: max_iter as usize,
+                        ..Default::default()
                     },
                     solver,
+                    ..Default::default()
                 },
                 t_end,
                 stride: stride as usize,

@@ -99,6 +99,17 @@ pub enum LinearSolveError {
     Sparse(String),
 }
 
+impl StepError {
+    /// Whether a smaller step size may succeed (all failures of the solve; not a non-finite
+    /// load, which does not depend on `h`).
+    pub fn is_recoverable(&self) -> bool {
+        !matches!(
+            self,
+            StepError::NonFinite { what: "load", .. } | StepError::StepSizeTooSmall { .. }
+        )
+    }
+}
+
 /// A failure of one time step.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum StepError {
@@ -119,6 +130,38 @@ pub enum StepError {
         tol: f64,
         /// Iterations done.
         iterations: usize,
+    },
+    /// The line search found no acceptable step length.
+    #[error(
+        "line search failed in step {step} (t = {t} → {t_next}): residual {residual:.3e} could not be reduced after {iterations} iterations"
+    )]
+    LineSearchFailed {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// End time of the step [s].
+        t_next: f64,
+        /// Residual norm at the last accepted iterate [N].
+        residual: f64,
+        /// Iterations done.
+        iterations: usize,
+    },
+    /// Step-size control halved the step as often as allowed without success.
+    #[error(
+        "step {step} (t = {t}): no convergence even with h = {h:.3e} s after {halvings} halvings; last failure: {last}"
+    )]
+    StepSizeTooSmall {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// The last step size tried [s].
+        h: f64,
+        /// Halvings done.
+        halvings: u32,
+        /// The failure at the smallest step size.
+        last: Box<StepError>,
     },
     /// A Newton iterate produced a strain outside the material's domain (e.g. `C ≤ 0`).
     #[error(

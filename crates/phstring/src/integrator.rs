@@ -191,11 +191,13 @@ mod tests {
     use crate::system::{MassMatrix, Problem, State};
     use proptest::prelude::*;
 
-    fn laws() -> [Material; 3] {
+    fn laws() -> [Material; 5] {
         [
             Material::hyperelastic(20.0),
             Material::linear_elastic(13.0),
             Material::st_venant_kirchhoff(7.0),
+            Material::tension_only_linear(11.0),
+            Material::tension_only_hyperelastic(17.0),
         ]
     }
 

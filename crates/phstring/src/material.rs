@@ -117,10 +117,17 @@ fn atanh_ratio(t: f64) -> (f64, f64) {
 }
 
 impl StoredEnergy for Hyperelastic {
+    /// `W = EA/4 (x − log1p x)` with `x = C − 1`; for `|x| < 1/2` evaluated as
+    /// `x²/(2+x) − 2u (atanh(u)/u − 1)`, `u = x/(2+x)`, so that it keeps full relative
+    /// accuracy near `C = 1` (where `W ≈ EA x²/8`).
     fn w(&self, c: f64) -> f64 {
-        // C − ln C − 1 = (C − 1) − log1p(C − 1): accurate near C = 1.
         let x = cm1(c);
-        0.25 * self.ea * (x - x.ln_1p())
+        if x.abs() >= 0.5 {
+            return 0.25 * self.ea * (x - x.ln_1p());
+        }
+        let u = x / (2.0 + x);
+        let (a_m1, _) = atanh_ratio(u);
+        0.25 * self.ea * (x * x / (2.0 + x) - 2.0 * u * a_m1)
     }
     fn dw(&self, c: f64) -> f64 {
         0.25 * self.ea * cm1(c) / c
@@ -192,6 +199,49 @@ impl StoredEnergy for StVenantKirchhoff {
     }
 }
 
+/// Tension-only cable law: `W(C) = 0` for `C < 1` (the cable goes slack instead of carrying
+/// compression) and the branch law for `C ≥ 1`. The branch must satisfy `W(1) = W'(1) = 0`
+/// ([`Hyperelastic`] and [`LinearElastic`] do), so `W` is continuously differentiable; `W''`
+/// jumps at `C = 1`. Defined for every finite `C`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TensionOnly<B> {
+    /// The law in tension (`C ≥ 1`).
+    pub branch: B,
+}
+
+impl<B: StoredEnergy> StoredEnergy for TensionOnly<B> {
+    fn w(&self, c: f64) -> f64 {
+        if c < 1.0 { 0.0 } else { self.branch.w(c) }
+    }
+    fn dw(&self, c: f64) -> f64 {
+        if c < 1.0 { 0.0 } else { self.branch.dw(c) }
+    }
+    fn d2w(&self, c: f64) -> f64 {
+        if c < 1.0 { 0.0 } else { self.branch.d2w(c) }
+    }
+    fn admissible(&self, c: f64) -> bool {
+        c.is_finite()
+    }
+    /// Piecewise exact: `0` when both strains are slack, the branch's exact quotient when
+    /// both are taut, `W(C_taut)/|C₁ − C₀|` (with sign) when the element crosses `C = 1`.
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        match (c0 < 1.0, c1 < 1.0) {
+            (true, true) => (0.0, 0.0),
+            (false, false) => self.branch.quotient(c0, c1),
+            (true, false) => {
+                let dc = c1 - c0;
+                let q = self.branch.w(c1) / dc;
+                (q, (self.branch.dw(c1) - q) / dc)
+            }
+            (false, true) => {
+                let dc = c0 - c1;
+                let q = self.branch.w(c0) / dc;
+                (q, q / dc)
+            }
+        }
+    }
+}
+
 /// The built-in material laws as one type (enum dispatch), as chosen in a scenario file.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Material {
@@ -201,6 +251,10 @@ pub enum Material {
     LinearElastic(LinearElastic),
     /// [`StVenantKirchhoff`] (paper Remark 2).
     StVenantKirchhoff(StVenantKirchhoff),
+    /// [`TensionOnly`] with the linear elastic branch (a cable: `N = EA (ν − 1)` in tension).
+    TensionOnlyLinear(TensionOnly<LinearElastic>),
+    /// [`TensionOnly`] with the paper's hyperelastic branch.
+    TensionOnlyHyperelastic(TensionOnly<Hyperelastic>),
 }
 
 impl Material {
@@ -216,22 +270,49 @@ impl Material {
     pub fn st_venant_kirchhoff(ea: f64) -> Self {
         Self::StVenantKirchhoff(StVenantKirchhoff { ea })
     }
+    /// Tension-only cable with the linear elastic branch, axial stiffness `ea` [N].
+    pub fn tension_only_linear(ea: f64) -> Self {
+        Self::TensionOnlyLinear(TensionOnly {
+            branch: LinearElastic { ea },
+        })
+    }
+    /// Tension-only cable with the hyperelastic branch, axial stiffness `ea` [N].
+    pub fn tension_only_hyperelastic(ea: f64) -> Self {
+        Self::TensionOnlyHyperelastic(TensionOnly {
+            branch: Hyperelastic { ea },
+        })
+    }
     /// Axial stiffness `EA` [N].
     pub fn ea(&self) -> f64 {
         match self {
             Self::Hyperelastic(m) => m.ea,
             Self::LinearElastic(m) => m.ea,
             Self::StVenantKirchhoff(m) => m.ea,
+            Self::TensionOnlyLinear(m) => m.branch.ea,
+            Self::TensionOnlyHyperelastic(m) => m.branch.ea,
         }
     }
     /// Short name as used in scenario files: `hyperelastic`, `linear_elastic`,
-    /// `st_venant_kirchhoff`.
+    /// `st_venant_kirchhoff`, `tension_only_linear`, `tension_only_hyperelastic`.
     pub fn name(&self) -> &'static str {
         match self {
             Self::Hyperelastic(_) => "hyperelastic",
             Self::LinearElastic(_) => "linear_elastic",
             Self::StVenantKirchhoff(_) => "st_venant_kirchhoff",
+            Self::TensionOnlyLinear(_) => "tension_only_linear",
+            Self::TensionOnlyHyperelastic(_) => "tension_only_hyperelastic",
         }
+    }
+    /// The law named `name` (see [`Self::name`]) with axial stiffness `ea` [N].
+    pub fn from_name(name: &str, ea: f64) -> Option<Self> {
+        Some(match name {
+            "hyperelastic" => Self::hyperelastic(ea),
+            "linear_elastic" => Self::linear_elastic(ea),
+            "st_venant_kirchhoff" => Self::st_venant_kirchhoff(ea),
+            "tension_only_linear" => Self::tension_only_linear(ea),
+            "tension_only_hyperelastic" => Self::tension_only_hyperelastic(ea),
+            _ => return None,
+        })
     }
 }
 
@@ -241,6 +322,8 @@ macro_rules! dispatch {
             Material::Hyperelastic($m) => $e,
             Material::LinearElastic($m) => $e,
             Material::StVenantKirchhoff($m) => $e,
+            Material::TensionOnlyLinear($m) => $e,
+            Material::TensionOnlyHyperelastic($m) => $e,
         }
     };
 }
@@ -296,6 +379,8 @@ mod tests {
             Material::hyperelastic(20.0),
             Material::linear_elastic(20.0),
             Material::st_venant_kirchhoff(20.0),
+            Material::tension_only_linear(20.0),
+            Material::tension_only_hyperelastic(20.0),
         ] {
             for c in [0.3, 1.0, 1.7] {
                 let (q, dq) = m.quotient(c, c);

@@ -17,6 +17,10 @@ pub struct NewtonParams {
     pub tol: f64,
     /// Largest number of iterations (linear solves) per step.
     pub max_iter: usize,
+    /// Globalize with a backtracking line search on the merit function `½‖R‖²` (Armijo
+    /// condition). An iterate whose strain leaves the material's domain or whose residual is
+    /// not finite counts as too long a step. When `false`, plain Newton (full steps).
+    pub line_search: bool,
 }
 
 impl Default for NewtonParams {
@@ -24,9 +28,15 @@ impl Default for NewtonParams {
         Self {
             tol: 1e-11,
             max_iter: 25,
+            line_search: true,
         }
     }
 }
+
+/// Armijo constant of the line search: accept `α` if `φ(α) ≤ (1 − 2σα) φ(0)`.
+const ARMIJO_SIGMA: f64 = 1e-4;
+/// Smallest step length of the line search before it gives up.
+const ALPHA_MIN: f64 = 1.0 / 1024.0;
 
 /// What one Newton solve did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -35,6 +45,8 @@ pub struct NewtonStats {
     pub iterations: usize,
     /// Final residual norm [N].
     pub residual: f64,
+    /// Line-search backtracks (step halvings) in all iterations.
+    pub backtracks: usize,
 }
 
 /// A nonlinear system `R(x) = 0` in node-block form.
@@ -64,20 +76,27 @@ pub enum NewtonError<E> {
     },
     /// No convergence within the iteration limit.
     MaxIterations(NewtonStats),
+    /// The line search found no acceptable step length down to its minimum.
+    LineSearch(NewtonStats),
 }
 
-/// Newton workspace (residual and Jacobian storage), allocated once.
+/// Newton workspace (residual, direction, Jacobian storage), allocated once.
 #[derive(Debug, Clone)]
 pub struct NewtonWorkspace<const D: usize> {
     res: Vec<Vector<D>>,
+    dir: Vec<Vector<D>>,
+    x_old: Vec<Vector<D>>,
     jac: BlockJacobian<D>,
 }
 
 impl<const D: usize> NewtonWorkspace<D> {
     /// Workspace for a mesh.
     pub fn new(mesh: &crate::mesh::Mesh) -> Self {
+        let n = mesh.n_nodes();
         Self {
-            res: vec![Vector::zeros(); mesh.n_nodes()],
+            res: vec![Vector::zeros(); n],
+            dir: vec![Vector::zeros(); n],
+            x_old: vec![Vector::zeros(); n],
             jac: BlockJacobian::zeros(mesh),
         }
     }
@@ -93,6 +112,11 @@ pub fn norm<const D: usize>(x: &[Vector<D>]) -> f64 {
 }
 
 /// Solves `R(x) = 0` starting from `x`, which holds the solution on success.
+///
+/// With `params.line_search`, each Newton direction `d = −J⁻¹R` is tried with step lengths
+/// `α = 1, ½, ¼, …` until `½‖R(x + αd)‖² ≤ (1 − 2σα) ½‖R(x)‖²`; an evaluation error or a
+/// non-finite residual at a trial point also halves `α`. Without it, `α = 1` always and an
+/// evaluation error ends the solve.
 pub fn solve<const D: usize, P: NewtonProblem<D>>(
     problem: &mut P,
     x: &mut [Vector<D>],
@@ -101,30 +125,67 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
     params: &NewtonParams,
 ) -> Result<NewtonStats, NewtonError<P::Error>> {
     let mut stats = NewtonStats::default();
+    problem
+        .evaluate(x, &mut ws.res, Some(&mut ws.jac))
+        .map_err(NewtonError::Eval)?;
+    stats.residual = norm(&ws.res);
+    if !stats.residual.is_finite() {
+        return Err(non_finite(&ws.res));
+    }
     loop {
-        problem
-            .evaluate(x, &mut ws.res, Some(&mut ws.jac))
-            .map_err(NewtonError::Eval)?;
-        stats.residual = norm(&ws.res);
-        if !stats.residual.is_finite() {
-            let node = ws.res.iter().position(|v| !v.iter().all(|c| c.is_finite()));
-            return Err(NewtonError::NonFinite {
-                node: node.unwrap_or(0),
-            });
-        }
         if stats.residual <= params.tol {
             return Ok(stats);
         }
         if stats.iterations >= params.max_iter {
             return Err(NewtonError::MaxIterations(stats));
         }
-        ws.res.iter_mut().for_each(|r| *r = -*r);
-        solver
-            .solve(&ws.jac, &mut ws.res)
-            .map_err(NewtonError::Linear)?;
-        for (xi, di) in x.iter_mut().zip(&ws.res) {
-            *xi += di;
+        for (d, r) in ws.dir.iter_mut().zip(&ws.res) {
+            *d = -r;
         }
+        solver
+            .solve(&ws.jac, &mut ws.dir)
+            .map_err(NewtonError::Linear)?;
         stats.iterations += 1;
+        if !params.line_search {
+            for (xi, di) in x.iter_mut().zip(&ws.dir) {
+                *xi += di;
+            }
+            problem
+                .evaluate(x, &mut ws.res, Some(&mut ws.jac))
+                .map_err(NewtonError::Eval)?;
+            stats.residual = norm(&ws.res);
+            if !stats.residual.is_finite() {
+                return Err(non_finite(&ws.res));
+            }
+            continue;
+        }
+        ws.x_old.copy_from_slice(x);
+        let phi0 = stats.residual * stats.residual;
+        let mut alpha = 1.0;
+        loop {
+            for ((xi, x0), di) in x.iter_mut().zip(&ws.x_old).zip(&ws.dir) {
+                *xi = x0 + di * alpha;
+            }
+            let ok = problem.evaluate(x, &mut ws.res, Some(&mut ws.jac)).is_ok();
+            let r = if ok { norm(&ws.res) } else { f64::INFINITY };
+            if r.is_finite() && r * r <= (1.0 - 2.0 * ARMIJO_SIGMA * alpha) * phi0 {
+                stats.residual = r;
+                break;
+            }
+            alpha *= 0.5;
+            stats.backtracks += 1;
+            if alpha < ALPHA_MIN {
+                // Leave x at the last accepted iterate.
+                x.copy_from_slice(&ws.x_old);
+                return Err(NewtonError::LineSearch(stats));
+            }
+        }
+    }
+}
+
+fn non_finite<const D: usize, E>(res: &[Vector<D>]) -> NewtonError<E> {
+    let node = res.iter().position(|v| !v.iter().all(|c| c.is_finite()));
+    NewtonError::NonFinite {
+        node: node.unwrap_or(0),
     }
 }

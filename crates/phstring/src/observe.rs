@@ -13,6 +13,10 @@ pub struct StepReport {
     pub h: f64,
     /// Newton iterations (linear solves).
     pub newton_iterations: usize,
+    /// Line-search backtracks.
+    pub backtracks: usize,
+    /// Attempts rejected (and retried with half the step size) before this step.
+    pub rejected: usize,
     /// Final Newton residual norm [N].
     pub residual: f64,
     /// Energies at `t_n` [J].
@@ -36,6 +40,8 @@ pub struct RunSummary {
     pub max_balance_error: f64,
     /// Largest Newton residual at convergence [N].
     pub max_residual: f64,
+    /// Rejected step attempts.
+    pub rejected: usize,
 }
 
 impl RunSummary {
@@ -45,6 +51,7 @@ impl RunSummary {
         self.newton_iterations += r.newton_iterations;
         self.max_balance_error = self.max_balance_error.max(r.balance_error.abs());
         self.max_residual = self.max_residual.max(r.residual);
+        self.rejected += r.rejected;
     }
 }
 

@@ -8,12 +8,13 @@ use crate::linsolve::{LinearSolver, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonWorkspace};
 use crate::observe::{Observer, RunSummary, StepReport};
+
 use crate::system::{Energies, PhSystem, Problem, State, Vector};
 
 /// Parameters of the time stepper.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepParams {
-    /// Time step `h` [s].
+    /// Time step `h` [s]; with step-size control, the largest step taken.
     pub h: f64,
     /// Scheme (DG or MP).
     pub scheme: Scheme,
@@ -21,6 +22,10 @@ pub struct StepParams {
     pub newton: NewtonParams,
     /// Linear solver.
     pub solver: SolverKind,
+    /// Newton's starting guess for the position increment.
+    pub predictor: Predictor,
+    /// Step-size control.
+    pub control: StepControl,
 }
 
 impl Default for StepParams {
@@ -30,6 +35,46 @@ impl Default for StepParams {
             scheme: Scheme::DiscreteGradient,
             newton: NewtonParams::default(),
             solver: SolverKind::Auto,
+            predictor: Predictor::default(),
+            control: StepControl::default(),
+        }
+    }
+}
+
+/// Newton's starting guess for `Δ = r_{n+1} − r_n`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Predictor {
+    /// `Δ = h v_n`.
+    #[default]
+    Velocity,
+    /// `Δ = h v_n + ½ h² a_n` with `a_n = (v_n − v_{n−1})/h_{n−1}` from the previous step
+    /// (`a_0 = 0`).
+    Acceleration,
+}
+
+/// Automatic step-size control: halve `h` when a step fails (Newton does not converge, the
+/// line search fails, a strain leaves the material's domain), double it back (up to
+/// [`StepParams::h`]) after a run of easy steps. Every accepted step satisfies the scheme's
+/// equations, so the DG energy balance holds for every accepted step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepControl {
+    /// On (`true`) or a fixed-step run that stops at the first failure (`false`).
+    pub adaptive: bool,
+    /// Most successive halvings of one step before giving up (`h ≥ h/2^max_halvings`).
+    pub max_halvings: u32,
+    /// Double `h` after this many successive easy steps.
+    pub grow_after: usize,
+    /// A step is easy if it needs at most this many Newton iterations and no backtracking.
+    pub easy_iterations: usize,
+}
+
+impl Default for StepControl {
+    fn default() -> Self {
+        Self {
+            adaptive: true,
+            max_halvings: 12,
+            grow_after: 4,
+            easy_iterations: 5,
         }
     }
 }
@@ -39,8 +84,16 @@ pub struct Simulation<const D: usize, M> {
     sys: PhSystem<D, M>,
     params: StepParams,
     state: State<D>,
-    t0: f64,
+    /// Time bookkeeping: `t = t_base + k h_cur` (exact multiples of `h` in a fixed-step run).
+    t_base: f64,
+    k: usize,
+    h_cur: f64,
     step: usize,
+    rejected: usize,
+    easy_streak: usize,
+    h_min_used: f64,
+    /// `a_n` estimate for the acceleration predictor.
+    acc: Vec<Vector<D>>,
     energies: Energies,
     supplied_total: f64,
     // Workspaces (allocated once).
@@ -96,8 +149,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             sys,
             params,
             state,
-            t0: 0.0,
+            t_base: 0.0,
+            k: 0,
+            h_cur: params.h,
             step: 0,
+            rejected: 0,
+            easy_streak: 0,
+            h_min_used: params.h,
+            acc: vec![Vector::zeros(); n],
             energies,
             supplied_total: 0.0,
             x: vec![Vector::zeros(); n],
@@ -121,9 +180,27 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn params(&self) -> &StepParams {
         &self.params
     }
-    /// Current time `t_n = n h` [s].
+    /// Current time `t_n` [s] (`n h` in a fixed-step run).
     pub fn time(&self) -> f64 {
-        self.t0 + self.step as f64 * self.params.h
+        self.t_base + self.k as f64 * self.h_cur
+    }
+    /// Step size the next step will try [s].
+    pub fn step_size(&self) -> f64 {
+        self.h_cur
+    }
+    /// Smallest step size accepted so far [s].
+    pub fn smallest_step_size(&self) -> f64 {
+        self.h_min_used
+    }
+    /// Steps rejected (and retried with half the step size) so far.
+    pub fn rejected_steps(&self) -> usize {
+        self.rejected
+    }
+
+    fn set_step_size(&mut self, h: f64) {
+        self.t_base = self.time();
+        self.k = 0;
+        self.h_cur = h;
     }
     /// Number of steps taken.
     pub fn steps(&self) -> usize {
@@ -151,11 +228,74 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         &self.ports
     }
 
-    /// Advances one step of size `h` from `t_n` to `t_{n+1}` (METHOD §3, paper eq. (32)).
+    /// Advances one step (METHOD §3, paper eq. (32)) with the current step size, halving it
+    /// and retrying on failure when step-size control is on.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
-        let h = self.params.h;
+        self.step_until(f64::INFINITY)
+    }
+
+    /// Like [`Self::step`], but shortens the step so as not to pass `t_end` [s].
+    pub fn step_until(&mut self, t_end: f64) -> Result<StepReport, StepError> {
+        let mut halvings = 0;
+        let mut rejected_here = 0;
+        loop {
+            let t = self.time();
+            // Clip only a real overshoot: a step that lands on t_end up to rounding keeps h.
+            let (h, t_next) = if t + self.h_cur > t_end + 1e-9 * self.h_cur {
+                (t_end - t, Some(t_end))
+            } else {
+                (self.h_cur, None)
+            };
+            match self.try_step(h, t_next) {
+                Ok(mut report) => {
+                    report.rejected = rejected_here;
+                    if t_next.is_some() {
+                        self.t_base = t_end;
+                        self.k = 0;
+                    } else {
+                        self.k += 1;
+                    }
+                    self.h_min_used = self.h_min_used.min(h);
+                    let c = self.params.control;
+                    let easy =
+                        report.newton_iterations <= c.easy_iterations && report.backtracks == 0;
+                    self.easy_streak = if easy { self.easy_streak + 1 } else { 0 };
+                    if c.adaptive && self.easy_streak >= c.grow_after && self.h_cur < self.params.h
+                    {
+                        self.set_step_size((2.0 * self.h_cur).min(self.params.h));
+                        self.easy_streak = 0;
+                    }
+                    return Ok(report);
+                }
+                Err(e) => {
+                    let c = self.params.control;
+                    if !c.adaptive || !e.is_recoverable() {
+                        return Err(e);
+                    }
+                    if halvings >= c.max_halvings {
+                        return Err(StepError::StepSizeTooSmall {
+                            step: self.step + 1,
+                            t,
+                            h,
+                            halvings,
+                            last: Box::new(e),
+                        });
+                    }
+                    halvings += 1;
+                    rejected_here += 1;
+                    self.rejected += 1;
+                    self.easy_streak = 0;
+                    self.set_step_size(0.5 * self.h_cur);
+                }
+            }
+        }
+    }
+
+    /// One attempt at a step of size `h` to `t_next` (default `t_base + (k+1) h_cur`).
+    /// Leaves the state untouched on failure.
+    fn try_step(&mut self, h: f64, t_next: Option<f64>) -> Result<StepReport, StepError> {
         let t = self.time();
-        let t_next = self.t0 + (self.step + 1) as f64 * h;
+        let t_next = t_next.unwrap_or(self.t_base + (self.k + 1) as f64 * self.h_cur);
         let t_mid = t + 0.5 * h;
         let step_no = self.step + 1;
 
@@ -174,9 +314,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             port.input = f;
             self.f_ext[load.node] += f;
         }
-        // Predictor: Δ = h v_n on free components.
-        for ((x, v), free) in self.x.iter_mut().zip(&self.state.v).zip(&self.sys.free) {
-            *x = v * h;
+        // Predictor on free components.
+        let acc_w = match self.params.predictor {
+            Predictor::Velocity => 0.0,
+            Predictor::Acceleration => 0.5 * h * h,
+        };
+        for (((x, v), a), free) in self
+            .x
+            .iter_mut()
+            .zip(&self.state.v)
+            .zip(&self.acc)
+            .zip(&self.sys.free)
+        {
+            *x = v * h + a * acc_w;
             for k in 0..D {
                 if !free[k] {
                     x[k] = 0.0;
@@ -226,6 +376,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 tol: self.params.newton.tol,
                 iterations: s.iterations,
             },
+            NewtonError::LineSearch(s) => StepError::LineSearchFailed {
+                step: step_no,
+                t,
+                t_next,
+                residual: s.residual,
+                iterations: s.iterations,
+            },
         })?;
 
         // Update: strains first (they need r_n), then r and v.
@@ -241,9 +398,18 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.state.c[e] += dc;
         }
         let inv_h = 1.0 / h;
-        for ((r, v), x) in self.state.r.iter_mut().zip(&mut self.state.v).zip(&self.x) {
+        for (((r, v), a), x) in self
+            .state
+            .r
+            .iter_mut()
+            .zip(&mut self.state.v)
+            .zip(&mut self.acc)
+            .zip(&self.x)
+        {
             *r += x;
-            *v = x * (2.0 * inv_h) - *v;
+            let v_new = x * (2.0 * inv_h) - *v;
+            *a = (v_new - *v) * inv_h;
+            *v = v_new;
         }
         // Port outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces.
         let n_loads = self.sys.boundary.loads.len();
@@ -286,6 +452,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             t: t_next,
             h,
             newton_iterations: stats.iterations,
+            backtracks: stats.backtracks,
+            rejected: 0,
             residual: stats.residual,
             before,
             after,
@@ -294,18 +462,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         })
     }
 
-    /// Steps until `t_end` (the number of steps is `round((t_end − t)/h)`), calling the
-    /// observer at the start, after every step and at the end.
+    /// Steps until `t_end` [s] (the last step is shortened if it would pass `t_end`), calling
+    /// the observer at the start, after every step and at the end.
     pub fn run_until(
         &mut self,
         t_end: f64,
         observer: &mut dyn Observer<D, M>,
     ) -> Result<RunSummary, StepError> {
-        let n = ((t_end - self.time()) / self.params.h).round().max(0.0) as usize;
         observer.on_start(self);
         let mut summary = RunSummary::default();
-        for _ in 0..n {
-            let report = self.step()?;
+        while self.time() < t_end - 1e-9 * self.h_cur {
+            let report = self.step_until(t_end)?;
             summary.record(&report);
             observer.on_step(self, &report);
         }

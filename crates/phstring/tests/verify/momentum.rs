@@ -40,6 +40,7 @@ fn spinning<const D: usize>(scheme: Scheme) -> Simulation<D, Material> {
         newton: NewtonParams {
             tol: 1e-12,
             max_iter: 25,
+            ..Default::default()
         },
         ..Default::default()
     };

@@ -38,6 +38,7 @@ fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
         newton: NewtonParams {
             tol: 1e-12,
             max_iter: 25,
+            ..Default::default()
         },
         ..Default::default()
     };

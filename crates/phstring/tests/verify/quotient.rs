@@ -23,6 +23,16 @@ fn to_f64(x: &BigFloat) -> f64 {
 
 /// `W(C)` in 512-bit arithmetic.
 fn w_big(m: &Material, c: f64, cc: &mut Consts) -> BigFloat {
+    match m {
+        Material::TensionOnlyLinear(t) if c >= 1.0 => {
+            return w_big(&Material::LinearElastic(t.branch), c, cc);
+        }
+        Material::TensionOnlyHyperelastic(t) if c >= 1.0 => {
+            return w_big(&Material::Hyperelastic(t.branch), c, cc);
+        }
+        Material::TensionOnlyLinear(_) | Material::TensionOnlyHyperelastic(_) => return big(0.0),
+        _ => {}
+    }
     let c = big(c);
     let one = big(1.0);
     let ea = big(m.ea());
@@ -40,11 +50,24 @@ fn w_big(m: &Material, c: f64, cc: &mut Consts) -> BigFloat {
             let e = c.sub(&one, P, RM);
             ea.mul(&e.mul(&e, P, RM), P, RM).div(&big(8.0), P, RM)
         }
+        Material::TensionOnlyLinear(_) | Material::TensionOnlyHyperelastic(_) => {
+            unreachable!("handled above")
+        }
     }
 }
 
 /// Exact `W'(C)` in 512-bit arithmetic (for `C₀ = C₁`).
 fn dw_big(m: &Material, c: f64) -> BigFloat {
+    match m {
+        Material::TensionOnlyLinear(t) if c >= 1.0 => {
+            return dw_big(&Material::LinearElastic(t.branch), c);
+        }
+        Material::TensionOnlyHyperelastic(t) if c >= 1.0 => {
+            return dw_big(&Material::Hyperelastic(t.branch), c);
+        }
+        Material::TensionOnlyLinear(_) | Material::TensionOnlyHyperelastic(_) => return big(0.0),
+        _ => {}
+    }
     let cb = big(c);
     let one = big(1.0);
     let ea = big(m.ea());
@@ -59,6 +82,9 @@ fn dw_big(m: &Material, c: f64) -> BigFloat {
                 .div(&s.mul(&big(2.0), P, RM), P, RM)
         }
         Material::StVenantKirchhoff(_) => ea.mul(&cb.sub(&one, P, RM), P, RM).div(&big(4.0), P, RM),
+        Material::TensionOnlyLinear(_) | Material::TensionOnlyHyperelastic(_) => {
+            unreachable!("handled above")
+        }
     }
 }
 
@@ -78,6 +104,8 @@ fn quotient_directionality_to_4_ulps() {
         Material::hyperelastic(20.0),
         Material::linear_elastic(20.0),
         Material::st_venant_kirchhoff(20.0),
+        Material::tension_only_linear(20.0),
+        Material::tension_only_hyperelastic(20.0),
     ];
     let mut worst = 0.0_f64;
     let mut cases = 0;
@@ -109,4 +137,33 @@ fn quotient_directionality_to_4_ulps() {
         }
     }
     eprintln!("quotient: worst error {worst} ulps over {cases} cases");
+}
+
+/// `W(C)` itself keeps full relative accuracy near the reference strain, where it is
+/// `O((C−1)²)` (needed for the tension-only law's crossing branch and for energies).
+#[test]
+fn stored_energy_accurate_near_reference() {
+    let mut cc = Consts::new().expect("constants cache");
+    let laws = [
+        Material::hyperelastic(20.0),
+        Material::linear_elastic(20.0),
+        Material::st_venant_kirchhoff(20.0),
+    ];
+    let mut worst = 0.0_f64;
+    for law in &laws {
+        for dc in [1e-12_f64, 1e-8, 1e-4, 0.1, 0.5, 3.0] {
+            for c in [1.0 + dc, 1.0 - dc.min(0.9)] {
+                let exact = to_f64(&w_big(law, c, &mut cc));
+                let err = (law.w(c) - exact).abs() / ulp(exact);
+                worst = worst.max(err);
+                assert!(
+                    err <= 4.0,
+                    "{}: W({c:e}) = {:e}, exact {exact:e}: {err} ulps",
+                    law.name(),
+                    law.w(c)
+                );
+            }
+        }
+    }
+    eprintln!("W(C): worst error {worst} ulps");
 }
