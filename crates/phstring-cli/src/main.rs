@@ -11,6 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::plot::{self, Series};
 use phstring_io::runner::{self, Progress, RunInfo};
 use phstring_io::scenario::{self, ScenarioFile};
+use phstring_io::sweep::Vary;
 
 /// The paper's benchmark scenario (also `examples/paper_pendulum.toml`).
 const PAPER_SCENARIO: &str = include_str!("../../../examples/paper_pendulum.toml");
@@ -52,6 +53,27 @@ enum Command {
         /// Override a scenario key by its dotted path, e.g. --set mesh.elements=300.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
+        /// Overwrite a non-empty output folder.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Run a scenario for every combination of varied values, in parallel.
+    Sweep {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// A key and its values, e.g. --vary mesh.elements=100,300,1000 (repeatable: all
+        /// combinations run).
+        #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
+        vary: Vec<String>,
+        /// Fixed overrides for every run.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Output folder (one sub-folder per run, plus sweep.csv).
+        #[arg(long, default_value = "out/sweep")]
+        out: PathBuf,
+        /// Parallel runs (default: number of cores).
+        #[arg(long, short)]
+        jobs: Option<usize>,
         /// Overwrite a non-empty output folder.
         #[arg(long)]
         force: bool,
@@ -110,6 +132,14 @@ fn dispatch(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Check { scenario, sets } => check(&scenario, &sets),
+        Command::Sweep {
+            scenario,
+            vary,
+            sets,
+            out,
+            jobs,
+            force,
+        } => sweep(&scenario, &vary, &sets, &out, jobs, force, cli.quiet),
     }
 }
 
@@ -175,19 +205,21 @@ fn clear_outputs(out: &Path) -> Result<()> {
     Ok(())
 }
 
-struct Bar(Option<ProgressBar>);
+/// Progress over simulated time (per mille of `t_end`), with step count and time.
+struct Bar(Option<ProgressBar>, f64);
 
 impl Progress for Bar {
-    fn start(&mut self, total: usize) {
+    fn start(&mut self, t_end: f64) {
+        self.1 = t_end;
         if let Some(b) = &self.0 {
-            b.set_length(total as u64);
+            b.set_length(1000);
         }
     }
     fn step(&mut self, step: usize, t: f64) {
         if let Some(b) = &self.0 {
-            b.set_position(step as u64);
+            b.set_position((1000.0 * t / self.1).round() as u64);
             if step.is_multiple_of(16) {
-                b.set_message(format!("t = {t:.4} s"));
+                b.set_message(format!("t = {t:.4} s of {} s, step {step}", self.1));
             }
         }
     }
@@ -200,17 +232,17 @@ impl Progress for Bar {
 
 fn progress_bar(quiet: bool, label: &str) -> Bar {
     if quiet || !std::io::stderr().is_terminal() {
-        return Bar(None);
+        return Bar(None, 1.0);
     }
     let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
     b.set_style(
-        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} steps, {msg}, ETA {eta}")
+        ProgressStyle::with_template("{prefix} [{bar:30}] {msg}, ETA {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> "),
     );
     b.set_prefix(label.to_string());
     b.enable_steady_tick(Duration::from_millis(200));
-    Bar(Some(b))
+    Bar(Some(b), 1.0)
 }
 
 fn run_one(
@@ -226,6 +258,55 @@ fn run_one(
         .unwrap_or_else(|| file.path.display().to_string());
     let mut bar = progress_bar(quiet, &label);
     Ok(runner::run(file, out, &mut bar, end_of_loading)?)
+}
+
+fn sweep(
+    path: &Path,
+    vary: &[String],
+    sets: &[String],
+    out: &Path,
+    jobs: Option<usize>,
+    force: bool,
+    quiet: bool,
+) -> Result<()> {
+    let vary: Vec<Vary> = vary
+        .iter()
+        .map(|v| Vary::parse(v))
+        .collect::<Result<_, _>>()?;
+    let n: usize = vary.iter().map(|v| v.values.len()).product();
+    prepare_out(out, force)?;
+    if out.join("sweep.csv").exists() {
+        std::fs::remove_file(out.join("sweep.csv"))?;
+    }
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let bar = progress_bar(quiet, "sweep");
+    if let Some(b) = &bar.0 {
+        b.set_length(n as u64);
+        b.set_message(format!("{n} runs on {jobs} threads"));
+    }
+    let done = |r: &phstring_io::sweep::SweepRun| {
+        if let Some(b) = &bar.0 {
+            b.inc(1);
+            if let Err(e) = &r.result {
+                b.println(format!("run {} failed: {e}", r.index));
+            }
+        }
+    };
+    let runs = phstring_io::sweep::run(path, sets, &vary, out, jobs, &done)?;
+    if let Some(b) = &bar.0 {
+        b.finish_and_clear();
+    }
+    let failed = runs.iter().filter(|r| r.result.is_err()).count();
+    println!(
+        "{} runs ({failed} failed) in {}; table: {}",
+        runs.len(),
+        out.display(),
+        out.join("sweep.csv").display()
+    );
+    if failed > 0 {
+        bail!("{failed} of {} runs failed (see sweep.csv)", runs.len());
+    }
+    Ok(())
 }
 
 fn check(path: &Path, sets: &[String]) -> Result<()> {

@@ -6,4 +6,5 @@ pub mod output;
 pub mod plot;
 pub mod runner;
 pub mod scenario;
+pub mod sweep;
 pub mod vtk;

@@ -131,7 +131,7 @@ impl Writers {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let energy = Csv::create(
             dir.join("energy.csv"),
-            "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual",
+            "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h",
         )?;
         let comps = ["x", "y", "z"];
         let positions = if positions {
@@ -167,7 +167,7 @@ impl Writers {
         };
         let e = sim.energies();
         w.energy.line(&format!(
-            "{},{},{},{},0,0,0,0",
+            "{},{},{},{},0,0,0,0,0",
             num(0.0),
             num(e.kinetic),
             num(e.potential()),
@@ -256,7 +256,7 @@ impl Writers {
         r: &StepReport,
     ) -> Result<(), OutputError> {
         self.energy.line(&format!(
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             num(r.t),
             num(r.after.kinetic),
             num(r.after.potential()),
@@ -264,7 +264,8 @@ impl Writers {
             num(sim.supplied_energy()),
             num(r.balance_error),
             r.newton_iterations,
-            num(r.residual)
+            num(r.residual),
+            num(r.h)
         ))?;
         let t_mid = r.t - 0.5 * r.h;
         for (k, p) in sim.ports().iter().enumerate() {

@@ -11,8 +11,8 @@ use crate::scenario::{ScenarioError, ScenarioFile};
 
 /// Receives progress of a run (a progress bar, or nothing).
 pub trait Progress {
-    /// The run starts with `total` steps.
-    fn start(&mut self, _total: usize) {}
+    /// The run starts and will end at simulated time `t_end` [s].
+    fn start(&mut self, _t_end: f64) {}
     /// Step `step` finished at time `t` [s].
     fn step(&mut self, _step: usize, _t: f64) {}
     /// The run ended.
@@ -64,10 +64,20 @@ pub struct RunInfo {
     pub h: f64,
     /// End time [s].
     pub t_end: f64,
-    /// Steps planned.
+    /// Steps planned (`T/h`; more when step-size control shortens steps).
     pub steps_planned: usize,
     /// Steps completed.
     pub steps: usize,
+    /// Whether step-size control was on.
+    pub adaptive: bool,
+    /// Step attempts rejected and retried with half the step size.
+    pub rejected_steps: usize,
+    /// Smallest accepted step size [s].
+    pub h_min_used: f64,
+    /// Line-search backtracks in all.
+    pub line_search_backtracks: usize,
+    /// Simulated time reached [s].
+    pub t_reached: f64,
     /// Newton iterations in all.
     pub total_newton_iterations: usize,
     /// Newton convergence test.
@@ -142,6 +152,11 @@ fn run_dim<const D: usize>(
         t_end: settings.t_end,
         steps_planned,
         steps: 0,
+        adaptive: settings.step.control.adaptive,
+        rejected_steps: 0,
+        h_min_used: settings.step.h,
+        line_search_backtracks: 0,
+        t_reached: 0.0,
         total_newton_iterations: 0,
         newton_norm: "Euclidean norm of the force residual (momentum balance / h) over free DOFs [N]",
         newton_tol: settings.step.newton.tol,
@@ -154,16 +169,19 @@ fn run_dim<const D: usize>(
         scenario: serde_json::to_value(&file.scenario).unwrap_or(serde_json::Value::Null),
         history: History::default(),
     };
-    progress.start(steps_planned);
+    progress.start(settings.t_end);
     let mut loop_time = 0.0;
     let mut failure = None;
-    for _ in 0..steps_planned {
+    let t_end = settings.t_end;
+    while sim.time() < t_end - 1e-9 * sim.step_size() {
         let t0 = Instant::now();
-        let res = sim.step();
+        let res = sim.step_until(t_end);
         loop_time += t0.elapsed().as_secs_f64();
         match res {
             Ok(report) => {
                 info.steps += 1;
+                info.rejected_steps += report.rejected;
+                info.line_search_backtracks += report.backtracks;
                 info.total_newton_iterations += report.newton_iterations;
                 info.max_balance_error = info.max_balance_error.max(report.balance_error.abs());
                 info.max_newton_residual = info.max_newton_residual.max(report.residual);
@@ -179,6 +197,8 @@ fn run_dim<const D: usize>(
     progress.finish();
     writers.finish(&sim)?;
     info.time_loop_s = loop_time;
+    info.t_reached = sim.time();
+    info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = writers
         .history
         .hamiltonian

@@ -150,6 +150,10 @@ pub struct TimeSpec {
     pub h: Spanned<f64>,
     /// End time `T` [s].
     pub end: Spanned<f64>,
+    /// Step-size control: halve `h` when a step fails, grow it back after easy steps
+    /// (default `true`). `false`: fixed steps, the run stops at the first failure.
+    #[serde(default = "yes")]
+    pub adaptive: bool,
 }
 
 fn default_scheme() -> Spanned<String> {
@@ -169,6 +173,17 @@ pub struct NewtonSpec {
     /// Linear solver: `auto` (default), `block_tridiagonal` or `sparse_lu`.
     #[serde(default = "default_solver")]
     pub solver: Spanned<String>,
+    /// Backtracking line search on `½‖R‖²` (default `true`); `false`: plain Newton.
+    #[serde(default = "yes")]
+    pub line_search: bool,
+    /// Starting guess: `velocity` (`Δ = h v`, default) or `acceleration`
+    /// (`Δ = h v + ½h² a` with `a` from the previous step).
+    #[serde(default = "default_predictor")]
+    pub predictor: Spanned<String>,
+}
+
+fn default_predictor() -> Spanned<String> {
+    Spanned::new(0..0, "velocity".into())
 }
 
 fn default_tol() -> Spanned<f64> {
@@ -187,6 +202,8 @@ impl Default for NewtonSpec {
             tol: default_tol(),
             max_iter: default_max_iter(),
             solver: default_solver(),
+            line_search: true,
+            predictor: default_predictor(),
         }
     }
 }
@@ -932,6 +949,18 @@ impl ScenarioFile {
                 ));
             }
         };
+        let predictor = match s.newton.predictor.get_ref().as_str() {
+            "velocity" => phstring::Predictor::Velocity,
+            "acceleration" => phstring::Predictor::Acceleration,
+            "midpoint_velocity" => phstring::Predictor::MidpointVelocity,
+            other => {
+                return Err(self.invalid(
+                    "newton.predictor",
+                    s.newton.predictor.span(),
+                    format!("must be velocity, acceleration or midpoint_velocity, got \"{other}\""),
+                ));
+            }
+        };
         let stride = *s.output.stride.get_ref();
         if stride < 1 {
             return Err(self.invalid(
@@ -957,10 +986,14 @@ impl ScenarioFile {
                     newton: NewtonParams {
                         tol,
                         max_iter: max_iter as usize,
-                        ..Default::default()
+                        line_search: s.newton.line_search,
                     },
                     solver,
-                    ..Default::default()
+                    predictor,
+                    control: phstring::StepControl {
+                        adaptive: s.time.adaptive,
+                        ..Default::default()
+                    },
                 },
                 t_end,
                 stride: stride as usize,

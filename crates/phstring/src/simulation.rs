@@ -50,6 +50,10 @@ pub enum Predictor {
     /// `Δ = h v_n + ½ h² a_n` with `a_n = (v_n − v_{n−1})/h_{n−1}` from the previous step
     /// (`a_0 = 0`).
     Acceleration,
+    /// `Δ = h v_{n−½}` with the previous step's mid-step velocity `v_{n−½} = Δ_{n−1}/h_{n−1}`
+    /// (`h v_0` for the first step). Unlike `h v_n` it is not thrown off by unresolved
+    /// high-frequency modes, whose velocity the scheme flips every step.
+    MidpointVelocity,
 }
 
 /// Automatic step-size control: halve `h` when a step fails (Newton does not converge, the
@@ -94,6 +98,8 @@ pub struct Simulation<const D: usize, M> {
     h_min_used: f64,
     /// `a_n` estimate for the acceleration predictor.
     acc: Vec<Vector<D>>,
+    /// `v_{n−½}` of the last step, for the mid-step velocity predictor.
+    v_mid: Vec<Vector<D>>,
     energies: Energies,
     supplied_total: f64,
     // Workspaces (allocated once).
@@ -157,6 +163,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             easy_streak: 0,
             h_min_used: params.h,
             acc: vec![Vector::zeros(); n],
+            v_mid: vec![Vector::zeros(); n],
             energies,
             supplied_total: 0.0,
             x: vec![Vector::zeros(); n],
@@ -315,18 +322,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.f_ext[load.node] += f;
         }
         // Predictor on free components.
-        let acc_w = match self.params.predictor {
-            Predictor::Velocity => 0.0,
-            Predictor::Acceleration => 0.5 * h * h,
+        let (acc_w, mid) = match self.params.predictor {
+            Predictor::Velocity => (0.0, false),
+            Predictor::Acceleration => (0.5 * h * h, false),
+            Predictor::MidpointVelocity => (0.0, self.step > 0),
         };
-        for (((x, v), a), free) in self
+        for ((((x, v), a), vm), free) in self
             .x
             .iter_mut()
             .zip(&self.state.v)
             .zip(&self.acc)
+            .zip(&self.v_mid)
             .zip(&self.sys.free)
         {
-            *x = v * h + a * acc_w;
+            *x = if mid { vm * h } else { v * h + a * acc_w };
             for k in 0..D {
                 if !free[k] {
                     x[k] = 0.0;
@@ -398,15 +407,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.state.c[e] += dc;
         }
         let inv_h = 1.0 / h;
-        for (((r, v), a), x) in self
+        for ((((r, v), a), vm), x) in self
             .state
             .r
             .iter_mut()
             .zip(&mut self.state.v)
             .zip(&mut self.acc)
+            .zip(&mut self.v_mid)
             .zip(&self.x)
         {
             *r += x;
+            *vm = x * inv_h;
             let v_new = x * (2.0 * inv_h) - *v;
             *a = (v_new - *v) * inv_h;
             *v = v_new;

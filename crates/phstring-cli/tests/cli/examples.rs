@@ -21,7 +21,7 @@ fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: u
     let (h, rows) = csv_rows(&dir.join("energy.csv"));
     assert_eq!(
         h.join(","),
-        "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual"
+        "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h"
     );
     assert_eq!(rows.len(), steps + 1, "{}", dir.display());
     for row in &rows {
@@ -210,4 +210,52 @@ fn set_overrides_a_key_and_check_describes_the_run() {
     ]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
+}
+
+/// `phstring sweep`: one folder per combination, a summary table, and results that do not
+/// depend on the number of threads.
+#[test]
+fn sweep_runs_all_combinations_independently_of_threads() {
+    let tmp = temp_dir("sweep");
+    let mut outputs = Vec::new();
+    for jobs in ["1", "2"] {
+        let out = tmp.join(format!("j{jobs}"));
+        let o = phstring(&[
+            "sweep",
+            "examples/paper_pendulum.toml",
+            "--vary",
+            "mesh.elements=8,16",
+            "--vary",
+            "material.law=hyperelastic,tension_only_linear",
+            "--set",
+            "time.end=0.3",
+            "--set",
+            "output.vtk=false",
+            "--set",
+            "output.plots=false",
+            "--jobs",
+            jobs,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let (h, rows) = csv_rows(&out.join("sweep.csv"));
+        assert_eq!(
+            h[2..4],
+            ["mesh.elements".to_string(), "material.law".to_string()]
+        );
+        assert_eq!(rows.len(), 4);
+        assert!(rows.iter().all(|r| &r[4] == "completed"));
+        assert_eq!(&rows[3][2], "16");
+        assert_eq!(&rows[3][3], "tension_only_linear");
+        outputs.push(out);
+    }
+    for i in 0..4 {
+        let f = format!("run_{i:03}/energy.csv");
+        assert_eq!(
+            read(&outputs[0].join(&f)),
+            read(&outputs[1].join(&f)),
+            "{f}"
+        );
+    }
 }
