@@ -3,13 +3,15 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use phstring_io::checkpoint::CheckpointFile;
 use phstring_io::plot::{self, Series};
-use phstring_io::runner::{self, Progress, RunInfo};
+use phstring_io::runner::{self, Progress, RunError, RunInfo, RunOptions};
 use phstring_io::scenario::{self, ScenarioFile};
 use phstring_io::sweep::Vary;
 
@@ -45,17 +47,28 @@ enum Command {
     },
     /// Run a scenario file.
     Run {
-        /// Scenario file (TOML).
-        scenario: PathBuf,
-        /// Output folder (default: out/<scenario name>).
+        /// Scenario file (TOML); not with --resume.
+        #[arg(required_unless_present = "resume", conflicts_with = "resume")]
+        scenario: Option<PathBuf>,
+        /// Output folder (default: out/<scenario name>; with --resume, the checkpoint's folder).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Override a scenario key by its dotted path, e.g. --set mesh.elements=300.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
+        #[arg(long = "set", value_name = "KEY=VALUE", conflicts_with = "resume")]
         sets: Vec<String>,
         /// Overwrite a non-empty output folder.
         #[arg(long)]
         force: bool,
+        /// Write <out>/checkpoint.json every N steps (an interrupted run always writes one).
+        #[arg(long, value_name = "N")]
+        checkpoint_every: Option<usize>,
+        /// Continue an interrupted run from its checkpoint.json, in that folder; the outputs
+        /// are then bit for bit those of an uninterrupted run.
+        #[arg(long, value_name = "CHECKPOINT")]
+        resume: Option<PathBuf>,
+        /// Stop like Ctrl-C after N steps in all (to run in chunks).
+        #[arg(long, value_name = "N")]
+        stop_after_steps: Option<usize>,
     },
     /// Run a scenario for every combination of varied values, in parallel.
     Sweep {
@@ -94,7 +107,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            // 130 = interrupted (as a shell reports SIGINT), 1 = any other failure.
+            match e.downcast_ref::<RunError>() {
+                Some(RunError::Interrupted { .. }) => ExitCode::from(130),
+                _ => ExitCode::FAILURE,
+            }
         }
     }
 }
@@ -107,17 +124,43 @@ fn dispatch(cli: Cli) -> Result<()> {
             out,
             sets,
             force,
+            checkpoint_every,
+            resume,
+            stop_after_steps,
         } => {
-            let file = scenario::load(&scenario, &sets)?;
-            file.check()?;
-            let out = out.unwrap_or_else(|| {
-                let stem = scenario
-                    .file_stem()
-                    .map_or("run".into(), |s| s.to_string_lossy().into_owned());
-                Path::new("out").join(stem)
-            });
-            prepare_out(&out, force)?;
-            let info = run_one(&file, &out, cli.quiet, None)?;
+            let (file, out, resume) = match (scenario, resume) {
+                (_, Some(cp_path)) => {
+                    let cp = CheckpointFile::read(&cp_path)?;
+                    let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
+                    let dir = out.unwrap_or_else(|| {
+                        cp_path
+                            .parent()
+                            .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+                    });
+                    (file, dir, Some(cp))
+                }
+                (Some(scenario), None) => {
+                    let file = scenario::load(&scenario, &sets)?;
+                    file.check()?;
+                    let out = out.unwrap_or_else(|| {
+                        let stem = scenario
+                            .file_stem()
+                            .map_or("run".into(), |s| s.to_string_lossy().into_owned());
+                        Path::new("out").join(stem)
+                    });
+                    prepare_out(&out, force)?;
+                    (file, out, None)
+                }
+                (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
+            };
+            let opts = RunOptions {
+                checkpoint_every,
+                stop_after_steps,
+                stop: Some(stop_flag()),
+                resume,
+                ..Default::default()
+            };
+            let info = run_one(&file, &out, cli.quiet, opts)?;
             println!(
                 "{}: {} steps, Ĥ(0) = {:.9} J, Ĥ(T) = {:.9} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
                 info.status,
@@ -245,19 +288,26 @@ fn progress_bar(quiet: bool, label: &str) -> Bar {
     Bar(Some(b), 1.0)
 }
 
-fn run_one(
-    file: &ScenarioFile,
-    out: &Path,
-    quiet: bool,
-    end_of_loading: Option<f64>,
-) -> Result<RunInfo> {
+fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions<'_>) -> Result<RunInfo> {
     let label = file
         .scenario
         .title
         .clone()
         .unwrap_or_else(|| file.path.display().to_string());
     let mut bar = progress_bar(quiet, &label);
-    Ok(runner::run(file, out, &mut bar, end_of_loading)?)
+    Ok(runner::run(file, out, &mut bar, opts)?)
+}
+
+/// A flag set by Ctrl-C (SIGINT/SIGTERM): runs stop at the end of the current step with
+/// their outputs flushed and a checkpoint written.
+fn stop_flag() -> &'static AtomicBool {
+    static STOP: AtomicBool = AtomicBool::new(false);
+    static INSTALLED: std::sync::Once = std::sync::Once::new();
+    INSTALLED.call_once(|| {
+        // If no handler can be installed, Ctrl-C keeps its default effect.
+        let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    });
+    &STOP
 }
 
 fn sweep(
@@ -390,7 +440,12 @@ fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
         let file = scenario::parse(PAPER_SCENARIO, path, &[format!("time.scheme={scheme}")])?;
         let dir = out.join(scheme);
         std::fs::create_dir_all(&dir)?;
-        let info = run_one(&file, &dir, quiet, Some(PAPER_END_OF_LOADING))?;
+        let opts = RunOptions {
+            end_of_loading: Some(PAPER_END_OF_LOADING),
+            stop: Some(stop_flag()),
+            ..Default::default()
+        };
+        let info = run_one(&file, &dir, quiet, opts)?;
         infos.push(info);
     }
     let figures = out.join("figures");

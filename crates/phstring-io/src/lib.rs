@@ -2,6 +2,7 @@
 //! output writers (CSV, JSON, ParaView), plots (SVG/PNG), and the run driver used by the
 //! `phstring` command line.
 
+pub mod checkpoint;
 pub mod output;
 pub mod plot;
 pub mod runner;

@@ -69,10 +69,48 @@ impl Csv {
             source,
         })
     }
+    /// Opens an existing file, cut back to `len` bytes, for appending.
+    fn reopen(path: PathBuf, len: u64) -> Result<Self, OutputError> {
+        use std::io::{Seek, SeekFrom};
+        let io = |source| OutputError::Io {
+            path: path.clone(),
+            source,
+        };
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .map_err(io)?;
+        if f.metadata().map_err(io)?.len() < len {
+            return Err(OutputError::Io {
+                path: path.clone(),
+                source: std::io::Error::other(format!(
+                    "shorter than the {len} bytes the checkpoint recorded"
+                )),
+            });
+        }
+        f.set_len(len).map_err(io)?;
+        f.seek(SeekFrom::End(0)).map_err(io)?;
+        Ok(Self {
+            path,
+            w: BufWriter::new(f),
+        })
+    }
+    /// Bytes written so far (after a flush).
+    fn len(&mut self) -> Result<u64, OutputError> {
+        self.flush()?;
+        self.w
+            .get_ref()
+            .metadata()
+            .map(|m| m.len())
+            .map_err(|source| OutputError::Io {
+                path: self.path.clone(),
+                source,
+            })
+    }
 }
 
 /// Time series kept in memory for the plots.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct History {
     /// Times [s], one per step including `t = 0`.
     pub t: Vec<f64>,
@@ -112,6 +150,7 @@ pub struct Writers {
     pub history: History,
     dim: usize,
     last_frame: Option<usize>,
+    frames: Vec<(f64, String)>,
 }
 
 impl Writers {
@@ -164,6 +203,7 @@ impl Writers {
             history: History::default(),
             dim: D,
             last_frame: None,
+            frames: Vec::new(),
         };
         let e = sim.energies();
         w.energy.line(&format!(
@@ -185,12 +225,13 @@ impl Writers {
         self.history.kinetic.push(e.kinetic);
         self.history.potential.push(e.potential());
         self.history.hamiltonian.push(e.hamiltonian());
-        let h = sim.params().h;
+        // Each snapshot time once, at the first step that reaches it.
+        let next = self.history.snapshots.len();
         if D >= 2
             && self
                 .snapshot_times
-                .iter()
-                .any(|&s| (s - t).abs() < 0.25 * h)
+                .get(next)
+                .is_some_and(|&s| t >= s - 1e-9 * sim.params().h)
         {
             let pts = sim.state().r.iter().map(|r| [r[0], r[1]]).collect();
             self.history.snapshots.push((t, pts));
@@ -244,6 +285,7 @@ impl Writers {
             )?;
             pvd.add(t, &name);
             pvd.write()?;
+            self.frames.push((t, name));
         }
         Ok(())
     }
@@ -286,6 +328,59 @@ impl Writers {
         }
         self.record(sim)?;
         self.frame(sim)
+    }
+
+    /// Reopens the outputs of an interrupted run in `dir` at the state a checkpoint recorded
+    /// (files longer than recorded are cut back), to continue appending.
+    pub fn resume(
+        dir: &Path,
+        dim: usize,
+        stride: usize,
+        vtk_frames: bool,
+        snapshot_times: Vec<f64>,
+        state: crate::checkpoint::OutputState,
+    ) -> Result<Self, OutputError> {
+        let positions = match state.positions_bytes {
+            Some(n) => Some(Csv::reopen(dir.join("positions.csv"), n)?),
+            None => None,
+        };
+        let pvd = if vtk_frames {
+            let mut p = PvdWriter::new(&dir.join("paraview").join("string.pvd"));
+            for (t, name) in &state.frames {
+                p.add(*t, name);
+            }
+            Some(p)
+        } else {
+            None
+        };
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            energy: Csv::reopen(dir.join("energy.csv"), state.energy_bytes)?,
+            positions,
+            ports: Csv::reopen(dir.join("ports.csv"), state.ports_bytes)?,
+            pvd,
+            stride,
+            snapshot_times,
+            history: state.history,
+            dim,
+            last_frame: state.last_frame,
+            frames: state.frames,
+        })
+    }
+
+    /// The output state for a checkpoint (flushes all files).
+    pub fn state(&mut self) -> Result<crate::checkpoint::OutputState, OutputError> {
+        Ok(crate::checkpoint::OutputState {
+            energy_bytes: self.energy.len()?,
+            positions_bytes: match &mut self.positions {
+                Some(p) => Some(p.len()?),
+                None => None,
+            },
+            ports_bytes: self.ports.len()?,
+            frames: self.frames.clone(),
+            last_frame: self.last_frame,
+            history: self.history.clone(),
+        })
     }
 
     /// Writes the final state (positions and ParaView frame) if the last step was not on

@@ -1,11 +1,14 @@
-//! Runs a validated scenario into an output folder (the work behind `phstring run`).
+//! Runs a validated scenario into an output folder (the work behind `phstring run`):
+//! outputs written as the run goes, checkpoints, interruption, resume.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use phstring::{Material, Simulation};
+use phstring::{Material, Simulation, StepError};
 use serde::Serialize;
 
+use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, SimState};
 use crate::output::{History, OutputError, Writers};
 use crate::scenario::{ScenarioError, ScenarioFile};
 
@@ -22,6 +25,24 @@ pub trait Progress {
 /// No progress reporting.
 impl Progress for () {}
 
+/// Options of a run beyond the scenario.
+#[derive(Default)]
+pub struct RunOptions<'a> {
+    /// End of a loading phase to mark in the increments plot [s].
+    pub end_of_loading: Option<f64>,
+    /// Write `checkpoint.json` every this many steps.
+    pub checkpoint_every: Option<usize>,
+    /// Stop (as if interrupted) after this many steps in all.
+    pub stop_after_steps: Option<usize>,
+    /// Set (e.g. by Ctrl-C) to stop at the end of the current step.
+    pub stop: Option<&'a AtomicBool>,
+    /// Continue from this checkpoint instead of starting at `t = 0`.
+    pub resume: Option<CheckpointFile>,
+}
+
+/// Name of the checkpoint file in the output folder.
+pub const CHECKPOINT: &str = "checkpoint.json";
+
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -32,11 +53,26 @@ pub enum RunError {
     #[error("setup failed: {0}")]
     Setup(#[from] phstring::SetupError),
     /// A step failed; outputs up to the last good step are written.
-    #[error("{0} (outputs up to the last good step are in {1})")]
-    Step(phstring::StepError, PathBuf),
+    #[error("{0}{1} (outputs up to the last good step are in {2})")]
+    Step(StepError, String, PathBuf),
     /// Writing outputs failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// Reading or writing a checkpoint failed.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// The run was stopped (Ctrl-C or `--stop-after-steps`); it can be resumed.
+    #[error("interrupted at t = {t} s after {steps} steps; outputs so far are in {}; continue with `phstring run --resume {}`", dir.display(), checkpoint.display())]
+    Interrupted {
+        /// Time reached [s].
+        t: f64,
+        /// Steps done.
+        steps: usize,
+        /// Output folder.
+        dir: PathBuf,
+        /// Checkpoint to resume from.
+        checkpoint: PathBuf,
+    },
 }
 
 /// What a run did: the content of `summary.json` plus the in-memory history.
@@ -46,7 +82,7 @@ pub struct RunInfo {
     pub program: &'static str,
     /// Program version.
     pub version: &'static str,
-    /// `completed` or `failed`.
+    /// `completed`, `failed` or `interrupted`.
     pub status: String,
     /// The reason for a failure.
     pub error: Option<String>,
@@ -60,7 +96,7 @@ pub struct RunInfo {
     pub scheme: &'static str,
     /// Linear solver used.
     pub solver: &'static str,
-    /// Step size [s].
+    /// Step size [s] (largest with step-size control).
     pub h: f64,
     /// End time [s].
     pub t_end: f64,
@@ -92,8 +128,10 @@ pub struct RunInfo {
     pub hamiltonian_initial: f64,
     /// `Ĥ` at the last completed step [J].
     pub hamiltonian_final: f64,
-    /// Wall time of the time loop alone (stepping, no output) [s].
+    /// Wall time of the time loop alone (stepping, no output) [s], summed over resumes.
     pub time_loop_s: f64,
+    /// Whether the run was resumed from a checkpoint.
+    pub resumed: bool,
     /// Plots written (stems, each as `.svg` and `.png`).
     pub plots: Vec<String>,
     /// The scenario as run (after `--set` overrides).
@@ -103,19 +141,20 @@ pub struct RunInfo {
     pub history: History,
 }
 
-/// Runs `file` into folder `out` (created if needed). Writes all outputs; on a step failure
-/// the outputs up to the last good step and a `summary.json` with `"status": "failed"` are
-/// written before the error is returned.
+/// Runs `file` into folder `out` (created if needed). Writes all outputs as it goes; on a
+/// step failure or an interruption the outputs up to the last good step and a
+/// `summary.json` with `"status": "failed"` / `"interrupted"` are written before the error
+/// is returned.
 pub fn run(
     file: &ScenarioFile,
     out: &Path,
     progress: &mut dyn Progress,
-    end_of_loading: Option<f64>,
+    opts: RunOptions<'_>,
 ) -> Result<RunInfo, RunError> {
     match file.dimension()? {
-        1 => run_dim::<1>(file, out, progress, end_of_loading),
-        2 => run_dim::<2>(file, out, progress, end_of_loading),
-        _ => run_dim::<3>(file, out, progress, end_of_loading),
+        1 => run_dim::<1>(file, out, progress, opts),
+        2 => run_dim::<2>(file, out, progress, opts),
+        _ => run_dim::<3>(file, out, progress, opts),
     }
 }
 
@@ -123,21 +162,14 @@ fn run_dim<const D: usize>(
     file: &ScenarioFile,
     out: &Path,
     progress: &mut dyn Progress,
-    end_of_loading: Option<f64>,
+    opts: RunOptions<'_>,
 ) -> Result<RunInfo, RunError> {
     let v = file.validate::<D>()?;
     let settings = v.settings.clone();
+    let load_error = v.load_error.clone();
     let mut sim: Simulation<D, Material> = Simulation::new(v.problem, settings.step)?;
     let steps_planned = (settings.t_end / settings.step.h).round() as usize;
     let snapshots: Vec<f64> = (0..=5).map(|k| settings.t_end * k as f64 / 5.0).collect();
-    let mut writers = Writers::start(
-        out,
-        &sim,
-        settings.stride,
-        settings.output.positions,
-        settings.output.vtk,
-        snapshots,
-    )?;
     let mut info = RunInfo {
         program: "phstring",
         version: env!("CARGO_PKG_VERSION"),
@@ -165,18 +197,87 @@ fn run_dim<const D: usize>(
         hamiltonian_initial: sim.energies().hamiltonian(),
         hamiltonian_final: sim.energies().hamiltonian(),
         time_loop_s: 0.0,
+        resumed: opts.resume.is_some(),
         plots: Vec::new(),
         scenario: serde_json::to_value(&file.scenario).unwrap_or(serde_json::Value::Null),
         history: History::default(),
     };
+    let end_of_loading = opts
+        .resume
+        .as_ref()
+        .map_or(opts.end_of_loading, |cp| cp.end_of_loading);
+    let mut writers = match opts.resume {
+        Some(cp) => {
+            sim.restore(cp.sim.to_checkpoint::<D>())?;
+            let c = cp.counters;
+            info.steps = c.steps;
+            info.total_newton_iterations = c.total_newton_iterations;
+            info.max_balance_error = c.max_balance_error;
+            info.max_newton_residual = c.max_newton_residual;
+            info.rejected_steps = c.rejected_steps;
+            info.line_search_backtracks = c.line_search_backtracks;
+            info.time_loop_s = c.time_loop_s;
+            info.hamiltonian_initial = c.hamiltonian_initial;
+            Writers::resume(
+                out,
+                D,
+                settings.stride,
+                settings.output.vtk,
+                snapshots,
+                cp.outputs,
+            )?
+        }
+        None => Writers::start(
+            out,
+            &sim,
+            settings.stride,
+            settings.output.positions,
+            settings.output.vtk,
+            snapshots,
+        )?,
+    };
+    let checkpoint_path = out.join(CHECKPOINT);
+    let write_checkpoint = |sim: &Simulation<D, Material>,
+                            writers: &mut Writers,
+                            info: &RunInfo|
+     -> Result<(), RunError> {
+        let cp = CheckpointFile {
+            format: "phstring checkpoint".into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            scenario_path: file.path.clone(),
+            scenario_text: file.text().to_string(),
+            end_of_loading,
+            sim: SimState::from_checkpoint(&sim.checkpoint()),
+            outputs: writers.state()?,
+            counters: Counters {
+                steps: info.steps,
+                total_newton_iterations: info.total_newton_iterations,
+                max_balance_error: info.max_balance_error,
+                max_newton_residual: info.max_newton_residual,
+                rejected_steps: info.rejected_steps,
+                line_search_backtracks: info.line_search_backtracks,
+                time_loop_s: info.time_loop_s,
+                hamiltonian_initial: info.hamiltonian_initial,
+            },
+        };
+        cp.write(&checkpoint_path)?;
+        Ok(())
+    };
+
     progress.start(settings.t_end);
-    let mut loop_time = 0.0;
-    let mut failure = None;
     let t_end = settings.t_end;
+    let mut failure = None;
+    let mut interrupted = false;
     while sim.time() < t_end - 1e-9 * sim.step_size() {
+        if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst))
+            || opts.stop_after_steps.is_some_and(|n| sim.steps() >= n)
+        {
+            interrupted = true;
+            break;
+        }
         let t0 = Instant::now();
         let res = sim.step_until(t_end);
-        loop_time += t0.elapsed().as_secs_f64();
+        info.time_loop_s += t0.elapsed().as_secs_f64();
         match res {
             Ok(report) => {
                 info.steps += 1;
@@ -187,6 +288,12 @@ fn run_dim<const D: usize>(
                 info.max_newton_residual = info.max_newton_residual.max(report.residual);
                 writers.step(&sim, &report)?;
                 progress.step(report.step, report.t);
+                if opts
+                    .checkpoint_every
+                    .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
+                {
+                    write_checkpoint(&sim, &mut writers, &info)?;
+                }
             }
             Err(e) => {
                 failure = Some(e);
@@ -195,8 +302,14 @@ fn run_dim<const D: usize>(
         }
     }
     progress.finish();
-    writers.finish(&sim)?;
-    info.time_loop_s = loop_time;
+    if interrupted {
+        // The checkpoint records the file lengths of this moment: write it before the final
+        // frame and plots, which a resumed run writes itself.
+        write_checkpoint(&sim, &mut writers, &info)?;
+    } else {
+        writers.finish(&sim)?;
+    }
+    writers.flush()?;
     info.t_reached = sim.time();
     info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = writers
@@ -213,16 +326,42 @@ fn run_dim<const D: usize>(
             .unwrap_or_else(|| "phstring".into());
         info.plots = writers.plots(&title, end_of_loading)?;
     }
+    let detail = match &failure {
+        Some(StepError::NonFinite { what: "load", .. }) => load_error
+            .lock()
+            .ok()
+            .and_then(|m| m.clone())
+            .map(|m| format!(": {m}"))
+            .unwrap_or_default(),
+        _ => String::new(),
+    };
     if let Some(e) = &failure {
         info.status = "failed".into();
-        info.error = Some(e.to_string());
+        info.error = Some(format!("{e}{detail}"));
+    } else if interrupted {
+        info.status = "interrupted".into();
+        info.error = Some(format!(
+            "interrupted at t = {} s; resume from {CHECKPOINT}",
+            sim.time()
+        ));
+    } else if checkpoint_path.exists() {
+        // A completed run needs no checkpoint; a stale one could be resumed by mistake.
+        let _ = std::fs::remove_file(&checkpoint_path);
     }
     write_summary(out, &info)?;
     info.history = writers.history;
-    match failure {
-        Some(e) => Err(RunError::Step(e, out.to_path_buf())),
-        None => Ok(info),
+    if let Some(e) = failure {
+        return Err(RunError::Step(e, detail, out.to_path_buf()));
     }
+    if interrupted {
+        return Err(RunError::Interrupted {
+            t: sim.time(),
+            steps: info.steps,
+            dir: out.to_path_buf(),
+            checkpoint: checkpoint_path,
+        });
+    }
+    Ok(info)
 }
 
 /// Writes `summary.json`.

@@ -519,6 +519,25 @@ fn set_rest(
     Err(err("empty key"))
 }
 
+/// Keeps the first failure of a force expression (later ones are consequences).
+fn record_load_error(
+    slot: &std::sync::Mutex<Option<String>>,
+    k: usize,
+    component: usize,
+    text: &str,
+    t: f64,
+    what: &str,
+) {
+    if let Ok(mut s) = slot.lock() {
+        if s.is_none() {
+            *s = Some(format!(
+                "`boundary.{k}.force` component {} \"{text}\" at t = {t} s: {what}",
+                ["x", "y", "z"][component.min(2)]
+            ));
+        }
+    }
+}
+
 /// Whether a force expression is the literal zero (`"0"`, `"0.0"`, …).
 fn is_zero(text: &str) -> bool {
     text.trim().parse::<f64>() == Ok(0.0)
@@ -580,9 +599,17 @@ pub struct Validated<const D: usize> {
     pub settings: RunSettings,
     /// Force expressions per load (node, component texts), for reports.
     pub loads: Vec<(usize, Vec<String>)>,
+    /// The first failure of a force expression during the run (a load that evaluates to an
+    /// error is NaN to the library, which stops the step; this says why).
+    pub load_error: Arc<std::sync::Mutex<Option<String>>>,
 }
 
 impl ScenarioFile {
+    /// The scenario text as run (with `--set` overrides applied).
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
     /// Where the value with `span` under dotted `key` came from.
     pub fn origin(&self, key: &str, span: Range<usize>) -> Origin {
         if let Some(set) = self.overrides.get(key) {
@@ -812,6 +839,7 @@ impl ScenarioFile {
         let mut fixed_mask: Vec<[bool; D]> = vec![[false; D]; n_nodes];
         // (boundary index, node, span, components with a non-zero force expression)
         let mut loaded: Vec<(usize, usize, Range<usize>, Vec<bool>)> = Vec::new();
+        let load_error: Arc<std::sync::Mutex<Option<String>>> = Arc::default();
         for (k, b) in s.boundary.iter().enumerate() {
             let key = |f: &str| format!("boundary.{k}.{f}");
             let raw = *b.node.get_ref();
@@ -888,8 +916,26 @@ impl ScenarioFile {
                 loads_text.push((node, texts.clone()));
                 let comps: Vec<bool> = texts.iter().map(|t| !is_zero(t)).collect();
                 loaded.push((k, node, f.span(), comps));
+                let errors = load_error.clone();
                 boundary.loads.push(NodalLoad::new(node, move |t| {
-                    Vector::<D>::from_fn(|i, _| exprs[i].eval(t).unwrap_or(f64::NAN))
+                    Vector::<D>::from_fn(|i, _| match exprs[i].eval(t) {
+                        Ok(x) if x.is_finite() => x,
+                        Ok(x) => {
+                            record_load_error(
+                                &errors,
+                                k,
+                                i,
+                                exprs[i].text(),
+                                t,
+                                &format!("value {x}"),
+                            );
+                            f64::NAN
+                        }
+                        Err(m) => {
+                            record_load_error(&errors, k, i, exprs[i].text(), t, &m);
+                            f64::NAN
+                        }
+                    })
                 }));
             }
         }
@@ -1000,6 +1046,7 @@ impl ScenarioFile {
                 output: s.output.clone(),
             },
             loads: loads_text,
+            load_error,
         })
     }
 }

@@ -127,7 +127,8 @@ pub fn run(
                 let result = std::fs::create_dir_all(&dir)
                     .map_err(|e| format!("cannot create {}: {e}", dir.display()))
                     .and_then(|_| {
-                        runner::run(file, &dir, &mut (), None).map_err(|e| e.to_string())
+                        runner::run(file, &dir, &mut (), runner::RunOptions::default())
+                            .map_err(|e| e.to_string())
                     });
                 let run = SweepRun {
                     index,

@@ -115,9 +115,11 @@ impl StepError {
 pub enum StepError {
     /// Newton's method did not reach the tolerance within the iteration limit.
     #[error(
-        "Newton did not converge in step {step} (t = {t} → {t_next}): residual {residual:.3e} > tolerance {tol:.1e} after {iterations} iterations"
+        "Newton did not converge in step {step} (t = {t} → {t_next}): residual {residual:.3e} N > tolerance {tol:.1e} N after {iterations} iterations; largest residual at node {worst_node}"
     )]
     NewtonDiverged {
+        /// Node with the largest residual.
+        worst_node: usize,
         /// Index of the step that failed (1 = the first step).
         step: usize,
         /// Start time of the step [s].
@@ -133,9 +135,11 @@ pub enum StepError {
     },
     /// The line search found no acceptable step length.
     #[error(
-        "line search failed in step {step} (t = {t} → {t_next}): residual {residual:.3e} could not be reduced after {iterations} iterations"
+        "line search failed in step {step} (t = {t} → {t_next}): residual {residual:.3e} N could not be reduced after {iterations} iterations; largest residual at node {worst_node}"
     )]
     LineSearchFailed {
+        /// Node with the largest residual.
+        worst_node: usize,
         /// Step index.
         step: usize,
         /// Start time of the step [s].

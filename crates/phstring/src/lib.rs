@@ -82,5 +82,5 @@ pub use material::{Hyperelastic, LinearElastic, Material, StVenantKirchhoff, Sto
 pub use mesh::Mesh;
 pub use newton::{NewtonParams, NewtonStats};
 pub use observe::{Observer, RunSummary, StepReport};
-pub use simulation::{Predictor, Simulation, StepControl, StepParams};
+pub use simulation::{Checkpoint, Predictor, Simulation, StepControl, StepParams};
 pub use system::{Energies, MassMatrix, PhSystem, Problem, State, Vector};

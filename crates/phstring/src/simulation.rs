@@ -83,6 +83,36 @@ impl Default for StepControl {
     }
 }
 
+/// The complete dynamic state of a [`Simulation`]: restoring it into a simulation of the same
+/// problem and parameters continues the run bit for bit as if it had not stopped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint<const D: usize> {
+    /// State `(r, v, C)`.
+    pub state: State<D>,
+    /// Time bookkeeping: `t = t_base + k h_cur` [s].
+    pub t_base: f64,
+    /// Steps since `t_base`.
+    pub k: usize,
+    /// Current step size [s].
+    pub h_cur: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// Rejected step attempts so far.
+    pub rejected: usize,
+    /// Successive easy steps (step-size growth).
+    pub easy_streak: usize,
+    /// Smallest accepted step size [s].
+    pub h_min_used: f64,
+    /// Acceleration estimate of the predictor.
+    pub acc: Vec<Vector<D>>,
+    /// Mid-step velocity of the last step (predictor).
+    pub v_mid: Vec<Vector<D>>,
+    /// Cumulative supplied energy [J].
+    pub supplied_total: f64,
+    /// Newton iterations so far.
+    pub total_newton: usize,
+}
+
 /// A running simulation: system, state, time and all workspaces.
 pub struct Simulation<const D: usize, M> {
     sys: PhSystem<D, M>,
@@ -202,6 +232,65 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Steps rejected (and retried with half the step size) so far.
     pub fn rejected_steps(&self) -> usize {
         self.rejected
+    }
+
+    /// The complete dynamic state, for [`Self::restore`].
+    pub fn checkpoint(&self) -> Checkpoint<D> {
+        Checkpoint {
+            state: self.state.clone(),
+            t_base: self.t_base,
+            k: self.k,
+            h_cur: self.h_cur,
+            steps: self.step,
+            rejected: self.rejected,
+            easy_streak: self.easy_streak,
+            h_min_used: self.h_min_used,
+            acc: self.acc.clone(),
+            v_mid: self.v_mid.clone(),
+            supplied_total: self.supplied_total,
+            total_newton: self.total_newton,
+        }
+    }
+
+    /// Continues from `cp`, taken from a simulation of the same problem and parameters.
+    pub fn restore(&mut self, cp: Checkpoint<D>) -> Result<(), SetupError> {
+        let (n, n_el) = (self.state.r.len(), self.state.c.len());
+        for (what, got, expected) in [
+            ("positions", cp.state.r.len(), n),
+            ("velocities", cp.state.v.len(), n),
+            ("strains", cp.state.c.len(), n_el),
+            ("predictor accelerations", cp.acc.len(), n),
+            ("predictor velocities", cp.v_mid.len(), n),
+        ] {
+            if got != expected {
+                return Err(SetupError::StateSize {
+                    what,
+                    got,
+                    expected,
+                });
+            }
+        }
+        if !(cp.h_cur > 0.0 && cp.h_cur.is_finite()) {
+            return Err(SetupError::NonPositive {
+                what: "checkpoint step size",
+                index: None,
+                value: cp.h_cur,
+            });
+        }
+        self.energies = self.sys.energies(&cp.state);
+        self.state = cp.state;
+        self.t_base = cp.t_base;
+        self.k = cp.k;
+        self.h_cur = cp.h_cur;
+        self.step = cp.steps;
+        self.rejected = cp.rejected;
+        self.easy_streak = cp.easy_streak;
+        self.h_min_used = cp.h_min_used;
+        self.acc = cp.acc;
+        self.v_mid = cp.v_mid;
+        self.supplied_total = cp.supplied_total;
+        self.total_newton = cp.total_newton;
+        Ok(())
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -352,14 +441,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             f_ext: &self.f_ext,
             reaction: &mut self.reaction,
         };
-        let stats = newton::solve(
+        let result = newton::solve(
             &mut eqs,
             &mut self.x,
             &mut self.newton_ws,
             self.solver.as_mut(),
             &self.params.newton,
-        )
-        .map_err(|e| match e {
+        );
+        let worst_node = || {
+            let res = self.newton_ws.residual();
+            (0..res.len())
+                .max_by(|&i, &j| res[i].norm_squared().total_cmp(&res[j].norm_squared()))
+                .unwrap_or(0)
+        };
+        let stats = result.map_err(|e| match e {
             NewtonError::Eval(s) => StepError::InvalidStrain {
                 step: step_no,
                 t,
@@ -378,6 +473,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             },
             NewtonError::MaxIterations(s) => StepError::NewtonDiverged {
+                worst_node: worst_node(),
                 step: step_no,
                 t,
                 t_next,
@@ -386,6 +482,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 iterations: s.iterations,
             },
             NewtonError::LineSearch(s) => StepError::LineSearchFailed {
+                worst_node: worst_node(),
                 step: step_no,
                 t,
                 t_next,
