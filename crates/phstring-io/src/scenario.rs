@@ -154,6 +154,13 @@ pub struct TimeSpec {
     /// (default `true`). `false`: fixed steps, the run stops at the first failure.
     #[serde(default = "yes")]
     pub adaptive: bool,
+    /// Most successive halvings of one step (default 12: `h` down to `h/4096`).
+    #[serde(default = "default_max_halvings")]
+    pub max_halvings: Spanned<i64>,
+}
+
+fn default_max_halvings() -> Spanned<i64> {
+    Spanned::new(0..0, 12)
 }
 
 fn default_scheme() -> Spanned<String> {
@@ -1007,6 +1014,15 @@ impl ScenarioFile {
                 ));
             }
         };
+        let mh = *s.time.max_halvings.get_ref();
+        if !(0..=40).contains(&mh) {
+            return Err(self.invalid(
+                "time.max_halvings",
+                s.time.max_halvings.span(),
+                format!("must be between 0 and 40, got {mh}"),
+            ));
+        }
+        let max_halvings = mh as u32;
         let stride = *s.output.stride.get_ref();
         if stride < 1 {
             return Err(self.invalid(
@@ -1038,6 +1054,7 @@ impl ScenarioFile {
                     predictor,
                     control: phstring::StepControl {
                         adaptive: s.time.adaptive,
+                        max_halvings,
                         ..Default::default()
                     },
                 },

@@ -115,7 +115,8 @@ impl StepError {
 pub enum StepError {
     /// Newton's method did not reach the tolerance within the iteration limit.
     #[error(
-        "Newton did not converge in step {step} (t = {t} → {t_next}): residual {residual:.3e} N > tolerance {tol:.1e} N after {iterations} iterations; largest residual at node {worst_node}"
+        "Newton did not converge in step {step} (t = {t} → {t_next}): residual {residual:.3e} N > tolerance {tol:.1e} N after {iterations} iterations; largest residual at node {worst_node}{}",
+        if *residual < 1e3 * *tol { " (the residual stagnates near round-off for forces of this size: raise the Newton tolerance)" } else { "" }
     )]
     NewtonDiverged {
         /// Node with the largest residual.

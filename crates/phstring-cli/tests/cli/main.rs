@@ -2,6 +2,7 @@
 
 mod broken;
 mod examples;
+mod reliability;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

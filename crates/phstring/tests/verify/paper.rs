@@ -193,3 +193,64 @@ fn checkpoint_restore_is_bit_identical() {
         assert_eq!(a.time().to_bits(), b.time().to_bits());
     }
 }
+
+/// A material with a bounded domain (limited extensibility, `C < 1.2`): stretching past it is
+/// a step error naming the element, the strain, the step and the time — with plain Newton
+/// and fixed steps; with the line search and step-size control the run still stops with a
+/// clear error once no step size helps.
+#[test]
+fn strain_outside_a_bounded_domain_is_reported() {
+    #[derive(Debug)]
+    struct Limited;
+    impl phstring::StoredEnergy for Limited {
+        fn w(&self, c: f64) -> f64 {
+            -5.0 * (1.0 - (c - 1.0) / 0.2).ln() - 25.0 * (c - 1.0)
+        }
+        fn dw(&self, c: f64) -> f64 {
+            25.0 / (1.0 - (c - 1.0) / 0.2) - 25.0
+        }
+        fn d2w(&self, c: f64) -> f64 {
+            125.0 / (1.0 - (c - 1.0) / 0.2).powi(2)
+        }
+        fn admissible(&self, c: f64) -> bool {
+            c.is_finite() && c < 1.2
+        }
+    }
+    let base = paper_pendulum(10);
+    let mut loads = base.boundary.clone();
+    loads.loads = vec![phstring::NodalLoad::new(10, |_| {
+        phstring::Vector::<2>::new(500.0, -500.0)
+    })];
+    let problem = phstring::Problem {
+        mesh: base.mesh,
+        material: Limited,
+        rho_a: 1.0,
+        body_force: phstring::Vector::zeros(),
+        mass: phstring::MassMatrix::Consistent,
+        boundary: loads,
+        initial: base.initial,
+    };
+    let params = StepParams {
+        h: 0.01,
+        newton: phstring::NewtonParams {
+            line_search: false,
+            ..Default::default()
+        },
+        control: phstring::StepControl {
+            adaptive: false,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(problem, params).unwrap();
+    let err = (0..100)
+        .find_map(|_| sim.step().err())
+        .expect("the limit is reached");
+    let msg = err.to_string();
+    assert!(
+        matches!(err, phstring::StepError::InvalidStrain { c, .. } if c >= 1.2)
+            && msg.contains("element")
+            && msg.contains("outside the material's domain"),
+        "{msg}"
+    );
+}
