@@ -535,13 +535,13 @@ fn record_load_error(
     t: f64,
     what: &str,
 ) {
-    if let Ok(mut s) = slot.lock() {
-        if s.is_none() {
-            *s = Some(format!(
-                "`boundary.{k}.force` component {} \"{text}\" at t = {t} s: {what}",
-                ["x", "y", "z"][component.min(2)]
-            ));
-        }
+    if let Ok(mut s) = slot.lock()
+        && s.is_none()
+    {
+        *s = Some(format!(
+            "`boundary.{k}.force` component {} \"{text}\" at t = {t} s: {what}",
+            ["x", "y", "z"][component.min(2)]
+        ));
     }
 }
 
