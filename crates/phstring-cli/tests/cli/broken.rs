@@ -234,3 +234,67 @@ fn bad_set_option() {
     let o = phstring(&["check", "examples/paper_pendulum.toml", "--set", "nonsense"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("expected key=value"));
 }
+
+#[test]
+fn non_positive_rho_a() {
+    rejects(
+        "rhoa",
+        &with("rho_a = 1.0", "rho_a = 0.0"),
+        &["rhoa.toml:9:", "`material.rho_a`"],
+    );
+}
+
+#[test]
+fn non_positive_end_time() {
+    rejects(
+        "end",
+        &with("end = 0.05", "end = -1.0"),
+        &["end.toml:18:", "`time.end`"],
+    );
+}
+
+#[test]
+fn zero_elements() {
+    rejects(
+        "el0",
+        &with("elements = 4", "elements = 0"),
+        &["el0.toml:6:", "`mesh.elements`"],
+    );
+}
+
+#[test]
+fn vector_length_must_match_dimension() {
+    rejects(
+        "veclen",
+        &with("end = [1.0, 0.0]", "end = [1.0, 0.0, 0.0]"),
+        &["veclen.toml:4:", "`geometry.end`", "2 components"],
+    );
+    rejects(
+        "forcelen",
+        &with("[\"0\", \"sin(t)\"]", "[\"0\"]"),
+        &["forcelen.toml:15:", "`boundary.1.force`", "2 expressions"],
+    );
+}
+
+#[test]
+fn bad_dimension_and_law() {
+    rejects(
+        "dim",
+        &with("dimension = 2", "dimension = 4"),
+        &["dim.toml:1:", "`dimension`", "1, 2 or 3"],
+    );
+    rejects(
+        "law",
+        &with("ea = 20.0", "law = \"rubber\"\nea = 20.0"),
+        &["law.toml:8:", "`material.law`", "\"rubber\""],
+    );
+}
+
+#[test]
+fn step_that_does_not_divide_end_time() {
+    rejects(
+        "div",
+        &with("h = 0.01", "h = 0.03"),
+        &["div.toml:17:", "`time.h`", "whole number of steps"],
+    );
+}
