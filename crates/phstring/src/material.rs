@@ -96,6 +96,13 @@ const RECIP_ODD: [f64; 32] = {
 #[inline]
 fn atanh_ratio(t: f64) -> (f64, f64) {
     let t2 = t * t;
+    if t2 < 1e-6 {
+        // Four terms: the first omitted one, t^10/11, is below 1e-24 of the sum t²/3 + ….
+        const R: [f64; 4] = [1.0 / 3.0, 1.0 / 5.0, 1.0 / 7.0, 1.0 / 9.0];
+        let a = t2 * (R[0] + t2 * (R[1] + t2 * (R[2] + t2 * R[3])));
+        let da = t * (2.0 * R[0] + t2 * (4.0 * R[1] + t2 * (6.0 * R[2] + t2 * (8.0 * R[3]))));
+        return (a, da);
+    }
     if t2 > 0.25 {
         let a = t.atanh() / t;
         return (a - 1.0, (1.0 / (1.0 - t2) - a) / t);
@@ -148,7 +155,9 @@ impl StoredEnergy for Hyperelastic {
         let (a_m1, da) = atanh_ratio(t);
         let q = 0.25 * self.ea * (mm1 - a_m1) / m;
         // ℓ = A(t)/m with A = atanh(t)/t; ∂ℓ/∂C₁ = (A'(t)(1 − t) − A(t)) / (2 m²), q = EA/4 (1 − ℓ).
-        let dl = (da * (1.0 - t) - (1.0 + a_m1)) / (2.0 * m * m);
+        // (Only Newton's matrix uses it, so one reciprocal suffices.)
+        let inv_m = 1.0 / m;
+        let dl = (da * (1.0 - t) - (1.0 + a_m1)) * (0.5 * inv_m * inv_m);
         (q, -0.25 * self.ea * dl)
     }
 }
