@@ -15,6 +15,14 @@ use phstring_io::runner::{self, Progress, RunError, RunInfo, RunOptions};
 use phstring_io::scenario::{self, ScenarioFile};
 use phstring_io::sweep::Vary;
 
+/// Prints a line to stdout; a closed pipe (`phstring check … | head`) is not an error.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 /// The paper's benchmark scenario (also `examples/paper_pendulum.toml`).
 const PAPER_SCENARIO: &str = include_str!("../../../examples/paper_pendulum.toml");
 /// End of the loading phase of the paper's benchmark [s].
@@ -161,7 +169,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                 ..Default::default()
             };
             let info = run_one(&file, &out, cli.quiet, opts)?;
-            println!(
+            say!(
                 "{}: {} steps, Ĥ(0) = {:.9} J, Ĥ(T) = {:.9} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
                 info.status,
                 info.steps,
@@ -171,7 +179,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                 info.total_newton_iterations,
                 info.time_loop_s
             );
-            println!("outputs in {}", out.display());
+            say!("outputs in {}", out.display());
             Ok(())
         }
         Command::Check { scenario, sets } => check(&scenario, &sets),
@@ -216,14 +224,20 @@ fn clear_outputs(out: &Path) -> Result<()> {
     let ours = |name: &str| {
         matches!(
             name,
-            "energy.csv" | "positions.csv" | "ports.csv" | "summary.json" | "string.pvd"
+            "energy.csv"
+                | "positions.csv"
+                | "ports.csv"
+                | "summary.json"
+                | "string.pvd"
+                | "checkpoint.json"
+                | "sweep.csv"
         ) || (name.starts_with("frame_") && name.ends_with(".vtp"))
             || ["energy", "configuration", "increments"]
                 .iter()
                 .any(|s| name == format!("{s}.svg") || name == format!("{s}.png"))
             || (name.starts_with("fig") && (name.ends_with(".svg") || name.ends_with(".png")))
     };
-    for sub in [
+    let mut dirs: Vec<PathBuf> = [
         "",
         "paraview",
         "dg",
@@ -231,8 +245,24 @@ fn clear_outputs(out: &Path) -> Result<()> {
         "dg/paraview",
         "mp/paraview",
         "figures",
-    ] {
-        let dir = out.join(sub);
+    ]
+    .iter()
+    .map(|s| out.join(s))
+    .collect();
+    // Sweep runs: run_NNN/ and run_NNN/paraview/.
+    if let Ok(entries) = std::fs::read_dir(out) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let is_run = name
+                .strip_prefix("run_")
+                .is_some_and(|n| n.chars().all(|c| c.is_ascii_digit()));
+            if is_run && e.path().is_dir() {
+                dirs.push(e.path());
+                dirs.push(e.path().join("paraview"));
+            }
+        }
+    }
+    for dir in dirs {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
         };
@@ -347,7 +377,7 @@ fn sweep(
         b.finish_and_clear();
     }
     let failed = runs.iter().filter(|r| r.result.is_err()).count();
-    println!(
+    say!(
         "{} runs ({failed} failed) in {}; table: {}",
         runs.len(),
         out.display(),
@@ -367,7 +397,7 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
         2 => describe::<2>(&file)?,
         _ => describe::<3>(&file)?,
     };
-    println!("{} is valid:\n{text}", path.display());
+    say!("{} is valid:\n{text}", path.display());
     Ok(())
 }
 
@@ -507,10 +537,15 @@ fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
         true,
         Some((PAPER_END_OF_LOADING, "end of loading")),
     )?;
-    println!("{title}: 30 elements, h = 0.01 s, T = 1 s");
-    println!(
+    say!("{title}: 30 elements, h = 0.01 s, T = 1 s");
+    say!(
         "{:<7} {:>13} {:>13} {:>24} {:>17} {:>12}",
-        "scheme", "H(0) [J]", "H(T) [J]", "max |dH| after loading", "Newton it. (avg)", "time loop"
+        "scheme",
+        "H(0) [J]",
+        "H(T) [J]",
+        "max |dH| after loading",
+        "Newton it. (avg)",
+        "time loop"
     );
     for info in &infos {
         let (t, inc) = info.history.increments();
@@ -520,7 +555,7 @@ fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
             .filter(|(t, _)| **t > PAPER_END_OF_LOADING + 1e-9)
             .map(|(_, d)| *d)
             .fold(0.0, f64::max);
-        println!(
+        say!(
             "{:<7} {:>13.7} {:>13.7} {:>24.3e} {:>10} ({:.2}) {:>10.2} ms",
             info.scheme,
             info.hamiltonian_initial,
@@ -531,7 +566,7 @@ fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
             info.time_loop_s * 1e3
         );
     }
-    println!("paper:  H(0) = -3.468359, H(1) = -3.403762 (DG), -3.398474 (MP)");
-    println!("outputs in {} (dg/, mp/, figures/)", out.display());
+    say!("paper:  H(0) = -3.468359, H(1) = -3.403762 (DG), -3.398474 (MP)");
+    say!("outputs in {} (dg/, mp/, figures/)", out.display());
     Ok(())
 }

@@ -183,8 +183,9 @@ pub struct NewtonSpec {
     /// Backtracking line search on `½‖R‖²` (default `true`); `false`: plain Newton.
     #[serde(default = "yes")]
     pub line_search: bool,
-    /// Starting guess: `velocity` (`Δ = h v`, default) or `acceleration`
-    /// (`Δ = h v + ½h² a` with `a` from the previous step).
+    /// Starting guess: `velocity` (`Δ = h v`, default), `acceleration`
+    /// (`Δ = h v + ½h² a` with `a` from the previous step) or `midpoint_velocity`
+    /// (`Δ = h v_{n−½}`, the previous step's mid-step velocity).
     #[serde(default = "default_predictor")]
     pub predictor: Spanned<String>,
 }
@@ -322,6 +323,14 @@ pub enum ScenarioError {
     /// A `--set` option is malformed.
     #[error("--set {option}: {reason}")]
     Set {
+        /// The option as given.
+        option: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A `--vary` option is malformed.
+    #[error("--vary {option}: {reason}")]
+    Vary {
         /// The option as given.
         option: String,
         /// What is wrong.

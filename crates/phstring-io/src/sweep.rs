@@ -25,7 +25,7 @@ impl Vary {
     /// Parses `key=v1,v2,…`; commas inside brackets or quotes do not split
     /// (`body_force.gravity=[0,-9.81],[0,-1.62]`).
     pub fn parse(option: &str) -> Result<Self, ScenarioError> {
-        let err = |reason: &str| ScenarioError::Set {
+        let err = |reason: &str| ScenarioError::Vary {
             option: option.to_string(),
             reason: reason.to_string(),
         };

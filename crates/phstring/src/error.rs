@@ -72,14 +72,6 @@ pub enum SetupError {
         /// Strain value.
         c: f64,
     },
-    /// A node is both fixed and loaded in the same component.
-    #[error("node {node} is both fixed and loaded in component {component}")]
-    FixedAndLoaded {
-        /// Node index.
-        node: usize,
-        /// Component index (0 = x).
-        component: usize,
-    },
     /// The requested linear solver cannot handle this mesh.
     #[error("the block-tridiagonal solver needs a chain mesh (element e = [e, e+1])")]
     NotAChain,

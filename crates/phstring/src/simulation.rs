@@ -491,6 +491,27 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             },
         })?;
 
+        // The new state must be finite before anything is overwritten, so that a failed step
+        // leaves the state untouched.
+        let two_over_h = 2.0 / h;
+        if let Some(node) = self
+            .x
+            .iter()
+            .zip(&self.state.v)
+            .zip(&self.state.r)
+            .position(|((x, v), r)| {
+                !(x.iter().all(|c| c.is_finite())
+                    && (x * two_over_h - v).iter().all(|c| c.is_finite())
+                    && (r + x).iter().all(|c| c.is_finite()))
+            })
+        {
+            return Err(StepError::NonFinite {
+                step: step_no,
+                t,
+                what: "state",
+                node,
+            });
+        }
         // Update: strains first (they need r_n), then r and v.
         let mesh = &self.sys.mesh;
         for (e, (&[a, b], &l)) in mesh.elements().iter().zip(mesh.lengths()).enumerate() {
@@ -545,16 +566,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.supplied_total += supplied;
         self.step += 1;
         self.total_newton += stats.iterations;
-        if let Some(node) = self.state.r.iter().zip(&self.state.v).position(|(r, v)| {
-            !(r.iter().all(|x| x.is_finite()) && v.iter().all(|x| x.is_finite()))
-        }) {
-            return Err(StepError::NonFinite {
-                step: step_no,
-                t,
-                what: "state",
-                node,
-            });
-        }
         Ok(StepReport {
             step: step_no,
             t: t_next,

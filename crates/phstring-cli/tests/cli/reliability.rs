@@ -365,3 +365,34 @@ fn nothing_is_written_outside_out() {
         .collect();
     assert_eq!(entries, vec!["inside".to_string()]);
 }
+
+/// Regression (review of issue 5): `--force` must remove an earlier run's checkpoint, or a
+/// later `--resume` would mix two runs.
+#[test]
+fn force_removes_a_stale_checkpoint() {
+    let out = temp_dir("stale-cp").join("o");
+    let o = phstring(&[
+        "run",
+        "examples/taut_string.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+        "--stop-after-steps",
+        "5",
+    ]);
+    assert_eq!(o.status.code(), Some(130));
+    assert!(out.join("checkpoint.json").exists());
+    // A new run into the same folder that fails at once.
+    let o = phstring(&[
+        "run",
+        "examples/paper_pendulum.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+        "--force",
+        "--set",
+        "boundary.1.force=[\"1e300\", \"0\"]",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!out.join("checkpoint.json").exists());
+}
