@@ -7,6 +7,7 @@ use std::path::Path;
 use phstring_io::scenario;
 use proptest::prelude::*;
 
+#[allow(clippy::too_many_arguments)] // one argument per scenario key under test
 fn scenario_text(
     dim: i64,
     elements: i64,
