@@ -124,14 +124,10 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
     solver: &mut dyn LinearSolver<D>,
     params: &NewtonParams,
 ) -> Result<NewtonStats, NewtonError<P::Error>> {
-    let mut stats = NewtonStats::default();
-    problem
-        .evaluate(x, &mut ws.res, Some(&mut ws.jac))
-        .map_err(NewtonError::Eval)?;
-    stats.residual = norm(&ws.res);
-    if !stats.residual.is_finite() {
-        return Err(non_finite(&ws.res));
-    }
+    let mut stats = NewtonStats {
+        residual: evaluate_checked(problem, x, ws)?,
+        ..Default::default()
+    };
     loop {
         if stats.residual <= params.tol {
             return Ok(stats);
@@ -150,13 +146,7 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
             for (xi, di) in x.iter_mut().zip(&ws.dir) {
                 *xi += di;
             }
-            problem
-                .evaluate(x, &mut ws.res, Some(&mut ws.jac))
-                .map_err(NewtonError::Eval)?;
-            stats.residual = norm(&ws.res);
-            if !stats.residual.is_finite() {
-                return Err(non_finite(&ws.res));
-            }
+            stats.residual = evaluate_checked(problem, x, ws)?;
             continue;
         }
         ws.x_old.copy_from_slice(x);
@@ -180,6 +170,23 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
                 return Err(NewtonError::LineSearch(stats));
             }
         }
+    }
+}
+
+/// Evaluates residual and Jacobian at `x`; returns the residual norm, which must be finite.
+fn evaluate_checked<const D: usize, P: NewtonProblem<D>>(
+    problem: &mut P,
+    x: &[Vector<D>],
+    ws: &mut NewtonWorkspace<D>,
+) -> Result<f64, NewtonError<P::Error>> {
+    problem
+        .evaluate(x, &mut ws.res, Some(&mut ws.jac))
+        .map_err(NewtonError::Eval)?;
+    let r = norm(&ws.res);
+    if r.is_finite() {
+        Ok(r)
+    } else {
+        Err(non_finite(&ws.res))
     }
 }
 
