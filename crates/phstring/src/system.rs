@@ -328,6 +328,19 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
+    /// `M_S = diag(l_e)` [m] (METHOD §2): the element reference lengths.
+    pub fn m_s(&self) -> &[f64] {
+        self.mesh.lengths()
+    }
+
+    /// Efforts `ẑ = (∂Ĥ/∂r̂, v̂, ½ Ŝ) = (−F_b, v̂, ½ Ŝ)` of `state` (paper eq. (30)), so that
+    /// `Eᵀ ẑ = ∇Ĥ` with `E = diag(I, M_ρ, M_S)`: units N, m/s, N.
+    pub fn efforts(&self, state: &State<D>) -> (Vec<Vector<D>>, Vec<Vector<D>>, Vec<f64>) {
+        let neg_fb = self.f_body.iter().map(|f| -f).collect();
+        let half_s = state.c.iter().map(|&c| self.material.dw(c)).collect();
+        (neg_fb, state.v.clone(), half_s)
+    }
+
     /// Stresses `S_e = 2 W'(C_e)` [N] (paper eq. (27d) with element-wise constant `Ψ`).
     pub fn stresses(&self, c: &[f64], out: &mut [f64]) {
         for (o, &ce) in out.iter_mut().zip(c) {

@@ -254,3 +254,42 @@ fn strain_outside_a_bounded_domain_is_reported() {
         "{msg}"
     );
 }
+
+/// `Eᵀ ẑ = ∇Ĥ` (paper eq. (29)–(30)): the efforts against finite differences of `Ĥ` in
+/// `r`, `v` and `C`, on a state of the paper's run.
+#[test]
+fn efforts_are_the_gradient_of_the_hamiltonian() {
+    let mut sim = Simulation::new(paper_pendulum(30), StepParams::default()).unwrap();
+    for _ in 0..30 {
+        sim.step().unwrap();
+    }
+    let sys = sim.system();
+    let state = sim.state().clone();
+    let (dr, v, half_s) = sys.efforts(&state);
+    let h = |s: &phstring::State<2>| sys.energies(s).hamiltonian();
+    let eps = 1e-6;
+    let mut mv = vec![phstring::Vector::<2>::zeros(); v.len()];
+    sys.mass_mul(&v, &mut mv);
+    for i in [0, 7, 30] {
+        for k in 0..2 {
+            let (mut p, mut m) = (state.clone(), state.clone());
+            p.r[i][k] += eps;
+            m.r[i][k] -= eps;
+            assert!(((h(&p) - h(&m)) / (2.0 * eps) - dr[i][k]).abs() < 1e-8);
+            let (mut p, mut m) = (state.clone(), state.clone());
+            p.v[i][k] += eps;
+            m.v[i][k] -= eps;
+            assert!(
+                ((h(&p) - h(&m)) / (2.0 * eps) - mv[i][k]).abs() < 1e-8,
+                "M v"
+            );
+        }
+    }
+    for e in [0, 13, 29] {
+        let (mut p, mut m) = (state.clone(), state.clone());
+        p.c[e] += eps;
+        m.c[e] -= eps;
+        let fd = (h(&p) - h(&m)) / (2.0 * eps);
+        assert!((fd - sys.m_s()[e] * half_s[e]).abs() < 1e-8, "M_S ½S");
+    }
+}
