@@ -275,11 +275,10 @@ impl Writers {
             let mat = sim.system().material();
             let s: Vec<f64> = st.c.iter().map(|&c| 2.0 * mat.dw(c)).collect();
             let name = format!("frame_{:06}.vtp", sim.steps());
-            let segs: Vec<[usize; 2]> = sim.system().mesh().elements().to_vec();
             vtk::write_vtp_segments(
                 &self.dir.join("paraview").join(&name),
                 &points,
-                &segs,
+                sim.system().mesh().elements(),
                 &vel,
                 &[("C", &st.c), ("S", &s)],
             )?;
