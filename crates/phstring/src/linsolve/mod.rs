@@ -10,6 +10,7 @@ mod block_tridiagonal;
 mod sparse_lu;
 
 pub use block_tridiagonal::BlockTridiagonal;
+pub(crate) use block_tridiagonal::block_thomas;
 pub use sparse_lu::SparseLu;
 
 use nalgebra::{SMatrix, SVector};
