@@ -125,6 +125,12 @@ pub struct Counters {
     pub rejected_steps: usize,
     /// Line-search backtracks.
     pub line_search_backtracks: usize,
+    /// Local Newton iterations of nonlinear elimination.
+    #[serde(default)]
+    pub local_newton_iterations: usize,
+    /// Their work in global-iteration equivalents.
+    #[serde(default)]
+    pub local_newton_work: f64,
     /// Wall time of the time loop so far [s].
     pub time_loop_s: f64,
     /// `Ĥ(0)` [J].

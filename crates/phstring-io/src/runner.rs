@@ -112,6 +112,12 @@ pub struct RunInfo {
     pub h_min_used: f64,
     /// Line-search backtracks in all.
     pub line_search_backtracks: usize,
+    /// Local Newton iterations of nonlinear elimination in all (not in
+    /// `total_newton_iterations`).
+    pub local_newton_iterations: usize,
+    /// Their work in global-iteration equivalents: `Σ` range length × local iterations,
+    /// divided by the number of nodes.
+    pub local_newton_work: f64,
     /// Simulated time reached [s].
     pub t_reached: f64,
     /// Newton iterations in all.
@@ -188,6 +194,8 @@ fn run_dim<const D: usize>(
         rejected_steps: 0,
         h_min_used: settings.step.h,
         line_search_backtracks: 0,
+        local_newton_iterations: 0,
+        local_newton_work: 0.0,
         t_reached: 0.0,
         total_newton_iterations: 0,
         newton_norm: "Euclidean norm of the force residual (momentum balance / h) over free DOFs [N]",
@@ -216,6 +224,8 @@ fn run_dim<const D: usize>(
             info.max_newton_residual = c.max_newton_residual;
             info.rejected_steps = c.rejected_steps;
             info.line_search_backtracks = c.line_search_backtracks;
+            info.local_newton_iterations = c.local_newton_iterations;
+            info.local_newton_work = c.local_newton_work;
             info.time_loop_s = c.time_loop_s;
             info.hamiltonian_initial = c.hamiltonian_initial;
             Writers::resume(
@@ -256,6 +266,8 @@ fn run_dim<const D: usize>(
                 max_newton_residual: info.max_newton_residual,
                 rejected_steps: info.rejected_steps,
                 line_search_backtracks: info.line_search_backtracks,
+                local_newton_iterations: info.local_newton_iterations,
+                local_newton_work: info.local_newton_work,
                 time_loop_s: info.time_loop_s,
                 hamiltonian_initial: info.hamiltonian_initial,
             },
@@ -284,6 +296,9 @@ fn run_dim<const D: usize>(
                 info.rejected_steps += report.rejected;
                 info.line_search_backtracks += report.backtracks;
                 info.total_newton_iterations += report.newton_iterations;
+                info.local_newton_iterations += report.local_iterations;
+                info.local_newton_work +=
+                    report.local_node_iterations as f64 / sim.system().mesh().n_nodes() as f64;
                 info.max_balance_error = info.max_balance_error.max(report.balance_error.abs());
                 info.max_newton_residual = info.max_newton_residual.max(report.residual);
                 writers.step(&sim, &report)?;

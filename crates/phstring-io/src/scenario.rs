@@ -183,6 +183,10 @@ pub struct NewtonSpec {
     /// Backtracking line search on `½‖R‖²` (default `true`); `false`: plain Newton.
     #[serde(default = "yes")]
     pub line_search: bool,
+    /// Nonlinear elimination: local Newton solves on the node range that carries the residual
+    /// (default `true`; chain meshes with line search only).
+    #[serde(default = "yes")]
+    pub elimination: bool,
     /// Starting guess: `velocity` (`Δ = h v`, default), `acceleration`
     /// (`Δ = h v + ½h² a` with `a` from the previous step) or `midpoint_velocity`
     /// (`Δ = h v_{n−½}`, the previous step's mid-step velocity).
@@ -211,6 +215,7 @@ impl Default for NewtonSpec {
             max_iter: default_max_iter(),
             solver: default_solver(),
             line_search: true,
+            elimination: true,
             predictor: default_predictor(),
         }
     }
@@ -1058,6 +1063,7 @@ impl ScenarioFile {
                         tol,
                         max_iter: max_iter as usize,
                         line_search: s.newton.line_search,
+                        elimination: s.newton.elimination,
                     },
                     solver,
                     predictor,

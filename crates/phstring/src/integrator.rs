@@ -92,25 +92,54 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         &mut self,
         x: &[Vector<D>],
         res: &mut [Vector<D>],
+        jac: Option<&mut BlockJacobian<D>>,
+    ) -> Result<(), StrainError> {
+        self.evaluate_nodes(x, res, jac, 0..x.len())
+    }
+
+    fn chain(&self) -> bool {
+        self.sys.mesh.is_chain()
+    }
+
+    fn evaluate_nodes(
+        &mut self,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
+        nodes: std::ops::Range<usize>,
     ) -> Result<(), StrainError> {
         let sys = self.sys;
         let h = self.h;
         let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
-        for (r, f) in res.iter_mut().zip(self.f_ext) {
+        let n_el = sys.mesh.n_elements();
+        let full = nodes.start == 0 && nodes.end >= x.len();
+        debug_assert!(full || sys.mesh.is_chain(), "node ranges need a chain mesh");
+        // Elements touching the node range (chain numbering when not the full range).
+        let els = if full {
+            0..n_el
+        } else {
+            nodes.start.saturating_sub(1)..nodes.end.min(n_el)
+        };
+        for (r, f) in res[nodes.clone()]
+            .iter_mut()
+            .zip(&self.f_ext[nodes.clone()])
+        {
             *r = -f;
         }
         if let Some(j) = jac.as_deref_mut() {
-            j.clear();
+            if full {
+                j.clear();
+            } else {
+                j.diag[nodes.clone()].iter_mut().for_each(|b| b.fill(0.0));
+            }
         }
         let eye = SMatrix::<f64, D, D>::identity();
-        for (e, (&[a, b], &l)) in sys
-            .mesh
-            .elements()
+        for (e, (&[a, b], &l)) in sys.mesh.elements()[els.clone()]
             .iter()
-            .zip(sys.mesh.lengths())
+            .zip(&sys.mesh.lengths()[els.clone()])
             .enumerate()
         {
+            let e = e + els.start;
             let (md, mo) = sys.element_mass(l);
             // Inertia: M_ρ (v_{n+1} − v_n)/h with v_{n+1} − v_n = 2 (Δ/h − v_n).
             let wa = (x[a] * inv_h - self.v0[a]) * (2.0 * inv_h);
@@ -140,7 +169,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         }
         // Dirichlet components: the residual there is the reaction force; the equation is
         // replaced by Δ_k = 0.
-        for &i in &sys.constrained {
+        for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
             let free = &sys.free[i];
             for k in 0..D {
                 if !free[k] {
@@ -159,7 +188,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
                     }
                 }
             };
-            for &i in &sys.constrained {
+            for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
                 let fi = &sys.free[i];
                 mask(&mut j.diag[i], fi, fi);
                 for k in 0..D {
@@ -168,7 +197,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
                     }
                 }
             }
-            for &e in &sys.constrained_elements {
+            for &e in sys.constrained_elements.iter().filter(|e| els.contains(e)) {
                 let [a, b] = sys.mesh.elements()[e];
                 let (fa, fb) = (&sys.free[a], &sys.free[b]);
                 mask(&mut j.off[e][0], fa, fb);
@@ -282,6 +311,25 @@ mod tests {
         let mut res = vec![Vector::<D>::zeros(); n];
         let mut jac = BlockJacobian::<D>::zeros(sys.mesh());
         eqs.evaluate(&x, &mut res, Some(&mut jac)).unwrap();
+        // A node range (used by nonlinear elimination) gives the same rows and blocks, whatever
+        // the buffers held before.
+        let range = 1..4;
+        let mut res_r = vec![Vector::<D>::from_element(f64::NAN); n];
+        let mut jac_r = jac.clone();
+        jac_r.diag.iter_mut().for_each(|b| b.fill(f64::NAN));
+        jac_r
+            .off
+            .iter_mut()
+            .for_each(|b| b.iter_mut().for_each(|b| b.fill(f64::NAN)));
+        eqs.evaluate_nodes(&x, &mut res_r, Some(&mut jac_r), range.clone())
+            .unwrap();
+        for i in range.clone() {
+            assert_eq!(res_r[i], res[i], "residual row {i}");
+            assert_eq!(jac_r.diag[i], jac.diag[i], "diagonal block {i}");
+        }
+        for e in range.start..range.end - 1 {
+            assert_eq!(jac_r.off[e], jac.off[e], "coupling blocks of element {e}");
+        }
         // Dense Jacobian from the blocks.
         let dense = |i: usize, k: usize, j: usize, m: usize| -> f64 {
             let mut v = 0.0;

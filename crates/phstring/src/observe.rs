@@ -15,6 +15,11 @@ pub struct StepReport {
     pub newton_iterations: usize,
     /// Line-search backtracks.
     pub backtracks: usize,
+    /// Local Newton iterations of nonlinear elimination (on node ranges).
+    pub local_iterations: usize,
+    /// `Σ` range length × local iterations: the local work in node-iterations (a global
+    /// iteration costs one per node).
+    pub local_node_iterations: usize,
     /// Attempts rejected (and retried with half the step size) before this step.
     pub rejected: usize,
     /// Final Newton residual norm [N].

@@ -572,6 +572,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             h,
             newton_iterations: stats.iterations,
             backtracks: stats.backtracks,
+            local_iterations: stats.local_iterations,
+            local_node_iterations: stats.local_node_iterations,
             rejected: 0,
             residual: stats.residual,
             before,

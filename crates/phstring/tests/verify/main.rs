@@ -2,6 +2,7 @@
 //! Issue 2's acceptance list, one module each.
 
 mod common;
+mod elimination;
 mod momentum;
 mod order;
 mod paper;
