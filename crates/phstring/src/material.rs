@@ -107,6 +107,16 @@ fn atanh_ratio(t: f64) -> (f64, f64) {
         let a = t.atanh() / t;
         return (a - 1.0, (1.0 / (1.0 - t2) - a) / t);
     }
+    // Fixed-length Horner forms: the first omitted term is below 1e-17 of the sum.
+    if t2 < 1e-3 {
+        return atanh_series::<6>(t, t2);
+    }
+    if t2 < 1e-2 {
+        return atanh_series::<9>(t, t2);
+    }
+    if t2 < 0.0625 {
+        return atanh_series::<14>(t, t2);
+    }
     // p = t^{2k}; terms decrease at least geometrically with ratio t² ≤ 1/4.
     let (mut sum, mut dsum) = (0.0, 0.0);
     let mut p = t2;
@@ -121,6 +131,18 @@ fn atanh_ratio(t: f64) -> (f64, f64) {
     }
     // dsum = Σ 2k t^{2k}/(2k+1) = t A'(t).
     (sum, if t == 0.0 { 0.0 } else { dsum / t })
+}
+
+/// `(Σ_{k=1..K} t^{2k}/(2k+1), Σ_{k=1..K} 2k t^{2k−1}/(2k+1))` by Horner's rule in `t²`.
+#[inline(always)]
+fn atanh_series<const K: usize>(t: f64, t2: f64) -> (f64, f64) {
+    let mut a = RECIP_ODD[K];
+    let mut da = (2 * K) as f64 * RECIP_ODD[K];
+    for k in (1..K).rev() {
+        a = a * t2 + RECIP_ODD[k];
+        da = da * t2 + (2 * k) as f64 * RECIP_ODD[k];
+    }
+    (t2 * a, t * da)
 }
 
 impl StoredEnergy for Hyperelastic {

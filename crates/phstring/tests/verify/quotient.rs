@@ -111,7 +111,9 @@ fn quotient_directionality_to_4_ulps() {
     let mut cases = 0;
     for law in &laws {
         for c in [0.5, 1.0, 2.0] {
-            for dc in [0.0, 1e-16, 1e-12, 1e-8, 1e-4, 0.5] {
+            // 3e-3 … 0.3 put t = ΔC/(C₀+C₁) in each range of the hyperelastic series
+            // (t² up to 1e-6, 1e-3, 1e-2, 1/16, 1/4).
+            for dc in [0.0, 1e-16, 1e-12, 1e-8, 1e-4, 3e-3, 0.03, 0.1, 0.3, 0.5] {
                 // Forward, backward and centred pairs around C.
                 for (c0, c1) in [(c, c + dc), (c, c - dc), (c - 0.5 * dc, c + 0.5 * dc)] {
                     if !(law.admissible(c0) && law.admissible(c1)) {
