@@ -125,6 +125,9 @@ pub struct Counters {
     pub rejected_steps: usize,
     /// Line-search backtracks.
     pub line_search_backtracks: usize,
+    /// Newton iterations of rejected attempts.
+    #[serde(default)]
+    pub rejected_newton_iterations: usize,
     /// Local Newton iterations of nonlinear elimination.
     #[serde(default)]
     pub local_newton_iterations: usize,

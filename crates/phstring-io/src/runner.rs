@@ -112,6 +112,8 @@ pub struct RunInfo {
     pub h_min_used: f64,
     /// Line-search backtracks in all.
     pub line_search_backtracks: usize,
+    /// Newton iterations spent in rejected step attempts (not in `total_newton_iterations`).
+    pub rejected_newton_iterations: usize,
     /// Local Newton iterations of nonlinear elimination in all (not in
     /// `total_newton_iterations`).
     pub local_newton_iterations: usize,
@@ -194,6 +196,7 @@ fn run_dim<const D: usize>(
         rejected_steps: 0,
         h_min_used: settings.step.h,
         line_search_backtracks: 0,
+        rejected_newton_iterations: 0,
         local_newton_iterations: 0,
         local_newton_work: 0.0,
         t_reached: 0.0,
@@ -224,6 +227,7 @@ fn run_dim<const D: usize>(
             info.max_newton_residual = c.max_newton_residual;
             info.rejected_steps = c.rejected_steps;
             info.line_search_backtracks = c.line_search_backtracks;
+            info.rejected_newton_iterations = c.rejected_newton_iterations;
             info.local_newton_iterations = c.local_newton_iterations;
             info.local_newton_work = c.local_newton_work;
             info.time_loop_s = c.time_loop_s;
@@ -266,6 +270,7 @@ fn run_dim<const D: usize>(
                 max_newton_residual: info.max_newton_residual,
                 rejected_steps: info.rejected_steps,
                 line_search_backtracks: info.line_search_backtracks,
+                rejected_newton_iterations: info.rejected_newton_iterations,
                 local_newton_iterations: info.local_newton_iterations,
                 local_newton_work: info.local_newton_work,
                 time_loop_s: info.time_loop_s,
@@ -296,9 +301,11 @@ fn run_dim<const D: usize>(
                 info.rejected_steps += report.rejected;
                 info.line_search_backtracks += report.backtracks;
                 info.total_newton_iterations += report.newton_iterations;
+                info.rejected_newton_iterations += report.rejected_iterations;
                 info.local_newton_iterations += report.local_iterations;
                 info.local_newton_work +=
-                    report.local_node_iterations as f64 / sim.system().mesh().n_nodes() as f64;
+                    (report.local_node_iterations + report.rejected_local_node_iterations) as f64
+                        / sim.system().mesh().n_nodes() as f64;
                 info.max_balance_error = info.max_balance_error.max(report.balance_error.abs());
                 info.max_newton_residual = info.max_newton_residual.max(report.residual);
                 writers.step(&sim, &report)?;

@@ -139,6 +139,7 @@ pub struct NewtonWorkspace<const D: usize> {
     jac: BlockJacobian<D>,
     /// Block-Thomas workspace of the local solves.
     thomas: Vec<Block<D>>,
+    last: NewtonStats,
 }
 
 impl<const D: usize> NewtonWorkspace<D> {
@@ -151,7 +152,12 @@ impl<const D: usize> NewtonWorkspace<D> {
             x_old: vec![Vector::zeros(); n],
             jac: BlockJacobian::zeros(mesh),
             thomas: vec![Block::zeros(); n],
+            last: NewtonStats::default(),
         }
+    }
+    /// Counts of the last solve, whether it converged or not.
+    pub fn last_stats(&self) -> &NewtonStats {
+        &self.last
     }
     /// The last residual evaluated.
     pub fn residual(&self) -> &[Vector<D>] {
@@ -178,10 +184,22 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
     solver: &mut dyn LinearSolver<D>,
     params: &NewtonParams,
 ) -> Result<NewtonStats, NewtonError<P::Error>> {
-    let mut stats = NewtonStats {
-        residual: evaluate_checked(problem, x, ws)?,
-        ..Default::default()
-    };
+    let mut stats = NewtonStats::default();
+    let result = solve_counting(problem, x, ws, solver, params, &mut stats);
+    ws.last = stats;
+    result.map(|()| stats)
+}
+
+/// [`solve`], keeping its counts in `stats` however it ends.
+fn solve_counting<const D: usize, P: NewtonProblem<D>>(
+    problem: &mut P,
+    x: &mut [Vector<D>],
+    ws: &mut NewtonWorkspace<D>,
+    solver: &mut dyn LinearSolver<D>,
+    params: &NewtonParams,
+    stats: &mut NewtonStats,
+) -> Result<(), NewtonError<P::Error>> {
+    stats.residual = evaluate_checked(problem, x, ws)?;
     let eliminate = params.elimination
         && params.line_search
         && problem.chain()
@@ -190,16 +208,16 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
     loop {
         if want_local
             && stats.residual > params.tol
-            && eliminate_locally(problem, x, ws, params.tol, &mut stats)
+            && eliminate_locally(problem, x, ws, params.tol, stats)
         {
             stats.residual = evaluate_checked(problem, x, ws)?;
         }
         want_local = false;
         if stats.residual <= params.tol {
-            return Ok(stats);
+            return Ok(());
         }
         if stats.iterations >= params.max_iter {
-            return Err(NewtonError::MaxIterations(stats));
+            return Err(NewtonError::MaxIterations(*stats));
         }
         for (d, r) in ws.dir.iter_mut().zip(&ws.res) {
             *d = -r;
@@ -234,7 +252,7 @@ pub fn solve<const D: usize, P: NewtonProblem<D>>(
             if alpha < ALPHA_MIN {
                 // Leave x at the last accepted iterate.
                 x.copy_from_slice(&ws.x_old);
-                return Err(NewtonError::LineSearch(stats));
+                return Err(NewtonError::LineSearch(*stats));
             }
         }
     }

@@ -22,6 +22,10 @@ pub struct StepReport {
     pub local_node_iterations: usize,
     /// Attempts rejected (and retried with half the step size) before this step.
     pub rejected: usize,
+    /// Newton iterations (linear solves) spent in those rejected attempts.
+    pub rejected_iterations: usize,
+    /// Local node-iterations of nonlinear elimination spent in those rejected attempts.
+    pub rejected_local_node_iterations: usize,
     /// Final Newton residual norm [N].
     pub residual: f64,
     /// Energies at `t_n` [J].

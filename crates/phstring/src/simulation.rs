@@ -334,6 +334,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn step_until(&mut self, t_end: f64) -> Result<StepReport, StepError> {
         let mut halvings = 0;
         let mut rejected_here = 0;
+        let (mut rejected_its, mut rejected_local) = (0, 0);
         loop {
             let t = self.time();
             // Clip only a real overshoot: a step that lands on t_end up to rounding keeps h.
@@ -345,6 +346,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             match self.try_step(h, t_next) {
                 Ok(mut report) => {
                     report.rejected = rejected_here;
+                    report.rejected_iterations = rejected_its;
+                    report.rejected_local_node_iterations = rejected_local;
                     if t_next.is_some() {
                         self.t_base = t_end;
                         self.k = 0;
@@ -377,6 +380,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             last: Box::new(e),
                         });
                     }
+                    let spent = self.newton_ws.last_stats();
+                    rejected_its += spent.iterations;
+                    rejected_local += spent.local_node_iterations;
                     halvings += 1;
                     rejected_here += 1;
                     self.rejected += 1;
@@ -574,6 +580,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             backtracks: stats.backtracks,
             local_iterations: stats.local_iterations,
             local_node_iterations: stats.local_node_iterations,
+            rejected_iterations: 0,
+            rejected_local_node_iterations: 0,
             rejected: 0,
             residual: stats.residual,
             before,
