@@ -25,14 +25,18 @@ impl<const D: usize> BlockTridiagonal<D> {
         }
         let n = mesh.n_nodes();
         Ok(Self {
-            c: vec![Block::zeros(); n.saturating_sub(1)],
+            c: vec![Block::zeros(); n],
         })
     }
 }
 
 /// Solves the block-tridiagonal system with diagonal blocks `diag[i]` and couplings
 /// `off[i] = [∂R_i/∂x_{i+1}, ∂R_{i+1}/∂x_i]`, overwriting `rhs`; `c` is workspace of at least
-/// `diag.len() − 1` blocks.
+/// `diag.len()` blocks.
+///
+/// Twisted ("burn at both ends") block Thomas: the chain is eliminated from both ends towards
+/// the middle node at once, which halves the length of the dependent chain of small
+/// inversions; each Schur-complement block is inverted in closed form.
 pub(crate) fn block_thomas<const D: usize>(
     diag: &[Block<D>],
     off: &[[Block<D>; 2]],
@@ -40,9 +44,20 @@ pub(crate) fn block_thomas<const D: usize>(
     rhs: &mut [SVector<f64, D>],
 ) -> Result<(), LinearSolveError> {
     let n = rhs.len();
-    // Factor and forward sweep in one pass: D'_0 = D_0, D'_{i+1} = D_{i+1} − L_i C_i,
-    // C_i = D'_i⁻¹ U_i, y_i = D'_i⁻¹ (b_i − L_{i−1} y_{i−1}) (stored in rhs).
-    for i in 0..n {
+    if n == 0 {
+        return Ok(());
+    }
+    let singular = |i| LinearSolveError::Singular { block: i };
+    // With U_i = off[i][0] (row i, column i+1) and L_i = off[i−1][1] (row i, column i−1):
+    // top-down for i < m:   D'_i = D_i − L_i C_{i−1}, C_i = D'_i⁻¹ U_i,
+    //                       y_i = D'_i⁻¹ (b_i − L_i y_{i−1});
+    // bottom-up for i > m:  E'_i = D_i − U_i G_{i+1}, G_i = E'_i⁻¹ L_i,
+    //                       z_i = E'_i⁻¹ (b_i − U_i z_{i+1});
+    // C_i and G_i share `c`, y_i and z_i share `rhs`.
+    let m = n / 2;
+    for k in 0..m {
+        // Top node i = k and bottom node j = n − 1 − k (> m ≥ k), independent of each other.
+        let (i, j) = (k, n - 1 - k);
         let mut d = diag[i];
         let mut b = rhs[i];
         if i > 0 {
@@ -50,27 +65,56 @@ pub(crate) fn block_thomas<const D: usize>(
             d -= l * c[i - 1];
             b -= l * rhs[i - 1];
         }
-        let inv = d
-            .try_inverse()
-            .ok_or(LinearSolveError::Singular { block: i })?;
-        rhs[i] = inv * b;
-        if i + 1 < n {
-            c[i] = inv * off[i][0];
+        let inv_d = d.try_inverse().ok_or(singular(i))?;
+        rhs[i] = inv_d * b;
+        c[i] = inv_d * off[i][0];
+        // For even n the bottom sweep has one node fewer than the top one.
+        if j > m {
+            let mut e = diag[j];
+            let mut f = rhs[j];
+            if j + 1 < n {
+                let u = &off[j][0];
+                e -= u * c[j + 1];
+                f -= u * rhs[j + 1];
+            }
+            let inv_e = e.try_inverse().ok_or(singular(j))?;
+            rhs[j] = inv_e * f;
+            c[j] = inv_e * off[j - 1][1];
         }
     }
-    // Back substitution: x_i = y_i − C_i x_{i+1}.
-    let mut finite = true;
-    for i in (0..n.saturating_sub(1)).rev() {
-        let x_next = rhs[i + 1];
-        rhs[i] -= c[i] * x_next;
-        finite &= rhs[i].iter().all(|v| v.is_finite());
+    // Middle node: D_m − L_m C_{m−1} − U_m G_{m+1}.
+    let mut d = diag[m];
+    let mut b = rhs[m];
+    if m > 0 {
+        let l = &off[m - 1][1];
+        d -= l * c[m - 1];
+        b -= l * rhs[m - 1];
     }
-    if !finite || n > 0 && !rhs[n - 1].iter().all(|v| v.is_finite()) {
+    if m + 1 < n {
+        let u = &off[m][0];
+        d -= u * c[m + 1];
+        b -= u * rhs[m + 1];
+    }
+    rhs[m] = d.try_inverse().ok_or(singular(m))? * b;
+    // Back substitution outwards: x_i = y_i − C_i x_{i+1}, x_j = z_j − G_j x_{j−1}.
+    let mut finite = rhs[m].iter().all(|v| v.is_finite());
+    for k in (0..m).rev() {
+        let x_next = rhs[k + 1];
+        rhs[k] -= c[k] * x_next;
+        finite &= rhs[k].iter().all(|v| v.is_finite());
+        let j = n - 1 - k;
+        if j > m {
+            let x_prev = rhs[j - 1];
+            rhs[j] -= c[j] * x_prev;
+            finite &= rhs[j].iter().all(|v| v.is_finite());
+        }
+    }
+    if !finite {
         let i = rhs
             .iter()
             .position(|x| !x.iter().all(|v| v.is_finite()))
             .unwrap_or(0);
-        return Err(LinearSolveError::Singular { block: i });
+        return Err(singular(i));
     }
     Ok(())
 }

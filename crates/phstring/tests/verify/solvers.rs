@@ -64,6 +64,20 @@ proptest! {
     }
 }
 
+/// The twisted elimination meets in the middle: short chains of both parities, where the
+/// top and bottom sweeps are empty or one node long.
+#[test]
+fn block_tridiagonal_short_chains() {
+    let vals: Vec<f64> = (0..97)
+        .map(|k| ((k * 37 % 101) as f64 / 50.0) - 1.0)
+        .collect();
+    for n_el in 1..=6 {
+        check::<1>(n_el, &vals);
+        check::<2>(n_el, &vals);
+        check::<3>(n_el, &vals);
+    }
+}
+
 /// A star of three strings sharing node 0 is not a chain: the block solver refuses it and the
 /// sparse LU solves it.
 #[test]
