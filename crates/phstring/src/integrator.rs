@@ -160,7 +160,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
             if let Some(j) = jac.as_deref_mut() {
                 // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
                 let rp1 = rpm + dr * 0.5;
-                let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) / l;
+                let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
                 j.diag[a] += g + eye * (mass_scale * md);
                 j.diag[b] += g + eye * (mass_scale * md);
                 let off = eye * (mass_scale * mo) - g;
