@@ -1,21 +1,37 @@
 //! The paper's pendulum on fine meshes (issue 4): largest fixed step that converges with
-//! plain and with globalized Newton, and adaptive runs at N = 3000 for each law.
+//! plain Newton, with the line search, and with line search plus nonlinear elimination; and
+//! adaptive runs at N = 3000 for each law, with their step sizes and Newton work.
 //!
-//! `cargo bench -p phstring --bench pendulum_scaling` (several minutes).
+//! `cargo bench -p phstring --bench pendulum_scaling` (several minutes). Wall times are the
+//! best of three runs; the runs are deterministic, so only the wall time varies.
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use phstring::benchmarks::paper_pendulum;
-use phstring::{Material, NewtonParams, Simulation, StepControl, StepParams};
+use phstring::{Material, NewtonParams, Predictor, Simulation, StepControl, StepParams};
+
+/// Newton variants of the fixed-step table.
+#[derive(Clone, Copy)]
+enum Variant {
+    Plain,
+    LineSearch,
+    Elimination,
+}
+
+fn newton(v: Variant) -> NewtonParams {
+    NewtonParams {
+        line_search: !matches!(v, Variant::Plain),
+        elimination: matches!(v, Variant::Elimination),
+        ..Default::default()
+    }
+}
 
 /// Runs to `t_end` with fixed steps; `Ok(())` if every step converged.
-fn fixed(n_el: usize, h: f64, line_search: bool, t_end: f64) -> Result<(), String> {
+fn fixed(n_el: usize, h: f64, v: Variant, t_end: f64) -> Result<(), String> {
     let params = StepParams {
         h,
-        newton: NewtonParams {
-            line_search,
-            ..Default::default()
-        },
+        newton: newton(v),
         control: StepControl {
             adaptive: false,
             ..Default::default()
@@ -28,73 +44,214 @@ fn fixed(n_el: usize, h: f64, line_search: bool, t_end: f64) -> Result<(), Strin
         .map_err(|e| e.to_string())
 }
 
+/// What an adaptive run to `T = 1 s` did.
+#[derive(Default)]
+struct Adaptive {
+    wall: f64,
+    steps: usize,
+    rejected: usize,
+    iterations: usize,
+    max_iterations: usize,
+    rejected_iterations: usize,
+    /// Local elimination work in global-iteration equivalents.
+    local_work: f64,
+    h_min: f64,
+    h_max: f64,
+    /// Accepted steps per step size (keyed by `−log2(h/0.01)`).
+    h_hist: BTreeMap<i32, usize>,
+    max_dh: f64,
+}
+
+fn adaptive(
+    n_el: usize,
+    law: Material,
+    predictor: Predictor,
+    elimination: bool,
+) -> Result<Adaptive, String> {
+    let mut problem = paper_pendulum(n_el);
+    problem.material = law;
+    let params = StepParams {
+        predictor,
+        newton: NewtonParams {
+            elimination,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(problem, params).map_err(|e| e.to_string())?;
+    let nodes = (n_el + 1) as f64;
+    let mut a = Adaptive {
+        h_min: f64::INFINITY,
+        ..Default::default()
+    };
+    let t0 = Instant::now();
+    while sim.time() < 1.0 - 1e-12 {
+        let r = sim.step_until(1.0).map_err(|e| e.to_string())?;
+        a.steps += 1;
+        a.rejected += r.rejected;
+        a.iterations += r.newton_iterations;
+        a.max_iterations = a.max_iterations.max(r.newton_iterations);
+        a.rejected_iterations += r.rejected_iterations;
+        a.local_work += (r.local_node_iterations + r.rejected_local_node_iterations) as f64 / nodes;
+        a.h_min = a.h_min.min(r.h);
+        a.h_max = a.h_max.max(r.h);
+        let level = (0.01 / r.h).log2().round() as i32;
+        *a.h_hist.entry(level).or_default() += 1;
+        // Loading ends at t = 0.2: from then on the energy is constant.
+        if r.t - r.h >= 0.2 - 1e-12 {
+            a.max_dh = a
+                .max_dh
+                .max((r.after.hamiltonian() - r.before.hamiltonian()).abs());
+        }
+    }
+    a.wall = t0.elapsed().as_secs_f64();
+    Ok(a)
+}
+
+/// Best wall time of three identical runs.
+fn adaptive_best(
+    n_el: usize,
+    law: Material,
+    predictor: Predictor,
+    elimination: bool,
+) -> Result<Adaptive, String> {
+    let mut best = adaptive(n_el, law, predictor, elimination)?;
+    for _ in 0..2 {
+        let again = adaptive(n_el, law, predictor, elimination)?;
+        best.wall = best.wall.min(again.wall);
+    }
+    Ok(best)
+}
+
+fn laws() -> [Material; 3] {
+    [
+        Material::hyperelastic(20.0),
+        Material::tension_only_hyperelastic(20.0),
+        Material::tension_only_linear(20.0),
+    ]
+}
+
+fn predictor_name(p: Predictor) -> &'static str {
+    match p {
+        Predictor::Velocity => "velocity",
+        Predictor::Acceleration => "acceleration",
+        Predictor::MidpointVelocity => "midpoint_velocity",
+    }
+}
+
 fn main() {
+    println!("# Adaptive runs, N = 3000, T = 1 s, h_max = 0.01 s (best wall of 3)");
+    println!(
+        "{:>26} {:>17} {:>5} {:>8} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>9} {:>10}",
+        "law",
+        "predictor",
+        "elim",
+        "wall [s]",
+        "steps",
+        "rej",
+        "it/step",
+        "max it",
+        "local/st",
+        "rej its",
+        "h min",
+        "max|dH|>.2"
+    );
+    let mut hists = Vec::new();
+    let configs = laws()
+        .into_iter()
+        .flat_map(|law| {
+            [Predictor::Velocity, Predictor::MidpointVelocity]
+                .into_iter()
+                .map(move |p| (law, p, true))
+        })
+        .chain([(Material::hyperelastic(20.0), Predictor::Velocity, false)]);
+    for (law, predictor, elimination) in configs {
+        match adaptive_best(3000, law, predictor, elimination) {
+            Ok(a) => {
+                println!(
+                    "{:>26} {:>17} {:>5} {:>8.3} {:>6} {:>5} {:>8.2} {:>8} {:>8.2} {:>9} {:>9.2e} {:>10.1e}",
+                    law.name(),
+                    predictor_name(predictor),
+                    elimination,
+                    a.wall,
+                    a.steps,
+                    a.rejected,
+                    a.iterations as f64 / a.steps as f64,
+                    a.max_iterations,
+                    a.local_work / a.steps as f64,
+                    a.rejected_iterations,
+                    a.h_min,
+                    a.max_dh
+                );
+                let hist: Vec<String> = a
+                    .h_hist
+                    .iter()
+                    .map(|(k, c)| format!("{:.2e}:{c}", 0.01 / f64::powi(2.0, *k)))
+                    .collect();
+                hists.push(format!(
+                    "{} / {} / elim {}: {}",
+                    law.name(),
+                    predictor_name(predictor),
+                    elimination,
+                    hists_join(&hist)
+                ));
+            }
+            Err(e) => println!(
+                "{:>26} {:>17} failed: {e}",
+                law.name(),
+                predictor_name(predictor)
+            ),
+        }
+    }
+    println!();
+    println!("# Accepted step sizes (h: number of steps)");
+    for h in &hists {
+        println!("{h}");
+    }
+    println!();
+    println!("# Spread with the mesh: wall [s] of one run, N = 2800 … 3200, velocity predictor");
+    print!("{:>26}", "law");
+    let ns = [2800usize, 2900, 3000, 3100, 3200];
+    for n in ns {
+        print!(" {n:>7}");
+    }
+    println!();
+    for law in laws() {
+        print!("{:>26}", law.name());
+        for n in ns {
+            match adaptive(n, law, Predictor::Velocity, true) {
+                Ok(a) => print!(" {:>7.3}", a.wall),
+                Err(_) => print!(" {:>7}", "failed"),
+            }
+        }
+        println!();
+    }
+    println!();
     println!("# Largest fixed h (0.01·2^-k) at which the pendulum converges to T");
     println!(
-        "{:>7} {:>6} {:>14} {:>14}",
-        "N", "T [s]", "plain Newton", "line search"
+        "{:>7} {:>6} {:>14} {:>14} {:>14}",
+        "N", "T [s]", "plain Newton", "line search", "LS + elim."
     );
     for (n, t_end) in [(300usize, 1.0), (3000, 1.0), (30000, 0.05)] {
         let mut row = Vec::new();
-        for ls in [false, true] {
+        for v in [Variant::Plain, Variant::LineSearch, Variant::Elimination] {
             let mut found = None;
             for k in 0..12 {
                 let h = 0.01 / f64::powi(2.0, k);
-                if fixed(n, h, ls, t_end).is_ok() {
+                if fixed(n, h, v, t_end).is_ok() {
                     found = Some(h);
                     break;
                 }
             }
             row.push(found.map_or("none ≥ 5e-6".to_string(), |h| format!("{h:.3e}")));
         }
-        println!("{n:>7} {t_end:>6} {:>14} {:>14}", row[0], row[1]);
+        println!(
+            "{n:>7} {t_end:>6} {:>14} {:>14} {:>14}",
+            row[0], row[1], row[2]
+        );
     }
-    println!();
-    println!("# Adaptive runs, N = 3000, T = 1 s, h_max = 0.01, line search");
-    println!(
-        "{:>26} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>12}",
-        "law", "wall [s]", "steps", "rejected", "it/step", "h min", "h max", "max|dH| >0.2"
-    );
-    for law in [
-        Material::hyperelastic(20.0),
-        Material::tension_only_hyperelastic(20.0),
-        Material::tension_only_linear(20.0),
-    ] {
-        let mut problem = paper_pendulum(3000);
-        problem.material = law;
-        let mut sim = Simulation::new(problem, StepParams::default()).unwrap();
-        let (mut steps, mut iters, mut hmax, mut dh) = (0, 0, 0.0_f64, 0.0_f64);
-        let t0 = Instant::now();
-        let mut ok = true;
-        while sim.time() < 1.0 - 1e-12 {
-            match sim.step_until(1.0) {
-                Ok(r) => {
-                    steps += 1;
-                    iters += r.newton_iterations;
-                    hmax = hmax.max(r.h);
-                    if r.t > 0.2 + 1e-9 && r.t - r.h >= 0.2 - 1e-12 {
-                        dh = dh.max((r.after.hamiltonian() - r.before.hamiltonian()).abs());
-                    }
-                }
-                Err(e) => {
-                    println!("{:>26} failed: {e}", law.name());
-                    ok = false;
-                    break;
-                }
-            }
-        }
-        if ok {
-            println!(
-                "{:>26} {:>8.3} {:>6} {:>9} {:>9.2} {:>9.2e} {:>9.2e} {:>12.2e}",
-                law.name(),
-                t0.elapsed().as_secs_f64(),
-                steps,
-                sim.rejected_steps(),
-                iters as f64 / steps as f64,
-                sim.smallest_step_size(),
-                hmax,
-                dh
-            );
-        }
-    }
+}
+
+fn hists_join(parts: &[String]) -> String {
+    parts.join("  ")
 }
