@@ -2,8 +2,10 @@
 //! plain Newton, with the line search, and with line search plus nonlinear elimination; and
 //! adaptive runs at N = 3000 for each law, with their step sizes and Newton work.
 //!
-//! `cargo bench -p phstring --bench pendulum_scaling` (several minutes). Wall times are the
-//! best of three runs; the runs are deterministic, so only the wall time varies.
+//! `cargo bench -p phstring --bench pendulum_scaling` (about two minutes). Wall times are the
+//! best of three runs; the runs are deterministic, so only the wall time varies. With
+//! `-- full` the fixed-step table runs N = 30000 to T = 1 s as well (about an hour; without
+//! it, to T = 0.05 s), and `-- table` prints only that table.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -140,6 +142,16 @@ fn predictor_name(p: Predictor) -> &'static str {
 }
 
 fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let full = args.iter().any(|a| a == "full");
+    let table_only = args.iter().any(|a| a == "table");
+    if !table_only {
+        adaptive_tables();
+    }
+    fixed_table(full);
+}
+
+fn adaptive_tables() {
     println!("# Adaptive runs, N = 3000, T = 1 s, h_max = 0.01 s (best wall of 3)");
     println!(
         "{:>26} {:>17} {:>5} {:>8} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>9} {:>10}",
@@ -227,12 +239,16 @@ fn main() {
         println!();
     }
     println!();
+}
+
+fn fixed_table(full: bool) {
     println!("# Largest fixed h (0.01·2^-k) at which the pendulum converges to T");
     println!(
         "{:>7} {:>6} {:>14} {:>14} {:>14}",
         "N", "T [s]", "plain Newton", "line search", "LS + elim."
     );
-    for (n, t_end) in [(300usize, 1.0), (3000, 1.0), (30000, 0.05)] {
+    let t_30000 = if full { 1.0 } else { 0.05 };
+    for (n, t_end) in [(300usize, 1.0), (3000, 1.0), (30000, t_30000)] {
         let mut row = Vec::new();
         for v in [Variant::Plain, Variant::LineSearch, Variant::Elimination] {
             let mut found = None;
