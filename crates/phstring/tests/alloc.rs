@@ -56,4 +56,26 @@ fn step_loop_does_not_allocate() {
             );
         }
     }
+    // Nonlinear elimination and step-size control on a fine mesh: adaptive steps with local
+    // solves and rejected attempts.
+    let mut problem = paper_pendulum(1000);
+    problem.material = phstring::Material::tension_only_linear(20.0);
+    let mut sim = Simulation::new(problem, StepParams::default()).unwrap();
+    sim.step().unwrap();
+    let before = ALLOCS.load(Ordering::SeqCst);
+    let (mut local, mut rejected) = (0, 0);
+    for _ in 0..40 {
+        let r = sim.step().unwrap();
+        local += r.local_iterations;
+        rejected += r.rejected;
+    }
+    let n = ALLOCS.load(Ordering::SeqCst) - before;
+    eprintln!(
+        "elimination: {n} allocations in 40 steps ({local} local iterations, {rejected} rejected)"
+    );
+    assert!(local > 0, "elimination never ran");
+    assert_eq!(
+        n, 0,
+        "the adaptive step loop with elimination allocated {n} times"
+    );
 }
