@@ -140,12 +140,12 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
             .enumerate()
         {
             let e = e + els.start;
+            // Rows outside a partial range are left alone.
+            let (in_a, in_b) = (full || a >= nodes.start, full || b < nodes.end);
             let (md, mo) = sys.element_mass(l);
             // Inertia: M_ρ (v_{n+1} − v_n)/h with v_{n+1} − v_n = 2 (Δ/h − v_n).
             let wa = (x[a] * inv_h - self.v0[a]) * (2.0 * inv_h);
             let wb = (x[b] * inv_h - self.v0[b]) * (2.0 * inv_h);
-            res[a] += wa * md + wb * mo;
-            res[b] += wb * md + wa * mo;
             // Internal force K(r_{n+½}) S̄.
             let (rpm, dr, dc) = element_step(&self.r0[a], &self.r0[b], &x[a], &x[b], l);
             let c0 = self.c0[e];
@@ -155,14 +155,24 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
             }
             let (q, dq) = self.scheme.half_stress(&sys.material, c0, c1);
             let f = rpm * (2.0 * q);
-            res[a] -= f;
-            res[b] += f;
+            if in_a {
+                res[a] += wa * md + wb * mo;
+                res[a] -= f;
+            }
+            if in_b {
+                res[b] += wb * md + wa * mo;
+                res[b] += f;
+            }
             if let Some(j) = jac.as_deref_mut() {
                 // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
                 let rp1 = rpm + dr * 0.5;
                 let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
-                j.diag[a] += g + eye * (mass_scale * md);
-                j.diag[b] += g + eye * (mass_scale * md);
+                if in_a {
+                    j.diag[a] += g + eye * (mass_scale * md);
+                }
+                if in_b {
+                    j.diag[b] += g + eye * (mass_scale * md);
+                }
                 let off = eye * (mass_scale * mo) - g;
                 j.off[e] = [off, off];
             }
@@ -312,20 +322,34 @@ mod tests {
         let mut jac = BlockJacobian::<D>::zeros(sys.mesh());
         eqs.evaluate(&x, &mut res, Some(&mut jac)).unwrap();
         // A node range (used by nonlinear elimination) gives the same rows and blocks, whatever
-        // the buffers held before.
+        // the buffers held before, and writes nothing else.
         let range = 1..4;
-        let mut res_r = vec![Vector::<D>::from_element(f64::NAN); n];
+        // Finite, so that an accumulation into a row outside the range shows.
+        const SENTINEL: f64 = 12345.0;
+        let mut res_r = vec![Vector::<D>::from_element(SENTINEL); n];
         let mut jac_r = jac.clone();
-        jac_r.diag.iter_mut().for_each(|b| b.fill(f64::NAN));
+        jac_r.diag.iter_mut().for_each(|b| b.fill(SENTINEL));
         jac_r
             .off
             .iter_mut()
-            .for_each(|b| b.iter_mut().for_each(|b| b.fill(f64::NAN)));
+            .for_each(|b| b.iter_mut().for_each(|b| b.fill(SENTINEL)));
         eqs.evaluate_nodes(&x, &mut res_r, Some(&mut jac_r), range.clone())
             .unwrap();
-        for i in range.clone() {
-            assert_eq!(res_r[i], res[i], "residual row {i}");
-            assert_eq!(jac_r.diag[i], jac.diag[i], "diagonal block {i}");
+        for i in 0..n {
+            if range.contains(&i) {
+                assert_eq!(res_r[i], res[i], "residual row {i}");
+                assert_eq!(jac_r.diag[i], jac.diag[i], "diagonal block {i}");
+            } else {
+                // Left as it was.
+                assert!(
+                    res_r[i].iter().all(|&v| v == SENTINEL),
+                    "row {i} was written"
+                );
+                assert!(
+                    jac_r.diag[i].iter().all(|&v| v == SENTINEL),
+                    "block {i} was written"
+                );
+            }
         }
         for e in range.start..range.end - 1 {
             assert_eq!(jac_r.off[e], jac.off[e], "coupling blocks of element {e}");

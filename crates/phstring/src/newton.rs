@@ -97,9 +97,10 @@ pub trait NewtonProblem<const D: usize> {
     fn chain(&self) -> bool {
         false
     }
-    /// Like [`Self::evaluate`], but only the residual rows and Jacobian blocks of the node
-    /// range `nodes` (with all other `x` held) need be correct; the rows of the two nodes just
-    /// outside it may be overwritten. Only called when [`Self::chain`] is `true`.
+    /// Like [`Self::evaluate`], but only for the residual rows and Jacobian blocks of the node
+    /// range `nodes` (the diagonal blocks of its nodes and the coupling blocks of the elements
+    /// touching it); every other row and block is left as it was. Only called when
+    /// [`Self::chain`] is `true`.
     fn evaluate_nodes(
         &mut self,
         x: &[Vector<D>],
@@ -206,11 +207,17 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
         && x.len() >= ELIMINATION_MIN_NODES;
     let mut want_local = eliminate;
     loop {
-        if want_local
-            && stats.residual > params.tol
-            && eliminate_locally(problem, x, ws, params.tol, stats)
-        {
-            stats.residual = evaluate_checked(problem, x, ws)?;
+        if want_local && stats.residual > params.tol {
+            match eliminate_locally(problem, x, ws, params.tol, stats) {
+                Elimination::Unchanged => {}
+                Elimination::Refreshed => {
+                    stats.residual = norm(&ws.res);
+                    if !stats.residual.is_finite() {
+                        return Err(non_finite(&ws.res));
+                    }
+                }
+                Elimination::Stale => stats.residual = evaluate_checked(problem, x, ws)?,
+            }
         }
         want_local = false;
         if stats.residual <= params.tol {
@@ -258,34 +265,48 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
     }
 }
 
+/// What a nonlinear elimination left in the workspace.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Elimination {
+    /// Nothing was evaluated; `x` and the workspace are as before.
+    Unchanged,
+    /// `x` may have changed and the workspace is current for it.
+    Refreshed,
+    /// The workspace must be evaluated again at `x`.
+    Stale,
+}
+
 /// One nonlinear elimination: picks the node range that carries the residual in `ws` (which
 /// must hold `R(x)` and its Jacobian) and runs damped Newton on it with the rest of `x` held.
-/// Returns `true` if it evaluated anything, after which `ws` must be re-evaluated; `x` holds
-/// the last accepted local iterate.
+/// On return `x` holds the last accepted local iterate and, if it says
+/// [`Elimination::Refreshed`], `ws` holds its residual and Jacobian (the rows next to the
+/// range, which depend on it, included).
 fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
     problem: &mut P,
     x: &mut [Vector<D>],
     ws: &mut NewtonWorkspace<D>,
     tol: f64,
     stats: &mut NewtonStats,
-) -> bool {
+) -> Elimination {
     let n = x.len();
-    let r_max = ws.res.iter().map(|v| v.norm()).fold(0.0, f64::max);
-    let big = |v: &Vector<D>| v.norm() > ELIMINATION_THRESHOLD * r_max;
+    // Squared norms throughout: this runs over the whole chain.
+    let r2_max = ws.res.iter().map(|v| v.norm_squared()).fold(0.0, f64::max);
+    let thr2 = ELIMINATION_THRESHOLD * ELIMINATION_THRESHOLD * r2_max;
+    let big = |v: &Vector<D>| v.norm_squared() > thr2;
     let (Some(first), Some(last)) = (ws.res.iter().position(big), ws.res.iter().rposition(big))
     else {
-        return false;
+        return Elimination::Unchanged;
     };
     let range = first.saturating_sub(ELIMINATION_PAD)..(last + ELIMINATION_PAD + 1).min(n);
     if range.len() > n / 3 {
-        return false;
+        return Elimination::Unchanged;
     }
-    let r_out = (norm(&ws.res[..range.start]).powi(2) + norm(&ws.res[range.end..]).powi(2)).sqrt();
-    let target = (ELIMINATION_REDUCTION * r_out).max(tol);
     // The workspace holds R(x) and J(x), so the range's rows are current.
     let mut r = norm(&ws.res[range.clone()]);
+    let r_out = (stats.residual * stats.residual - r * r).max(0.0).sqrt();
+    let target = (ELIMINATION_REDUCTION * r_out).max(tol);
     let mut evaluated = false;
-    for _ in 0..ELIMINATION_MAX_ITER {
+    'local: for _ in 0..ELIMINATION_MAX_ITER {
         if r <= target {
             break;
         }
@@ -327,11 +348,24 @@ fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
             alpha *= 0.5;
             if alpha < ALPHA_MIN {
                 x[range.clone()].copy_from_slice(&ws.x_old[range.clone()]);
-                return evaluated;
+                break 'local;
             }
         }
     }
-    evaluated
+    if evaluated {
+        // The range's rows are those of the last trial, and the two rows next to it depend
+        // on the range's nodes: evaluate the widened range at the final x.
+        let wide = range.start.saturating_sub(1)..(range.end + 1).min(n);
+        if problem
+            .evaluate_nodes(x, &mut ws.res, Some(&mut ws.jac), wide)
+            .is_err()
+        {
+            // Cannot happen for an x that was evaluated before; let the caller evaluate all.
+            return Elimination::Stale;
+        }
+        return Elimination::Refreshed;
+    }
+    Elimination::Unchanged
 }
 
 /// Evaluates residual and Jacobian at `x`; returns the residual norm, which must be finite.
