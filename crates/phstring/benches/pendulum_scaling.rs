@@ -62,6 +62,8 @@ struct Adaptive {
     /// Accepted steps per step size (keyed by `−log2(h/0.01)`).
     h_hist: BTreeMap<i32, usize>,
     max_dh: f64,
+    /// Smallest element strain met (`C < 1`: compression).
+    c_min: f64,
 }
 
 fn adaptive(
@@ -84,6 +86,7 @@ fn adaptive(
     let nodes = (n_el + 1) as f64;
     let mut a = Adaptive {
         h_min: f64::INFINITY,
+        c_min: f64::INFINITY,
         ..Default::default()
     };
     let t0 = Instant::now();
@@ -97,6 +100,7 @@ fn adaptive(
         a.local_work += (r.local_node_iterations + r.rejected_local_node_iterations) as f64 / nodes;
         a.h_min = a.h_min.min(r.h);
         a.h_max = a.h_max.max(r.h);
+        a.c_min = sim.state().c.iter().copied().fold(a.c_min, f64::min);
         let level = (0.01 / r.h).log2().round() as i32;
         *a.h_hist.entry(level).or_default() += 1;
         // Loading ends at t = 0.2: from then on the energy is constant.
@@ -154,7 +158,7 @@ fn main() {
 fn adaptive_tables() {
     println!("# Adaptive runs, N = 3000, T = 1 s, h_max = 0.01 s (best wall of 3)");
     println!(
-        "{:>26} {:>17} {:>5} {:>8} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>9} {:>10}",
+        "{:>26} {:>17} {:>5} {:>8} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>9} {:>10} {:>6}",
         "law",
         "predictor",
         "elim",
@@ -166,7 +170,8 @@ fn adaptive_tables() {
         "local/st",
         "rej its",
         "h min",
-        "max|dH|>.2"
+        "max|dH|>.2",
+        "C min"
     );
     let mut hists = Vec::new();
     let configs = laws()
@@ -181,7 +186,7 @@ fn adaptive_tables() {
         match adaptive_best(3000, law, predictor, elimination) {
             Ok(a) => {
                 println!(
-                    "{:>26} {:>17} {:>5} {:>8.3} {:>6} {:>5} {:>8.2} {:>8} {:>8.2} {:>9} {:>9.2e} {:>10.1e}",
+                    "{:>26} {:>17} {:>5} {:>8.3} {:>6} {:>5} {:>8.2} {:>8} {:>8.2} {:>9} {:>9.2e} {:>10.1e} {:>6.3}",
                     law.name(),
                     predictor_name(predictor),
                     elimination,
@@ -193,7 +198,8 @@ fn adaptive_tables() {
                     a.local_work / a.steps as f64,
                     a.rejected_iterations,
                     a.h_min,
-                    a.max_dh
+                    a.max_dh,
+                    a.c_min
                 );
                 let hist: Vec<String> = a
                     .h_hist
