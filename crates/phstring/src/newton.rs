@@ -13,8 +13,11 @@
 //! residual exceeds 5 % of the largest, widened by 8 nodes) is solved alone, with the other
 //! nodes held, by a local damped Newton iteration — if the mesh is a chain of at least 64
 //! nodes and the range covers at most a third of it. The global iteration then only has to
-//! fix the coupling, usually in a few quadratically converging steps. The converged solution
-//! and its test are those of global Newton: elimination changes the path, not the result.
+//! fix the coupling, usually in a few quadratically converging steps. The convergence test is
+//! that of global Newton, so every accepted step solves the step equations to `tol` and keeps
+//! the energy balance. Where the step has one solution near the predictor the result is the
+//! same; where it has several (a compressed free end with a law that carries compression,
+//! for `h` beyond the element-scale stability limit) elimination may reach another one.
 
 use crate::error::LinearSolveError;
 use crate::linsolve::{Block, BlockJacobian, LinearSolver, block_thomas};
