@@ -9,10 +9,10 @@
 //! step concentrates where the string is most nonlinear (near a free end: slack or compressed
 //! elements, kinks at the scale of one element), and global Newton crawls there with damped
 //! steps while the rest of the string is already resolved. Before the first global iteration
-//! and after every damped one, the node range that carries the residual (all nodes whose
-//! residual exceeds 5 % of the largest, widened by 8 nodes) is solved alone, with the other
-//! nodes held, by a local damped Newton iteration — if the mesh is a chain of at least 64
-//! nodes and the range covers at most a third of it. The global iteration then only has to
+//! and after every damped one, the node ranges that carry the residual (the nodes whose
+//! residual exceeds 5 % of the largest, in up to four separate clusters, each widened by 8
+//! nodes) are solved alone, with the other nodes held, by a local damped Newton iteration —
+//! if the mesh is a chain of at least 64 nodes and the ranges cover at most a third of it. The global iteration then only has to
 //! fix the coupling, usually in a few quadratically converging steps. The convergence test is
 //! that of global Newton, so every accepted step solves the step equations to `tol` and keeps
 //! the energy balance. Where the step has one solution near the predictor the result is the
@@ -279,8 +279,9 @@ enum Elimination {
     Stale,
 }
 
-/// One nonlinear elimination: picks the node range that carries the residual in `ws` (which
-/// must hold `R(x)` and its Jacobian) and runs damped Newton on it with the rest of `x` held.
+/// One nonlinear elimination: picks the node ranges that carry the residual in `ws` (which
+/// must hold `R(x)` and its Jacobian; at most four separate clusters, together at most a
+/// third of the chain) and runs damped Newton on each with the rest of `x` held.
 /// On return `x` holds the last accepted local iterate and, if it says
 /// [`Elimination::Refreshed`], `ws` holds its residual and Jacobian (the rows next to the
 /// range, which depend on it, included).
@@ -295,19 +296,86 @@ fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
     // Squared norms throughout: this runs over the whole chain.
     let r2_max = ws.res.iter().map(|v| v.norm_squared()).fold(0.0, f64::max);
     let thr2 = ELIMINATION_THRESHOLD * ELIMINATION_THRESHOLD * r2_max;
-    let big = |v: &Vector<D>| v.norm_squared() > thr2;
-    let (Some(first), Some(last)) = (ws.res.iter().position(big), ws.res.iter().rposition(big))
-    else {
+    // Clusters of large-residual nodes; two clusters closer than this merge, so that the
+    // padded ranges stay two nodes apart (a range's refresh touches one row on each side).
+    let gap = 2 * ELIMINATION_PAD + 3;
+    let mut ranges = [0..0, 0..0, 0..0, 0..0];
+    let mut count = 0;
+    let mut current: Option<(usize, usize)> = None;
+    for (i, v) in ws.res.iter().enumerate() {
+        if v.norm_squared() <= thr2 {
+            continue;
+        }
+        current = match current {
+            Some((first, last)) if i - last <= gap => Some((first, i)),
+            Some((first, last)) => {
+                if count == ranges.len() {
+                    return Elimination::Unchanged;
+                }
+                ranges[count] = padded(first, last, n);
+                count += 1;
+                Some((i, i))
+            }
+            None => Some((i, i)),
+        };
+    }
+    let Some((first, last)) = current else {
         return Elimination::Unchanged;
     };
-    let range = first.saturating_sub(ELIMINATION_PAD)..(last + ELIMINATION_PAD + 1).min(n);
-    if range.len() > n / 3 {
+    if count == ranges.len() {
         return Elimination::Unchanged;
     }
+    ranges[count] = padded(first, last, n);
+    count += 1;
+    let ranges = &ranges[..count];
+    let covered: usize = ranges.iter().map(|r| r.len()).sum();
+    if covered > n / 3 {
+        return Elimination::Unchanged;
+    }
+    let r2_in: f64 = ranges
+        .iter()
+        .map(|r| {
+            ws.res[r.clone()]
+                .iter()
+                .map(|v| v.norm_squared())
+                .sum::<f64>()
+        })
+        .sum();
+    let r_out = (stats.residual * stats.residual - r2_in).max(0.0).sqrt();
+    let target = (ELIMINATION_REDUCTION * r_out).max(tol);
+    let mut outcome = Elimination::Unchanged;
+    for range in ranges {
+        match solve_range(problem, x, ws, range.clone(), target, stats) {
+            Elimination::Unchanged => {}
+            Elimination::Refreshed => {
+                if outcome == Elimination::Unchanged {
+                    outcome = Elimination::Refreshed;
+                }
+            }
+            Elimination::Stale => outcome = Elimination::Stale,
+        }
+    }
+    outcome
+}
+
+/// The node range `first − pad .. last + pad + 1`, clipped to the chain.
+fn padded(first: usize, last: usize, n: usize) -> std::ops::Range<usize> {
+    first.saturating_sub(ELIMINATION_PAD)..(last + ELIMINATION_PAD + 1).min(n)
+}
+
+/// Damped Newton on the node range `range` with the rest of `x` held, until the range's
+/// residual is at most `target`.
+fn solve_range<const D: usize, P: NewtonProblem<D>>(
+    problem: &mut P,
+    x: &mut [Vector<D>],
+    ws: &mut NewtonWorkspace<D>,
+    range: std::ops::Range<usize>,
+    target: f64,
+    stats: &mut NewtonStats,
+) -> Elimination {
+    let n = x.len();
     // The workspace holds R(x) and J(x), so the range's rows are current.
     let mut r = norm(&ws.res[range.clone()]);
-    let r_out = (stats.residual * stats.residual - r * r).max(0.0).sqrt();
-    let target = (ELIMINATION_REDUCTION * r_out).max(tol);
     let mut evaluated = false;
     'local: for _ in 0..ELIMINATION_MAX_ITER {
         if r <= target {
@@ -392,5 +460,102 @@ fn non_finite<const D: usize, E>(res: &[Vector<D>]) -> NewtonError<E> {
     let node = res.iter().position(|v| !v.iter().all(|c| c.is_finite()));
     NewtonError::NonFinite {
         node: node.unwrap_or(0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linsolve::BlockTridiagonal;
+    use crate::mesh::Mesh;
+
+    /// A chain of scalar unknowns: `R_i = x_i + x_i³ + κ (2x_i − x_{i−1} − x_{i+1}) − b_i`
+    /// (missing neighbours count as 0).
+    struct Cubic {
+        b: Vec<f64>,
+        kappa: f64,
+    }
+
+    impl NewtonProblem<1> for Cubic {
+        type Error = ();
+        fn evaluate(
+            &mut self,
+            x: &[Vector<1>],
+            res: &mut [Vector<1>],
+            jac: Option<&mut BlockJacobian<1>>,
+        ) -> Result<(), ()> {
+            self.evaluate_nodes(x, res, jac, 0..x.len())
+        }
+        fn chain(&self) -> bool {
+            true
+        }
+        fn evaluate_nodes(
+            &mut self,
+            x: &[Vector<1>],
+            res: &mut [Vector<1>],
+            mut jac: Option<&mut BlockJacobian<1>>,
+            nodes: std::ops::Range<usize>,
+        ) -> Result<(), ()> {
+            let n = x.len();
+            let at = |i: isize| {
+                if i < 0 || i as usize >= n {
+                    0.0
+                } else {
+                    x[i as usize][0]
+                }
+            };
+            for i in nodes {
+                let xi = x[i][0];
+                let lap = 2.0 * xi - at(i as isize - 1) - at(i as isize + 1);
+                res[i][0] = xi + xi * xi * xi + self.kappa * lap - self.b[i];
+                if let Some(j) = jac.as_deref_mut() {
+                    j.diag[i][(0, 0)] = 1.0 + 3.0 * xi * xi + 2.0 * self.kappa;
+                    if i + 1 < n {
+                        j.off[i] = [Block::from_element(-self.kappa); 2];
+                    }
+                }
+            }
+            Ok(())
+        }
+    }
+
+    /// Residual concentrated at both ends: elimination solves two separate ranges, leaves the
+    /// workspace equal to a full evaluation, and the global solve then converges.
+    #[test]
+    fn elimination_handles_two_separate_clusters() {
+        let n = 200;
+        let mut b = vec![0.0; n];
+        for i in (0..5).chain(n - 5..n) {
+            b[i] = 5.0;
+        }
+        let mut p = Cubic { b, kappa: 0.2 };
+        let mesh = Mesh::uniform_chain(n - 1, 1.0).unwrap();
+        let mut ws = NewtonWorkspace::<1>::new(&mesh);
+        let mut x = vec![Vector::<1>::zeros(); n];
+        let mut stats = NewtonStats {
+            residual: evaluate_checked(&mut p, &x, &mut ws).unwrap(),
+            ..Default::default()
+        };
+        let out = eliminate_locally(&mut p, &mut x, &mut ws, 1e-12, &mut stats);
+        assert_eq!(out, Elimination::Refreshed);
+        assert!(x[0][0] > 1.0 && x[n - 1][0] > 1.0, "both ends solved");
+        assert_eq!(x[n / 2][0], 0.0, "the middle is held");
+        // The refreshed workspace is what a full evaluation gives.
+        let (res, jac) = (ws.res.clone(), ws.jac.clone());
+        evaluate_checked(&mut p, &x, &mut ws).unwrap();
+        assert_eq!(res, ws.res);
+        assert_eq!(jac, ws.jac);
+        // Only the coupling into the held middle is left.
+        assert!(norm(&ws.res) < 0.1 * 5.0, "residual {}", norm(&ws.res));
+        let mut solver = BlockTridiagonal::<1>::new(&mesh).unwrap();
+        let stats = solve(
+            &mut p,
+            &mut x,
+            &mut ws,
+            &mut solver,
+            &NewtonParams::default(),
+        )
+        .unwrap();
+        assert!(stats.residual <= 1e-11);
     }
 }
