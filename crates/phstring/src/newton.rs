@@ -12,10 +12,10 @@
 //! and after every damped one, the node ranges that carry the residual (the nodes whose
 //! residual exceeds 5 % of the largest, in up to four separate clusters, each widened by 8
 //! nodes) are solved alone, with the other nodes held, by a local damped Newton iteration —
-//! if the mesh is a chain of at least 64 nodes and the ranges cover at most a third of it. The global iteration then only has to
-//! fix the coupling, usually in a few quadratically converging steps. The convergence test is
-//! that of global Newton, so every accepted step solves the step equations to `tol` and keeps
-//! the energy balance. Where the step has one solution near the predictor the result is the
+//! if the mesh is a chain of at least 64 nodes and the ranges cover at most a third of it.
+//! The global iteration then only has to fix the coupling, usually in a few quadratically
+//! converging steps. The convergence test is that of global Newton, so every accepted step
+//! solves the step equations to `tol` and keeps the energy balance. Where the step has one solution near the predictor the result is the
 //! same; where it has several (a compressed free end with a law that carries compression,
 //! for `h` beyond the element-scale stability limit) elimination may reach another one.
 
@@ -53,13 +53,13 @@ impl Default for NewtonParams {
 
 /// Smallest chain (in nodes) on which nonlinear elimination is tried.
 const ELIMINATION_MIN_NODES: usize = 64;
-/// Nodes whose residual exceeds this fraction of the largest one form the local range.
+/// Nodes whose residual exceeds this fraction of the largest one form the local ranges.
 const ELIMINATION_THRESHOLD: f64 = 0.05;
-/// The local range is widened by this many nodes on each side.
+/// Each local range is widened by this many nodes on each side.
 const ELIMINATION_PAD: usize = 8;
 /// The local solve stops when its residual is below this fraction of the residual outside.
 const ELIMINATION_REDUCTION: f64 = 1e-3;
-/// Most local iterations per elimination.
+/// Most local iterations per range and elimination.
 const ELIMINATION_MAX_ITER: usize = 30;
 
 /// Armijo constant of the line search: accept `α` if `φ(α) ≤ (1 − 2σα) φ(0)`.
