@@ -8,4 +8,6 @@ pub mod plot;
 pub mod runner;
 pub mod scenario;
 pub mod sweep;
+#[cfg(test)]
+mod test_util;
 pub mod vtk;

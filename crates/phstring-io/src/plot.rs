@@ -956,21 +956,10 @@ impl Figure for ConfigFigure<'_> {
 mod tests {
     use super::*;
     use std::f64::consts::PI;
-    use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// A fresh, empty directory under the system temp dir.
     fn temp_dir(name: &str) -> PathBuf {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!(
-            "phstring-plot-{}-{}-{}",
-            std::process::id(),
-            n,
-            name
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+        crate::test_util::temp_dir("plot", name)
     }
 
     /// Removes a test directory unless `PHSTRING_KEEP_TEST_PLOTS` is set (to inspect the figures).
