@@ -7,17 +7,19 @@
 //!
 //! **Nonlinear elimination** ([`NewtonParams::elimination`]). On fine meshes the residual of a
 //! step concentrates where the string is most nonlinear (near a free end: slack or compressed
-//! elements, kinks at the scale of one element), and global Newton crawls there with damped
-//! steps while the rest of the string is already resolved. Before the first global iteration
-//! and after every damped one, the node ranges that carry the residual (the nodes whose
-//! residual exceeds 5 % of the largest, in up to four separate clusters, each widened by 8
-//! nodes) are solved alone, with the other nodes held, by a local damped Newton iteration —
-//! if the mesh is a chain of at least 64 nodes and the ranges cover at most a third of it.
-//! The global iteration then only has to fix the coupling, usually in a few quadratically
-//! converging steps. The convergence test is that of global Newton, so every accepted step
-//! solves the step equations to `tol` and keeps the energy balance. Where the step has one solution near the predictor the result is the
-//! same; where it has several (a compressed free end with a law that carries compression,
-//! for `h` beyond the element-scale stability limit) elimination may reach another one.
+//! elements, kinks at the scale of one element). There a full Newton step overshoots, and a
+//! line search on the whole residual would shorten the step for the whole chain, so the bulk,
+//! which the full step had right, crawls along with the few hard nodes. Instead, at the
+//! predictor and at every trial point of the line search, the node ranges that carry the
+//! residual (the nodes whose residual exceeds 5 % of the largest, in up to four separate
+//! clusters, each widened by 8 nodes) are first solved alone, with the other nodes held, by a
+//! local damped Newton iteration; the trial point is judged (Armijo) after these local solves.
+//! This runs if the mesh is a chain of at least 64 nodes and the ranges cover at most a third
+//! of it. The convergence test is that of global Newton, so every accepted step solves the
+//! step equations to `tol` and keeps the energy balance. Where the step has one solution near
+//! the predictor the result is the same; where it has several (a compressed free end with a
+//! law that carries compression, for `h` beyond the element-scale stability limit)
+//! elimination may reach another one.
 
 use crate::error::LinearSolveError;
 use crate::linsolve::{Block, BlockJacobian, LinearSolver, block_thomas};
@@ -208,21 +210,15 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
         && params.line_search
         && problem.chain()
         && x.len() >= ELIMINATION_MIN_NODES;
-    let mut want_local = eliminate;
+    if eliminate && stats.residual > params.tol {
+        stats.residual = match eliminate_measured(problem, x, ws, stats.residual, params.tol, stats)
+        {
+            Ok(r) if r.is_finite() => r,
+            Ok(_) => return Err(non_finite(&ws.res)),
+            Err(e) => return Err(NewtonError::Eval(e)),
+        };
+    }
     loop {
-        if want_local && stats.residual > params.tol {
-            match eliminate_locally(problem, x, ws, params.tol, stats) {
-                Elimination::Unchanged => {}
-                Elimination::Refreshed => {
-                    stats.residual = norm(&ws.res);
-                    if !stats.residual.is_finite() {
-                        return Err(non_finite(&ws.res));
-                    }
-                }
-                Elimination::Stale => stats.residual = evaluate_checked(problem, x, ws)?,
-            }
-        }
-        want_local = false;
         if stats.residual <= params.tol {
             return Ok(());
         }
@@ -250,11 +246,19 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
             for ((xi, x0), di) in x.iter_mut().zip(&ws.x_old).zip(&ws.dir) {
                 *xi = x0 + di * alpha;
             }
-            let ok = problem.evaluate(x, &mut ws.res, Some(&mut ws.jac)).is_ok();
-            let r = if ok { norm(&ws.res) } else { f64::INFINITY };
+            let mut r = match problem.evaluate(x, &mut ws.res, Some(&mut ws.jac)) {
+                Ok(()) => norm(&ws.res),
+                Err(_) => f64::INFINITY,
+            };
+            // The trial point is judged after the local solves: a full Newton step that is
+            // right for the bulk of the chain is not damped for the nonlinearity of a few
+            // nodes, which the local solves take care of.
+            if eliminate && r.is_finite() && r > params.tol {
+                r = eliminate_measured(problem, x, ws, r, params.tol, stats)
+                    .unwrap_or(f64::INFINITY);
+            }
             if r.is_finite() && r * r <= (1.0 - 2.0 * ARMIJO_SIGMA * alpha) * phi0 {
                 stats.residual = r;
-                want_local = eliminate && alpha < 1.0;
                 break;
             }
             alpha *= 0.5;
@@ -266,6 +270,29 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
             }
         }
     }
+}
+
+/// Runs [`eliminate_locally`] at `x`, whose residual norm `residual` and Jacobian the
+/// workspace holds, and returns the residual norm afterwards (the workspace is current for the
+/// returned `x`).
+fn eliminate_measured<const D: usize, P: NewtonProblem<D>>(
+    problem: &mut P,
+    x: &mut [Vector<D>],
+    ws: &mut NewtonWorkspace<D>,
+    residual: f64,
+    tol: f64,
+    stats: &mut NewtonStats,
+) -> Result<f64, P::Error> {
+    Ok(
+        match eliminate_locally(problem, x, ws, residual, tol, stats) {
+            Elimination::Unchanged => residual,
+            Elimination::Refreshed => norm(&ws.res),
+            Elimination::Stale => {
+                problem.evaluate(x, &mut ws.res, Some(&mut ws.jac))?;
+                norm(&ws.res)
+            }
+        },
+    )
 }
 
 /// What a nonlinear elimination left in the workspace.
@@ -280,8 +307,9 @@ enum Elimination {
 }
 
 /// One nonlinear elimination: picks the node ranges that carry the residual in `ws` (which
-/// must hold `R(x)` and its Jacobian; at most four separate clusters, together at most a
-/// third of the chain) and runs damped Newton on each with the rest of `x` held.
+/// must hold `R(x)`, of norm `residual`, and its Jacobian; at most four separate clusters,
+/// together at most a third of the chain) and runs damped Newton on each with the rest of `x`
+/// held.
 /// On return `x` holds the last accepted local iterate and, if it says
 /// [`Elimination::Refreshed`], `ws` holds its residual and Jacobian (the rows next to the
 /// range, which depend on it, included).
@@ -289,6 +317,7 @@ fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
     problem: &mut P,
     x: &mut [Vector<D>],
     ws: &mut NewtonWorkspace<D>,
+    residual: f64,
     tol: f64,
     stats: &mut NewtonStats,
 ) -> Elimination {
@@ -341,7 +370,7 @@ fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
                 .sum::<f64>()
         })
         .sum();
-    let r_out = (stats.residual * stats.residual - r2_in).max(0.0).sqrt();
+    let r_out = (residual * residual - r2_in).max(0.0).sqrt();
     let target = (ELIMINATION_REDUCTION * r_out).max(tol);
     let mut outcome = Elimination::Unchanged;
     for range in ranges {
@@ -532,11 +561,9 @@ mod tests {
         let mesh = Mesh::uniform_chain(n - 1, 1.0).unwrap();
         let mut ws = NewtonWorkspace::<1>::new(&mesh);
         let mut x = vec![Vector::<1>::zeros(); n];
-        let mut stats = NewtonStats {
-            residual: evaluate_checked(&mut p, &x, &mut ws).unwrap(),
-            ..Default::default()
-        };
-        let out = eliminate_locally(&mut p, &mut x, &mut ws, 1e-12, &mut stats);
+        let residual = evaluate_checked(&mut p, &x, &mut ws).unwrap();
+        let mut stats = NewtonStats::default();
+        let out = eliminate_locally(&mut p, &mut x, &mut ws, residual, 1e-12, &mut stats);
         assert_eq!(out, Elimination::Refreshed);
         assert!(x[0][0] > 1.0 && x[n - 1][0] > 1.0, "both ends solved");
         assert_eq!(x[n / 2][0], 0.0, "the middle is held");
