@@ -187,15 +187,15 @@ pub struct NewtonSpec {
     /// (default `true`; chain meshes with line search only).
     #[serde(default = "yes")]
     pub elimination: bool,
-    /// Starting guess: `velocity` (`Δ = h v`, default), `acceleration`
+    /// Starting guess: `velocity` (`Δ = h v`), `acceleration`
     /// (`Δ = h v + ½h² a` with `a` from the previous step) or `midpoint_velocity`
-    /// (`Δ = h v_{n−½}`, the previous step's mid-step velocity).
+    /// (`Δ = h v_{n−½}`, the previous step's mid-step velocity; the default).
     #[serde(default = "default_predictor")]
     pub predictor: Spanned<String>,
 }
 
 fn default_predictor() -> Spanned<String> {
-    Spanned::new(0..0, "velocity".into())
+    Spanned::new(0..0, "midpoint_velocity".into())
 }
 
 fn default_tol() -> Spanned<f64> {

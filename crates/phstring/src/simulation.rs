@@ -45,14 +45,14 @@ impl Default for StepParams {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Predictor {
     /// `Δ = h v_n`.
-    #[default]
     Velocity,
     /// `Δ = h v_n + ½ h² a_n` with `a_n = (v_n − v_{n−1})/h_{n−1}` from the previous step
     /// (`a_0 = 0`).
     Acceleration,
     /// `Δ = h v_{n−½}` with the previous step's mid-step velocity `v_{n−½} = Δ_{n−1}/h_{n−1}`
     /// (`h v_0` for the first step). Unlike `h v_n` it is not thrown off by unresolved
-    /// high-frequency modes, whose velocity the scheme flips every step.
+    /// high-frequency modes, whose velocity the scheme flips every step. The default.
+    #[default]
     MidpointVelocity,
 }
 
@@ -77,8 +77,8 @@ impl Default for StepControl {
         Self {
             adaptive: true,
             max_halvings: 12,
-            grow_after: 4,
-            easy_iterations: 5,
+            grow_after: 2,
+            easy_iterations: 6,
         }
     }
 }
