@@ -258,9 +258,13 @@ fn checkpoint_resume_is_bit_identical() {
 fn interrupt_stops_cleanly_and_resumes() {
     let tmp = temp_dir("sigint");
     let (a, b) = (tmp.join("a"), tmp.join("b"));
+    // Small steps (3000 of them on 4000 elements, about 2 s) so that the run is still going
+    // when the signal comes.
     let sets = [
         "--set",
-        "mesh.elements=2000",
+        "mesh.elements=4000",
+        "--set",
+        "time.h=0.0001",
         "--set",
         "time.end=0.3",
         "--set",
