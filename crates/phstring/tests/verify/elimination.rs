@@ -71,3 +71,44 @@ fn energy_balance_is_exact_on_a_fine_mesh_with_elimination() {
     assert!(local > 0, "elimination never ran");
     assert!(worst <= 1e-11, "balance error {worst:e} J");
 }
+
+/// The paper's pendulum (paper's law) on 300 elements with the paper's step h = 0.01 s, fixed,
+/// to T = 1 s: with elimination every step converges and keeps the energy balance to 1e-11 J,
+/// although the free end crumples into compression; with the line search alone the same run
+/// fails (its largest fixed step is 2.5e-3 s, issue 4's table).
+#[test]
+fn paper_step_size_on_a_fine_mesh_needs_elimination() {
+    let run = |elimination: bool| {
+        let params = StepParams {
+            h: 0.01,
+            newton: NewtonParams {
+                elimination,
+                ..Default::default()
+            },
+            control: StepControl {
+                adaptive: false,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let mut sim = Simulation::new(paper_pendulum(300), params).unwrap();
+        let (mut worst, mut c_min) = (0.0_f64, f64::INFINITY);
+        for _ in 0..100 {
+            let r = sim.step()?;
+            worst = worst.max(r.balance_error.abs());
+            c_min = sim.state().c.iter().copied().fold(c_min, f64::min);
+        }
+        Ok::<_, phstring::StepError>((worst, c_min))
+    };
+    let (worst, c_min) = run(true).expect("every step converges with elimination");
+    eprintln!(
+        "h = 0.01, 300 elements: max balance error {worst:.2e} J, smallest strain {c_min:.3}"
+    );
+    assert!(worst <= 1e-11, "balance error {worst:e} J");
+    assert!(
+        c_min < 0.95,
+        "the free end should go into compression (C min {c_min})"
+    );
+    let err = run(false).expect_err("the line search alone should fail at h = 0.01");
+    eprintln!("without elimination: {err}");
+}
