@@ -4,7 +4,7 @@
 //!
 //! `cargo bench -p phstring --bench pendulum_scaling` (about two minutes). Wall times are the
 //! best of three runs; the runs are deterministic, so only the wall time varies. With
-//! `-- full` the fixed-step table runs N = 30000 to T = 1 s as well (about an hour; without
+//! `-- full` the fixed-step table runs N = 30000 to T = 1 s as well (about 50 minutes; without
 //! it, to T = 0.05 s), and `-- table` prints only that table.
 
 use std::collections::BTreeMap;
