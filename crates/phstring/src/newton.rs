@@ -12,7 +12,8 @@
 //! which the full step had right, crawls along with the few hard nodes. Instead, at the
 //! predictor and at every trial point of the line search, the node ranges that carry the
 //! residual (the nodes whose residual exceeds 5 % of the largest, in up to four separate
-//! clusters, each widened by 8 nodes) are first solved alone, with the other nodes held, by a
+//! clusters — nearby clusters merge, the merging distance doubling from 19 nodes until at
+//! most four are left — each widened by 8 nodes) are first solved alone, with the other nodes held, by a
 //! local damped Newton iteration; the trial point is judged (Armijo) after these local solves.
 //! This runs if the mesh is a chain of at least 64 nodes and the ranges cover at most a third
 //! of it. The convergence test is that of global Newton, so every accepted step solves the
@@ -325,37 +326,22 @@ fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
     // Squared norms throughout: this runs over the whole chain.
     let r2_max = ws.res.iter().map(|v| v.norm_squared()).fold(0.0, f64::max);
     let thr2 = ELIMINATION_THRESHOLD * ELIMINATION_THRESHOLD * r2_max;
-    // Clusters of large-residual nodes; two clusters closer than this merge, so that the
-    // padded ranges stay two nodes apart (a range's refresh touches one row on each side).
-    let gap = 2 * ELIMINATION_PAD + 3;
-    let mut ranges = [0..0, 0..0, 0..0, 0..0];
-    let mut count = 0;
-    let mut current: Option<(usize, usize)> = None;
-    for (i, v) in ws.res.iter().enumerate() {
-        if v.norm_squared() <= thr2 {
-            continue;
+    // Clusters of large-residual nodes; two clusters closer than `gap` merge. The smallest
+    // gap keeps the padded ranges two nodes apart (a range's refresh touches one row on each
+    // side); while there are more clusters than ranges, the gap doubles.
+    let mut gap = 2 * ELIMINATION_PAD + 3;
+    let (ranges, count) = loop {
+        if let Some(found) = clusters(&ws.res, thr2, gap) {
+            break found;
         }
-        current = match current {
-            Some((first, last)) if i - last <= gap => Some((first, i)),
-            Some((first, last)) => {
-                if count == ranges.len() {
-                    return Elimination::Unchanged;
-                }
-                ranges[count] = padded(first, last, n);
-                count += 1;
-                Some((i, i))
-            }
-            None => Some((i, i)),
-        };
-    }
-    let Some((first, last)) = current else {
-        return Elimination::Unchanged;
+        gap *= 2;
+        if gap > n / 3 {
+            return Elimination::Unchanged;
+        }
     };
-    if count == ranges.len() {
+    if count == 0 {
         return Elimination::Unchanged;
     }
-    ranges[count] = padded(first, last, n);
-    count += 1;
     let ranges = &ranges[..count];
     let covered: usize = ranges.iter().map(|r| r.len()).sum();
     if covered > n / 3 {
@@ -385,6 +371,45 @@ fn eliminate_locally<const D: usize, P: NewtonProblem<D>>(
         }
     }
     outcome
+}
+
+/// The padded ranges of the clusters of nodes whose squared residual exceeds `thr2`, two
+/// clusters merging when at most `gap` nodes apart, and their number; `None` if there are
+/// more than four.
+fn clusters<const D: usize>(
+    res: &[Vector<D>],
+    thr2: f64,
+    gap: usize,
+) -> Option<([std::ops::Range<usize>; 4], usize)> {
+    let n = res.len();
+    let mut ranges = [0..0, 0..0, 0..0, 0..0];
+    let mut count = 0;
+    let mut current: Option<(usize, usize)> = None;
+    for (i, v) in res.iter().enumerate() {
+        if v.norm_squared() <= thr2 {
+            continue;
+        }
+        current = match current {
+            Some((first, last)) if i - last <= gap => Some((first, i)),
+            Some((first, last)) => {
+                if count == ranges.len() {
+                    return None;
+                }
+                ranges[count] = padded(first, last, n);
+                count += 1;
+                Some((i, i))
+            }
+            None => Some((i, i)),
+        };
+    }
+    if let Some((first, last)) = current {
+        if count == ranges.len() {
+            return None;
+        }
+        ranges[count] = padded(first, last, n);
+        count += 1;
+    }
+    Some((ranges, count))
 }
 
 /// The node range `first − pad .. last + pad + 1`, clipped to the chain.
@@ -584,5 +609,49 @@ mod tests {
         )
         .unwrap();
         assert!(stats.residual <= 1e-11);
+    }
+
+    /// Ten residual peaks 30 nodes apart near one end (as on a crumpled free end of a fine
+    /// mesh): more clusters than ranges, so nearby ones merge, and all peaks are solved while
+    /// the far end is held.
+    #[test]
+    fn elimination_merges_many_clusters() {
+        let n = 2000;
+        let mut b = vec![0.0; n];
+        let peaks: Vec<usize> = (0..10).map(|k| n - 10 - 30 * k).collect();
+        for &i in &peaks {
+            b[i] = 5.0;
+        }
+        let mut p = Cubic { b, kappa: 0.2 };
+        let mesh = Mesh::uniform_chain(n - 1, 1.0).unwrap();
+        let mut ws = NewtonWorkspace::<1>::new(&mesh);
+        let mut x = vec![Vector::<1>::zeros(); n];
+        // The smallest merging distance (19 nodes) leaves ten clusters.
+        let r2_max = ws_res_max2(&mut p, &x, &mut ws);
+        let thr2 = ELIMINATION_THRESHOLD * ELIMINATION_THRESHOLD * r2_max;
+        assert!(clusters(&ws.res, thr2, 2 * ELIMINATION_PAD + 3).is_none());
+        let residual = norm(&ws.res);
+        let mut stats = NewtonStats::default();
+        let out = eliminate_locally(&mut p, &mut x, &mut ws, residual, 1e-12, &mut stats);
+        assert_eq!(out, Elimination::Refreshed);
+        for &i in &peaks {
+            assert!(
+                x[i][0] > 1.0,
+                "peak at node {i} not solved: x = {}",
+                x[i][0]
+            );
+        }
+        assert_eq!(x[0][0], 0.0, "the far end is held");
+        assert!(
+            norm(&ws.res) < 1e-2 * residual,
+            "residual {}",
+            norm(&ws.res)
+        );
+    }
+
+    /// Evaluates at `x` and returns the largest squared nodal residual.
+    fn ws_res_max2(p: &mut Cubic, x: &[Vector<1>], ws: &mut NewtonWorkspace<1>) -> f64 {
+        evaluate_checked(p, x, ws).unwrap();
+        ws.res.iter().map(|v| v.norm_squared()).fold(0.0, f64::max)
     }
 }
