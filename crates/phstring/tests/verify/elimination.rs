@@ -4,10 +4,9 @@
 use phstring::benchmarks::paper_pendulum;
 use phstring::{Material, NewtonParams, Simulation, StepControl, StepParams};
 
-/// Fixed-step pendulum run with or without elimination; returns the final positions, the
-/// global and local Newton iterations.
-fn run(n_el: usize, h: f64, steps: usize, elimination: bool) -> (Vec<[f64; 2]>, usize, usize) {
-    let params = StepParams {
+/// Fixed steps of size `h` [s] (no step-size control), with or without elimination.
+fn fixed_steps(h: f64, elimination: bool) -> StepParams {
+    StepParams {
         h,
         newton: NewtonParams {
             elimination,
@@ -18,8 +17,13 @@ fn run(n_el: usize, h: f64, steps: usize, elimination: bool) -> (Vec<[f64; 2]>, 
             ..Default::default()
         },
         ..Default::default()
-    };
-    let mut sim = Simulation::new(paper_pendulum(n_el), params).unwrap();
+    }
+}
+
+/// Fixed-step pendulum run with or without elimination; returns the final positions, the
+/// global and local Newton iterations.
+fn run(n_el: usize, h: f64, steps: usize, elimination: bool) -> (Vec<[f64; 2]>, usize, usize) {
+    let mut sim = Simulation::new(paper_pendulum(n_el), fixed_steps(h, elimination)).unwrap();
     let (mut global, mut local) = (0, 0);
     for _ in 0..steps {
         let r = sim.step().expect("step converges");
@@ -79,19 +83,7 @@ fn energy_balance_is_exact_on_a_fine_mesh_with_elimination() {
 #[test]
 fn paper_step_size_on_a_fine_mesh_needs_elimination() {
     let run = |elimination: bool| {
-        let params = StepParams {
-            h: 0.01,
-            newton: NewtonParams {
-                elimination,
-                ..Default::default()
-            },
-            control: StepControl {
-                adaptive: false,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
-        let mut sim = Simulation::new(paper_pendulum(300), params).unwrap();
+        let mut sim = Simulation::new(paper_pendulum(300), fixed_steps(0.01, elimination)).unwrap();
         let (mut worst, mut c_min) = (0.0_f64, f64::INFINITY);
         for _ in 0..100 {
             let r = sim.step()?;
