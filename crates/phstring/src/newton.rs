@@ -13,10 +13,10 @@
 //! predictor and at every trial point of the line search, the node ranges that carry the
 //! residual (the nodes whose residual exceeds 5 % of the largest, in up to four separate
 //! clusters — nearby clusters merge, the merging distance doubling from 19 nodes until at
-//! most four are left — each widened by 8 nodes) are first solved alone, with the other nodes held, by a
-//! local damped Newton iteration; the trial point is judged (Armijo) after these local solves.
-//! This runs if the mesh is a chain of at least 64 nodes and the ranges cover at most a third
-//! of it. The convergence test is that of global Newton, so every accepted step solves the
+//! most four are left — each widened by 8 nodes) are first solved alone, with the other
+//! nodes held, by a local damped Newton iteration; the trial point is judged (Armijo) after
+//! these local solves. This runs if the mesh is a chain of at least 64 nodes and the ranges
+//! cover at most a third of it. The convergence test is that of global Newton, so every accepted step solves the
 //! step equations to `tol` and keeps the energy balance. Where the step has one solution near
 //! the predictor the result is the same; where it has several (a compressed free end with a
 //! law that carries compression, for `h` beyond the element-scale stability limit)
