@@ -2,9 +2,9 @@
 //! plain Newton, with the line search, and with line search plus nonlinear elimination; and
 //! adaptive runs at N = 3000 for each law, with their step sizes and Newton work.
 //!
-//! `cargo bench -p phstring --bench pendulum_scaling` (about two minutes). Wall times are the
+//! `cargo bench -p phstring --bench pendulum_scaling` (under a minute). Wall times are the
 //! best of three runs; the runs are deterministic, so only the wall time varies. With
-//! `-- full` the fixed-step table runs N = 30000 to T = 1 s as well (about 50 minutes; without
+//! `-- full` the fixed-step table runs N = 30000 to T = 1 s as well (about 45 minutes; without
 //! it, to T = 0.05 s), and `-- table` prints only that table.
 
 use std::collections::BTreeMap;
