@@ -1,10 +1,10 @@
-//! Boundary conditions and ports (METHOD §1 "boundary ports", paper Remarks 3 and 4).
+//! Boundary conditions and ports (docs/method.md §2 and §4, paper Remarks 3 and 4).
 //!
 //! * A **fixed** node keeps (some of) its position components at their initial values
 //!   (Dirichlet). Its port has the velocity (zero) as input and the reaction force as output.
 //! * A **load** applies a nodal force `F(t)` [N] (Neumann). Its port has the force as input
 //!   and the node velocity as output. The discrete-gradient scheme evaluates `F` at the mid
-//!   time `t_{n+½}` (METHOD §3).
+//!   time `t_{n+½}` (docs/method.md §5).
 
 use std::fmt;
 use std::sync::Arc;

@@ -2,6 +2,22 @@
 
 use thiserror::Error;
 
+/// A number for messages: the shortest exact form for ordinary magnitudes, scientific
+/// notation (`5e-324`, `1.2e300`) otherwise, so that no message prints hundreds of digits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
 /// An invalid problem definition, found before any time step is taken.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SetupError {
@@ -35,7 +51,7 @@ pub enum SetupError {
         node: usize,
     },
     /// A value that must be positive and finite is not.
-    #[error("{what}{} must be positive and finite, got {value}", index.map(|i| format!(" [{i}]")).unwrap_or_default())]
+    #[error("{what}{} must be positive and finite, got {}", index.map(|i| format!(" [{i}]")).unwrap_or_default(), Num(*value))]
     NonPositive {
         /// Name of the quantity.
         what: &'static str,
@@ -45,7 +61,7 @@ pub enum SetupError {
         value: f64,
     },
     /// A value that must be finite is not.
-    #[error("{what} [{index}] is not finite: {value}")]
+    #[error("{what} [{index}] is not finite: {}", Num(*value))]
     NotFinite {
         /// Name of the quantity.
         what: &'static str,
@@ -65,12 +81,31 @@ pub enum SetupError {
         expected: usize,
     },
     /// The initial strain is outside the material's domain.
-    #[error("initial strain C = {c} of element {element} is outside the material's domain")]
+    #[error("initial strain C = {} of element {element} is outside the material's domain", Num(*c))]
     InadmissibleStrain {
         /// Element index.
         element: usize,
         /// Strain value.
         c: f64,
+    },
+    /// A parameter is outside its range.
+    #[error("{what} must be in {range}, got {}", Num(*value))]
+    OutOfRange {
+        /// Name of the parameter.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+        /// The allowed range.
+        range: &'static str,
+    },
+    /// A quantity derived from the problem (a load, an energy) is not finite: the inputs
+    /// are too large (or small) for floating point.
+    #[error("{what} is not finite ({}): the inputs overflow floating point", Num(*value))]
+    DerivedNotFinite {
+        /// What was computed, e.g. "initial potential energy" or "body force at node 3".
+        what: String,
+        /// The value computed.
+        value: f64,
     },
     /// The requested linear solver cannot handle this mesh.
     #[error("the block-tridiagonal solver needs a chain mesh (element e = [e, e+1])")]
@@ -97,7 +132,9 @@ impl StepError {
     pub fn is_recoverable(&self) -> bool {
         !matches!(
             self,
-            StepError::NonFinite { what: "load", .. } | StepError::StepSizeTooSmall { .. }
+            StepError::NonFinite { what: "load", .. }
+                | StepError::StepSizeTooSmall { .. }
+                | StepError::Interrupted { .. }
         )
     }
 }
@@ -107,8 +144,8 @@ impl StepError {
 pub enum StepError {
     /// Newton's method did not reach the tolerance within the iteration limit.
     #[error(
-        "Newton did not converge in step {step} (t = {t} → {t_next}): residual {residual:.3e} N > tolerance {tol:.1e} N after {iterations} iterations; largest residual at node {worst_node}{}",
-        if *residual < 1e3 * *tol { " (the residual stagnates near round-off for forces of this size: raise the Newton tolerance)" } else { "" }
+        "Newton did not converge in step {step} (t = {t0} s → {t1} s): residual {residual:.3e} N > tolerance {tol:.3e} N (force scale {force_scale:.3e} N) after {iterations} iterations; largest residual at node {worst_node}{hint}",
+        t0 = Num(*t), t1 = Num(*t_next), hint = if *residual < 1e3 * *tol { " (the residual stagnates close to the tolerance: raise newton.tol or newton.rtol)" } else { "" }
     )]
     NewtonDiverged {
         /// Node with the largest residual.
@@ -123,12 +160,15 @@ pub enum StepError {
         residual: f64,
         /// Tolerance [N].
         tol: f64,
+        /// Force scale of the step [N] (see `NewtonParams`).
+        force_scale: f64,
         /// Iterations done.
         iterations: usize,
     },
     /// The line search found no acceptable step length.
     #[error(
-        "line search failed in step {step} (t = {t} → {t_next}): residual {residual:.3e} N could not be reduced after {iterations} iterations; largest residual at node {worst_node}"
+        "line search failed in step {step} (t = {t0} s → {t1} s): residual {residual:.3e} N (tolerance {tol:.3e} N, force scale {force_scale:.3e} N) could not be reduced after {iterations} iterations; largest residual at node {worst_node}",
+        t0 = Num(*t), t1 = Num(*t_next)
     )]
     LineSearchFailed {
         /// Node with the largest residual.
@@ -141,12 +181,18 @@ pub enum StepError {
         t_next: f64,
         /// Residual norm at the last accepted iterate [N].
         residual: f64,
+        /// Tolerance [N].
+        tol: f64,
+        /// Force scale of the step [N].
+        force_scale: f64,
         /// Iterations done.
         iterations: usize,
     },
-    /// Step-size control halved the step as often as allowed without success.
+    /// Step-size control reached the step-size floor `time.h / 2^max_halvings` without
+    /// success.
     #[error(
-        "step {step} (t = {t}): no convergence even with h = {h:.3e} s after {halvings} halvings; last failure: {last}"
+        "step {step} (t = {t0} s): the step-size floor h = {floor:.3e} s (time.h / 2^{max_halvings}) was reached without convergence ({halvings} halvings in this step); last failure: {last}",
+        t0 = Num(*t)
     )]
     StepSizeTooSmall {
         /// Step index.
@@ -155,14 +201,27 @@ pub enum StepError {
         t: f64,
         /// The last step size tried [s].
         h: f64,
-        /// Halvings done.
+        /// The floor `time.h / 2^max_halvings` [s].
+        floor: f64,
+        /// `max_halvings`.
+        max_halvings: u32,
+        /// Halvings done in this step.
         halvings: u32,
         /// The failure at the smallest step size.
         last: Box<StepError>,
     },
+    /// The stop flag was set during the step; the state is that of the last good step.
+    #[error("step {step} (t = {t0} s): interrupted", t0 = Num(*t))]
+    Interrupted {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+    },
     /// A Newton iterate produced a strain outside the material's domain (e.g. `C ≤ 0`).
     #[error(
-        "step {step} (t = {t}): element {element} reached strain C = {c}, outside the material's domain"
+        "step {step} (t = {t0} s): element {element} reached strain C = {c0}, outside the material's domain",
+        t0 = Num(*t), c0 = Num(*c)
     )]
     InvalidStrain {
         /// Step index.
@@ -175,19 +234,19 @@ pub enum StepError {
         c: f64,
     },
     /// The residual or the state became NaN or infinite.
-    #[error("step {step} (t = {t}): non-finite value in the {what} at node {node}")]
+    #[error("step {step} (t = {t0} s): non-finite value in the {what} at node {node}", t0 = Num(*t))]
     NonFinite {
         /// Step index.
         step: usize,
         /// Start time of the step [s].
         t: f64,
-        /// `"residual"`, `"state"` or `"load"`.
+        /// `"residual"`, `"state"`, `"energy"` or `"load"`.
         what: &'static str,
         /// Node index.
         node: usize,
     },
     /// The linear solve failed.
-    #[error("step {step} (t = {t}): {source}")]
+    #[error("step {step} (t = {t0} s): {source}", t0 = Num(*t))]
     Linear {
         /// Step index.
         step: usize,

@@ -1,5 +1,5 @@
-//! Time discretization: discrete gradient (DG) and implicit midpoint (MP) (METHOD §3,
-//! paper eqs. (32)–(36)).
+//! Time discretization: discrete gradient (DG) and implicit midpoint (MP) (docs/method.md §5,
+//! §7, §8; paper eqs. (33)–(36)).
 //!
 //! Both schemes solve, per step, for the position increment `Δ = r_{n+1} − r_n`; velocities
 //! and strains are eliminated exactly: `v_{n+1} = 2Δ/h − v_n` and
@@ -83,6 +83,9 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub f_ext: &'a [Vector<D>],
     /// Reaction forces at the constrained components [N] (output).
     pub reaction: &'a mut [Vector<D>],
+    /// Force scale of the last full evaluation [N] (output; see
+    /// [`NewtonProblem::force_scale`]).
+    pub scale: f64,
 }
 
 impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, M> {
@@ -99,6 +102,10 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
 
     fn chain(&self) -> bool {
         self.sys.mesh.is_chain()
+    }
+
+    fn force_scale(&self) -> f64 {
+        self.scale
     }
 
     fn evaluate_nodes(
@@ -126,6 +133,13 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         {
             *r = -f;
         }
+        // Force scale (docs/method.md §9, eq. (9.2)): squares of the magnitudes of every force term of
+        // the residual, summed over the full evaluation.
+        let mut scale2 = if full {
+            self.f_ext.iter().map(|f| f.norm_squared()).sum::<f64>()
+        } else {
+            0.0
+        };
         if let Some(j) = jac.as_deref_mut() {
             if full {
                 j.clear();
@@ -155,6 +169,15 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
             }
             let (q, dq) = self.scheme.half_stress(&sys.material, c0, c1);
             let f = rpm * (2.0 * q);
+            if full {
+                // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
+                // force on both nodes.
+                let m = (2.0 * inv_h) * (md + mo.abs());
+                let motion = (x[a].norm_squared() + x[b].norm_squared()) * (inv_h * inv_h)
+                    + self.v0[a].norm_squared()
+                    + self.v0[b].norm_squared();
+                scale2 += m * m * motion + 8.0 * q * q * rpm.norm_squared();
+            }
             if in_a {
                 res[a] += wa * md + wb * mo;
                 res[a] -= f;
@@ -213,6 +236,9 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
                 mask(&mut j.off[e][0], fa, fb);
                 mask(&mut j.off[e][1], fb, fa);
             }
+        }
+        if full {
+            self.scale = scale2.sqrt();
         }
         Ok(())
     }
@@ -316,6 +342,7 @@ mod tests {
             c0: &state.c,
             f_ext: &f_ext,
             reaction: &mut reaction,
+            scale: 0.0,
         };
         let n = x.len();
         let mut res = vec![Vector::<D>::zeros(); n];

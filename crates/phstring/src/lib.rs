@@ -3,15 +3,15 @@
 //! Structure-preserving simulation of geometrically exact strings and cables (no bending
 //! stiffness) in 1D, 2D and 3D, after Kinon, Thoma, Betsch and Kotyczka, "Port-Hamiltonian
 //! formulation and structure-preserving discretization of hyperelastic strings". The
-//! numerics follow `shared/spec/METHOD.md` section by section:
+//! numerics follow `docs/method.md` in the repository, section by section:
 //!
-//! * **Model** (§1): state `(r, v, C)` with strain `C = r'·r'`, stored energy `W(C)`
+//! * **Model** (§2–§3): state `(r, v, C)` with strain `C = r'·r'`, stored energy `W(C)`
 //!   ([`material`]), stress `S = 2W'(C)`, Hamiltonian `H = ∫ ½ρA v·v + W(C) − r·b ds`.
 //!   Boundary ports: force in / velocity out at loaded nodes, velocity in / reaction force
 //!   out at fixed nodes ([`boundary`]).
-//! * **Space** (§2): mixed finite elements — linear `r`, `v` per node, constant `C`, `S` per
+//! * **Space** (§4): mixed finite elements — linear `r`, `v` per node, constant `C`, `S` per
 //!   element; consistent mass matrix ([`system`]).
-//! * **Time** (§3): the energy-consistent discrete-gradient scheme (Greenspan quotient,
+//! * **Time** (§5–§11): the energy-consistent discrete-gradient scheme (Greenspan quotient,
 //!   evaluated without cancellation) and the implicit midpoint rule ([`integrator`]), solved
 //!   by Newton's method on the positions alone ([`newton`]) with an O(N) block-tridiagonal
 //!   or a sparse LU linear solve ([`linsolve`]).
@@ -32,7 +32,7 @@
 //! * Times: step `n` goes from `t_n = n h` to `t_{n+1}`; loads are evaluated at
 //!   `t_{n+½}`.
 //!
-//! ## Example: the paper's string pendulum (METHOD §4)
+//! ## Example: the paper's string pendulum (docs/method.md §12)
 //! ```
 //! use phstring::{Boundary, Fixed, MassMatrix, Material, Mesh, NodalLoad, Problem,
 //!                Scheme, Simulation, State, StepParams, Vector};
@@ -75,12 +75,12 @@ pub mod simulation;
 pub mod system;
 
 pub use boundary::{Boundary, Fixed, ForceFn, NodalLoad, PortKind, PortSample};
-pub use error::{LinearSolveError, SetupError, StepError};
+pub use error::{LinearSolveError, Num, SetupError, StepError};
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};
 pub use material::{Hyperelastic, LinearElastic, Material, StVenantKirchhoff, StoredEnergy};
 pub use mesh::Mesh;
 pub use newton::{NewtonParams, NewtonStats};
-pub use observe::{Observer, RunSummary, StepReport};
+pub use observe::{Observer, RunSummary, StepReport, nan_max};
 pub use simulation::{Checkpoint, Predictor, Simulation, StepControl, StepParams};
 pub use system::{Energies, MassMatrix, PhSystem, Problem, State, Vector};

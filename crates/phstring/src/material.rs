@@ -1,4 +1,4 @@
-//! Stored-energy functions `W(C)` and their discrete gradients (METHOD §1, §3).
+//! Stored-energy functions `W(C)` and their discrete gradients (docs/method.md §3, §6).
 //!
 //! A material is described by the stored energy per unit reference length `W(C)` [J/m = N]
 //! as a function of the strain `C = r'·r'` (dimensionless), with derivatives `W'(C)` and
@@ -29,7 +29,7 @@ pub trait StoredEnergy: Debug + Send + Sync {
     }
     /// Greenspan quotient `q = (W(C₁) − W(C₀)) / (C₁ − C₀)`, equal to `W'(C₀)` when
     /// `C₁ = C₀`, together with its partial derivative `∂q/∂C₁` (used by Newton's method).
-    /// The discrete-gradient stress is `S̄ = 2 q` (METHOD §3, paper eq. (36)).
+    /// The discrete-gradient stress is `S̄ = 2 q` (docs/method.md eq. (5.4), paper eq. (36)).
     fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
         let dc = c1 - c0;
         let m = 0.5 * (c0 + c1);

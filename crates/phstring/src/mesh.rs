@@ -1,4 +1,4 @@
-//! Reference configuration: nodes and 2-node elements with reference lengths (METHOD §2).
+//! Reference configuration: nodes and 2-node elements with reference lengths (docs/method.md §4).
 
 use crate::error::SetupError;
 

@@ -28,6 +28,13 @@ pub struct StepReport {
     pub rejected_local_node_iterations: usize,
     /// Final Newton residual norm [N].
     pub residual: f64,
+    /// The Newton tolerance of this step [N]: `max(tol, rtol · F)` (docs/method.md §9).
+    pub tolerance: f64,
+    /// The step's force scale `F` [N] (docs/method.md §9).
+    pub force_scale: f64,
+    /// Newton ended at the round-off floor of the residual (stagnation below
+    /// `64 ε F`) rather than below `tolerance`.
+    pub at_roundoff: bool,
     /// Energies at `t_n` [J].
     pub before: Energies,
     /// Energies at `t_{n+1}` [J].
@@ -51,6 +58,18 @@ pub struct RunSummary {
     pub max_residual: f64,
     /// Rejected step attempts.
     pub rejected: usize,
+    /// Steps whose Newton solve ended at the round-off floor.
+    pub at_roundoff: usize,
+}
+
+/// The larger of `a` and `b`, NaN if either is NaN (unlike [`f64::max`], which drops a NaN,
+/// so that a NaN never disappears from a running maximum).
+pub fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
 }
 
 impl RunSummary {
@@ -58,9 +77,10 @@ impl RunSummary {
     pub fn record(&mut self, r: &StepReport) {
         self.steps += 1;
         self.newton_iterations += r.newton_iterations;
-        self.max_balance_error = self.max_balance_error.max(r.balance_error.abs());
-        self.max_residual = self.max_residual.max(r.residual);
+        self.max_balance_error = nan_max(self.max_balance_error, r.balance_error.abs());
+        self.max_residual = nan_max(self.max_residual, r.residual);
         self.rejected += r.rejected;
+        self.at_roundoff += usize::from(r.at_roundoff);
     }
 }
 

@@ -1,6 +1,9 @@
 //! The time loop: [`Simulation::step`] advances one step and reports; the caller owns the
 //! loop, [`Simulation::run_until`] is a thin convenience over it.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use crate::boundary::{PortKind, PortSample};
 use crate::error::{SetupError, StepError};
 use crate::integrator::{Scheme, StepEquations, element_step};
@@ -41,6 +44,10 @@ impl Default for StepParams {
     }
 }
 
+/// Largest [`StepControl::max_halvings`]: a floor of `h / 2^60` is already far below any
+/// step a simulation can make progress with.
+pub const MAX_HALVINGS: u32 = 60;
+
 /// Newton's starting guess for `Δ = r_{n+1} − r_n`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Predictor {
@@ -64,7 +71,7 @@ pub enum Predictor {
 pub struct StepControl {
     /// On (`true`) or a fixed-step run that stops at the first failure (`false`).
     pub adaptive: bool,
-    /// Most successive halvings of one step before giving up (`h ≥ h/2^max_halvings`).
+    /// The step-size floor is `h / 2^max_halvings`: a step that fails there ends the run.
     pub max_halvings: u32,
     /// Double `h` after this many successive easy steps.
     pub grow_after: usize,
@@ -140,6 +147,8 @@ pub struct Simulation<const D: usize, M> {
     newton_ws: NewtonWorkspace<D>,
     solver: Box<dyn LinearSolver<D>>,
     total_newton: usize,
+    /// Set from outside (Ctrl-C) to end the current step between Newton iterations.
+    stop: Option<Arc<AtomicBool>>,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -152,11 +161,26 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 value: params.h,
             });
         }
-        if params.newton.tol.is_nan() || params.newton.tol <= 0.0 {
+        let nw = &params.newton;
+        if !(nw.tol > 0.0 && nw.tol.is_finite()) {
             return Err(SetupError::NonPositive {
-                what: "Newton tolerance",
+                what: "Newton tolerance (absolute floor)",
                 index: None,
-                value: params.newton.tol,
+                value: nw.tol,
+            });
+        }
+        if !(nw.rtol >= 0.0 && nw.rtol < 1.0) {
+            return Err(SetupError::OutOfRange {
+                what: "relative Newton tolerance",
+                value: nw.rtol,
+                range: "0 <= rtol < 1",
+            });
+        }
+        if params.control.max_halvings > MAX_HALVINGS {
+            return Err(SetupError::OutOfRange {
+                what: "max_halvings",
+                value: params.control.max_halvings as f64,
+                range: "at most 60 (a floor of time.h / 2^60)",
             });
         }
         let (sys, state) = PhSystem::new(problem)?;
@@ -202,7 +226,26 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             ports,
             solver,
             total_newton: 0,
+            stop: None,
         })
+    }
+
+    /// A flag that, once set (e.g. by a Ctrl-C handler), ends the current step between two
+    /// Newton iterations with [`StepError::Interrupted`], the state left at the last good
+    /// step; `None` removes it.
+    pub fn set_stop_flag(&mut self, flag: Option<Arc<AtomicBool>>) {
+        self.stop = flag;
+    }
+
+    fn stop_requested(&self) -> bool {
+        self.stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Relaxed))
+    }
+
+    /// The step-size floor `h / 2^max_halvings` [s]: step-size control never goes below it.
+    pub fn step_size_floor(&self) -> f64 {
+        self.params.h / 2f64.powi(self.params.control.max_halvings as i32)
     }
 
     /// The system.
@@ -324,7 +367,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         &self.ports
     }
 
-    /// Advances one step (METHOD §3, paper eq. (32)) with the current step size, halving it
+    /// Advances one step (docs/method.md §5, §8) with the current step size, halving it
     /// and retrying on failure when step-size control is on.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
         self.step_until(f64::INFINITY)
@@ -335,8 +378,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut halvings = 0;
         let mut rejected_here = 0;
         let (mut rejected_its, mut rejected_local) = (0, 0);
+        let floor = self.step_size_floor();
         loop {
             let t = self.time();
+            if self.stop_requested() {
+                return Err(StepError::Interrupted {
+                    step: self.step + 1,
+                    t,
+                });
+            }
             // Clip only a real overshoot: a step that lands on t_end up to rounding keeps h.
             let (h, t_next) = if t + self.h_cur > t_end + 1e-9 * self.h_cur {
                 (t_end - t, Some(t_end))
@@ -371,11 +421,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     if !c.adaptive || !e.is_recoverable() {
                         return Err(e);
                     }
-                    if halvings >= c.max_halvings {
+                    // The floor is absolute: h_cur is always time.h / 2^k.
+                    if 0.5 * self.h_cur < floor * (1.0 - 1e-12) {
                         return Err(StepError::StepSizeTooSmall {
                             step: self.step + 1,
                             t,
                             h,
+                            floor,
+                            max_halvings: c.max_halvings,
                             halvings,
                             last: Box::new(e),
                         });
@@ -446,6 +499,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             c0: &self.state.c,
             f_ext: &self.f_ext,
             reaction: &mut self.reaction,
+            scale: 0.0,
         };
         let result = newton::solve(
             &mut eqs,
@@ -453,6 +507,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &mut self.newton_ws,
             self.solver.as_mut(),
             &self.params.newton,
+            self.stop.as_deref(),
         );
         let worst_node = || {
             let res = self.newton_ws.residual();
@@ -484,15 +539,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 t,
                 t_next,
                 residual: s.residual,
-                tol: self.params.newton.tol,
+                tol: s.tolerance,
+                force_scale: s.force_scale,
                 iterations: s.iterations,
             },
+            NewtonError::Interrupted(_) => StepError::Interrupted { step: step_no, t },
             NewtonError::LineSearch(s) => StepError::LineSearchFailed {
                 worst_node: worst_node(),
                 step: step_no,
                 t,
                 t_next,
                 residual: s.residual,
+                tol: s.tolerance,
+                force_scale: s.force_scale,
                 iterations: s.iterations,
             },
         })?;
@@ -518,6 +577,31 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
+        // The energies of the new state must be finite too (a strain can overflow `W`);
+        // they are evaluated from r_n, v_n, C_n and Δ exactly as `energies` will see the
+        // updated state.
+        let inv_h = 1.0 / h;
+        let after = {
+            let (r0, v0, c0, x) = (&self.state.r, &self.state.v, &self.state.c, &self.x);
+            let mesh = &self.sys.mesh;
+            self.sys.energies_with(
+                |i| r0[i] + x[i],
+                |i| x[i] * (2.0 * inv_h) - v0[i],
+                |e| {
+                    let [a, b] = mesh.elements()[e];
+                    c0[e] + element_step(&r0[a], &r0[b], &x[a], &x[b], mesh.lengths()[e]).2
+                },
+            )
+        };
+        if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
+        {
+            return Err(StepError::NonFinite {
+                step: step_no,
+                t,
+                what: "energy",
+                node: self.non_finite_energy_node(),
+            });
+        }
         // Update: strains first (they need r_n), then r and v.
         let mesh = &self.sys.mesh;
         for (e, (&[a, b], &l)) in mesh.elements().iter().zip(mesh.lengths()).enumerate() {
@@ -530,7 +614,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             );
             self.state.c[e] += dc;
         }
-        let inv_h = 1.0 / h;
         for ((((r, v), a), vm), x) in self
             .state
             .r
@@ -567,7 +650,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         let supplied = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
         let before = self.energies;
-        let after = self.sys.energies(&self.state);
+        debug_assert_eq!(after, self.sys.energies(&self.state));
         self.energies = after;
         self.supplied_total += supplied;
         self.step += 1;
@@ -584,11 +667,31 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             rejected_local_node_iterations: 0,
             rejected: 0,
             residual: stats.residual,
+            tolerance: stats.tolerance,
+            force_scale: stats.force_scale,
+            at_roundoff: stats.at_roundoff,
             before,
             after,
             supplied,
             balance_error: after.hamiltonian() - before.hamiltonian() - supplied,
         })
+    }
+
+    /// The node of the first element whose new strain or stored energy is not finite (the
+    /// first node of the mesh if none is found), for the message of a non-finite energy.
+    fn non_finite_energy_node(&self) -> usize {
+        let mesh = &self.sys.mesh;
+        let bad = mesh
+            .elements()
+            .iter()
+            .zip(mesh.lengths())
+            .zip(&self.state.c)
+            .position(|((&[a, b], &l), &c0)| {
+                let (r0, x) = (&self.state.r, &self.x);
+                let c = c0 + element_step(&r0[a], &r0[b], &x[a], &x[b], l).2;
+                !(l * self.sys.material.w(c)).is_finite()
+            });
+        bad.map_or(0, |e| mesh.elements()[e][0])
     }
 
     /// Steps until `t_end` [s] (the last step is shortened if it would pass `t_end`), calling

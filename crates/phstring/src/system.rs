@@ -1,4 +1,4 @@
-//! The semi-discrete port-Hamiltonian system (METHOD §2, paper eqs. (27)–(31)).
+//! The semi-discrete port-Hamiltonian system (docs/method.md §4, paper eqs. (24)–(31)).
 //!
 //! State `x̂ = (r̂, v̂, Ĉ)`: nodal positions [m], nodal velocities [m/s], element strains
 //! (dimensionless). Efforts `ẑ = (−F_b, v̂, ½ Ŝ)` so that `Eᵀẑ = ∇Ĥ`, with
@@ -17,7 +17,7 @@ pub type Vector<const D: usize> = SVector<f64, D>;
 /// Mass matrix `M_ρ` variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum MassMatrix {
-    /// Consistent mass `ρA l_e/6 [[2,1],[1,2]] ⊗ I` (METHOD §2; the default).
+    /// Consistent mass `ρA l_e/6 [[2,1],[1,2]] ⊗ I` (docs/method.md eq. (4.3); the default).
     #[default]
     Consistent,
     /// Row-sum lumped mass `ρA l_e/2` per node of each element (an option, not the paper's).
@@ -99,7 +99,7 @@ impl Energies {
     pub fn potential(&self) -> f64 {
         self.internal + self.external
     }
-    /// Hamiltonian `Ĥ = T̂ + V̂` (paper eq. (29)).
+    /// Hamiltonian `Ĥ = T̂ + V̂` (docs/method.md eq. (4.8), paper eq. (26)).
     pub fn hamiltonian(&self) -> f64 {
         self.kinetic + self.internal + self.external
     }
@@ -235,25 +235,59 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .filter(|(_, [a, b])| is_constrained(*a) || is_constrained(*b))
             .map(|(e, _)| e)
             .collect();
+        for (e, &l) in mesh.lengths().iter().enumerate() {
+            if !l.is_finite() {
+                return Err(SetupError::DerivedNotFinite {
+                    what: format!("reference length of element {e}"),
+                    value: l,
+                });
+            }
+        }
         let mut f_body = vec![Vector::<D>::zeros(); n];
         for (&[a, b], &l) in mesh.elements().iter().zip(mesh.lengths()) {
             f_body[a] += body_force * (0.5 * l);
             f_body[b] += body_force * (0.5 * l);
         }
-        Ok((
-            Self {
-                mesh,
-                material,
-                rho_a,
-                mass,
-                boundary,
-                f_body,
-                free,
-                constrained,
-                constrained_elements,
-            },
-            initial,
-        ))
+        if let Some((i, f)) = f_body
+            .iter()
+            .enumerate()
+            .find(|(_, f)| !f.iter().all(|x| x.is_finite()))
+        {
+            return Err(SetupError::DerivedNotFinite {
+                what: format!("body force at node {i}"),
+                value: f
+                    .iter()
+                    .copied()
+                    .find(|x| !x.is_finite())
+                    .unwrap_or(f64::NAN),
+            });
+        }
+        let sys = Self {
+            mesh,
+            material,
+            rho_a,
+            mass,
+            boundary,
+            f_body,
+            free,
+            constrained,
+            constrained_elements,
+        };
+        let en = sys.energies(&initial);
+        for (what, value) in [
+            ("initial kinetic energy", en.kinetic),
+            ("initial internal energy", en.internal),
+            ("initial external potential energy", en.external),
+            ("initial Hamiltonian", en.hamiltonian()),
+        ] {
+            if !value.is_finite() {
+                return Err(SetupError::DerivedNotFinite {
+                    what: what.into(),
+                    value,
+                });
+            }
+        }
+        Ok((sys, initial))
     }
 
     /// The mesh.
@@ -276,7 +310,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     pub fn mass_matrix(&self) -> MassMatrix {
         self.mass
     }
-    /// Nodal body-force vector `F_b = ∫ Φᵀ b` [N] (METHOD §2).
+    /// Nodal body-force vector `F_b = ∫ Φᵀ b` [N] (docs/method.md §4).
     pub fn body_force_vector(&self) -> &[Vector<D>] {
         &self.f_body
     }
@@ -306,7 +340,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     }
 
     /// `out = K(r) S` [N]: element `e` adds `−S_e r'_e` to node `a` and `+S_e r'_e` to node `b`
-    /// (METHOD §2; enters the momentum balance with a minus sign).
+    /// (docs/method.md eq. (4.5); enters the momentum balance with a minus sign).
     pub fn k_mul(&self, r: &[Vector<D>], s: &[f64], out: &mut [Vector<D>]) {
         out.iter_mut().for_each(|x| *x = Vector::zeros());
         for ((&[a, b], &l), &se) in self.mesh.elements().iter().zip(self.mesh.lengths()).zip(s) {
@@ -316,7 +350,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
-    /// `out = K(r)ᵀ v` [m/s]: element `e` gets `r'_e · (v_b − v_a)` (METHOD §2; the
+    /// `out = K(r)ᵀ v` [m/s]: element `e` gets `r'_e · (v_b − v_a)` (docs/method.md eq. (4.6); the
     /// element's `l_e` and `1/l_e` cancel).
     pub fn kt_mul(&self, r: &[Vector<D>], v: &[Vector<D>], out: &mut [f64]) {
         for ((o, &[a, b]), &l) in out
@@ -328,12 +362,12 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
-    /// `M_S = diag(l_e)` [m] (METHOD §2): the element reference lengths.
+    /// `M_S = diag(l_e)` [m] (docs/method.md §4): the element reference lengths.
     pub fn m_s(&self) -> &[f64] {
         self.mesh.lengths()
     }
 
-    /// Efforts `ẑ = (∂Ĥ/∂r̂, v̂, ½ Ŝ) = (−F_b, v̂, ½ Ŝ)` of `state` (paper eq. (30)), so that
+    /// Efforts `ẑ = (∂Ĥ/∂r̂, v̂, ½ Ŝ) = (−F_b, v̂, ½ Ŝ)` of `state` (paper eqs. (27)–(28)), so that
     /// `Eᵀ ẑ = ∇Ĥ` with `E = diag(I, M_ρ, M_S)`: units N, m/s, N.
     pub fn efforts(&self, state: &State<D>) -> (Vec<Vector<D>>, Vec<Vector<D>>, Vec<f64>) {
         let neg_fb = self.f_body.iter().map(|f| -f).collect();
@@ -341,34 +375,46 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         (neg_fb, state.v.clone(), half_s)
     }
 
-    /// Stresses `S_e = 2 W'(C_e)` [N] (paper eq. (27d) with element-wise constant `Ψ`).
+    /// Stresses `S_e = 2 W'(C_e)` [N] (paper eq. (24d) with element-wise constant `Ψ`).
     pub fn stresses(&self, c: &[f64], out: &mut [f64]) {
         for (o, &ce) in out.iter_mut().zip(c) {
             *o = 2.0 * self.material.dw(ce);
         }
     }
 
-    /// Energies `T̂`, `Σ l_e W(C_e)`, `−r̂ᵀF_b` of `state` [J] (paper eq. (29)).
+    /// Energies `T̂`, `Σ l_e W(C_e)`, `−r̂ᵀF_b` of `state` [J] (paper eq. (26)).
     pub fn energies(&self, state: &State<D>) -> Energies {
+        self.energies_with(|i| state.r[i], |i| state.v[i], |e| state.c[e])
+    }
+
+    /// [`Self::energies`] of the state with node positions `r(i)`, velocities `v(i)` and
+    /// element strains `c(e)` (each called once per node or element, in the same order as
+    /// for a stored state, so the result is bit-identical to `energies` of that state).
+    pub(crate) fn energies_with(
+        &self,
+        r: impl Fn(usize) -> Vector<D>,
+        v: impl Fn(usize) -> Vector<D>,
+        c: impl Fn(usize) -> f64,
+    ) -> Energies {
         let mut kinetic = 0.0;
         let mut internal = 0.0;
-        for ((&[a, b], &l), &c) in self
+        for (e, (&[a, b], &l)) in self
             .mesh
             .elements()
             .iter()
             .zip(self.mesh.lengths())
-            .zip(&state.c)
+            .enumerate()
         {
-            let (va, vb) = (&state.v[a], &state.v[b]);
+            let (va, vb) = (v(a), v(b));
             let (md, mo) = self.element_mass(l);
-            kinetic += 0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(vb);
-            internal += l * self.material.w(c);
+            kinetic += 0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(&vb);
+            internal += l * self.material.w(c(e));
         }
-        let external = -state
-            .r
+        let external = -self
+            .f_body
             .iter()
-            .zip(&self.f_body)
-            .map(|(r, f)| r.dot(f))
+            .enumerate()
+            .map(|(i, f)| r(i).dot(f))
             .sum::<f64>();
         Energies {
             kinetic,

@@ -1,4 +1,4 @@
-//! Linear solves of the Newton system `J δ = −R` (METHOD §3).
+//! Linear solves of the Newton system `J δ = −R` (docs/method.md §8, eqs. (8.4)–(8.6)).
 //!
 //! The Newton matrix is stored as node blocks ([`BlockJacobian`]): one `D×D` diagonal block
 //! per node and two off-diagonal blocks per element. Two solvers implement

@@ -1,14 +1,13 @@
 //! Shared helpers.
 
-use phstring::benchmarks::paper_pendulum;
+use phstring::benchmarks::{paper_params, paper_pendulum};
 use phstring::{Material, Scheme, Simulation, StepParams, StepReport};
 
 /// Runs the paper benchmark with `scheme`, returning the simulation, `Ĥ(0)` and all reports.
 pub fn run_paper(scheme: Scheme) -> (Simulation<2, Material>, f64, Vec<StepReport>) {
     let params = StepParams {
-        h: 0.01,
         scheme,
-        ..Default::default()
+        ..paper_params()
     };
     let mut sim = Simulation::new(paper_pendulum(30), params).expect("valid problem");
     let h0 = sim.energies().hamiltonian();

@@ -1,4 +1,4 @@
-//! Verification of the method against theorems, closed forms and the paper (METHOD §3–4).
+//! Verification of the method against theorems, closed forms and the paper (docs/method.md §13).
 //! Issue 2's acceptance list, one module each.
 
 mod common;
@@ -7,4 +7,5 @@ mod momentum;
 mod order;
 mod paper;
 mod quotient;
+mod real_units;
 mod solvers;

@@ -1,4 +1,4 @@
-//! Acceptance 3: momentum maps of a free–free string (METHOD §3, consequence 3).
+//! Acceptance 3: momentum maps of a free–free string (docs/method.md §5, eq. (5.9)).
 
 use phstring::{
     Boundary, MassMatrix, Material, Mesh, NewtonParams, Problem, Scheme, Simulation, State,
@@ -39,6 +39,7 @@ fn spinning<const D: usize>(scheme: Scheme) -> Simulation<D, Material> {
         scheme,
         newton: NewtonParams {
             tol: 1e-12,
+            rtol: 0.0,
             max_iter: 25,
             ..Default::default()
         },

@@ -1,4 +1,4 @@
-//! Acceptance 6: second order in time for both schemes (METHOD §3, consequence 4).
+//! Acceptance 6: second order in time for both schemes (docs/method.md §5, "Accuracy").
 //!
 //! A taut string (8 elements, both ends fixed, prestretched to C = 1.44) released at rest
 //! from a sinusoidal transverse displacement of amplitude 0.1 m; largest nodal position
@@ -37,6 +37,7 @@ fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
         scheme,
         newton: NewtonParams {
             tol: 1e-12,
+            rtol: 0.0,
             max_iter: 25,
             ..Default::default()
         },

@@ -1,6 +1,6 @@
-//! Acceptance 1, 2 and 7: the paper's benchmark (METHOD §4).
+//! Acceptance 1, 2 and 7: the paper's benchmark (docs/method.md §12).
 
-use phstring::benchmarks::{PAPER_H0, PAPER_H1_DG, PAPER_H1_MP, paper_pendulum};
+use phstring::benchmarks::{PAPER_H0, PAPER_H1_DG, PAPER_H1_MP, paper_params, paper_pendulum};
 use phstring::{Scheme, Simulation, SolverKind, StepParams};
 
 use crate::common::run_paper;
@@ -67,9 +67,8 @@ fn paper_mp_values_and_energy_drift() {
 fn remark5_kinematic_relation_holds_over_the_run() {
     for scheme in [Scheme::DiscreteGradient, Scheme::Midpoint] {
         let params = StepParams {
-            h: 0.01,
             scheme,
-            ..Default::default()
+            ..paper_params()
         };
         let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
         let mut worst = sim.state().kinematic_defect(sim.system().mesh());
@@ -95,10 +94,9 @@ fn paper_newton_iteration_counts() {
         (MidpointVelocity, Scheme::Midpoint, 374, 5),
     ] {
         let params = StepParams {
-            h: 0.01,
             scheme,
             predictor,
-            ..Default::default()
+            ..paper_params()
         };
         let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
         for _ in 0..100 {
@@ -125,9 +123,8 @@ fn paper_sparse_lu_matches_block_tridiagonal() {
         .into_iter()
         .map(|solver| {
             let params = StepParams {
-                h: 0.01,
                 solver,
-                ..Default::default()
+                ..paper_params()
             };
             Simulation::new(paper_pendulum(30), params).unwrap()
         })
@@ -156,11 +153,7 @@ fn paper_sparse_lu_matches_block_tridiagonal() {
 /// output of the support's velocity port and `F_N` the input of the load port.
 #[test]
 fn port_outputs_close_the_momentum_balance() {
-    let params = StepParams {
-        h: 0.01,
-        ..Default::default()
-    };
-    let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
+    let mut sim = Simulation::new(paper_pendulum(30), paper_params()).unwrap();
     let fb: phstring::Vector<2> = sim.system().body_force_vector().iter().sum();
     let mut worst = 0.0_f64;
     for _ in 0..100 {
@@ -194,9 +187,8 @@ fn checkpoint_restore_is_bit_identical() {
         phstring::Predictor::MidpointVelocity,
     ] {
         let params = StepParams {
-            h: 0.01,
             predictor,
-            ..Default::default()
+            ..paper_params()
         };
         let mut a = Simulation::new(paper_pendulum(30), params).unwrap();
         for _ in 0..37 {
@@ -254,7 +246,7 @@ fn strain_outside_a_bounded_domain_is_reported() {
         h: 0.01,
         newton: phstring::NewtonParams {
             line_search: false,
-            ..Default::default()
+            ..phstring::NewtonParams::absolute(1e-11)
         },
         control: phstring::StepControl {
             adaptive: false,
@@ -275,7 +267,7 @@ fn strain_outside_a_bounded_domain_is_reported() {
     );
 }
 
-/// `Eᵀ ẑ = ∇Ĥ` (paper eq. (29)–(30)): the efforts against finite differences of `Ĥ` in
+/// `Eᵀ ẑ = ∇Ĥ` (docs/method.md eqs. (4.9)–(4.10)): the efforts against finite differences of `Ĥ` in
 /// `r`, `v` and `C`, on a state of the paper's run.
 #[test]
 fn efforts_are_the_gradient_of_the_hamiltonian() {
