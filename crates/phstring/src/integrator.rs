@@ -86,6 +86,9 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     /// Force scale of the last full evaluation [N] (output; see
     /// [`NewtonProblem::force_scale`]).
     pub scale: f64,
+    /// Strain scale of the last full evaluation [N] (output; see
+    /// [`NewtonProblem::strain_scale`]).
+    pub strain_scale: f64,
 }
 
 impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, M> {
@@ -106,6 +109,10 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
 
     fn force_scale(&self) -> f64 {
         self.scale
+    }
+
+    fn strain_scale(&self) -> f64 {
+        self.strain_scale
     }
 
     fn evaluate_nodes(
@@ -135,6 +142,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         }
         // Force scale (docs/method.md §9, eq. (9.2)): squares of the magnitudes of every force term of
         // the residual, summed over the full evaluation.
+        let mut strain2 = 0.0;
         let mut scale2 = if full {
             self.f_ext.iter().map(|f| f.norm_squared()).sum::<f64>()
         } else {
@@ -176,7 +184,10 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
                 let motion = (x[a].norm_squared() + x[b].norm_squared()) * (inv_h * inv_h)
                     + self.v0[a].norm_squared()
                     + self.v0[b].norm_squared();
-                scale2 += m * m * motion + 8.0 * q * q * rpm.norm_squared();
+                let rpm2 = rpm.norm_squared();
+                scale2 += m * m * motion + 8.0 * q * q * rpm2;
+                let k = dq * c1.abs().max(c0.abs());
+                strain2 += 8.0 * k * k * rpm2;
             }
             if in_a {
                 res[a] += wa * md + wb * mo;
@@ -239,6 +250,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         }
         if full {
             self.scale = scale2.sqrt();
+            self.strain_scale = strain2.sqrt();
         }
         Ok(())
     }
@@ -343,6 +355,7 @@ mod tests {
             f_ext: &f_ext,
             reaction: &mut reaction,
             scale: 0.0,
+            strain_scale: 0.0,
         };
         let n = x.len();
         let mut res = vec![Vector::<D>::zeros(); n];

@@ -82,5 +82,8 @@ pub use material::{Hyperelastic, LinearElastic, Material, StVenantKirchhoff, Sto
 pub use mesh::Mesh;
 pub use newton::{NewtonParams, NewtonStats};
 pub use observe::{Observer, RunSummary, StepReport, nan_max};
-pub use simulation::{Checkpoint, Predictor, Simulation, StepControl, StepParams};
+pub use simulation::{
+    Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
+    estimated_seconds_per_iteration,
+};
 pub use system::{Energies, MassMatrix, PhSystem, Problem, State, Vector};

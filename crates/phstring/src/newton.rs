@@ -39,8 +39,7 @@ use crate::system::Vector;
 ///
 /// Whatever the tolerance, an iterate at the round-off floor is converged: when a Newton
 /// step no longer halves the residual (or the line search cannot reduce it) and the residual
-/// is at most [`ROUNDOFF_FLOOR`]` · ε · F`, the solve ends successfully
-/// ([`NewtonStats::at_roundoff`]).
+/// is at most [`roundoff_floor`], the solve ends successfully ([`NewtonStats::at_roundoff`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NewtonParams {
     /// Absolute tolerance [N] on the Euclidean norm of the force residual: alone when
@@ -67,9 +66,13 @@ pub const DEFAULT_RTOL: f64 = 1e-12;
 /// Default absolute floor under the relative test [N]: it matters only for steps whose
 /// forces are all below about 1e-3 N.
 pub const DEFAULT_ATOL: f64 = 1e-15;
-/// An iterate that stagnates with `‖R‖ ≤ ROUNDOFF_FLOOR · ε · F` is at the round-off floor
-/// of the residual and counts as converged.
+/// Round-off floor of the residual, summation part: `ROUNDOFF_FLOOR · ε · F`.
 pub const ROUNDOFF_FLOOR: f64 = 1000.0;
+/// Round-off floor of the residual, strain part: `ROUNDOFF_STRAIN · ε · K`, with `K` the
+/// strain scale ([`NewtonProblem::strain_scale`]). A stiff element's stress can only change
+/// in steps of `∂S̄/∂C · ulp(C)`, so a residual below that cannot be reached however small
+/// the forces are (a steel rope at rest: `EA/2 · 2.2e-16 ≈ 1e-8 N` per element).
+pub const ROUNDOFF_STRAIN: f64 = 16.0;
 /// A Newton step that leaves more than this fraction of the residual has stagnated.
 const STAGNATION_RATIO: f64 = 0.5;
 
@@ -101,10 +104,10 @@ impl NewtonParams {
     }
 }
 
-/// Round-off floor of a residual whose force scale is `scale` [N]: `ROUNDOFF_FLOOR · ε ·
-/// scale`.
-pub fn roundoff_floor(scale: f64) -> f64 {
-    ROUNDOFF_FLOOR * f64::EPSILON * scale
+/// Round-off floor [N] of a residual with force scale `force` and strain scale `strain` [N]:
+/// `ε (ROUNDOFF_FLOOR · force + ROUNDOFF_STRAIN · strain)`.
+pub fn roundoff_floor(force: f64, strain: f64) -> f64 {
+    f64::EPSILON * (ROUNDOFF_FLOOR * force + ROUNDOFF_STRAIN * strain)
 }
 
 /// Smallest chain (in nodes) on which nonlinear elimination is tried.
@@ -132,6 +135,8 @@ pub struct NewtonStats {
     pub residual: f64,
     /// Force scale `F` of the last full evaluation [N] (see [`NewtonParams`]).
     pub force_scale: f64,
+    /// Strain scale `K` of the last full evaluation [N] (see [`ROUNDOFF_STRAIN`]).
+    pub strain_scale: f64,
     /// The tolerance the residual was tested against [N].
     pub tolerance: f64,
     /// The solve ended at the round-off floor (stagnation) instead of below `tolerance`.
@@ -161,6 +166,12 @@ pub trait NewtonProblem<const D: usize> {
     /// magnitudes of the force terms whose sum is the residual. Relative tolerances and the
     /// round-off floor are measured against it; 0 (the default) makes both absolute.
     fn force_scale(&self) -> f64 {
+        0.0
+    }
+    /// Strain scale [N] of the last full [`Self::evaluate`]: the root-sum-square over the
+    /// elements of the internal force's change for a relative strain change of 1 (`2 ∂q/∂C ·
+    /// C · |r'|` on each node). The residual cannot resolve less than about `ε` times it.
+    fn strain_scale(&self) -> f64 {
         0.0
     }
     /// `true` if the Jacobian is block tridiagonal in node order (a chain mesh), so that
@@ -284,6 +295,7 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
         && problem.chain()
         && x.len() >= ELIMINATION_MIN_NODES;
     stats.force_scale = problem.force_scale();
+    stats.strain_scale = problem.strain_scale();
     stats.tolerance = params.tolerance(stats.force_scale);
     if eliminate && stats.residual > stats.tolerance {
         stats.residual =
@@ -297,12 +309,13 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
     let mut previous = f64::INFINITY;
     loop {
         stats.force_scale = problem.force_scale();
+        stats.strain_scale = problem.strain_scale();
         stats.tolerance = params.tolerance(stats.force_scale);
         if stats.residual <= stats.tolerance {
             return Ok(());
         }
         if stats.residual > STAGNATION_RATIO * previous
-            && stats.residual <= roundoff_floor(stats.force_scale)
+            && stats.residual <= roundoff_floor(stats.force_scale, stats.strain_scale)
         {
             stats.at_roundoff = true;
             return Ok(());
@@ -355,7 +368,7 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
             if alpha < ALPHA_MIN {
                 // Leave x at the last accepted iterate.
                 x.copy_from_slice(&ws.x_old);
-                if stats.residual <= roundoff_floor(stats.force_scale) {
+                if stats.residual <= roundoff_floor(stats.force_scale, stats.strain_scale) {
                     // No direction reduces a residual that is already round-off: converged.
                     // The workspace (and the problem's outputs) must be those of `x`.
                     evaluate_checked(problem, x, ws)?;
@@ -742,6 +755,69 @@ mod tests {
             norm(&ws.res) < 1e-2 * residual,
             "residual {}",
             norm(&ws.res)
+        );
+    }
+
+    /// A cubic chain that raises the stop flag on its second evaluation, as a Ctrl-C during a
+    /// long solve would.
+    struct Raising<'a> {
+        inner: Cubic,
+        flag: &'a AtomicBool,
+        evaluations: usize,
+    }
+
+    impl NewtonProblem<1> for Raising<'_> {
+        type Error = ();
+        fn evaluate(
+            &mut self,
+            x: &[Vector<1>],
+            res: &mut [Vector<1>],
+            jac: Option<&mut BlockJacobian<1>>,
+        ) -> Result<(), ()> {
+            self.evaluations += 1;
+            if self.evaluations == 2 {
+                self.flag.store(true, Ordering::Relaxed);
+            }
+            self.inner.evaluate(x, res, jac)
+        }
+    }
+
+    /// Issue 10: a stop request is honoured between Newton iterations, not only between
+    /// steps (a step on a huge mesh can take minutes).
+    #[test]
+    fn stop_flag_ends_the_solve_between_iterations() {
+        let n = 10;
+        let flag = AtomicBool::new(false);
+        let mut p = Raising {
+            inner: Cubic {
+                b: vec![50.0; n],
+                kappa: 0.2,
+            },
+            flag: &flag,
+            evaluations: 0,
+        };
+        let mesh = Mesh::uniform_chain(n - 1, 1.0).unwrap();
+        let mut ws = NewtonWorkspace::<1>::new(&mesh);
+        let mut solver = BlockTridiagonal::<1>::new(&mesh).unwrap();
+        let mut x = vec![Vector::<1>::zeros(); n];
+        let params = NewtonParams::absolute(1e-11);
+        match solve(&mut p, &mut x, &mut ws, &mut solver, &params, Some(&flag)) {
+            Err(NewtonError::Interrupted(stats)) => assert_eq!(stats.iterations, 1),
+            other => panic!("expected an interruption, got {other:?}"),
+        }
+        // Without the flag the same problem converges.
+        let (mut p, mut x) = (
+            Cubic {
+                b: vec![50.0; n],
+                kappa: 0.2,
+            },
+            vec![Vector::<1>::zeros(); n],
+        );
+        let stats = solve(&mut p, &mut x, &mut ws, &mut solver, &params, None).unwrap();
+        assert!(
+            stats.iterations > 2,
+            "converged too fast to test: {}",
+            stats.iterations
         );
     }
 

@@ -17,11 +17,19 @@ struct Counting;
 thread_local! {
     /// Allocations made by this thread (const-initialized: reading it never allocates).
     static ALLOCS: Cell<usize> = const { Cell::new(0) };
+    /// Bytes allocated minus bytes freed by this thread.
+    static LIVE: Cell<isize> = const { Cell::new(0) };
 }
 
-fn count() {
+fn count(grow: isize) {
     // `try_with` fails only while the thread is being torn down; nothing to count then.
     let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+    let _ = LIVE.try_with(|c| c.set(c.get() + grow));
+}
+
+/// Bytes allocated and not freed so far by the calling thread.
+fn live_bytes() -> isize {
+    LIVE.with(Cell::get)
 }
 
 /// Allocations made so far by the calling thread.
@@ -31,14 +39,15 @@ fn allocations() -> usize {
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
+        count(layout.size() as isize);
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        let _ = LIVE.try_with(|c| c.set(c.get() - layout.size() as isize));
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
+        count(new_size as isize - layout.size() as isize);
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
@@ -63,6 +72,63 @@ fn allocation_counter_ignores_other_threads() {
     let v = vec![1u8; 10];
     assert_eq!(allocations() - before, 1);
     drop(v);
+}
+
+/// Issue 10: `check` refuses runs that cannot fit in memory, from
+/// `phstring::estimated_memory_bytes`. The estimate must be what a simulation really holds:
+/// the heap bytes of a set-up simulation (with its problem's state moved in) and after ten
+/// steps, against the estimate, in 1D, 2D and 3D.
+#[test]
+fn memory_estimate_matches_the_allocator() {
+    fn measure<const D: usize>(n_el: usize) -> (isize, isize) {
+        let before = live_bytes();
+        let mesh = phstring::Mesh::uniform_chain(n_el, 10.0).unwrap();
+        let mut end = phstring::Vector::<D>::zeros();
+        end[0] = 10.0;
+        let initial = phstring::State::straight(&mesh, phstring::Vector::zeros(), end);
+        let problem = phstring::Problem {
+            mesh,
+            material: phstring::Material::hyperelastic(1e6),
+            rho_a: 1.0,
+            body_force: phstring::Vector::zeros(),
+            mass: phstring::MassMatrix::Consistent,
+            boundary: phstring::Boundary {
+                fixed: vec![phstring::Fixed::node(0)],
+                loads: vec![],
+            },
+            initial,
+        };
+        let mut sim = Simulation::new(problem, StepParams::default()).unwrap();
+        let setup = live_bytes() - before;
+        for _ in 0..10 {
+            sim.step().unwrap();
+        }
+        let stepping = live_bytes() - before;
+        drop(sim);
+        (setup, stepping)
+    }
+    let n_el = 100_000;
+    for (d, (setup, stepping)) in [
+        (1, measure::<1>(n_el)),
+        (2, measure::<2>(n_el)),
+        (3, measure::<3>(n_el)),
+    ] {
+        let estimate = phstring::estimated_memory_bytes(d, n_el) as f64;
+        eprintln!(
+            "d = {d}: estimate {:.1} MB, set up {:.1} MB, after 10 steps {:.1} MB ({:.0} bytes per element)",
+            estimate / 1e6,
+            setup as f64 / 1e6,
+            stepping as f64 / 1e6,
+            stepping as f64 / n_el as f64
+        );
+        for measured in [setup, stepping] {
+            let ratio = measured as f64 / estimate;
+            assert!(
+                (0.95..=1.05).contains(&ratio),
+                "d = {d}: measured {measured} bytes, estimate {estimate}"
+            );
+        }
+    }
 }
 
 #[test]
