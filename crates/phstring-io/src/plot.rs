@@ -4,6 +4,12 @@
 //! `<stem>.svg` (vector, for publication) and `<stem>.png` (raster, [`WIDTH`] × [`HEIGHT`] px).
 //! The API is data-only: plain slices in SI units, no dependency on the simulator types.
 //! Text uses the bundled DejaVu Sans font, so no system fonts are needed.
+//!
+//! Data whose axis ranges cannot be drawn faithfully (non-finite bounds or spans, a span
+//! below [`MIN_RELATIVE_SPAN`] of the magnitude, magnitudes above [`MAX_MAGNITUDE`]) is
+//! refused with [`PlotError::Range`] before anything is drawn: the plotting library's
+//! tick computation does not terminate on such ranges. Titles and labels are stripped of
+//! control characters and shortened ([`sanitize_text`]).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -32,6 +38,57 @@ const MARGIN: u32 = 18;
 const X_LABEL_AREA: u32 = 70;
 /// Snapshots with more nodes than this are drawn without node markers.
 const MAX_MARKED_NODES: usize = 200;
+/// Largest magnitude of a value on a linear axis (beyond it a plot is refused).
+pub const MAX_MAGNITUDE: f64 = 1e15;
+/// Smallest span of an axis relative to the magnitude of its values (below it a plot is
+/// refused: ticks could not be told apart in `f64`).
+pub const MIN_RELATIVE_SPAN: f64 = 1e-12;
+/// Longest title or label, in characters (longer ones end in `…`).
+pub const MAX_TEXT_CHARS: usize = 200;
+
+/// `text` without control characters (they would reach a terminal or make an SVG file
+/// invalid), cut to at most `max_chars` characters with a trailing `…`.
+pub fn sanitize_text(text: &str, max_chars: usize) -> String {
+    let mut out = String::new();
+    for (n, c) in text.chars().filter(|c| !c.is_control()).enumerate() {
+        if n + 1 > max_chars {
+            out.push('…');
+            break;
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// Checks that the axis range `lo..hi` can be drawn: finite, increasing, a span of at
+/// least [`MIN_RELATIVE_SPAN`] of the magnitude, and (linear axes) a magnitude of at most
+/// [`MAX_MAGNITUDE`]; log axes need `0 < lo` and finite `hi`.
+fn check_axis(name: &str, lo: f64, hi: f64, log: bool) -> Result<(), String> {
+    let span = hi - lo;
+    let mag = lo.abs().max(hi.abs());
+    if !(lo.is_finite() && hi.is_finite() && span.is_finite()) {
+        return Err(format!("the {name} range {lo:e} … {hi:e} is not finite"));
+    }
+    if log {
+        if !(f64::MIN_POSITIVE <= lo && hi > lo) {
+            return Err(format!(
+                "the logarithmic {name} range {lo:e} … {hi:e} is invalid"
+            ));
+        }
+        return Ok(());
+    }
+    if mag > MAX_MAGNITUDE {
+        return Err(format!(
+            "the {name} values reach {mag:e}, beyond the {MAX_MAGNITUDE:e} that can be plotted"
+        ));
+    }
+    if span <= 0.0 || span < MIN_RELATIVE_SPAN * mag {
+        return Err(format!(
+            "the {name} range {lo:e} … {hi:e} is too narrow for its magnitude"
+        ));
+    }
+    Ok(())
+}
 
 /// Error while writing a figure.
 #[derive(Debug, thiserror::Error)]
@@ -45,6 +102,15 @@ pub enum PlotError {
         /// Output file that was to be written.
         path: PathBuf,
         /// What is wrong with the input.
+        message: String,
+    },
+    /// The data's ranges cannot be drawn (non-finite, degenerate or extreme); nothing was
+    /// written.
+    #[error("cannot plot {path}: {message}")]
+    Range {
+        /// Output file that was to be written.
+        path: PathBuf,
+        /// Which range and why.
         message: String,
     },
     /// The plotting backend failed (drawing, encoding or writing the PNG).
@@ -120,8 +186,9 @@ pub fn energy_plot(
             width: 2,
         },
     ];
+    let title = sanitize_text(title, MAX_TEXT_CHARS);
     let fig = XyFigure {
-        title,
+        title: &title,
         x_label: "t [s]",
         y_label: "energy [J]",
         curves,
@@ -146,7 +213,7 @@ pub fn configuration_plot(
         .iter()
         .zip(colors)
         .map(|((time, nodes), color)| Curve {
-            label: format!("t = {} s", format_plain(*time)),
+            label: sanitize_text(&format!("t = {} s", format_plain(*time)), MAX_TEXT_CHARS),
             points: nodes
                 .iter()
                 .filter(|p| p[0].is_finite() && p[1].is_finite())
@@ -156,7 +223,14 @@ pub fn configuration_plot(
             width: 2,
         })
         .collect();
-    write_both(stem, &ConfigFigure { title, curves })
+    let title = sanitize_text(title, MAX_TEXT_CHARS);
+    write_both(
+        stem,
+        &ConfigFigure {
+            title: &title,
+            curves,
+        },
+    )
 }
 
 /// Plots named curves `y(x)` on a shared axis pair (paper Figs. 4 and 5).
@@ -188,19 +262,28 @@ pub fn series_plot(
             });
         }
         curves.push(Curve {
-            label: s.label.to_string(),
+            label: sanitize_text(s.label, MAX_TEXT_CHARS),
             points: finite_points(s.x, s.y, log_y),
             color,
             width: 2,
         });
     }
+    let (title, x_label, y_label) = (
+        sanitize_text(title, MAX_TEXT_CHARS),
+        sanitize_text(x_label, MAX_TEXT_CHARS),
+        sanitize_text(y_label, MAX_TEXT_CHARS),
+    );
+    let vline_label = vline.map(|(_, l)| sanitize_text(l, MAX_TEXT_CHARS));
     let fig = XyFigure {
-        title,
-        x_label,
-        y_label,
+        title: &title,
+        x_label: &x_label,
+        y_label: &y_label,
         curves,
         log_y,
-        vline: vline.filter(|(x, _)| x.is_finite()),
+        vline: vline
+            .zip(vline_label.as_deref())
+            .map(|((x, _), l)| (x, l))
+            .filter(|(x, _)| x.is_finite()),
     };
     write_both(stem, &fig)
 }
@@ -259,6 +342,8 @@ struct Curve {
 /// `raster` is true for the PNG backend, whose text renderer ignores glyph side bearings, so
 /// combining accents (T̂, V̂) are drawn by hand there; SVG viewers render them natively.
 trait Figure {
+    /// Whether the figure's ranges can be drawn (see [`check_axis`]).
+    fn check(&self) -> Result<(), String>;
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
@@ -286,6 +371,10 @@ fn with_extension(stem: &Path, ext: &str) -> PathBuf {
 
 /// Draws `fig` into `<stem>.svg` and `<stem>.png`.
 fn write_both(stem: &Path, fig: &impl Figure) -> Result<(), PlotError> {
+    fig.check().map_err(|message| PlotError::Range {
+        path: stem.to_path_buf(),
+        message,
+    })?;
     ensure_font()?;
     let size = (WIDTH, HEIGHT);
 
@@ -342,14 +431,19 @@ fn bounds(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 }
 
 /// A non-degenerate linear range from data bounds: `pad` is the fraction of the span added on
-/// each side; a (near-)constant value `c` becomes `c ± 10 %` (or ±1 around zero).
+/// each side; a (near-)constant value `c` becomes `c ± 10 %` (or ±1 around zero). Bounds
+/// whose span overflows are returned unchanged (and refused by [`check_axis`]).
 fn linear_range(b: Option<(f64, f64)>, pad: f64) -> (f64, f64) {
     let Some((lo, hi)) = b else {
         return (0.0, 1.0);
     };
     let span = hi - lo;
     let mag = lo.abs().max(hi.abs());
-    if !span.is_finite() || span <= 1e-9 * mag {
+    if !span.is_finite() {
+        // Not drawable; left as is for `check_axis` to refuse.
+        return (lo, hi);
+    }
+    if span <= 1e-9 * mag {
         let mid = 0.5 * (lo + hi);
         let half = if mid.abs() > 0.0 && mid.is_finite() {
             0.1 * mid.abs()
@@ -728,6 +822,32 @@ struct XyFigure<'a> {
 }
 
 impl XyFigure<'_> {
+    /// The x axis range: all curves and the vertical marker.
+    fn x_range(&self) -> (f64, f64) {
+        let xs = self
+            .curves
+            .iter()
+            .flat_map(|c| c.points.iter().map(|p| p.0));
+        let xs = xs.chain(self.vline.map(|v| v.0));
+        linear_range(bounds(xs), 0.0)
+    }
+
+    /// The y axis range (a decade and a half of margin on a log axis).
+    fn y_range(&self) -> (f64, f64) {
+        let ys = self
+            .curves
+            .iter()
+            .flat_map(|c| c.points.iter().map(|p| p.1));
+        if self.log_y {
+            match bounds(ys) {
+                Some((lo, hi)) => (lo / 3.0, hi * 3.0),
+                None => (0.1, 10.0),
+            }
+        } else {
+            linear_range(bounds(ys), 0.05)
+        }
+    }
+
     fn legend(&self) -> Vec<LegendEntry> {
         let mut entries: Vec<LegendEntry> = self
             .curves
@@ -752,6 +872,13 @@ impl XyFigure<'_> {
 }
 
 impl Figure for XyFigure<'_> {
+    fn check(&self) -> Result<(), String> {
+        let (x0, x1) = self.x_range();
+        check_axis("x", x0, x1, false)?;
+        let (y0, y1) = self.y_range();
+        check_axis("y", y0, y1, self.log_y)
+    }
+
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
@@ -760,28 +887,15 @@ impl Figure for XyFigure<'_> {
         let entries = self.legend();
         let (plot_area, legend_area) = layout(root, self.title, &entries)?;
 
-        let xs = self
-            .curves
-            .iter()
-            .flat_map(|c| c.points.iter().map(|p| p.0));
-        let xs = xs.chain(self.vline.map(|v| v.0));
-        let (x0, x1) = linear_range(bounds(xs), 0.0);
+        let (x0, x1) = self.x_range();
         let x_fmt = linear_formatter(x0, x1);
-        let ys = || {
-            self.curves
-                .iter()
-                .flat_map(|c| c.points.iter().map(|p| p.1))
-        };
 
         let tick = text_style(TICK_SIZE);
         let desc = text_style(DESC_SIZE);
         let vline_style = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(2);
 
         if self.log_y {
-            let (y0, y1) = match bounds(ys()) {
-                Some((lo, hi)) => (lo / 3.0, hi * 3.0),
-                None => (0.1, 10.0),
-            };
+            let (y0, y1) = self.y_range();
             let axis = LogAxis::new(y0, y1);
             let labels = axis.key_points(BoldPoints(12));
             let yl = y_label_area(&plot_area, labels.iter().map(log_label))?;
@@ -817,7 +931,7 @@ impl Figure for XyFigure<'_> {
                     .map_err(err)?;
             }
         } else {
-            let (y0, y1) = linear_range(bounds(ys()), 0.05);
+            let (y0, y1) = self.y_range();
             let y_fmt = linear_formatter(y0, y1);
             let axis = RangedCoordf64::from(y0..y1);
             let labels = axis.key_points(10usize);
@@ -865,7 +979,33 @@ struct ConfigFigure<'a> {
     curves: Vec<Curve>,
 }
 
+impl ConfigFigure<'_> {
+    /// The padded data box `(x0, x1, y0, y1)` in m.
+    fn data_box(&self) -> (f64, f64, f64, f64) {
+        let pts = || self.curves.iter().flat_map(|c| c.points.iter());
+        let bx = bounds(pts().map(|p| p.0));
+        let by = bounds(pts().map(|p| p.1));
+        let ((bx0, bx1), (by0, by1)) = match (bx, by) {
+            (Some(x), Some(y)) => (x, y),
+            _ => ((0.0, 1.0), (0.0, 1.0)),
+        };
+        let span = (bx1 - bx0).max(by1 - by0);
+        let pad = if span > 0.0 {
+            0.06 * span
+        } else {
+            0.1 * bx0.abs().max(by0.abs()).max(1.0)
+        };
+        (bx0 - pad, bx1 + pad, by0 - pad, by1 + pad)
+    }
+}
+
 impl Figure for ConfigFigure<'_> {
+    fn check(&self) -> Result<(), String> {
+        let (x0, x1, y0, y1) = self.data_box();
+        check_axis("x", x0, x1, false)?;
+        check_axis("y", y0, y1, false)
+    }
+
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
@@ -888,20 +1028,7 @@ impl Figure for ConfigFigure<'_> {
         let (plot_area, legend_area) = layout(root, self.title, &entries)?;
 
         // Padded data box, in m.
-        let pts = || self.curves.iter().flat_map(|c| c.points.iter());
-        let bx = bounds(pts().map(|p| p.0));
-        let by = bounds(pts().map(|p| p.1));
-        let ((bx0, bx1), (by0, by1)) = match (bx, by) {
-            (Some(x), Some(y)) => (x, y),
-            _ => ((0.0, 1.0), (0.0, 1.0)),
-        };
-        let span = (bx1 - bx0).max(by1 - by0);
-        let pad = if span > 0.0 {
-            0.06 * span
-        } else {
-            0.1 * bx0.abs().max(by0.abs()).max(1.0)
-        };
-        let (bx0, bx1, by0, by1) = (bx0 - pad, bx1 + pad, by0 - pad, by1 + pad);
+        let (bx0, bx1, by0, by1) = self.data_box();
 
         // Label area sized for labels of the padded box (final ranges are similar or wider).
         let y_fmt_guess = linear_formatter(by0, by1);
@@ -1172,6 +1299,97 @@ mod tests {
             None,
         );
         assert!(matches!(bad, Err(PlotError::Input { .. })));
+        cleanup(&dir);
+    }
+
+    /// Issue 10, plot hang: plotters' tick computation loops forever on ranges that are not
+    /// finite or too narrow for their magnitude; such data is refused before drawing.
+    #[test]
+    fn plot_hang_degenerate_and_extreme_ranges_are_refused() {
+        let dir = temp_dir("extreme");
+        let range_err = |r: Result<(), PlotError>| {
+            let e = r.unwrap_err();
+            assert!(matches!(e, PlotError::Range { .. }), "{e}");
+        };
+        // The issue's geometry: x = 1e308 for all nodes.
+        let far = vec![(0.0, vec![[1e308, 0.0], [1e308, -1.0]])];
+        range_err(configuration_plot(&dir.join("c1"), "far", &far));
+        // A span of 1e-10 m at 1e10 m (relative 1e-20) and a huge magnitude.
+        let narrow = vec![(0.0, vec![[1e10, 0.0], [1e10 + 1e-6, 0.0]])];
+        range_err(configuration_plot(&dir.join("c2"), "narrow", &narrow));
+        let huge = vec![(0.0, vec![[0.0, 0.0], [1e16, -1.0]])];
+        range_err(configuration_plot(&dir.join("c3"), "huge", &huge));
+        let t = [0.0, 1.0, 2.0];
+        let big = [1e300, -1e300, 1.7e308];
+        range_err(energy_plot(&dir.join("e1"), "big", &t, &big, &big, &big));
+        let ext = [f64::MAX, -f64::MAX, 0.0];
+        let s = |y: &'static [f64]| Series {
+            label: "y",
+            x: &[0.0, 1.0, 2.0],
+            y,
+        };
+        range_err(series_plot(
+            &dir.join("s1"),
+            "",
+            "x",
+            "y",
+            &[s(&[1e300, 1.7e308, 1e200])],
+            true,
+            None,
+        ));
+        range_err(series_plot(
+            &dir.join("s2"),
+            "",
+            "x",
+            "y",
+            &[Series {
+                label: "e",
+                x: &ext,
+                y: &t,
+            }],
+            false,
+            None,
+        ));
+        // Constant values are widened, not refused; moderate extremes still draw.
+        let c = [1e12, 1e12, 1e12];
+        energy_plot(&dir.join("e2"), "constant", &t, &c, &c, &c).unwrap();
+        let tiny = vec![(0.0, vec![[1e-300, 0.0], [2e-300, 1e-300]])];
+        configuration_plot(&dir.join("c4"), "tiny", &tiny).unwrap();
+        series_plot(
+            &dir.join("s3"),
+            "",
+            "x",
+            "y",
+            &[s(&[1e-300, 1e300, 5.0])],
+            true,
+            None,
+        )
+        .unwrap();
+        for name in ["c1", "c2", "c3", "e1", "s1", "s2"] {
+            assert!(!with_extension(&dir.join(name), "svg").exists(), "{name}");
+        }
+        cleanup(&dir);
+    }
+
+    /// Issue 10: control characters in titles reached the terminal, and NUL made the SVG
+    /// invalid.
+    #[test]
+    fn control_characters_in_titles_are_stripped() {
+        assert_eq!(sanitize_text("a\0b\x1b[31mc\r\n\u{85}d", 100), "ab[31mcd");
+        assert_eq!(sanitize_text("abcdef", 3), "abc…");
+        assert_eq!(sanitize_text("Ĥ (Hamiltonian)", 100), "Ĥ (Hamiltonian)");
+        let dir = temp_dir("control");
+        let stem = dir.join("energy");
+        let t = [0.0, 1.0];
+        let title = format!("bad\0title\x1b[2J{}", "x".repeat(10_000));
+        energy_plot(&stem, &title, &t, &t, &t, &t).unwrap();
+        let svg = std::fs::read_to_string(with_extension(&stem, "svg")).unwrap();
+        assert!(
+            !svg.chars()
+                .any(|c| c.is_control() && c != '\n' && c != '\t' && c != '\r')
+        );
+        assert!(svg.contains("badtitle[2J"));
+        assert!(!svg.contains(&"x".repeat(MAX_TEXT_CHARS + 1)));
         cleanup(&dir);
     }
 
