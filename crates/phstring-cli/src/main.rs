@@ -202,8 +202,8 @@ fn prepare_out(out: &Path, force: bool) -> Result<()> {
         }
         let non_empty = std::fs::read_dir(out)
             .with_context(|| format!("cannot read output folder {}", out.display()))?
-            .next()
-            .is_some();
+            .flatten()
+            .any(|e| !phstring_io::output::is_own_temp_file(&e.file_name().to_string_lossy()));
         if non_empty && !force {
             bail!(
                 "output folder {} is not empty; pass --force to overwrite it, or choose another with --out",
@@ -318,7 +318,7 @@ fn progress_bar(quiet: bool, label: &str) -> Bar {
     Bar(Some(b), 1.0)
 }
 
-fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions<'_>) -> Result<RunInfo> {
+fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions) -> Result<RunInfo> {
     let label = file
         .scenario
         .title
@@ -330,14 +330,16 @@ fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions<'_>) -
 
 /// A flag set by Ctrl-C (SIGINT/SIGTERM): runs stop at the end of the current step with
 /// their outputs flushed and a checkpoint written.
-fn stop_flag() -> &'static AtomicBool {
-    static STOP: AtomicBool = AtomicBool::new(false);
-    static INSTALLED: std::sync::Once = std::sync::Once::new();
-    INSTALLED.call_once(|| {
+fn stop_flag() -> std::sync::Arc<AtomicBool> {
+    static STOP: std::sync::OnceLock<std::sync::Arc<AtomicBool>> = std::sync::OnceLock::new();
+    STOP.get_or_init(|| {
+        let flag = std::sync::Arc::new(AtomicBool::new(false));
+        let set = flag.clone();
         // If no handler can be installed, Ctrl-C keeps its default effect.
-        let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
-    });
-    &STOP
+        let _ = ctrlc::set_handler(move || set.store(true, Ordering::SeqCst));
+        flag
+    })
+    .clone()
 }
 
 fn sweep(

@@ -1,12 +1,39 @@
 //! Checkpoint files: everything needed to continue a run so that its outputs are bit for bit
 //! those of an uninterrupted run. JSON, with floats in shortest round-trip form (exact).
+//!
+//! A checkpoint's size does not grow with the number of steps: it holds the dynamic state,
+//! the lengths of the output files and a few counters (the plots read `energy.csv` back).
+//! Reading one is bounded ([`MAX_CHECKPOINT_BYTES`], [`MAX_STREAMED_CHECKPOINT_BYTES`]), its [`checksum`](CheckpointFile::checksum)
+//! detects any edit, and [`CheckpointFile::check_against`] checks every length and value
+//! range against the scenario before anything is restored, so that a damaged or edited file
+//! is refused with a message instead of panicking or silently continuing a different run.
 
+use std::hash::Hasher;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use phstring::{Checkpoint, State, Vector};
+use phstring::{Checkpoint, Material, Simulation, State, StoredEnergy, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::output::History;
+/// The `format` field of every checkpoint.
+pub const FORMAT: &str = "phstring checkpoint";
+
+/// Largest checkpoint file read, in bytes, derived from the largest mesh a scenario may
+/// have (5e7 elements): per node at most 13 numbers of state (`r`, `v`, `acc`, `v_mid` in
+/// 3D and a strain) and 6 snapshot points, each number at most 25 bytes in JSON, so about
+/// 640 bytes; 700 bytes per node plus 64 MiB for the scenario text and the rest.
+pub const MAX_CHECKPOINT_BYTES: u64 = 50_000_001 * 700 + (64 << 20);
+
+/// Largest checkpoint read from something other than a regular file (a pipe or a device,
+/// whose length is not known in advance), in bytes: 1 GiB.
+pub const MAX_STREAMED_CHECKPOINT_BYTES: u64 = 1 << 30;
+
+/// FNV-1a (64 bit) hash of `bytes`, as 16 hex digits.
+pub fn fnv1a64_hex(bytes: &[u8]) -> String {
+    let mut h = fnv::FnvHasher::default();
+    h.write(bytes);
+    format!("{:016x}", h.finish())
+}
 
 /// The simulation part of a checkpoint (flattened vectors, `D` components per node).
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -45,8 +72,12 @@ fn flat<const D: usize>(v: &[Vector<D>]) -> Vec<f64> {
     v.iter().flat_map(|x| x.iter().copied()).collect()
 }
 
+/// Nodal vectors from a flat array; an incomplete last vector is dropped (lengths are
+/// checked by [`CheckpointFile::check_against`] and again by `Simulation::restore`).
 fn unflat<const D: usize>(v: &[f64]) -> Vec<Vector<D>> {
-    v.chunks(D).map(Vector::<D>::from_column_slice).collect()
+    v.chunks_exact(D)
+        .map(Vector::<D>::from_column_slice)
+        .collect()
 }
 
 impl SimState {
@@ -93,7 +124,8 @@ impl SimState {
 }
 
 /// The output part of a checkpoint: file lengths at the checkpoint (longer files are cut back
-/// on resume), ParaView frames, in-memory history.
+/// on resume), the number of ParaView frames, and the configuration snapshots. Its size does
+/// not depend on the number of steps.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct OutputState {
     /// Bytes of `energy.csv`.
@@ -102,12 +134,15 @@ pub struct OutputState {
     pub positions_bytes: Option<u64>,
     /// Bytes of `ports.csv`.
     pub ports_bytes: u64,
-    /// ParaView frames `(t, file name)`.
-    pub frames: Vec<(f64, String)>,
+    /// ParaView frames written so far: the first `frames` entries of `paraview/string.pvd`.
+    pub frames: usize,
+    /// FNV-1a hash of those frames' times and file names (checks `string.pvd` on resume).
+    pub frames_hash: u64,
     /// Step of the last frame written.
     pub last_frame: Option<usize>,
-    /// Energy history and snapshots for the plots.
-    pub history: History,
+    /// Configuration snapshots `(t, node positions x, y)` for the configuration plot (at most
+    /// six).
+    pub snapshots: Vec<(f64, Vec<[f64; 2]>)>,
 }
 
 /// Run totals carried across a resume.
@@ -143,10 +178,14 @@ pub struct Counters {
 /// A checkpoint file.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CheckpointFile {
-    /// Always `"phstring checkpoint"`.
+    /// Always [`FORMAT`].
     pub format: String,
     /// Program version that wrote it.
     pub version: String,
+    /// Id of the run that wrote it; the output folder carries the same id in
+    /// [`RUN_ID_FILE`](crate::runner::RUN_ID_FILE), and a resume into a folder with another
+    /// id is refused.
+    pub run_id: String,
     /// Scenario file name (for messages).
     pub scenario_path: PathBuf,
     /// Scenario text as run (with `--set` overrides applied).
@@ -159,6 +198,13 @@ pub struct CheckpointFile {
     pub outputs: OutputState,
     /// Totals.
     pub counters: Counters,
+    /// FNV-1a (64 bit, hex) of the JSON of this checkpoint with an empty `checksum`; any edit
+    /// of a value changes it. Set by [`Self::write`], checked by [`Self::read`].
+    #[serde(default)]
+    pub checksum: String,
+    /// The file it was read from (empty if it was not read from a file).
+    #[serde(skip)]
+    pub path: PathBuf,
 }
 
 /// Errors reading or writing checkpoints.
@@ -172,7 +218,7 @@ pub enum CheckpointError {
         /// Cause.
         source: std::io::Error,
     },
-    /// Not a checkpoint or from another version.
+    /// Not a checkpoint, from another version, or edited (checksum mismatch).
     #[error("checkpoint {}: {reason}", path.display())]
     Format {
         /// File.
@@ -180,50 +226,405 @@ pub enum CheckpointError {
         /// What is wrong.
         reason: String,
     },
+    /// A length or value that cannot belong to a run of this scenario.
+    #[error("checkpoint {} is damaged or does not belong to this scenario: {reason}", path.display())]
+    Invalid {
+        /// File.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The output folder holds another run (or none) than the one that wrote the checkpoint.
+    #[error(
+        "checkpoint {} was written by the run in {}, but the output folder {} {}; resume into {} (omit --out) so that no other run is overwritten",
+        path.display(), checkpoint_dir.display(), out.display(),
+        match found { Some(id) => format!("holds another run (run id {id}, the checkpoint's is {expected})"), None => "holds no phstring run".to_string() },
+        checkpoint_dir.display()
+    )]
+    OtherRun {
+        /// Checkpoint file.
+        path: PathBuf,
+        /// Folder of the checkpoint file.
+        checkpoint_dir: PathBuf,
+        /// Output folder of the resume.
+        out: PathBuf,
+        /// Run id of the checkpoint.
+        expected: String,
+        /// Run id found in the output folder, if any.
+        found: Option<String>,
+    },
 }
 
 impl CheckpointFile {
-    /// Writes atomically (temporary file, then rename).
+    /// The checksum of this checkpoint's content: FNV-1a (64 bit) over its JSON with an
+    /// empty `checksum` field. Floats print in shortest round-trip form, so the JSON of a
+    /// checkpoint read back is that of the one written, and any changed value changes it.
+    pub fn checksum(&self) -> String {
+        let mut body = self.clone();
+        body.checksum.clear();
+        // Serializing plain data to a string cannot fail.
+        let text = serde_json::to_string(&body).unwrap_or_default();
+        fnv1a64_hex(text.as_bytes())
+    }
+
+    /// Writes atomically (a temporary file in the same folder, then rename), with the
+    /// checksum set.
     pub fn write(&self, path: &Path) -> Result<(), CheckpointError> {
+        // JSON has no NaN or infinity (serde_json would write `null`, unreadable).
+        if let Some(what) = self.non_finite() {
+            return Err(CheckpointError::Format {
+                path: path.to_path_buf(),
+                reason: format!("refusing to write a non-finite value in {what}"),
+            });
+        }
+        let mut cp = self.clone();
+        cp.checksum = self.checksum();
+        let text = serde_json::to_string(&cp).map_err(|e| CheckpointError::Format {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        crate::output::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// The first field holding NaN or infinity, if any.
+    fn non_finite(&self) -> Option<&'static str> {
+        let s = &self.sim;
+        let c = &self.counters;
+        let arrays: [(&'static str, &[f64]); 5] = [
+            ("sim.r", &s.r),
+            ("sim.v", &s.v),
+            ("sim.c", &s.c),
+            ("sim.acc", &s.acc),
+            ("sim.v_mid", &s.v_mid),
+        ];
+        let scalars = [
+            ("sim.t_base", s.t_base),
+            ("sim.h_cur", s.h_cur),
+            ("sim.h_min_used", s.h_min_used),
+            ("sim.supplied_total", s.supplied_total),
+            ("counters.max_balance_error", c.max_balance_error),
+            ("counters.max_newton_residual", c.max_newton_residual),
+            ("counters.local_newton_work", c.local_newton_work),
+            ("counters.time_loop_s", c.time_loop_s),
+            ("counters.hamiltonian_initial", c.hamiltonian_initial),
+            ("end_of_loading", self.end_of_loading.unwrap_or(0.0)),
+        ];
+        arrays
+            .into_iter()
+            .find(|(_, a)| a.iter().any(|x| !x.is_finite()))
+            .map(|(n, _)| n)
+            .or_else(|| {
+                scalars
+                    .into_iter()
+                    .find(|(_, x)| !x.is_finite())
+                    .map(|(n, _)| n)
+            })
+            .or_else(|| {
+                self.outputs
+                    .snapshots
+                    .iter()
+                    .any(|(t, p)| !t.is_finite() || p.iter().flatten().any(|x| !x.is_finite()))
+                    .then_some("outputs.snapshots")
+            })
+    }
+
+    /// Reads a checkpoint (at most [`MAX_CHECKPOINT_BYTES`], or
+    /// [`MAX_STREAMED_CHECKPOINT_BYTES`] from a pipe or device) and checks its format, version
+    /// and checksum. The lengths and ranges that depend on the scenario are checked by
+    /// [`Self::check_against`].
+    pub fn read(path: &Path) -> Result<Self, CheckpointError> {
+        let format_err = |reason: String| CheckpointError::Format {
+            path: path.to_path_buf(),
+            reason,
+        };
         let io = |source| CheckpointError::Io {
             path: path.to_path_buf(),
             source,
         };
-        let text = serde_json::to_string(self).map_err(|e| CheckpointError::Format {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
-        let tmp = path.with_extension("json.tmp");
-        std::fs::write(&tmp, text).map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
-    }
-
-    /// Reads and checks a checkpoint.
-    pub fn read(path: &Path) -> Result<Self, CheckpointError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CheckpointError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let cp: Self = serde_json::from_str(&text).map_err(|e| CheckpointError::Format {
-            path: path.to_path_buf(),
-            reason: format!("not a phstring checkpoint ({e})"),
-        })?;
-        if cp.format != "phstring checkpoint" {
-            return Err(CheckpointError::Format {
-                path: path.to_path_buf(),
-                reason: format!("unknown format \"{}\"", cp.format),
-            });
+        let file = std::fs::File::open(path).map_err(io)?;
+        let meta = file.metadata().map_err(io)?;
+        if meta.is_dir() {
+            return Err(format_err("is a folder, not a checkpoint file".into()));
+        }
+        let cap = if meta.is_file() {
+            MAX_CHECKPOINT_BYTES
+        } else {
+            MAX_STREAMED_CHECKPOINT_BYTES
+        };
+        if meta.is_file() && meta.len() > cap {
+            return Err(format_err(format!(
+                "is {} bytes, more than a checkpoint can be ({cap} bytes): not a phstring checkpoint",
+                meta.len()
+            )));
+        }
+        // Bounded even for devices and pipes (`/dev/zero`); the parser stops at the first
+        // byte that cannot start a checkpoint.
+        let mut limited = std::io::BufReader::new(file).take(cap + 1);
+        let parsed: Result<Self, _> = serde_json::from_reader(&mut limited);
+        if limited.limit() == 0 {
+            return Err(format_err(format!(
+                "longer than {cap} bytes: not a phstring checkpoint"
+            )));
+        }
+        let mut cp = parsed.map_err(|e| format_err(format!("not a phstring checkpoint ({e})")))?;
+        cp.path = path.to_path_buf();
+        if cp.format != FORMAT {
+            return Err(format_err(format!(
+                "unknown format \"{}\"",
+                crate::plot::sanitize_text(&cp.format, 80)
+            )));
         }
         if cp.version != env!("CARGO_PKG_VERSION") {
-            return Err(CheckpointError::Format {
-                path: path.to_path_buf(),
-                reason: format!(
-                    "written by phstring {}, this is {}: resuming would not be bit-identical",
-                    cp.version,
-                    env!("CARGO_PKG_VERSION")
-                ),
-            });
+            return Err(format_err(format!(
+                "written by phstring {}, this is {}: resuming would not be bit-identical",
+                crate::plot::sanitize_text(&cp.version, 80),
+                env!("CARGO_PKG_VERSION")
+            )));
+        }
+        let expected = cp.checksum();
+        if cp.checksum != expected {
+            return Err(format_err(if cp.checksum.is_empty() {
+                "has no checksum: not written by this phstring".to_string()
+            } else {
+                "checksum mismatch: the file was edited or damaged after it was written".to_string()
+            }));
+        }
+        if cp.run_id.is_empty()
+            || cp.run_id.len() > 64
+            || !cp.run_id.chars().all(|c| c.is_ascii_alphanumeric())
+        {
+            return Err(format_err("invalid run id".into()));
         }
         Ok(cp)
+    }
+
+    /// Checks every array length and value range of the checkpoint against the simulation
+    /// set up from its scenario (before [`Simulation::restore`]) and the run settings: node
+    /// and element counts, finite values, strains in the material's domain, the step size
+    /// between the floor `time.h / 2^max_halvings` and `time.h`, the time within
+    /// `[0, time.end]`, step and iteration counts a run to `time.end` can reach, and output
+    /// lengths at least the files' headers.
+    pub fn check_against<const D: usize>(
+        &self,
+        sim: &Simulation<D, Material>,
+        settings: &crate::scenario::RunSettings,
+    ) -> Result<(), CheckpointError> {
+        let bad = |reason: String| CheckpointError::Invalid {
+            path: self.path.clone(),
+            reason,
+        };
+        let s = &self.sim;
+        let n = sim.system().mesh().n_nodes();
+        let n_el = sim.system().mesh().n_elements();
+        for (name, values, expected, what) in [
+            ("sim.r", &s.r, D * n, "nodes"),
+            ("sim.v", &s.v, D * n, "nodes"),
+            ("sim.acc", &s.acc, D * n, "nodes"),
+            ("sim.v_mid", &s.v_mid, D * n, "nodes"),
+            ("sim.c", &s.c, n_el, "elements"),
+        ] {
+            if values.len() != expected {
+                let count = if what == "nodes" {
+                    format!("{n} nodes × {D} components")
+                } else {
+                    format!("{n_el} elements")
+                };
+                return Err(bad(format!(
+                    "{name} has {} numbers, the scenario needs {expected} ({count})",
+                    values.len()
+                )));
+            }
+            if let Some(i) = values.iter().position(|x| !x.is_finite()) {
+                return Err(bad(format!("{name}[{i}] is not finite")));
+            }
+        }
+        let mat = sim.system().material();
+        if let Some(i) = s.c.iter().position(|&c| !mat.admissible(c)) {
+            return Err(bad(format!(
+                "sim.c[{i}] = {:e} is outside the material's domain",
+                s.c[i]
+            )));
+        }
+        let step = &settings.step;
+        let h = step.h;
+        let halvings = step.control.max_halvings.min(1074);
+        let floor = h * 0.5f64.powi(halvings as i32);
+        if !(s.h_cur.is_finite()
+            && s.h_cur > 0.0
+            && s.h_cur >= floor * (1.0 - 1e-9)
+            && s.h_cur <= h * (1.0 + 1e-12))
+        {
+            return Err(bad(format!(
+                "sim.h_cur = {:e} s is not between the step-size floor {floor:e} s and time.h = {h:e} s",
+                s.h_cur
+            )));
+        }
+        if !(s.h_min_used.is_finite() && s.h_min_used > 0.0 && s.h_min_used <= h * (1.0 + 1e-12)) {
+            return Err(bad(format!(
+                "sim.h_min_used = {:e} s is not in (0, time.h = {h:e} s]",
+                s.h_min_used
+            )));
+        }
+        let t_end = settings.t_end;
+        if !(s.t_base.is_finite() && s.t_base >= 0.0 && s.t_base <= t_end * (1.0 + 1e-9)) {
+            return Err(bad(format!(
+                "sim.t_base = {:e} s is not in [0, time.end = {t_end:e} s]",
+                s.t_base
+            )));
+        }
+        let t = s.t_base + s.k as f64 * s.h_cur;
+        if !(t.is_finite() && t <= t_end * (1.0 + 1e-9) + s.h_cur) || s.k > s.steps {
+            return Err(bad(format!(
+                "sim.t_base + sim.k × sim.h_cur = {t:e} s (k = {}, {} steps) is beyond time.end = {t_end:e} s",
+                s.k, s.steps
+            )));
+        }
+        // Every accepted step but a last, clipped one advances at least the floor.
+        let max_steps = (t / floor).ceil() + 2.0;
+        if s.steps as f64 > max_steps {
+            return Err(bad(format!(
+                "sim.steps = {} is more than a run to t = {t:e} s can take with steps of at least {floor:e} s",
+                s.steps
+            )));
+        }
+        let c = &self.counters;
+        if c.steps != s.steps {
+            return Err(bad(format!(
+                "counters.steps = {} differs from sim.steps = {}",
+                c.steps, s.steps
+            )));
+        }
+        let attempts_per_step = halvings as usize + 1;
+        let max_rejected = (s.steps + 1).saturating_mul(attempts_per_step);
+        let max_iterations =
+            (s.steps + max_rejected + 1).saturating_mul(step.newton.max_iter.max(1));
+        for (name, value, limit) in [
+            ("sim.rejected", s.rejected, max_rejected),
+            ("counters.rejected_steps", c.rejected_steps, max_rejected),
+            ("sim.easy_streak", s.easy_streak, s.steps),
+            ("sim.total_newton", s.total_newton, max_iterations),
+            (
+                "counters.total_newton_iterations",
+                c.total_newton_iterations,
+                max_iterations,
+            ),
+            (
+                "counters.rejected_newton_iterations",
+                c.rejected_newton_iterations,
+                max_iterations,
+            ),
+            (
+                "counters.line_search_backtracks",
+                c.line_search_backtracks,
+                max_iterations.saturating_mul(64),
+            ),
+            (
+                "counters.local_newton_iterations",
+                c.local_newton_iterations,
+                max_iterations.saturating_mul(1024),
+            ),
+        ] {
+            if value > limit {
+                return Err(bad(format!(
+                    "{name} = {value} is more than {} steps can have (at most {limit})",
+                    s.steps
+                )));
+            }
+        }
+        for (name, value, nonneg) in [
+            ("sim.supplied_total", s.supplied_total, false),
+            ("counters.hamiltonian_initial", c.hamiltonian_initial, false),
+            ("counters.max_balance_error", c.max_balance_error, true),
+            ("counters.max_newton_residual", c.max_newton_residual, true),
+            ("counters.local_newton_work", c.local_newton_work, true),
+            ("counters.time_loop_s", c.time_loop_s, true),
+        ] {
+            if !value.is_finite() || (nonneg && value < 0.0) {
+                return Err(bad(format!(
+                    "{name} = {value:e} must be finite{}",
+                    if nonneg { " and ≥ 0" } else { "" }
+                )));
+            }
+        }
+        if let Some(e) = self.end_of_loading
+            && !e.is_finite()
+        {
+            return Err(bad("end_of_loading is not finite".into()));
+        }
+        let o = &self.outputs;
+        let (energy_header, positions_header, ports_header) = crate::output::headers(D);
+        for (name, bytes, header) in [
+            ("outputs.energy_bytes", Some(o.energy_bytes), &energy_header),
+            (
+                "outputs.positions_bytes",
+                o.positions_bytes,
+                &positions_header,
+            ),
+            ("outputs.ports_bytes", Some(o.ports_bytes), &ports_header),
+        ] {
+            // energy.csv holds the header and the t = 0 row at least.
+            let min = header.len() as u64 + if name == "outputs.energy_bytes" { 3 } else { 1 };
+            if let Some(b) = bytes
+                && b < min
+            {
+                return Err(bad(format!(
+                    "{name} = {b} is shorter than the file's header and first row ({min} bytes)"
+                )));
+            }
+        }
+        if o.positions_bytes.is_some() != settings.output.positions {
+            return Err(bad(format!(
+                "outputs.positions_bytes is {} but output.positions = {}",
+                if o.positions_bytes.is_some() {
+                    "set"
+                } else {
+                    "missing"
+                },
+                settings.output.positions
+            )));
+        }
+        let max_frames = s.steps / settings.stride.max(1) + 2;
+        if (!settings.output.vtk && o.frames > 0) || o.frames > max_frames {
+            return Err(bad(format!(
+                "outputs.frames = {} is more than {} steps write with output.stride = {}{}",
+                o.frames,
+                s.steps,
+                settings.stride,
+                if settings.output.vtk {
+                    ""
+                } else {
+                    " and output.vtk = false"
+                }
+            )));
+        }
+        if o.last_frame.is_some_and(|f| f > s.steps) {
+            return Err(bad(format!(
+                "outputs.last_frame is beyond the {} steps done",
+                s.steps
+            )));
+        }
+        let max_snapshots = if D >= 2 { crate::output::SNAPSHOTS } else { 0 };
+        if o.snapshots.len() > max_snapshots {
+            return Err(bad(format!(
+                "outputs.snapshots has {} snapshots, at most {max_snapshots} are taken",
+                o.snapshots.len()
+            )));
+        }
+        for (k, (ts, pts)) in o.snapshots.iter().enumerate() {
+            if !(ts.is_finite() && *ts >= 0.0 && *ts <= t * (1.0 + 1e-9) + s.h_cur) {
+                return Err(bad(format!(
+                    "outputs.snapshots[{k}] has time {ts:e} s outside [0, t = {t:e} s]"
+                )));
+            }
+            if pts.len() != n || pts.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(bad(format!(
+                    "outputs.snapshots[{k}] must have {n} finite node positions"
+                )));
+            }
+        }
+        Ok(())
     }
 }

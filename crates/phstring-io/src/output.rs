@@ -1,15 +1,110 @@
 //! Output writers of a run: `energy.csv`, `positions.csv`, `ports.csv`, ParaView frames,
 //! plots and `summary.json`. Rows are written as the run goes, so everything up to the last
-//! good step is on disk when a run fails.
+//! good step is on disk when a run fails: the `t = 0` rows are flushed at once, and the
+//! files at least every [`FLUSH_EVERY`] of wall time.
+//!
+//! No NaN or infinity is ever written: a row with a non-finite value is refused with
+//! [`OutputError::NonFinite`]. Memory does not grow with the number of steps: the plots
+//! read what they need back from `energy.csv` ([`read_history`]), decimated to at most
+//! [`PLOT_POINTS`] points per curve.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::hash::Hasher;
+use std::io::{BufRead, BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use phstring::{Material, PortKind, Simulation, StepReport, StoredEnergy};
 
 use crate::plot::{self, PlotError, Series};
 use crate::vtk::{self, PvdWriter, VtkError};
+
+/// Longest wall time between two flushes of the output files during a run.
+pub const FLUSH_EVERY: Duration = Duration::from_millis(500);
+
+/// Most points per curve in the plots of a run: longer series are decimated keeping, per
+/// bucket of consecutive rows, the rows with the smallest and largest value of each curve
+/// (so that spikes survive).
+pub const PLOT_POINTS: usize = 20_000;
+
+/// Configuration snapshots taken for the configuration plot (at `t = k T / 5`).
+pub const SNAPSHOTS: usize = 6;
+
+/// Names of the temporary files phstring writes next to a file it replaces atomically
+/// (left behind only by a kill; removed or replaced by the next write, and not counted as
+/// user files when an output folder is checked for being empty).
+pub const TEMP_FILES: [&str; 5] = [
+    ".checkpoint.json.tmp",
+    ".summary.json.tmp",
+    ".string.pvd.tmp",
+    "checkpoint.json.tmp",
+    "string.pvd.tmp",
+];
+
+/// Whether `name` is one of phstring's own temporary files ([`TEMP_FILES`]).
+pub fn is_own_temp_file(name: &str) -> bool {
+    TEMP_FILES.contains(&name)
+}
+
+/// The temporary sibling `.<name>.tmp` used to replace `path` atomically.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.tmp"))
+}
+
+/// Writes `bytes` to `path` atomically: to [`temp_path`] in the same folder, then renamed
+/// over `path`, so that readers (and a kill) see either the old or the new file. A stale
+/// temporary file is replaced; on failure the temporary file is removed.
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temp_path(path);
+    let res = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if res.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    res
+}
+
+/// Removes phstring's stale temporary files ([`TEMP_FILES`]) from `dir` and
+/// `dir/paraview` (regular files only).
+pub fn remove_stale_temp_files(dir: &Path) {
+    for d in [dir.to_path_buf(), dir.join("paraview")] {
+        for name in TEMP_FILES {
+            let p = d.join(name);
+            if std::fs::symlink_metadata(&p).is_ok_and(|m| m.is_file()) {
+                let _ = std::fs::remove_file(&p);
+            }
+        }
+    }
+}
+
+/// The header lines of `energy.csv`, `positions.csv` and `ports.csv` in dimension `d`.
+pub fn headers(d: usize) -> (String, String, String) {
+    let comps = ["x", "y", "z"];
+    let d = d.clamp(1, 3);
+    let energy = "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h".to_string();
+    let positions = format!("t,node,{}", comps[..d].join(","));
+    let u: Vec<String> = comps[..d].iter().map(|c| format!("u_{c}")).collect();
+    let y: Vec<String> = comps[..d].iter().map(|c| format!("y_{c}")).collect();
+    let ports = format!("t_mid,port,node,kind,{},{},power", u.join(","), y.join(","));
+    (energy, positions, ports)
+}
+
+/// FNV-1a hash of a list of ParaView frames, extended by one frame `(t, name)`; start from
+/// [`frames_hash_start`].
+pub fn frames_hash_add(hash: u64, t: f64, name: &str) -> u64 {
+    let mut h = fnv::FnvHasher::with_key(hash);
+    h.write(&t.to_bits().to_le_bytes());
+    h.write(name.as_bytes());
+    h.finish()
+}
+
+/// FNV-1a hash of an empty list of frames.
+pub fn frames_hash_start() -> u64 {
+    fnv::FnvHasher::default().finish()
+}
 
 /// Errors while writing outputs.
 #[derive(Debug, thiserror::Error)]
@@ -28,6 +123,50 @@ pub enum OutputError {
     /// A ParaView file failed.
     #[error(transparent)]
     Vtk(#[from] VtkError),
+    /// A value to be written is NaN or infinite: the row is refused (nothing of it written).
+    #[error("refusing to write a non-finite {what} ({value}) at t = {t} s to {}: the simulation produced NaN or infinity", path.display())]
+    NonFinite {
+        /// File.
+        path: PathBuf,
+        /// The quantity.
+        what: String,
+        /// Time of the row [s].
+        t: f64,
+        /// The value.
+        value: f64,
+    },
+    /// An output file does not match the checkpoint a run resumes from.
+    #[error("cannot resume into {}: {reason}", path.display())]
+    Mismatch {
+        /// File.
+        path: PathBuf,
+        /// What does not match.
+        reason: String,
+    },
+    /// An output file could not be read back (for the plots).
+    #[error("cannot read {} line {line}: {message}", path.display())]
+    Read {
+        /// File.
+        path: PathBuf,
+        /// Line number (1-based).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Refuses non-finite `values` (named `what`, for the row at time `t`) before they reach
+/// `path`.
+fn check_finite(path: &Path, what: &str, t: f64, values: &[f64]) -> Result<(), OutputError> {
+    match values.iter().find(|x| !x.is_finite()) {
+        Some(&value) => Err(OutputError::NonFinite {
+            path: path.to_path_buf(),
+            what: what.to_string(),
+            t,
+            value,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Formats `x` with 17 significant digits (round-trip exact).
@@ -69,24 +208,38 @@ impl Csv {
             source,
         })
     }
-    /// Opens an existing file, cut back to `len` bytes, for appending.
+    /// Opens an existing file, cut back to `len` bytes, for appending. The file must be at
+    /// least `len` bytes long and byte `len − 1` must end a row.
     fn reopen(path: PathBuf, len: u64) -> Result<Self, OutputError> {
-        use std::io::{Seek, SeekFrom};
+        use std::io::{Read, Seek, SeekFrom};
         let io = |source| OutputError::Io {
             path: path.clone(),
             source,
         };
         let mut f = std::fs::OpenOptions::new()
+            .read(true)
             .write(true)
             .open(&path)
             .map_err(io)?;
-        if f.metadata().map_err(io)?.len() < len {
-            return Err(OutputError::Io {
+        let actual = f.metadata().map_err(io)?.len();
+        if actual < len {
+            return Err(OutputError::Mismatch {
                 path: path.clone(),
-                source: std::io::Error::other(format!(
-                    "shorter than the {len} bytes the checkpoint recorded"
-                )),
+                reason: format!(
+                    "it has {actual} bytes, fewer than the {len} bytes the checkpoint recorded"
+                ),
             });
+        }
+        if len > 0 {
+            let mut last = [0u8];
+            f.seek(SeekFrom::Start(len - 1)).map_err(io)?;
+            f.read_exact(&mut last).map_err(io)?;
+            if last[0] != b'\n' {
+                return Err(OutputError::Mismatch {
+                    path: path.clone(),
+                    reason: format!("the checkpoint's length {len} does not end a row of the file"),
+                });
+            }
         }
         f.set_len(len).map_err(io)?;
         f.seek(SeekFrom::End(0)).map_err(io)?;
@@ -109,52 +262,337 @@ impl Csv {
     }
 }
 
-/// Time series kept in memory for the plots.
-#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+/// The series the plots draw, read back from `energy.csv` ([`read_history`]): every row of
+/// a short run, a min/max decimation of a long one (at most [`PLOT_POINTS`] points per
+/// curve), so that its size does not grow with the number of steps.
+#[derive(Debug, Clone, Default)]
 pub struct History {
-    /// Times [s], one per step including `t = 0`.
+    /// Times [s] of the rows kept (including `t = 0`).
     pub t: Vec<f64>,
-    /// Kinetic energy [J].
+    /// Kinetic energy [J] at those rows.
     pub kinetic: Vec<f64>,
-    /// Potential energy [J].
+    /// Potential energy [J] at those rows.
     pub potential: Vec<f64>,
-    /// Hamiltonian [J].
+    /// Hamiltonian [J] at those rows.
     pub hamiltonian: Vec<f64>,
+    /// Step end times [s] of the increments kept.
+    pub increment_t: Vec<f64>,
+    /// `|Ĥ_{n+1} − Ĥ_n|` [J] per step, from all rows (decimated after differencing, so the
+    /// largest increment is always kept).
+    pub increment: Vec<f64>,
     /// Configuration snapshots `(t, node positions x, y)` for the configuration plot.
     pub snapshots: Vec<(f64, Vec<[f64; 2]>)>,
 }
 
 impl History {
-    /// `|Ĥ_{n+1} − Ĥ_n|` per step, at the step end times.
+    /// `|Ĥ_{n+1} − Ĥ_n|` per step, at the step end times (as kept, see [`Self::increment`]).
     pub fn increments(&self) -> (Vec<f64>, Vec<f64>) {
-        let t = self.t[1..].to_vec();
-        let d = self
-            .hamiltonian
-            .windows(2)
-            .map(|w| (w[1] - w[0]).abs())
-            .collect();
-        (t, d)
+        (self.increment_t.clone(), self.increment.clone())
     }
 }
 
-/// Writes the standard outputs of one run into a folder.
+/// A row of a decimated series: its index and values (column 0 is the abscissa).
+type Row<const N: usize> = (usize, [f64; N]);
+
+/// Rows of one bucket with the smallest and largest value of each column `1..N`.
+#[derive(Clone, Copy)]
+struct Bucket<const N: usize> {
+    rows: usize,
+    lo: [Row<N>; N],
+    hi: [Row<N>; N],
+}
+
+impl<const N: usize> Bucket<N> {
+    fn new(r: Row<N>) -> Self {
+        Self {
+            rows: 1,
+            lo: [r; N],
+            hi: [r; N],
+        }
+    }
+    fn add(&mut self, r: Row<N>) {
+        self.rows += 1;
+        for j in 1..N {
+            if r.1[j] < self.lo[j].1[j] {
+                self.lo[j] = r;
+            }
+            if r.1[j] > self.hi[j].1[j] {
+                self.hi[j] = r;
+            }
+        }
+    }
+    fn merge(mut self, o: &Self) -> Self {
+        self.rows += o.rows;
+        for j in 1..N {
+            if o.lo[j].1[j] < self.lo[j].1[j] {
+                self.lo[j] = o.lo[j];
+            }
+            if o.hi[j].1[j] > self.hi[j].1[j] {
+                self.hi[j] = o.hi[j];
+            }
+        }
+        self
+    }
+}
+
+/// Streaming min/max decimation of rows `[x, y_1, …, y_{N−1}]` of unknown count: consecutive
+/// rows are grouped in buckets (one row each at first, twice as many whenever the bucket
+/// count reaches its limit), and per bucket the rows with the smallest and largest `y_j`
+/// are kept, plus the first and last row. At most `max_points` rows (+ 2) come out, in
+/// order; fewer than about `max_points / (2 (N − 1))` rows come out unchanged.
+struct Decimator<const N: usize> {
+    max_buckets: usize,
+    width: usize,
+    buckets: Vec<Bucket<N>>,
+    first: Option<Row<N>>,
+    last: Option<Row<N>>,
+    count: usize,
+}
+
+impl<const N: usize> Decimator<N> {
+    fn new(max_points: usize) -> Self {
+        let per_bucket = 4 * N.saturating_sub(1).max(1);
+        Self {
+            max_buckets: (max_points / per_bucket).max(1),
+            width: 1,
+            buckets: Vec::new(),
+            first: None,
+            last: None,
+            count: 0,
+        }
+    }
+
+    fn push(&mut self, row: [f64; N]) {
+        let r = (self.count, row);
+        self.count += 1;
+        if self.first.is_none() {
+            self.first = Some(r);
+        }
+        self.last = Some(r);
+        match self.buckets.last_mut() {
+            Some(b) if b.rows < self.width => b.add(r),
+            _ => {
+                if self.buckets.len() >= 2 * self.max_buckets {
+                    // All buckets are full: merge pairs.
+                    self.buckets = self
+                        .buckets
+                        .chunks(2)
+                        .map(|p| {
+                            if p.len() == 2 {
+                                p[0].merge(&p[1])
+                            } else {
+                                p[0]
+                            }
+                        })
+                        .collect();
+                    self.width *= 2;
+                }
+                self.buckets.push(Bucket::new(r));
+            }
+        }
+    }
+
+    fn finish(self) -> Vec<[f64; N]> {
+        let mut rows: Vec<Row<N>> = self.first.into_iter().chain(self.last).collect();
+        for b in &self.buckets {
+            for j in 1..N {
+                rows.push(b.lo[j]);
+                rows.push(b.hi[j]);
+            }
+        }
+        rows.sort_by_key(|r| r.0);
+        rows.dedup_by_key(|r| r.0);
+        rows.into_iter().map(|r| r.1).collect()
+    }
+}
+
+/// Reads the energies of a run back from its `energy.csv` for the plots, streaming, with at
+/// most `max_points` points per curve (min/max decimation, see [`History`]); `snapshots` are
+/// passed through. Returns `None` if `stop` is set meanwhile.
+pub fn read_history(
+    path: &Path,
+    max_points: usize,
+    snapshots: Vec<(f64, Vec<[f64; 2]>)>,
+    stop: Option<&AtomicBool>,
+) -> Result<Option<History>, OutputError> {
+    let f = File::open(path).map_err(|source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut reader = std::io::BufReader::new(f);
+    let mut energies = Decimator::<4>::new(max_points);
+    let mut increments = Decimator::<2>::new(max_points);
+    let mut line = String::new();
+    let mut prev_h: Option<f64> = None;
+    let mut number = 0;
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|source| OutputError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        if n == 0 {
+            break;
+        }
+        number += 1;
+        if number == 1 {
+            continue; // header
+        }
+        if number % 4096 == 0 && stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Ok(None);
+        }
+        let bad = |message: String| OutputError::Read {
+            path: path.to_path_buf(),
+            line: number,
+            message,
+        };
+        let mut v = [0.0; 4];
+        let mut fields = line.trim_end().split(',');
+        for (k, x) in v.iter_mut().enumerate() {
+            let field = fields
+                .next()
+                .ok_or_else(|| bad(format!("{} fields, expected 9", k)))?;
+            *x = field
+                .parse()
+                .map_err(|_| bad(format!("not a number: {}", plot::sanitize_text(field, 40))))?;
+        }
+        energies.push(v);
+        if let Some(p) = prev_h {
+            increments.push([v[0], (v[3] - p).abs()]);
+        }
+        prev_h = Some(v[3]);
+    }
+    let mut h = History {
+        snapshots,
+        ..History::default()
+    };
+    for [t, k, p, e] in energies.finish() {
+        h.t.push(t);
+        h.kinetic.push(k);
+        h.potential.push(p);
+        h.hamiltonian.push(e);
+    }
+    for [t, d] in increments.finish() {
+        h.increment_t.push(t);
+        h.increment.push(d);
+    }
+    Ok(Some(h))
+}
+
+/// What [`draw_plots`] did.
+#[derive(Debug, Clone, Default)]
+pub struct PlotReport {
+    /// Plots written (stems, each as `.svg` and `.png`).
+    pub written: Vec<String>,
+    /// Plots not written (degenerate or extreme data, a stop request, a failure).
+    pub skipped: Vec<String>,
+    /// Why each skipped plot was skipped.
+    pub warnings: Vec<String>,
+}
+
+/// Draws the `energy`, `configuration` (2D and 3D) and `increments` plots of a run into
+/// `dir`. A plot that cannot be drawn (degenerate or extreme ranges, an I/O error, a
+/// failure inside the plotting library) is skipped with a warning and never fails the run;
+/// once `stop` is set, the remaining plots are skipped. `history = Err(reason)` (it could
+/// not be read, or reading it was stopped) skips all.
+pub fn draw_plots(
+    dir: &Path,
+    dim: usize,
+    title: &str,
+    end_of_loading: Option<f64>,
+    history: Result<&History, &str>,
+    stop: Option<&AtomicBool>,
+) -> PlotReport {
+    let mut report = PlotReport::default();
+    let mut stems = vec!["energy"];
+    let configuration = history.is_ok_and(|h| dim >= 2 && !h.snapshots.is_empty());
+    if configuration || (history.is_err() && dim >= 2) {
+        stems.push("configuration");
+    }
+    stems.push("increments");
+    let h = match history {
+        Ok(h) => h,
+        Err(why) => {
+            for s in stems {
+                report.skipped.push(s.to_string());
+                report.warnings.push(format!("{s} plot skipped: {why}"));
+            }
+            return report;
+        }
+    };
+    let (ti, inc) = h.increments();
+    for stem in stems {
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            report.skipped.push(stem.to_string());
+            report
+                .warnings
+                .push(format!("{stem} plot skipped: stop requested"));
+            continue;
+        }
+        let path = dir.join(stem);
+        let draw = || match stem {
+            "energy" => {
+                plot::energy_plot(&path, title, &h.t, &h.kinetic, &h.potential, &h.hamiltonian)
+            }
+            "configuration" => plot::configuration_plot(&path, title, &h.snapshots),
+            _ => plot::series_plot(
+                &path,
+                title,
+                "t [s]",
+                "|Ĥ(n+1) − Ĥ(n)| [J]",
+                &[Series {
+                    label: "|ΔĤ| per step",
+                    x: &ti,
+                    y: &inc,
+                }],
+                true,
+                end_of_loading.map(|t| (t, "end of loading")),
+            ),
+        };
+        // A panic inside the plotting library must not take the run's summary with it.
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(draw)) {
+            Ok(Ok(())) => report.written.push(stem.to_string()),
+            Ok(Err(e)) => {
+                report.skipped.push(stem.to_string());
+                report.warnings.push(format!("{stem} plot skipped: {e}"));
+            }
+            Err(_) => {
+                report.skipped.push(stem.to_string());
+                report.warnings.push(format!(
+                    "{stem} plot skipped: the plotting library failed on this data"
+                ));
+            }
+        }
+    }
+    report
+}
+
+/// Writes the standard outputs of one run into a folder. Memory does not grow with the
+/// number of steps (the configuration snapshots are bounded; the ParaView collection lists
+/// one entry per frame file written).
 pub struct Writers {
     dir: PathBuf,
     energy: Csv,
     positions: Option<Csv>,
     ports: Csv,
     pvd: Option<PvdWriter>,
+    /// The collection file lacks frames added since it was last written.
+    pvd_dirty: bool,
     stride: usize,
     snapshot_times: Vec<f64>,
-    /// The recorded series.
-    pub history: History,
-    dim: usize,
+    snapshots: Vec<(f64, Vec<[f64; 2]>)>,
     last_frame: Option<usize>,
-    frames: Vec<(f64, String)>,
+    frames: usize,
+    frames_hash: u64,
+    last_flush: Instant,
+    flush_every: Duration,
 }
 
 impl Writers {
-    /// Creates the folder's files and writes the `t = 0` rows.
+    /// Creates the folder's files and writes (and flushes) the `t = 0` rows. Stale temporary
+    /// files of an earlier, killed run are removed.
     pub fn start<const D: usize>(
         dir: &Path,
         sim: &Simulation<D, Material>,
@@ -168,23 +606,15 @@ impl Writers {
             move |source| OutputError::Io { path: p, source }
         };
         std::fs::create_dir_all(dir).map_err(io(dir))?;
-        let energy = Csv::create(
-            dir.join("energy.csv"),
-            "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h",
-        )?;
-        let comps = ["x", "y", "z"];
+        remove_stale_temp_files(dir);
+        let (energy_header, positions_header, ports_header) = headers(D);
+        let energy = Csv::create(dir.join("energy.csv"), &energy_header)?;
         let positions = if positions {
-            let header = format!("t,node,{}", comps[..D].join(","));
-            Some(Csv::create(dir.join("positions.csv"), &header)?)
+            Some(Csv::create(dir.join("positions.csv"), &positions_header)?)
         } else {
             None
         };
-        let u: Vec<String> = comps[..D].iter().map(|c| format!("u_{c}")).collect();
-        let y: Vec<String> = comps[..D].iter().map(|c| format!("y_{c}")).collect();
-        let ports = Csv::create(
-            dir.join("ports.csv"),
-            &format!("t_mid,port,node,kind,{},{},power", u.join(","), y.join(",")),
-        )?;
+        let ports = Csv::create(dir.join("ports.csv"), &ports_header)?;
         let pvd = if vtk_frames {
             let pdir = dir.join("paraview");
             std::fs::create_dir_all(&pdir).map_err(io(&pdir))?;
@@ -198,35 +628,43 @@ impl Writers {
             positions,
             ports,
             pvd,
+            pvd_dirty: false,
             stride,
             snapshot_times,
-            history: History::default(),
-            dim: D,
+            snapshots: Vec::new(),
             last_frame: None,
-            frames: Vec::new(),
+            frames: 0,
+            frames_hash: frames_hash_start(),
+            last_flush: Instant::now(),
+            flush_every: FLUSH_EVERY,
         };
         let e = sim.energies();
+        let values = [e.kinetic, e.potential(), e.hamiltonian()];
+        check_finite(&w.energy.path, "initial energy", 0.0, &values)?;
         w.energy.line(&format!(
             "{},{},{},{},0,0,0,0,0",
             num(0.0),
-            num(e.kinetic),
-            num(e.potential()),
-            num(e.hamiltonian())
+            num(values[0]),
+            num(values[1]),
+            num(values[2])
         ))?;
-        w.record(sim)?;
+        w.record(sim);
         w.frame(sim)?;
+        // The t = 0 rows are on disk at once, whatever happens next.
+        w.flush()?;
         Ok(w)
     }
 
-    fn record<const D: usize>(&mut self, sim: &Simulation<D, Material>) -> Result<(), OutputError> {
-        let e = sim.energies();
+    /// Flushes at most every `every` of wall time during a run (default [`FLUSH_EVERY`];
+    /// `Duration::ZERO` flushes after every step).
+    pub fn set_flush_interval(&mut self, every: Duration) {
+        self.flush_every = every;
+    }
+
+    fn record<const D: usize>(&mut self, sim: &Simulation<D, Material>) {
         let t = sim.time();
-        self.history.t.push(t);
-        self.history.kinetic.push(e.kinetic);
-        self.history.potential.push(e.potential());
-        self.history.hamiltonian.push(e.hamiltonian());
         // Each snapshot time once, at the first step that reaches it.
-        let next = self.history.snapshots.len();
+        let next = self.snapshots.len();
         if D >= 2
             && self
                 .snapshot_times
@@ -234,9 +672,8 @@ impl Writers {
                 .is_some_and(|&s| t >= s - 1e-9 * sim.params().h)
         {
             let pts = sim.state().r.iter().map(|r| [r[0], r[1]]).collect();
-            self.history.snapshots.push((t, pts));
+            self.snapshots.push((t, pts));
         }
-        Ok(())
     }
 
     /// Writes positions and a ParaView frame every `stride` steps.
@@ -255,9 +692,14 @@ impl Writers {
         if !wanted || self.last_frame == Some(sim.steps()) {
             return Ok(());
         }
-        self.last_frame = Some(sim.steps());
         let t = sim.time();
         let st = sim.state();
+        if let Some(p) = &self.positions {
+            for r in &st.r {
+                check_finite(&p.path, "position", t, r.as_slice())?;
+            }
+        }
+        self.last_frame = Some(sim.steps());
         if let Some(p) = &mut self.positions {
             for (i, r) in st.r.iter().enumerate() {
                 let comps: Vec<String> = r.iter().map(|x| num(*x)).collect();
@@ -283,32 +725,49 @@ impl Writers {
                 &[("C", &st.c), ("S", &s)],
             )?;
             pvd.add(t, &name);
-            pvd.write()?;
-            self.frames.push((t, name));
+            self.pvd_dirty = true;
+            self.frames += 1;
+            self.frames_hash = frames_hash_add(self.frames_hash, t, &name);
         }
         Ok(())
     }
 
     /// Records one step: energy row, port rows, and (every `stride` steps) positions and a
-    /// ParaView frame.
+    /// ParaView frame. Refuses ([`OutputError::NonFinite`]) a row with NaN or infinity.
     pub fn step<const D: usize>(
         &mut self,
         sim: &Simulation<D, Material>,
         r: &StepReport,
     ) -> Result<(), OutputError> {
+        let values = [
+            r.t,
+            r.after.kinetic,
+            r.after.potential(),
+            r.after.hamiltonian(),
+            sim.supplied_energy(),
+            r.balance_error,
+            r.residual,
+            r.h,
+        ];
+        check_finite(&self.energy.path, "energy row value", r.t, &values)?;
+        let t_mid = r.t - 0.5 * r.h;
+        for p in sim.ports() {
+            check_finite(&self.ports.path, "port input", t_mid, p.input.as_slice())?;
+            check_finite(&self.ports.path, "port output", t_mid, p.output.as_slice())?;
+            check_finite(&self.ports.path, "port power", t_mid, &[p.power()])?;
+        }
         self.energy.line(&format!(
             "{},{},{},{},{},{},{},{},{}",
-            num(r.t),
-            num(r.after.kinetic),
-            num(r.after.potential()),
-            num(r.after.hamiltonian()),
-            num(sim.supplied_energy()),
-            num(r.balance_error),
+            num(values[0]),
+            num(values[1]),
+            num(values[2]),
+            num(values[3]),
+            num(values[4]),
+            num(values[5]),
             r.newton_iterations,
-            num(r.residual),
-            num(r.h)
+            num(values[6]),
+            num(values[7])
         ))?;
-        let t_mid = r.t - 0.5 * r.h;
         for (k, p) in sim.ports().iter().enumerate() {
             let kind = match p.kind {
                 PortKind::Force => "force",
@@ -325,32 +784,63 @@ impl Writers {
                 num(p.power())
             ))?;
         }
-        self.record(sim)?;
-        self.frame(sim)
+        self.record(sim);
+        self.frame(sim)?;
+        if self.last_flush.elapsed() >= self.flush_every {
+            self.flush()?;
+        }
+        Ok(())
     }
 
     /// Reopens the outputs of an interrupted run in `dir` at the state a checkpoint recorded
-    /// (files longer than recorded are cut back), to continue appending.
+    /// (files longer than recorded are cut back), to continue appending. The ParaView
+    /// collection is read back from `paraview/string.pvd` and must list the checkpoint's
+    /// frames.
     pub fn resume(
         dir: &Path,
-        dim: usize,
         stride: usize,
         vtk_frames: bool,
         snapshot_times: Vec<f64>,
         state: crate::checkpoint::OutputState,
     ) -> Result<Self, OutputError> {
-        let positions = match state.positions_bytes {
-            Some(n) => Some(Csv::reopen(dir.join("positions.csv"), n)?),
-            None => None,
-        };
+        remove_stale_temp_files(dir);
         let pvd = if vtk_frames {
-            let mut p = PvdWriter::new(&dir.join("paraview").join("string.pvd"));
-            for (t, name) in &state.frames {
-                p.add(*t, name);
+            let path = dir.join("paraview").join("string.pvd");
+            let mut p = if state.frames == 0 {
+                PvdWriter::new(&path)
+            } else {
+                PvdWriter::read(&path)?
+            };
+            if p.len() < state.frames {
+                return Err(OutputError::Mismatch {
+                    path,
+                    reason: format!(
+                        "it lists {} frames, the checkpoint recorded {}",
+                        p.len(),
+                        state.frames
+                    ),
+                });
+            }
+            p.truncate(state.frames);
+            let hash = p
+                .entries()
+                .iter()
+                .fold(frames_hash_start(), |h, (t, name)| {
+                    frames_hash_add(h, *t, name)
+                });
+            if hash != state.frames_hash {
+                return Err(OutputError::Mismatch {
+                    path,
+                    reason: "its frames differ from those the checkpoint recorded".into(),
+                });
             }
             Some(p)
         } else {
             None
+        };
+        let positions = match state.positions_bytes {
+            Some(n) => Some(Csv::reopen(dir.join("positions.csv"), n)?),
+            None => None,
         };
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -358,17 +848,21 @@ impl Writers {
             positions,
             ports: Csv::reopen(dir.join("ports.csv"), state.ports_bytes)?,
             pvd,
+            pvd_dirty: true,
             stride,
             snapshot_times,
-            history: state.history,
-            dim,
+            snapshots: state.snapshots,
             last_frame: state.last_frame,
             frames: state.frames,
+            frames_hash: state.frames_hash,
+            last_flush: Instant::now(),
+            flush_every: FLUSH_EVERY,
         })
     }
 
     /// The output state for a checkpoint (flushes all files).
     pub fn state(&mut self) -> Result<crate::checkpoint::OutputState, OutputError> {
+        self.flush()?;
         Ok(crate::checkpoint::OutputState {
             energy_bytes: self.energy.len()?,
             positions_bytes: match &mut self.positions {
@@ -376,14 +870,25 @@ impl Writers {
                 None => None,
             },
             ports_bytes: self.ports.len()?,
-            frames: self.frames.clone(),
+            frames: self.frames,
+            frames_hash: self.frames_hash,
             last_frame: self.last_frame,
-            history: self.history.clone(),
+            snapshots: self.snapshots.clone(),
         })
     }
 
+    /// The configuration snapshots taken so far.
+    pub fn snapshots(&self) -> &[(f64, Vec<[f64; 2]>)] {
+        &self.snapshots
+    }
+
+    /// Path of `energy.csv`.
+    pub fn energy_path(&self) -> &Path {
+        &self.energy.path
+    }
+
     /// Writes the final state (positions and ParaView frame) if the last step was not on
-    /// the output stride, then flushes all CSV files.
+    /// the output stride, then flushes all files.
     pub fn finish<const D: usize>(
         &mut self,
         sim: &Simulation<D, Material>,
@@ -392,53 +897,256 @@ impl Writers {
         self.flush()
     }
 
-    /// Flushes all CSV files.
+    /// Flushes all CSV files and rewrites the ParaView collection if frames were added.
     pub fn flush(&mut self) -> Result<(), OutputError> {
         self.energy.flush()?;
         self.ports.flush()?;
         if let Some(p) = &mut self.positions {
             p.flush()?;
         }
+        if let Some(pvd) = &self.pvd
+            && self.pvd_dirty
+        {
+            pvd.write()?;
+            self.pvd_dirty = false;
+        }
+        self.last_flush = Instant::now();
         Ok(())
     }
+}
 
-    /// Draws `energy`, `configuration` and `increments` plots (SVG and PNG). Returns the
-    /// files written.
-    pub fn plots(
-        &self,
-        title: &str,
-        end_of_loading: Option<f64>,
-    ) -> Result<Vec<String>, OutputError> {
-        let h = &self.history;
-        let mut written = Vec::new();
-        plot::energy_plot(
-            &self.dir.join("energy"),
-            title,
-            &h.t,
-            &h.kinetic,
-            &h.potential,
-            &h.hamiltonian,
-        )?;
-        written.push("energy".to_string());
-        if self.dim >= 2 && !h.snapshots.is_empty() {
-            plot::configuration_plot(&self.dir.join("configuration"), title, &h.snapshots)?;
-            written.push("configuration".to_string());
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use phstring::benchmarks::paper_pendulum;
+    use phstring::{Scheme, StepParams};
+
+    fn sim() -> Simulation<2, Material> {
+        let params = StepParams {
+            h: 0.01,
+            scheme: Scheme::DiscreteGradient,
+            ..Default::default()
+        };
+        Simulation::new(paper_pendulum(10), params).unwrap()
+    }
+
+    fn lines(p: &Path) -> usize {
+        std::fs::read_to_string(p).unwrap().lines().count()
+    }
+
+    #[test]
+    fn t0_rows_are_flushed_at_start() {
+        let dir = crate::test_util::temp_dir("output", "t0");
+        let s = sim();
+        let _w = Writers::start(&dir, &s, 1, true, true, vec![0.0]).unwrap();
+        // The writers are alive (nothing dropped or flushed by the caller): the header and
+        // the t = 0 row are already on disk.
+        assert_eq!(lines(&dir.join("energy.csv")), 2);
+        assert_eq!(lines(&dir.join("positions.csv")), 1 + 11);
+        assert!(
+            std::fs::read_to_string(dir.join("paraview/string.pvd"))
+                .unwrap()
+                .contains("frame_000000.vtp")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn flush_interval_bounds_what_a_kill_loses() {
+        let dir = crate::test_util::temp_dir("output", "flush");
+        let mut s = sim();
+        let mut w = Writers::start(&dir, &s, 1, false, false, vec![]).unwrap();
+        // A huge interval: rows stay buffered (a few hundred bytes, below the buffer size).
+        w.set_flush_interval(Duration::from_secs(3600));
+        let r = s.step().unwrap();
+        w.step(&s, &r).unwrap();
+        assert_eq!(lines(&dir.join("energy.csv")), 2);
+        // Interval zero: every step is on disk when `step` returns.
+        w.set_flush_interval(Duration::ZERO);
+        for k in 0..3 {
+            let r = s.step().unwrap();
+            w.step(&s, &r).unwrap();
+            assert_eq!(lines(&dir.join("energy.csv")), 4 + k);
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn non_finite_values_are_refused_not_written() {
+        let dir = crate::test_util::temp_dir("output", "nonfinite");
+        let mut s = sim();
+        let mut w = Writers::start(&dir, &s, 1, true, true, vec![]).unwrap();
+        let good = s.step().unwrap();
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut r = good;
+            r.balance_error = bad;
+            let e = w.step(&s, &r).unwrap_err();
+            assert!(matches!(e, OutputError::NonFinite { .. }), "{e}");
+            assert!(e.to_string().contains("non-finite"), "{e}");
+            let mut r = good;
+            r.after.kinetic = bad;
+            assert!(matches!(w.step(&s, &r), Err(OutputError::NonFinite { .. })));
+        }
+        w.step(&s, &good).unwrap();
+        w.flush().unwrap();
+        for f in [
+            "energy.csv",
+            "ports.csv",
+            "positions.csv",
+            "paraview/string.pvd",
+        ] {
+            let text = std::fs::read_to_string(dir.join(f)).unwrap().to_lowercase();
+            assert!(
+                !text.contains("nan") && !text.contains("inf"),
+                "{f}: {text}"
+            );
+        }
+        // One good row after the t = 0 row: the refused rows left nothing behind.
+        assert_eq!(lines(&dir.join("energy.csv")), 3);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn full_disk_is_an_error() {
+        // /dev/full accepts the open and fails every write with ENOSPC.
+        if !Path::new("/dev/full").exists() {
+            return;
+        }
+        let mut c = Csv::create(PathBuf::from("/dev/full"), "header").unwrap();
+        let e = c.flush().unwrap_err();
+        assert!(matches!(e, OutputError::Io { .. }), "{e}");
+        assert!(atomic_write(Path::new("/dev/full/x"), b"x").is_err());
+    }
+
+    #[test]
+    fn atomic_write_replaces_a_stale_temp_file() {
+        let dir = crate::test_util::temp_dir("output", "atomic");
+        let path = dir.join("summary.json");
+        std::fs::write(dir.join(".summary.json.tmp"), "stale").unwrap();
+        std::fs::write(&path, "old").unwrap();
+        atomic_write(&path, b"new").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        assert!(!dir.join(".summary.json.tmp").exists());
+        // A write that fails (a folder where the file should be) leaves no temp file.
+        std::fs::create_dir(dir.join("d.json")).unwrap();
+        assert!(atomic_write(&dir.join("d.json"), b"x").is_err());
+        assert!(!dir.join(".d.json.tmp").exists());
+        for name in TEMP_FILES {
+            assert!(is_own_temp_file(name));
+        }
+        assert!(!is_own_temp_file("notes.tmp") && !is_own_temp_file("energy.csv"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn decimation_bounds_points_and_keeps_spikes() {
+        let n = 1_000_003;
+        let mut d = Decimator::<2>::new(PLOT_POINTS);
+        for i in 0..n {
+            let y = if i == 777_777 {
+                1e3
+            } else if i == 123_457 {
+                -1e3
+            } else {
+                (i as f64 * 0.37).sin()
+            };
+            d.push([i as f64, y]);
+        }
+        let rows = d.finish();
+        assert!(rows.len() <= PLOT_POINTS + 2, "{}", rows.len());
+        assert!(rows.len() > PLOT_POINTS / 4, "{}", rows.len());
+        assert_eq!(rows[0][0], 0.0);
+        assert_eq!(rows.last().unwrap()[0], (n - 1) as f64);
+        assert!(rows.iter().any(|r| r == &[777_777.0, 1e3]));
+        assert!(rows.iter().any(|r| r == &[123_457.0, -1e3]));
+        assert!(rows.windows(2).all(|w| w[0][0] < w[1][0]), "in order");
+        // Short series pass unchanged.
+        let mut d = Decimator::<4>::new(PLOT_POINTS);
+        let short: Vec<[f64; 4]> = (0..1000)
+            .map(|i| [i as f64, (i % 7) as f64, -(i as f64), 1.0])
+            .collect();
+        for r in &short {
+            d.push(*r);
+        }
+        assert_eq!(d.finish(), short);
+    }
+
+    #[test]
+    fn history_is_read_back_from_energy_csv() {
+        let dir = crate::test_util::temp_dir("output", "history");
+        let mut s = sim();
+        let mut w = Writers::start(&dir, &s, 1, false, false, vec![0.0, 0.05]).unwrap();
+        let mut hs = vec![s.energies().hamiltonian()];
+        for _ in 0..10 {
+            let r = s.step().unwrap();
+            w.step(&s, &r).unwrap();
+            hs.push(r.after.hamiltonian());
+        }
+        w.flush().unwrap();
+        let h = read_history(w.energy_path(), PLOT_POINTS, w.snapshots().to_vec(), None)
+            .unwrap()
+            .unwrap();
+        assert_eq!(h.hamiltonian, hs, "17 digits round-trip exactly");
+        assert_eq!(h.t.len(), 11);
         let (ti, inc) = h.increments();
-        plot::series_plot(
-            &self.dir.join("increments"),
-            title,
-            "t [s]",
-            "|Ĥ(n+1) − Ĥ(n)| [J]",
-            &[Series {
-                label: "|ΔĤ| per step",
-                x: &ti,
-                y: &inc,
-            }],
-            true,
-            end_of_loading.map(|t| (t, "end of loading")),
-        )?;
-        written.push("increments".to_string());
-        Ok(written)
+        assert_eq!(ti.len(), 10);
+        assert_eq!(inc[3], (hs[4] - hs[3]).abs());
+        assert_eq!(h.snapshots.len(), 2);
+        // A stop request while reading gives no history (only checked every 4096 rows, so
+        // this short file is read in full).
+        let stop = AtomicBool::new(true);
+        assert!(
+            read_history(w.energy_path(), PLOT_POINTS, vec![], Some(&stop))
+                .unwrap()
+                .is_some()
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn stop_during_plots_skips_them() {
+        let dir = crate::test_util::temp_dir("output", "plotstop");
+        let h = History {
+            t: vec![0.0, 1.0],
+            kinetic: vec![0.0, 1.0],
+            potential: vec![1.0, 0.0],
+            hamiltonian: vec![1.0, 1.0],
+            increment_t: vec![1.0],
+            increment: vec![1e-15],
+            snapshots: vec![(0.0, vec![[0.0, 0.0], [1.0, 0.0]])],
+        };
+        let stop = AtomicBool::new(true);
+        let r = draw_plots(&dir, 2, "t", None, Ok(&h), Some(&stop));
+        assert!(r.written.is_empty());
+        assert_eq!(r.skipped, ["energy", "configuration", "increments"]);
+        assert!(r.warnings.iter().all(|w| w.contains("stop requested")));
+        let r = draw_plots(&dir, 2, "t", None, Ok(&h), None);
+        assert_eq!(r.written, ["energy", "configuration", "increments"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn plot_problems_are_warnings_not_errors() {
+        let dir = crate::test_util::temp_dir("output", "plotwarn");
+        let far = vec![[1e308, 0.0], [1e308, -1.0]];
+        let h = History {
+            t: vec![0.0, 1.0],
+            kinetic: vec![0.0, 1e300],
+            potential: vec![1.0, 0.0],
+            hamiltonian: vec![1.0, 1e300],
+            increment_t: vec![1.0],
+            increment: vec![1e300],
+            snapshots: vec![(0.0, far)],
+        };
+        let r = draw_plots(&dir, 2, "t", None, Ok(&h), None);
+        assert_eq!(r.written, ["increments"]);
+        assert_eq!(r.skipped, ["energy", "configuration"]);
+        assert_eq!(r.warnings.len(), 2);
+        assert!(
+            r.warnings[1].contains("configuration plot skipped"),
+            "{:?}",
+            r.warnings
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,16 +1,91 @@
 //! Runs a validated scenario into an output folder (the work behind `phstring run`):
 //! outputs written as the run goes, checkpoints, interruption, resume.
+//!
+//! An output folder carries the id of the run that writes it ([`RUN_ID_FILE`], also in
+//! `summary.json` and in every checkpoint); a resume into a folder with another id is
+//! refused, so that a checkpoint can never overwrite another run. `summary.json` is
+//! replaced atomically, written before the plots and again after them, and a run that fails
+//! on an I/O error still tries to leave a summary with `"status": "failed"`.
 
+use std::hash::Hasher;
+use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
 use phstring::{Material, Simulation, StepError};
 use serde::Serialize;
 
-use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, SimState};
-use crate::output::{History, OutputError, Writers};
+use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimState};
+use crate::output::{self, History, OutputError, Writers};
 use crate::scenario::{ScenarioError, ScenarioFile};
+
+/// The larger of `a` and `b`, NaN if either is NaN (`f64::max` drops a NaN, which would hide
+/// a broken run behind a finite maximum).
+pub fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// Name of the file in an output folder that holds the id of the run writing it.
+pub const RUN_ID_FILE: &str = ".phstring-run";
+
+/// A new run id: a hash of the time, the process id, a counter and the output folder.
+pub fn new_run_id(out: &Path) -> String {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    let mut h = fnv::FnvHasher::default();
+    h.write(&nanos.to_le_bytes());
+    h.write(&std::process::id().to_le_bytes());
+    h.write(&COUNTER.fetch_add(1, Ordering::Relaxed).to_le_bytes());
+    h.write(out.as_os_str().as_encoded_bytes());
+    format!("{:016x}", h.finish())
+}
+
+/// The run id recorded in output folder `dir` ([`RUN_ID_FILE`]), if any.
+pub fn read_run_id(dir: &Path) -> Option<String> {
+    let mut text = String::new();
+    std::fs::File::open(dir.join(RUN_ID_FILE))
+        .ok()?
+        .take(256)
+        .read_to_string(&mut text)
+        .ok()?;
+    let id = text.trim();
+    Some(
+        if !id.is_empty() && id.len() <= 64 && id.chars().all(|c| c.is_ascii_alphanumeric()) {
+            id.to_string()
+        } else {
+            "(unreadable)".to_string()
+        },
+    )
+}
+
+/// Refuses to resume `cp` into `out` unless `out` carries the run id of the run that wrote
+/// the checkpoint.
+pub fn check_resume_folder(cp: &CheckpointFile, out: &Path) -> Result<(), CheckpointError> {
+    let found = read_run_id(out);
+    if found.as_deref() == Some(cp.run_id.as_str()) {
+        return Ok(());
+    }
+    let checkpoint_dir = cp
+        .path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    Err(CheckpointError::OtherRun {
+        path: cp.path.clone(),
+        checkpoint_dir,
+        out: out.to_path_buf(),
+        expected: cp.run_id.clone(),
+        found,
+    })
+}
 
 /// Receives progress of a run (a progress bar, or nothing).
 pub trait Progress {
@@ -27,15 +102,17 @@ impl Progress for () {}
 
 /// Options of a run beyond the scenario.
 #[derive(Default)]
-pub struct RunOptions<'a> {
+pub struct RunOptions {
     /// End of a loading phase to mark in the increments plot [s].
     pub end_of_loading: Option<f64>,
     /// Write `checkpoint.json` every this many steps.
     pub checkpoint_every: Option<usize>,
     /// Stop (as if interrupted) after this many steps in all.
     pub stop_after_steps: Option<usize>,
-    /// Set (e.g. by Ctrl-C) to stop at the end of the current step.
-    pub stop: Option<&'a AtomicBool>,
+    /// Set (e.g. by Ctrl-C) to stop: a step under way ends between two Newton iterations
+    /// and is not taken (the state stays at the last good step), a checkpoint is written,
+    /// and the plots not yet drawn are skipped.
+    pub stop: Option<Arc<AtomicBool>>,
     /// Continue from this checkpoint instead of starting at `t = 0`.
     pub resume: Option<CheckpointFile>,
 }
@@ -140,11 +217,20 @@ pub struct RunInfo {
     pub time_loop_s: f64,
     /// Whether the run was resumed from a checkpoint.
     pub resumed: bool,
+    /// Id of the run (also in the folder's [`RUN_ID_FILE`] and in its checkpoints).
+    pub run_id: String,
     /// Plots written (stems, each as `.svg` and `.png`).
     pub plots: Vec<String>,
+    /// Plots not written (degenerate or extreme data, a stop request, a failure); the
+    /// reasons are in `warnings`.
+    pub plots_skipped: Vec<String>,
+    /// Problems that did not fail the run (e.g. a plot that could not be drawn).
+    pub warnings: Vec<String>,
     /// The scenario as run (after `--set` overrides).
     pub scenario: serde_json::Value,
-    /// Energy history (not serialized).
+    /// Energies read back from `energy.csv` after the run, decimated to at most
+    /// [`output::PLOT_POINTS`] points per curve, and the configuration snapshots (not
+    /// serialized; empty if the run was stopped before it was read).
     #[serde(skip)]
     pub history: History,
 }
@@ -157,7 +243,7 @@ pub fn run(
     file: &ScenarioFile,
     out: &Path,
     progress: &mut dyn Progress,
-    opts: RunOptions<'_>,
+    opts: RunOptions,
 ) -> Result<RunInfo, RunError> {
     match file.dimension()? {
         1 => run_dim::<1>(file, out, progress, opts),
@@ -170,14 +256,22 @@ fn run_dim<const D: usize>(
     file: &ScenarioFile,
     out: &Path,
     progress: &mut dyn Progress,
-    opts: RunOptions<'_>,
+    opts: RunOptions,
 ) -> Result<RunInfo, RunError> {
     let v = file.validate::<D>()?;
     let settings = v.settings.clone();
     let load_error = v.load_error.clone();
     let mut sim: Simulation<D, Material> = Simulation::new(v.problem, settings.step)?;
+    sim.set_stop_flag(opts.stop.clone());
+    let stop = opts.stop.clone();
     let steps_planned = (settings.t_end / settings.step.h).round() as usize;
-    let snapshots: Vec<f64> = (0..=5).map(|k| settings.t_end * k as f64 / 5.0).collect();
+    let snapshots: Vec<f64> = (0..output::SNAPSHOTS)
+        .map(|k| settings.t_end * k as f64 / (output::SNAPSHOTS - 1) as f64)
+        .collect();
+    let run_id = match &opts.resume {
+        Some(cp) => cp.run_id.clone(),
+        None => new_run_id(out),
+    };
     let mut info = RunInfo {
         program: "phstring",
         version: env!("CARGO_PKG_VERSION"),
@@ -209,7 +303,10 @@ fn run_dim<const D: usize>(
         hamiltonian_final: sim.energies().hamiltonian(),
         time_loop_s: 0.0,
         resumed: opts.resume.is_some(),
+        run_id: run_id.clone(),
         plots: Vec::new(),
+        plots_skipped: Vec::new(),
+        warnings: Vec::new(),
         scenario: serde_json::to_value(&file.scenario).unwrap_or(serde_json::Value::Null),
         history: History::default(),
     };
@@ -217,8 +314,12 @@ fn run_dim<const D: usize>(
         .resume
         .as_ref()
         .map_or(opts.end_of_loading, |cp| cp.end_of_loading);
-    let mut writers = match opts.resume {
+    let fresh = opts.resume.is_none();
+    let writers = match opts.resume {
         Some(cp) => {
+            // Everything is checked before the folder is touched.
+            check_resume_folder(&cp, out)?;
+            cp.check_against(&sim, &settings)?;
             sim.restore(cp.sim.to_checkpoint::<D>())?;
             let c = cp.counters;
             info.steps = c.steps;
@@ -234,12 +335,11 @@ fn run_dim<const D: usize>(
             info.hamiltonian_initial = c.hamiltonian_initial;
             Writers::resume(
                 out,
-                D,
                 settings.stride,
                 settings.output.vtk,
                 snapshots,
                 cp.outputs,
-            )?
+            )
         }
         None => Writers::start(
             out,
@@ -248,7 +348,26 @@ fn run_dim<const D: usize>(
             settings.output.positions,
             settings.output.vtk,
             snapshots,
-        )?,
+        )
+        .and_then(|w| {
+            std::fs::write(out.join(RUN_ID_FILE), format!("{run_id}\n")).map_err(|source| {
+                OutputError::Io {
+                    path: out.join(RUN_ID_FILE),
+                    source,
+                }
+            })?;
+            Ok(w)
+        }),
+    };
+    let mut writers = match writers {
+        Ok(w) => w,
+        Err(e) => {
+            let e = RunError::from(e);
+            if fresh {
+                record_failure(out, &mut info, &e);
+            }
+            return Err(e);
+        }
     };
     let checkpoint_path = out.join(CHECKPOINT);
     let write_checkpoint = |sim: &Simulation<D, Material>,
@@ -256,8 +375,9 @@ fn run_dim<const D: usize>(
                             info: &RunInfo|
      -> Result<(), RunError> {
         let cp = CheckpointFile {
-            format: "phstring checkpoint".into(),
+            format: FORMAT.into(),
             version: env!("CARGO_PKG_VERSION").into(),
+            run_id: run_id.clone(),
             scenario_path: file.path.clone(),
             scenario_text: file.text().to_string(),
             end_of_loading,
@@ -276,6 +396,8 @@ fn run_dim<const D: usize>(
                 time_loop_s: info.time_loop_s,
                 hamiltonian_initial: info.hamiltonian_initial,
             },
+            checksum: String::new(),
+            path: checkpoint_path.clone(),
         };
         cp.write(&checkpoint_path)?;
         Ok(())
@@ -285,68 +407,69 @@ fn run_dim<const D: usize>(
     let t_end = settings.t_end;
     let mut failure = None;
     let mut interrupted = false;
-    while sim.time() < t_end - 1e-9 * sim.step_size() {
-        if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst))
-            || opts.stop_after_steps.is_some_and(|n| sim.steps() >= n)
-        {
-            interrupted = true;
-            break;
-        }
-        let t0 = Instant::now();
-        let res = sim.step_until(t_end);
-        info.time_loop_s += t0.elapsed().as_secs_f64();
-        match res {
-            Ok(report) => {
-                info.steps += 1;
-                info.rejected_steps += report.rejected;
-                info.line_search_backtracks += report.backtracks;
-                info.total_newton_iterations += report.newton_iterations;
-                info.rejected_newton_iterations += report.rejected_iterations;
-                info.local_newton_iterations += report.local_iterations;
-                info.local_newton_work +=
-                    (report.local_node_iterations + report.rejected_local_node_iterations) as f64
-                        / sim.system().mesh().n_nodes() as f64;
-                info.max_balance_error = info.max_balance_error.max(report.balance_error.abs());
-                info.max_newton_residual = info.max_newton_residual.max(report.residual);
-                writers.step(&sim, &report)?;
-                progress.step(report.step, report.t);
-                if opts
-                    .checkpoint_every
-                    .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
-                {
-                    write_checkpoint(&sim, &mut writers, &info)?;
-                }
-            }
-            Err(e) => {
-                failure = Some(e);
+    let body = (|| -> Result<(), RunError> {
+        while sim.time() < t_end - 1e-9 * sim.step_size() {
+            // A stop request (the flag) is seen by the simulation itself, before and during
+            // the step: `StepError::Interrupted` below.
+            if opts.stop_after_steps.is_some_and(|n| sim.steps() >= n) {
+                interrupted = true;
                 break;
             }
+            let t0 = Instant::now();
+            let res = sim.step_until(t_end);
+            info.time_loop_s += t0.elapsed().as_secs_f64();
+            match res {
+                Ok(report) => {
+                    info.steps += 1;
+                    info.rejected_steps += report.rejected;
+                    info.line_search_backtracks += report.backtracks;
+                    info.total_newton_iterations += report.newton_iterations;
+                    info.rejected_newton_iterations += report.rejected_iterations;
+                    info.local_newton_iterations += report.local_iterations;
+                    info.local_newton_work += (report.local_node_iterations
+                        + report.rejected_local_node_iterations)
+                        as f64
+                        / sim.system().mesh().n_nodes() as f64;
+                    info.max_balance_error =
+                        nan_max(info.max_balance_error, report.balance_error.abs());
+                    info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
+                    writers.step(&sim, &report)?;
+                    progress.step(report.step, report.t);
+                    if opts
+                        .checkpoint_every
+                        .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
+                    {
+                        write_checkpoint(&sim, &mut writers, &info)?;
+                    }
+                }
+                // A stop request during the step: the state is that of the last good step.
+                Err(StepError::Interrupted { .. }) => {
+                    interrupted = true;
+                    break;
+                }
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            }
         }
-    }
+        if interrupted {
+            // The checkpoint records the file lengths of this moment: write it before the
+            // final frame and plots, which a resumed run writes itself.
+            write_checkpoint(&sim, &mut writers, &info)?;
+        } else if failure.is_none() {
+            writers.finish(&sim)?;
+        }
+        writers.flush()?;
+        Ok(())
+    })();
     progress.finish();
-    if interrupted {
-        // The checkpoint records the file lengths of this moment: write it before the final
-        // frame and plots, which a resumed run writes itself.
-        write_checkpoint(&sim, &mut writers, &info)?;
-    } else {
-        writers.finish(&sim)?;
-    }
-    writers.flush()?;
     info.t_reached = sim.time();
     info.h_min_used = sim.smallest_step_size();
-    info.hamiltonian_final = writers
-        .history
-        .hamiltonian
-        .last()
-        .copied()
-        .unwrap_or(f64::NAN);
-    if settings.output.plots {
-        let title = file
-            .scenario
-            .title
-            .clone()
-            .unwrap_or_else(|| "phstring".into());
-        info.plots = writers.plots(&title, end_of_loading)?;
+    info.hamiltonian_final = sim.energies().hamiltonian();
+    if let Err(e) = body {
+        record_failure(out, &mut info, &e);
+        return Err(e);
     }
     let detail = match &failure {
         Some(StepError::NonFinite { what: "load", .. }) => load_error
@@ -370,8 +493,34 @@ fn run_dim<const D: usize>(
         // A completed run needs no checkpoint; a stale one could be resumed by mistake.
         let _ = std::fs::remove_file(&checkpoint_path);
     }
+    // The summary is on disk before the plots, whatever happens to them.
     write_summary(out, &info)?;
-    info.history = writers.history;
+    let history = match output::read_history(
+        writers.energy_path(),
+        output::PLOT_POINTS,
+        writers.snapshots().to_vec(),
+        stop.as_deref(),
+    ) {
+        Ok(Some(h)) => Ok(h),
+        Ok(None) => Err("stop requested".to_string()),
+        Err(e) => Err(e.to_string()),
+    };
+    if settings.output.plots {
+        let title = file.scenario.title.as_deref().unwrap_or("phstring");
+        let report = output::draw_plots(
+            out,
+            D,
+            title,
+            end_of_loading,
+            history.as_ref().map_err(String::as_str),
+            stop.as_deref(),
+        );
+        info.plots = report.written;
+        info.plots_skipped = report.skipped;
+        info.warnings.extend(report.warnings);
+        write_summary(out, &info)?;
+    }
+    info.history = history.unwrap_or_default();
     if let Some(e) = failure {
         return Err(RunError::Step(e, detail, out.to_path_buf()));
     }
@@ -386,10 +535,51 @@ fn run_dim<const D: usize>(
     Ok(info)
 }
 
-/// Writes `summary.json`.
+/// Marks `info` failed with `e` and tries to write `summary.json` (an error writing it is
+/// ignored: `e` is what is reported).
+fn record_failure(out: &Path, info: &mut RunInfo, e: &RunError) {
+    info.status = "failed".into();
+    info.error = Some(e.to_string());
+    let _ = write_summary(out, info);
+}
+
+/// Writes `summary.json` atomically (a temporary file in `out`, then renamed), so that it
+/// is never half-written and never left stale by a failed write.
 pub fn write_summary(out: &Path, info: &RunInfo) -> Result<(), OutputError> {
     let path = out.join("summary.json");
     let text =
         serde_json::to_string_pretty(info).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-    std::fs::write(&path, text + "\n").map_err(|source| OutputError::Io { path, source })
+    output::atomic_write(&path, (text + "\n").as_bytes())
+        .map_err(|source| OutputError::Io { path, source })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 10: `f64::max` dropped a NaN, so a broken run reported `max_balance_error: 0`.
+    #[test]
+    fn non_finite_maximum_propagates_nan() {
+        assert!(nan_max(0.0, f64::NAN).is_nan());
+        assert!(nan_max(f64::NAN, 1.0).is_nan());
+        assert_eq!(nan_max(1.0, 2.0), 2.0);
+        assert_eq!(nan_max(0.0, f64::INFINITY), f64::INFINITY);
+        let m = [1e-15, f64::NAN, 3e-15].into_iter().fold(0.0, nan_max);
+        assert!(m.is_nan());
+    }
+
+    #[test]
+    fn run_ids_differ_and_are_read_back() {
+        let a = new_run_id(Path::new("x"));
+        let b = new_run_id(Path::new("x"));
+        assert_ne!(a, b);
+        assert_eq!(a.len(), 16);
+        let dir = crate::test_util::temp_dir("runner", "runid");
+        assert_eq!(read_run_id(&dir), None);
+        std::fs::write(dir.join(RUN_ID_FILE), format!("{a}\n")).unwrap();
+        assert_eq!(read_run_id(&dir), Some(a));
+        std::fs::write(dir.join(RUN_ID_FILE), "\0\x1b[2J").unwrap();
+        assert_eq!(read_run_id(&dir).as_deref(), Some("(unreadable)"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

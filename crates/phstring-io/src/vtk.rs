@@ -78,6 +78,20 @@ pub fn write_vtp_segments(
             points.len()
         )));
     }
+    for (what, values) in [
+        ("point coordinate", points.as_flattened()),
+        ("velocity", velocity.as_flattened()),
+    ]
+    .into_iter()
+    .chain(cell_data.iter().map(|(name, v)| (*name, *v)))
+    {
+        if let Some(i) = values.iter().position(|x| !x.is_finite()) {
+            return Err(input_err(format!(
+                "non-finite {what} value {} (index {i})",
+                values[i]
+            )));
+        }
+    }
     if let Some((k, s)) = segments
         .iter()
         .enumerate()
@@ -177,6 +191,47 @@ impl PvdWriter {
         self.entries.push((time, file_name_relative.to_string()));
     }
 
+    /// The data sets added so far: `(time in s, file name)`.
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
+    /// Keeps the first `n` data sets.
+    pub fn truncate(&mut self, n: usize) {
+        self.entries.truncate(n);
+    }
+
+    /// Reads a collection file written by [`Self::write`] (to append to it), e.g. when a run
+    /// resumes. Times must be finite; file names are unescaped.
+    pub fn read(pvd_path: &Path) -> Result<Self, VtkError> {
+        let text = std::fs::read_to_string(pvd_path).map_err(|source| VtkError::Io {
+            path: pvd_path.to_path_buf(),
+            source,
+        })?;
+        let bad = |line: usize, message: &str| VtkError::Input {
+            path: pvd_path.to_path_buf(),
+            message: format!("line {}: {message}", line + 1),
+        };
+        let attr = |line: &str, name: &str| -> Option<String> {
+            let start = line.find(&format!(" {name}=\""))? + name.len() + 3;
+            let len = line[start..].find('"')?;
+            Some(line[start..start + len].to_string())
+        };
+        let mut w = Self::new(pvd_path);
+        for (i, line) in text.lines().enumerate() {
+            if !line.trim_start().starts_with("<DataSet ") {
+                continue;
+            }
+            let time: f64 = attr(line, "timestep")
+                .and_then(|t| t.parse().ok())
+                .filter(|t: &f64| t.is_finite())
+                .ok_or_else(|| bad(i, "no finite timestep"))?;
+            let file = attr(line, "file").ok_or_else(|| bad(i, "no file"))?;
+            w.add(time, &xml_unescape(&file));
+        }
+        Ok(w)
+    }
+
     /// The collection XML text for the entries added so far.
     pub fn to_xml(&self) -> String {
         let mut s = String::from(
@@ -207,21 +262,19 @@ impl PvdWriter {
                 message: format!("non-finite time {time} for data set {file:?}"),
             });
         }
-        let mut tmp = self.path.as_os_str().to_owned();
-        tmp.push(".tmp");
-        let tmp = PathBuf::from(tmp);
-        std::fs::write(&tmp, self.to_xml()).map_err(|source| VtkError::Io {
-            path: tmp.clone(),
-            source,
-        })?;
-        std::fs::rename(&tmp, &self.path).map_err(|source| VtkError::Io {
-            path: self.path.clone(),
-            source,
+        crate::output::atomic_write(&self.path, self.to_xml().as_bytes()).map_err(|source| {
+            VtkError::Io {
+                path: self.path.clone(),
+                source,
+            }
         })
     }
 }
 
-/// Escapes the five XML special characters for use in an attribute value.
+/// Escapes text for an XML attribute value: the five special characters as entities, tab,
+/// newline and carriage return as character references (attribute values normalize them
+/// otherwise), and the characters XML 1.0 forbids (other control characters, NUL, U+FFFE,
+/// U+FFFF) dropped, so the file is always well-formed.
 fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
@@ -231,9 +284,50 @@ fn xml_escape(s: &str) -> String {
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&apos;"),
+            '\t' => out.push_str("&#9;"),
+            '\n' => out.push_str("&#10;"),
+            '\r' => out.push_str("&#13;"),
+            '\u{FFFE}' | '\u{FFFF}' => {}
+            c if c.is_control() && (c as u32) < 0x20 => {}
+            c if c == '\u{7f}' || ('\u{80}'..='\u{9f}').contains(&c) => {}
             _ => out.push(c),
         }
     }
+    out
+}
+
+/// Inverse of [`xml_escape`] for the entities and character references it writes.
+fn xml_unescape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(i) = rest.find('&') {
+        out.push_str(&rest[..i]);
+        rest = &rest[i..];
+        let Some(end) = rest.find(';') else { break };
+        let entity = &rest[1..end];
+        let c = match entity {
+            "amp" => Some('&'),
+            "lt" => Some('<'),
+            "gt" => Some('>'),
+            "quot" => Some('"'),
+            "apos" => Some('\''),
+            _ => entity
+                .strip_prefix('#')
+                .and_then(|n| n.parse::<u32>().ok())
+                .and_then(char::from_u32),
+        };
+        match c {
+            Some(c) => {
+                out.push(c);
+                rest = &rest[end + 1..];
+            }
+            None => {
+                out.push('&');
+                rest = &rest[1..];
+            }
+        }
+    }
+    out.push_str(rest);
     out
 }
 
@@ -336,6 +430,62 @@ mod tests {
         write_vtp(&dir.join("none.vtp"), &[], &[], &[]).unwrap();
         let err = write_vtp(&dir.join("missing").join("x.vtp"), &points, &vel, &[]);
         assert!(err.unwrap_err().to_string().contains("x.vtp"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Issue 10: control characters must not make the XML invalid.
+    #[test]
+    fn xml_escape_strips_control_characters() {
+        assert_eq!(xml_escape("a\0b\x1bc\u{7f}d\u{FFFF}"), "abcd");
+        assert_eq!(xml_escape("t\tn\nr\r"), "t&#9;n&#10;r&#13;");
+        assert_eq!(xml_escape("<&>\"'"), "&lt;&amp;&gt;&quot;&apos;");
+        for s in ["plain", "a&b<c>\"d'", "t\tn\nr\r", "ü &amp; &#9;"] {
+            assert_eq!(xml_unescape(&xml_escape(s)), s);
+        }
+        let dir = temp_dir("escape");
+        let mut pvd = PvdWriter::new(&dir.join("s.pvd"));
+        pvd.add(0.5, "frame\0_\x1b1.vtp");
+        pvd.write().unwrap();
+        let xml = std::fs::read_to_string(dir.join("s.pvd")).unwrap();
+        assert!(xml.contains("file=\"frame_1.vtp\""), "{xml}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn pvd_reads_back_what_it_wrote() {
+        let dir = temp_dir("pvdread");
+        let path = dir.join("string.pvd");
+        let mut pvd = PvdWriter::new(&path);
+        for (t, f) in [
+            (0.0, "frame_000000.vtp"),
+            (0.1 + 0.2, "a&b.vtp"),
+            (1e-300, "x\ty.vtp"),
+        ] {
+            pvd.add(t, f);
+        }
+        pvd.write().unwrap();
+        let back = PvdWriter::read(&path).unwrap();
+        assert_eq!(back.entries(), pvd.entries());
+        std::fs::write(&path, "<DataSet timestep=\"nan\" part=\"0\" file=\"f\"/>\n").unwrap();
+        assert!(PvdWriter::read(&path).is_err());
+        assert!(!dir.join(".string.pvd.tmp").exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Issue 10: no NaN or infinity ever reaches an output file.
+    #[test]
+    fn non_finite_values_are_refused_in_vtp() {
+        let dir = temp_dir("vtpnan");
+        let path = dir.join("f.vtp");
+        let p = [[0.0; 3], [1.0, f64::NAN, 0.0]];
+        let v = [[0.0; 3]; 2];
+        let e = write_vtp(&path, &p, &v, &[]).unwrap_err();
+        assert!(matches!(e, VtkError::Input { .. }), "{e}");
+        let ok = [[0.0; 3], [1.0, 0.0, 0.0]];
+        let bad_v = [[0.0; 3], [f64::INFINITY, 0.0, 0.0]];
+        assert!(write_vtp(&path, &ok, &bad_v, &[]).is_err());
+        assert!(write_vtp(&path, &ok, &v, &[("S", &[f64::NAN])]).is_err());
+        assert!(!path.exists());
         let _ = std::fs::remove_dir_all(&dir);
     }
 

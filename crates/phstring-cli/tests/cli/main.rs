@@ -2,6 +2,7 @@
 
 mod broken;
 mod examples;
+mod hardening_io;
 mod reliability;
 
 use std::path::{Path, PathBuf};
