@@ -55,6 +55,7 @@ fn measure<const D: usize>(n_el: usize, solver: SolverKind) -> (f64, f64, usize)
     // Tolerance relative to the problem size: the residual floor grows like sqrt(N).
     let mut params = params;
     params.newton.tol = 1e-11 * (n_el as f64 / 30.0).sqrt().max(1.0);
+    params.newton.rtol = 0.0;
     // The cost of a full Newton iteration: no local solves in between.
     params.newton.elimination = false;
     let mut sim = Simulation::new(problem::<D>(n_el), params).unwrap();
