@@ -82,10 +82,7 @@ fn paper_loop() -> (f64, usize) {
     for _ in 0..20 {
         let mut sim = Simulation::new(
             phstring::benchmarks::paper_pendulum(30),
-            StepParams {
-                h: 0.01,
-                ..Default::default()
-            },
+            phstring::benchmarks::paper_params(),
         )
         .unwrap();
         let t0 = Instant::now();

@@ -83,12 +83,15 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub f_ext: &'a [Vector<D>],
     /// Reaction forces at the constrained components [N] (output).
     pub reaction: &'a mut [Vector<D>],
-    /// Force scale of the last full evaluation [N] (output; see
+    /// Force scale of the step, measured at the first full evaluation [N] (output; see
     /// [`NewtonProblem::force_scale`]).
     pub scale: f64,
-    /// Strain scale of the last full evaluation [N] (output; see
+    /// Strain scale of the step, measured at the first full evaluation [N] (output; see
     /// [`NewtonProblem::strain_scale`]).
     pub strain_scale: f64,
+    /// Measure the scales in the next full evaluation (then cleared): they are taken once
+    /// per solve, at the predictor, where they cost nothing in the Newton iterations.
+    pub measure: bool,
 }
 
 impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, M> {
@@ -119,6 +122,25 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         &mut self,
         x: &[Vector<D>],
         res: &mut [Vector<D>],
+        jac: Option<&mut BlockJacobian<D>>,
+        nodes: std::ops::Range<usize>,
+    ) -> Result<(), StrainError> {
+        // Two instances, so that the Newton iterations run a loop without the scale sums.
+        if self.measure && nodes.start == 0 && nodes.end >= x.len() {
+            self.evaluate_range::<true>(x, res, jac, nodes)
+        } else {
+            self.evaluate_range::<false>(x, res, jac, nodes)
+        }
+    }
+}
+
+impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
+    /// [`NewtonProblem::evaluate_nodes`]; with `MEASURE` (a full range only) also the force
+    /// and strain scales.
+    fn evaluate_range<const MEASURE: bool>(
+        &mut self,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
     ) -> Result<(), StrainError> {
@@ -142,8 +164,9 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         }
         // Force scale (docs/method.md §9, eq. (9.2)): squares of the magnitudes of every force term of
         // the residual, summed over the full evaluation.
+        let measure = MEASURE;
         let mut strain2 = 0.0;
-        let mut scale2 = if full {
+        let mut scale2 = if measure {
             self.f_ext.iter().map(|f| f.norm_squared()).sum::<f64>()
         } else {
             0.0
@@ -177,7 +200,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
             }
             let (q, dq) = self.scheme.half_stress(&sys.material, c0, c1);
             let f = rpm * (2.0 * q);
-            if full {
+            if measure {
                 // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
                 // force on both nodes.
                 let m = (2.0 * inv_h) * (md + mo.abs());
@@ -248,9 +271,10 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
                 mask(&mut j.off[e][1], fb, fa);
             }
         }
-        if full {
+        if measure {
             self.scale = scale2.sqrt();
             self.strain_scale = strain2.sqrt();
+            self.measure = false;
         }
         Ok(())
     }
@@ -356,6 +380,7 @@ mod tests {
             reaction: &mut reaction,
             scale: 0.0,
             strain_scale: 0.0,
+            measure: true,
         };
         let n = x.len();
         let mut res = vec![Vector::<D>::zeros(); n];

@@ -133,9 +133,9 @@ pub struct NewtonStats {
     pub iterations: usize,
     /// Final residual norm [N].
     pub residual: f64,
-    /// Force scale `F` of the last full evaluation [N] (see [`NewtonParams`]).
+    /// Force scale `F` of the step [N], taken at the predictor (see [`NewtonParams`]).
     pub force_scale: f64,
-    /// Strain scale `K` of the last full evaluation [N] (see [`ROUNDOFF_STRAIN`]).
+    /// Strain scale `K` of the step [N], taken at the predictor (see [`ROUNDOFF_STRAIN`]).
     pub strain_scale: f64,
     /// The tolerance the residual was tested against [N].
     pub tolerance: f64,
@@ -162,7 +162,8 @@ pub trait NewtonProblem<const D: usize> {
         res: &mut [Vector<D>],
         jac: Option<&mut BlockJacobian<D>>,
     ) -> Result<(), Self::Error>;
-    /// Force scale [N] of the last full [`Self::evaluate`]: the root-sum-square of the
+    /// Force scale [N] of the step (a full [`Self::evaluate`] may measure it; the step
+    /// equations do so at the predictor): the root-sum-square of the
     /// magnitudes of the force terms whose sum is the residual. Relative tolerances and the
     /// round-off floor are measured against it; 0 (the default) makes both absolute.
     fn force_scale(&self) -> f64 {

@@ -53,7 +53,7 @@ pub const MAX_HALVINGS: u32 = 60;
 /// [`Problem`] while it is being set up: per node the state `r, v`, the predictor's `a, v_{n−½}`,
 /// the step's `Δ`, external forces and reactions, Newton's residual, direction and last
 /// iterate, the Jacobian's diagonal block and the two block-Thomas workspaces; per element the
-/// strain, the two off-diagonal Jacobian blocks, the connectivity and the reference length.
+/// strain and its value before the step, the two off-diagonal Jacobian blocks, the connectivity and the reference length.
 /// For the sparse LU solver (any other mesh) add its factors, which this does not count.
 /// Measured against the allocator in the tests (within 5 %).
 pub fn estimated_memory_bytes(dimension: usize, n_elements: usize) -> u64 {
@@ -63,8 +63,8 @@ pub fn estimated_memory_bytes(dimension: usize, n_elements: usize) -> u64 {
     // r, v, acc, v_mid, x, f_ext, reaction, f_body, res, dir, x_old: 11 vectors per node;
     // Jacobian diagonal, Newton's Thomas workspace, the solver's: 3 blocks; `free` flags.
     let per_node = 11 * vector + 3 * block + d;
-    // C, off-diagonal blocks, [a, b], l.
-    let per_element = 8 + 2 * block + 16 + 8;
+    // C and its copy, off-diagonal blocks, [a, b], l.
+    let per_element = 16 + 2 * block + 16 + 8;
     nodes * per_node + n_elements as u64 * per_element
 }
 
@@ -176,6 +176,8 @@ pub struct Simulation<const D: usize, M> {
     x: Vec<Vector<D>>,
     f_ext: Vec<Vector<D>>,
     reaction: Vec<Vector<D>>,
+    /// Strains before the update of the current step (restored if its energies overflow).
+    c_prev: Vec<f64>,
     ports: Vec<PortSample<D>>,
     newton_ws: NewtonWorkspace<D>,
     solver: Box<dyn LinearSolver<D>>,
@@ -217,6 +219,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             });
         }
         let (sys, state) = PhSystem::new(problem)?;
+        let n_el = sys.mesh.n_elements();
         let n = sys.mesh.n_nodes();
         let solver = make_solver::<D>(params.solver, &sys.mesh)?;
         let mut ports: Vec<PortSample<D>> = sys
@@ -256,6 +259,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             x: vec![Vector::zeros(); n],
             f_ext: vec![Vector::zeros(); n],
             reaction: vec![Vector::zeros(); n],
+            c_prev: vec![0.0; n_el],
             ports,
             solver,
             total_newton: 0,
@@ -534,6 +538,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             reaction: &mut self.reaction,
             scale: 0.0,
             strain_scale: 0.0,
+            measure: true,
         };
         let result = newton::solve(
             &mut eqs,
@@ -611,32 +616,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
-        // The energies of the new state must be finite too (a strain can overflow `W`);
-        // they are evaluated from r_n, v_n, C_n and Δ exactly as `energies` will see the
-        // updated state.
-        let inv_h = 1.0 / h;
-        let after = {
-            let (r0, v0, c0, x) = (&self.state.r, &self.state.v, &self.state.c, &self.x);
-            let mesh = &self.sys.mesh;
-            self.sys.energies_with(
-                |i| r0[i] + x[i],
-                |i| x[i] * (2.0 * inv_h) - v0[i],
-                |e| {
-                    let [a, b] = mesh.elements()[e];
-                    c0[e] + element_step(&r0[a], &r0[b], &x[a], &x[b], mesh.lengths()[e]).2
-                },
-            )
-        };
-        if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
-        {
-            return Err(StepError::NonFinite {
-                step: step_no,
-                t,
-                what: "energy",
-                node: self.non_finite_energy_node(),
-            });
-        }
-        // Update: strains first (they need r_n), then r and v.
+        // Strains first (they need r_n). The previous ones are kept until the energies of
+        // the new state are known to be finite (a strain can overflow `W`), so that a failed
+        // step leaves the state untouched.
+        self.c_prev.copy_from_slice(&self.state.c);
         let mesh = &self.sys.mesh;
         for (e, (&[a, b], &l)) in mesh.elements().iter().zip(mesh.lengths()).enumerate() {
             let (_, _, dc) = element_step(
@@ -647,6 +630,25 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 l,
             );
             self.state.c[e] += dc;
+        }
+        let inv_h = 1.0 / h;
+        // The energies of the new state, with r and v formed as the update below forms them
+        // (bit-identical to `energies` of the updated state).
+        let after = {
+            let (r0, v0, c, x) = (&self.state.r, &self.state.v, &self.state.c, &self.x);
+            self.sys
+                .energies_with(|i| r0[i] + x[i], |i| x[i] * (2.0 * inv_h) - v0[i], |e| c[e])
+        };
+        if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
+        {
+            let node = self.non_finite_energy_node();
+            self.state.c.copy_from_slice(&self.c_prev);
+            return Err(StepError::NonFinite {
+                step: step_no,
+                t,
+                what: "energy",
+                node,
+            });
         }
         for ((((r, v), a), vm), x) in self
             .state
@@ -711,20 +713,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         })
     }
 
-    /// The node of the first element whose new strain or stored energy is not finite (the
-    /// first node of the mesh if none is found), for the message of a non-finite energy.
+    /// The first node of the first element whose stored energy (at the strains in the state)
+    /// is not finite, else the first node of the mesh: where a non-finite energy comes from.
     fn non_finite_energy_node(&self) -> usize {
         let mesh = &self.sys.mesh;
         let bad = mesh
-            .elements()
+            .lengths()
             .iter()
-            .zip(mesh.lengths())
             .zip(&self.state.c)
-            .position(|((&[a, b], &l), &c0)| {
-                let (r0, x) = (&self.state.r, &self.x);
-                let c = c0 + element_step(&r0[a], &r0[b], &x[a], &x[b], l).2;
-                !(l * self.sys.material.w(c)).is_finite()
-            });
+            .position(|(&l, &c)| !(l * self.sys.material.w(c)).is_finite());
         bad.map_or(0, |e| mesh.elements()[e][0])
     }
 

@@ -124,6 +124,13 @@ fn run_with(
         worst_rel = worst_rel.max(r.balance_error.abs() / scale);
         assert!(r.balance_error.is_finite());
         worst_res = worst_res.max(r.residual / r.force_scale);
+        assert!(
+            r.residual <= r.tolerance || r.at_roundoff,
+            "step {}: residual {:e} above the tolerance {:e}",
+            r.step,
+            r.residual,
+            r.tolerance
+        );
     }
     (sim.steps(), sim.rejected_steps(), worst_rel, worst_res)
 }
@@ -157,20 +164,17 @@ fn stiff_real_unit_ropes_converge_with_default_tolerance() {
                 rope.ea
             );
             // The tension-only law starts at its kink (C = 1) and some elements go slack in
-            // the first steps; a few of those steps are halved for the nonlinearity (residuals
-            // of the order of the forces, not round-off).
+            // the first steps; a few of those steps are halved for the nonlinearity: their
+            // line search fails with residuals of the order of the forces (1e4 N for the
+            // steel rope), not at round-off. Before the relative tolerance, the case
+            // took 18,483 steps for 2.
             let (most_steps, most_rejected) = match material {
                 Material::Hyperelastic(_) => (planned, 0),
-                _ => (planned + 6, 3),
+                _ => (2 * planned, planned / 2),
             };
             assert!(
                 steps <= most_steps && rejected <= most_rejected,
                 "{}: {steps} steps ({rejected} rejected) for {planned}",
-                rope.name
-            );
-            assert!(
-                res <= 1e-12,
-                "{}: residual {res:.1e} of the force scale",
                 rope.name
             );
             assert!(
