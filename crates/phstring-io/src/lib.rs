@@ -3,6 +3,7 @@
 //! `phstring` command line.
 
 pub mod checkpoint;
+pub mod outdir;
 pub mod output;
 pub mod plot;
 pub mod runner;
@@ -10,4 +11,5 @@ pub mod scenario;
 pub mod sweep;
 #[cfg(test)]
 mod test_util;
+pub mod text;
 pub mod vtk;
