@@ -17,6 +17,8 @@ use phstring::{
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
+use crate::text::{clip, num, nums, printable};
+
 /// A scenario as written in the file (before validation).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -292,7 +294,7 @@ impl std::fmt::Display for Origin {
                 }
                 Ok(())
             }
-            Origin::Set(s) => write!(f, "--set {s}"),
+            Origin::Set(s) => write!(f, "--set {}", printable(&clip(s), false)),
             Origin::Scenario(path) => write!(f, "{}", path.display()),
         }
     }
@@ -302,12 +304,23 @@ impl std::fmt::Display for Origin {
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
     /// The file could not be read.
-    #[error("cannot read scenario file {}: {source}", path.display())]
+    #[error("cannot read scenario file {}: {cause}", path.display())]
     Read {
         /// File.
         path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
+        /// The operating system's reason (part of the message, not a separate source, so
+        /// that it is printed once).
+        cause: std::io::Error,
+    },
+    /// The file is larger than [`MAX_SCENARIO_BYTES`].
+    #[error(
+        "scenario file {} is larger than {} MiB; is it a scenario file?",
+        path.display(),
+        MAX_SCENARIO_BYTES >> 20
+    )]
+    TooLarge {
+        /// File.
+        path: PathBuf,
     },
     /// The file is not UTF-8 text.
     #[error("scenario file {} is not UTF-8 text (byte {valid_up_to} is invalid); is it a TOML file?", path.display())]
@@ -318,7 +331,7 @@ pub enum ScenarioError {
         valid_up_to: usize,
     },
     /// TOML syntax or type error (unknown key, wrong type, missing key).
-    #[error("{}: {message}", origin)]
+    #[error("{}: {}", origin, clip_lines(message))]
     Toml {
         /// Where.
         origin: Origin,
@@ -326,7 +339,7 @@ pub enum ScenarioError {
         message: String,
     },
     /// A `--set` option is malformed.
-    #[error("--set {option}: {reason}")]
+    #[error("--set {}: {reason}", printable(&clip(option), false))]
     Set {
         /// The option as given.
         option: String,
@@ -334,7 +347,7 @@ pub enum ScenarioError {
         reason: String,
     },
     /// A `--vary` option is malformed.
-    #[error("--vary {option}: {reason}")]
+    #[error("--vary {}: {reason}", printable(&clip(option), false))]
     Vary {
         /// The option as given.
         option: String,
@@ -367,12 +380,28 @@ pub struct ScenarioFile {
     shifted: bool,
 }
 
+/// Largest scenario file read [bytes] (16 MiB; the examples have about 1 KiB). Reading
+/// stops there, so `/dev/zero` or a huge file is refused instead of read forever.
+pub const MAX_SCENARIO_BYTES: u64 = 16 << 20;
+
 /// Reads `path`, applies `--set key=value` overrides and parses the scenario.
 pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError> {
-    let bytes = std::fs::read(path).map_err(|source| ScenarioError::Read {
+    use std::io::Read as _;
+    let read_err = |cause| ScenarioError::Read {
         path: path.to_path_buf(),
-        source,
-    })?;
+        cause,
+    };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .map_err(read_err)?
+        .take(MAX_SCENARIO_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(read_err)?;
+    if bytes.len() as u64 > MAX_SCENARIO_BYTES {
+        return Err(ScenarioError::TooLarge {
+            path: path.to_path_buf(),
+        });
+    }
     let text = String::from_utf8(bytes).map_err(|e| ScenarioError::NotText {
         path: path.to_path_buf(),
         valid_up_to: e.utf8_error().valid_up_to(),
@@ -428,7 +457,7 @@ fn toml_error(
         Origin::File { line, .. } => text
             .lines()
             .nth(line - 1)
-            .map(|l| format!("\n  | {l}"))
+            .map(|l| format!("\n  | {}", clip(l)))
             .unwrap_or_default(),
         _ => String::new(),
     };
@@ -436,6 +465,12 @@ fn toml_error(
         origin,
         message: format!("{}{excerpt}", message.trim_end()),
     }
+}
+
+/// `message` with each line shortened by [`clip`] (a parser message quotes the offending
+/// line, which may be megabytes long).
+fn clip_lines(message: &str) -> String {
+    message.lines().map(clip).collect::<Vec<_>>().join("\n")
 }
 
 /// 1-based line and column of byte offset `pos` in `text`.
@@ -447,7 +482,17 @@ fn line_col(text: &str, pos: usize) -> (usize, usize) {
     (line, column)
 }
 
-/// Applies one `key.path=value` to the document; returns the dotted key and value text.
+/// Most planned steps (`time.end / time.h`) of a run: 1e10 steps take days even on the
+/// smallest mesh.
+pub const MAX_STEPS: f64 = 1e10;
+
+/// Most segments of a `--set` key (the deepest scenario key has three, `boundary.0.force`).
+pub const MAX_KEY_SEGMENTS: usize = 32;
+/// Longest `--set` key [bytes].
+pub const MAX_KEY_BYTES: usize = 256;
+
+/// Applies one `key.path=value` to the document; returns the dotted key (array indices
+/// counted from the start, as validation names keys) and the value text.
 fn apply_set(
     doc: &mut toml_edit::DocumentMut,
     option: &str,
@@ -460,84 +505,88 @@ fn apply_set(
         .split_once('=')
         .ok_or_else(|| err("expected key=value, e.g. mesh.elements=300"))?;
     let key = key.trim();
-    let parts: Vec<&str> = key.split('.').collect();
+    if key.len() > MAX_KEY_BYTES {
+        return Err(err(&format!(
+            "the key is {} bytes long; scenario keys have at most {MAX_KEY_BYTES}",
+            key.len()
+        )));
+    }
+    let parts: Vec<&str> = key.split('.').map(str::trim).collect();
+    if parts.len() > MAX_KEY_SEGMENTS {
+        return Err(err(&format!(
+            "the key has {} segments; scenario keys have at most {MAX_KEY_SEGMENTS}",
+            parts.len()
+        )));
+    }
     if parts.iter().any(|p| p.is_empty()) {
         return Err(err("empty key segment"));
     }
-    // Parse the value as a TOML value; a bare word becomes a string.
-    let parsed: toml_edit::Value = match format!("v = {value}").parse::<toml_edit::DocumentMut>() {
-        Ok(d) => d["v"]
-            .as_value()
-            .cloned()
-            .ok_or_else(|| err("value is not a TOML value"))?,
-        Err(_) => toml_edit::Value::from(value.trim()),
-    };
-    let mut item: &mut toml_edit::Item = doc.as_item_mut();
-    for (i, part) in parts.iter().enumerate() {
-        let last = i + 1 == parts.len();
-        if let Ok(idx) = part.parse::<usize>() {
-            let arr = item.as_array_of_tables_mut().ok_or_else(|| {
-                err(&format!(
-                    "`{}` is not an array of tables",
-                    parts[..i].join(".")
-                ))
-            })?;
-            let len = arr.len();
-            let t = arr
-                .get_mut(idx)
-                .ok_or_else(|| err(&format!("index {idx} out of range ({len} entries)")))?;
-            if last {
-                return Err(err("cannot replace a whole table"));
-            }
-            // Descend into the table.
-            let next = parts[i + 1];
-            if i + 2 == parts.len() {
-                t.insert(next, toml_edit::Item::Value(parsed.clone()));
-                return Ok((key.to_string(), value.to_string()));
-            }
-            item = t
-                .get_mut(next)
-                .ok_or_else(|| err(&format!("no key `{next}`")))?;
-            return set_rest(item, &parts[i + 2..], parsed, key, value, &err);
-        }
-        let table = item
-            .as_table_like_mut()
-            .ok_or_else(|| err(&format!("`{}` is not a table", parts[..i].join("."))))?;
-        if last {
-            table.insert(part, toml_edit::Item::Value(parsed));
-            return Ok((key.to_string(), value.to_string()));
-        }
-        if table.get(part).is_none() {
-            table.insert(part, toml_edit::Item::Table(toml_edit::Table::new()));
-        }
-        item = table
-            .get_mut(part)
-            .ok_or_else(|| err(&format!("no key `{part}`")))?;
-    }
-    Err(err("empty key"))
-}
-
-fn set_rest(
-    mut item: &mut toml_edit::Item,
-    parts: &[&str],
-    parsed: toml_edit::Value,
-    key: &str,
-    value: &str,
-    err: &dyn Fn(&str) -> ScenarioError,
-) -> Result<(String, String), ScenarioError> {
-    for (i, part) in parts.iter().enumerate() {
-        let table = item
-            .as_table_like_mut()
-            .ok_or_else(|| err(&format!("`{part}` is not inside a table")))?;
+    let parsed = set_value(value).map_err(&err)?;
+    // Walk down the tables; `path` is the key as validation names it.
+    let mut table: &mut dyn toml_edit::TableLike = doc.as_table_mut();
+    let mut path: Vec<String> = Vec::new();
+    let mut i = 0;
+    loop {
+        let part = parts[i];
+        path.push(part.to_string());
         if i + 1 == parts.len() {
             table.insert(part, toml_edit::Item::Value(parsed));
-            return Ok((key.to_string(), value.to_string()));
+            return Ok((path.join("."), value.to_string()));
         }
-        item = table
+        if table.get(part).is_none() {
+            // Implicit: a table that only holds other tables gets no `[a.b]` header line of
+            // its own.
+            let mut t = toml_edit::Table::new();
+            t.set_implicit(true);
+            table.insert(part, toml_edit::Item::Table(t));
+        }
+        let here = path.join(".");
+        let item = table
             .get_mut(part)
-            .ok_or_else(|| err(&format!("no key `{part}`")))?;
+            .ok_or_else(|| err(&format!("no key `{here}`")))?;
+        i += 1;
+        table = match item {
+            toml_edit::Item::ArrayOfTables(arr) => {
+                let len = arr.len();
+                let idx: i64 = parts[i].parse().map_err(|_| {
+                    let rest = match parts.get(i + 1..) {
+                        Some(r) if !r.is_empty() => r.join("."),
+                        _ => "node".to_string(),
+                    };
+                    err(&format!(
+                        "`{here}` is an array of tables: address an entry by its 0-based index, e.g. {here}.0.{rest} (negative indices count from the end)"
+                    ))
+                })?;
+                let k = if idx < 0 { idx + len as i64 } else { idx };
+                if !(0..len as i64).contains(&k) {
+                    return Err(err(&format!("index {idx} out of range ({len} entries)")));
+                }
+                if i + 1 == parts.len() {
+                    return Err(err("cannot replace a whole table"));
+                }
+                path.push(k.to_string());
+                i += 1;
+                arr.get_mut(k as usize)
+                    .ok_or_else(|| err(&format!("index {idx} out of range ({len} entries)")))?
+            }
+            other => other
+                .as_table_like_mut()
+                .ok_or_else(|| err(&format!("`{here}` is not a table")))?,
+        };
     }
-    Err(err("empty key"))
+}
+
+/// The value of a `--set` option: one TOML value (which may span lines, like an array), or
+/// else the text as a string. A string cannot span lines: such text is refused instead of
+/// being cut at the line break.
+fn set_value(value: &str) -> Result<toml_edit::Value, &'static str> {
+    match value.trim().parse::<toml_edit::Value>() {
+        Ok(v) => Ok(v.decorated(" ", "")),
+        Err(_) if value.contains(['\n', '\r']) => Err(
+            "the value has a line break but is not one TOML value (text that is not TOML is taken as a string, which must fit on one line)",
+        ),
+        Err(_) => Ok(toml_edit::Value::from(value.trim())),
+    }
 }
 
 /// Keeps the first failure of a force expression (later ones are consequences).
@@ -553,8 +602,10 @@ fn record_load_error(
         && s.is_none()
     {
         *s = Some(format!(
-            "`boundary.{k}.force` component {} \"{text}\" at t = {t} s: {what}",
-            ["x", "y", "z"][component.min(2)]
+            "`boundary.{k}.force` component {} \"{}\" at t = {} s: {what}",
+            ["x", "y", "z"][component.min(2)],
+            clip(text),
+            num(t)
         ));
     }
 }
@@ -578,7 +629,7 @@ impl Expr {
             text: text.to_string(),
         };
         e.eval(t_check)
-            .map_err(|m| format!("expression \"{text}\" is invalid: {m}"))?;
+            .map_err(|m| format!("expression \"{}\" is invalid: {m}", clip(text)))?;
         Ok(e)
     }
     /// Evaluates at time `t` [s].
@@ -588,8 +639,11 @@ impl Expr {
             let s = e.span;
             let part = self.text.get(s.start..s.end).unwrap_or("");
             format!(
-                "{} (at \"{part}\", characters {}..{})",
-                e.kind, s.start, s.end
+                "{} (at \"{}\", characters {}..{})",
+                e.kind,
+                clip(part),
+                s.start,
+                s.end
             )
         })
     }
@@ -684,7 +738,7 @@ impl ScenarioFile {
             Err(self.invalid(
                 key,
                 v.span(),
-                format!("must be positive and finite, got {x}"),
+                format!("must be positive and finite, got {}", num(x)),
             ))
         }
     }
@@ -706,7 +760,11 @@ impl ScenarioFile {
             ));
         }
         if let Some(bad) = x.iter().find(|c| !c.is_finite()) {
-            return Err(self.invalid(key, v.span(), format!("has a non-finite component {bad}")));
+            return Err(self.invalid(
+                key,
+                v.span(),
+                format!("has a non-finite component {}", num(*bad)),
+            ));
         }
         Ok(Vector::<D>::from_column_slice(x))
     }
@@ -732,7 +790,8 @@ impl ScenarioFile {
                 "material.law",
                 s.material.law.span(),
                 format!(
-                    "must be hyperelastic, linear_elastic, st_venant_kirchhoff, tension_only_linear or tension_only_hyperelastic, got \"{law}\""
+                    "must be hyperelastic, linear_elastic, st_venant_kirchhoff, tension_only_linear or tension_only_hyperelastic, got \"{}\"",
+                    clip(law)
                 ),
             )
         })?;
@@ -743,7 +802,7 @@ impl ScenarioFile {
                 return Err(self.invalid(
                     "material.mass",
                     s.material.mass.span(),
-                    format!("must be consistent or lumped, got \"{other}\""),
+                    format!("must be consistent or lumped, got \"{}\"", clip(other)),
                 ));
             }
         };
@@ -772,7 +831,7 @@ impl ScenarioFile {
                         return Err(self.invalid(
                             "geometry.nodes",
                             nodes.span(),
-                            format!("node {i} must have {D} finite components, got {p:?}"),
+                            format!("node {i} must have {D} finite components, got {}", nums(p)),
                         ));
                     }
                     out.push(Vector::<D>::from_column_slice(p));
@@ -807,11 +866,35 @@ impl ScenarioFile {
             }
         };
         let n_el = positions.len() - 1;
-        let seg: Vec<f64> = positions.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
-        if let Some(i) = seg.iter().position(|&l| l.is_nan() || l <= 0.0) {
+        let geometry_span = g.nodes.as_ref().map_or(0..0, |n| n.span());
+        // Interpolating between start and end overflows when they are too far apart.
+        if let Some(i) = positions
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
             return Err(self.invalid(
                 "geometry",
-                g.nodes.as_ref().map_or(0..0, |n| n.span()),
+                geometry_span,
+                format!(
+                    "node {i} has a non-finite position: the distance from start to end overflows (too large coordinates)"
+                ),
+            ));
+        }
+        let seg: Vec<f64> = positions.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+        if let Some(i) = seg.iter().position(|&l| !l.is_finite()) {
+            return Err(self.invalid(
+                "geometry",
+                geometry_span,
+                format!(
+                    "the length of element {i} (nodes {i} to {}) overflows: the coordinates are too large",
+                    i + 1
+                ),
+            ));
+        }
+        if let Some(i) = seg.iter().position(|&l| l <= 0.0) {
+            return Err(self.invalid(
+                "geometry",
+                geometry_span,
                 format!(
                     "element {i} has zero initial length (nodes {i} and {} coincide)",
                     i + 1
@@ -819,16 +902,45 @@ impl ScenarioFile {
             ));
         }
         let total: f64 = seg.iter().sum();
+        if !total.is_finite() {
+            return Err(self.invalid(
+                "geometry",
+                geometry_span,
+                "the total length of the string overflows: the coordinates are too large",
+            ));
+        }
         let lengths: Vec<f64> = match &g.length {
             Some(l) => {
                 let l0 = self.positive("geometry.length", l)?;
-                seg.iter().map(|s| s * l0 / total).collect()
+                let lengths: Vec<f64> = seg.iter().map(|s| s * l0 / total).collect();
+                if let Some(i) = lengths.iter().position(|&x| !x.is_finite() || x <= 0.0) {
+                    return Err(self.invalid(
+                        "geometry.length",
+                        l.span(),
+                        format!(
+                            "= {} gives element {i} the reference length {}, which is not a positive finite number",
+                            num(l0),
+                            num(lengths[i])
+                        ),
+                    ));
+                }
+                lengths
             }
             None => seg.clone(),
         };
         let mesh = Mesh::new(n_el + 1, (0..n_el).map(|e| [e, e + 1]).collect(), lengths)
             .map_err(|e| self.invalid("geometry", 0..0, e.to_string()))?;
         let initial = State::at_rest(&mesh, positions);
+        if let Some((e, c)) = initial.c.iter().enumerate().find(|(_, c)| !c.is_finite()) {
+            return Err(self.invalid(
+                "geometry",
+                0..0,
+                format!(
+                    "initial strain C = {} of element {e} is not finite: the initial length is too large for the reference length (geometry.length)",
+                    num(*c)
+                ),
+            ));
+        }
         if let Some((e, c)) = initial
             .c
             .iter()
@@ -838,7 +950,10 @@ impl ScenarioFile {
             return Err(self.invalid(
                 "geometry",
                 0..0,
-                format!("initial strain C = {c} of element {e} is outside the material's domain"),
+                format!(
+                    "initial strain C = {} of element {e} is outside the material's domain",
+                    num(*c)
+                ),
             ));
         }
         // Body force.
@@ -896,7 +1011,7 @@ impl ScenarioFile {
                                 return Err(self.invalid(
                                     &key("fixed"),
                                     f.span(),
-                                    format!("component \"{name}\" is not one of x, y, z up to dimension {D}"),
+                                    format!("component \"{}\" is not one of x, y, z up to dimension {D}", clip(name)),
                                 ));
                             }
                             c[i] = true;
@@ -948,7 +1063,7 @@ impl ScenarioFile {
                                 i,
                                 exprs[i].text(),
                                 t,
-                                &format!("value {x}"),
+                                &format!("value {}", num(x)),
                             );
                             f64::NAN
                         }
@@ -977,11 +1092,31 @@ impl ScenarioFile {
         let h = self.positive("time.h", &s.time.h)?;
         let t_end = self.positive("time.end", &s.time.end)?;
         let steps = (t_end / h).round();
+        if steps > MAX_STEPS {
+            return Err(self.invalid(
+                "time.h",
+                s.time.h.span(),
+                format!(
+                    "= {} gives {} steps up to time.end = {}; at most {MAX_STEPS:.0e} are allowed (use a larger time.h or a shorter time.end)",
+                    num(h),
+                    if steps.is_finite() {
+                        format!("{steps:.2e}")
+                    } else {
+                        "too many".to_string()
+                    },
+                    num(t_end)
+                ),
+            ));
+        }
         if steps < 1.0 || ((steps * h) - t_end).abs() > 1e-9 * t_end {
             return Err(self.invalid(
                 "time.h",
                 s.time.h.span(),
-                format!("= {h} does not divide time.end = {t_end} into a whole number of steps"),
+                format!(
+                    "= {} does not divide time.end = {} into a whole number of steps",
+                    num(h),
+                    num(t_end)
+                ),
             ));
         }
         let scheme = match s.time.scheme.get_ref().as_str() {
@@ -991,7 +1126,7 @@ impl ScenarioFile {
                 return Err(self.invalid(
                     "time.scheme",
                     s.time.scheme.span(),
-                    format!("must be dg or mp, got \"{other}\""),
+                    format!("must be dg or mp, got \"{}\"", clip(other)),
                 ));
             }
         };
@@ -1012,7 +1147,10 @@ impl ScenarioFile {
                 return Err(self.invalid(
                     "newton.solver",
                     s.newton.solver.span(),
-                    format!("must be auto, block_tridiagonal or sparse_lu, got \"{other}\""),
+                    format!(
+                        "must be auto, block_tridiagonal or sparse_lu, got \"{}\"",
+                        clip(other)
+                    ),
                 ));
             }
         };
@@ -1024,7 +1162,10 @@ impl ScenarioFile {
                 return Err(self.invalid(
                     "newton.predictor",
                     s.newton.predictor.span(),
-                    format!("must be velocity, acceleration or midpoint_velocity, got \"{other}\""),
+                    format!(
+                        "must be velocity, acceleration or midpoint_velocity, got \"{}\"",
+                        clip(other)
+                    ),
                 ));
             }
         };
