@@ -10,16 +10,30 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
+use phstring_io::outdir::{self, OutLock};
 use phstring_io::plot::{self, Series};
 use phstring_io::runner::{self, Progress, RunError, RunInfo, RunOptions};
 use phstring_io::scenario::{self, ScenarioFile};
-use phstring_io::sweep::Vary;
+use phstring_io::sweep::{Sweep, Vary};
+use phstring_io::text::{clip, num, nums, printable};
 
-/// Prints a line to stdout; a closed pipe (`phstring check … | head`) is not an error.
+/// Prints a line to stdout; a closed pipe (`phstring check … | head`) or a full disk is not
+/// an error. Control characters (from titles, values) are escaped; line breaks are kept.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+        let text = format!($($arg)*);
+        let _ = writeln!(std::io::stdout().lock(), "{}", printable(&text, true));
+    }};
+}
+
+/// Prints a line to stderr like [`say!`]: a closed or full stderr (`2>/dev/full`) neither
+/// panics nor changes the exit code.
+macro_rules! tell {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let text = format!($($arg)*);
+        let _ = writeln!(std::io::stderr().lock(), "{}", printable(&text, true));
     }};
 }
 
@@ -68,11 +82,11 @@ enum Command {
         #[arg(long)]
         force: bool,
         /// Write <out>/checkpoint.json every N steps (an interrupted run always writes one).
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = at_least_one)]
         checkpoint_every: Option<usize>,
         /// Continue an interrupted run from its checkpoint.json, in that folder; the outputs
         /// are then bit for bit those of an uninterrupted run.
-        #[arg(long, value_name = "CHECKPOINT")]
+        #[arg(long, value_name = "CHECKPOINT", conflicts_with = "force")]
         resume: Option<PathBuf>,
         /// Stop like Ctrl-C after N steps in all (to run in chunks).
         #[arg(long, value_name = "N")]
@@ -92,8 +106,8 @@ enum Command {
         /// Output folder (one sub-folder per run, plus sweep.csv).
         #[arg(long, default_value = "out/sweep")]
         out: PathBuf,
-        /// Parallel runs (default: number of cores).
-        #[arg(long, short)]
+        /// Parallel runs (default: number of cores; at most 4 per core).
+        #[arg(long, short, value_parser = at_least_one)]
         jobs: Option<usize>,
         /// Overwrite a non-empty output folder.
         #[arg(long)]
@@ -109,19 +123,62 @@ enum Command {
     },
 }
 
+/// A count option that must be at least 1 (`--jobs 0` or `--checkpoint-every 0` would do
+/// nothing, and are refused rather than ignored).
+fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(format!("{e}")),
+    }
+}
+
+/// `phstring paper` was interrupted (exit code 130 like an interrupted run; its message
+/// says how to redo it, since a `--resume` would complete only one of its runs).
+#[derive(Debug)]
+struct PaperInterrupted(String);
+
+impl std::fmt::Display for PaperInterrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for PaperInterrupted {}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            tell!("error: {}", error_text(&e));
             // 130 = interrupted (as a shell reports SIGINT), 1 = any other failure.
-            match e.downcast_ref::<RunError>() {
-                Some(RunError::Interrupted { .. }) => ExitCode::from(130),
-                _ => ExitCode::FAILURE,
+            if matches!(
+                e.downcast_ref::<RunError>(),
+                Some(RunError::Interrupted { .. })
+            ) || e.is::<PaperInterrupted>()
+            {
+                ExitCode::from(130)
+            } else {
+                ExitCode::FAILURE
             }
         }
     }
+}
+
+/// The error with its causes, each stated once: a cause whose text the message already
+/// holds (an error type that prints its source and also returns it from `source()`) is not
+/// repeated.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
 }
 
 fn dispatch(cli: Cli) -> Result<()> {
@@ -136,19 +193,26 @@ fn dispatch(cli: Cli) -> Result<()> {
             resume,
             stop_after_steps,
         } => {
-            let (file, out, resume) = match (scenario, resume) {
+            // From here on, Ctrl-C or SIGTERM asks the run to stop, and a second one exits.
+            let stop = stop_flag();
+            // The lock on the output folder is held until the run ends (or the process dies).
+            let (file, out, resume, _lock) = match (scenario, resume) {
                 (_, Some(cp_path)) => {
                     let cp = CheckpointFile::read(&cp_path)?;
                     let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
                     let dir = out.unwrap_or_else(|| {
                         cp_path
                             .parent()
+                            .filter(|p| !p.as_os_str().is_empty())
                             .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
                     });
-                    (file, dir, Some(cp))
+                    let lock = outdir::prepare_resume(&dir)?;
+                    (file, dir, Some(cp), lock)
                 }
                 (Some(scenario), None) => {
                     let file = scenario::load(&scenario, &sets)?;
+                    // Before validation, which itself holds the whole mesh.
+                    check_budget(&file)?;
                     file.check()?;
                     let out = out.unwrap_or_else(|| {
                         let stem = scenario
@@ -156,25 +220,25 @@ fn dispatch(cli: Cli) -> Result<()> {
                             .map_or("run".into(), |s| s.to_string_lossy().into_owned());
                         Path::new("out").join(stem)
                     });
-                    prepare_out(&out, force)?;
-                    (file, out, None)
+                    let lock = prepare_out(&out, force)?;
+                    (file, out, None, lock)
                 }
                 (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
             };
             let opts = RunOptions {
                 checkpoint_every,
                 stop_after_steps,
-                stop: Some(stop_flag()),
+                stop: Some(stop),
                 resume,
                 ..Default::default()
             };
             let info = run_one(&file, &out, cli.quiet, opts)?;
             say!(
-                "{}: {} steps, Ĥ(0) = {:.9} J, Ĥ(T) = {:.9} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
+                "{}: {} steps, Ĥ(0) = {} J, Ĥ(T) = {} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
                 info.status,
                 info.steps,
-                info.hamiltonian_initial,
-                info.hamiltonian_final,
+                energy(info.hamiltonian_initial),
+                energy(info.hamiltonian_final),
                 info.max_balance_error,
                 info.total_newton_iterations,
                 info.time_loop_s
@@ -194,88 +258,21 @@ fn dispatch(cli: Cli) -> Result<()> {
     }
 }
 
-/// Refuses a non-empty output folder unless `force`.
-fn prepare_out(out: &Path, force: bool) -> Result<()> {
-    if out.exists() {
-        if !out.is_dir() {
-            bail!("output path {} exists and is not a folder", out.display());
-        }
-        let non_empty = std::fs::read_dir(out)
-            .with_context(|| format!("cannot read output folder {}", out.display()))?
-            .flatten()
-            .any(|e| !phstring_io::output::is_own_temp_file(&e.file_name().to_string_lossy()));
-        if non_empty && !force {
-            bail!(
-                "output folder {} is not empty; pass --force to overwrite it, or choose another with --out",
-                out.display()
-            );
-        }
-        if non_empty {
-            clear_outputs(out)?;
-        }
-    }
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("cannot create output folder {}", out.display()))
+/// Prepares and locks an output folder ([`outdir::prepare`]): refuses a non-empty folder
+/// unless `force`, a folder another run is using, and symbolic links among phstring's
+/// output names; with `force`, removes exactly the outputs of an earlier run.
+fn prepare_out(out: &Path, force: bool) -> Result<OutLock> {
+    Ok(outdir::prepare(out, force)?)
 }
 
-/// Removes the files a previous run wrote into `out` (and nothing else), so that stale
-/// frames or plots cannot be mistaken for the new run's.
-fn clear_outputs(out: &Path) -> Result<()> {
-    let ours = |name: &str| {
-        matches!(
-            name,
-            "energy.csv"
-                | "positions.csv"
-                | "ports.csv"
-                | "summary.json"
-                | "string.pvd"
-                | "checkpoint.json"
-                | "sweep.csv"
-        ) || (name.starts_with("frame_") && name.ends_with(".vtp"))
-            || ["energy", "configuration", "increments"]
-                .iter()
-                .any(|s| name == format!("{s}.svg") || name == format!("{s}.png"))
-            || (name.starts_with("fig") && (name.ends_with(".svg") || name.ends_with(".png")))
-    };
-    let mut dirs: Vec<PathBuf> = [
-        "",
-        "paraview",
-        "dg",
-        "mp",
-        "dg/paraview",
-        "mp/paraview",
-        "figures",
-    ]
-    .iter()
-    .map(|s| out.join(s))
-    .collect();
-    // Sweep runs: run_NNN/ and run_NNN/paraview/.
-    if let Ok(entries) = std::fs::read_dir(out) {
-        for e in entries.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            let is_run = name
-                .strip_prefix("run_")
-                .is_some_and(|n| n.chars().all(|c| c.is_ascii_digit()));
-            if is_run && e.path().is_dir() {
-                dirs.push(e.path());
-                dirs.push(e.path().join("paraview"));
-            }
-        }
+/// An energy for the terminal: 9 decimals, or scientific notation for very large or small
+/// values (never hundreds of digits).
+fn energy(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+        format!("{x:.9}")
+    } else {
+        format!("{x:.9e}")
     }
-    for dir in dirs {
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            continue;
-        };
-        for entry in entries.flatten() {
-            let name = entry.file_name().to_string_lossy().into_owned();
-            if entry.path().is_file() && ours(&name) {
-                std::fs::remove_file(entry.path()).with_context(|| {
-                    format!("cannot remove old output {}", entry.path().display())
-                })?;
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Progress over simulated time (per mille of `t_end`), with step count and time.
@@ -292,7 +289,7 @@ impl Progress for Bar {
         if let Some(b) = &self.0 {
             b.set_position((1000.0 * t / self.1).round() as u64);
             if step.is_multiple_of(16) {
-                b.set_message(format!("t = {t:.4} s of {} s, step {step}", self.1));
+                b.set_message(format!("t = {t:.4} s of {} s, step {step}", num(self.1)));
             }
         }
     }
@@ -313,7 +310,8 @@ fn progress_bar(quiet: bool, label: &str) -> Bar {
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> "),
     );
-    b.set_prefix(label.to_string());
+    // A title is user text: one line, no control characters, not too long.
+    b.set_prefix(printable(&clip(label), false).into_owned());
     b.enable_steady_tick(Duration::from_millis(200));
     Bar(Some(b), 1.0)
 }
@@ -328,19 +326,32 @@ fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions) -> Re
     Ok(runner::run(file, out, &mut bar, opts)?)
 }
 
-/// A flag set by Ctrl-C (SIGINT/SIGTERM): runs stop at the end of the current step with
-/// their outputs flushed and a checkpoint written.
+/// A flag set by the first Ctrl-C or SIGTERM (ctrlc's `termination` feature): runs stop at
+/// the end of the current step with their outputs flushed and a checkpoint written. A second
+/// Ctrl-C or SIGTERM exits at once with code 130, whatever the program is doing (what is on
+/// disk stays; the checkpoint of an interrupted run may then be missing). `run` and `paper`
+/// install it first thing; `check` and `sweep` keep the default effect of a signal (they
+/// end at once).
 fn stop_flag() -> std::sync::Arc<AtomicBool> {
     static STOP: std::sync::OnceLock<std::sync::Arc<AtomicBool>> = std::sync::OnceLock::new();
     STOP.get_or_init(|| {
         let flag = std::sync::Arc::new(AtomicBool::new(false));
         let set = flag.clone();
         // If no handler can be installed, Ctrl-C keeps its default effect.
-        let _ = ctrlc::set_handler(move || set.store(true, Ordering::SeqCst));
+        let _ = ctrlc::set_handler(move || {
+            if set.swap(true, Ordering::SeqCst) {
+                tell!("second interrupt: exiting at once");
+                std::process::exit(130);
+            }
+            tell!("stopping at the end of the current step (press Ctrl-C again to exit at once)");
+        });
         flag
     })
     .clone()
 }
+
+/// Most `--jobs` per core.
+const MAX_JOBS_PER_CORE: usize = 4;
 
 fn sweep(
     path: &Path,
@@ -355,12 +366,23 @@ fn sweep(
         .iter()
         .map(|v| Vary::parse(v))
         .collect::<Result<_, _>>()?;
-    let n: usize = vary.iter().map(|v| v.values.len()).product();
-    prepare_out(out, force)?;
-    if out.join("sweep.csv").exists() {
-        std::fs::remove_file(out.join("sweep.csv"))?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max_jobs = MAX_JOBS_PER_CORE * cores;
+    let jobs = jobs.unwrap_or(cores);
+    if jobs > max_jobs {
+        bail!(
+            "--jobs {jobs}: at most {max_jobs} ({MAX_JOBS_PER_CORE} per core, {cores} cores); each run is single-threaded, so more threads than cores only cost memory"
+        );
     }
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    // Every combination is validated before the output folder is touched.
+    let plan = Sweep::new(path, sets, vary)?;
+    let n = plan.len();
+    let concurrent = jobs.min(n);
+    for index in 0..n {
+        check_budget_of(&plan.file(index)?, concurrent)
+            .with_context(|| format!("run {index} of the sweep"))?;
+    }
+    let _lock = prepare_out(out, force)?;
     let bar = progress_bar(quiet, "sweep");
     if let Some(b) = &bar.0 {
         b.set_length(n as u64);
@@ -370,11 +392,11 @@ fn sweep(
         if let Some(b) = &bar.0 {
             b.inc(1);
             if let Err(e) = &r.result {
-                b.println(format!("run {} failed: {e}", r.index));
+                b.println(printable(&format!("run {} failed: {e}", r.index), true));
             }
         }
     };
-    let runs = phstring_io::sweep::run(path, sets, &vary, out, jobs, &done)?;
+    let runs = plan.run(out, jobs, &done)?;
     if let Some(b) = &bar.0 {
         b.finish_and_clear();
     }
@@ -400,7 +422,203 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
         _ => describe::<3>(&file)?,
     };
     say!("{} is valid:\n{text}", path.display());
+    let b = budget(&file)?;
+    say!("  estimate:  {}", b.describe());
+    for w in b.warnings(1) {
+        tell!("warning: {w}");
+    }
     Ok(())
+}
+
+/// Most planned steps before `check` warns.
+const WARN_STEPS: f64 = 1e9;
+
+/// What a run will take, roughly: planned steps, memory and time per step.
+struct Budget {
+    dimension: usize,
+    elements: usize,
+    steps: f64,
+    /// Bytes the run needs (the library's estimate), if known.
+    memory: Option<f64>,
+    /// Bytes of memory available on this machine, if known.
+    available: Option<f64>,
+    /// Seconds per step (rough, see [`budget`]).
+    step_seconds: f64,
+}
+
+/// Newton iterations per step assumed by the time estimate (3–6 are usual).
+const ITERATIONS_PER_STEP: f64 = 4.0;
+
+/// Memory of a run beyond [`phstring::estimated_memory_bytes`], per element [bytes], by
+/// dimension 1, 2, 3: (validation and the step's other work space, positions and plots,
+/// ParaView frames). Measured as the growth of the peak resident memory of `phstring run`
+/// (release, one step) from 3e4 to 3e5 elements, minus the library's estimate, rounded up.
+const RUN_BYTES_PER_ELEMENT: [(f64, f64, f64); 3] = [
+    (16.0, 8.0, 488.0),
+    (208.0, 192.0, 224.0),
+    (208.0, 192.0, 240.0),
+];
+
+/// The budget of a validated scenario: memory from [`phstring::estimated_memory_bytes`]
+/// plus [`RUN_BYTES_PER_ELEMENT`] for the outputs switched on; time per step from
+/// [`phstring::estimated_seconds_per_iteration`] (a release build) at
+/// [`ITERATIONS_PER_STEP`] iterations.
+fn budget(file: &ScenarioFile) -> Result<Budget> {
+    let s = &file.scenario;
+    let dimension = file.dimension()?;
+    let elements = match (&s.mesh.elements, &s.geometry.nodes) {
+        (Some(n), _) => usize::try_from(*n.get_ref()).unwrap_or(0),
+        (None, Some(nodes)) => nodes.get_ref().len().saturating_sub(1),
+        (None, None) => 0,
+    };
+    let steps = (*s.time.end.get_ref() / *s.time.h.get_ref()).round();
+    let (base, plots, vtk) = RUN_BYTES_PER_ELEMENT[dimension.clamp(1, 3) - 1];
+    let o = &s.output;
+    let per_element =
+        base + if o.positions || o.plots { plots } else { 0.0 } + if o.vtk { vtk } else { 0.0 };
+    Ok(Budget {
+        dimension,
+        elements,
+        steps,
+        memory: Some(
+            phstring::estimated_memory_bytes(dimension, elements) as f64
+                + per_element * elements as f64,
+        ),
+        available: mem_available()?,
+        step_seconds: ITERATIONS_PER_STEP
+            * phstring::estimated_seconds_per_iteration(dimension, elements),
+    })
+}
+
+impl Budget {
+    fn describe(&self) -> String {
+        let memory = self.memory.map_or_else(
+            || "memory unknown".to_string(),
+            |m| format!("{} of memory", bytes(m)),
+        );
+        format!(
+            "{memory}, ~{} per step, ~{} for {:.0} steps (rough: release build, {ITERATIONS_PER_STEP} Newton iterations per step)",
+            duration(self.step_seconds),
+            duration(self.step_seconds * self.steps),
+            self.steps
+        )
+    }
+
+    /// Problems of `concurrent` such runs at once on this machine.
+    fn warnings(&self, concurrent: usize) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.steps > WARN_STEPS {
+            w.push(format!(
+                "{:.2e} planned steps (about {} in all); a larger time.h or a shorter time.end may be meant",
+                self.steps,
+                duration(self.step_seconds * self.steps)
+            ));
+        }
+        if let Some(e) = self.memory_error(concurrent) {
+            w.push(e);
+        }
+        w
+    }
+
+    /// Why `concurrent` such runs do not fit in the available memory, if they do not.
+    fn memory_error(&self, concurrent: usize) -> Option<String> {
+        let need = self.memory? * concurrent as f64;
+        let available = self.available?;
+        (need > available).then(|| {
+            format!(
+                "{} elements in {}D need about {} of memory{}, but only {} is available on this machine; use fewer elements",
+                self.elements,
+                self.dimension,
+                bytes(need),
+                if concurrent > 1 {
+                    format!(" ({concurrent} runs at once; fewer --jobs also help)")
+                } else {
+                    String::new()
+                },
+                bytes(available)
+            )
+        })
+    }
+}
+
+/// Refuses a run that cannot fit in this machine's available memory.
+fn check_budget(file: &ScenarioFile) -> Result<()> {
+    check_budget_of(file, 1)
+}
+
+/// Refuses `concurrent` runs of `file` at once that cannot fit in this machine's available
+/// memory.
+fn check_budget_of(file: &ScenarioFile, concurrent: usize) -> Result<()> {
+    if let Some(e) = budget(file)?.memory_error(concurrent) {
+        bail!("{e}");
+    }
+    Ok(())
+}
+
+/// Environment variable with the memory [bytes] runs may use, instead of `MemAvailable` (in
+/// a container, `/proc/meminfo` may show the host's memory rather than the container's
+/// limit).
+const MEMORY_ENV: &str = "PHSTRING_MEMORY_AVAILABLE";
+
+/// The memory runs may use [bytes]: [`MEMORY_ENV`] if set, else `MemAvailable` of
+/// `/proc/meminfo` if readable.
+fn mem_available() -> Result<Option<f64>> {
+    if let Some(v) = std::env::var_os(MEMORY_ENV) {
+        let text = v.to_string_lossy();
+        return match text.trim().parse::<f64>() {
+            Ok(b) if b >= 0.0 && b.is_finite() => Ok(Some(b)),
+            _ => bail!(
+                "{MEMORY_ENV}={}: expected a number of bytes, e.g. 8e9",
+                clip(&text)
+            ),
+        };
+    }
+    Ok(meminfo_available())
+}
+
+/// `MemAvailable` of `/proc/meminfo` [bytes], if readable.
+fn meminfo_available() -> Option<f64> {
+    use std::io::Read as _;
+    let mut text = String::new();
+    std::fs::File::open("/proc/meminfo")
+        .ok()?
+        .take(64 << 10)
+        .read_to_string(&mut text)
+        .ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: f64 = line
+        .trim_start_matches("MemAvailable:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kib * 1024.0)
+}
+
+/// Bytes for people: `3.2 GB`.
+fn bytes(b: f64) -> String {
+    match b {
+        b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
+        b if b >= 1e6 => format!("{:.0} MB", b / 1e6),
+        b => format!("{:.0} kB", (b / 1e3).max(1.0)),
+    }
+}
+
+/// Seconds for people: `0.3 ms`, `12 s`, `3.5 h`, `41 days`, `2.1e6 years`.
+fn duration(s: f64) -> String {
+    const DAY: f64 = 86_400.0;
+    const YEAR: f64 = 365.25 * DAY;
+    match s {
+        s if s < 1e-3 => format!("{:.2} ms", s * 1e3),
+        s if s < 1.0 => format!("{:.0} ms", s * 1e3),
+        s if s < 120.0 => format!("{s:.1} s"),
+        s if s < 7200.0 => format!("{:.0} min", s / 60.0),
+        s if s < 2.0 * DAY => format!("{:.1} h", s / 3600.0),
+        s if s < YEAR => format!("{:.0} days", s / DAY),
+        s if s < 1e4 * YEAR => format!("{:.0} years", s / YEAR),
+        s => format!("{:.1e} years", s / YEAR),
+    }
 }
 
 fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
@@ -412,7 +630,10 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
     let _ = writeln!(
         out,
         "  title:     {}",
-        file.scenario.title.as_deref().unwrap_or("(none)")
+        printable(
+            &clip(file.scenario.title.as_deref().unwrap_or("(none)")),
+            false
+        )
     );
     let _ = writeln!(out, "  dimension: {D}");
     let _ = writeln!(
@@ -420,20 +641,20 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         "  mesh:      {} elements, {} nodes, reference length {} m",
         p.mesh.n_elements(),
         p.mesh.n_nodes(),
-        p.mesh.total_length()
+        num(p.mesh.total_length())
     );
     let _ = writeln!(
         out,
         "  material:  {}, EA = {} N, rhoA = {} kg/m, {} mass",
         p.material.name(),
-        p.material.ea(),
-        p.rho_a,
+        num(p.material.ea()),
+        num(p.rho_a),
         match p.mass {
             phstring::MassMatrix::Consistent => "consistent",
             phstring::MassMatrix::Lumped => "lumped",
         }
     );
-    let _ = writeln!(out, "  body force: {:?} N/m", p.body_force.as_slice());
+    let _ = writeln!(out, "  body force: {} N/m", nums(p.body_force.as_slice()));
     for f in &p.boundary.fixed {
         let comps: Vec<&str> = ["x", "y", "z"][..D]
             .iter()
@@ -444,6 +665,7 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         let _ = writeln!(out, "  fixed:     node {} ({})", f.node, comps.join(", "));
     }
     for (node, exprs) in &v.loads {
+        let exprs: Vec<String> = exprs.iter().map(|e| clip(e).into_owned()).collect();
         let _ = writeln!(out, "  force:     node {node}: [{}] N", exprs.join(", "));
     }
     let steps = (s.t_end / s.step.h).round() as usize;
@@ -451,8 +673,8 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         out,
         "  time:      {} scheme, h = {} s, T = {} s, {steps} steps",
         s.step.scheme.name(),
-        s.step.h,
-        s.t_end
+        num(s.step.h),
+        num(s.t_end)
     );
     let _ = write!(
         out,
@@ -464,8 +686,20 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
     Ok(out)
 }
 
+/// The error of an interrupted `phstring paper`. A `--resume` of the run's checkpoint
+/// would complete that one run only (not the other scheme, nor the figures), and the whole
+/// benchmark takes about a second: the honest advice is to run it again.
+fn paper_interrupted(scheme: &str, out: &Path) -> PaperInterrupted {
+    PaperInterrupted(format!(
+        "interrupted during the {scheme} run; the outputs so far are in {}; the benchmark takes about a second: run `phstring paper --force --out {}` again for all of it",
+        out.display(),
+        out.display()
+    ))
+}
+
 fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
-    prepare_out(out, force)?;
+    let stop = stop_flag();
+    let _lock = prepare_out(out, force)?;
     let path = Path::new("examples/paper_pendulum.toml (built in)");
     let mut infos = Vec::new();
     for scheme in ["dg", "mp"] {
@@ -474,10 +708,15 @@ fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
         std::fs::create_dir_all(&dir)?;
         let opts = RunOptions {
             end_of_loading: Some(PAPER_END_OF_LOADING),
-            stop: Some(stop_flag()),
+            stop: Some(stop.clone()),
             ..Default::default()
         };
-        let info = run_one(&file, &dir, quiet, opts)?;
+        let info = match run_one(&file, &dir, quiet, opts) {
+            Err(e) if matches!(e.downcast_ref(), Some(RunError::Interrupted { .. })) => {
+                return Err(paper_interrupted(scheme, out).into());
+            }
+            r => r?,
+        };
         infos.push(info);
     }
     let figures = out.join("figures");
@@ -571,4 +810,54 @@ fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
     say!("paper:  H(0) = -3.468359, H(1) = -3.403762 (DG), -3.398474 (MP)");
     say!("outputs in {} (dg/, mp/, figures/)", out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Finding "`phstring paper` interrupted suggests a `--resume` that completes only
+    /// `dg/`": the message suggests re-running the whole benchmark instead.
+    #[test]
+    fn paper_interrupted_suggests_rerunning_paper() {
+        let e = paper_interrupted("dg", Path::new("out/p")).to_string();
+        assert!(!e.contains("--resume"), "{e}");
+        assert!(
+            e.contains("run `phstring paper --force --out out/p` again"),
+            "{e}"
+        );
+        assert!(e.contains("during the dg run"), "{e}");
+        let any: anyhow::Error = paper_interrupted("mp", Path::new("x")).into();
+        assert!(any.is::<PaperInterrupted>());
+    }
+
+    #[test]
+    fn error_causes_appear_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
+        // A message that already holds its cause, with the cause also chained.
+        #[derive(Debug)]
+        struct Both(std::io::Error);
+        impl std::fmt::Display for Both {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "cannot read x: {}", self.0)
+            }
+        }
+        impl std::error::Error for Both {
+            fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+                Some(&self.0)
+            }
+        }
+        let e = anyhow::Error::new(Both(io)).context("loading");
+        assert_eq!(error_text(&e), "loading: cannot read x: gone");
+    }
+
+    #[test]
+    fn sizes_and_durations_for_people() {
+        assert_eq!(bytes(9.94e8), "994 MB");
+        assert_eq!(bytes(2.01e10), "20.1 GB");
+        assert_eq!(duration(12.5), "12.5 s");
+        assert_eq!(duration(3.0 * 3600.0), "3.0 h");
+        assert_eq!(energy(-3.468358762), "-3.468358762");
+        assert_eq!(energy(1e300), "1.000000000e300");
+    }
 }

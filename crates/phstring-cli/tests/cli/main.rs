@@ -2,6 +2,7 @@
 
 mod broken;
 mod examples;
+mod hardening_cli;
 mod hardening_io;
 mod reliability;
 
