@@ -94,3 +94,120 @@ proptest! {
         prop_assert!(file.check().is_ok(), "{:?}", file.check().err().map(|e| e.to_string()));
     }
 }
+
+/// The paper example, for `--set` properties.
+fn paper_text() -> String {
+    scenario_text(2, 30, 20.0, 1.0, 0.01, 1.0, -1, "sin(t)")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Issue 10: any `--set` option (keys of any depth, values with line breaks, quotes,
+    /// brackets) gives a scenario or an error that names the option, clipped to a bounded
+    /// length, and never a panic.
+    #[test]
+    fn set_options_never_panic_and_errors_are_bounded(
+        key in "[a-z0-9._ -]{0,40}|(boundary|geometry|time)\\.-?[0-9]{1,2}\\.[a-z]{1,6}",
+        value in "[a-z0-9\\[\\]{}\"'=,.\\n -]{0,60}",
+        long in 0usize..2,
+    ) {
+        let value = if long == 1 { value.repeat(2000) } else { value };
+        let option = format!("{key}={value}");
+        match scenario::parse(&paper_text(), Path::new("p.toml"), std::slice::from_ref(&option)) {
+            Ok(file) => { let _ = file.check(); }
+            Err(e) => {
+                let m = e.to_string();
+                prop_assert!(m.len() < 1500, "{} bytes: {}", m.len(), &m[..300]);
+                prop_assert!(!m.chars().any(|c| c.is_control() && c != '\n'), "{m:?}");
+            }
+        }
+    }
+
+    /// Issue 10 (`--vary` splitting): values joined by commas split back into the same
+    /// values, whatever quotes, escapes and brackets they hold.
+    #[test]
+    fn vary_values_split_back(values in proptest::collection::vec(vary_value(), 1..5)) {
+        let option = format!("title={}", values.join(","));
+        let v = phstring_io::sweep::Vary::parse(&option).unwrap();
+        prop_assert_eq!(v.values, values);
+    }
+
+    /// Any `--vary` text gives values or an error, never a panic.
+    #[test]
+    fn vary_parsing_never_panics(text in "[a-z=,\"'\\\\\\[\\]{} ]{0,40}") {
+        let _ = phstring_io::sweep::Vary::parse(&text);
+    }
+}
+
+/// A `--vary` value: a number, a word, a basic string with escapes, a literal string or
+/// an array of them.
+fn vary_value() -> impl Strategy<Value = String> {
+    let leaf = prop_oneof![
+        "[0-9]{1,4}".prop_map(|s| s),
+        "[a-z]{1,6}".prop_map(|s| s),
+        "([a-z,]|\\\\\"|\\\\\\\\){0,6}".prop_map(|s| format!("\"{s}\"")),
+        "[a-z,\"]{0,6}".prop_map(|s| format!("'{s}'")),
+    ];
+    prop_oneof![
+        leaf.clone(),
+        proptest::collection::vec(leaf, 0..3).prop_map(|v| format!("[{}]", v.join(", "))),
+    ]
+}
+
+/// Issue 10 (unbounded inputs): a key of 4,000 segments is refused at once by its length;
+/// 32 segments are the most.
+#[test]
+fn deep_set_keys_are_capped() {
+    let deep = format!("{}=1", vec!["a"; 4000].join("."));
+    let e = scenario::parse(&paper_text(), Path::new("p.toml"), &[deep])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("the key is 7999 bytes long"),
+        "{}",
+        &e[..300.min(e.len())]
+    );
+    assert!(e.len() < 600);
+    let deep = format!("{}=1", vec!["a"; 33].join("."));
+    let e = scenario::parse(&paper_text(), Path::new("p.toml"), &[deep])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("33 segments"), "{e}");
+    // 32 segments: a new nested table costs one header line, not one per level.
+    let deep = format!("{}=1", vec!["a"; 32].join("."));
+    let e = scenario::parse(&paper_text(), Path::new("p.toml"), &[deep])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown field `a`"), "{e}");
+}
+
+/// Issue 10 (`--set` silently drops the text after a newline).
+#[test]
+fn set_with_a_line_break_is_one_value_or_refused() {
+    let e = scenario::parse(
+        &paper_text(),
+        Path::new("p.toml"),
+        &["time.h=0.01\ntime.end=5".to_string()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("the value has a line break"), "{e}");
+    let file = scenario::parse(
+        &paper_text(),
+        Path::new("p.toml"),
+        &["geometry.end=[\n1.0,\n 2.0]".to_string()],
+    )
+    .unwrap();
+    assert_eq!(
+        file.scenario.geometry.end.as_ref().unwrap().get_ref(),
+        &vec![1.0, 2.0]
+    );
+}
+
+/// Issue 10 (unbounded inputs): a scenario file is read up to 16 MiB.
+#[test]
+fn scenario_file_size_is_capped() {
+    let e = scenario::load(Path::new("/dev/zero"), &[]).unwrap_err();
+    assert!(matches!(e, scenario::ScenarioError::TooLarge { .. }), "{e}");
+}
