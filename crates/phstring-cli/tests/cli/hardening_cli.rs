@@ -576,6 +576,11 @@ fn error_causes_are_printed_once() {
     let o = phstring(&["check", "missing.toml"]);
     let err = stderr(&o);
     assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    // CheckpointError::Io both prints and chains its cause: still once.
+    let o = phstring(&["run", "--resume", "/nonexistent/checkpoint.json"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
     let o = phstring(&["run", PAPER, "--out", "/dev/null/o"]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
