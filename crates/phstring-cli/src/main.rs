@@ -206,6 +206,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                             .filter(|p| !p.as_os_str().is_empty())
                             .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
                     });
+                    check_budget(&file)?;
                     let lock = outdir::prepare_resume(&dir)?;
                     (file, dir, Some(cp), lock)
                 }
