@@ -173,9 +173,15 @@ fn default_scheme() -> Spanned<String> {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct NewtonSpec {
-    /// Residual tolerance [N] (Euclidean norm of the force residual).
-    #[serde(default = "default_tol")]
-    pub tol: Spanned<f64>,
+    /// Absolute residual tolerance [N] (Euclidean norm of the force residual). Given alone,
+    /// the convergence test is absolute (the paper's 1e-11 N); with `rtol`, a floor under
+    /// the relative test.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tol: Option<Spanned<f64>>,
+    /// Tolerance relative to the step's force scale (see docs/method.md §9). When neither
+    /// `tol` nor `rtol` is given: `rtol = 1e-12` with an absolute floor of 1e-15 N.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rtol: Option<Spanned<f64>>,
     /// Iteration limit per step.
     #[serde(default = "default_max_iter")]
     pub max_iter: Spanned<i64>,
@@ -200,9 +206,6 @@ fn default_predictor() -> Spanned<String> {
     Spanned::new(0..0, "midpoint_velocity".into())
 }
 
-fn default_tol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-11)
-}
 fn default_max_iter() -> Spanned<i64> {
     Spanned::new(0..0, 25)
 }
@@ -213,7 +216,8 @@ fn default_solver() -> Spanned<String> {
 impl Default for NewtonSpec {
     fn default() -> Self {
         Self {
-            tol: default_tol(),
+            tol: None,
+            rtol: None,
             max_iter: default_max_iter(),
             solver: default_solver(),
             line_search: true,
@@ -1130,7 +1134,32 @@ impl ScenarioFile {
                 ));
             }
         };
-        let tol = self.positive("newton.tol", &s.newton.tol)?;
+        let tol = match &s.newton.tol {
+            Some(t) => Some(self.positive("newton.tol", t)?),
+            None => None,
+        };
+        let rtol = match &s.newton.rtol {
+            Some(r) => {
+                let x = *r.get_ref();
+                if !(0.0..1.0).contains(&x) {
+                    return Err(self.invalid(
+                        "newton.rtol",
+                        r.span(),
+                        format!("must be at least 0 and below 1, got {}", phstring::Num(x)),
+                    ));
+                }
+                Some(x)
+            }
+            None => None,
+        };
+        // `tol` alone: absolute test; otherwise relative with `tol` (or the default) as floor.
+        let (tol, rtol) = match (tol, rtol) {
+            (Some(t), None) => (t, 0.0),
+            (t, r) => (
+                t.unwrap_or(phstring::newton::DEFAULT_ATOL),
+                r.unwrap_or(phstring::newton::DEFAULT_RTOL),
+            ),
+        };
         let max_iter = *s.newton.max_iter.get_ref();
         if !(1..=10_000).contains(&max_iter) {
             return Err(self.invalid(
@@ -1202,6 +1231,7 @@ impl ScenarioFile {
                     scheme,
                     newton: NewtonParams {
                         tol,
+                        rtol,
                         max_iter: max_iter as usize,
                         line_search: s.newton.line_search,
                         elimination: s.newton.elimination,
