@@ -679,12 +679,25 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
     );
     let _ = write!(
         out,
-        "  newton:    tol = {:e} N, max {} iterations, solver {}",
-        s.step.newton.tol,
+        "  newton:    {}, max {} iterations, solver {}",
+        newton_test(&s.step.newton),
         s.step.newton.max_iter,
         s.step.solver.name()
     );
     Ok(out)
+}
+
+/// The Newton convergence test in words: `‖R‖ ≤ max(tol, rtol·F)` or `‖R‖ ≤ tol`.
+fn newton_test(n: &phstring::NewtonParams) -> String {
+    if n.rtol > 0.0 {
+        format!(
+            "‖R‖ ≤ max({} N, {} × force scale)",
+            num(n.tol),
+            num(n.rtol)
+        )
+    } else {
+        format!("‖R‖ ≤ {} N (absolute)", num(n.tol))
+    }
 }
 
 /// The error of an interrupted `phstring paper`. A `--resume` of the run's checkpoint

@@ -137,7 +137,7 @@ fn newton_failure_with_fixed_steps_names_step_time_node_residual() {
         code,
         &err,
         &out,
-        &["in step 1 (t = 0 → 0.01)", "residual", "at node"],
+        &["in step 1 (t = 0 s → 0.01 s)", "residual", "at node"],
     );
     assert_eq!(steps, 0);
 }
@@ -158,7 +158,7 @@ fn exhausted_step_size_control_is_an_error() {
         code,
         &err,
         &out,
-        &["no convergence even with h = 5.000e-3 s after 1 halvings"],
+        &["the step-size floor h = 5.000e-3 s (time.h / 2^1) was reached without convergence"],
     );
 }
 
