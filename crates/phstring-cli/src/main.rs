@@ -91,6 +91,10 @@ enum Command {
         /// Stop like Ctrl-C after N steps in all (to run in chunks).
         #[arg(long, value_name = "N")]
         stop_after_steps: Option<usize>,
+        /// For tests: send SIGINT to this process after step N and wait until the handler has
+        /// seen it, so that an interruption by a real signal lands at a known step.
+        #[arg(long, value_name = "N", hide = true)]
+        signal_self_after_step: Option<usize>,
     },
     /// Run a scenario for every combination of varied values, in parallel.
     Sweep {
@@ -192,6 +196,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             checkpoint_every,
             resume,
             stop_after_steps,
+            signal_self_after_step,
         } => {
             // From here on, Ctrl-C or SIGTERM asks the run to stop, and a second one exits.
             let stop = stop_flag();
@@ -226,6 +231,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                 }
                 (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
             };
+            let signal = signal_self_after_step.map(|n| (n, stop.clone()));
             let opts = RunOptions {
                 checkpoint_every,
                 stop_after_steps,
@@ -233,7 +239,9 @@ fn dispatch(cli: Cli) -> Result<()> {
                 resume,
                 ..Default::default()
             };
-            let info = run_one(&file, &out, cli.quiet, opts)?;
+            let mut bar = progress_bar(cli.quiet, &run_label(&file));
+            bar.signal = signal;
+            let info = runner::run(&file, &out, &mut bar, opts)?;
             say!(
                 "{}: {} steps, Ĥ(0) = {} J, Ĥ(T) = {} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
                 info.status,
@@ -277,33 +285,67 @@ fn energy(x: f64) -> String {
 }
 
 /// Progress over simulated time (per mille of `t_end`), with step count and time.
-struct Bar(Option<ProgressBar>, f64);
+struct Bar {
+    bar: Option<ProgressBar>,
+    t_end: f64,
+    /// `--signal-self-after-step`: the step, and the flag the signal handler sets.
+    signal: Option<(usize, std::sync::Arc<AtomicBool>)>,
+}
 
 impl Progress for Bar {
     fn start(&mut self, t_end: f64) {
-        self.1 = t_end;
-        if let Some(b) = &self.0 {
+        self.t_end = t_end;
+        if let Some(b) = &self.bar {
             b.set_length(1000);
         }
     }
     fn step(&mut self, step: usize, t: f64) {
-        if let Some(b) = &self.0 {
-            b.set_position((1000.0 * t / self.1).round() as u64);
+        if let Some((n, flag)) = &self.signal
+            && *n == step
+        {
+            signal_self(flag);
+        }
+        if let Some(b) = &self.bar {
+            b.set_position((1000.0 * t / self.t_end).round() as u64);
             if step.is_multiple_of(16) {
-                b.set_message(format!("t = {t:.4} s of {} s, step {step}", num(self.1)));
+                b.set_message(format!(
+                    "t = {t:.4} s of {} s, step {step}",
+                    num(self.t_end)
+                ));
             }
         }
     }
     fn finish(&mut self) {
-        if let Some(b) = &self.0 {
+        if let Some(b) = &self.bar {
             b.finish_and_clear();
+        }
+    }
+}
+
+/// Sends SIGINT to this process (with `kill`, as a user would) and waits until the handler
+/// has set `flag`, at most 60 s.
+fn signal_self(flag: &AtomicBool) {
+    let sent = std::process::Command::new("kill")
+        .args(["-INT", &std::process::id().to_string()])
+        .status()
+        .is_ok_and(|s| s.success());
+    if sent {
+        for _ in 0..60_000 {
+            if flag.load(Ordering::SeqCst) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(1));
         }
     }
 }
 
 fn progress_bar(quiet: bool, label: &str) -> Bar {
     if quiet || !std::io::stderr().is_terminal() {
-        return Bar(None, 1.0);
+        return Bar {
+            bar: None,
+            t_end: 1.0,
+            signal: None,
+        };
     }
     let b = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
     b.set_style(
@@ -314,16 +356,23 @@ fn progress_bar(quiet: bool, label: &str) -> Bar {
     // A title is user text: one line, no control characters, not too long.
     b.set_prefix(printable(&clip(label), false).into_owned());
     b.enable_steady_tick(Duration::from_millis(200));
-    Bar(Some(b), 1.0)
+    Bar {
+        bar: Some(b),
+        t_end: 1.0,
+        signal: None,
+    }
+}
+
+/// The progress bar's label: the scenario's title, else its file name.
+fn run_label(file: &ScenarioFile) -> String {
+    file.scenario
+        .title
+        .clone()
+        .unwrap_or_else(|| file.path.display().to_string())
 }
 
 fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions) -> Result<RunInfo> {
-    let label = file
-        .scenario
-        .title
-        .clone()
-        .unwrap_or_else(|| file.path.display().to_string());
-    let mut bar = progress_bar(quiet, &label);
+    let mut bar = progress_bar(quiet, &run_label(file));
     Ok(runner::run(file, out, &mut bar, opts)?)
 }
 
@@ -385,12 +434,12 @@ fn sweep(
     }
     let _lock = prepare_out(out, force)?;
     let bar = progress_bar(quiet, "sweep");
-    if let Some(b) = &bar.0 {
+    if let Some(b) = &bar.bar {
         b.set_length(n as u64);
         b.set_message(format!("{n} runs on {jobs} threads"));
     }
     let done = |r: &phstring_io::sweep::SweepRun| {
-        if let Some(b) = &bar.0 {
+        if let Some(b) = &bar.bar {
             b.inc(1);
             if let Err(e) = &r.result {
                 b.println(printable(&format!("run {} failed: {e}", r.index), true));
@@ -398,7 +447,7 @@ fn sweep(
         }
     };
     let runs = plan.run(out, jobs, &done)?;
-    if let Some(b) = &bar.0 {
+    if let Some(b) = &bar.bar {
         b.finish_and_clear();
     }
     let failed = runs.iter().filter(|r| r.result.is_err()).count();
@@ -690,11 +739,7 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
 /// The Newton convergence test in words: `‖R‖ ≤ max(tol, rtol·F)` or `‖R‖ ≤ tol`.
 fn newton_test(n: &phstring::NewtonParams) -> String {
     if n.rtol > 0.0 {
-        format!(
-            "‖R‖ ≤ max({} N, {} × force scale)",
-            num(n.tol),
-            num(n.rtol)
-        )
+        format!("‖R‖ ≤ max({} N, {} × force scale)", num(n.tol), num(n.rtol))
     } else {
         format!("‖R‖ ≤ {} N (absolute)", num(n.tol))
     }

@@ -79,6 +79,21 @@ const LONG: &[&str] = &[
     "output.positions=false",
 ];
 
+/// A run that cannot end before a signal comes, however fast the machine (1e7 steps); the
+/// tests stop it.
+const ENDLESS: &[&str] = &[
+    "--set",
+    "mesh.elements=4000",
+    "--set",
+    "time.h=0.0001",
+    "--set",
+    "time.end=1000",
+    "--set",
+    "output.vtk=false",
+    "--set",
+    "output.positions=false",
+];
+
 fn energy_rows(out: &Path) -> usize {
     std::fs::read_to_string(out.join("energy.csv")).map_or(0, |s| s.lines().count())
 }
@@ -363,7 +378,7 @@ fn second_signal_exits_at_once() {
 fn sigterm_stops_a_run_cleanly() {
     let out = temp_dir("sigterm").join("o");
     let mut args = vec!["run", PAPER, "-q", "--out", s(&out)];
-    args.extend(LONG);
+    args.extend(ENDLESS);
     let mut guard = Guard(Some(command(&args).stderr(Stdio::piped()).spawn().unwrap()));
     wait_until("the run starts", || energy_rows(&out) > 3);
     kill("-TERM", guard.child());
