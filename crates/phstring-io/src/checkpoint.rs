@@ -169,6 +169,9 @@ pub struct Counters {
     /// Their work in global-iteration equivalents.
     #[serde(default)]
     pub local_newton_work: f64,
+    /// Steps whose Newton solve ended at the round-off floor.
+    #[serde(default)]
+    pub steps_at_roundoff: usize,
     /// Wall time of the time loop so far [s].
     pub time_loop_s: f64,
     /// `Ĥ(0)` [J].
@@ -526,6 +529,7 @@ impl CheckpointFile {
                 c.local_newton_iterations,
                 max_iterations.saturating_mul(1024),
             ),
+            ("counters.steps_at_roundoff", c.steps_at_roundoff, s.steps),
         ] {
             if value > limit {
                 return Err(bad(format!(

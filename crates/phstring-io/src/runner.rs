@@ -203,8 +203,14 @@ pub struct RunInfo {
     pub total_newton_iterations: usize,
     /// Newton convergence test.
     pub newton_norm: &'static str,
-    /// Newton tolerance [N].
+    /// Newton tolerance [N]: the absolute floor under `newton_rtol · F`, or, with
+    /// `newton_rtol = 0`, the absolute tolerance.
     pub newton_tol: f64,
+    /// Newton tolerance relative to each step's force scale `F` (0: absolute test).
+    pub newton_rtol: f64,
+    /// Steps whose Newton solve ended at the round-off floor of the residual (docs/method.md
+    /// §9) instead of below the tolerance.
+    pub steps_at_roundoff: usize,
     /// Largest `|Ĥ_{n+1} − Ĥ_n − h û·ŷ|` [J].
     pub max_balance_error: f64,
     /// Largest Newton residual at convergence [N].
@@ -295,8 +301,10 @@ fn run_dim<const D: usize>(
         local_newton_work: 0.0,
         t_reached: 0.0,
         total_newton_iterations: 0,
-        newton_norm: "Euclidean norm of the force residual (momentum balance / h) over free DOFs [N]",
+        newton_norm: "Euclidean norm of the force residual (momentum balance / h) over free DOFs [N], at most max(newton_tol, newton_rtol × force scale of the step)",
         newton_tol: settings.step.newton.tol,
+        newton_rtol: settings.step.newton.rtol,
+        steps_at_roundoff: 0,
         max_balance_error: 0.0,
         max_newton_residual: 0.0,
         hamiltonian_initial: sim.energies().hamiltonian(),
@@ -331,6 +339,7 @@ fn run_dim<const D: usize>(
             info.rejected_newton_iterations = c.rejected_newton_iterations;
             info.local_newton_iterations = c.local_newton_iterations;
             info.local_newton_work = c.local_newton_work;
+            info.steps_at_roundoff = c.steps_at_roundoff;
             info.time_loop_s = c.time_loop_s;
             info.hamiltonian_initial = c.hamiltonian_initial;
             Writers::resume(
@@ -393,6 +402,7 @@ fn run_dim<const D: usize>(
                 rejected_newton_iterations: info.rejected_newton_iterations,
                 local_newton_iterations: info.local_newton_iterations,
                 local_newton_work: info.local_newton_work,
+                steps_at_roundoff: info.steps_at_roundoff,
                 time_loop_s: info.time_loop_s,
                 hamiltonian_initial: info.hamiltonian_initial,
             },
@@ -433,6 +443,7 @@ fn run_dim<const D: usize>(
                     info.max_balance_error =
                         nan_max(info.max_balance_error, report.balance_error.abs());
                     info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
+                    info.steps_at_roundoff += usize::from(report.at_roundoff);
                     writers.step(&sim, &report)?;
                     progress.step(report.step, report.t);
                     if opts
