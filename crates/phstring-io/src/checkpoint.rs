@@ -214,12 +214,12 @@ pub struct CheckpointFile {
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
     /// I/O.
-    #[error("checkpoint {}: {source}", path.display())]
+    #[error("checkpoint {}: {cause}", path.display())]
     Io {
         /// File.
         path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: std::io::Error,
     },
     /// Not a checkpoint, from another version, or edited (checksum mismatch).
     #[error("checkpoint {}: {reason}", path.display())]
@@ -288,7 +288,7 @@ impl CheckpointFile {
         })?;
         crate::output::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
             path: path.to_path_buf(),
-            source,
+            cause: source,
         })
     }
 
@@ -345,7 +345,7 @@ impl CheckpointFile {
         };
         let io = |source| CheckpointError::Io {
             path: path.to_path_buf(),
-            source,
+            cause: source,
         };
         let file = std::fs::File::open(path).map_err(io)?;
         let meta = file.metadata().map_err(io)?;

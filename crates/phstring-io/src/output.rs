@@ -110,12 +110,12 @@ pub fn frames_hash_start() -> u64 {
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// A file could not be written.
-    #[error("cannot write {}: {source}", path.display())]
+    #[error("cannot write {}: {cause}", path.display())]
     Io {
         /// File.
         path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: std::io::Error,
     },
     /// A plot failed.
     #[error(transparent)]
@@ -187,7 +187,7 @@ impl Csv {
     fn create(path: PathBuf, header: &str) -> Result<Self, OutputError> {
         let f = File::create(&path).map_err(|source| OutputError::Io {
             path: path.clone(),
-            source,
+            cause: source,
         })?;
         let mut c = Self {
             path,
@@ -199,13 +199,13 @@ impl Csv {
     fn line(&mut self, s: &str) -> Result<(), OutputError> {
         writeln!(self.w, "{s}").map_err(|source| OutputError::Io {
             path: self.path.clone(),
-            source,
+            cause: source,
         })
     }
     fn flush(&mut self) -> Result<(), OutputError> {
         self.w.flush().map_err(|source| OutputError::Io {
             path: self.path.clone(),
-            source,
+            cause: source,
         })
     }
     /// Opens an existing file, cut back to `len` bytes, for appending. The file must be at
@@ -214,7 +214,7 @@ impl Csv {
         use std::io::{Read, Seek, SeekFrom};
         let io = |source| OutputError::Io {
             path: path.clone(),
-            source,
+            cause: source,
         };
         let mut f = std::fs::OpenOptions::new()
             .read(true)
@@ -257,7 +257,7 @@ impl Csv {
             .map(|m| m.len())
             .map_err(|source| OutputError::Io {
                 path: self.path.clone(),
-                source,
+                cause: source,
             })
     }
 }
@@ -417,7 +417,7 @@ pub fn read_history(
 ) -> Result<Option<History>, OutputError> {
     let f = File::open(path).map_err(|source| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        cause: source,
     })?;
     let mut reader = std::io::BufReader::new(f);
     let mut energies = Decimator::<4>::new(max_points);
@@ -431,7 +431,7 @@ pub fn read_history(
             .read_line(&mut line)
             .map_err(|source| OutputError::Io {
                 path: path.to_path_buf(),
-                source,
+                cause: source,
             })?;
         if n == 0 {
             break;
@@ -603,7 +603,10 @@ impl Writers {
     ) -> Result<Self, OutputError> {
         let io = |path: &Path| {
             let p = path.to_path_buf();
-            move |source| OutputError::Io { path: p, source }
+            move |source| OutputError::Io {
+                path: p,
+                cause: source,
+            }
         };
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         remove_stale_temp_files(dir);

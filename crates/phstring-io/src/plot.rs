@@ -122,12 +122,12 @@ pub enum PlotError {
         message: String,
     },
     /// Writing the output file failed.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {cause}")]
     Io {
         /// Output file that was being written.
         path: PathBuf,
-        /// Underlying I/O error.
-        source: std::io::Error,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: std::io::Error,
     },
 }
 
@@ -391,7 +391,7 @@ fn write_both(stem: &Path, fig: &impl Figure) -> Result<(), PlotError> {
     }
     std::fs::write(&svg_path, svg).map_err(|source| PlotError::Io {
         path: svg_path.clone(),
-        source,
+        cause: source,
     })?;
 
     let png_path = with_extension(stem, "png");

@@ -128,7 +128,7 @@ pub enum RunError {
     Scenario(#[from] ScenarioError),
     /// The simulation could not be set up.
     #[error("setup failed: {0}")]
-    Setup(#[from] phstring::SetupError),
+    Setup(phstring::SetupError),
     /// A step failed; outputs up to the last good step are written.
     #[error("{0}{1} (outputs up to the last good step are in {2})")]
     Step(StepError, String, PathBuf),
@@ -150,6 +150,12 @@ pub enum RunError {
         /// Checkpoint to resume from.
         checkpoint: PathBuf,
     },
+}
+
+impl From<phstring::SetupError> for RunError {
+    fn from(e: phstring::SetupError) -> Self {
+        RunError::Setup(e)
+    }
 }
 
 /// What a run did: the content of `summary.json` plus the in-memory history.
@@ -362,7 +368,7 @@ fn run_dim<const D: usize>(
             std::fs::write(out.join(RUN_ID_FILE), format!("{run_id}\n")).map_err(|source| {
                 OutputError::Io {
                     path: out.join(RUN_ID_FILE),
-                    source,
+                    cause: source,
                 }
             })?;
             Ok(w)
@@ -560,13 +566,69 @@ pub fn write_summary(out: &Path, info: &RunInfo) -> Result<(), OutputError> {
     let path = out.join("summary.json");
     let text =
         serde_json::to_string_pretty(info).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-    output::atomic_write(&path, (text + "\n").as_bytes())
-        .map_err(|source| OutputError::Io { path, source })
+    output::atomic_write(&path, (text + "\n").as_bytes()).map_err(|source| OutputError::Io {
+        path,
+        cause: source,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The whole chain of `e` as `{:#}` prints it: the message, then each source.
+    fn chain(e: &dyn std::error::Error) -> String {
+        let mut text = e.to_string();
+        let mut next = e.source();
+        while let Some(s) = next {
+            text += &format!(": {s}");
+            next = s.source();
+        }
+        text
+    }
+
+    /// Issue 10 ("error causes are printed twice"), at the cause: no error type both writes
+    /// its cause into its message and chains it as a source.
+    #[test]
+    fn error_causes_are_printed_once() {
+        let io = || std::io::Error::other("disk full");
+        let errors: Vec<Box<dyn std::error::Error>> = vec![
+            Box::new(OutputError::Io {
+                path: "energy.csv".into(),
+                cause: io(),
+            }),
+            Box::new(CheckpointError::Io {
+                path: "checkpoint.json".into(),
+                cause: io(),
+            }),
+            Box::new(crate::vtk::VtkError::Io {
+                path: "string.pvd".into(),
+                cause: io(),
+            }),
+            Box::new(crate::plot::PlotError::Io {
+                path: "energy.svg".into(),
+                cause: io(),
+            }),
+            Box::new(RunError::Output(OutputError::Io {
+                path: "energy.csv".into(),
+                cause: io(),
+            })),
+        ];
+        for e in &errors {
+            let text = chain(e.as_ref());
+            assert_eq!(text.matches("disk full").count(), 1, "{text}");
+        }
+        let setup = RunError::from(phstring::SetupError::NoElements);
+        let text = chain(&setup);
+        assert_eq!(text.matches("no elements").count(), 1, "{text}");
+        let linear = phstring::StepError::Linear {
+            step: 3,
+            t: 0.5,
+            cause: phstring::LinearSolveError::Singular { block: 7 },
+        };
+        let text = chain(&linear);
+        assert_eq!(text.matches("singular").count(), 1, "{text}");
+    }
 
     /// Issue 10: `f64::max` dropped a NaN, so a broken run reported `max_balance_error: 0`.
     #[test]

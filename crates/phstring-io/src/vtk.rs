@@ -31,12 +31,12 @@ pub enum VtkError {
         message: String,
     },
     /// Writing the output file failed.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {cause}")]
     Io {
         /// Output file that was being written.
         path: PathBuf,
-        /// Underlying I/O error.
-        source: std::io::Error,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: std::io::Error,
     },
 }
 
@@ -206,7 +206,7 @@ impl PvdWriter {
     pub fn read(pvd_path: &Path) -> Result<Self, VtkError> {
         let text = std::fs::read_to_string(pvd_path).map_err(|source| VtkError::Io {
             path: pvd_path.to_path_buf(),
-            source,
+            cause: source,
         })?;
         let bad = |line: usize, message: &str| VtkError::Input {
             path: pvd_path.to_path_buf(),
@@ -265,7 +265,7 @@ impl PvdWriter {
         crate::output::atomic_write(&self.path, self.to_xml().as_bytes()).map_err(|source| {
             VtkError::Io {
                 path: self.path.clone(),
-                source,
+                cause: source,
             }
         })
     }

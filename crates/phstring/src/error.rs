@@ -246,13 +246,13 @@ pub enum StepError {
         node: usize,
     },
     /// The linear solve failed.
-    #[error("step {step} (t = {t0} s): {source}", t0 = Num(*t))]
+    #[error("step {step} (t = {t0} s): {cause}", t0 = Num(*t))]
     Linear {
         /// Step index.
         step: usize,
         /// Start time of the step [s].
         t: f64,
-        /// The cause.
-        source: LinearSolveError,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: LinearSolveError,
     },
 }

@@ -564,7 +564,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             NewtonError::Linear(source) => StepError::Linear {
                 step: step_no,
                 t,
-                source,
+                cause: source,
             },
             NewtonError::NonFinite { node } => StepError::NonFinite {
                 step: step_no,
