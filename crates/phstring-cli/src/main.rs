@@ -465,6 +465,11 @@ fn sweep(
 
 fn check(path: &Path, sets: &[String]) -> Result<()> {
     let file = scenario::load(path, sets)?;
+    // The system the scenario sets up must be valid too (finite initial energies and
+    // forces); set it up only where it fits in memory (otherwise the warning below says so).
+    if budget(&file)?.memory_error(1).is_none() {
+        file.check()?;
+    }
     let d = file.dimension()?;
     let text = match d {
         1 => describe::<1>(&file)?,

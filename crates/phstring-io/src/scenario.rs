@@ -368,6 +368,17 @@ pub enum ScenarioError {
         /// What is wrong.
         reason: String,
     },
+    /// Every key is valid, but the system they set up is not (a quantity derived from
+    /// several keys overflows, e.g. the initial energy of a string at 1e308 m under gravity).
+    #[error("{}{}: {cause}", path.display(), if *with_sets { " (with the --set overrides)" } else { "" })]
+    Setup {
+        /// The scenario file.
+        path: PathBuf,
+        /// Whether `--set` overrides were applied.
+        with_sets: bool,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: phstring::SetupError,
+    },
 }
 
 /// A scenario with its source text, so that errors can point into the file.
@@ -714,13 +725,26 @@ impl ScenarioFile {
         }
     }
 
-    /// Validates the whole scenario in its own dimension without running it.
+    /// Validates the whole scenario in its own dimension without running it, including the
+    /// system it sets up (quantities derived from several keys, such as the initial
+    /// energies, must be finite).
     pub fn check(&self) -> Result<(), ScenarioError> {
         match self.dimension()? {
-            1 => self.validate::<1>().map(|_| ()),
-            2 => self.validate::<2>().map(|_| ()),
-            _ => self.validate::<3>().map(|_| ()),
+            1 => self.check_setup::<1>(),
+            2 => self.check_setup::<2>(),
+            _ => self.check_setup::<3>(),
         }
+    }
+
+    fn check_setup<const D: usize>(&self) -> Result<(), ScenarioError> {
+        let v = self.validate::<D>()?;
+        phstring::PhSystem::new(v.problem)
+            .map(|_| ())
+            .map_err(|cause| ScenarioError::Setup {
+                path: self.path.clone(),
+                with_sets: !self.overrides.is_empty(),
+                cause,
+            })
     }
 
     /// The spatial dimension, checked.

@@ -262,6 +262,14 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                     .unwrap_or(f64::NAN),
             });
         }
+        // The residual's force scale squares the forces: they must stay below about 1e154 N.
+        let f2: f64 = f_body.iter().map(|f| f.norm_squared()).sum();
+        if !f2.is_finite() {
+            return Err(SetupError::DerivedNotFinite {
+                what: "sum of the squared nodal body forces".into(),
+                value: f2,
+            });
+        }
         let sys = Self {
             mesh,
             material,

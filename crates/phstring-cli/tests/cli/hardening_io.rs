@@ -431,6 +431,54 @@ fn non_finite_values_never_reach_outputs() {
     }
 }
 
+/// Finding "non-finite values are written and reported as completed", at validation: `check`
+/// and `run` refuse a scenario whose derived quantities overflow, name the quantity, and a
+/// refused run creates no output folder.
+#[test]
+fn non_finite_derived_quantities_are_refused_by_check_and_run() {
+    let tmp = temp_dir("nonfinite-check");
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &[
+                "--set",
+                "geometry.start=[1e308, 0.0]",
+                "--set",
+                "geometry.end=[1e308, -1.0]",
+                "--set",
+                "body_force.gravity=[-9.81,-9.81]",
+            ],
+            "initial external potential energy is not finite",
+        ),
+        (
+            &["--set", "body_force.per_length=[1e308, 1e308]"],
+            "squared nodal body forces is not finite",
+        ),
+        (&["--set", "geometry.length=1e-154"], "not finite"),
+    ];
+    for (k, (sets, expected)) in cases.iter().enumerate() {
+        let mut args = vec!["check", "examples/paper_pendulum.toml"];
+        args.extend_from_slice(sets);
+        let o = phstring(&args);
+        assert_eq!(o.status.code(), Some(1), "check {sets:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(expected),
+            "check {sets:?}: {}",
+            stderr(&o)
+        );
+        let out = tmp.join(format!("o{k}"));
+        let mut args = vec!["examples/paper_pendulum.toml"];
+        args.extend_from_slice(sets);
+        let o = run(&out, &args);
+        assert_eq!(o.status.code(), Some(1), "run {sets:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(expected),
+            "run {sets:?}: {}",
+            stderr(&o)
+        );
+        assert!(!out.exists(), "a refused run created {}", out.display());
+    }
+}
+
 /// Counts the scalar values (leaves) of a JSON document.
 fn leaves(v: &serde_json::Value) -> usize {
     match v {

@@ -371,6 +371,17 @@ fn non_finite_derived_quantities_are_refused_at_setup() {
         "{msg}"
     );
 
+    // A body force of 1e308 N/m: each nodal force is finite, but the residual overflows.
+    let huge = build(Vector::zeros(), Vector::<2>::new(1.0, 0.0), 1.0, 1e308);
+    let err = Simulation::new(huge, StepParams::default())
+        .err()
+        .expect("refused");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("squared nodal body forces is not finite"),
+        "{msg}"
+    );
+
     let overflowing = build(Vector::zeros(), Vector::<2>::new(1.0, 0.0), 1e-154, 9.81);
     let err = Simulation::new(overflowing, StepParams::default())
         .err()
