@@ -486,7 +486,9 @@ impl CheckpointFile {
             )));
         }
         // Every accepted step but a last, clipped one advances at least the floor.
-        let max_steps = (t / floor).ceil() + 2.0;
+        // Capped far below usize::MAX, so that the counts below and those a resumed run adds
+        // cannot overflow.
+        let max_steps = ((t / floor).ceil() + 2.0).min(1e15);
         if s.steps as f64 > max_steps {
             return Err(bad(format!(
                 "sim.steps = {} is more than a run to t = {t:e} s can take with steps of at least {floor:e} s",
@@ -501,9 +503,9 @@ impl CheckpointFile {
             )));
         }
         let attempts_per_step = halvings as usize + 1;
-        let max_rejected = (s.steps + 1).saturating_mul(attempts_per_step);
-        let max_iterations =
-            (s.steps + max_rejected + 1).saturating_mul(step.newton.max_iter.max(1));
+        let max_rejected = s.steps.saturating_add(1).saturating_mul(attempts_per_step);
+        let max_iterations = (s.steps.saturating_add(max_rejected).saturating_add(1))
+            .saturating_mul(step.newton.max_iter.max(1));
         for (name, value, limit) in [
             ("sim.rejected", s.rejected, max_rejected),
             ("counters.rejected_steps", c.rejected_steps, max_rejected),

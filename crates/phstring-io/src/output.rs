@@ -124,7 +124,7 @@ pub enum OutputError {
     #[error(transparent)]
     Vtk(#[from] VtkError),
     /// A value to be written is NaN or infinite: the row is refused (nothing of it written).
-    #[error("refusing to write a non-finite {what} ({value}) at t = {t} s to {}: the simulation produced NaN or infinity", path.display())]
+    #[error("refusing to write a non-finite {what} ({value}) at t = {} s to {}: the simulation produced NaN or infinity", phstring::Num(*t), path.display())]
     NonFinite {
         /// File.
         path: PathBuf,

@@ -21,15 +21,7 @@ use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimSt
 use crate::output::{self, History, OutputError, Writers};
 use crate::scenario::{ScenarioError, ScenarioFile};
 
-/// The larger of `a` and `b`, NaN if either is NaN (`f64::max` drops a NaN, which would hide
-/// a broken run behind a finite maximum).
-pub fn nan_max(a: f64, b: f64) -> f64 {
-    if a.is_nan() || b.is_nan() {
-        f64::NAN
-    } else {
-        a.max(b)
-    }
-}
+pub use phstring::nan_max;
 
 /// Name of the file in an output folder that holds the id of the run writing it.
 pub const RUN_ID_FILE: &str = ".phstring-run";
@@ -139,7 +131,7 @@ pub enum RunError {
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
     /// The run was stopped (Ctrl-C or `--stop-after-steps`); it can be resumed.
-    #[error("interrupted at t = {t} s after {steps} steps; outputs so far are in {}; continue with `phstring run --resume {}`", dir.display(), checkpoint.display())]
+    #[error("interrupted at t = {} s after {steps} steps; outputs so far are in {}; continue with `phstring run --resume {}`", phstring::Num(*t), dir.display(), checkpoint.display())]
     Interrupted {
         /// Time reached [s].
         t: f64,
@@ -474,7 +466,9 @@ fn run_dim<const D: usize>(
             // The checkpoint records the file lengths of this moment: write it before the
             // final frame and plots, which a resumed run writes itself.
             write_checkpoint(&sim, &mut writers, &info)?;
-        } else if failure.is_none() {
+        } else {
+            // Completed, or failed: the last good state is written either way (a failed step
+            // leaves the state at the last good step, finite).
             writers.finish(&sim)?;
         }
         writers.flush()?;
@@ -504,7 +498,7 @@ fn run_dim<const D: usize>(
         info.status = "interrupted".into();
         info.error = Some(format!(
             "interrupted at t = {} s; resume from {CHECKPOINT}",
-            sim.time()
+            phstring::Num(sim.time())
         ));
     } else if checkpoint_path.exists() {
         // A completed run needs no checkpoint; a stale one could be resumed by mistake.

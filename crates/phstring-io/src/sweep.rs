@@ -156,10 +156,10 @@ pub fn run_count(vary: &[Vary]) -> Result<usize, SweepError> {
     match n {
         Some(n) if n <= MAX_RUNS => Ok(n),
         _ => {
+            // Saturating: a count beyond u128 is only printed, never used.
             let exact = vary
                 .iter()
-                .map(|v| v.values.len() as u128)
-                .product::<u128>();
+                .fold(1u128, |n, v| n.saturating_mul(v.values.len() as u128));
             Err(SweepError::TooManyRuns {
                 count: if exact < 10_000_000_000 {
                     exact.to_string()

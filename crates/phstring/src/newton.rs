@@ -98,16 +98,24 @@ impl NewtonParams {
             ..Self::default()
         }
     }
-    /// The tolerance [N] for a step of force scale `scale` [N].
+    /// The tolerance [N] for a step of force scale `scale` [N]; the absolute `tol` alone if
+    /// the scale is not finite (forces whose squares overflow), so that an overflow never
+    /// makes every residual acceptable.
     pub fn tolerance(&self, scale: f64) -> f64 {
-        self.tol.max(self.rtol * scale)
+        if scale.is_finite() {
+            self.tol.max(self.rtol * scale)
+        } else {
+            self.tol
+        }
     }
 }
 
 /// Round-off floor [N] of a residual with force scale `force` and strain scale `strain` [N]:
 /// `ε (ROUNDOFF_FLOOR · force + ROUNDOFF_STRAIN · strain)`.
 pub fn roundoff_floor(force: f64, strain: f64) -> f64 {
-    f64::EPSILON * (ROUNDOFF_FLOOR * force + ROUNDOFF_STRAIN * strain)
+    let floor = f64::EPSILON * (ROUNDOFF_FLOOR * force + ROUNDOFF_STRAIN * strain);
+    // Scales that overflow give no floor (never a licence to accept any residual).
+    if floor.is_finite() { floor } else { 0.0 }
 }
 
 /// Smallest chain (in nodes) on which nonlinear elimination is tried.
@@ -309,9 +317,6 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
     // Residual before the last iteration, to recognise stagnation.
     let mut previous = f64::INFINITY;
     loop {
-        stats.force_scale = problem.force_scale();
-        stats.strain_scale = problem.strain_scale();
-        stats.tolerance = params.tolerance(stats.force_scale);
         if stats.residual <= stats.tolerance {
             return Ok(());
         }

@@ -33,7 +33,7 @@ pub struct StepReport {
     /// The step's force scale `F` [N] (docs/method.md §9).
     pub force_scale: f64,
     /// Newton ended at the round-off floor of the residual (stagnation below
-    /// `64 ε F`) rather than below `tolerance`.
+    /// `ε (1000 F + 16 K)`, docs/method.md eq. (9.4)) rather than below `tolerance`.
     pub at_roundoff: bool,
     /// Energies at `t_n` [J].
     pub before: Energies,

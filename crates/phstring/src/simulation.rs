@@ -53,19 +53,22 @@ pub const MAX_HALVINGS: u32 = 60;
 /// [`Problem`] while it is being set up: per node the state `r, v`, the predictor's `a, v_{n−½}`,
 /// the step's `Δ`, external forces and reactions, Newton's residual, direction and last
 /// iterate, the Jacobian's diagonal block and the two block-Thomas workspaces; per element the
-/// strain and its value before the step, the two off-diagonal Jacobian blocks, the connectivity and the reference length.
+/// strain and the step's new strain, the two off-diagonal Jacobian blocks, the connectivity and the reference length.
 /// For the sparse LU solver (any other mesh) add its factors, which this does not count.
 /// Measured against the allocator in the tests (within 5 %).
 pub fn estimated_memory_bytes(dimension: usize, n_elements: usize) -> u64 {
     let d = dimension as u64;
     let (vector, block) = (8 * d, 8 * d * d);
-    let nodes = n_elements as u64 + 1;
+    let nodes = (n_elements as u64).saturating_add(1);
     // r, v, acc, v_mid, x, f_ext, reaction, f_body, res, dir, x_old: 11 vectors per node;
     // Jacobian diagonal, Newton's Thomas workspace, the solver's: 3 blocks; `free` flags.
     let per_node = 11 * vector + 3 * block + d;
-    // C and its copy, off-diagonal blocks, [a, b], l.
+    // C and the step's new C, off-diagonal blocks, [a, b], l.
     let per_element = 16 + 2 * block + 16 + 8;
-    nodes * per_node + n_elements as u64 * per_element
+    // Saturating: the estimate is also asked for unvalidated element counts.
+    nodes
+        .saturating_mul(per_node)
+        .saturating_add((n_elements as u64).saturating_mul(per_element))
 }
 
 /// Estimated wall time of one Newton iteration [s] on a chain of `n_elements` elements in
@@ -176,8 +179,9 @@ pub struct Simulation<const D: usize, M> {
     x: Vec<Vector<D>>,
     f_ext: Vec<Vector<D>>,
     reaction: Vec<Vector<D>>,
-    /// Strains before the update of the current step (restored if its energies overflow).
-    c_prev: Vec<f64>,
+    /// The new strains of the current step, swapped into the state once its energies are
+    /// known to be finite.
+    c_next: Vec<f64>,
     ports: Vec<PortSample<D>>,
     newton_ws: NewtonWorkspace<D>,
     solver: Box<dyn LinearSolver<D>>,
@@ -259,7 +263,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             x: vec![Vector::zeros(); n],
             f_ext: vec![Vector::zeros(); n],
             reaction: vec![Vector::zeros(); n],
-            c_prev: vec![0.0; n_el],
+            c_next: vec![0.0; n_el],
             ports,
             solver,
             total_newton: 0,
@@ -616,10 +620,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
-        // Strains first (they need r_n). The previous ones are kept until the energies of
-        // the new state are known to be finite (a strain can overflow `W`), so that a failed
-        // step leaves the state untouched.
-        self.c_prev.copy_from_slice(&self.state.c);
+        // New strains first (they need r_n), into the spare buffer: they replace the old ones
+        // only once the energies of the new state are known to be finite (a strain can
+        // overflow `W`), so that a failed step leaves the state untouched.
         let mesh = &self.sys.mesh;
         for (e, (&[a, b], &l)) in mesh.elements().iter().zip(mesh.lengths()).enumerate() {
             let (_, _, dc) = element_step(
@@ -629,20 +632,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 &self.x[b],
                 l,
             );
-            self.state.c[e] += dc;
+            self.c_next[e] = self.state.c[e] + dc;
         }
         let inv_h = 1.0 / h;
         // The energies of the new state, with r and v formed as the update below forms them
         // (bit-identical to `energies` of the updated state).
         let after = {
-            let (r0, v0, c, x) = (&self.state.r, &self.state.v, &self.state.c, &self.x);
+            let (r0, v0, c, x) = (&self.state.r, &self.state.v, &self.c_next, &self.x);
             self.sys
                 .energies_with(|i| r0[i] + x[i], |i| x[i] * (2.0 * inv_h) - v0[i], |e| c[e])
         };
         if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
         {
             let node = self.non_finite_energy_node();
-            self.state.c.copy_from_slice(&self.c_prev);
             return Err(StepError::NonFinite {
                 step: step_no,
                 t,
@@ -650,6 +652,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
+        std::mem::swap(&mut self.state.c, &mut self.c_next);
         for ((((r, v), a), vm), x) in self
             .state
             .r
@@ -713,14 +716,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         })
     }
 
-    /// The first node of the first element whose stored energy (at the strains in the state)
-    /// is not finite, else the first node of the mesh: where a non-finite energy comes from.
+    /// The first node of the first element whose stored energy at the new strains of the
+    /// step is not finite, else the first node of the mesh: where a non-finite energy comes
+    /// from.
     fn non_finite_energy_node(&self) -> usize {
         let mesh = &self.sys.mesh;
         let bad = mesh
             .lengths()
             .iter()
-            .zip(&self.state.c)
+            .zip(&self.c_next)
             .position(|(&l, &c)| !(l * self.sys.material.w(c)).is_finite());
         bad.map_or(0, |e| mesh.elements()[e][0])
     }
