@@ -183,6 +183,32 @@ struct Csv {
     w: BufWriter<File>,
 }
 
+/// A CSV file checked for a resume at `len` bytes and not changed yet: all files of a resume
+/// are checked before any is cut back, so a refused resume leaves the folder as it was.
+struct PendingCsv {
+    path: PathBuf,
+    f: File,
+    len: u64,
+}
+
+impl PendingCsv {
+    /// Cuts the file back to the checked length and appends from there.
+    fn commit(self) -> Result<Csv, OutputError> {
+        use std::io::{Seek, SeekFrom};
+        let Self { path, mut f, len } = self;
+        let io = |source| OutputError::Io {
+            path: path.clone(),
+            cause: source,
+        };
+        f.set_len(len).map_err(io)?;
+        f.seek(SeekFrom::End(0)).map_err(io)?;
+        Ok(Csv {
+            path,
+            w: BufWriter::new(f),
+        })
+    }
+}
+
 impl Csv {
     fn create(path: PathBuf, header: &str) -> Result<Self, OutputError> {
         let f = File::create(&path).map_err(|source| OutputError::Io {
@@ -208,9 +234,10 @@ impl Csv {
             cause: source,
         })
     }
-    /// Opens an existing file, cut back to `len` bytes, for appending. The file must be at
-    /// least `len` bytes long and byte `len − 1` must end a row.
-    fn reopen(path: PathBuf, len: u64) -> Result<Self, OutputError> {
+    /// Opens an existing file for appending at `len` bytes (cut back by
+    /// [`PendingCsv::commit`]). The file must be at least `len` bytes long and byte `len − 1`
+    /// must end a row.
+    fn reopen(path: PathBuf, len: u64) -> Result<PendingCsv, OutputError> {
         use std::io::{Read, Seek, SeekFrom};
         let io = |source| OutputError::Io {
             path: path.clone(),
@@ -241,12 +268,7 @@ impl Csv {
                 });
             }
         }
-        f.set_len(len).map_err(io)?;
-        f.seek(SeekFrom::End(0)).map_err(io)?;
-        Ok(Self {
-            path,
-            w: BufWriter::new(f),
-        })
+        Ok(PendingCsv { path, f, len })
     }
     /// Bytes written so far (after a flush).
     fn len(&mut self) -> Result<u64, OutputError> {
@@ -841,15 +863,19 @@ impl Writers {
         } else {
             None
         };
+        // Check every file before any is cut back.
+        let energy = Csv::reopen(dir.join("energy.csv"), state.energy_bytes)?;
+        let ports = Csv::reopen(dir.join("ports.csv"), state.ports_bytes)?;
         let positions = match state.positions_bytes {
             Some(n) => Some(Csv::reopen(dir.join("positions.csv"), n)?),
             None => None,
         };
+        let positions = positions.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
-            energy: Csv::reopen(dir.join("energy.csv"), state.energy_bytes)?,
+            energy: energy.commit()?,
             positions,
-            ports: Csv::reopen(dir.join("ports.csv"), state.ports_bytes)?,
+            ports: ports.commit()?,
             pvd,
             pvd_dirty: true,
             stride,

@@ -827,6 +827,18 @@ mod tests {
         );
     }
 
+    /// Review of issue 10: forces whose squares overflow give an infinite force scale, which
+    /// must not make every residual acceptable.
+    #[test]
+    fn overflowing_scale_falls_back_to_the_absolute_tolerance() {
+        let p = NewtonParams::default();
+        assert_eq!(p.tolerance(f64::INFINITY), DEFAULT_ATOL);
+        assert_eq!(p.tolerance(f64::NAN), DEFAULT_ATOL);
+        assert_eq!(p.tolerance(10.0), 10.0 * DEFAULT_RTOL);
+        assert_eq!(roundoff_floor(f64::INFINITY, 1.0), 0.0);
+        assert!(roundoff_floor(1.0, 1.0) > 0.0);
+    }
+
     /// Evaluates at `x` and returns the largest squared nodal residual.
     fn ws_res_max2(p: &mut Cubic, x: &[Vector<1>], ws: &mut NewtonWorkspace<1>) -> f64 {
         evaluate_checked(p, x, ws).unwrap();

@@ -479,6 +479,29 @@ fn non_finite_derived_quantities_are_refused_by_check_and_run() {
     }
 }
 
+/// Review of issue 10: a resume that is refused because one output file does not match its
+/// checkpoint must leave every file as it was (it used to cut `positions.csv` back before
+/// finding that `ports.csv` was short).
+#[test]
+fn refused_resume_leaves_every_file_as_it_was() {
+    let out = temp_dir("refused-resume").join("o");
+    let cp = interrupted_run(&out);
+    // A crash after the checkpoint leaves positions.csv longer than recorded; ports.csv was
+    // damaged (shorter than recorded).
+    let positions = out.join("positions.csv");
+    let mut longer = read(&positions);
+    longer += "0.5,0,1,2\n";
+    std::fs::write(&positions, &longer).unwrap();
+    let ports = out.join("ports.csv");
+    let text = read(&ports);
+    let cut = text[..text.len() - 1].rfind('\n').unwrap() + 1;
+    std::fs::write(&ports, &text[..cut]).unwrap();
+    let o = resume(&cp);
+    assert_refused(&o, "ports.csv");
+    assert_eq!(read(&positions), longer, "positions.csv was changed");
+    assert_eq!(read(&ports), text[..cut], "ports.csv was changed");
+}
+
 /// Counts the scalar values (leaves) of a JSON document.
 fn leaves(v: &serde_json::Value) -> usize {
     match v {
