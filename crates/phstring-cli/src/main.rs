@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
@@ -424,14 +424,13 @@ fn sweep(
             "--jobs {jobs}: at most {max_jobs} ({MAX_JOBS_PER_CORE} per core, {cores} cores); each run is single-threaded, so more threads than cores only cost memory"
         );
     }
-    // Every combination is validated before the output folder is touched.
-    let plan = Sweep::new(path, sets, vary)?;
+    // Every combination is checked against the memory budget (before validation allocates
+    // its mesh) and validated before the output folder is touched.
+    let concurrent = jobs.min(phstring_io::sweep::run_count(&vary)?);
+    let plan = Sweep::new_with(path, sets, vary, |index, file| {
+        check_budget_of(file, concurrent).map_err(|e| format!("run {index} of the sweep: {e:#}"))
+    })?;
     let n = plan.len();
-    let concurrent = jobs.min(n);
-    for index in 0..n {
-        check_budget_of(&plan.file(index)?, concurrent)
-            .with_context(|| format!("run {index} of the sweep"))?;
-    }
     let _lock = prepare_out(out, force)?;
     let bar = progress_bar(quiet, "sweep");
     if let Some(b) = &bar.bar {

@@ -130,6 +130,9 @@ pub enum SweepError {
         /// The number of combinations, as text (it may not fit in a `usize`).
         count: String,
     },
+    /// A combination was refused before validation (e.g. it does not fit in memory).
+    #[error("{0}")]
+    Refused(String),
     /// The thread pool could not be built.
     #[error("cannot start {jobs} threads: {cause}")]
     Threads {
@@ -211,6 +214,18 @@ impl Sweep {
     /// Reads the scenario, refuses a key varied twice (or varied and also set with `--set`)
     /// and more than [`MAX_RUNS`] runs, and validates every combination (one at a time).
     pub fn new(scenario_path: &Path, sets: &[String], vary: Vec<Vary>) -> Result<Self, SweepError> {
+        Self::new_with(scenario_path, sets, vary, |_, _| Ok(()))
+    }
+
+    /// [`Self::new`], calling `precheck(index, combination)` on every combination before it
+    /// is validated (for checks that must come before validation allocates the mesh, such as
+    /// a memory budget); its message is the error.
+    pub fn new_with(
+        scenario_path: &Path,
+        sets: &[String],
+        vary: Vec<Vary>,
+        precheck: impl Fn(usize, &ScenarioFile) -> Result<(), String>,
+    ) -> Result<Self, SweepError> {
         for (i, v) in vary.iter().enumerate() {
             if vary[..i].iter().any(|w| w.key == v.key) {
                 return Err(ScenarioError::Vary {
@@ -242,7 +257,9 @@ impl Sweep {
             count,
         };
         for index in 0..count {
-            sweep.file(index)?.check()?;
+            let file = sweep.file(index)?;
+            precheck(index, &file).map_err(SweepError::Refused)?;
+            file.check()?;
         }
         Ok(sweep)
     }
