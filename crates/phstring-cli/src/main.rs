@@ -376,8 +376,9 @@ fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions) -> Re
     Ok(runner::run(file, out, &mut bar, opts)?)
 }
 
-/// A flag set by the first Ctrl-C or SIGTERM (ctrlc's `termination` feature): runs stop at
-/// the end of the current step with their outputs flushed and a checkpoint written. A second
+/// A flag set by the first Ctrl-C or SIGTERM (ctrlc's `termination` feature): runs stop
+/// between two Newton iterations (the state stays at the last good step) with their outputs
+/// flushed and a checkpoint written; the plot phase skips the plots it has not drawn yet. A second
 /// Ctrl-C or SIGTERM exits at once with code 130, whatever the program is doing (what is on
 /// disk stays; the checkpoint of an interrupted run may then be missing). `run` and `paper`
 /// install it first thing; `check` and `sweep` keep the default effect of a signal (they

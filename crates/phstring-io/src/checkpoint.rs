@@ -395,10 +395,7 @@ impl CheckpointFile {
                 "checksum mismatch: the file was edited or damaged after it was written".to_string()
             }));
         }
-        if cp.run_id.is_empty()
-            || cp.run_id.len() > 64
-            || !cp.run_id.chars().all(|c| c.is_ascii_alphanumeric())
-        {
+        if !crate::runner::is_valid_run_id(&cp.run_id) {
             return Err(format_err("invalid run id".into()));
         }
         Ok(cp)

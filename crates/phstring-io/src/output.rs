@@ -8,6 +8,7 @@
 //! read what they need back from `energy.csv` ([`read_history`]), decimated to at most
 //! [`PLOT_POINTS`] points per curve.
 
+use crate::outdir::{PARAVIEW_DIR, PVD_FILE, frame_name};
 use std::fs::File;
 use std::hash::Hasher;
 use std::io::{BufRead, BufWriter, Write};
@@ -70,7 +71,7 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// Removes phstring's stale temporary files ([`TEMP_FILES`]) from `dir` and
 /// `dir/paraview` (regular files only).
 pub fn remove_stale_temp_files(dir: &Path) {
-    for d in [dir.to_path_buf(), dir.join("paraview")] {
+    for d in [dir.to_path_buf(), dir.join(PARAVIEW_DIR)] {
         for name in TEMP_FILES {
             let p = d.join(name);
             if std::fs::symlink_metadata(&p).is_ok_and(|m| m.is_file()) {
@@ -641,9 +642,9 @@ impl Writers {
         };
         let ports = Csv::create(dir.join("ports.csv"), &ports_header)?;
         let pvd = if vtk_frames {
-            let pdir = dir.join("paraview");
+            let pdir = dir.join(PARAVIEW_DIR);
             std::fs::create_dir_all(&pdir).map_err(io(&pdir))?;
-            Some(PvdWriter::new(&pdir.join("string.pvd")))
+            Some(PvdWriter::new(&pdir.join(PVD_FILE)))
         } else {
             None
         };
@@ -741,9 +742,9 @@ impl Writers {
             let vel: Vec<[f64; 3]> = st.v.iter().map(pad).collect();
             let mat = sim.system().material();
             let s: Vec<f64> = st.c.iter().map(|&c| 2.0 * mat.dw(c)).collect();
-            let name = format!("frame_{:06}.vtp", sim.steps());
+            let name = frame_name(sim.steps());
             vtk::write_vtp_segments(
-                &self.dir.join("paraview").join(&name),
+                &self.dir.join(PARAVIEW_DIR).join(&name),
                 &points,
                 sim.system().mesh().elements(),
                 &vel,
@@ -830,7 +831,7 @@ impl Writers {
     ) -> Result<Self, OutputError> {
         remove_stale_temp_files(dir);
         let pvd = if vtk_frames {
-            let path = dir.join("paraview").join("string.pvd");
+            let path = dir.join(PARAVIEW_DIR).join(PVD_FILE);
             let mut p = if state.frames == 0 {
                 PvdWriter::new(&path)
             } else {

@@ -26,6 +26,11 @@ pub use phstring::nan_max;
 /// Name of the file in an output folder that holds the id of the run writing it.
 pub const RUN_ID_FILE: &str = ".phstring-run";
 
+/// Whether `id` can be a run id: 1 to 64 ASCII letters and digits.
+pub fn is_valid_run_id(id: &str) -> bool {
+    !id.is_empty() && id.len() <= 64 && id.chars().all(|c| c.is_ascii_alphanumeric())
+}
+
 /// A new run id: a hash of the time, the process id, a counter and the output folder.
 pub fn new_run_id(out: &Path) -> String {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -49,13 +54,11 @@ pub fn read_run_id(dir: &Path) -> Option<String> {
         .read_to_string(&mut text)
         .ok()?;
     let id = text.trim();
-    Some(
-        if !id.is_empty() && id.len() <= 64 && id.chars().all(|c| c.is_ascii_alphanumeric()) {
-            id.to_string()
-        } else {
-            "(unreadable)".to_string()
-        },
-    )
+    Some(if is_valid_run_id(id) {
+        id.to_string()
+    } else {
+        "(unreadable)".to_string()
+    })
 }
 
 /// Refuses to resume `cp` into `out` unless `out` carries the run id of the run that wrote
@@ -234,7 +237,7 @@ pub struct RunInfo {
     pub scenario: serde_json::Value,
     /// Energies read back from `energy.csv` after the run, decimated to at most
     /// [`output::PLOT_POINTS`] points per curve, and the configuration snapshots (not
-    /// serialized; empty if the run was stopped before it was read).
+    /// serialized; empty if `output.plots` is off or the run was stopped before it was read).
     #[serde(skip)]
     pub history: History,
 }
@@ -506,17 +509,18 @@ fn run_dim<const D: usize>(
     }
     // The summary is on disk before the plots, whatever happens to them.
     write_summary(out, &info)?;
-    let history = match output::read_history(
-        writers.energy_path(),
-        output::PLOT_POINTS,
-        writers.snapshots().to_vec(),
-        stop.as_deref(),
-    ) {
-        Ok(Some(h)) => Ok(h),
-        Ok(None) => Err("stop requested".to_string()),
-        Err(e) => Err(e.to_string()),
-    };
     if settings.output.plots {
+        // The plots' data, read back from energy.csv (the run keeps no history in memory).
+        let history = match output::read_history(
+            writers.energy_path(),
+            output::PLOT_POINTS,
+            writers.snapshots().to_vec(),
+            stop.as_deref(),
+        ) {
+            Ok(Some(h)) => Ok(h),
+            Ok(None) => Err("stop requested".to_string()),
+            Err(e) => Err(e.to_string()),
+        };
         let title = file.scenario.title.as_deref().unwrap_or("phstring");
         let report = output::draw_plots(
             out,
@@ -530,8 +534,8 @@ fn run_dim<const D: usize>(
         info.plots_skipped = report.skipped;
         info.warnings.extend(report.warnings);
         write_summary(out, &info)?;
+        info.history = history.unwrap_or_default();
     }
-    info.history = history.unwrap_or_default();
     if let Some(e) = failure {
         return Err(RunError::Step(e, detail, out.to_path_buf()));
     }
