@@ -832,28 +832,17 @@ impl Writers {
         remove_stale_temp_files(dir);
         let pvd = if vtk_frames {
             let path = dir.join(PARAVIEW_DIR).join(PVD_FILE);
-            let mut p = if state.frames == 0 {
-                PvdWriter::new(&path)
-            } else {
-                PvdWriter::read(&path)?
-            };
-            if p.len() < state.frames {
-                return Err(OutputError::Mismatch {
-                    path,
-                    reason: format!(
-                        "it lists {} frames, the checkpoint recorded {}",
-                        p.len(),
-                        state.frames
-                    ),
-                });
-            }
-            p.truncate(state.frames);
-            let hash = p
-                .entries()
-                .iter()
-                .fold(frames_hash_start(), |h, (t, name)| {
-                    frames_hash_add(h, *t, name)
-                });
+            let mut hash = frames_hash_start();
+            let p = PvdWriter::resume(&path, state.frames, |t, name| {
+                hash = frames_hash_add(hash, t, name);
+            })
+            .map_err(|e| OutputError::Mismatch {
+                path: path.clone(),
+                reason: format!(
+                    "it does not list the checkpoint's {} frames ({e})",
+                    state.frames
+                ),
+            })?;
             if hash != state.frames_hash {
                 return Err(OutputError::Mismatch {
                     path,
@@ -934,7 +923,7 @@ impl Writers {
         if let Some(p) = &mut self.positions {
             p.flush()?;
         }
-        if let Some(pvd) = &self.pvd
+        if let Some(pvd) = &mut self.pvd
             && self.pvd_dirty
         {
             pvd.write()?;

@@ -4,7 +4,6 @@
 //! Each element (segment) is one VTK line cell, so per-element quantities such as the strain
 //! `C` and the stress `S` are cell data with one value per element.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use vtkio::model::{
@@ -152,22 +151,40 @@ pub fn write_vtp_segments(
     })
 }
 
+/// Opening of a collection file, up to its first data set.
+const PVD_HEADER: &str = "<?xml version=\"1.0\"?>\n\
+<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  \
+<Collection>\n";
+/// Closing of a collection file, after its last data set.
+const PVD_FOOTER: &str = "  </Collection>\n</VTKFile>\n";
+
 /// Writer of a ParaView collection file (`.pvd`) listing one data file per time step.
 ///
 /// Call [`PvdWriter::add`] per frame and [`PvdWriter::write`] as often as wanted: each call
-/// rewrites the whole file, so the collection on disk is valid after every frame.
+/// appends the data sets added since the last one and rewrites the closing tags, so the
+/// collection on disk is valid after every write, and neither memory nor the cost of a write
+/// grows with the number of frames.
 #[derive(Debug, Clone)]
 pub struct PvdWriter {
     path: PathBuf,
-    entries: Vec<(f64, String)>,
+    /// Data sets in the file.
+    written: usize,
+    /// Byte offset of the closing tags in the file (after the last data set written); 0
+    /// before the first write.
+    body_end: u64,
+    /// Data sets added since the last write: `(time in s, file name)`.
+    pending: Vec<(f64, String)>,
 }
 
 impl PvdWriter {
-    /// A writer for the collection file at `pvd_path` (nothing is written yet).
+    /// A writer for the collection file at `pvd_path` (nothing is written yet; the first
+    /// write replaces any file there).
     pub fn new(pvd_path: &Path) -> Self {
         Self {
             path: pvd_path.to_path_buf(),
-            entries: Vec::new(),
+            written: 0,
+            body_end: 0,
+            pending: Vec::new(),
         }
     }
 
@@ -176,39 +193,40 @@ impl PvdWriter {
         &self.path
     }
 
-    /// Number of data sets added so far.
+    /// Number of data sets added so far (written or not).
     pub fn len(&self) -> usize {
-        self.entries.len()
+        self.written + self.pending.len()
     }
 
     /// Whether no data set has been added yet.
     pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
+        self.len() == 0
     }
 
     /// Records the data file for time `time` (in s), given relative to the `.pvd` file's folder.
     pub fn add(&mut self, time: f64, file_name_relative: &str) {
-        self.entries.push((time, file_name_relative.to_string()));
+        self.pending.push((time, file_name_relative.to_string()));
     }
 
-    /// The data sets added so far: `(time in s, file name)`.
-    pub fn entries(&self) -> &[(f64, String)] {
-        &self.entries
-    }
-
-    /// Keeps the first `n` data sets.
-    pub fn truncate(&mut self, n: usize) {
-        self.entries.truncate(n);
-    }
-
-    /// Reads a collection file written by [`Self::write`] (to append to it), e.g. when a run
-    /// resumes. Times must be finite; file names are unescaped.
-    pub fn read(pvd_path: &Path) -> Result<Self, VtkError> {
-        let text = std::fs::read_to_string(pvd_path).map_err(|source| VtkError::Io {
+    /// Continues the collection file written by [`Self::write`] after its first `frames` data
+    /// sets (a resumed run; data sets after them are dropped at the next write), calling
+    /// `visit(time, file name)` for each of those. The file is read as a stream and not
+    /// changed here. Times must be finite; file names are unescaped.
+    pub fn resume(
+        pvd_path: &Path,
+        frames: usize,
+        mut visit: impl FnMut(f64, &str),
+    ) -> Result<Self, VtkError> {
+        use std::io::BufRead;
+        let mut w = Self::new(pvd_path);
+        if frames == 0 {
+            return Ok(w);
+        }
+        let io = |source| VtkError::Io {
             path: pvd_path.to_path_buf(),
             cause: source,
-        })?;
-        let bad = |line: usize, message: &str| VtkError::Input {
+        };
+        let bad = |line: usize, message: String| VtkError::Input {
             path: pvd_path.to_path_buf(),
             message: format!("line {}: {message}", line + 1),
         };
@@ -217,57 +235,80 @@ impl PvdWriter {
             let len = line[start..].find('"')?;
             Some(line[start..start + len].to_string())
         };
-        let mut w = Self::new(pvd_path);
-        for (i, line) in text.lines().enumerate() {
-            if !line.trim_start().starts_with("<DataSet ") {
-                continue;
+        let mut reader = std::io::BufReader::new(std::fs::File::open(pvd_path).map_err(io)?);
+        let (mut line, mut offset, mut i) = (String::new(), 0u64, 0usize);
+        while w.written < frames {
+            line.clear();
+            let n = reader.read_line(&mut line).map_err(io)?;
+            if n == 0 {
+                return Err(bad(
+                    i,
+                    format!(
+                        "the collection ends after {} data sets, {frames} were expected",
+                        w.written
+                    ),
+                ));
             }
-            let time: f64 = attr(line, "timestep")
-                .and_then(|t| t.parse().ok())
-                .filter(|t: &f64| t.is_finite())
-                .ok_or_else(|| bad(i, "no finite timestep"))?;
-            let file = attr(line, "file").ok_or_else(|| bad(i, "no file"))?;
-            w.add(time, &xml_unescape(&file));
+            offset += n as u64;
+            if line.trim_start().starts_with("<DataSet ") {
+                let time: f64 = attr(&line, "timestep")
+                    .and_then(|t| t.parse().ok())
+                    .filter(|t: &f64| t.is_finite())
+                    .ok_or_else(|| bad(i, "no finite timestep".into()))?;
+                let file = attr(&line, "file").ok_or_else(|| bad(i, "no file".into()))?;
+                visit(time, &xml_unescape(&file));
+                w.written += 1;
+            }
+            i += 1;
         }
+        w.body_end = offset;
         Ok(w)
     }
 
-    /// The collection XML text for the entries added so far.
-    pub fn to_xml(&self) -> String {
-        let mut s = String::from(
-            "<?xml version=\"1.0\"?>\n\
-             <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  \
-             <Collection>\n",
-        );
-        for (time, file) in &self.entries {
-            // Writing into a String cannot fail.
-            let _ = writeln!(
-                s,
-                "    <DataSet timestep=\"{time:?}\" part=\"0\" file=\"{}\"/>",
-                xml_escape(file)
-            );
-        }
-        s.push_str("  </Collection>\n</VTKFile>\n");
-        s
+    /// The XML line of one data set.
+    fn entry(time: f64, file: &str) -> String {
+        format!(
+            "    <DataSet timestep=\"{time:?}\" part=\"0\" file=\"{}\"/>\n",
+            xml_escape(file)
+        )
     }
 
-    /// Writes (or rewrites) the collection file with all entries added so far.
-    ///
-    /// The file is written to a temporary sibling and renamed, so readers never see a
-    /// half-written collection. Non-finite times are rejected.
-    pub fn write(&self) -> Result<(), VtkError> {
-        if let Some((time, file)) = self.entries.iter().find(|(t, _)| !t.is_finite()) {
+    /// Writes the data sets added since the last write, and the closing tags after them (the
+    /// first write writes the whole file). Non-finite times are rejected.
+    pub fn write(&mut self) -> Result<(), VtkError> {
+        use std::io::{Seek, SeekFrom, Write as _};
+        if let Some((time, file)) = self.pending.iter().find(|(t, _)| !t.is_finite()) {
             return Err(VtkError::Input {
                 path: self.path.clone(),
                 message: format!("non-finite time {time} for data set {file:?}"),
             });
         }
-        crate::output::atomic_write(&self.path, self.to_xml().as_bytes()).map_err(|source| {
-            VtkError::Io {
-                path: self.path.clone(),
-                cause: source,
-            }
-        })
+        let io = |source| VtkError::Io {
+            path: self.path.clone(),
+            cause: source,
+        };
+        let mut body = String::new();
+        if self.body_end == 0 {
+            body.push_str(PVD_HEADER);
+        }
+        for (time, file) in &self.pending {
+            body.push_str(&Self::entry(*time, file));
+        }
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .write(true)
+            .truncate(false)
+            .open(&self.path)
+            .map_err(io)?;
+        f.seek(SeekFrom::Start(self.body_end)).map_err(io)?;
+        f.write_all(body.as_bytes()).map_err(io)?;
+        f.write_all(PVD_FOOTER.as_bytes()).map_err(io)?;
+        let end = self.body_end + (body.len() + PVD_FOOTER.len()) as u64;
+        f.set_len(end).map_err(io)?;
+        self.body_end += body.len() as u64;
+        self.written += self.pending.len();
+        self.pending.clear();
+        Ok(())
     }
 }
 
@@ -464,11 +505,39 @@ mod tests {
             pvd.add(t, f);
         }
         pvd.write().unwrap();
-        let back = PvdWriter::read(&path).unwrap();
-        assert_eq!(back.entries(), pvd.entries());
+        let mut back = Vec::new();
+        let resumed = PvdWriter::resume(&path, 3, |t, f| back.push((t, f.to_string()))).unwrap();
+        assert_eq!(resumed.len(), 3);
+        let expected = [
+            (0.0, "frame_000000.vtp"),
+            (0.1 + 0.2, "a&b.vtp"),
+            (1e-300, "x\ty.vtp"),
+        ];
+        assert_eq!(back.len(), 3);
+        for ((t, f), (te, fe)) in back.iter().zip(expected) {
+            assert_eq!((*t, f.as_str()), (te, fe));
+        }
+        // Resuming after the first two drops the third at the next write.
+        let before = std::fs::read_to_string(&path).unwrap();
+        let mut two = PvdWriter::resume(&path, 2, |_, _| {}).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            before,
+            "resume changed the file"
+        );
+        two.add(0.5, "next.vtp");
+        two.write().unwrap();
+        let xml = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(xml.matches("<DataSet ").count(), 3, "{xml}");
+        assert!(
+            xml.contains("next.vtp") && !xml.contains("x&#9;y.vtp"),
+            "{xml}"
+        );
+        assert!(xml.ends_with("</VTKFile>\n"), "{xml}");
+        // Fewer data sets than asked for, and a non-finite time, are errors.
+        assert!(PvdWriter::resume(&path, 4, |_, _| {}).is_err());
         std::fs::write(&path, "<DataSet timestep=\"nan\" part=\"0\" file=\"f\"/>\n").unwrap();
-        assert!(PvdWriter::read(&path).is_err());
-        assert!(!dir.join(".string.pvd.tmp").exists());
+        assert!(PvdWriter::resume(&path, 1, |_, _| {}).is_err());
         let _ = std::fs::remove_dir_all(&dir);
     }
 
