@@ -258,16 +258,61 @@ pub enum CheckpointError {
     },
 }
 
+/// A [`CheckpointFile`] by reference, with the checksum given apart: it serializes to the
+/// same JSON as the file with that checksum, without copying the state.
+#[derive(Serialize)]
+struct CheckpointView<'a> {
+    format: &'a str,
+    version: &'a str,
+    run_id: &'a str,
+    scenario_path: &'a Path,
+    scenario_text: &'a str,
+    end_of_loading: Option<f64>,
+    sim: &'a SimState,
+    outputs: &'a OutputState,
+    counters: &'a Counters,
+    checksum: &'a str,
+}
+
+/// Feeds what is written into an FNV-1a hasher.
+struct HashWriter(fnv::FnvHasher);
+
+impl std::io::Write for HashWriter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
 impl CheckpointFile {
+    /// This checkpoint with `checksum` as its checksum, by reference.
+    fn view<'a>(&'a self, checksum: &'a str) -> CheckpointView<'a> {
+        CheckpointView {
+            format: &self.format,
+            version: &self.version,
+            run_id: &self.run_id,
+            scenario_path: &self.scenario_path,
+            scenario_text: &self.scenario_text,
+            end_of_loading: self.end_of_loading,
+            sim: &self.sim,
+            outputs: &self.outputs,
+            counters: &self.counters,
+            checksum,
+        }
+    }
+
     /// The checksum of this checkpoint's content: FNV-1a (64 bit) over its JSON with an
-    /// empty `checksum` field. Floats print in shortest round-trip form, so the JSON of a
-    /// checkpoint read back is that of the one written, and any changed value changes it.
+    /// empty `checksum` field (hashed as it is serialized, without a copy). Floats print in
+    /// shortest round-trip form, so the JSON of a checkpoint read back is that of the one
+    /// written, and any changed value changes it.
     pub fn checksum(&self) -> String {
-        let mut body = self.clone();
-        body.checksum.clear();
-        // Serializing plain data to a string cannot fail.
-        let text = serde_json::to_string(&body).unwrap_or_default();
-        fnv1a64_hex(text.as_bytes())
+        let mut h = HashWriter(fnv::FnvHasher::default());
+        // Serializing plain data into a hasher cannot fail.
+        let _ = serde_json::to_writer(&mut h, &self.view(""));
+        format!("{:016x}", h.0.finish())
     }
 
     /// Writes atomically (a temporary file in the same folder, then rename), with the
@@ -280,12 +325,12 @@ impl CheckpointFile {
                 reason: format!("refusing to write a non-finite value in {what}"),
             });
         }
-        let mut cp = self.clone();
-        cp.checksum = self.checksum();
-        let text = serde_json::to_string(&cp).map_err(|e| CheckpointError::Format {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
+        let checksum = self.checksum();
+        let text =
+            serde_json::to_string(&self.view(&checksum)).map_err(|e| CheckpointError::Format {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
         crate::output::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
             path: path.to_path_buf(),
             cause: source,
