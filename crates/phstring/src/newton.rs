@@ -2,7 +2,8 @@
 //!
 //! Convergence test: the Euclidean norm of the residual over all free degrees of freedom,
 //! in newtons (the momentum balance of the step divided by `h`), is at most
-//! [`NewtonParams::tol`]. The test is made before each solve, so `iterations` counts linear
+//! [`NewtonParams::tolerance`] of the step's force scale, or stagnates at the round-off floor
+//! (see [`NewtonParams`]). The test is made before each solve, so `iterations` counts linear
 //! solves (Jacobian factorizations) of the whole system.
 //!
 //! **Nonlinear elimination** ([`NewtonParams::elimination`]). On fine meshes the residual of a
@@ -177,7 +178,7 @@ pub trait NewtonProblem<const D: usize> {
     fn force_scale(&self) -> f64 {
         0.0
     }
-    /// Strain scale [N] of the last full [`Self::evaluate`]: the root-sum-square over the
+    /// Strain scale [N] of the step (measured like [`Self::force_scale`]): the root-sum-square over the
     /// elements of the internal force's change for a relative strain change of 1 (`2 ∂q/∂C ·
     /// C · |r'|` on each node). The residual cannot resolve less than about `ε` times it.
     fn strain_scale(&self) -> f64 {
