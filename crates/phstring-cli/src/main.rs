@@ -723,6 +723,15 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         let exprs: Vec<String> = exprs.iter().map(|e| clip(e).into_owned()).collect();
         let _ = writeln!(out, "  force:     node {node}: [{}] N", exprs.join(", "));
     }
+    for pm in &p.point_masses {
+        let _ = writeln!(
+            out,
+            "  mass:      node {}: {} kg, weight {} N",
+            pm.node,
+            num(pm.mass),
+            nums(pm.weight.as_slice())
+        );
+    }
     let steps = (s.t_end / s.step.h).round() as usize;
     let _ = writeln!(
         out,

@@ -41,6 +41,9 @@ pub struct Scenario {
     /// Boundary conditions, one table per node.
     #[serde(default)]
     pub boundary: Vec<BoundarySpec>,
+    /// Point masses at nodes (payloads, clump weights), one table each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub point_mass: Vec<PointMassSpec>,
     /// Time stepping.
     pub time: TimeSpec,
     /// Newton's method and the linear solver.
@@ -139,6 +142,16 @@ pub struct BoundarySpec {
     /// Nodal force [N], one expression in `t` [s] per component.
     #[serde(default)]
     pub force: Option<Spanned<Vec<String>>>,
+}
+
+/// A point mass at a node; gravity (`body_force.gravity`) acts on it.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMassSpec {
+    /// Node index; negative values count from the end (`-1` is the last node).
+    pub node: Spanned<i64>,
+    /// Mass [kg].
+    pub kg: Spanned<f64>,
 }
 
 /// Time stepping.
@@ -986,8 +999,10 @@ impl ScenarioFile {
         }
         // Body force.
         let mut body = Vector::<D>::zeros();
+        let mut gravity = Vector::<D>::zeros();
         if let Some(gv) = &s.body_force.gravity {
-            body += self.vector::<D>("body_force.gravity", gv)? * rho_a;
+            gravity = self.vector::<D>("body_force.gravity", gv)?;
+            body += gravity * rho_a;
         }
         if let Some(pl) = &s.body_force.per_length {
             body += self.vector::<D>("body_force.per_length", pl)?;
@@ -998,6 +1013,36 @@ impl ScenarioFile {
             _ => 0.0,
         };
         let n_nodes = n_el + 1;
+        let mut point_masses = Vec::with_capacity(s.point_mass.len());
+        for (k, pm) in s.point_mass.iter().enumerate() {
+            let key = |f: &str| format!("point_mass.{k}.{f}");
+            let raw = *pm.node.get_ref();
+            let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
+            if node < 0 || node >= n_nodes as i64 {
+                return Err(self.invalid(
+                    &key("node"),
+                    pm.node.span(),
+                    format!("= {raw} is out of range: the mesh has nodes 0..={} (or -1..=-{n_nodes} from the end)", n_nodes - 1),
+                ));
+            }
+            let kg = self.positive(&key("kg"), &pm.kg)?;
+            let weight = gravity * kg;
+            if !weight.iter().all(|w| w.is_finite()) {
+                return Err(self.invalid(
+                    &key("kg"),
+                    pm.kg.span(),
+                    format!(
+                        "= {}: its weight under body_force.gravity overflows",
+                        num(kg)
+                    ),
+                ));
+            }
+            point_masses.push(phstring::PointMass {
+                node: node as usize,
+                mass: kg,
+                weight,
+            });
+        }
         let mut boundary = Boundary::<D>::default();
         let mut loads_text = Vec::new();
         let mut fixed_mask: Vec<[bool; D]> = vec![[false; D]; n_nodes];
@@ -1241,6 +1286,7 @@ impl ScenarioFile {
         }
         Ok(Validated {
             problem: Problem {
+                point_masses,
                 mesh,
                 material,
                 rho_a,

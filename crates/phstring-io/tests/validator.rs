@@ -211,3 +211,36 @@ fn scenario_file_size_is_capped() {
     let e = scenario::load(Path::new("/dev/zero"), &[]).unwrap_err();
     assert!(matches!(e, scenario::ScenarioError::TooLarge { .. }), "{e}");
 }
+
+/// Point masses (`[[point_mass]]`): the node counts from the end like a boundary's, the
+/// weight is `kg · g`, and a bad mass or node names its key and position.
+#[test]
+fn point_masses_are_validated_with_their_weight() {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper_pendulum.toml"),
+    )
+    .unwrap()
+        + "\n[[point_mass]]\nnode = -1\nkg = 2.5\n";
+    let file = scenario::parse(&text, Path::new("pm.toml"), &[]).unwrap();
+    let v = file.validate::<2>().unwrap();
+    let pm = &v.problem.point_masses;
+    assert_eq!(pm.len(), 1);
+    assert_eq!((pm[0].node, pm[0].mass), (30, 2.5));
+    assert_eq!(pm[0].weight, phstring::Vector::<2>::new(0.0, -9.81 * 2.5));
+    for (set, key) in [
+        ("point_mass.0.kg=0", "`point_mass.0.kg` must be positive"),
+        ("point_mass.0.kg=-1.0", "`point_mass.0.kg` must be positive"),
+        (
+            "point_mass.0.node=31",
+            "`point_mass.0.node` = 31 is out of range",
+        ),
+        ("point_mass.0.kg=1e308", "`point_mass.0.kg`"),
+    ] {
+        let err = scenario::parse(&text, Path::new("pm.toml"), &[set.to_string()])
+            .and_then(|f| f.check())
+            .err()
+            .unwrap_or_else(|| panic!("{set} accepted"))
+            .to_string();
+        assert!(err.contains(key), "{set}: {err}");
+    }
+}

@@ -32,6 +32,7 @@ fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
     let mut g = Vector::<D>::zeros();
     g[1] = -9.81;
     Problem {
+        point_masses: Vec::new(),
         initial: State::consistent(&mesh, r, v),
         mesh,
         material: Material::hyperelastic(20.0),

@@ -47,6 +47,7 @@ pub fn paper_pendulum(n_el: usize) -> Problem<2, Material> {
     let initial = State::straight(&mesh, Vector::zeros(), end);
     let tip = mesh.n_nodes() - 1;
     Problem {
+        point_masses: Vec::new(),
         mesh,
         material: Material::hyperelastic(20.0),
         rho_a: 1.0,

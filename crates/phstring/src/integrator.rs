@@ -234,6 +234,19 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 j.off[e] = [off, off];
             }
         }
+        // Point masses: inertia m (v_{n+1} − v_n)/h at their nodes.
+        for &(i, m) in sys.point_mass.iter().filter(|(i, _)| nodes.contains(i)) {
+            let w = (x[i] * inv_h - self.v0[i]) * (2.0 * inv_h);
+            res[i] += w * m;
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[i] += eye * (mass_scale * m);
+            }
+            if MEASURE {
+                let mm = 2.0 * inv_h * m;
+                scale2 +=
+                    mm * mm * (x[i].norm_squared() * (inv_h * inv_h) + self.v0[i].norm_squared());
+            }
+        }
         // Dirichlet components: the residual there is the reaction force; the equation is
         // replaced by Δ_k = 0.
         for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
@@ -343,6 +356,7 @@ mod tests {
         let mut fixed1 = [false; D];
         fixed1[0] = true;
         let problem = Problem {
+            point_masses: Vec::new(),
             initial: State::consistent(&mesh, r, v),
             mesh,
             material,

@@ -53,6 +53,7 @@
 //!     body_force: Vector::<2>::new(0.0, -9.81),                      // −g ρA e_y
 //!     mass: MassMatrix::Consistent,
 //!     boundary: Boundary { fixed: vec![Fixed::node(0)], loads: vec![load] },
+//!     point_masses: vec![],                                          // none here
 //! };
 //! let params = StepParams { h: 0.01, scheme: Scheme::DiscreteGradient, ..Default::default() };
 //! let mut sim = Simulation::new(problem, params)?;
@@ -86,4 +87,4 @@ pub use simulation::{
     Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
     estimated_seconds_per_iteration,
 };
-pub use system::{Energies, MassMatrix, PhSystem, Problem, State, Vector};
+pub use system::{Energies, MassMatrix, PhSystem, PointMass, Problem, State, Vector};

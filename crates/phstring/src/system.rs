@@ -105,6 +105,19 @@ impl Energies {
     }
 }
 
+/// A point mass attached to a node (a payload, a clump weight): it adds `mass` to the node's
+/// inertia and the constant force `weight` (usually `mass · g`) to the node's loads; its
+/// potential `−r·weight` is part of `V̂`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointMass<const D: usize> {
+    /// Node index.
+    pub node: usize,
+    /// Mass [kg].
+    pub mass: f64,
+    /// Constant force on the mass [N], e.g. its weight `mass · g`.
+    pub weight: Vector<D>,
+}
+
 /// The problem: everything that defines the semi-discrete system and its initial state.
 #[derive(Debug, Clone)]
 pub struct Problem<const D: usize, M> {
@@ -120,6 +133,8 @@ pub struct Problem<const D: usize, M> {
     pub mass: MassMatrix,
     /// Boundary conditions.
     pub boundary: Boundary<D>,
+    /// Point masses at nodes (none by default).
+    pub point_masses: Vec<PointMass<D>>,
     /// Initial state.
     pub initial: State<D>,
 }
@@ -140,6 +155,8 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) constrained: Vec<usize>,
     /// Elements with a node in `constrained`.
     pub(crate) constrained_elements: Vec<usize>,
+    /// Point masses `(node, mass [kg])`, sorted by node (their weights are in `f_body`).
+    pub(crate) point_mass: Vec<(usize, f64)>,
 }
 
 impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
@@ -152,6 +169,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             body_force,
             mass,
             boundary,
+            point_masses,
             initial,
         } = problem;
         if !(rho_a > 0.0 && rho_a.is_finite()) {
@@ -248,6 +266,41 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             f_body[a] += body_force * (0.5 * l);
             f_body[b] += body_force * (0.5 * l);
         }
+        let mut point_mass = Vec::with_capacity(point_masses.len());
+        for (k, pm) in point_masses.iter().enumerate() {
+            if pm.node >= n {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "point mass",
+                    node: pm.node,
+                    n_nodes: n,
+                });
+            }
+            if !(pm.mass > 0.0 && pm.mass.is_finite()) {
+                return Err(SetupError::NonPositive {
+                    what: "point mass [kg]",
+                    index: Some(k),
+                    value: pm.mass,
+                });
+            }
+            if let Some(x) = pm.weight.iter().find(|x| !x.is_finite()) {
+                return Err(SetupError::NotFinite {
+                    what: "weight of point mass",
+                    index: k,
+                    value: *x,
+                });
+            }
+            f_body[pm.node] += pm.weight;
+            point_mass.push((pm.node, pm.mass));
+        }
+        // Several masses at one node add up.
+        point_mass.sort_by_key(|&(node, _)| node);
+        point_mass.dedup_by(|later, first| {
+            let same = later.0 == first.0;
+            if same {
+                first.1 += later.1;
+            }
+            same
+        });
         if let Some((i, f)) = f_body
             .iter()
             .enumerate()
@@ -280,6 +333,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             free,
             constrained,
             constrained_elements,
+            point_mass,
         };
         let en = sys.energies(&initial);
         for (what, value) in [
@@ -345,6 +399,14 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             out[a] += v[a] * md + v[b] * mo;
             out[b] += v[b] * md + v[a] * mo;
         }
+        for &(i, m) in &self.point_mass {
+            out[i] += v[i] * m;
+        }
+    }
+
+    /// Point masses `(node, mass [kg])`, sorted by node, several at one node added up.
+    pub fn point_masses(&self) -> &[(usize, f64)] {
+        &self.point_mass
     }
 
     /// `out = K(r) S` [N]: element `e` adds `−S_e r'_e` to node `a` and `+S_e r'_e` to node `b`
@@ -418,6 +480,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             kinetic += 0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(&vb);
             internal += l * self.material.w(c(e));
         }
+        for &(i, m) in &self.point_mass {
+            kinetic += 0.5 * m * v(i).norm_squared();
+        }
         let external = -self
             .f_body
             .iter()
@@ -437,6 +502,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
             let (md, mo) = self.element_mass(l);
             p += (state.v[a] + state.v[b]) * (md + mo);
+        }
+        for &(i, m) in &self.point_mass {
+            p += state.v[i] * m;
         }
         p
     }
@@ -471,6 +539,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             let (ra, rb, va, vb) = (&state.r[a], &state.r[b], &state.v[a], &state.v[b]);
             l_tot += (cross(ra, va) + cross(rb, vb)) * md;
             l_tot += (cross(ra, vb) + cross(rb, va)) * mo;
+        }
+        for &(i, m) in &self.point_mass {
+            l_tot += cross(&state.r[i], &state.v[i]) * m;
         }
         l_tot
     }

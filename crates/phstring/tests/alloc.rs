@@ -87,6 +87,7 @@ fn memory_estimate_matches_the_allocator() {
         end[0] = 10.0;
         let initial = phstring::State::straight(&mesh, phstring::Vector::zeros(), end);
         let problem = phstring::Problem {
+            point_masses: Vec::new(),
             mesh,
             material: phstring::Material::hyperelastic(1e6),
             rho_a: 1.0,

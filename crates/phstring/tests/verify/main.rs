@@ -6,6 +6,7 @@ mod elimination;
 mod momentum;
 mod order;
 mod paper;
+mod point_mass;
 mod quotient;
 mod real_units;
 mod solvers;

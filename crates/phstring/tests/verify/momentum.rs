@@ -26,6 +26,7 @@ fn spinning<const D: usize>(scheme: Scheme) -> Simulation<D, Material> {
         v.push(vi);
     }
     let problem = Problem {
+        point_masses: Vec::new(),
         initial: State::consistent(&mesh, r, v),
         mesh,
         material: Material::hyperelastic(20.0),

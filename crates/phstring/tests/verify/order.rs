@@ -21,6 +21,7 @@ fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
         })
         .collect();
     let problem = Problem {
+        point_masses: Vec::new(),
         initial: State::at_rest(&mesh, r),
         mesh,
         material: Material::hyperelastic(20.0),

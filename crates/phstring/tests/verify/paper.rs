@@ -234,6 +234,7 @@ fn strain_outside_a_bounded_domain_is_reported() {
         phstring::Vector::<2>::new(500.0, -500.0)
     })];
     let problem = phstring::Problem {
+        point_masses: Vec::new(),
         mesh: base.mesh,
         material: Limited,
         rho_a: 1.0,

@@ -88,6 +88,7 @@ fn hanging(rope: Rope, material: Material, n_el: usize) -> Problem<2, Material> 
     let initial = State::straight(&mesh, Vector::zeros(), bottom);
     let weight = rope.payload * G;
     Problem {
+        point_masses: Vec::new(),
         mesh,
         material,
         rho_a: rope.rho_a,
@@ -309,6 +310,7 @@ fn stiff_rope_at_rest_stays_at_rest() {
     let mesh = Mesh::uniform_chain(1000, rope.length).unwrap();
     let end = Vector::<2>::new(rope.length, 0.0);
     let problem = Problem {
+        point_masses: Vec::new(),
         initial: State::straight(&mesh, Vector::zeros(), end),
         mesh,
         material: Material::hyperelastic(rope.ea),
@@ -344,6 +346,7 @@ fn non_finite_derived_quantities_are_refused_at_setup() {
         let mesh = Mesh::uniform_chain(30, length).unwrap();
         let initial = State::straight(&mesh, start, end);
         Problem {
+            point_masses: Vec::new(),
             initial,
             mesh,
             material: Material::hyperelastic(20.0),
