@@ -723,6 +723,23 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         let exprs: Vec<String> = exprs.iter().map(|e| clip(e).into_owned()).collect();
         let _ = writeln!(out, "  force:     node {node}: [{}] N", exprs.join(", "));
     }
+    // Motions are listed in the order of the scenario's non-empty `position` expressions.
+    let texts = file
+        .scenario
+        .boundary
+        .iter()
+        .filter_map(|b| b.position.as_ref())
+        .flat_map(|pos| pos.get_ref().iter())
+        .filter(|t| !t.trim().is_empty());
+    for (m, text) in p.boundary.motions.iter().zip(texts) {
+        let _ = writeln!(
+            out,
+            "  motion:    node {} {} = {} m (velocity in, reaction out)",
+            m.node,
+            ["x", "y", "z"][m.component.min(2)],
+            clip(text)
+        );
+    }
     for pm in &p.point_masses {
         let _ = writeln!(
             out,

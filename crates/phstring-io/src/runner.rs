@@ -486,7 +486,10 @@ fn run_dim<const D: usize>(
         return Err(e);
     }
     let detail = match &failure {
-        Some(StepError::NonFinite { what: "load", .. }) => load_error
+        Some(StepError::NonFinite {
+            what: "load" | "prescribed position",
+            ..
+        }) => load_error
             .lock()
             .ok()
             .and_then(|m| m.clone())

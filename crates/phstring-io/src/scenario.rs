@@ -142,6 +142,10 @@ pub struct BoundarySpec {
     /// Nodal force [N], one expression in `t` [s] per component.
     #[serde(default)]
     pub force: Option<Spanned<Vec<String>>>,
+    /// Prescribed absolute position [m], one expression in `t` [s] per component; `""` leaves
+    /// a component free. Each must equal the initial position at `t = 0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<Spanned<Vec<String>>>,
 }
 
 /// A point mass at a node; gravity (`body_force.gravity`) acts on it.
@@ -620,6 +624,7 @@ fn set_value(value: &str) -> Result<toml_edit::Value, &'static str> {
 /// Keeps the first failure of a force expression (later ones are consequences).
 fn record_load_error(
     slot: &std::sync::Mutex<Option<String>>,
+    key: &str,
     k: usize,
     component: usize,
     text: &str,
@@ -630,7 +635,7 @@ fn record_load_error(
         && s.is_none()
     {
         *s = Some(format!(
-            "`boundary.{k}.force` component {} \"{}\" at t = {} s: {what}",
+            "`boundary.{k}.{key}` component {} \"{}\" at t = {} s: {what}",
             ["x", "y", "z"][component.min(2)],
             clip(text),
             num(t)
@@ -1061,12 +1066,83 @@ impl ScenarioFile {
                 ));
             }
             let node = node as usize;
-            if b.fixed.is_none() && b.force.is_none() {
+            if b.fixed.is_none() && b.force.is_none() && b.position.is_none() {
                 return Err(self.invalid(
                     &key("node"),
                     b.node.span(),
-                    "has neither `fixed` nor `force`",
+                    "has neither `fixed`, `force` nor `position`",
                 ));
+            }
+            if let Some(p) = &b.position {
+                let texts = p.get_ref();
+                if texts.len() != D {
+                    return Err(self.invalid(
+                        &key("position"),
+                        p.span(),
+                        format!(
+                            "must have {D} expressions (dimension = {D}; \"\" for a free component), got {}",
+                            texts.len()
+                        ),
+                    ));
+                }
+                for (i, txt) in texts.iter().enumerate() {
+                    if txt.trim().is_empty() {
+                        continue;
+                    }
+                    let e = Expr::new(txt, t_check)
+                        .map_err(|m| self.invalid(&key("position"), p.span(), m))?;
+                    let at_zero = e
+                        .eval(0.0)
+                        .map_err(|m| self.invalid(&key("position"), p.span(), m))?;
+                    let start = initial.r[node][i];
+                    // NaN (an expression undefined at 0) fails too.
+                    let starts_there = (at_zero - start).abs() <= 1e-9 * start.abs().max(1.0);
+                    if !starts_there {
+                        return Err(self.invalid(
+                            &key("position"),
+                            p.span(),
+                            format!(
+                                "component {} is at {} m at t = 0, but node {node} starts at {} m: the expression gives the absolute position",
+                                ["x", "y", "z"][i],
+                                num(at_zero),
+                                num(start)
+                            ),
+                        ));
+                    }
+                    if fixed_mask[node][i] {
+                        return Err(self.invalid(
+                            &key("position"),
+                            p.span(),
+                            format!(
+                                "node {node} is already fixed in component {} (give \"\" there)",
+                                ["x", "y", "z"][i]
+                            ),
+                        ));
+                    }
+                    fixed_mask[node][i] = true;
+                    let errors = load_error.clone();
+                    boundary
+                        .motions
+                        .push(phstring::Motion::new(node, i, move |t| match e.eval(t) {
+                            Ok(x) if x.is_finite() => x,
+                            Ok(x) => {
+                                record_load_error(
+                                    &errors,
+                                    "position",
+                                    k,
+                                    i,
+                                    e.text(),
+                                    t,
+                                    &format!("value {}", num(x)),
+                                );
+                                f64::NAN
+                            }
+                            Err(m) => {
+                                record_load_error(&errors, "position", k, i, e.text(), t, &m);
+                                f64::NAN
+                            }
+                        }));
+                }
             }
             if let Some(f) = &b.fixed {
                 let comps = match f.get_ref() {
@@ -1132,6 +1208,7 @@ impl ScenarioFile {
                         Ok(x) => {
                             record_load_error(
                                 &errors,
+                                "force",
                                 k,
                                 i,
                                 exprs[i].text(),
@@ -1141,11 +1218,42 @@ impl ScenarioFile {
                             f64::NAN
                         }
                         Err(m) => {
-                            record_load_error(&errors, k, i, exprs[i].text(), t, &m);
+                            record_load_error(&errors, "force", k, i, exprs[i].text(), t, &m);
                             f64::NAN
                         }
                     })
                 }));
+            }
+        }
+        for m in &boundary.motions {
+            if boundary
+                .fixed
+                .iter()
+                .any(|f| f.node == m.node && f.components[m.component])
+            {
+                let k = s
+                    .boundary
+                    .iter()
+                    .position(|b| {
+                        b.position.is_some() && {
+                            let raw = *b.node.get_ref();
+                            let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
+                            node == m.node as i64
+                        }
+                    })
+                    .unwrap_or(0);
+                return Err(self.invalid(
+                    &format!("boundary.{k}.position"),
+                    s.boundary[k]
+                        .position
+                        .as_ref()
+                        .map_or(0..0, |p| p.span()),
+                    format!(
+                        "node {} is also fixed in component {} (give \"\" there, or drop it from `fixed`)",
+                        m.node,
+                        ["x", "y", "z"][m.component]
+                    ),
+                ));
             }
         }
         for (k, node, span, comps) in &loaded {

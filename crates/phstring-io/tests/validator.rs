@@ -244,3 +244,38 @@ fn point_masses_are_validated_with_their_weight() {
         assert!(err.contains(key), "{set}: {err}");
     }
 }
+
+/// Prescribed motion (`position` in a boundary entry): absolute positions that must start at
+/// the node; a component cannot be both fixed and moved; `""` leaves a component free.
+#[test]
+fn prescribed_positions_are_validated() {
+    let base = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/crane_trolley.toml"),
+    )
+    .unwrap();
+    let file = scenario::parse(&base, Path::new("crane.toml"), &[]).unwrap();
+    let v = file.validate::<2>().unwrap();
+    let m = &v.problem.boundary.motions;
+    assert_eq!(m.len(), 1);
+    assert_eq!((m[0].node, m[0].component), (0, 0));
+    assert_eq!((m[0].position)(2.0), 2.0);
+    for (set, expected) in [
+        (
+            r#"boundary.0.position=["1 + t", ""]"#,
+            "component x is at 1 m at t = 0, but node 0 starts at 0 m",
+        ),
+        (
+            r#"boundary.0.position=["t", "t"]"#,
+            "node 0 is also fixed in component y",
+        ),
+        (r#"boundary.0.position=["t"]"#, "must have 2 expressions"),
+    ] {
+        let err = scenario::parse(&base, Path::new("crane.toml"), &[set.to_string()])
+            .and_then(|f| f.check())
+            .err()
+            .unwrap_or_else(|| panic!("{set} accepted"))
+            .to_string();
+        assert!(err.contains("`boundary.0.position`"), "{set}: {err}");
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+}

@@ -40,6 +40,7 @@ fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
         body_force: g,
         mass: MassMatrix::Consistent,
         boundary: Boundary {
+            motions: vec![],
             fixed: vec![Fixed::node(0), Fixed::node(n_el)],
             loads: vec![],
         },

@@ -54,6 +54,7 @@ pub fn paper_pendulum(n_el: usize) -> Problem<2, Material> {
         body_force: Vector::<2>::new(0.0, -9.81),
         mass: MassMatrix::Consistent,
         boundary: Boundary {
+            motions: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![NodalLoad::new(tip, |t| paper_load(1.0, t))],
         },

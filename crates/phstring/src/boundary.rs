@@ -63,6 +63,47 @@ impl<const D: usize> fmt::Debug for NodalLoad<D> {
     }
 }
 
+/// A position signal `t ↦ x(t)` [s ↦ m].
+pub type PositionFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
+
+/// Prescribed motion (paper Remarks 3–4, velocity in / force out): component `component` of
+/// `node` follows the absolute position `position(t)` [m], which must equal the initial
+/// position at `t = 0`. Its port has the mid-step velocity as input and the reaction force
+/// as output, and their power enters the energy balance.
+#[derive(Clone)]
+pub struct Motion {
+    /// Node index.
+    pub node: usize,
+    /// Component (0 = x, 1 = y, 2 = z).
+    pub component: usize,
+    /// The absolute position signal.
+    pub position: PositionFn,
+}
+
+impl Motion {
+    /// Component `component` of `node` follows `position(t)` [m].
+    pub fn new(
+        node: usize,
+        component: usize,
+        position: impl Fn(f64) -> f64 + Send + Sync + 'static,
+    ) -> Self {
+        Self {
+            node,
+            component,
+            position: Arc::new(position),
+        }
+    }
+}
+
+impl fmt::Debug for Motion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Motion")
+            .field("node", &self.node)
+            .field("component", &self.component)
+            .finish_non_exhaustive()
+    }
+}
+
 /// All boundary conditions of a problem.
 #[derive(Debug, Clone, Default)]
 pub struct Boundary<const D: usize> {
@@ -70,6 +111,8 @@ pub struct Boundary<const D: usize> {
     pub fixed: Vec<Fixed<D>>,
     /// Neumann conditions.
     pub loads: Vec<NodalLoad<D>>,
+    /// Prescribed motions (moving supports).
+    pub motions: Vec<Motion>,
 }
 
 /// What a port's input is.
@@ -77,7 +120,8 @@ pub struct Boundary<const D: usize> {
 pub enum PortKind {
     /// Force input [N], velocity output [m/s] (a loaded node).
     Force,
-    /// Velocity input [m/s], reaction-force output [N] (a fixed node).
+    /// Velocity input [m/s], reaction-force output [N] (a fixed node or one whose motion is
+    /// prescribed).
     Velocity,
 }
 

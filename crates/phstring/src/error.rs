@@ -88,6 +88,23 @@ pub enum SetupError {
         /// Strain value.
         c: f64,
     },
+    /// A prescribed position does not start at the node's initial position.
+    #[error(
+        "prescribed motion {index} (node {node}, component {component}) is at {} m at t = 0, but the node starts at {} m",
+        Num(*at_zero), Num(*initial)
+    )]
+    MotionStart {
+        /// Index in the list of motions.
+        index: usize,
+        /// Node index.
+        node: usize,
+        /// Component.
+        component: usize,
+        /// The prescribed position at `t = 0` [m].
+        at_zero: f64,
+        /// The initial position [m].
+        initial: f64,
+    },
     /// A parameter is outside its range.
     #[error("{what} must be in {range}, got {}", Num(*value))]
     OutOfRange {
@@ -132,8 +149,10 @@ impl StepError {
     pub fn is_recoverable(&self) -> bool {
         !matches!(
             self,
-            StepError::NonFinite { what: "load", .. }
-                | StepError::StepSizeTooSmall { .. }
+            StepError::NonFinite {
+                what: "load" | "prescribed position",
+                ..
+            } | StepError::StepSizeTooSmall { .. }
                 | StepError::Interrupted { .. }
         )
     }
@@ -240,7 +259,7 @@ pub enum StepError {
         step: usize,
         /// Start time of the step [s].
         t: f64,
-        /// `"residual"`, `"state"`, `"energy"` or `"load"`.
+        /// `"residual"`, `"state"`, `"energy"`, `"load"` or `"prescribed position"`.
         what: &'static str,
         /// Node index.
         node: usize,

@@ -364,6 +364,7 @@ mod tests {
             body_force: Vector::from_fn(|_, _| 0.5),
             mass: MassMatrix::Consistent,
             boundary: Boundary {
+                motions: vec![],
                 fixed: vec![
                     Fixed::node(0),
                     Fixed {

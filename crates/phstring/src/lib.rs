@@ -52,7 +52,7 @@
 //!     rho_a: 1.0,
 //!     body_force: Vector::<2>::new(0.0, -9.81),                      // −g ρA e_y
 //!     mass: MassMatrix::Consistent,
-//!     boundary: Boundary { fixed: vec![Fixed::node(0)], loads: vec![load] },
+//!     boundary: Boundary { fixed: vec![Fixed::node(0)], loads: vec![load], motions: vec![] },
 //!     point_masses: vec![],                                          // none here
 //! };
 //! let params = StepParams { h: 0.01, scheme: Scheme::DiscreteGradient, ..Default::default() };
@@ -75,7 +75,7 @@ pub mod observe;
 pub mod simulation;
 pub mod system;
 
-pub use boundary::{Boundary, Fixed, ForceFn, NodalLoad, PortKind, PortSample};
+pub use boundary::{Boundary, Fixed, ForceFn, Motion, NodalLoad, PortKind, PortSample, PositionFn};
 pub use error::{LinearSolveError, Num, SetupError, StepError};
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};

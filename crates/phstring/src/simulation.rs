@@ -531,6 +531,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 }
             }
         }
+        // Prescribed motions: their increments are known; Newton holds them (their rows are
+        // the reactions).
+        for m in &self.sys.boundary.motions {
+            let target = (m.position)(t_next);
+            if !target.is_finite() {
+                return Err(StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "prescribed position",
+                    node: m.node,
+                });
+            }
+            self.x[m.node][m.component] = target - self.state.r[m.node][m.component];
+        }
         let mut eqs = StepEquations {
             sys: &self.sys,
             scheme: self.params.scheme,

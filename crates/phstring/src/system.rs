@@ -235,6 +235,35 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 free[fx.node][k] &= !fx.components[k];
             }
         }
+        for (k, m) in boundary.motions.iter().enumerate() {
+            if m.node >= n {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "prescribed motion",
+                    node: m.node,
+                    n_nodes: n,
+                });
+            }
+            if m.component >= D {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "prescribed motion (component)",
+                    node: m.component,
+                    n_nodes: D,
+                });
+            }
+            let (at_zero, initial) = ((m.position)(0.0), initial.r[m.node][m.component]);
+            // NaN (a signal undefined at 0) fails too.
+            let starts_there = (at_zero - initial).abs() <= 1e-9 * initial.abs().max(1.0);
+            if !starts_there {
+                return Err(SetupError::MotionStart {
+                    index: k,
+                    node: m.node,
+                    component: m.component,
+                    at_zero,
+                    initial,
+                });
+            }
+            free[m.node][m.component] = false;
+        }
         for load in &boundary.loads {
             if load.node >= n {
                 return Err(SetupError::NodeOutOfRange {

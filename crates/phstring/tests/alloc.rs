@@ -94,6 +94,7 @@ fn memory_estimate_matches_the_allocator() {
             body_force: phstring::Vector::zeros(),
             mass: phstring::MassMatrix::Consistent,
             boundary: phstring::Boundary {
+                motions: vec![],
                 fixed: vec![phstring::Fixed::node(0)],
                 loads: vec![],
             },

@@ -4,6 +4,7 @@
 mod common;
 mod elimination;
 mod momentum;
+mod motion;
 mod order;
 mod paper;
 mod point_mass;

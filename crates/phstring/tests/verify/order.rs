@@ -29,6 +29,7 @@ fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
         body_force: Vector::zeros(),
         mass: MassMatrix::Consistent,
         boundary: Boundary {
+            motions: vec![],
             fixed: vec![Fixed::node(0), Fixed::node(n_el)],
             loads: vec![],
         },

@@ -29,6 +29,7 @@ fn payload_on_a_light_rope_bounces_like_a_spring_mass() {
         body_force: Vector::<2>::new(0.0, -G * rho_a),
         mass: MassMatrix::Consistent,
         boundary: Boundary {
+            motions: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![],
         },

@@ -95,6 +95,7 @@ fn hanging(rope: Rope, material: Material, n_el: usize) -> Problem<2, Material> 
         body_force: Vector::<2>::new(0.0, -G * rope.rho_a),
         mass: MassMatrix::Consistent,
         boundary: Boundary {
+            motions: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![NodalLoad::new(n_el, move |_| {
                 Vector::<2>::new(0.0, -weight)
@@ -318,6 +319,7 @@ fn stiff_rope_at_rest_stays_at_rest() {
         body_force: Vector::zeros(),
         mass: MassMatrix::Consistent,
         boundary: Boundary {
+            motions: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![],
         },
@@ -354,6 +356,7 @@ fn non_finite_derived_quantities_are_refused_at_setup() {
             body_force: Vector::<2>::new(-gravity, -gravity),
             mass: MassMatrix::Consistent,
             boundary: Boundary {
+                motions: vec![],
                 fixed: vec![Fixed::node(0)],
                 loads: vec![],
             },
