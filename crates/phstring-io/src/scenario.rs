@@ -343,6 +343,17 @@ pub enum ScenarioError {
         /// File.
         path: PathBuf,
     },
+    /// The text (file or `--set` value) has more `{` than the TOML parser can take: its
+    /// inline-table parsing recurses once per `{` and could overflow the stack.
+    #[error(
+        "{what} has {count} `{{` characters, more than the {MAX_BRACES} a scenario may have (inline tables nest too deep to parse safely)"
+    )]
+    TooManyBraces {
+        /// The scenario file or the `--set` option.
+        what: String,
+        /// Number of `{` characters.
+        count: usize,
+    },
     /// The file is not UTF-8 text.
     #[error("scenario file {} is not UTF-8 text (byte {valid_up_to} is invalid); is it a TOML file?", path.display())]
     NotText {
@@ -443,6 +454,10 @@ pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError>
 
 /// Parses scenario `text` (named `path` in messages) with `--set` overrides.
 pub fn parse(text: &str, path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError> {
+    check_braces(text, || format!("scenario file {}", path.display()))?;
+    for s in sets {
+        check_braces(s, || format!("--set {}", printable(&clip(s), false)))?;
+    }
     let mut overrides = BTreeMap::new();
     let mut shifted = false;
     let text = if sets.is_empty() {
@@ -468,6 +483,23 @@ pub fn parse(text: &str, path: &Path, sets: &[String]) -> Result<ScenarioFile, S
         overrides,
         shifted,
     })
+}
+
+/// Most `{` characters in a scenario file or a `--set` option. The TOML parser recurses once
+/// per `{` in some malformed inline tables (about 1 KB of stack each in release builds, more
+/// in debug builds); real scenarios have a handful.
+pub const MAX_BRACES: usize = 256;
+
+/// Refuses `text` with more than [`MAX_BRACES`] `{` (see [`ScenarioError::TooManyBraces`]).
+fn check_braces(text: &str, what: impl FnOnce() -> String) -> Result<(), ScenarioError> {
+    let count = text.bytes().filter(|&b| b == b'{').count();
+    if count > MAX_BRACES {
+        return Err(ScenarioError::TooManyBraces {
+            what: what(),
+            count,
+        });
+    }
+    Ok(())
 }
 
 fn toml_error(

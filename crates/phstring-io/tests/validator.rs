@@ -279,3 +279,24 @@ fn prescribed_positions_are_validated() {
         assert!(err.contains(expected), "{set}: {err}");
     }
 }
+
+/// Found by `set_options_never_panic_and_errors_are_bounded` in a fresh clone (issue 10,
+/// unbounded inputs): malformed inline tables make the TOML parser recurse once per `{`, and a
+/// 1 MB scenario file (or a long `--set` value) overflowed the stack and aborted. Texts with
+/// more than `MAX_BRACES` `{` are refused before parsing.
+#[test]
+fn many_braces_are_refused_not_overflowing_the_stack() {
+    let junk = "{,[\n] b].]'{}\"z']9,bb".repeat(50_000);
+    let text = format!("title = \"x\"\ndimension = 2\n[mesh]\nelements = {junk}\n");
+    let err = scenario::parse(&text, Path::new("junk.toml"), &[])
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(err.contains("junk.toml has 100000 `{` characters"), "{err}");
+    let set = format!("mesh.elements={}", "{,[\n] b].]'{}\"z']9,bb".repeat(2000));
+    let err = scenario::parse(&paper_text(), Path::new("p.toml"), &[set])
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(err.contains("4000 `{` characters"), "{err}");
+}
