@@ -289,14 +289,12 @@ fn many_braces_are_refused_not_overflowing_the_stack() {
     let junk = "{,[\n] b].]'{}\"z']9,bb".repeat(50_000);
     let text = format!("title = \"x\"\ndimension = 2\n[mesh]\nelements = {junk}\n");
     let err = scenario::parse(&text, Path::new("junk.toml"), &[])
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(err.contains("junk.toml has 100000 `{` characters"), "{err}");
     let set = format!("mesh.elements={}", "{,[\n] b].]'{}\"z']9,bb".repeat(2000));
     let err = scenario::parse(&paper_text(), Path::new("p.toml"), &[set])
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(err.contains("4000 `{` characters"), "{err}");
 }
