@@ -653,6 +653,13 @@ fn set_value(value: &str) -> Result<toml_edit::Value, &'static str> {
     }
 }
 
+/// Node `raw` of a mesh of `n_nodes` nodes, negative indices counting from the end (`-1` is
+/// the last node); `None` if out of range.
+fn resolve_node(raw: i64, n_nodes: usize) -> Option<usize> {
+    let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
+    usize::try_from(node).ok().filter(|&n| n < n_nodes)
+}
+
 /// Keeps the first failure of a force expression (later ones are consequences).
 fn record_load_error(
     slot: &std::sync::Mutex<Option<String>>,
@@ -806,6 +813,26 @@ impl ScenarioFile {
             3 => Ok(3),
             v => Err(self.invalid("dimension", d.span(), format!("must be 1, 2 or 3, got {v}"))),
         }
+    }
+
+    /// The node a `node` key names (negative counts from the end), or an error naming `key`.
+    fn node_index(
+        &self,
+        key: &str,
+        spec: &Spanned<i64>,
+        n_nodes: usize,
+    ) -> Result<usize, ScenarioError> {
+        let raw = *spec.get_ref();
+        resolve_node(raw, n_nodes).ok_or_else(|| {
+            self.invalid(
+                key,
+                spec.span(),
+                format!(
+                    "= {raw} is out of range: the mesh has nodes 0..={} (or -1..=-{n_nodes} from the end)",
+                    n_nodes - 1
+                ),
+            )
+        })
     }
 
     fn positive(&self, key: &str, v: &Spanned<f64>) -> Result<f64, ScenarioError> {
@@ -1053,15 +1080,7 @@ impl ScenarioFile {
         let mut point_masses = Vec::with_capacity(s.point_mass.len());
         for (k, pm) in s.point_mass.iter().enumerate() {
             let key = |f: &str| format!("point_mass.{k}.{f}");
-            let raw = *pm.node.get_ref();
-            let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
-            if node < 0 || node >= n_nodes as i64 {
-                return Err(self.invalid(
-                    &key("node"),
-                    pm.node.span(),
-                    format!("= {raw} is out of range: the mesh has nodes 0..={} (or -1..=-{n_nodes} from the end)", n_nodes - 1),
-                ));
-            }
+            let node = self.node_index(&key("node"), &pm.node, n_nodes)?;
             let kg = self.positive(&key("kg"), &pm.kg)?;
             let weight = gravity * kg;
             if !weight.iter().all(|w| w.is_finite()) {
@@ -1075,7 +1094,7 @@ impl ScenarioFile {
                 ));
             }
             point_masses.push(phstring::PointMass {
-                node: node as usize,
+                node,
                 mass: kg,
                 weight,
             });
@@ -1088,16 +1107,7 @@ impl ScenarioFile {
         let load_error: Arc<std::sync::Mutex<Option<String>>> = Arc::default();
         for (k, b) in s.boundary.iter().enumerate() {
             let key = |f: &str| format!("boundary.{k}.{f}");
-            let raw = *b.node.get_ref();
-            let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
-            if node < 0 || node >= n_nodes as i64 {
-                return Err(self.invalid(
-                    &key("node"),
-                    b.node.span(),
-                    format!("= {raw} is out of range: the mesh has nodes 0..={} (or -1..=-{n_nodes} from the end)", n_nodes - 1),
-                ));
-            }
-            let node = node as usize;
+            let node = self.node_index(&key("node"), &b.node, n_nodes)?;
             if b.fixed.is_none() && b.force.is_none() && b.position.is_none() {
                 return Err(self.invalid(
                     &key("node"),
@@ -1267,11 +1277,8 @@ impl ScenarioFile {
                     .boundary
                     .iter()
                     .position(|b| {
-                        b.position.is_some() && {
-                            let raw = *b.node.get_ref();
-                            let node = if raw < 0 { n_nodes as i64 + raw } else { raw };
-                            node == m.node as i64
-                        }
+                        b.position.is_some()
+                            && resolve_node(*b.node.get_ref(), n_nodes) == Some(m.node)
                     })
                     .unwrap_or(0);
                 return Err(self.invalid(

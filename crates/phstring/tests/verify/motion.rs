@@ -1,6 +1,7 @@
 //! Prescribed motion of a support (issue 11, item 3; paper Remarks 3–4): velocity in, reaction
 //! force out. A crane trolley drags the top of a hanging rope with a payload sideways.
 
+use crate::common::energy_scale;
 use phstring::{
     Boundary, Fixed, MassMatrix, Material, Mesh, Motion, PointMass, PortKind, Problem, SetupError,
     Simulation, State, StepParams, Vector,
@@ -78,12 +79,7 @@ fn moving_support_drags_the_rope_with_an_exact_energy_balance() {
         // Work of the reaction in x over the step.
         work += port.output[0] * (x1 - x0);
         supplied += r.supplied;
-        let scale = r
-            .after
-            .kinetic
-            .abs()
-            .max(r.after.internal.abs())
-            .max(r.after.external.abs());
+        let scale = energy_scale(&r.after);
         worst = worst.max(r.balance_error.abs() / scale);
     }
     let h1 = sim.energies().hamiltonian();

@@ -3,6 +3,7 @@
 
 use std::f64::consts::PI;
 
+use crate::common::energy_scale;
 use phstring::{
     Boundary, Fixed, MassMatrix, Material, Mesh, PointMass, Problem, Simulation, State,
     StepControl, StepParams, Vector,
@@ -60,12 +61,7 @@ fn payload_on_a_light_rope_bounces_like_a_spring_mass() {
             lowest = stretch;
             t_lowest = r.t;
         }
-        let scale = r
-            .after
-            .kinetic
-            .abs()
-            .max(r.after.internal.abs())
-            .max(r.after.external.abs());
+        let scale = energy_scale(&r.after);
         worst_balance = worst_balance.max(r.balance_error.abs() / scale);
     }
     let back = -length - sim.state().r[n_el][1];

@@ -6,6 +6,7 @@
 //! 1e-11 N, the stiff cases could not converge (the residual's round-off floor lies above
 //! it) and step-size control halved the step thousands of times.
 
+use crate::common::energy_scale;
 use phstring::{
     Boundary, Fixed, MassMatrix, Material, Mesh, NodalLoad, Problem, Simulation, State,
     StepControl, StepParams, Vector,
@@ -119,10 +120,9 @@ fn run_with(
         let r = sim.step_until(t_end).unwrap_or_else(|e| panic!("{e}"));
         // Energy scale of the step: the largest magnitude of the energy parts before and
         // after, and the supplied work.
-        let scale = [r.before, r.after]
-            .iter()
-            .flat_map(|e| [e.kinetic.abs(), e.internal.abs(), e.external.abs()])
-            .fold(r.supplied.abs(), f64::max);
+        let scale = energy_scale(&r.before)
+            .max(energy_scale(&r.after))
+            .max(r.supplied.abs());
         worst_rel = worst_rel.max(r.balance_error.abs() / scale);
         assert!(r.balance_error.is_finite());
         worst_res = worst_res.max(r.residual / r.force_scale);
@@ -235,12 +235,7 @@ fn absolute_tolerance_below_roundoff_converges_at_the_floor() {
                 r.residual
             );
         }
-        let scale = r
-            .after
-            .kinetic
-            .abs()
-            .max(r.after.internal.abs())
-            .max(r.after.external.abs());
+        let scale = energy_scale(&r.after);
         assert!(
             r.balance_error.abs() <= 1e-12 * scale,
             "balance error {:e}",
