@@ -660,26 +660,33 @@ fn resolve_node(raw: i64, n_nodes: usize) -> Option<usize> {
     usize::try_from(node).ok().filter(|&n| n < n_nodes)
 }
 
-/// Keeps the first failure of a force expression (later ones are consequences).
-fn record_load_error(
+/// The value of `expr` at `t`, component `component` of `boundary.{k}.{key}`; a failure or a
+/// non-finite value gives NaN (the step then fails) and is kept in `slot` for the message,
+/// the first one only (later ones are consequences).
+fn eval_or_record(
+    expr: &Expr,
     slot: &std::sync::Mutex<Option<String>>,
     key: &str,
     k: usize,
     component: usize,
-    text: &str,
     t: f64,
-    what: &str,
-) {
+) -> f64 {
+    let what = match expr.eval(t) {
+        Ok(x) if x.is_finite() => return x,
+        Ok(x) => format!("value {}", num(x)),
+        Err(m) => m,
+    };
     if let Ok(mut s) = slot.lock()
         && s.is_none()
     {
         *s = Some(format!(
             "`boundary.{k}.{key}` component {} \"{}\" at t = {} s: {what}",
             ["x", "y", "z"][component.min(2)],
-            clip(text),
+            clip(expr.text()),
             num(t)
         ));
     }
+    f64::NAN
 }
 
 /// Whether a force expression is the literal zero (`"0"`, `"0.0"`, …).
@@ -1165,24 +1172,8 @@ impl ScenarioFile {
                     let errors = load_error.clone();
                     boundary
                         .motions
-                        .push(phstring::Motion::new(node, i, move |t| match e.eval(t) {
-                            Ok(x) if x.is_finite() => x,
-                            Ok(x) => {
-                                record_load_error(
-                                    &errors,
-                                    "position",
-                                    k,
-                                    i,
-                                    e.text(),
-                                    t,
-                                    &format!("value {}", num(x)),
-                                );
-                                f64::NAN
-                            }
-                            Err(m) => {
-                                record_load_error(&errors, "position", k, i, e.text(), t, &m);
-                                f64::NAN
-                            }
+                        .push(phstring::Motion::new(node, i, move |t| {
+                            eval_or_record(&e, &errors, "position", k, i, t)
                         }));
                 }
             }
@@ -1245,24 +1236,8 @@ impl ScenarioFile {
                 loaded.push((k, node, f.span(), comps));
                 let errors = load_error.clone();
                 boundary.loads.push(NodalLoad::new(node, move |t| {
-                    Vector::<D>::from_fn(|i, _| match exprs[i].eval(t) {
-                        Ok(x) if x.is_finite() => x,
-                        Ok(x) => {
-                            record_load_error(
-                                &errors,
-                                "force",
-                                k,
-                                i,
-                                exprs[i].text(),
-                                t,
-                                &format!("value {}", num(x)),
-                            );
-                            f64::NAN
-                        }
-                        Err(m) => {
-                            record_load_error(&errors, "force", k, i, exprs[i].text(), t, &m);
-                            f64::NAN
-                        }
+                    Vector::<D>::from_fn(|i, _| {
+                        eval_or_record(&exprs[i], &errors, "force", k, i, t)
                     })
                 }));
             }
