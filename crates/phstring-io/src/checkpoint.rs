@@ -12,7 +12,7 @@ use std::hash::Hasher;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use phstring::{Checkpoint, Material, Simulation, State, StoredEnergy, Vector};
+use phstring::{Checkpoint, Material, Simulation, State, Vector};
 use serde::{Deserialize, Serialize};
 
 /// The `format` field of every checkpoint.
@@ -486,8 +486,7 @@ impl CheckpointFile {
                 return Err(bad(format!("{name}[{i}] is not finite")));
             }
         }
-        let mat = sim.system().material();
-        if let Some(i) = s.c.iter().position(|&c| !mat.admissible(c)) {
+        if let Some(i) = sim.system().first_inadmissible(&s.c) {
             return Err(bad(format!(
                 "sim.c[{i}] = {:e} is outside the material's domain",
                 s.c[i]

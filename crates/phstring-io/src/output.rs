@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use phstring::{Material, PortKind, Simulation, StepReport, StoredEnergy};
+use phstring::{Material, PortKind, Simulation, StepReport};
 
 use crate::plot::{self, PlotError, Series};
 use crate::vtk::{self, PvdWriter, VtkError};
@@ -740,8 +740,8 @@ impl Writers {
             };
             let points: Vec<[f64; 3]> = st.r.iter().map(pad).collect();
             let vel: Vec<[f64; 3]> = st.v.iter().map(pad).collect();
-            let mat = sim.system().material();
-            let s: Vec<f64> = st.c.iter().map(|&c| 2.0 * mat.dw(c)).collect();
+            let mut s = vec![0.0; st.c.len()];
+            sim.system().stresses(&st.c, &mut s);
             let name = frame_name(sim.steps());
             vtk::write_vtp_segments(
                 &self.dir.join(PARAVIEW_DIR).join(&name),

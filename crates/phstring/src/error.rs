@@ -124,6 +124,41 @@ pub enum SetupError {
         /// The value computed.
         value: f64,
     },
+    /// The element groups do not cover the elements `0..n_elements` in order, each once.
+    #[error(
+        "element group {group} covers elements {start}..{end}, but the next uncovered element is {expected} (of {n_elements}); groups must be non-empty, in order and cover every element once"
+    )]
+    GroupCoverage {
+        /// Group index (`n_groups` if elements are left over at the end).
+        group: usize,
+        /// First element of the group.
+        start: usize,
+        /// One past the last element of the group.
+        end: usize,
+        /// The element the group should start at.
+        expected: usize,
+        /// Number of elements in the mesh.
+        n_elements: usize,
+    },
+    /// A spring group was given a mass or a body force: springs are massless links.
+    #[error(
+        "element group {group} ({name}) is a spring group: springs are massless, so its rho_a and body force must be 0"
+    )]
+    MassiveSpring {
+        /// Group index.
+        group: usize,
+        /// Group name.
+        name: String,
+    },
+    /// A node with a free component has no mass (only springs, no string and no point mass
+    /// attached): its equation of motion would have no inertia.
+    #[error(
+        "node {node} is free but has no mass: attach a string or a point mass to it, or fix it"
+    )]
+    MasslessNode {
+        /// Node index.
+        node: usize,
+    },
     /// The requested linear solver cannot handle this mesh.
     #[error("the block-tridiagonal solver needs a chain mesh (element e = [e, e+1])")]
     NotAChain,

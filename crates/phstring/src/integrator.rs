@@ -13,7 +13,19 @@ use nalgebra::SMatrix;
 use crate::linsolve::BlockJacobian;
 use crate::material::StoredEnergy;
 use crate::newton::NewtonProblem;
-use crate::system::{PhSystem, Vector};
+use crate::system::{Law, MassMatrix, PhSystem, Vector, element_mass};
+
+/// The part of a residual evaluation that one element group takes.
+struct ElementKernel {
+    mass: MassMatrix,
+    rho_a: f64,
+    /// Elements of the group to evaluate.
+    els: std::ops::Range<usize>,
+    /// Whether all rows are evaluated.
+    full: bool,
+    /// Rows evaluated when not `full`.
+    nodes: std::ops::Range<usize>,
+}
 
 /// Time-stepping scheme: how the stress `S̄` of a step is formed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -179,59 +191,27 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
         }
         let eye = SMatrix::<f64, D, D>::identity();
-        for (e, (&[a, b], &l)) in sys.mesh.elements()[els.clone()]
-            .iter()
-            .zip(&sys.mesh.lengths()[els.clone()])
-            .enumerate()
-        {
-            let e = e + els.start;
-            // Rows outside a partial range are left alone.
-            let (in_a, in_b) = (full || a >= nodes.start, full || b < nodes.end);
-            let (md, mo) = sys.element_mass(l);
-            // Inertia: M_ρ (v_{n+1} − v_n)/h with v_{n+1} − v_n = 2 (Δ/h − v_n).
-            let wa = (x[a] * inv_h - self.v0[a]) * (2.0 * inv_h);
-            let wb = (x[b] * inv_h - self.v0[b]) * (2.0 * inv_h);
-            // Internal force K(r_{n+½}) S̄.
-            let (rpm, dr, dc) = element_step(&self.r0[a], &self.r0[b], &x[a], &x[b], l);
-            let c0 = self.c0[e];
-            let c1 = c0 + dc;
-            if !sys.material.admissible(c1) {
-                return Err(StrainError { element: e, c: c1 });
+        for grp in &sys.groups {
+            // This group's part of the elements touching the range.
+            let sub = grp.elements.start.max(els.start)..grp.elements.end.min(els.end);
+            if sub.is_empty() {
+                continue;
             }
-            let (q, dq) = self.scheme.half_stress(&sys.material, c0, c1);
-            let f = rpm * (2.0 * q);
-            if measure {
-                // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
-                // force on both nodes.
-                let m = (2.0 * inv_h) * (md + mo.abs());
-                let motion = (x[a].norm_squared() + x[b].norm_squared()) * (inv_h * inv_h)
-                    + self.v0[a].norm_squared()
-                    + self.v0[b].norm_squared();
-                let rpm2 = rpm.norm_squared();
-                scale2 += m * m * motion + 8.0 * q * q * rpm2;
-                let k = dq * c1.abs().max(c0.abs());
-                strain2 += 8.0 * k * k * rpm2;
-            }
-            if in_a {
-                res[a] += wa * md + wb * mo;
-                res[a] -= f;
-            }
-            if in_b {
-                res[b] += wb * md + wa * mo;
-                res[b] += f;
-            }
-            if let Some(j) = jac.as_deref_mut() {
-                // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
-                let rp1 = rpm + dr * 0.5;
-                let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
-                if in_a {
-                    j.diag[a] += g + eye * (mass_scale * md);
+            let k = ElementKernel {
+                mass: grp.mass,
+                rho_a: grp.rho_a,
+                els: sub,
+                full,
+                nodes: nodes.clone(),
+            };
+            let jac = jac.as_deref_mut();
+            match &grp.law {
+                Law::String(m) => {
+                    self.elements::<_, MEASURE>(m, k, x, res, jac, &mut scale2, &mut strain2)?
                 }
-                if in_b {
-                    j.diag[b] += g + eye * (mass_scale * md);
+                Law::Spring(sp) => {
+                    self.elements::<_, MEASURE>(sp, k, x, res, jac, &mut scale2, &mut strain2)?
                 }
-                let off = eye * (mass_scale * mo) - g;
-                j.off[e] = [off, off];
             }
         }
         // Point masses: inertia m (v_{n+1} − v_n)/h at their nodes.
@@ -288,6 +268,85 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             self.scale = scale2.sqrt();
             self.strain_scale = strain2.sqrt();
             self.measure = false;
+        }
+        Ok(())
+    }
+
+    /// The inertia and internal-force terms of the elements `k.els` of one group with law
+    /// `law` (rows of `k.nodes` only unless `k.full`); with `MEASURE` also their force and
+    /// strain scales, added to `scale2` and `strain2`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn elements<L: StoredEnergy, const MEASURE: bool>(
+        &self,
+        law: &L,
+        k: ElementKernel,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+        scale2: &mut f64,
+        strain2: &mut f64,
+    ) -> Result<(), StrainError> {
+        let sys = self.sys;
+        let h = self.h;
+        let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
+        let (els, full, nodes) = (k.els.clone(), k.full, k.nodes.clone());
+        let measure = MEASURE;
+        let eye = SMatrix::<f64, D, D>::identity();
+        for (e, (&[a, b], &l)) in sys.mesh.elements()[els.clone()]
+            .iter()
+            .zip(&sys.mesh.lengths()[els.clone()])
+            .enumerate()
+        {
+            let e = e + els.start;
+            // Rows outside a partial range are left alone.
+            let (in_a, in_b) = (full || a >= nodes.start, full || b < nodes.end);
+            let (md, mo) = element_mass(k.mass, k.rho_a, l);
+            // Inertia: M_ρ (v_{n+1} − v_n)/h with v_{n+1} − v_n = 2 (Δ/h − v_n).
+            let wa = (x[a] * inv_h - self.v0[a]) * (2.0 * inv_h);
+            let wb = (x[b] * inv_h - self.v0[b]) * (2.0 * inv_h);
+            // Internal force K(r_{n+½}) S̄.
+            let (rpm, dr, dc) = element_step(&self.r0[a], &self.r0[b], &x[a], &x[b], l);
+            let c0 = self.c0[e];
+            let c1 = c0 + dc;
+            if !law.admissible(c1) {
+                return Err(StrainError { element: e, c: c1 });
+            }
+            let (q, dq) = self.scheme.half_stress(law, c0, c1);
+            let f = rpm * (2.0 * q);
+            if measure {
+                // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
+                // force on both nodes.
+                let m = (2.0 * inv_h) * (md + mo.abs());
+                let motion = (x[a].norm_squared() + x[b].norm_squared()) * (inv_h * inv_h)
+                    + self.v0[a].norm_squared()
+                    + self.v0[b].norm_squared();
+                let rpm2 = rpm.norm_squared();
+                *scale2 += m * m * motion + 8.0 * q * q * rpm2;
+                let kk = dq * c1.abs().max(c0.abs());
+                *strain2 += 8.0 * kk * kk * rpm2;
+            }
+            if in_a {
+                res[a] += wa * md + wb * mo;
+                res[a] -= f;
+            }
+            if in_b {
+                res[b] += wb * md + wa * mo;
+                res[b] += f;
+            }
+            if let Some(j) = jac.as_deref_mut() {
+                // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
+                let rp1 = rpm + dr * 0.5;
+                let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
+                if in_a {
+                    j.diag[a] += g + eye * (mass_scale * md);
+                }
+                if in_b {
+                    j.diag[b] += g + eye * (mass_scale * md);
+                }
+                let off = eye * (mass_scale * mo) - g;
+                j.off[e] = [off, off];
+            }
         }
         Ok(())
     }

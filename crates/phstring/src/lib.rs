@@ -79,7 +79,9 @@ pub use boundary::{Boundary, Fixed, ForceFn, Motion, NodalLoad, PortKind, PortSa
 pub use error::{LinearSolveError, Num, SetupError, StepError};
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};
-pub use material::{Hyperelastic, LinearElastic, Material, StVenantKirchhoff, StoredEnergy};
+pub use material::{
+    Hyperelastic, LinearElastic, LinearSpring, Material, StVenantKirchhoff, StoredEnergy,
+};
 pub use mesh::Mesh;
 pub use newton::{NewtonParams, NewtonStats};
 pub use observe::{Observer, RunSummary, StepReport, nan_max};
@@ -87,4 +89,6 @@ pub use simulation::{
     Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
     estimated_seconds_per_iteration,
 };
-pub use system::{Energies, MassMatrix, PhSystem, PointMass, Problem, State, Vector};
+pub use system::{
+    ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State, Vector,
+};

@@ -392,6 +392,53 @@ impl StoredEnergy for Material {
     }
 }
 
+/// A linear spring between two nodes, as the stored energy of a one-element link whose
+/// reference length is 1 m, so that `C = |r_b − r_a|²` is the squared spring length [m²]:
+/// `W(C) = k/2 (√C − L₀)²` [J], with stiffness `k` [N/m] and rest length `L₀ ≥ 0` [m]. The
+/// "stress" `S = 2W'(C) = k (1 − L₀/√C)` is in N/m and the spring force is `S √C = k (|d| − L₀)`
+/// [N] (positive in tension). With `L₀ = 0` the energy `k/2 |d|²` is defined for every `C`;
+/// with `L₀ > 0` the direction of the force is undefined at zero length, so `C > 0` is required.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearSpring {
+    /// Stiffness `k` [N/m].
+    pub k: f64,
+    /// Rest length `L₀` [m].
+    pub rest: f64,
+}
+
+impl StoredEnergy for LinearSpring {
+    fn w(&self, c: f64) -> f64 {
+        if self.rest == 0.0 {
+            return 0.5 * self.k * c;
+        }
+        let d = c.sqrt() - self.rest;
+        0.5 * self.k * d * d
+    }
+    fn dw(&self, c: f64) -> f64 {
+        if self.rest == 0.0 {
+            return 0.5 * self.k;
+        }
+        0.5 * self.k * (1.0 - self.rest / c.sqrt())
+    }
+    fn d2w(&self, c: f64) -> f64 {
+        0.25 * self.k * self.rest / (c * c.sqrt())
+    }
+    fn admissible(&self, c: f64) -> bool {
+        c.is_finite() && (self.rest == 0.0 || c > 0.0)
+    }
+    /// `W(C₁) − W(C₀) = k/2 (C₁ − C₀) (1 − 2L₀/(√C₀ + √C₁))`, exact in the difference.
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        if self.rest == 0.0 {
+            return (0.5 * self.k, 0.0);
+        }
+        let (s0, s1) = (c0.sqrt(), c1.sqrt());
+        let sum = s0 + s1;
+        let q = 0.5 * self.k * (1.0 - 2.0 * self.rest / sum);
+        let dq = 0.5 * self.k * self.rest / (sum * sum * s1);
+        (q, dq)
+    }
+}
+
 impl<T: StoredEnergy + ?Sized> StoredEnergy for &T {
     fn w(&self, c: f64) -> f64 {
         (**self).w(c)

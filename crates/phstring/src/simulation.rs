@@ -12,7 +12,7 @@ use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonWorkspace};
 use crate::observe::{Observer, RunSummary, StepReport};
 
-use crate::system::{Energies, PhSystem, Problem, State, Vector};
+use crate::system::{Energies, Network, PhSystem, State, Vector};
 
 /// Parameters of the time stepper.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -192,7 +192,7 @@ pub struct Simulation<const D: usize, M> {
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Validates `problem`, sets up the solver and starts at time `t = 0`.
-    pub fn new(problem: Problem<D, M>, params: StepParams) -> Result<Self, SetupError> {
+    pub fn new(problem: impl Into<Network<D, M>>, params: StepParams) -> Result<Self, SetupError> {
         if !(params.h > 0.0 && params.h.is_finite()) {
             return Err(SetupError::NonPositive {
                 what: "time step h",
@@ -735,11 +735,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// from.
     fn non_finite_energy_node(&self) -> usize {
         let mesh = &self.sys.mesh;
-        let bad = mesh
-            .lengths()
-            .iter()
-            .zip(&self.c_next)
-            .position(|(&l, &c)| !(l * self.sys.material.w(c)).is_finite());
+        let bad = self
+            .sys
+            .each_element()
+            .position(|(g, e, _, l)| !(l * g.law.w(self.c_next[e])).is_finite());
         bad.map_or(0, |e| mesh.elements()[e][0])
     }
 

@@ -8,7 +8,9 @@ use nalgebra::SVector;
 
 use crate::boundary::Boundary;
 use crate::error::SetupError;
-use crate::material::StoredEnergy;
+use std::ops::Range;
+
+use crate::material::{LinearSpring, StoredEnergy};
 use crate::mesh::Mesh;
 
 /// A nodal vector in `R^D` [m, m/s or N].
@@ -139,13 +141,114 @@ pub struct Problem<const D: usize, M> {
     pub initial: State<D>,
 }
 
+/// The stored-energy law of an element group: a string law `M`, or a linear spring.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Law<M> {
+    /// A string (cable, rope) of the law `M`, `W` per unit reference length.
+    String(M),
+    /// Linear springs; their elements have reference length 1 m (see [`LinearSpring`]).
+    Spring(LinearSpring),
+}
+
+impl<M: StoredEnergy> StoredEnergy for Law<M> {
+    #[inline]
+    fn w(&self, c: f64) -> f64 {
+        match self {
+            Law::String(m) => m.w(c),
+            Law::Spring(s) => s.w(c),
+        }
+    }
+    #[inline]
+    fn dw(&self, c: f64) -> f64 {
+        match self {
+            Law::String(m) => m.dw(c),
+            Law::Spring(s) => s.dw(c),
+        }
+    }
+    #[inline]
+    fn d2w(&self, c: f64) -> f64 {
+        match self {
+            Law::String(m) => m.d2w(c),
+            Law::Spring(s) => s.d2w(c),
+        }
+    }
+    #[inline]
+    fn admissible(&self, c: f64) -> bool {
+        match self {
+            Law::String(m) => m.admissible(c),
+            Law::Spring(s) => s.admissible(c),
+        }
+    }
+    #[inline]
+    fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
+        match self {
+            Law::String(m) => m.quotient(c0, c1),
+            Law::Spring(s) => s.quotient(c0, c1),
+        }
+    }
+}
+
+/// A run of consecutive elements `elements` that share one law and cross-section: one
+/// string of a network, or a set of springs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElementGroup<const D: usize, M> {
+    /// Name for outputs and messages, e.g. the string's name in the scenario.
+    pub name: String,
+    /// The elements of the group (indices into the mesh's element list).
+    pub elements: Range<usize>,
+    /// Stored-energy law.
+    pub law: Law<M>,
+    /// Mass per unit reference length `ρA` [kg/m] (positive for strings, 0 for springs).
+    pub rho_a: f64,
+    /// Mass matrix variant of the group's elements.
+    pub mass: MassMatrix,
+    /// Constant body force per unit reference length `b` [N/m] (gravity: `ρA g`; 0 for
+    /// springs).
+    pub body_force: Vector<D>,
+}
+
+/// A network: any number of strings and springs on one mesh, joined at shared nodes, with
+/// point masses, supports, loads and prescribed motions. One Hamiltonian, one step.
+#[derive(Debug, Clone)]
+pub struct Network<const D: usize, M> {
+    /// Reference configuration of all strings and springs.
+    pub mesh: Mesh,
+    /// Element groups, in element order, covering every element once.
+    pub groups: Vec<ElementGroup<D, M>>,
+    /// Boundary conditions.
+    pub boundary: Boundary<D>,
+    /// Point masses at nodes.
+    pub point_masses: Vec<PointMass<D>>,
+    /// Initial state.
+    pub initial: State<D>,
+}
+
+impl<const D: usize, M> From<Problem<D, M>> for Network<D, M> {
+    /// The single string of `problem` as a network of one group named `string`.
+    fn from(p: Problem<D, M>) -> Self {
+        let n_el = p.mesh.n_elements();
+        Network {
+            groups: vec![ElementGroup {
+                name: "string".into(),
+                elements: 0..n_el,
+                law: Law::String(p.material),
+                rho_a: p.rho_a,
+                mass: p.mass,
+                body_force: p.body_force,
+            }],
+            mesh: p.mesh,
+            boundary: p.boundary,
+            point_masses: p.point_masses,
+            initial: p.initial,
+        }
+    }
+}
+
 /// The validated semi-discrete PH system with its precomputed constant operators.
 #[derive(Debug, Clone)]
 pub struct PhSystem<const D: usize, M> {
     pub(crate) mesh: Mesh,
-    pub(crate) material: M,
-    pub(crate) rho_a: f64,
-    pub(crate) mass: MassMatrix,
+    pub(crate) groups: Vec<ElementGroup<D, M>>,
     pub(crate) boundary: Boundary<D>,
     /// `F_b` per node [N].
     pub(crate) f_body: Vec<Vector<D>>,
@@ -159,34 +262,93 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) point_mass: Vec<(usize, f64)>,
 }
 
+/// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
+/// `l` [m]: it contributes `m_diag I` to each diagonal node block and `m_off I` to the two
+/// off-diagonal blocks.
+#[inline]
+pub(crate) fn element_mass(mass: MassMatrix, rho_a: f64, l: f64) -> (f64, f64) {
+    match mass {
+        MassMatrix::Consistent => (rho_a * l / 3.0, rho_a * l / 6.0),
+        MassMatrix::Lumped => (rho_a * l / 2.0, 0.0),
+    }
+}
+
 impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
-    /// Validates `problem` and precomputes `F_b`. Returns the system and the initial state.
-    pub fn new(problem: Problem<D, M>) -> Result<(Self, State<D>), SetupError> {
-        let Problem {
+    /// Validates `problem` (a single [`Problem`] or a [`Network`]) and precomputes `F_b`.
+    /// Returns the system and the initial state.
+    pub fn new(problem: impl Into<Network<D, M>>) -> Result<(Self, State<D>), SetupError> {
+        let Network {
             mesh,
-            material,
-            rho_a,
-            body_force,
-            mass,
+            groups,
             boundary,
             point_masses,
             initial,
-        } = problem;
-        if !(rho_a > 0.0 && rho_a.is_finite()) {
-            return Err(SetupError::NonPositive {
-                what: "rho_a",
-                index: None,
-                value: rho_a,
-            });
-        }
-        for (i, x) in body_force.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(SetupError::NotFinite {
-                    what: "body force component",
-                    index: i,
-                    value: *x,
+        } = problem.into();
+        let n_el = mesh.n_elements();
+        let mut next = 0;
+        for (g, grp) in groups.iter().enumerate() {
+            let (start, end) = (grp.elements.start, grp.elements.end);
+            if start != next || end <= start || end > n_el {
+                return Err(SetupError::GroupCoverage {
+                    group: g,
+                    start,
+                    end,
+                    expected: next,
+                    n_elements: n_el,
                 });
             }
+            next = end;
+            match grp.law {
+                Law::String(_) => {
+                    if !(grp.rho_a > 0.0 && grp.rho_a.is_finite()) {
+                        return Err(SetupError::NonPositive {
+                            what: "rho_a",
+                            index: (groups.len() > 1).then_some(g),
+                            value: grp.rho_a,
+                        });
+                    }
+                }
+                Law::Spring(sp) => {
+                    if grp.rho_a != 0.0 || grp.body_force.iter().any(|&x| x != 0.0) {
+                        return Err(SetupError::MassiveSpring {
+                            group: g,
+                            name: grp.name.clone(),
+                        });
+                    }
+                    if !(sp.k > 0.0 && sp.k.is_finite()) {
+                        return Err(SetupError::NonPositive {
+                            what: "spring stiffness k [N/m] of group",
+                            index: Some(g),
+                            value: sp.k,
+                        });
+                    }
+                    if !(sp.rest >= 0.0 && sp.rest.is_finite()) {
+                        return Err(SetupError::OutOfRange {
+                            what: "spring rest length [m]",
+                            value: sp.rest,
+                            range: "0 <= rest < infinity",
+                        });
+                    }
+                }
+            }
+            for (i, x) in grp.body_force.iter().enumerate() {
+                if !x.is_finite() {
+                    return Err(SetupError::NotFinite {
+                        what: "body force component",
+                        index: i,
+                        value: *x,
+                    });
+                }
+            }
+        }
+        if next != n_el {
+            return Err(SetupError::GroupCoverage {
+                group: groups.len(),
+                start: n_el,
+                end: n_el,
+                expected: next,
+                n_elements: n_el,
+            });
         }
         let n = mesh.n_nodes();
         for (what, got) in [
@@ -217,9 +379,12 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 });
             }
         }
-        for (e, &c) in initial.c.iter().enumerate() {
-            if !material.admissible(c) {
-                return Err(SetupError::InadmissibleStrain { element: e, c });
+        for grp in &groups {
+            for e in grp.elements.clone() {
+                let c = initial.c[e];
+                if !grp.law.admissible(c) {
+                    return Err(SetupError::InadmissibleStrain { element: e, c });
+                }
             }
         }
         let mut free = vec![[true; D]; n];
@@ -291,9 +456,19 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             }
         }
         let mut f_body = vec![Vector::<D>::zeros(); n];
-        for (&[a, b], &l) in mesh.elements().iter().zip(mesh.lengths()) {
-            f_body[a] += body_force * (0.5 * l);
-            f_body[b] += body_force * (0.5 * l);
+        // Lumped mass per node, to find free nodes without inertia.
+        let mut node_mass = vec![0.0; n];
+        for grp in &groups {
+            let els = grp.elements.clone();
+            for (&[a, b], &l) in mesh.elements()[els.clone()]
+                .iter()
+                .zip(&mesh.lengths()[els])
+            {
+                f_body[a] += grp.body_force * (0.5 * l);
+                f_body[b] += grp.body_force * (0.5 * l);
+                node_mass[a] += grp.rho_a * l;
+                node_mass[b] += grp.rho_a * l;
+            }
         }
         let mut point_mass = Vec::with_capacity(point_masses.len());
         for (k, pm) in point_masses.iter().enumerate() {
@@ -319,6 +494,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 });
             }
             f_body[pm.node] += pm.weight;
+            node_mass[pm.node] += pm.mass;
             point_mass.push((pm.node, pm.mass));
         }
         // Several masses at one node add up.
@@ -352,11 +528,12 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 value: f2,
             });
         }
+        if let Some(node) = (0..n).find(|&i| free[i].iter().any(|&f| f) && node_mass[i] <= 0.0) {
+            return Err(SetupError::MasslessNode { node });
+        }
         let sys = Self {
             mesh,
-            material,
-            rho_a,
-            mass,
+            groups,
             boundary,
             f_body,
             free,
@@ -385,21 +562,25 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     pub fn mesh(&self) -> &Mesh {
         &self.mesh
     }
-    /// The material.
-    pub fn material(&self) -> &M {
-        &self.material
+    /// The element groups, in element order.
+    pub fn groups(&self) -> &[ElementGroup<D, M>] {
+        &self.groups
     }
-    /// Mass per unit length `ρA` [kg/m].
+    /// The law of the first group: the material of a single-string problem.
+    pub fn material(&self) -> &Law<M> {
+        &self.groups[0].law
+    }
+    /// `ρA` [kg/m] of the first group: that of a single-string problem.
     pub fn rho_a(&self) -> f64 {
-        self.rho_a
+        self.groups[0].rho_a
     }
     /// Boundary conditions.
     pub fn boundary(&self) -> &Boundary<D> {
         &self.boundary
     }
-    /// Mass matrix variant.
+    /// Mass matrix variant of the first group: that of a single-string problem.
     pub fn mass_matrix(&self) -> MassMatrix {
-        self.mass
+        self.groups[0].mass
     }
     /// Nodal body-force vector `F_b = ∫ Φᵀ b` [N] (docs/method.md §4).
     pub fn body_force_vector(&self) -> &[Vector<D>] {
@@ -410,21 +591,42 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         &self.free
     }
 
-    /// Element mass-matrix coefficients `(m_diag, m_off)` [kg]: the element contributes
-    /// `m_diag I` to each diagonal node block and `m_off I` to the two off-diagonal blocks.
-    #[inline]
-    pub(crate) fn element_mass(&self, l: f64) -> (f64, f64) {
-        match self.mass {
-            MassMatrix::Consistent => (self.rho_a * l / 3.0, self.rho_a * l / 6.0),
-            MassMatrix::Lumped => (self.rho_a * l / 2.0, 0.0),
-        }
+    /// Every element as `(group, element index, [a, b], l_e)`, in element order.
+    pub(crate) fn each_element(
+        &self,
+    ) -> impl Iterator<Item = (&ElementGroup<D, M>, usize, [usize; 2], f64)> + '_ {
+        self.groups.iter().flat_map(move |g| {
+            g.elements
+                .clone()
+                .map(move |e| (g, e, self.mesh.elements()[e], self.mesh.lengths()[e]))
+        })
+    }
+
+    /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of element `e` (see
+    /// [`Self::mass_mul`]); springs have none.
+    pub fn element_mass(&self, e: usize) -> (f64, f64) {
+        let g = self.group_of(e);
+        element_mass(g.mass, g.rho_a, self.mesh.lengths()[e])
+    }
+
+    /// The group element `e` belongs to.
+    pub fn group_of(&self, e: usize) -> &ElementGroup<D, M> {
+        let g = self.groups.partition_point(|g| g.elements.end <= e);
+        &self.groups[g.min(self.groups.len() - 1)]
+    }
+
+    /// The first element whose strain `c[e]` is outside its law's domain, if any.
+    pub fn first_inadmissible(&self, c: &[f64]) -> Option<usize> {
+        self.each_element()
+            .find(|&(g, e, _, _)| !g.law.admissible(c[e]))
+            .map(|(_, e, _, _)| e)
     }
 
     /// `out = M_ρ v` [kg·m/s] (momenta per node).
     pub fn mass_mul(&self, v: &[Vector<D>], out: &mut [Vector<D>]) {
         out.iter_mut().for_each(|x| *x = Vector::zeros());
-        for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
-            let (md, mo) = self.element_mass(l);
+        for (g, _, [a, b], l) in self.each_element() {
+            let (md, mo) = element_mass(g.mass, g.rho_a, l);
             out[a] += v[a] * md + v[b] * mo;
             out[b] += v[b] * md + v[a] * mo;
         }
@@ -470,14 +672,17 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// `Eᵀ ẑ = ∇Ĥ` with `E = diag(I, M_ρ, M_S)`: units N, m/s, N.
     pub fn efforts(&self, state: &State<D>) -> (Vec<Vector<D>>, Vec<Vector<D>>, Vec<f64>) {
         let neg_fb = self.f_body.iter().map(|f| -f).collect();
-        let half_s = state.c.iter().map(|&c| self.material.dw(c)).collect();
+        let half_s = self
+            .each_element()
+            .map(|(g, e, _, _)| g.law.dw(state.c[e]))
+            .collect();
         (neg_fb, state.v.clone(), half_s)
     }
 
     /// Stresses `S_e = 2 W'(C_e)` [N] (paper eq. (24d) with element-wise constant `Ψ`).
     pub fn stresses(&self, c: &[f64], out: &mut [f64]) {
-        for (o, &ce) in out.iter_mut().zip(c) {
-            *o = 2.0 * self.material.dw(ce);
+        for (g, e, _, _) in self.each_element() {
+            out[e] = 2.0 * g.law.dw(c[e]);
         }
     }
 
@@ -497,17 +702,11 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     ) -> Energies {
         let mut kinetic = 0.0;
         let mut internal = 0.0;
-        for (e, (&[a, b], &l)) in self
-            .mesh
-            .elements()
-            .iter()
-            .zip(self.mesh.lengths())
-            .enumerate()
-        {
+        for (g, e, [a, b], l) in self.each_element() {
             let (va, vb) = (v(a), v(b));
-            let (md, mo) = self.element_mass(l);
+            let (md, mo) = element_mass(g.mass, g.rho_a, l);
             kinetic += 0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(&vb);
-            internal += l * self.material.w(c(e));
+            internal += l * g.law.w(c(e));
         }
         for &(i, m) in &self.point_mass {
             kinetic += 0.5 * m * v(i).norm_squared();
@@ -528,8 +727,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// Linear momentum `Σ M_ρ v̂` [kg·m/s].
     pub fn linear_momentum(&self, state: &State<D>) -> Vector<D> {
         let mut p = Vector::zeros();
-        for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
-            let (md, mo) = self.element_mass(l);
+        for (g, _, [a, b], l) in self.each_element() {
+            let (md, mo) = element_mass(g.mass, g.rho_a, l);
             p += (state.v[a] + state.v[b]) * (md + mo);
         }
         for &(i, m) in &self.point_mass {
@@ -563,8 +762,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         cross: impl Fn(&Vector<D>, &Vector<D>) -> T,
     ) -> T {
         let mut l_tot = T::default();
-        for (&[a, b], &l) in self.mesh.elements().iter().zip(self.mesh.lengths()) {
-            let (md, mo) = self.element_mass(l);
+        for (g, _, [a, b], l) in self.each_element() {
+            let (md, mo) = element_mass(g.mass, g.rho_a, l);
             let (ra, rb, va, vb) = (&state.r[a], &state.r[b], &state.v[a], &state.v[b]);
             l_tot += (cross(ra, va) + cross(rb, vb)) * md;
             l_tot += (cross(ra, vb) + cross(rb, va)) * mo;
