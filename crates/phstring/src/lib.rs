@@ -70,6 +70,7 @@ pub mod integrator;
 pub mod linsolve;
 pub mod material;
 pub mod mesh;
+pub mod network;
 pub mod newton;
 pub mod observe;
 pub mod simulation;
@@ -83,6 +84,7 @@ pub use material::{
     Hyperelastic, LinearElastic, LinearSpring, Material, StVenantKirchhoff, StoredEnergy,
 };
 pub use mesh::Mesh;
+pub use network::{NetworkBuilder, StringSpec};
 pub use newton::{NewtonParams, NewtonStats};
 pub use observe::{Observer, RunSummary, StepReport, nan_max};
 pub use simulation::{

@@ -5,6 +5,7 @@ mod common;
 mod elimination;
 mod momentum;
 mod motion;
+mod network;
 mod order;
 mod paper;
 mod point_mass;
