@@ -250,7 +250,7 @@ fn point_masses_are_validated_with_their_weight() {
 #[test]
 fn prescribed_positions_are_validated() {
     let base = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/crane_trolley.toml"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/crane_2d.toml"),
     )
     .unwrap();
     let file = scenario::parse(&base, Path::new("crane.toml"), &[]).unwrap();

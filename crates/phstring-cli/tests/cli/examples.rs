@@ -82,7 +82,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("hoist_3d", 3, 400, 4, 21),
         ("axial_rod_1d", 1, 500, 10, 51),
         ("steel_hoist", 2, 400, 10, 101),
-        ("crane_trolley", 2, 600, 10, 41),
+        ("crane_2d", 2, 3600, 10, 41),
     ];
     let mut files: Vec<String> = std::fs::read_dir(workspace_root().join("examples"))
         .unwrap()
