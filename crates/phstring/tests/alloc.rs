@@ -182,3 +182,79 @@ fn step_loop_does_not_allocate() {
         "the adaptive step loop with elimination allocated {n} times"
     );
 }
+
+/// A network (three strings at a junction, a spring, a spring to a fixed point, a point mass, a
+/// moving support) steps without allocating, with each solver for general meshes.
+#[test]
+fn network_step_loop_does_not_allocate() {
+    use phstring::{
+        Boundary, Fixed, MassMatrix, Material, Motion, NetworkBuilder, PointMass, StringSpec,
+        Vector,
+    };
+    let solvers: Vec<SolverKind> = [SolverKind::SparseLu, SolverKind::Auto].into();
+    for solver in solvers {
+        let g = Vector::<3>::new(0.0, 0.0, -9.81);
+        let mut b = NetworkBuilder::<3, Material>::new();
+        let hub = b.node(Vector::<3>::new(0.0, 0.0, 0.0));
+        let tops: Vec<usize> = [(-10.0, 0.0), (5.0, 8.0), (5.0, -8.0)]
+            .iter()
+            .map(|&(x, y)| b.node(Vector::<3>::new(x, y, 10.0)))
+            .collect();
+        for (k, &top) in tops.iter().enumerate() {
+            let spec = StringSpec {
+                name: format!("leg{k}"),
+                material: Material::tension_only_linear(2e7),
+                rho_a: 1.5,
+                mass: MassMatrix::Consistent,
+                body_force: g * 1.5,
+                prestretch: 1.0,
+            };
+            b.string(spec, &[top, hub], 20).unwrap();
+        }
+        let (m0, m1) = (b.group_nodes(0).unwrap()[10], b.group_nodes(1).unwrap()[10]);
+        let gap = (b.position(m1).unwrap() - b.position(m0).unwrap()).norm();
+        b.spring("brace", m0, m1, 1e4, gap).unwrap();
+        b.spring_to_point("tie", hub, Vector::<3>::new(1.0, 0.0, 0.0), 1e3, 1.0)
+            .unwrap();
+        let z0 = 10.0;
+        let net = b
+            .build(
+                Boundary {
+                    fixed: vec![
+                        Fixed {
+                            node: tops[0],
+                            components: [true, true, false],
+                        },
+                        Fixed::node(tops[1]),
+                        Fixed::node(tops[2]),
+                    ],
+                    loads: vec![],
+                    motions: vec![Motion::new(tops[0], 2, move |t| z0 + 0.1 * t * t)],
+                },
+                vec![PointMass {
+                    node: hub,
+                    mass: 800.0,
+                    weight: g * 800.0,
+                }],
+            )
+            .unwrap();
+        let params = StepParams {
+            h: 2e-3,
+            solver,
+            ..StepParams::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap();
+        sim.step().unwrap();
+        let before = allocations();
+        let mut iters = 0;
+        for _ in 0..50 {
+            iters += sim.step().unwrap().newton_iterations;
+        }
+        let n = allocations() - before;
+        eprintln!(
+            "network, {}: {n} allocations in 50 steps ({iters} Newton iterations)",
+            sim.solver_name()
+        );
+        assert_eq!(n, 0, "{}: the network step loop allocated {n} times", sim.solver_name());
+    }
+}
