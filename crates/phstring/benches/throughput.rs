@@ -9,8 +9,8 @@
 use std::time::Instant;
 
 use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, Problem, Scheme, Simulation, SolverKind, State,
-    StepParams, Vector,
+    Boundary, Fixed, MassMatrix, Material, Mesh, Network, NetworkBuilder, Problem, Scheme,
+    Simulation, SolverKind, State, StepParams, StringSpec, Vector,
 };
 
 fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
@@ -75,6 +75,105 @@ fn measure<const D: usize>(n_el: usize, solver: SolverKind) -> (f64, f64, usize)
     let dt = t0.elapsed().as_secs_f64();
     let rate = (iters * n_el) as f64 / dt;
     (rate, dt / iters as f64, iters)
+}
+
+/// A net of `2k` strings (`k` along x, `k` along y) crossing at a `k × k` grid of shared
+/// junction nodes, `span` elements between crossings and from the border crossings to the
+/// fixed border anchors: each string has `(k + 1) · span` elements. Prestretched (λ = 1.2),
+/// gravity on, a transverse initial velocity: the chain benchmark's problem, as a net.
+fn net<const D: usize>(k: usize, span: usize) -> Network<D, Material> {
+    assert!(D >= 2);
+    let spacing = 1.2 / (k + 1) as f64;
+    let mut b = NetworkBuilder::<D, Material>::new();
+    let at = |i: f64, j: f64| {
+        let mut x = Vector::<D>::zeros();
+        x[0] = i * spacing;
+        x[1] = j * spacing;
+        x
+    };
+    let cross: Vec<usize> = (0..k * k)
+        .map(|n| b.node(at((n % k + 1) as f64, (n / k + 1) as f64)))
+        .collect();
+    let mut g = Vector::<D>::zeros();
+    g[D - 1] = -9.81;
+    let spec = |name: String| StringSpec {
+        name,
+        material: Material::hyperelastic(20.0),
+        rho_a: 1.0,
+        mass: MassMatrix::Consistent,
+        body_force: g,
+        prestretch: 1.2,
+    };
+    let mut anchors = Vec::new();
+    for dir in 0..2 {
+        for j in 0..k {
+            let edge = |b: &mut NetworkBuilder<D, Material>, i: f64| {
+                b.node(if dir == 0 {
+                    at(i, (j + 1) as f64)
+                } else {
+                    at((j + 1) as f64, i)
+                })
+            };
+            let first = edge(&mut b, 0.0);
+            let last = edge(&mut b, (k + 1) as f64);
+            anchors.extend([first, last]);
+            let mut path = vec![first];
+            path.extend((0..k).map(|i| {
+                if dir == 0 {
+                    cross[j * k + i]
+                } else {
+                    cross[i * k + j]
+                }
+            }));
+            path.push(last);
+            b.string(spec(format!("s{dir}_{j}")), &path, span).unwrap();
+        }
+    }
+    let fixed = anchors.iter().map(|&a| Fixed::node(a)).collect();
+    let mut network = b
+        .build(
+            Boundary {
+                fixed,
+                loads: vec![],
+                motions: vec![],
+            },
+            vec![],
+        )
+        .unwrap();
+    let pi = std::f64::consts::PI;
+    for (r, v) in network.initial.r.iter().zip(&mut network.initial.v) {
+        v[D - 1] = (pi * r[0] / 1.2).sin() * (pi * r[1] / 1.2).sin();
+    }
+    network
+}
+
+/// Element-Newton-iterations per second of the net (see [`net`]) with `solver`, as
+/// [`measure`] does for a chain: `(rate, seconds per iteration, iterations, elements)`.
+fn measure_net<const D: usize>(
+    k: usize,
+    span: usize,
+    solver: SolverKind,
+) -> (f64, f64, usize, usize) {
+    let network = net::<D>(k, span);
+    let n_el = network.mesh.n_elements();
+    let mut params = StepParams {
+        h: 1e-3,
+        scheme: Scheme::DiscreteGradient,
+        solver,
+        ..Default::default()
+    };
+    params.newton.tol = 1e-11 * (n_el as f64 / 30.0).sqrt().max(1.0);
+    params.newton.rtol = 0.0;
+    params.newton.elimination = false;
+    let mut sim = Simulation::new(network, params).unwrap();
+    sim.step().unwrap(); // warm-up
+    let mut iters = 0;
+    let t0 = Instant::now();
+    for _ in 0..3 {
+        iters += sim.step().unwrap().newton_iterations;
+    }
+    let dt = t0.elapsed().as_secs_f64();
+    ((iters * n_el) as f64 / dt, dt / iters as f64, iters, n_el)
 }
 
 /// The paper's benchmark time loop (100 steps, 30 elements), best of 20 runs [s].
@@ -144,4 +243,40 @@ fn main() {
             );
         }
     }
+    // The net: 50 + 50 strings of 1020 elements crossing at a 50 × 50 grid of junctions,
+    // against the chain of (about) the same size.
+    let (k, span) = if max_n >= 100_000 { (50, 20) } else { (10, 20) };
+    let (chain2, _, _) = measure::<2>(2 * k * (k + 1) * span, SolverKind::BlockTridiagonal);
+    let (chain3, _, _) = measure::<3>(2 * k * (k + 1) * span, SolverKind::BlockTridiagonal);
+    println!(
+        "net of {} strings × {} elements ({} junctions); ratio = net rate / chain rate at the same size",
+        2 * k,
+        (k + 1) * span,
+        k * k
+    );
+    for solver in NET_SOLVERS {
+        let (r2, s2, i2, n2) = measure_net::<2>(k, span, solver);
+        println!(
+            "{n2:>9} {:>2} {:>18} {:>22.3e} {:>16.3e} {:>6}   ratio {:.2}",
+            2,
+            format!("net {solver:?}"),
+            r2,
+            s2,
+            i2,
+            r2 / chain2
+        );
+        let (r3, s3, i3, n3) = measure_net::<3>(k, span, solver);
+        println!(
+            "{n3:>9} {:>2} {:>18} {:>22.3e} {:>16.3e} {:>6}   ratio {:.2}",
+            3,
+            format!("net {solver:?}"),
+            r3,
+            s3,
+            i3,
+            r3 / chain3
+        );
+    }
 }
+
+/// Solvers measured on the net.
+const NET_SOLVERS: [SolverKind; 2] = [SolverKind::SparseLu, SolverKind::Network];

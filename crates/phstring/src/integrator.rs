@@ -477,7 +477,7 @@ mod tests {
         let mut reaction = vec![Vector::<D>::zeros(); x.len()];
         let f_ext = sys.f_body.clone();
         let mut eqs = StepEquations {
-            sys: &sys,
+            sys,
             scheme,
             h,
             r0: &state.r,

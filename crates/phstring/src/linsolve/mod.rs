@@ -2,15 +2,18 @@
 //!
 //! The Newton matrix is stored as node blocks ([`BlockJacobian`]): one `D×D` diagonal block
 //! per node and two off-diagonal blocks per element. Two solvers implement
-//! [`LinearSolver`]: [`BlockTridiagonal`] (block Thomas, O(N), chain meshes only) and
-//! [`SparseLu`] (faer's sparse LU, any mesh). Both analyse the mesh once at construction and
-//! refactor new values at every call without allocating.
+//! [`LinearSolver`]: [`BlockTridiagonal`] (block Thomas, O(N), chain meshes only),
+//! [`SparseLu`] (faer's sparse LU, any mesh) and [`NetworkSolver`] (block Thomas along the
+//! strings between junction nodes, sparse LU on the junctions; any mesh). All analyse the
+//! mesh once at construction and refactor new values at every call without allocating.
 
 mod block_tridiagonal;
+mod network;
 mod sparse_lu;
 
 pub use block_tridiagonal::BlockTridiagonal;
 pub(crate) use block_tridiagonal::block_thomas;
+pub use network::{JunctionLu, NetworkSolver};
 pub use sparse_lu::SparseLu;
 
 use nalgebra::{SMatrix, SVector};
@@ -68,15 +71,18 @@ pub enum SolverKind {
     BlockTridiagonal,
     /// [`SparseLu`].
     SparseLu,
+    /// [`NetworkSolver`].
+    Network,
 }
 
 impl SolverKind {
-    /// Name as in scenario files: `auto`, `block_tridiagonal`, `sparse_lu`.
+    /// Name as in scenario files: `auto`, `block_tridiagonal`, `sparse_lu`, `network`.
     pub fn name(self) -> &'static str {
         match self {
             SolverKind::Auto => "auto",
             SolverKind::BlockTridiagonal => "block_tridiagonal",
             SolverKind::SparseLu => "sparse_lu",
+            SolverKind::Network => "network",
         }
     }
 }
@@ -89,7 +95,7 @@ pub trait LinearSolver<const D: usize>: Send {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError>;
-    /// Name for reports: `block_tridiagonal` or `sparse_lu`.
+    /// Name for reports: `block_tridiagonal`, `sparse_lu` or `network`.
     fn name(&self) -> &'static str;
 }
 
@@ -102,5 +108,6 @@ pub fn make_solver<const D: usize>(
         SolverKind::Auto if mesh.is_chain() => Box::new(BlockTridiagonal::new(mesh)?),
         SolverKind::BlockTridiagonal => Box::new(BlockTridiagonal::new(mesh)?),
         SolverKind::Auto | SolverKind::SparseLu => Box::new(SparseLu::new(mesh)),
+        SolverKind::Network => Box::new(NetworkSolver::new(mesh)),
     })
 }

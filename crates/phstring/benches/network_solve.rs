@@ -1,0 +1,403 @@
+//! Linear solve of the Newton matrix of a net of strings: [`NetworkSolver`] (block Thomas
+//! along the strings, faer's sparse LU on the junctions) against [`SparseLu`] (faer's sparse
+//! LU of the whole matrix), with [`BlockTridiagonal`] on a single chain of the same number of
+//! elements as the lower bound.
+//!
+//! `cargo bench -p phstring --bench network_solve` (about 20 s). The net has 50 horizontal
+//! and 50 vertical strings of 1000 elements each, crossing at a 50 × 50 grid of shared
+//! junction nodes every 20 elements, with free tails of 10 elements (100 000 elements,
+//! 97 600 nodes). Each design factors and solves the same random mass-dominated matrix
+//! (`diag = 8D·I + random`, off blocks random, not symmetric); times are the median of
+//! [`REPS`] solves (factor + solve each) after one warm-up solve; `setup` is the
+//! construction (decomposition, symbolic analysis). Rows:
+//!
+//! - `sparse_lu`: the crate's [`SparseLu`] (faer picks the simplicial LU for this net);
+//! - `(faer supernodal)`: for reference, faer's supernodal LU of the whole matrix (not a
+//!   solver of the crate; it allocates in every factorization);
+//! - `network`: [`NetworkSolver::new`], simplicial junction LU, no allocation per solve;
+//! - `network (supern.)`: [`JunctionLu::Supernodal`], allocates per solve;
+//! - `block_tridiagonal` and `network` on a chain of 100 000 elements.
+//!
+//! All net solutions are checked against `sparse_lu`, and a counting allocator reports the
+//! allocations of the first solve after construction (`1st`) and of the timed solves
+//! (`allocs`, summed over the repetitions).
+#![allow(unsafe_code)] // a global allocator needs `unsafe impl`
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::time::Instant;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Par};
+use nalgebra::SVector;
+use phstring::linsolve::{
+    Block, BlockJacobian, BlockTridiagonal, JunctionLu, LinearSolver, NetworkSolver, SparseLu,
+};
+use phstring::{LinearSolveError, Mesh};
+
+struct Counting;
+
+thread_local! {
+    /// Allocations made by this thread.
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCS.with(Cell::get)
+}
+
+/// Timed repetitions per design (the median is reported).
+const REPS: usize = 7;
+
+/// SplitMix64 for the random matrices.
+struct Rng(u64);
+
+impl Rng {
+    fn sym(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// `nh` horizontal and `nv` vertical strings crossing at shared nodes every `spacing`
+/// elements, with free tails of `tail` elements. Crossings are nodes `0 … nh·nv − 1`, the
+/// other nodes are numbered string by string.
+fn grid_net(nh: usize, nv: usize, spacing: usize, tail: usize) -> Mesh {
+    let mut els = Vec::new();
+    let mut next = nh * nv;
+    let mut string = |n_cross: usize, crossing: &dyn Fn(usize) -> usize| {
+        let len = 2 * tail + spacing * (n_cross - 1);
+        let mut prev = None;
+        for pos in 0..=len {
+            let node = if pos >= tail && (pos - tail).is_multiple_of(spacing) {
+                crossing((pos - tail) / spacing)
+            } else {
+                next += 1;
+                next - 1
+            };
+            if let Some(p) = prev {
+                els.push([p, node]);
+            }
+            prev = Some(node);
+        }
+    };
+    for h in 0..nh {
+        string(nv, &|v| h * nv + v);
+    }
+    for v in 0..nv {
+        string(nh, &|h| h * nv + v);
+    }
+    let n = els.len();
+    Mesh::new(next, els, vec![1.0; n]).expect("valid net")
+}
+
+fn random_jac<const D: usize>(mesh: &Mesh, rng: &mut Rng) -> BlockJacobian<D> {
+    let mut jac = BlockJacobian::<D>::zeros(mesh);
+    for d in &mut jac.diag {
+        *d = Block::from_fn(|_, _| rng.sym()) + Block::identity() * (8.0 * D as f64);
+    }
+    for off in &mut jac.off {
+        for b in off.iter_mut() {
+            *b = Block::from_fn(|_, _| rng.sym());
+        }
+    }
+    jac
+}
+
+/// Reference only: faer's *supernodal* sparse LU of the whole matrix (the crate's
+/// [`SparseLu`] lets faer choose, and faer chooses the simplicial LU for this net). Built
+/// like `SparseLu`, with the scalar pattern assembled per solve from a slot map.
+struct WholeSupernodal<const D: usize> {
+    mat: SparseColMat<usize, f64>,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    factor_buf: MemBuffer,
+    solve_buf: MemBuffer,
+    rhs: Vec<f64>,
+    /// Slots of the diagonal blocks (`D²` per node), then of the element blocks.
+    slots: Vec<usize>,
+}
+
+impl<const D: usize> WholeSupernodal<D> {
+    fn new(mesh: &Mesh) -> Self {
+        let n = mesh.n_nodes() * D;
+        let mut blocks: Vec<[usize; 2]> = (0..mesh.n_nodes()).map(|i| [i, i]).collect();
+        for &[a, b] in mesh.elements() {
+            blocks.push([a, b]);
+            blocks.push([b, a]);
+        }
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for &[i, j] in &blocks {
+            for k in 0..D {
+                for l in 0..D {
+                    cols[j * D + l].push(i * D + k);
+                }
+            }
+        }
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        for c in &mut cols {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len());
+        }
+        let mut slots = Vec::with_capacity(blocks.len() * D * D);
+        for &[i, j] in &blocks {
+            for k in 0..D {
+                for l in 0..D {
+                    let (r, c) = (i * D + k, j * D + l);
+                    let (s, e) = (col_ptr[c], col_ptr[c + 1]);
+                    slots.push(s + row_idx[s..e].binary_search(&r).expect("in pattern"));
+                }
+            }
+        }
+        let nnz = row_idx.len();
+        let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(pattern.as_ref(), params).expect("symbolic LU");
+        let factor_buf = MemBuffer::new(
+            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+        );
+        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        Self {
+            mat: SparseColMat::new(pattern, vec![0.0; nnz]),
+            symbolic,
+            numeric: NumericLu::new(),
+            factor_buf,
+            solve_buf,
+            rhs: vec![0.0; n],
+            slots,
+        }
+    }
+}
+
+impl<const D: usize> LinearSolver<D> for WholeSupernodal<D> {
+    fn solve(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        let vals = self.mat.val_mut();
+        vals.fill(0.0);
+        let all = jac.diag.iter().chain(jac.off.iter().flatten());
+        for (blk, slots) in all.zip(self.slots.chunks_exact(D * D)) {
+            for k in 0..D {
+                for l in 0..D {
+                    vals[slots[k * D + l]] += blk[(k, l)];
+                }
+            }
+        }
+        for (i, x) in rhs.iter().enumerate() {
+            self.rhs[i * D..(i + 1) * D].copy_from_slice(x.as_slice());
+        }
+        let lu = self
+            .symbolic
+            .factorize_numeric_lu(
+                &mut self.numeric,
+                self.mat.as_ref(),
+                Par::Seq,
+                MemStack::new(&mut self.factor_buf),
+                Default::default(),
+            )
+            .map_err(|e| LinearSolveError::Sparse(format!("{e:?}")))?;
+        let n = self.rhs.len();
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.solve_buf),
+        );
+        for (i, x) in rhs.iter_mut().enumerate() {
+            x.copy_from_slice(&self.rhs[i * D..(i + 1) * D]);
+        }
+        Ok(())
+    }
+    fn name(&self) -> &'static str {
+        "whole supernodal"
+    }
+}
+
+/// What one design did on one matrix.
+struct Timing<const D: usize> {
+    setup: f64,
+    median: f64,
+    /// Allocations in the first solve after construction.
+    first_allocs: usize,
+    /// Allocations in the timed solves (all repetitions).
+    allocs: usize,
+    x: Vec<SVector<f64, D>>,
+}
+
+/// Builds a solver (timed), warms it up and times `REPS` solves of `jac · x = b`.
+fn time<const D: usize, S: LinearSolver<D>>(
+    build: impl FnOnce() -> S,
+    jac: &BlockJacobian<D>,
+    b: &[SVector<f64, D>],
+) -> Timing<D> {
+    let t = Instant::now();
+    let mut solver = build();
+    let setup = t.elapsed().as_secs_f64();
+    let mut x = b.to_vec();
+    let a0 = allocations();
+    solver.solve(jac, &mut x).expect("warm-up solve");
+    let first_allocs = allocations() - a0;
+    let mut times = Vec::with_capacity(REPS);
+    let mut allocs = 0;
+    for _ in 0..REPS {
+        x.copy_from_slice(b);
+        let a0 = allocations();
+        let t = Instant::now();
+        solver.solve(jac, &mut x).expect("solve");
+        times.push(t.elapsed().as_secs_f64());
+        allocs += allocations() - a0;
+    }
+    times.sort_by(f64::total_cmp);
+    Timing {
+        setup,
+        median: times[REPS / 2],
+        first_allocs,
+        allocs,
+        x,
+    }
+}
+
+/// `‖J x − b‖ / ‖b‖`.
+fn residual<const D: usize>(
+    mesh: &Mesh,
+    jac: &BlockJacobian<D>,
+    x: &[SVector<f64, D>],
+    b: &[SVector<f64, D>],
+) -> f64 {
+    let mut jx = vec![SVector::zeros(); x.len()];
+    jac.mul(mesh, x, &mut jx);
+    let r: f64 = jx.iter().zip(b).map(|(a, c)| (a - c).norm_squared()).sum();
+    let n: f64 = b.iter().map(|c| c.norm_squared()).sum();
+    (r / n).sqrt()
+}
+
+fn rel_diff<const D: usize>(x: &[SVector<f64, D>], y: &[SVector<f64, D>]) -> f64 {
+    let d: f64 = x.iter().zip(y).map(|(a, c)| (a - c).norm_squared()).sum();
+    let n: f64 = y.iter().map(|c| c.norm_squared()).sum();
+    (d / n).sqrt()
+}
+
+fn row<const D: usize>(design: &str, mesh: &str, n_el: usize, t: &Timing<D>) {
+    println!(
+        "{design:>17} {mesh:>6} {D:>2} {n_el:>8} {:>11.3e} {:>10.1} {:>9.3} {:>7} {:>7}",
+        t.median,
+        t.median * 1e9 / n_el as f64,
+        t.setup,
+        t.first_allocs,
+        t.allocs
+    );
+}
+
+fn run<const D: usize>(net: &Mesh, chain: &Mesh) {
+    let mut rng = Rng(0x5EED + D as u64);
+    let jac = random_jac::<D>(net, &mut rng);
+    let b: Vec<SVector<f64, D>> = (0..net.n_nodes())
+        .map(|_| SVector::from_fn(|_, _| rng.sym()))
+        .collect();
+    let n_el = net.n_elements();
+    let lu = time(|| SparseLu::<D>::new(net), &jac, &b);
+    row("sparse_lu", "net", n_el, &lu);
+    let ws = time(|| WholeSupernodal::<D>::new(net), &jac, &b);
+    row("(faer supernodal)", "net", n_el, &ws);
+    let nw = time(|| NetworkSolver::<D>::new(net), &jac, &b);
+    row("network", "net", n_el, &nw);
+    let ns = time(
+        || NetworkSolver::<D>::with_junction_lu(net, JunctionLu::Supernodal),
+        &jac,
+        &b,
+    );
+    row("network (supern.)", "net", n_el, &ns);
+    for (name, t) in [
+        ("whole supernodal", &ws),
+        ("network", &nw),
+        ("network (supern.)", &ns),
+    ] {
+        let diff = rel_diff(&t.x, &lu.x);
+        let res = residual(net, &jac, &t.x, &b);
+        println!(
+            "{:>17} {name}: ‖x − x_sparse_lu‖/‖x_sparse_lu‖ = {diff:.1e}, ‖Jx − b‖/‖b‖ = {res:.1e}",
+            ""
+        );
+        assert!(diff <= 1e-10, "{name} and sparse LU disagree: {diff:e}");
+    }
+    println!(
+        "{:>17} sparse_lu: ‖Jx − b‖/‖b‖ = {:.1e}",
+        "",
+        residual(net, &jac, &lu.x, &b)
+    );
+    assert_eq!(
+        nw.first_allocs + nw.allocs,
+        0,
+        "the network solve allocated"
+    );
+
+    let cjac = random_jac::<D>(chain, &mut rng);
+    let cb: Vec<SVector<f64, D>> = (0..chain.n_nodes())
+        .map(|_| SVector::from_fn(|_, _| rng.sym()))
+        .collect();
+    let bt = time(
+        || BlockTridiagonal::<D>::new(chain).expect("chain"),
+        &cjac,
+        &cb,
+    );
+    row("block_tridiagonal", "chain", chain.n_elements(), &bt);
+    let nc = time(|| NetworkSolver::<D>::new(chain), &cjac, &cb);
+    row("network", "chain", chain.n_elements(), &nc);
+    assert!(
+        rel_diff(&nc.x, &bt.x) <= 1e-10,
+        "network and block Thomas disagree"
+    );
+}
+
+fn main() {
+    let net = grid_net(50, 50, 20, 10);
+    let chain = Mesh::uniform_chain(net.n_elements(), 1.0).expect("chain");
+    let probe = NetworkSolver::<1>::new(&net);
+    println!(
+        "net: {} elements, {} nodes; {} junctions, {} segments, {} interior nodes",
+        net.n_elements(),
+        net.n_nodes(),
+        probe.n_junctions(),
+        probe.n_segments(),
+        probe.n_interior()
+    );
+    println!("median of {REPS} solves (factor + solve) after one warm-up; setup = new()");
+    println!(
+        "{:>17} {:>6} {:>2} {:>8} {:>11} {:>10} {:>9} {:>7} {:>7}",
+        "design", "mesh", "D", "elements", "s/solve", "ns/elem", "setup s", "1st", "allocs"
+    );
+    run::<3>(&net, &chain);
+    run::<2>(&net, &chain);
+}

@@ -1,0 +1,887 @@
+//! Network solver for meshes of strings joined at junction nodes: block Thomas along each
+//! string segment, faer's sparse LU on the (small) reduced system of the junction nodes.
+//!
+//! The mesh is decomposed once, at construction, into *junction* nodes and *segments*
+//! (paths junction – interior – … – interior – junction; see [`NetworkSolver`]). Per solve,
+//! the interior nodes of every segment are eliminated with block Thomas (closed-form `D×D`
+//! inverses, no pivoting between blocks, as [`super::BlockTridiagonal`]), which adds
+//! Schur-complement blocks to the junction rows; the reduced junction system is solved with
+//! a sparse LU whose symbolic analysis was done at construction, and the interior nodes are
+//! recovered by back substitution.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Par};
+use nalgebra::SVector;
+
+use super::{Block, BlockJacobian, LinearSolver};
+use crate::error::LinearSolveError;
+use crate::mesh::Mesh;
+
+/// Which of faer's sparse LU variants factors the reduced junction system of a
+/// [`NetworkSolver`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum JunctionLu {
+    /// Simplicial (column-by-column) LU. Its storage is sized once, in the construction, so
+    /// that solves do not allocate (unless row pivoting changes the fill, which it does not
+    /// for diagonally dominant matrices). Slow when the junctions form a 2-D grid with
+    /// thousands of nodes, whose factors fill in.
+    #[default]
+    Simplicial,
+    /// Supernodal LU (dense kernels on groups of columns): several times faster on large
+    /// 2-D nets of junctions, but faer allocates work space (about one allocation per
+    /// supernode) in every numeric factorization.
+    Supernodal,
+}
+
+/// Marks a node that is not a junction in [`NetworkSolver::junction_index`].
+const NOT_A_JUNCTION: usize = usize::MAX;
+
+/// A path junction – interior – … – interior – junction of the element graph.
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    /// End junctions `[start, end]` (node indices; equal for a loop).
+    ends: [usize; 2],
+    /// First interior node in `interior_nodes` (and row of the `c`, `g` workspaces).
+    first_interior: usize,
+    /// Number of interior nodes `m`; the segment has `m + 1` elements.
+    n_interior: usize,
+    /// First element of the path in `path_elements`.
+    first_element: usize,
+    /// Index in `Reduced::slots` of the coupling blocks `(start, end)` (then `(end, start)`,
+    /// `D²` entries each); [`NOT_A_JUNCTION`] for a loop, whose couplings are diagonal.
+    coupling_slots: usize,
+}
+
+/// The reduced junction system and its sparse LU (absent if the mesh has no junctions).
+struct Reduced {
+    mat: SparseColMat<usize, f64>,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    factor_buf: MemBuffer,
+    solve_buf: MemBuffer,
+    rhs: Vec<f64>,
+    /// CSC value slots: `D²` per junction diagonal block (row-major within a block), then
+    /// `2·D²` per non-loop segment (blocks `(start, end)` and `(end, start)`).
+    slots: Vec<usize>,
+}
+
+/// Network linear solver for the Newton matrix of any mesh, fastest for meshes made of long
+/// strings joined at few junction nodes (nets, stars, strings with springs between them).
+///
+/// **Decomposition** (once, in [`NetworkSolver::new`], independent of the node numbering up
+/// to the choice of one node per ring): a node is *interior* if it has exactly two incident
+/// elements and they lead to two distinct other nodes; every other node (ends of strings,
+/// nodes of degree ≥ 3, isolated nodes, nodes with parallel elements) is a *junction*. A
+/// closed ring of interior nodes without any junction gets one junction declared on it (its
+/// first node met in element order). The elements then split into *segments*: maximal paths
+/// junction – interior – … – interior – junction, with zero or more interior nodes; both ends
+/// may be the same junction (a loop).
+///
+/// **Solve**: along each segment, interior node `p_k` (path order, `p_0` and `p_{m+1}` the
+/// end junctions) has the row `B_{k−1} x_{p_{k−1}} + D_k x_{p_k} + F_k x_{p_{k+1}} = b_k`
+/// with `F_k = ∂R_{p_k}/∂x_{p_{k+1}}` and `B_k = ∂R_{p_{k+1}}/∂x_{p_k}` taken from the element
+/// blocks in path direction. Eliminating `p_1 … p_m` in order gives
+/// `x_{p_k} = y_k − C_k x_{p_{k+1}} − G_k x_{p_0}` and adds Schur-complement blocks to the
+/// rows of the two end junctions (diagonal, coupling and right-hand side). The reduced system
+/// on the junctions is solved by faer's sparse LU ([`JunctionLu`]; symbolic analysis at
+/// construction, numeric refactorization per call), then the interior nodes are
+/// back-substituted. Pivot blocks along segments are inverted in closed form without
+/// pivoting, which is safe for the mass-dominated Newton matrices of the time stepper;
+/// [`super::SparseLu`] is the oracle.
+///
+/// All workspace is allocated in [`NetworkSolver::new`]; with [`JunctionLu::Simplicial`],
+/// [`LinearSolver::solve`] does not allocate. A singular pivot block or a non-finite
+/// solution is reported as [`LinearSolveError::Singular`] with the node index.
+pub struct NetworkSolver<const D: usize> {
+    /// Junction nodes, in the order of the reduced system.
+    junctions: Vec<usize>,
+    /// Position of each node in `junctions`, [`NOT_A_JUNCTION`] for interior nodes.
+    junction_index: Vec<usize>,
+    segments: Vec<Segment>,
+    /// Interior nodes of all segments, segment by segment in path order.
+    interior_nodes: Vec<usize>,
+    /// Elements of all segments in path order, with whether element `[a, b]` is traversed
+    /// `a → b` (`true`) or `b → a`.
+    path_elements: Vec<(usize, bool)>,
+    /// `C_k = D'_k⁻¹ F_k` per interior node (indexed like `interior_nodes`).
+    c: Vec<Block<D>>,
+    /// `G_k = D'_k⁻¹ L_k` per interior node, `L_k` the fill coupling to the start junction.
+    g: Vec<Block<D>>,
+    /// Schur-complemented junction diagonal blocks (indexed like `junctions`).
+    jdiag: Vec<Block<D>>,
+    reduced: Option<Reduced>,
+}
+
+impl<const D: usize> std::fmt::Debug for NetworkSolver<D> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NetworkSolver")
+            .field("junctions", &self.junctions.len())
+            .field("segments", &self.segments.len())
+            .field("interior", &self.interior_nodes.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// The junction/segment decomposition of a mesh's element graph.
+struct Decomposition {
+    is_junction: Vec<bool>,
+    segments: Vec<Segment>,
+    interior_nodes: Vec<usize>,
+    path_elements: Vec<(usize, bool)>,
+}
+
+fn decompose(mesh: &Mesh) -> Decomposition {
+    let n = mesh.n_nodes();
+    let els = mesh.elements();
+    // Incidence lists in CSR form: elements of node v are inc[start[v]..start[v + 1]].
+    let mut start = vec![0usize; n + 1];
+    for &[a, b] in els {
+        start[a + 1] += 1;
+        start[b + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut inc = vec![0usize; 2 * els.len()];
+    for (e, &[a, b]) in els.iter().enumerate() {
+        for v in [a, b] {
+            inc[fill[v]] = e;
+            fill[v] += 1;
+        }
+    }
+    let other = |e: usize, v: usize| if els[e][0] == v { els[e][1] } else { els[e][0] };
+    let mut is_junction: Vec<bool> = (0..n)
+        .map(|v| {
+            let i = &inc[start[v]..start[v + 1]];
+            !(i.len() == 2 && other(i[0], v) != other(i[1], v))
+        })
+        .collect();
+    let mut d = Decomposition {
+        is_junction: Vec::new(),
+        segments: Vec::new(),
+        interior_nodes: Vec::new(),
+        path_elements: Vec::new(),
+    };
+    let mut visited = vec![false; els.len()];
+    // Walks from junction `j` along element `e0` to the next junction, recording a segment.
+    let trace =
+        |d: &mut Decomposition, visited: &mut [bool], is_junction: &[bool], j: usize, e0: usize| {
+            let first_interior = d.interior_nodes.len();
+            let first_element = d.path_elements.len();
+            visited[e0] = true;
+            d.path_elements.push((e0, els[e0][0] == j));
+            let (mut prev, mut cur) = (e0, other(e0, j));
+            while !is_junction[cur] {
+                d.interior_nodes.push(cur);
+                let i = &inc[start[cur]..start[cur] + 2];
+                let e = if i[0] == prev { i[1] } else { i[0] };
+                visited[e] = true;
+                d.path_elements.push((e, els[e][0] == cur));
+                prev = e;
+                cur = other(e, cur);
+            }
+            d.segments.push(Segment {
+                ends: [j, cur],
+                first_interior,
+                n_interior: d.interior_nodes.len() - first_interior,
+                first_element,
+                coupling_slots: NOT_A_JUNCTION,
+            });
+        };
+    for j in 0..n {
+        if is_junction[j] {
+            for &e in &inc[start[j]..start[j + 1]] {
+                if !visited[e] {
+                    trace(&mut d, &mut visited, &is_junction, j, e);
+                }
+            }
+        }
+    }
+    // What is left are rings of interior nodes: declare one node of each a junction.
+    for e in 0..els.len() {
+        if !visited[e] {
+            let j = els[e][0];
+            is_junction[j] = true;
+            trace(&mut d, &mut visited, &is_junction, j, e);
+        }
+    }
+    d.is_junction = is_junction;
+    d
+}
+
+impl<const D: usize> NetworkSolver<D> {
+    /// Decomposes `mesh` into junctions and segments and analyses the sparsity pattern of
+    /// the reduced junction system, factored by [`JunctionLu::Simplicial`] (no allocation
+    /// per solve).
+    pub fn new(mesh: &Mesh) -> Self {
+        Self::with_junction_lu(mesh, JunctionLu::Simplicial)
+    }
+
+    /// As [`NetworkSolver::new`], with the factorization `junction_lu` of the reduced
+    /// junction system.
+    pub fn with_junction_lu(mesh: &Mesh, junction_lu: JunctionLu) -> Self {
+        let mut dec = decompose(mesh);
+        let junctions: Vec<usize> = (0..mesh.n_nodes())
+            .filter(|&v| dec.is_junction[v])
+            .collect();
+        let mut junction_index = vec![NOT_A_JUNCTION; mesh.n_nodes()];
+        for (r, &j) in junctions.iter().enumerate() {
+            junction_index[j] = r;
+        }
+        let nj = junctions.len();
+        let reduced = (nj > 0).then(|| {
+            let n = nj * D;
+            let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+            let mut add_block = |i: usize, j: usize| {
+                for k in 0..D {
+                    for l in 0..D {
+                        cols[j * D + l].push(i * D + k);
+                    }
+                }
+            };
+            for r in 0..nj {
+                add_block(r, r);
+            }
+            for s in &dec.segments {
+                let [a, b] = s.ends.map(|v| junction_index[v]);
+                if a != b {
+                    add_block(a, b);
+                    add_block(b, a);
+                }
+            }
+            let mut col_ptr = Vec::with_capacity(n + 1);
+            let mut row_idx = Vec::new();
+            col_ptr.push(0);
+            for c in &mut cols {
+                c.sort_unstable();
+                c.dedup();
+                row_idx.extend_from_slice(c);
+                col_ptr.push(row_idx.len());
+            }
+            let nnz = row_idx.len();
+            let slot = |i: usize, j: usize| -> usize {
+                let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+                s + row_idx[s..e]
+                    .binary_search(&i)
+                    .expect("entry is in the pattern")
+            };
+            let block_slots = |i: usize, j: usize, out: &mut Vec<usize>| {
+                for k in 0..D {
+                    for l in 0..D {
+                        out.push(slot(i * D + k, j * D + l));
+                    }
+                }
+            };
+            let mut slots = Vec::with_capacity((nj + 2 * dec.segments.len()) * D * D);
+            for r in 0..nj {
+                block_slots(r, r, &mut slots);
+            }
+            for s in &mut dec.segments {
+                let [a, b] = s.ends.map(|v| junction_index[v]);
+                if a != b {
+                    s.coupling_slots = slots.len();
+                    block_slots(a, b, &mut slots);
+                    block_slots(b, a, &mut slots);
+                }
+            }
+            // Diagonally dominant values on the pattern, for a warm-up factorization that
+            // sizes faer's numeric storage here rather than in the first solve.
+            let mut warm = vec![1.0; nnz];
+            for (j, w) in col_ptr.windows(2).enumerate() {
+                warm[slot(j, j)] = (w[1] - w[0]) as f64 + 1.0;
+            }
+            let symbolic_mat = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+            let params = LuSymbolicParams {
+                supernodal_flop_ratio_threshold: match junction_lu {
+                    JunctionLu::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+                    JunctionLu::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+                },
+                ..Default::default()
+            };
+            let symbolic = factorize_symbolic_lu(symbolic_mat.as_ref(), params)
+                .expect("symbolic LU of a valid square pattern");
+            let mut factor_buf = MemBuffer::new(
+                symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+            );
+            let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+            let mat = SparseColMat::new(symbolic_mat, warm);
+            let mut numeric = NumericLu::new();
+            // A failure here only means that the first solve sizes the storage instead.
+            let _ = symbolic.factorize_numeric_lu(
+                &mut numeric,
+                mat.as_ref(),
+                Par::Seq,
+                MemStack::new(&mut factor_buf),
+                Default::default(),
+            );
+            Reduced {
+                mat,
+                symbolic,
+                numeric,
+                factor_buf,
+                solve_buf,
+                rhs: vec![0.0; n],
+                slots,
+            }
+        });
+        let n_int = dec.interior_nodes.len();
+        Self {
+            junctions,
+            junction_index,
+            segments: dec.segments,
+            interior_nodes: dec.interior_nodes,
+            path_elements: dec.path_elements,
+            c: vec![Block::zeros(); n_int],
+            g: vec![Block::zeros(); n_int],
+            jdiag: vec![Block::zeros(); nj],
+            reduced,
+        }
+    }
+
+    /// Number of junction nodes (the size of the reduced system, in blocks).
+    pub fn n_junctions(&self) -> usize {
+        self.junctions.len()
+    }
+    /// Number of segments (paths junction – interior – … – junction).
+    pub fn n_segments(&self) -> usize {
+        self.segments.len()
+    }
+    /// Number of interior nodes, eliminated by block Thomas along the segments.
+    pub fn n_interior(&self) -> usize {
+        self.interior_nodes.len()
+    }
+    /// Whether node `v` is a junction (solved in the reduced system).
+    pub fn is_junction(&self, v: usize) -> bool {
+        self.junction_index[v] != NOT_A_JUNCTION
+    }
+
+    /// Blocks `[F, B]` of path element `p`: `F = ∂R_from/∂x_to`, `B = ∂R_to/∂x_from`.
+    #[inline]
+    fn path_blocks<'a>(&self, jac: &'a BlockJacobian<D>, p: usize) -> [&'a Block<D>; 2] {
+        let (e, forward) = self.path_elements[p];
+        let off = &jac.off[e];
+        if forward {
+            [&off[0], &off[1]]
+        } else {
+            [&off[1], &off[0]]
+        }
+    }
+
+    /// Eliminates the interior nodes of segment `s`: stores `C_k`, `G_k` and `y_k` (in
+    /// `rhs`), adds the Schur complement to `jdiag`, `rhs` of the end junctions and the
+    /// coupling blocks to `vals`.
+    fn eliminate(
+        &mut self,
+        s: usize,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+        vals: &mut [f64],
+        slots: &[usize],
+    ) -> Result<(), LinearSolveError> {
+        let seg = self.segments[s];
+        let [j0, j1] = seg.ends;
+        let (r0, r1) = (self.junction_index[j0], self.junction_index[j1]);
+        let [f0, b0] = self.path_blocks(jac, seg.first_element);
+        // r: coupling of row j0 to the current node; l: of the current row to x_{j0}.
+        let mut r = *f0;
+        let mut l = *b0;
+        // (B_k, C_k, y_k) of the previous interior node.
+        let mut prev: Option<(Block<D>, Block<D>, SVector<f64, D>)> = None;
+        for k in 0..seg.n_interior {
+            let q = seg.first_interior + k;
+            let node = self.interior_nodes[q];
+            let [fk, bk] = self.path_blocks(jac, seg.first_element + k + 1);
+            let mut d = jac.diag[node];
+            let mut b = rhs[node];
+            if let Some((bp, cp, yp)) = &prev {
+                d -= bp * cp;
+                b -= bp * yp;
+            }
+            let inv = d
+                .try_inverse()
+                .ok_or(LinearSolveError::Singular { block: node })?;
+            let y = inv * b;
+            let c = inv * fk;
+            let g = inv * l;
+            rhs[node] = y;
+            self.c[q] = c;
+            self.g[q] = g;
+            self.jdiag[r0] -= r * g;
+            rhs[j0] -= r * y;
+            r = -(r * c);
+            l = -(bk * g);
+            prev = Some((*bk, c, y));
+        }
+        if let Some((bm, c, y)) = &prev {
+            self.jdiag[r1] -= bm * c;
+            rhs[j1] -= bm * y;
+        }
+        if seg.coupling_slots == NOT_A_JUNCTION {
+            self.jdiag[r0] += r + l;
+        } else {
+            let dd = D * D;
+            let base = seg.coupling_slots;
+            for k in 0..D {
+                for m in 0..D {
+                    vals[slots[base + k * D + m]] += r[(k, m)];
+                    vals[slots[base + dd + k * D + m]] += l[(k, m)];
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether all entries of `x` are finite.
+fn finite<const D: usize>(x: &SVector<f64, D>) -> bool {
+    x.iter().all(|v| v.is_finite())
+}
+
+impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
+    fn solve(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        // The reduced system is moved out while the segments write into it.
+        let mut reduced = self.reduced.take();
+        let result = self.solve_with(&mut reduced, jac, rhs);
+        self.reduced = reduced;
+        result
+    }
+    fn name(&self) -> &'static str {
+        "network"
+    }
+}
+
+impl<const D: usize> NetworkSolver<D> {
+    fn solve_with(
+        &mut self,
+        reduced: &mut Option<Reduced>,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        let Some(red) = reduced else {
+            // No junctions means no elements: the matrix is block diagonal.
+            for (i, (x, d)) in rhs.iter_mut().zip(&jac.diag).enumerate() {
+                let inv = d
+                    .try_inverse()
+                    .ok_or(LinearSolveError::Singular { block: i })?;
+                *x = inv * *x;
+                if !finite(x) {
+                    return Err(LinearSolveError::Singular { block: i });
+                }
+            }
+            return Ok(());
+        };
+        let vals = red.mat.val_mut();
+        vals.fill(0.0);
+        for (r, &j) in self.junctions.iter().enumerate() {
+            self.jdiag[r] = jac.diag[j];
+        }
+        for s in 0..self.segments.len() {
+            self.eliminate(s, jac, rhs, vals, &red.slots)?;
+        }
+        let dd = D * D;
+        for (r, (blk, &j)) in self.jdiag.iter().zip(&self.junctions).enumerate() {
+            for k in 0..D {
+                for l in 0..D {
+                    vals[red.slots[r * dd + k * D + l]] += blk[(k, l)];
+                }
+            }
+            red.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
+        }
+        let lu = red
+            .symbolic
+            .factorize_numeric_lu(
+                &mut red.numeric,
+                red.mat.as_ref(),
+                Par::Seq,
+                MemStack::new(&mut red.factor_buf),
+                Default::default(),
+            )
+            .map_err(|e| LinearSolveError::Sparse(format!("{e:?}")))?;
+        let n = red.rhs.len();
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut red.rhs, n, 1),
+            Par::Seq,
+            MemStack::new(&mut red.solve_buf),
+        );
+        for (r, &j) in self.junctions.iter().enumerate() {
+            let x = &mut rhs[j];
+            x.copy_from_slice(&red.rhs[r * D..(r + 1) * D]);
+            if !finite(x) {
+                return Err(LinearSolveError::Singular { block: j });
+            }
+        }
+        // Back substitution: x_{p_k} = y_k − C_k x_{p_{k+1}} − G_k x_{p_0}.
+        for seg in &self.segments {
+            let [j0, j1] = seg.ends;
+            let x0 = rhs[j0];
+            let mut next = rhs[j1];
+            for q in (seg.first_interior..seg.first_interior + seg.n_interior).rev() {
+                let node = self.interior_nodes[q];
+                let x = rhs[node] - self.c[q] * next - self.g[q] * x0;
+                if !finite(&x) {
+                    return Err(LinearSolveError::Singular { block: node });
+                }
+                rhs[node] = x;
+                next = x;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::DMatrix;
+
+    use super::*;
+    use crate::linsolve::{SolverKind, SparseLu, make_solver};
+
+    /// SplitMix64: a small deterministic generator for test matrices and permutations.
+    struct Rng(u64);
+
+    impl Rng {
+        fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^ (z >> 31)
+        }
+        /// Uniform in `[−1, 1)`.
+        fn sym(&mut self) -> f64 {
+            (self.next_u64() >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+        /// Uniform in `0..n`.
+        fn below(&mut self, n: usize) -> usize {
+            (self.next_u64() % n as u64) as usize
+        }
+    }
+
+    fn mesh(n_nodes: usize, elements: Vec<[usize; 2]>) -> Mesh {
+        let n = elements.len();
+        Mesh::new(n_nodes, elements, vec![1.0; n]).unwrap()
+    }
+
+    fn chain(n_el: usize) -> Mesh {
+        Mesh::uniform_chain(n_el, 1.0).unwrap()
+    }
+
+    /// `arms` chains of `len` elements joined at node 0.
+    fn star(arms: usize, len: usize) -> Mesh {
+        let mut els = Vec::new();
+        let mut next = 1;
+        for _ in 0..arms {
+            let mut prev = 0;
+            for _ in 0..len {
+                els.push([prev, next]);
+                prev = next;
+                next += 1;
+            }
+        }
+        mesh(next, els)
+    }
+
+    fn ring(n: usize) -> Mesh {
+        mesh(n, (0..n).map(|i| [i, (i + 1) % n]).collect())
+    }
+
+    /// `nh` horizontal and `nv` vertical strings crossing at shared nodes every `spacing`
+    /// elements, with free tails of `tail` elements beyond the outermost crossings.
+    fn grid_net(nh: usize, nv: usize, spacing: usize, tail: usize) -> Mesh {
+        let mut els = Vec::new();
+        let mut next = nh * nv;
+        let mut string = |n_cross: usize, crossing: &dyn Fn(usize) -> usize| {
+            let len = 2 * tail + spacing * (n_cross - 1);
+            let mut prev = None;
+            for pos in 0..=len {
+                let node = if pos >= tail && (pos - tail).is_multiple_of(spacing) {
+                    crossing((pos - tail) / spacing)
+                } else {
+                    next += 1;
+                    next - 1
+                };
+                if let Some(p) = prev {
+                    els.push([p, node]);
+                }
+                prev = Some(node);
+            }
+        };
+        for h in 0..nh {
+            string(nv, &|v| h * nv + v);
+        }
+        for v in 0..nv {
+            string(nh, &|h| h * nv + v);
+        }
+        mesh(next, els)
+    }
+
+    /// Two chains of 20 elements (nodes 0–20 and 21–41), a second element parallel to
+    /// `[5, 6]`, a spring between interior nodes 12 and 30, and an isolated node 42.
+    fn parallel_and_spring() -> Mesh {
+        let mut els: Vec<[usize; 2]> = (0..20).map(|i| [i, i + 1]).collect();
+        els.extend((21..41).map(|i| [i, i + 1]));
+        els.push([6, 5]);
+        els.push([12, 30]);
+        mesh(43, els)
+    }
+
+    /// A chain of 10 elements whose last node carries a loop of 8 elements back to itself.
+    fn lollipop() -> Mesh {
+        let mut els: Vec<[usize; 2]> = (0..10).map(|i| [i, i + 1]).collect();
+        let ring: Vec<usize> = std::iter::once(10).chain(11..18).collect();
+        for k in 0..ring.len() {
+            els.push([ring[k], ring[(k + 1) % ring.len()]]);
+        }
+        mesh(18, els)
+    }
+
+    /// `mesh` with its nodes renumbered by a random permutation, its elements reordered and
+    /// randomly flipped; returns the permutation (old node → new node) too.
+    fn shuffled(mesh: &Mesh, rng: &mut Rng) -> (Mesh, Vec<usize>) {
+        let n = mesh.n_nodes();
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, rng.below(i + 1));
+        }
+        let mut els: Vec<[usize; 2]> = mesh
+            .elements()
+            .iter()
+            .map(|&[a, b]| {
+                if rng.below(2) == 0 {
+                    [perm[a], perm[b]]
+                } else {
+                    [perm[b], perm[a]]
+                }
+            })
+            .collect();
+        for i in (1..els.len()).rev() {
+            els.swap(i, rng.below(i + 1));
+        }
+        (self::mesh(n, els), perm)
+    }
+
+    /// Mass-dominated random Newton matrix: `diag = big·I + random`, off blocks random and
+    /// not symmetric.
+    fn random_jac<const D: usize>(mesh: &Mesh, rng: &mut Rng) -> BlockJacobian<D> {
+        let mut jac = BlockJacobian::<D>::zeros(mesh);
+        let big = 8.0 * D as f64;
+        for d in &mut jac.diag {
+            *d = Block::from_fn(|_, _| rng.sym()) + Block::identity() * big;
+        }
+        for off in &mut jac.off {
+            for b in off.iter_mut() {
+                *b = Block::from_fn(|_, _| rng.sym());
+            }
+        }
+        jac
+    }
+
+    fn random_rhs<const D: usize>(n: usize, rng: &mut Rng) -> Vec<SVector<f64, D>> {
+        (0..n).map(|_| SVector::from_fn(|_, _| rng.sym())).collect()
+    }
+
+    fn dense<const D: usize>(mesh: &Mesh, jac: &BlockJacobian<D>) -> DMatrix<f64> {
+        let n = mesh.n_nodes() * D;
+        let mut m = DMatrix::zeros(n, n);
+        let mut add = |i: usize, j: usize, b: &Block<D>| {
+            for k in 0..D {
+                for l in 0..D {
+                    m[(i * D + k, j * D + l)] += b[(k, l)];
+                }
+            }
+        };
+        for (i, d) in jac.diag.iter().enumerate() {
+            add(i, i, d);
+        }
+        for (&[a, b], off) in mesh.elements().iter().zip(&jac.off) {
+            add(a, b, &off[0]);
+            add(b, a, &off[1]);
+        }
+        m
+    }
+
+    fn flat<const D: usize>(x: &[SVector<f64, D>]) -> nalgebra::DVector<f64> {
+        nalgebra::DVector::from_iterator(x.len() * D, x.iter().flat_map(|v| v.iter().copied()))
+    }
+
+    /// Solves three random systems on `mesh` (one solver, refactored each time) with the
+    /// network solver (both junction LU variants) and the sparse LU oracle; checks agreement
+    /// and the dense residual.
+    fn check<const D: usize>(mesh: &Mesh, seed: u64) {
+        let mut rng = Rng(seed);
+        let mut nets = [JunctionLu::Simplicial, JunctionLu::Supernodal]
+            .map(|k| NetworkSolver::<D>::with_junction_lu(mesh, k));
+        let mut lu = SparseLu::<D>::new(mesh);
+        for _ in 0..3 {
+            let jac = random_jac::<D>(mesh, &mut rng);
+            let b = random_rhs::<D>(mesh.n_nodes(), &mut rng);
+            let mut x_lu = b.clone();
+            lu.solve(&jac, &mut x_lu).unwrap();
+            let (x_lu, bf) = (flat(&x_lu), flat(&b));
+            let j = dense(mesh, &jac);
+            for net in &mut nets {
+                let mut x = b.clone();
+                net.solve(&jac, &mut x).unwrap();
+                let x = flat(&x);
+                let diff = (&x - &x_lu).norm() / x_lu.norm();
+                assert!(diff <= 1e-10, "D = {D}: network vs sparse LU {diff:e}");
+                let res = (&j * &x - &bf).norm() / bf.norm();
+                assert!(res <= 1e-10, "D = {D}: residual {res:e}");
+            }
+        }
+    }
+
+    fn check_all_d(mesh: &Mesh, seed: u64) {
+        check::<1>(mesh, seed);
+        check::<2>(mesh, seed + 1);
+        check::<3>(mesh, seed + 2);
+    }
+
+    /// Checks `mesh` and a shuffled copy, and that the shuffled copy decomposes into the
+    /// same junctions (mapped by the permutation), segments and interior nodes.
+    fn check_with_shuffle(mesh: &Mesh, seed: u64) {
+        check_all_d(mesh, seed);
+        let mut rng = Rng(seed ^ 0xABCD);
+        let (sh, perm) = shuffled(mesh, &mut rng);
+        check_all_d(&sh, seed + 10);
+        let a = NetworkSolver::<1>::new(mesh);
+        let b = NetworkSolver::<1>::new(&sh);
+        assert_eq!(a.n_segments(), b.n_segments());
+        assert_eq!(a.n_junctions(), b.n_junctions());
+        assert_eq!(a.n_interior(), b.n_interior());
+        for (v, &pv) in perm.iter().enumerate() {
+            assert_eq!(a.is_junction(v), b.is_junction(pv), "node {v}");
+        }
+    }
+
+    #[test]
+    fn chain_is_one_segment_and_matches_sparse_lu() {
+        let m = chain(40);
+        let s = NetworkSolver::<2>::new(&m);
+        assert_eq!(
+            (s.n_junctions(), s.n_segments(), s.n_interior()),
+            (2, 1, 39)
+        );
+        check_with_shuffle(&m, 1);
+        check_all_d(&chain(1), 2);
+        check_all_d(&chain(2), 3);
+    }
+
+    #[test]
+    fn star_of_three_chains_matches_sparse_lu() {
+        let m = star(3, 15);
+        let s = NetworkSolver::<2>::new(&m);
+        // The centre and the three free ends.
+        assert_eq!(
+            (s.n_junctions(), s.n_segments(), s.n_interior()),
+            (4, 3, 42)
+        );
+        check_with_shuffle(&m, 20);
+    }
+
+    #[test]
+    fn ring_gets_one_junction_and_matches_sparse_lu() {
+        for n in [3, 4, 17] {
+            let m = ring(n);
+            let s = NetworkSolver::<2>::new(&m);
+            assert_eq!(
+                (s.n_junctions(), s.n_segments(), s.n_interior()),
+                (1, 1, n - 1)
+            );
+            check_all_d(&m, 30 + n as u64);
+            let (sh, _) = shuffled(&m, &mut Rng(n as u64));
+            check_all_d(&sh, 40 + n as u64);
+        }
+        // Two nodes joined by two parallel elements: both are junctions.
+        let m = mesh(2, vec![[0, 1], [1, 0]]);
+        let s = NetworkSolver::<2>::new(&m);
+        assert_eq!((s.n_junctions(), s.n_segments(), s.n_interior()), (2, 2, 0));
+        check_all_d(&m, 50);
+    }
+
+    #[test]
+    fn loop_segment_through_interior_nodes_matches_sparse_lu() {
+        let m = lollipop();
+        let s = NetworkSolver::<2>::new(&m);
+        // Ends 0 and 10; the loop 10 → 11 … 17 → 10 is one segment with both ends at 10.
+        assert_eq!(
+            (s.n_junctions(), s.n_segments(), s.n_interior()),
+            (2, 2, 16)
+        );
+        check_with_shuffle(&m, 60);
+    }
+
+    #[test]
+    fn square_net_of_crossing_strings_matches_sparse_lu() {
+        let m = grid_net(6, 6, 5, 2);
+        let s = NetworkSolver::<2>::new(&m);
+        // 36 crossings and 24 free ends; per string 5 inner segments and 2 tails.
+        assert_eq!(s.n_junctions(), 36 + 24);
+        assert_eq!(s.n_segments(), 12 * 7);
+        assert_eq!(s.n_junctions() + s.n_interior(), m.n_nodes());
+        check_with_shuffle(&m, 70);
+        // Crossings one element apart: segments without interior nodes.
+        check_with_shuffle(&grid_net(4, 3, 1, 1), 80);
+    }
+
+    #[test]
+    fn parallel_element_spring_and_isolated_node_match_sparse_lu() {
+        let m = parallel_and_spring();
+        let s = NetworkSolver::<2>::new(&m);
+        for v in [0, 5, 6, 12, 20, 21, 30, 41, 42] {
+            assert!(s.is_junction(v), "node {v}");
+        }
+        assert_eq!(s.n_junctions(), 9);
+        // Chain 1: 0–5, 5=6 (two), 6–12, 12–20; chain 2: 21–30, 30–41; the spring.
+        assert_eq!(s.n_segments(), 8);
+        check_with_shuffle(&m, 90);
+    }
+
+    #[test]
+    fn singular_and_non_finite_are_reported() {
+        let m = star(3, 4);
+        let mut s = NetworkSolver::<2>::new(&m);
+        // A zero interior pivot: node 2 (arm 1–4) with no coupling to node 1 before it.
+        let mut jac = random_jac::<2>(&m, &mut Rng(1));
+        jac.diag[2] = Block::zeros();
+        jac.off[1][1] = Block::zeros();
+        let mut x = vec![SVector::<f64, 2>::repeat(1.0); m.n_nodes()];
+        assert_eq!(
+            s.solve(&jac, &mut x),
+            Err(LinearSolveError::Singular { block: 2 })
+        );
+        // A NaN on a junction shows up in the junction solution.
+        let mut jac = random_jac::<2>(&m, &mut Rng(2));
+        jac.diag[0][(0, 0)] = f64::NAN;
+        let mut x = vec![SVector::<f64, 2>::repeat(1.0); m.n_nodes()];
+        let err = s.solve(&jac, &mut x).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                LinearSolveError::Singular { .. } | LinearSolveError::Sparse(_)
+            ),
+            "{err:?}"
+        );
+        // The solver recovers with good values.
+        let jac = random_jac::<2>(&m, &mut Rng(3));
+        let mut x = vec![SVector::<f64, 2>::repeat(1.0); m.n_nodes()];
+        s.solve(&jac, &mut x).unwrap();
+    }
+
+    #[test]
+    fn make_solver_builds_network() {
+        let m = grid_net(2, 2, 3, 1);
+        let s = make_solver::<3>(SolverKind::Network, &m).unwrap();
+        assert_eq!(s.name(), "network");
+        assert_eq!(SolverKind::Network.name(), "network");
+    }
+}
