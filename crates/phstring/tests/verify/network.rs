@@ -259,3 +259,51 @@ fn network_setup_errors_name_the_cause() {
         Err(SetupError::DegenerateElement { .. })
     ));
 }
+
+/// The network solver and the general sparse LU give the same trajectory of the platform
+/// network (the linear solves differ only by round-off, so the Newton iterates agree to the
+/// tolerance).
+#[test]
+fn network_solver_and_sparse_lu_give_the_same_trajectory() {
+    use phstring::SolverKind;
+    let run = |solver: SolverKind| {
+        let (net, _) = platform();
+        let mut sim = Simulation::new(
+            net,
+            StepParams {
+                h: 2e-3,
+                solver,
+                ..StepParams::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let mut its = 0;
+        for _ in 0..100 {
+            its += sim
+                .step()
+                .unwrap_or_else(|e| panic!("{e}"))
+                .newton_iterations;
+        }
+        (sim.solver_name(), sim.state().clone(), its)
+    };
+    let (name_a, a, its_a) = run(SolverKind::Auto);
+    let (name_b, b, its_b) = run(SolverKind::SparseLu);
+    assert_eq!((name_a, name_b), ("network", "sparse_lu"));
+    let dr =
+        a.r.iter()
+            .zip(&b.r)
+            .map(|(x, y)| (x - y).norm())
+            .fold(0.0, f64::max);
+    let dv =
+        a.v.iter()
+            .zip(&b.v)
+            .map(|(x, y)| (x - y).norm())
+            .fold(0.0, f64::max);
+    println!(
+        "network vs sparse LU: max |Δr| {dr:.2e} m, |Δv| {dv:.2e} m/s, iterations {its_a} vs {its_b}"
+    );
+    assert!(
+        dr <= 1e-11 && dv <= 1e-8,
+        "trajectories differ: {dr:e} m, {dv:e} m/s"
+    );
+}
