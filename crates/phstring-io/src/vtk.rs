@@ -66,6 +66,52 @@ pub fn write_vtp_segments(
     velocity: &[[f64; 3]],
     cell_data: &[(&str, &[f64])],
 ) -> Result<(), VtkError> {
+    write_vtp_frame(
+        path,
+        &FrameData {
+            points,
+            segments,
+            velocity,
+            cell_data,
+            cell_ints: &[],
+            point_data: &[],
+        },
+    )
+}
+
+/// The arrays of one ParaView frame of a line mesh (see [`write_vtp_frame`]).
+#[derive(Debug, Clone, Copy)]
+pub struct FrameData<'a> {
+    /// Node positions [m] (1D and 2D padded with zeros).
+    pub points: &'a [[f64; 3]],
+    /// Line cells: pairs of indices into `points`.
+    pub segments: &'a [[usize; 2]],
+    /// Nodal velocities [m/s], one per point (point data `"velocity"`).
+    pub velocity: &'a [[f64; 3]],
+    /// Named per-segment floating-point arrays (cell data), one value per segment.
+    pub cell_data: &'a [(&'a str, &'a [f64])],
+    /// Named per-segment integer arrays (cell data, e.g. a group index), one value per
+    /// segment.
+    pub cell_ints: &'a [(&'a str, &'a [i32])],
+    /// Named per-point floating-point arrays (point data besides `"velocity"`), one value
+    /// per point.
+    pub point_data: &'a [(&'a str, &'a [f64])],
+}
+
+/// Writes a line mesh with cell and point data as an XML PolyData `.vtp` file: one two-point
+/// line cell per segment, point data `"velocity"` and `data.point_data`, cell data
+/// `data.cell_data` then `data.cell_ints`. Array names must be non-empty and distinct (cell
+/// names among cell arrays, point names among point arrays and `"velocity"`); non-finite
+/// values are refused.
+pub fn write_vtp_frame(path: &Path, data: &FrameData<'_>) -> Result<(), VtkError> {
+    let FrameData {
+        points,
+        segments,
+        velocity,
+        cell_data,
+        cell_ints,
+        point_data,
+    } = *data;
     let input_err = |message: String| VtkError::Input {
         path: path.to_path_buf(),
         message,
@@ -83,6 +129,7 @@ pub fn write_vtp_segments(
     ]
     .into_iter()
     .chain(cell_data.iter().map(|(name, v)| (*name, *v)))
+    .chain(point_data.iter().map(|(name, v)| (*name, *v)))
     {
         if let Some(i) = values.iter().position(|x| !x.is_finite()) {
             return Err(input_err(format!(
@@ -101,19 +148,28 @@ pub fn write_vtp_segments(
             points.len()
         )));
     }
-    for (i, (name, values)) in cell_data.iter().enumerate() {
-        if name.is_empty() || name == &"velocity" {
-            return Err(input_err(format!("invalid cell data name {name:?}")));
-        }
-        if cell_data[..i].iter().any(|(other, _)| other == name) {
-            return Err(input_err(format!("duplicate cell data name {name:?}")));
-        }
-        if values.len() != segments.len() {
-            return Err(input_err(format!(
-                "cell data {name:?} has {} values for {} elements",
-                values.len(),
-                segments.len()
-            )));
+    let cell_arrays: Vec<(&str, usize)> = cell_data
+        .iter()
+        .map(|(n, v)| (*n, v.len()))
+        .chain(cell_ints.iter().map(|(n, v)| (*n, v.len())))
+        .collect();
+    let point_arrays: Vec<(&str, usize)> = point_data.iter().map(|(n, v)| (*n, v.len())).collect();
+    for (kind, arrays, count, unit) in [
+        ("cell", &cell_arrays, segments.len(), "elements"),
+        ("point", &point_arrays, points.len(), "points"),
+    ] {
+        for (i, (name, len)) in arrays.iter().enumerate() {
+            if name.is_empty() || *name == "velocity" {
+                return Err(input_err(format!("invalid {kind} data name {name:?}")));
+            }
+            if arrays[..i].iter().any(|(other, _)| other == name) {
+                return Err(input_err(format!("duplicate {kind} data name {name:?}")));
+            }
+            if *len != count {
+                return Err(input_err(format!(
+                    "{kind} data {name:?} has {len} values for {count} {unit}"
+                )));
+            }
         }
     }
 
@@ -124,6 +180,18 @@ pub fn write_vtp_segments(
     let cell = cell_data
         .iter()
         .map(|(name, values)| Attribute::scalars(*name, 1).with_data(values.to_vec()))
+        .chain(
+            cell_ints
+                .iter()
+                .map(|(name, values)| Attribute::scalars(*name, 1).with_data(values.to_vec())),
+        )
+        .collect();
+    let point = std::iter::once(Attribute::vectors("velocity").with_data(vel))
+        .chain(
+            point_data
+                .iter()
+                .map(|(name, values)| Attribute::scalars(*name, 1).with_data(values.to_vec())),
+        )
         .collect();
 
     let piece = PolyDataPiece {
@@ -132,10 +200,7 @@ pub fn write_vtp_segments(
             connectivity,
             offsets,
         }),
-        data: Attributes {
-            point: vec![Attribute::vectors("velocity").with_data(vel)],
-            cell,
-        },
+        data: Attributes { point, cell },
         ..Default::default()
     };
     let vtk = Vtk {
@@ -471,6 +536,64 @@ mod tests {
         write_vtp(&dir.join("none.vtp"), &[], &[], &[]).unwrap();
         let err = write_vtp(&dir.join("missing").join("x.vtp"), &points, &vel, &[]);
         assert!(err.unwrap_err().to_string().contains("x.vtp"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn vtp_frame_with_integer_cell_data_and_point_data() {
+        let dir = temp_dir("frame");
+        let path = dir.join("net.vtp");
+        let points = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ];
+        let vel = [[0.5, 0.0, 0.0]; 4];
+        let segs = [[0, 1], [1, 2], [1, 3]];
+        let data = FrameData {
+            points: &points,
+            segments: &segs,
+            velocity: &vel,
+            cell_data: &[("tension", &[10.0, 20.0, 30.0])],
+            cell_ints: &[("string", &[0, 0, 1])],
+            point_data: &[("mass", &[0.0, 2.5, 0.0, 0.0])],
+        };
+        write_vtp_frame(&path, &data).unwrap();
+        let piece = poly_piece(Vtk::import(&path).unwrap());
+        assert_eq!(piece.num_cells(), 3);
+        let names: Vec<&str> = piece.data.cell.iter().map(|a| a.name()).collect();
+        assert_eq!(names, ["tension", "string"]);
+        assert_eq!(array(&piece.data.cell, "string"), [0.0, 0.0, 1.0]);
+        assert_eq!(array(&piece.data.point, "mass"), [0.0, 2.5, 0.0, 0.0]);
+        assert_eq!(array(&piece.data.point, "velocity").len(), 12);
+        let xml = std::fs::read_to_string(&path).unwrap();
+        assert!(xml.contains("Int32"), "integer array type: {xml}");
+
+        let bad = |d: FrameData<'_>| {
+            let e = write_vtp_frame(&path, &d).unwrap_err();
+            assert!(matches!(e, VtkError::Input { .. }), "{e}");
+        };
+        bad(FrameData {
+            cell_ints: &[("string", &[0, 1])],
+            ..data
+        });
+        bad(FrameData {
+            cell_ints: &[("tension", &[0, 1, 2])],
+            ..data
+        });
+        bad(FrameData {
+            point_data: &[("velocity", &[0.0; 4])],
+            ..data
+        });
+        bad(FrameData {
+            point_data: &[("mass", &[0.0, f64::NAN, 0.0, 0.0])],
+            ..data
+        });
+        bad(FrameData {
+            point_data: &[("mass", &[0.0; 3])],
+            ..data
+        });
         let _ = std::fs::remove_dir_all(&dir);
     }
 
