@@ -172,18 +172,21 @@ pub fn energy_plot(
             points: finite_points(t, kinetic, false),
             color: PALETTE[0],
             width: 2,
+            dashed: false,
         },
         Curve {
             label: "V̂ (potential)".to_string(),
             points: finite_points(t, potential, false),
             color: PALETTE[1],
             width: 2,
+            dashed: false,
         },
         Curve {
             label: "Ĥ (Hamiltonian)".to_string(),
             points: finite_points(t, hamiltonian, false),
             color: RGBColor(0, 0, 0),
             width: 2,
+            dashed: false,
         },
     ];
     let title = sanitize_text(title, MAX_TEXT_CHARS);
@@ -208,29 +211,361 @@ pub fn configuration_plot(
     title: &str,
     snapshots: &[(f64, Vec<[f64; 2]>)],
 ) -> Result<(), PlotError> {
-    let colors = distinct_colors(snapshots.len());
-    let curves = snapshots
-        .iter()
-        .zip(colors)
-        .map(|((time, nodes), color)| Curve {
-            label: sanitize_text(&format!("t = {} s", format_plain(*time)), MAX_TEXT_CHARS),
-            points: nodes
-                .iter()
-                .filter(|p| p[0].is_finite() && p[1].is_finite())
-                .map(|p| (p[0], p[1]))
-                .collect(),
-            color,
-            width: 2,
-        })
-        .collect();
     let title = sanitize_text(title, MAX_TEXT_CHARS);
-    write_both(
-        stem,
-        &ConfigFigure {
-            title: &title,
+    write_both(stem, &config_figure(&title, None, snapshots))
+}
+
+/// Plots snapshots of a network in the plane with equal aspect ratio: every element of
+/// `topology` as a segment between its nodes, point masses as dots (larger for heavier
+/// masses).
+///
+/// Each snapshot is `(time in s, node positions [x, y] in m)`, every node of the network. A
+/// single string through nodes `0, 1, …` ([`Topology::is_chain`]) looks exactly like
+/// [`configuration_plot`] (one colour per snapshot), plus its point masses. Otherwise each
+/// string group has its colour and springs are thin, dashed and grey; the snapshots are told
+/// apart by their shade, from faint (the first) to full (the last). Elements with a
+/// non-finite node are skipped. A topology that refers to nodes beyond a snapshot is refused
+/// with [`PlotError::Input`]. Writes `<stem>.svg` and `<stem>.png`.
+pub fn network_plot(
+    stem: &Path,
+    title: &str,
+    topology: &Topology,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> Result<(), PlotError> {
+    for (t, nodes) in snapshots {
+        topology
+            .check(nodes.len())
+            .map_err(|message| PlotError::Input {
+                path: stem.to_path_buf(),
+                message: format!("snapshot at t = {} s: {message}", format_plain(*t)),
+            })?;
+    }
+    let title = sanitize_text(title, MAX_TEXT_CHARS);
+    write_both(stem, &config_figure(&title, Some(topology), snapshots))
+}
+
+/// One group of elements of a [`Topology`]: a string, or a set of springs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupDrawing {
+    /// Name (legend text).
+    pub name: String,
+    /// Its elements (indices into [`Topology::elements`]).
+    pub elements: Range<usize>,
+    /// Springs (drawn thin and grey) rather than a string (a colour per group).
+    pub spring: bool,
+}
+
+/// What joins the nodes of a configuration: elements as node pairs, in groups (strings and
+/// springs), and point masses at nodes. Plain data; `phstring_io::output::topology` builds
+/// it from a simulation, `phstring_io::output::read_topology` from an output folder.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Topology {
+    /// Elements `[node_a, node_b]`.
+    pub elements: Vec<[usize; 2]>,
+    /// Element groups, in element order.
+    pub groups: Vec<GroupDrawing>,
+    /// Point masses `(node, mass [kg])`.
+    pub masses: Vec<(usize, f64)>,
+}
+
+impl Topology {
+    /// One string named `string` through nodes `0, 1, …, n_nodes − 1`, no point masses.
+    pub fn chain(n_nodes: usize) -> Self {
+        let n_el = n_nodes.saturating_sub(1);
+        Self {
+            elements: (0..n_el).map(|i| [i, i + 1]).collect(),
+            groups: vec![GroupDrawing {
+                name: "string".into(),
+                elements: 0..n_el,
+                spring: false,
+            }],
+            masses: Vec::new(),
+        }
+    }
+
+    /// Whether this is a single string through nodes `0, 1, …` in order (point masses
+    /// aside): drawn like one string, one colour per snapshot.
+    pub fn is_chain(&self) -> bool {
+        let one_string = match self.groups.as_slice() {
+            [g] => !g.spring && g.elements == (0..self.elements.len()),
+            [] => self.elements.is_empty(),
+            _ => false,
+        };
+        one_string
+            && self
+                .elements
+                .iter()
+                .enumerate()
+                .all(|(i, e)| *e == [i, i + 1])
+    }
+
+    /// Checks that the elements and point masses refer to nodes below `n_nodes` and the
+    /// groups to existing elements.
+    pub fn check(&self, n_nodes: usize) -> Result<(), String> {
+        if let Some((k, e)) = self
+            .elements
+            .iter()
+            .enumerate()
+            .find(|(_, e)| e[0] >= n_nodes || e[1] >= n_nodes)
+        {
+            return Err(format!(
+                "element {k} = {e:?} refers to a node beyond the {n_nodes} nodes"
+            ));
+        }
+        if let Some(g) = self
+            .groups
+            .iter()
+            .find(|g| g.elements.start > g.elements.end || g.elements.end > self.elements.len())
+        {
+            return Err(format!(
+                "group {:?} has elements {:?} of {}",
+                sanitize_text(&g.name, 40),
+                g.elements,
+                self.elements.len()
+            ));
+        }
+        if let Some((node, _)) = self.masses.iter().find(|(n, _)| *n >= n_nodes) {
+            return Err(format!(
+                "a point mass is at node {node}, beyond the {n_nodes} nodes"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The elements of group `g` as node paths: runs of consecutive elements each starting
+    /// where the previous one ended (one path for a string numbered along its length).
+    pub fn polylines(&self, g: usize) -> Vec<Vec<usize>> {
+        let mut out: Vec<Vec<usize>> = Vec::new();
+        let Some(group) = self.groups.get(g) else {
+            return out;
+        };
+        for e in group.elements.clone() {
+            let Some(&[a, b]) = self.elements.get(e) else {
+                continue;
+            };
+            match out.last_mut() {
+                Some(path) if path.last() == Some(&a) => path.push(b),
+                _ => out.push(vec![a, b]),
+            }
+        }
+        out
+    }
+
+    /// Radius in pixels of the dot of a point mass `m` when the heaviest is `m_max` (grows
+    /// with the cube root of the mass, `base` to `base + extra`).
+    pub(crate) fn mass_radius(m: f64, m_max: f64, base: f64, extra: f64) -> u32 {
+        let f = if m_max > 0.0 && m.is_finite() {
+            (m / m_max).clamp(0.0, 1.0).cbrt()
+        } else {
+            1.0
+        };
+        (base + extra * f).round() as u32
+    }
+}
+
+/// Grey of the springs in configuration plots and animations.
+pub(crate) const SPRING_GREY: RGBColor = RGBColor(128, 128, 128);
+/// Colour of point masses in network drawings.
+pub(crate) const MASS_COLOR: RGBColor = RGBColor(0, 0, 0);
+/// Most string groups named in a legend (the rest are summed up in one entry).
+const MAX_LEGEND_GROUPS: usize = 10;
+
+/// `c` mixed with white: `f = 1` is `c`, `f = 0` white.
+pub(crate) fn fade(c: RGBColor, f: f64) -> RGBColor {
+    let mix = |v: u8| (255.0 - (255.0 - f64::from(v)) * f.clamp(0.0, 1.0)).round() as u8;
+    RGBColor(mix(c.0), mix(c.1), mix(c.2))
+}
+
+/// The colours of the string groups of `topology` (springs get [`SPRING_GREY`]).
+pub(crate) fn group_colors(topology: &Topology) -> Vec<RGBColor> {
+    let n_strings = topology.groups.iter().filter(|g| !g.spring).count();
+    let mut palette = distinct_colors(n_strings).into_iter();
+    topology
+        .groups
+        .iter()
+        .map(|g| {
+            if g.spring {
+                SPRING_GREY
+            } else {
+                palette.next().unwrap_or(PALETTE[0])
+            }
+        })
+        .collect()
+}
+
+/// The configuration figure of `snapshots`: a chain (no topology, or a chain topology) or a
+/// network.
+fn config_figure<'a>(
+    title: &'a str,
+    topology: Option<&Topology>,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> ConfigFigure<'a> {
+    let finite = |p: &[f64; 2]| p[0].is_finite() && p[1].is_finite();
+    let masses: &[(usize, f64)] = topology.map_or(&[], |t| &t.masses);
+    let m_max = masses.iter().map(|m| m.1).fold(0.0, f64::max);
+    let mass_dots = |nodes: &[[f64; 2]], color: RGBColor| -> Vec<Dot> {
+        masses
+            .iter()
+            .filter_map(|&(i, m)| nodes.get(i).filter(|p| finite(p)).map(|p| (p, m)))
+            .map(|(p, m)| Dot {
+                x: p[0],
+                y: p[1],
+                radius: Topology::mass_radius(m, m_max, 4.0, 5.0),
+                color,
+            })
+            .collect()
+    };
+    let mass_entry = || LegendEntry {
+        label: "point masses".into(),
+        color: MASS_COLOR,
+        dashed: false,
+        marker: true,
+        line: false,
+    };
+    let time_label = |t: f64| sanitize_text(&format!("t = {} s", format_plain(t)), MAX_TEXT_CHARS);
+    if topology.is_none_or(Topology::is_chain) {
+        let colors = distinct_colors(snapshots.len());
+        let curves: Vec<Curve> = snapshots
+            .iter()
+            .zip(&colors)
+            .map(|((time, nodes), &color)| Curve {
+                label: time_label(*time),
+                points: nodes
+                    .iter()
+                    .filter(|p| finite(p))
+                    .map(|p| (p[0], p[1]))
+                    .collect(),
+                color,
+                width: 2,
+                dashed: false,
+            })
+            .collect();
+        let markers = curves.iter().all(|c| c.points.len() <= MAX_MARKED_NODES);
+        let mut entries: Vec<LegendEntry> = curves
+            .iter()
+            .map(|c| LegendEntry {
+                label: c.label.clone(),
+                color: c.color,
+                dashed: false,
+                marker: markers,
+                line: true,
+            })
+            .collect();
+        let dots: Vec<Dot> = snapshots
+            .iter()
+            .zip(&colors)
+            .flat_map(|((_, nodes), &color)| mass_dots(nodes, color))
+            .collect();
+        if !dots.is_empty() {
+            entries.push(mass_entry());
+        }
+        return ConfigFigure {
+            title,
             curves,
-        },
-    )
+            dots,
+            entries,
+            markers,
+        };
+    }
+    let topology = topology.expect("checked above");
+    let colors = group_colors(topology);
+    let n = snapshots.len();
+    let shade = |k: usize| {
+        if n <= 1 {
+            1.0
+        } else {
+            0.25 + 0.75 * k as f64 / (n - 1) as f64
+        }
+    };
+    let (mut curves, mut dots) = (Vec::new(), Vec::new());
+    for (k, (_, nodes)) in snapshots.iter().enumerate() {
+        let f = shade(k);
+        // Springs first, under the strings.
+        for spring in [true, false] {
+            for (g, group) in topology.groups.iter().enumerate() {
+                if group.spring != spring {
+                    continue;
+                }
+                for path in topology.polylines(g) {
+                    // A path is cut at non-finite nodes.
+                    let mut run: Vec<(f64, f64)> = Vec::new();
+                    for i in path.into_iter().chain([usize::MAX]) {
+                        match nodes.get(i).filter(|p| finite(p)) {
+                            Some(p) => run.push((p[0], p[1])),
+                            None => {
+                                if run.len() > 1 {
+                                    curves.push(Curve {
+                                        label: String::new(),
+                                        points: std::mem::take(&mut run),
+                                        color: fade(colors[g], f),
+                                        width: if spring { 1 } else { 2 },
+                                        dashed: spring,
+                                    });
+                                }
+                                run.clear();
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        dots.extend(mass_dots(nodes, fade(MASS_COLOR, f)));
+    }
+    let mut entries = Vec::new();
+    let strings: Vec<usize> = (0..topology.groups.len())
+        .filter(|&g| !topology.groups[g].spring)
+        .collect();
+    for (shown, &g) in strings.iter().enumerate() {
+        if shown == MAX_LEGEND_GROUPS && strings.len() > MAX_LEGEND_GROUPS + 1 {
+            entries.push(LegendEntry {
+                label: format!("… {} more strings", strings.len() - shown),
+                color: colors[g],
+                dashed: false,
+                marker: false,
+                line: false,
+            });
+            break;
+        }
+        entries.push(LegendEntry {
+            label: sanitize_text(&topology.groups[g].name, 40),
+            color: colors[g],
+            dashed: false,
+            marker: false,
+            line: true,
+        });
+    }
+    let springs: Vec<&GroupDrawing> = topology.groups.iter().filter(|g| g.spring).collect();
+    if !springs.is_empty() {
+        entries.push(LegendEntry {
+            label: match springs.as_slice() {
+                [one] => sanitize_text(&one.name, 40),
+                many => format!("springs ({})", many.len()),
+            },
+            color: SPRING_GREY,
+            dashed: true,
+            marker: false,
+            line: true,
+        });
+    }
+    if !dots.is_empty() {
+        entries.push(mass_entry());
+    }
+    for (k, (t, _)) in snapshots.iter().enumerate() {
+        entries.push(LegendEntry {
+            label: time_label(*t),
+            color: fade(RGBColor(0, 0, 0), shade(k)),
+            dashed: false,
+            marker: false,
+            line: true,
+        });
+    }
+    ConfigFigure {
+        title,
+        curves,
+        dots,
+        entries,
+        markers: false,
+    }
 }
 
 /// Plots named curves `y(x)` on a shared axis pair (paper Figs. 4 and 5).
@@ -266,6 +601,7 @@ pub fn series_plot(
             points: finite_points(s.x, s.y, log_y),
             color,
             width: 2,
+            dashed: false,
         });
     }
     let (title, x_label, y_label) = (
@@ -305,7 +641,7 @@ const PALETTE: [RGBColor; 8] = [
 ];
 
 /// `n` distinct colours: the qualitative palette, or a viridis-like ramp for many curves.
-fn distinct_colors(n: usize) -> Vec<RGBColor> {
+pub(crate) fn distinct_colors(n: usize) -> Vec<RGBColor> {
     if n <= PALETTE.len() {
         return PALETTE[..n].to_vec();
     }
@@ -335,6 +671,8 @@ struct Curve {
     points: Vec<(f64, f64)>,
     color: RGBColor,
     width: u32,
+    /// Drawn dashed (springs).
+    dashed: bool,
 }
 
 /// Something that can be drawn onto any plotters backend.
@@ -352,7 +690,7 @@ trait Figure {
 }
 
 /// Registers the bundled font once per process.
-fn ensure_font() -> Result<(), PlotError> {
+pub(crate) fn ensure_font() -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()
@@ -405,11 +743,11 @@ fn write_both(stem: &Path, fig: &impl Figure) -> Result<(), PlotError> {
     Ok(())
 }
 
-fn text_style(size: f64) -> TextStyle<'static> {
+pub(crate) fn text_style(size: f64) -> TextStyle<'static> {
     TextStyle::from((FONT, size).into_font())
 }
 
-fn err<E: std::fmt::Display>(e: E) -> String {
+pub(crate) fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
@@ -502,7 +840,7 @@ fn trim_scientific(s: &str) -> String {
 }
 
 /// Short plain representation of a time for legends (e.g. `0.2`, `1`, `1e-5`).
-fn format_plain(v: f64) -> String {
+pub(crate) fn format_plain(v: f64) -> String {
     if v == 0.0 {
         return "0".to_string();
     }
@@ -606,6 +944,8 @@ struct LegendEntry {
     color: RGBColor,
     dashed: bool,
     marker: bool,
+    /// Whether the line sample is drawn (a marker alone stands for point masses).
+    line: bool,
 }
 
 /// Width in pixels needed by a legend panel holding `entries`.
@@ -645,14 +985,14 @@ fn draw_legend<DB: DrawingBackend>(
         let y = top + 5 + row * i as i32 + row / 2;
         let (a, b) = (x0 + 10, x0 + 50);
         let style = ShapeStyle::from(&e.color).stroke_width(2);
-        if e.dashed {
+        if e.line && e.dashed {
             let mut x = a;
             while x < b {
                 area.draw(&PathElement::new(vec![(x, y), ((x + 7).min(b), y)], style))
                     .map_err(err)?;
                 x += 12;
             }
-        } else {
+        } else if e.line {
             area.draw(&PathElement::new(vec![(a, y), (b, y)], style))
                 .map_err(err)?;
         }
@@ -759,13 +1099,24 @@ fn y_label_area<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     labels: impl Iterator<Item = String>,
 ) -> Result<u32, String> {
-    let style = text_style(TICK_SIZE);
+    y_label_area_sized(area, labels, TICK_SIZE, DESC_SIZE)
+}
+
+/// Width of the y label area for tick labels of font size `tick` and an axis description of
+/// size `desc`, in pixels.
+fn y_label_area_sized<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    labels: impl Iterator<Item = String>,
+    tick: f64,
+    desc: f64,
+) -> Result<u32, String> {
+    let style = text_style(tick);
     let mut w = 0;
     for l in labels {
         w = w.max(area.estimate_text_size(&l, &style).map_err(err)?.0);
     }
     // tick marks + gap + rotated axis description
-    Ok(w + 22 + (DESC_SIZE * 1.6) as u32)
+    Ok(w + (tick * 11.0 / 9.0) as u32 + (desc * 1.6) as u32)
 }
 
 /// Draws the polylines (and markers) of `curves` into a built chart.
@@ -785,7 +1136,11 @@ where
 {
     for c in curves {
         let style = ShapeStyle::from(&c.color).stroke_width(c.width);
-        if c.points.len() > 1 && raster && c.width > 1 {
+        if c.dashed && c.points.len() > 1 {
+            chart
+                .draw_series(DashedLineSeries::new(c.points.iter().copied(), 6, 4, style))
+                .map_err(err)?;
+        } else if c.points.len() > 1 && raster && c.width > 1 {
             chart
                 .draw_series(
                     c.points
@@ -857,6 +1212,7 @@ impl XyFigure<'_> {
                 color: c.color,
                 dashed: false,
                 marker: false,
+                line: true,
             })
             .collect();
         if let Some((_, label)) = self.vline {
@@ -865,6 +1221,7 @@ impl XyFigure<'_> {
                 color: RGBColor(90, 90, 90),
                 dashed: true,
                 marker: false,
+                line: true,
             });
         }
         entries
@@ -973,37 +1330,145 @@ impl Figure for XyFigure<'_> {
     }
 }
 
-/// Snapshots of the string in the plane, equal aspect ratio.
+/// Sizes of the axes of an x-y chart, in pixels.
+pub(crate) struct AxisStyle {
+    /// Tick label font size.
+    pub tick: f64,
+    /// Axis description font size.
+    pub desc: f64,
+    /// Outer margin of the chart.
+    pub margin: u32,
+    /// Height of the x tick-label plus axis-description band.
+    pub x_label_area: u32,
+    /// Number of tick labels per axis (at most).
+    pub labels: usize,
+}
+
+impl AxisStyle {
+    /// The axes of the figures ([`WIDTH`] × [`HEIGHT`]).
+    pub const FIGURE: Self = Self {
+        tick: TICK_SIZE,
+        desc: DESC_SIZE,
+        margin: MARGIN,
+        x_label_area: X_LABEL_AREA,
+        labels: 10,
+    };
+}
+
+/// Builds a chart `x [m]`, `y [m]` on `area` with equal scales (1 m in x as long as 1 m in
+/// y) that shows at least the data box `(x0, x1, y0, y1)`, centred, and draws its axes and
+/// grid. The box must pass [`check_box`].
+pub(crate) fn equal_aspect_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    data_box: (f64, f64, f64, f64),
+    style: &AxisStyle,
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>, String> {
+    let (bx0, bx1, by0, by1) = data_box;
+    // Label area sized for labels of the padded box (final ranges are similar or wider).
+    let y_fmt_guess = linear_formatter(by0, by1);
+    let guess = RangedCoordf64::from(by0..by1).key_points(style.labels);
+    let yl = y_label_area_sized(area, guess.iter().map(&y_fmt_guess), style.tick, style.desc)?
+        + (style.tick * 2.0 / 3.0) as u32;
+
+    // Measure the plotting area to make 1 m in x as long as 1 m in y.
+    let (pw, ph) = {
+        let probe = ChartBuilder::on(area)
+            .margin(style.margin)
+            .x_label_area_size(style.x_label_area)
+            .y_label_area_size(yl)
+            .build_cartesian_2d(0.0..1.0, 0.0..1.0)
+            .map_err(err)?;
+        let (w, h) = probe.plotting_area().dim_in_pixel();
+        (f64::from(w.max(1)), f64::from(h.max(1)))
+    };
+    let m_per_px = ((bx1 - bx0) / pw).max((by1 - by0) / ph);
+    let (cx, cy) = (0.5 * (bx0 + bx1), 0.5 * (by0 + by1));
+    let (x0, x1) = (cx - 0.5 * m_per_px * pw, cx + 0.5 * m_per_px * pw);
+    let (y0, y1) = (cy - 0.5 * m_per_px * ph, cy + 0.5 * m_per_px * ph);
+    let x_fmt = linear_formatter(x0, x1);
+    let y_fmt = linear_formatter(y0, y1);
+
+    let mut chart = ChartBuilder::on(area)
+        .margin(style.margin)
+        .x_label_area_size(style.x_label_area)
+        .y_label_area_size(yl)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("x [m]")
+        .y_desc("y [m]")
+        .x_labels(style.labels)
+        .y_labels(style.labels)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .label_style(text_style(style.tick))
+        .axis_desc_style(text_style(style.desc))
+        .light_line_style(RGBColor(238, 238, 238))
+        .max_light_lines(4)
+        .bold_line_style(RGBColor(210, 210, 210))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
+/// A filled circle of `radius` px at `(x, y)` in m (a point mass).
+struct Dot {
+    x: f64,
+    y: f64,
+    radius: u32,
+    color: RGBColor,
+}
+
+/// Snapshots of the string or network in the plane, equal aspect ratio.
 struct ConfigFigure<'a> {
     title: &'a str,
     curves: Vec<Curve>,
+    dots: Vec<Dot>,
+    entries: Vec<LegendEntry>,
+    /// Node markers on the curves.
+    markers: bool,
+}
+
+/// The data box `(x0, x1, y0, y1)` of `points` in m, padded by 6 % of its larger span (a
+/// point or no points: a box around it).
+pub(crate) fn padded_box(points: impl Iterator<Item = (f64, f64)> + Clone) -> (f64, f64, f64, f64) {
+    let bx = bounds(points.clone().map(|p| p.0));
+    let by = bounds(points.map(|p| p.1));
+    let ((bx0, bx1), (by0, by1)) = match (bx, by) {
+        (Some(x), Some(y)) => (x, y),
+        _ => ((0.0, 1.0), (0.0, 1.0)),
+    };
+    let span = (bx1 - bx0).max(by1 - by0);
+    let pad = if span > 0.0 {
+        0.06 * span
+    } else {
+        0.1 * bx0.abs().max(by0.abs()).max(1.0)
+    };
+    (bx0 - pad, bx1 + pad, by0 - pad, by1 + pad)
+}
+
+/// Checks that the data box `(x0, x1, y0, y1)` can be drawn (see [`check_axis`]).
+pub(crate) fn check_box(b: (f64, f64, f64, f64)) -> Result<(), String> {
+    check_axis("x", b.0, b.1, false)?;
+    check_axis("y", b.2, b.3, false)
 }
 
 impl ConfigFigure<'_> {
     /// The padded data box `(x0, x1, y0, y1)` in m.
     fn data_box(&self) -> (f64, f64, f64, f64) {
-        let pts = || self.curves.iter().flat_map(|c| c.points.iter());
-        let bx = bounds(pts().map(|p| p.0));
-        let by = bounds(pts().map(|p| p.1));
-        let ((bx0, bx1), (by0, by1)) = match (bx, by) {
-            (Some(x), Some(y)) => (x, y),
-            _ => ((0.0, 1.0), (0.0, 1.0)),
-        };
-        let span = (bx1 - bx0).max(by1 - by0);
-        let pad = if span > 0.0 {
-            0.06 * span
-        } else {
-            0.1 * bx0.abs().max(by0.abs()).max(1.0)
-        };
-        (bx0 - pad, bx1 + pad, by0 - pad, by1 + pad)
+        let pts = self
+            .curves
+            .iter()
+            .flat_map(|c| c.points.iter().copied())
+            .chain(self.dots.iter().map(|d| (d.x, d.y)));
+        padded_box(pts)
     }
 }
 
 impl Figure for ConfigFigure<'_> {
     fn check(&self) -> Result<(), String> {
-        let (x0, x1, y0, y1) = self.data_box();
-        check_axis("x", x0, x1, false)?;
-        check_axis("y", y0, y1, false)
+        check_box(self.data_box())
     }
 
     fn draw<DB: DrawingBackend>(
@@ -1011,71 +1476,19 @@ impl Figure for ConfigFigure<'_> {
         root: &DrawingArea<DB, Shift>,
         raster: bool,
     ) -> Result<(), String> {
-        let markers = self
-            .curves
-            .iter()
-            .all(|c| c.points.len() <= MAX_MARKED_NODES);
-        let entries: Vec<LegendEntry> = self
-            .curves
-            .iter()
-            .map(|c| LegendEntry {
-                label: c.label.clone(),
-                color: c.color,
-                dashed: false,
-                marker: markers,
-            })
-            .collect();
-        let (plot_area, legend_area) = layout(root, self.title, &entries)?;
+        let entries = &self.entries;
+        let (plot_area, legend_area) = layout(root, self.title, entries)?;
 
-        // Padded data box, in m.
-        let (bx0, bx1, by0, by1) = self.data_box();
-
-        // Label area sized for labels of the padded box (final ranges are similar or wider).
-        let y_fmt_guess = linear_formatter(by0, by1);
-        let guess = RangedCoordf64::from(by0..by1).key_points(10usize);
-        let yl = y_label_area(&plot_area, guess.iter().map(&y_fmt_guess))? + 12;
-
-        // Measure the plotting area to make 1 m in x as long as 1 m in y.
-        let (pw, ph) = {
-            let probe = ChartBuilder::on(&plot_area)
-                .margin(MARGIN)
-                .x_label_area_size(X_LABEL_AREA)
-                .y_label_area_size(yl)
-                .build_cartesian_2d(0.0..1.0, 0.0..1.0)
-                .map_err(err)?;
-            let (w, h) = probe.plotting_area().dim_in_pixel();
-            (f64::from(w.max(1)), f64::from(h.max(1)))
-        };
-        let m_per_px = ((bx1 - bx0) / pw).max((by1 - by0) / ph);
-        let (cx, cy) = (0.5 * (bx0 + bx1), 0.5 * (by0 + by1));
-        let (x0, x1) = (cx - 0.5 * m_per_px * pw, cx + 0.5 * m_per_px * pw);
-        let (y0, y1) = (cy - 0.5 * m_per_px * ph, cy + 0.5 * m_per_px * ph);
-        let x_fmt = linear_formatter(x0, x1);
-        let y_fmt = linear_formatter(y0, y1);
-
-        let mut chart = ChartBuilder::on(&plot_area)
-            .margin(MARGIN)
-            .x_label_area_size(X_LABEL_AREA)
-            .y_label_area_size(yl)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(err)?;
+        let mut chart = equal_aspect_chart(&plot_area, self.data_box(), &AxisStyle::FIGURE)?;
+        draw_curves(&mut chart, &self.curves, self.markers, raster)?;
         chart
-            .configure_mesh()
-            .x_desc("x [m]")
-            .y_desc("y [m]")
-            .x_labels(10)
-            .y_labels(10)
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .label_style(text_style(TICK_SIZE))
-            .axis_desc_style(text_style(DESC_SIZE))
-            .light_line_style(RGBColor(238, 238, 238))
-            .max_light_lines(4)
-            .bold_line_style(RGBColor(210, 210, 210))
-            .draw()
+            .draw_series(
+                self.dots
+                    .iter()
+                    .map(|d| Circle::new((d.x, d.y), d.radius, d.color.filled())),
+            )
             .map_err(err)?;
-        draw_curves(&mut chart, &self.curves, markers, raster)?;
-        draw_legend(&legend_area, &entries, MARGIN as i32, raster)
+        draw_legend(&legend_area, entries, MARGIN as i32, raster)
     }
 }
 
