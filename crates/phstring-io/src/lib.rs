@@ -2,6 +2,7 @@
 //! output writers (CSV, JSON, ParaView), plots (SVG/PNG), and the run driver used by the
 //! `phstring` command line.
 
+pub mod animation;
 pub mod checkpoint;
 pub mod outdir;
 pub mod output;
