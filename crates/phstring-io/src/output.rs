@@ -1,7 +1,9 @@
 //! Output writers of a run: `energy.csv`, `positions.csv`, `ports.csv`, ParaView frames,
-//! plots and `summary.json`. Rows are written as the run goes, so everything up to the last
-//! good step is on disk when a run fails: the `t = 0` rows are flushed at once, and the
-//! files at least every [`FLUSH_EVERY`] of wall time.
+//! plots and `summary.json`, and once at the start the network's layout, `elements.csv`
+//! (and `point_masses.csv` if it has point masses), from which `positions.csv` can be drawn.
+//! Rows are written as the run goes, so everything up to the last good step is on disk when
+//! a run fails: the `t = 0` rows are flushed at once, and the files at least every
+//! [`FLUSH_EVERY`] of wall time.
 //!
 //! No NaN or infinity is ever written: a row with a non-finite value is refused with
 //! [`OutputError::NonFinite`]. Memory does not grow with the number of steps: the plots
@@ -16,10 +18,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use phstring::{Material, PortKind, Simulation, StepReport};
+use phstring::{Law, Material, PortKind, Simulation, StepReport};
 
-use crate::plot::{self, PlotError, Series};
-use crate::vtk::{self, PvdWriter, VtkError};
+use crate::plot::{self, GroupDrawing, PlotError, Series, Topology};
+use crate::vtk::{self, FrameData, PvdWriter, VtkError};
 
 /// Longest wall time between two flushes of the output files during a run.
 pub const FLUSH_EVERY: Duration = Duration::from_millis(500);
@@ -35,13 +37,20 @@ pub const SNAPSHOTS: usize = 6;
 /// Names of the temporary files phstring writes next to a file it replaces atomically
 /// (left behind only by a kill; removed or replaced by the next write, and not counted as
 /// user files when an output folder is checked for being empty).
-pub const TEMP_FILES: [&str; 5] = [
+pub const TEMP_FILES: [&str; 6] = [
     ".checkpoint.json.tmp",
     ".summary.json.tmp",
     ".string.pvd.tmp",
     "checkpoint.json.tmp",
     "string.pvd.tmp",
+    ".animation.gif.tmp",
 ];
+
+/// The elements of the mesh, written once at the start of a run (see [`elements_header`]).
+pub const ELEMENTS_FILE: &str = "elements.csv";
+/// The point masses of the network, `node,mass`, written once at the start of a run that
+/// has point masses.
+pub const POINT_MASSES_FILE: &str = "point_masses.csv";
 
 /// Whether `name` is one of phstring's own temporary files ([`TEMP_FILES`]).
 pub fn is_own_temp_file(name: &str) -> bool {
@@ -91,6 +100,196 @@ pub fn headers(d: usize) -> (String, String, String) {
     let y: Vec<String> = comps[..d].iter().map(|c| format!("y_{c}")).collect();
     let ports = format!("t_mid,port,node,kind,{},{},power", u.join(","), y.join(","));
     (energy, positions, ports)
+}
+
+/// The header line of [`ELEMENTS_FILE`]: one row per element `e = [node_a, node_b]` of the
+/// mesh (node indices as in `positions.csv`), its group index (the ParaView cell array
+/// `string`), the group's kind (`string` or `spring`), its reference length `l_e` [m]
+/// (springs: 1, their rest length is a parameter of their law) and the group's name.
+pub fn elements_header() -> &'static str {
+    "element,node_a,node_b,group,kind,reference_length,group_name"
+}
+
+/// The drawing of the network of `sim`: its elements, groups and point masses.
+pub fn topology<const D: usize>(sim: &Simulation<D, Material>) -> Topology {
+    let sys = sim.system();
+    Topology {
+        elements: sys.mesh().elements().to_vec(),
+        groups: sys
+            .groups()
+            .iter()
+            .map(|g| GroupDrawing {
+                name: g.name.clone(),
+                elements: g.elements.clone(),
+                spring: matches!(g.law, Law::Spring(_)),
+            })
+            .collect(),
+        masses: sys.point_masses().to_vec(),
+    }
+}
+
+/// A text field for a CSV row: control characters dropped, quoted (`"` doubled) if it holds
+/// a comma or a quote or starts or ends with a space.
+fn csv_text(text: &str) -> String {
+    let t: String = text.chars().filter(|c| !c.is_control()).collect();
+    if t.contains([',', '"']) || t.starts_with(' ') || t.ends_with(' ') {
+        format!("\"{}\"", t.replace('"', "\"\""))
+    } else {
+        t
+    }
+}
+
+/// Inverse of [`csv_text`] for a field that ends its row.
+fn csv_untext(field: &str) -> String {
+    match field.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
+        Some(inner) => inner.replace("\"\"", "\""),
+        None => field.to_string(),
+    }
+}
+
+/// Writes [`ELEMENTS_FILE`] and, if the network has point masses, [`POINT_MASSES_FILE`] into
+/// `dir` (replacing earlier ones; a run without point masses removes a stale
+/// [`POINT_MASSES_FILE`]).
+fn write_topology<const D: usize>(
+    dir: &Path,
+    sim: &Simulation<D, Material>,
+) -> Result<(), OutputError> {
+    let sys = sim.system();
+    let mut csv = Csv::create(dir.join(ELEMENTS_FILE), elements_header())?;
+    check_finite(&csv.path, "reference length", 0.0, sys.mesh().lengths())?;
+    for (g, group) in sys.groups().iter().enumerate() {
+        let kind = match group.law {
+            Law::Spring(_) => "spring",
+            Law::String(_) => "string",
+        };
+        let name = csv_text(&group.name);
+        for e in group.elements.clone() {
+            let [a, b] = sys.mesh().elements()[e];
+            let l = sys.mesh().lengths()[e];
+            csv.line(&format!("{e},{a},{b},{g},{kind},{},{name}", num(l)))?;
+        }
+    }
+    csv.flush()?;
+    let path = dir.join(POINT_MASSES_FILE);
+    if sys.point_masses().is_empty() {
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(&path);
+        }
+        return Ok(());
+    }
+    let mut csv = Csv::create(path, "node,mass")?;
+    for &(node, m) in sys.point_masses() {
+        check_finite(&csv.path, "point mass", 0.0, &[m])?;
+        csv.line(&format!("{node},{}", num(m)))?;
+    }
+    csv.flush()
+}
+
+/// Reads the network's drawing back from [`ELEMENTS_FILE`] and [`POINT_MASSES_FILE`] in
+/// `dir`; `None` if there is no [`ELEMENTS_FILE`] (a folder written before it existed).
+/// Rows must list the elements in order, each group's elements consecutively.
+pub fn read_topology(dir: &Path) -> Result<Option<Topology>, OutputError> {
+    let path = dir.join(ELEMENTS_FILE);
+    let f = match File::open(&path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(cause) => return Err(OutputError::Io { path, cause }),
+    };
+    let mut t = Topology::default();
+    for_each_row(&path, f, |line, row| {
+        let fields: Vec<&str> = row.splitn(7, ',').collect();
+        let bad = |message: String| OutputError::Read {
+            path: path.clone(),
+            line,
+            message,
+        };
+        if fields.len() != 7 {
+            return Err(bad(format!("{} fields, expected 7", fields.len())));
+        }
+        let int = |k: usize| {
+            fields[k].parse::<usize>().map_err(|_| {
+                bad(format!(
+                    "not an index: {}",
+                    plot::sanitize_text(fields[k], 40)
+                ))
+            })
+        };
+        let (e, a, b, g) = (int(0)?, int(1)?, int(2)?, int(3)?);
+        if e != t.elements.len() {
+            return Err(bad(format!(
+                "element {e} where {} was expected",
+                t.elements.len()
+            )));
+        }
+        let spring = match fields[4] {
+            "spring" => true,
+            "string" => false,
+            other => {
+                return Err(bad(format!(
+                    "kind {} is neither string nor spring",
+                    plot::sanitize_text(other, 40)
+                )));
+            }
+        };
+        t.elements.push([a, b]);
+        match t.groups.len() {
+            n if g + 1 == n && t.groups[g].elements.end == e => t.groups[g].elements.end = e + 1,
+            n if g == n => t.groups.push(GroupDrawing {
+                name: csv_untext(fields[6]),
+                elements: e..e + 1,
+                spring,
+            }),
+            _ => return Err(bad(format!("group {g} out of order"))),
+        }
+        Ok(())
+    })?;
+    let path = dir.join(POINT_MASSES_FILE);
+    match File::open(&path) {
+        Ok(f) => for_each_row(&path, f, |line, row| {
+            let bad = |message: String| OutputError::Read {
+                path: path.clone(),
+                line,
+                message,
+            };
+            let (node, m) = row
+                .split_once(',')
+                .ok_or_else(|| bad("2 fields expected".into()))?;
+            let node = node.parse().map_err(|_| bad("not a node index".into()))?;
+            let m: f64 = m.parse().map_err(|_| bad("not a mass".into()))?;
+            t.masses.push((node, m));
+            Ok(())
+        })?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(cause) => return Err(OutputError::Io { path, cause }),
+    }
+    Ok(Some(t))
+}
+
+/// Calls `row(line number, text)` for every row of the CSV file `f` after its header.
+fn for_each_row(
+    path: &Path,
+    f: File,
+    mut row: impl FnMut(usize, &str) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    let mut reader = std::io::BufReader::new(f);
+    let mut line = String::new();
+    let mut number = 0;
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|source| OutputError::Io {
+                path: path.to_path_buf(),
+                cause: source,
+            })?;
+        if n == 0 {
+            return Ok(());
+        }
+        number += 1;
+        if number > 1 {
+            row(number, line.trim_end_matches(['\n', '\r']))?;
+        }
+    }
 }
 
 /// FNV-1a hash of a list of ParaView frames, extended by one frame `(t, name)`; start from
@@ -546,6 +745,12 @@ pub fn draw_plots(
         }
     };
     let (ti, inc) = h.increments();
+    // The network drawn by the configuration plot (a chain in a folder without it).
+    let topology = if configuration {
+        read_topology(dir).map_err(|e| e.to_string())
+    } else {
+        Ok(None)
+    };
     for stem in stems {
         if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
             report.skipped.push(stem.to_string());
@@ -559,7 +764,14 @@ pub fn draw_plots(
             "energy" => {
                 plot::energy_plot(&path, title, &h.t, &h.kinetic, &h.potential, &h.hamiltonian)
             }
-            "configuration" => plot::configuration_plot(&path, title, &h.snapshots),
+            "configuration" => match &topology {
+                Ok(Some(t)) => plot::network_plot(&path, title, t, &h.snapshots),
+                Ok(None) => plot::configuration_plot(&path, title, &h.snapshots),
+                Err(e) => Err(PlotError::Input {
+                    path: path.clone(),
+                    message: e.clone(),
+                }),
+            },
             _ => plot::series_plot(
                 &path,
                 title,
@@ -587,6 +799,43 @@ pub fn draw_plots(
                     "{stem} plot skipped: the plotting library failed on this data"
                 ));
             }
+        }
+    }
+    report
+}
+
+/// Writes the animation of the run in `dir` (`animation.gif`, see
+/// [`crate::animation::write_animation`]) for `dim ≥ 2`, drawing the network read back from
+/// `dir` ([`read_topology`]), and reports it like [`draw_plots`]: `animation` written, or
+/// skipped with a warning (never an error; a stop request skips it). Nothing for `dim = 1`.
+pub fn draw_animation(
+    dir: &Path,
+    dim: usize,
+    title: &str,
+    stop: Option<&AtomicBool>,
+) -> PlotReport {
+    let mut report = PlotReport::default();
+    if dim < 2 {
+        return report;
+    }
+    let stem = "animation";
+    let draw = || {
+        let topology = read_topology(dir)
+            .map_err(|e| e.to_string())?
+            .ok_or_else(|| format!("{ELEMENTS_FILE} was not written"))?;
+        crate::animation::write_animation(dir, dim, title, &topology, stop)
+    };
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(draw)) {
+        Ok(Ok(_)) => report.written.push(stem.to_string()),
+        Ok(Err(why)) => {
+            report.skipped.push(stem.to_string());
+            report.warnings.push(format!("{stem} skipped: {why}"));
+        }
+        Err(_) => {
+            report.skipped.push(stem.to_string());
+            report.warnings.push(format!(
+                "{stem} skipped: the plotting library failed on this data"
+            ));
         }
     }
     report
@@ -641,6 +890,7 @@ impl Writers {
             None
         };
         let ports = Csv::create(dir.join("ports.csv"), &ports_header)?;
+        write_topology(dir, sim)?;
         let pvd = if vtk_frames {
             let pdir = dir.join(PARAVIEW_DIR);
             std::fs::create_dir_all(&pdir).map_err(io(&pdir))?;
@@ -738,17 +988,42 @@ impl Writers {
                 a[..D].copy_from_slice(v.as_slice());
                 a
             };
+            let sys = sim.system();
             let points: Vec<[f64; 3]> = st.r.iter().map(pad).collect();
             let vel: Vec<[f64; 3]> = st.v.iter().map(pad).collect();
             let mut s = vec![0.0; st.c.len()];
-            sim.system().stresses(&st.c, &mut s);
+            sys.stresses(&st.c, &mut s);
+            // Axial force S √C [N]: strings and springs alike (C ≥ 0 up to round-off).
+            let tension: Vec<f64> = s
+                .iter()
+                .zip(&st.c)
+                .map(|(s, c)| s * c.max(0.0).sqrt())
+                .collect();
+            let mut group = vec![0i32; st.c.len()];
+            for (g, grp) in sys.groups().iter().enumerate() {
+                let g = i32::try_from(g).unwrap_or(i32::MAX);
+                group[grp.elements.clone()].fill(g);
+            }
+            let mass = (!sys.point_masses().is_empty()).then(|| {
+                let mut m = vec![0.0; points.len()];
+                for &(node, kg) in sys.point_masses() {
+                    m[node] += kg;
+                }
+                m
+            });
+            let point_data: Vec<(&str, &[f64])> =
+                mass.iter().map(|m| ("mass", m.as_slice())).collect();
             let name = frame_name(sim.steps());
-            vtk::write_vtp_segments(
+            vtk::write_vtp_frame(
                 &self.dir.join(PARAVIEW_DIR).join(&name),
-                &points,
-                sim.system().mesh().elements(),
-                &vel,
-                &[("C", &st.c), ("S", &s)],
+                &FrameData {
+                    points: &points,
+                    segments: sys.mesh().elements(),
+                    velocity: &vel,
+                    cell_data: &[("C", &st.c), ("S", &s), ("tension", &tension)],
+                    cell_ints: &[("string", &group)],
+                    point_data: &point_data,
+                },
             )?;
             pvd.add(t, &name);
             self.pvd_dirty = true;
@@ -1141,6 +1416,119 @@ mod tests {
         assert!(r.warnings.iter().all(|w| w.contains("stop requested")));
         let r = draw_plots(&dir, 2, "t", None, Ok(&h), None);
         assert_eq!(r.written, ["energy", "configuration", "increments"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A network of two strings with awkward names and a spring, with a point mass.
+    fn named_network() -> Simulation<2, Material> {
+        use phstring::{Boundary, MassMatrix, NetworkBuilder, PointMass, StringSpec, Vector};
+        let mut b = NetworkBuilder::<2, Material>::new();
+        let n: Vec<usize> = [(0.0, 0.0), (1.0, -1.0), (2.0, 0.0)]
+            .iter()
+            .map(|&(x, y)| b.node(Vector::<2>::new(x, y)))
+            .collect();
+        let spec = |name: &str| StringSpec {
+            name: name.into(),
+            material: Material::linear_elastic(1e3),
+            rho_a: 0.1,
+            mass: MassMatrix::Lumped,
+            body_force: Vector::zeros(),
+            prestretch: 1.0,
+        };
+        b.string(spec("a,b \"c\""), &[n[0], n[1]], 3).unwrap();
+        b.string(spec(" line\nbreak"), &[n[1], n[2]], 2).unwrap();
+        b.spring("plain", n[0], n[2], 10.0, 2.0).unwrap();
+        let net = b
+            .build(
+                Boundary::default(),
+                vec![PointMass {
+                    node: n[1],
+                    mass: 0.5,
+                    weight: Vector::zeros(),
+                }],
+            )
+            .unwrap();
+        let params = StepParams {
+            h: 0.01,
+            ..Default::default()
+        };
+        Simulation::new(net, params).unwrap()
+    }
+
+    #[test]
+    fn elements_csv_round_trips_and_malformed_files_are_refused() {
+        let dir = crate::test_util::temp_dir("output", "elements");
+        let s = named_network();
+        let _w = Writers::start(&dir, &s, 1, false, false, vec![]).unwrap();
+        let text = std::fs::read_to_string(dir.join(ELEMENTS_FILE)).unwrap();
+        assert!(text.contains(",string,"), "{text}");
+        assert!(text.contains("\"a,b \"\"c\"\"\"\n"), "{text}");
+        assert!(text.contains("\" linebreak\"\n"), "{text}");
+        assert!(
+            text.ends_with("\n5,0,2,2,spring,1.0000000000000000e0,plain\n"),
+            "{text}"
+        );
+        let t = read_topology(&dir).unwrap().unwrap();
+        let mut expected = topology(&s);
+        expected.groups[1].name = " linebreak".into();
+        assert_eq!(t, expected);
+        assert_eq!(t.masses, [(1, 0.5)]);
+        assert_eq!(t.elements.len(), 6);
+
+        let header = elements_header();
+        for (rows, why, line) in [
+            ("0,0,1,0,rope,1,x\n", "neither string nor spring", 2),
+            ("1,0,1,0,string,1,x\n", "element 1 where 0", 2),
+            ("0,0,1,1,string,1,x\n", "group 1 out of order", 2),
+            (
+                "0,0,1,0,string,1,x\n1,1,2,1,string,1,y\n2,2,3,0,string,1,x\n",
+                "group 0 out of order",
+                4,
+            ),
+            ("0,0,1,0,string\n", "fields, expected 7", 2),
+            ("0,-1,1,0,string,1,x\n", "not an index", 2),
+        ] {
+            std::fs::write(dir.join(ELEMENTS_FILE), format!("{header}\n{rows}")).unwrap();
+            let e = read_topology(&dir).unwrap_err().to_string();
+            assert!(
+                e.contains(why) && e.contains(&format!("line {line}:")),
+                "{rows}: {e}"
+            );
+        }
+        std::fs::write(dir.join(ELEMENTS_FILE), format!("{header}\n")).unwrap();
+        std::fs::write(dir.join(POINT_MASSES_FILE), "node,mass\n1,heavy\n").unwrap();
+        let e = read_topology(&dir).unwrap_err().to_string();
+        assert!(e.contains("not a mass"), "{e}");
+        std::fs::remove_file(dir.join(ELEMENTS_FILE)).unwrap();
+        assert_eq!(read_topology(&dir).unwrap(), None);
+        // A later single-string run into the folder removes the stale point masses.
+        let _w = Writers::start(&dir, &sim(), 1, false, false, vec![]).unwrap();
+        assert!(!dir.join(POINT_MASSES_FILE).exists());
+        assert!(read_topology(&dir).unwrap().unwrap().is_chain());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn animation_is_reported_like_a_plot() {
+        let dir = crate::test_util::temp_dir("output", "animation");
+        let mut s = named_network();
+        let mut w = Writers::start(&dir, &s, 1, true, false, vec![]).unwrap();
+        for _ in 0..3 {
+            let r = s.step().unwrap();
+            w.step(&s, &r).unwrap();
+        }
+        w.finish(&s).unwrap();
+        assert!(draw_animation(&dir, 1, "t", None).written.is_empty());
+        let stop = AtomicBool::new(true);
+        let r = draw_animation(&dir, 2, "t", Some(&stop));
+        assert_eq!(r.skipped, ["animation"]);
+        assert!(r.warnings[0].contains("stop requested"), "{:?}", r.warnings);
+        let r = draw_animation(&dir, 2, "t", None);
+        assert_eq!(r.written, ["animation"], "{:?}", r.warnings);
+        assert!(dir.join("animation.gif").exists());
+        std::fs::remove_file(dir.join(ELEMENTS_FILE)).unwrap();
+        let r = draw_animation(&dir, 2, "t", None);
+        assert!(r.warnings[0].contains("elements.csv"), "{:?}", r.warnings);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
