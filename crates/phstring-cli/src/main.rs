@@ -521,11 +521,7 @@ const RUN_BYTES_PER_ELEMENT: [(f64, f64, f64); 3] = [
 fn budget(file: &ScenarioFile) -> Result<Budget> {
     let s = &file.scenario;
     let dimension = file.dimension()?;
-    let elements = match (&s.mesh.elements, &s.geometry.nodes) {
-        (Some(n), _) => usize::try_from(*n.get_ref()).unwrap_or(0),
-        (None, Some(nodes)) => nodes.get_ref().len().saturating_sub(1),
-        (None, None) => 0,
-    };
+    let elements = file.element_count();
     let steps = (*s.time.end.get_ref() / *s.time.h.get_ref()).round();
     let (base, plots, vtk) = RUN_BYTES_PER_ELEMENT[dimension.clamp(1, 3) - 1];
     let o = &s.output;
@@ -676,9 +672,24 @@ fn duration(s: f64) -> String {
     }
 }
 
+/// Most entries of one kind (strings, springs, fixed nodes, …) that `check` lists.
+const LISTED: usize = 20;
+
+/// Lists `items` with `line`, at most [`LISTED`], then how many more there are.
+fn list<T>(out: &mut String, items: &[T], what: &str, line: impl Fn(&T) -> String) {
+    use std::fmt::Write;
+    for item in items.iter().take(LISTED) {
+        let _ = writeln!(out, "{}", line(item));
+    }
+    if items.len() > LISTED {
+        let _ = writeln!(out, "  …          and {} more {what}", items.len() - LISTED);
+    }
+}
+
 fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
     let v = file.validate::<D>()?;
     let p = &v.problem;
+    let c = &v.components;
     let s = &v.settings;
     let mut out = String::new();
     use std::fmt::Write;
@@ -691,64 +702,95 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         )
     );
     let _ = writeln!(out, "  dimension: {D}");
-    let _ = writeln!(
-        out,
-        "  mesh:      {} elements, {} nodes, reference length {} m",
-        p.mesh.n_elements(),
-        p.mesh.n_nodes(),
-        num(p.mesh.total_length())
-    );
-    let _ = writeln!(
-        out,
-        "  material:  {}, EA = {} N, rhoA = {} kg/m, {} mass",
-        p.material.name(),
-        num(p.material.ea()),
-        num(p.rho_a),
-        match p.mass {
-            phstring::MassMatrix::Consistent => "consistent",
-            phstring::MassMatrix::Lumped => "lumped",
-        }
-    );
-    let _ = writeln!(out, "  body force: {} N/m", nums(p.body_force.as_slice()));
-    for f in &p.boundary.fixed {
-        let comps: Vec<&str> = ["x", "y", "z"][..D]
-            .iter()
-            .zip(f.components)
-            .filter(|(_, c)| *c)
-            .map(|(n, _)| *n)
-            .collect();
-        let _ = writeln!(out, "  fixed:     node {} ({})", f.node, comps.join(", "));
-    }
-    for (node, exprs) in &v.loads {
-        let exprs: Vec<String> = exprs.iter().map(|e| clip(e).into_owned()).collect();
-        let _ = writeln!(out, "  force:     node {node}: [{}] N", exprs.join(", "));
-    }
-    // Motions are listed in the order of the scenario's non-empty `position` expressions.
-    let texts = file
-        .scenario
-        .boundary
-        .iter()
-        .filter_map(|b| b.position.as_ref())
-        .flat_map(|pos| pos.get_ref().iter())
-        .filter(|t| !t.trim().is_empty());
-    for (m, text) in p.boundary.motions.iter().zip(texts) {
+    let node = |i: usize| c.node_label(i);
+    if v.network {
         let _ = writeln!(
             out,
-            "  motion:    node {} {} = {} m (velocity in, reaction out)",
-            m.node,
-            ["x", "y", "z"][m.component.min(2)],
-            clip(text)
+            "  mesh:      {} elements, {} nodes: {} strings, {} springs, {} named nodes",
+            p.mesh.n_elements(),
+            p.mesh.n_nodes(),
+            c.strings.len(),
+            c.springs.len(),
+            c.nodes.len()
         );
-    }
-    for pm in &p.point_masses {
+        list(&mut out, &c.nodes, "named nodes", |n| {
+            format!("  node:      {} at {} m", node(n.node), nums(&n.position))
+        });
+        list(&mut out, &c.strings, "strings", |st| {
+            let spans = st.path_nodes.len() - 1;
+            format!(
+                "  string:    {}: {} elements ({spans} span{} of {}), {} to {}, {} ({}), EA = {} N, rhoA = {} kg/m, {} mass, reference length {} m, body force {} N/m",
+                st.name,
+                st.elements[1] - st.elements[0],
+                if spans == 1 { "" } else { "s" },
+                st.elements_per_span,
+                node(st.path_nodes[0]),
+                node(st.path_nodes[spans]),
+                st.law,
+                st.material,
+                num(st.ea),
+                num(st.rho_a),
+                st.mass,
+                num(st.reference_length),
+                nums(&st.body_force)
+            )
+        });
+        list(&mut out, &c.springs, "springs", |sp| {
+            let to = match &sp.to_point {
+                Some(pt) => format!("the fixed point {} m", nums(pt)),
+                None => node(sp.nodes[1]),
+            };
+            format!(
+                "  spring:    {}: {} to {to}, k = {} N/m, rest length {} m",
+                sp.name,
+                node(sp.nodes[0]),
+                num(sp.k),
+                num(sp.rest)
+            )
+        });
+    } else {
+        // One string: its group carries the material.
+        let st = &c.strings[0];
         let _ = writeln!(
             out,
-            "  mass:      node {}: {} kg, weight {} N",
-            pm.node,
-            num(pm.mass),
-            nums(pm.weight.as_slice())
+            "  mesh:      {} elements, {} nodes, reference length {} m",
+            p.mesh.n_elements(),
+            p.mesh.n_nodes(),
+            num(p.mesh.total_length())
         );
+        let _ = writeln!(
+            out,
+            "  material:  {}, EA = {} N, rhoA = {} kg/m, {} mass",
+            st.law,
+            num(st.ea),
+            num(st.rho_a),
+            st.mass
+        );
+        let _ = writeln!(out, "  body force: {} N/m", nums(&st.body_force));
     }
+    list(&mut out, &c.supports, "fixed nodes", |f| {
+        format!("  fixed:     {} ({})", node(f.node), f.fixed.join(", "))
+    });
+    list(&mut out, &c.loads, "loads", |l| {
+        let exprs: Vec<String> = l.force.iter().map(|e| clip(e).into_owned()).collect();
+        format!("  force:     {}: [{}] N", node(l.node), exprs.join(", "))
+    });
+    list(&mut out, &c.motions, "motions", |m| {
+        format!(
+            "  motion:    {} {} = {} m (velocity in, reaction out)",
+            node(m.node),
+            m.component,
+            clip(&m.position)
+        )
+    });
+    list(&mut out, &c.point_masses, "point masses", |pm| {
+        format!(
+            "  mass:      {}: {} kg, weight {} N",
+            node(pm.node),
+            num(pm.kg),
+            nums(&pm.weight)
+        )
+    });
     let steps = (s.t_end / s.step.h).round() as usize;
     let _ = writeln!(
         out,

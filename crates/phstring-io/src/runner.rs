@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimState};
 use crate::output::{self, History, OutputError, Writers};
-use crate::scenario::{ScenarioError, ScenarioFile};
+use crate::scenario::{Components, RunSettings, ScenarioError, ScenarioFile};
 
 pub use phstring::nan_max;
 
@@ -170,6 +170,9 @@ pub struct RunInfo {
     pub dimension: usize,
     /// Number of elements.
     pub elements: usize,
+    /// The components (strings, springs, point masses, supports, motions, loads, named
+    /// nodes) with their mesh nodes and elements.
+    pub components: Components,
     /// Scheme (`dg` or `mp`).
     pub scheme: &'static str,
     /// Linear solver used.
@@ -259,232 +262,69 @@ pub fn run(
     }
 }
 
+/// What a run needs besides the simulation and the writers, shared by its parts.
+struct RunContext<'a> {
+    file: &'a ScenarioFile,
+    out: &'a Path,
+    settings: RunSettings,
+    run_id: String,
+    end_of_loading: Option<f64>,
+    checkpoint_path: PathBuf,
+}
+
 fn run_dim<const D: usize>(
     file: &ScenarioFile,
     out: &Path,
     progress: &mut dyn Progress,
-    opts: RunOptions,
+    mut opts: RunOptions,
 ) -> Result<RunInfo, RunError> {
     let v = file.validate::<D>()?;
     let settings = v.settings.clone();
     let load_error = v.load_error.clone();
+    let components = v.components;
     let mut sim: Simulation<D, Material> = Simulation::new(v.problem, settings.step)?;
     sim.set_stop_flag(opts.stop.clone());
-    let stop = opts.stop.clone();
-    let steps_planned = (settings.t_end / settings.step.h).round() as usize;
-    let snapshots: Vec<f64> = (0..output::SNAPSHOTS)
-        .map(|k| settings.t_end * k as f64 / (output::SNAPSHOTS - 1) as f64)
-        .collect();
-    let run_id = match &opts.resume {
-        Some(cp) => cp.run_id.clone(),
-        None => new_run_id(out),
+    let resume = opts.resume.take();
+    let ctx = RunContext {
+        file,
+        out,
+        run_id: resume
+            .as_ref()
+            .map_or_else(|| new_run_id(out), |cp| cp.run_id.clone()),
+        end_of_loading: resume
+            .as_ref()
+            .map_or(opts.end_of_loading, |cp| cp.end_of_loading),
+        checkpoint_path: out.join(CHECKPOINT),
+        settings,
     };
-    let mut info = RunInfo {
-        program: "phstring",
-        version: env!("CARGO_PKG_VERSION"),
-        status: "completed".into(),
-        error: None,
-        title: file.scenario.title.clone(),
-        dimension: D,
-        elements: sim.system().mesh().n_elements(),
-        scheme: settings.step.scheme.name(),
-        solver: sim.solver_name(),
-        h: settings.step.h,
-        t_end: settings.t_end,
-        steps_planned,
-        steps: 0,
-        adaptive: settings.step.control.adaptive,
-        rejected_steps: 0,
-        h_min_used: settings.step.h,
-        line_search_backtracks: 0,
-        rejected_newton_iterations: 0,
-        local_newton_iterations: 0,
-        local_newton_work: 0.0,
-        t_reached: 0.0,
-        total_newton_iterations: 0,
-        newton_norm: "Euclidean norm of the force residual (momentum balance / h) over free DOFs [N], at most max(newton_tol, newton_rtol × force scale of the step)",
-        newton_tol: settings.step.newton.tol,
-        newton_rtol: settings.step.newton.rtol,
-        steps_at_roundoff: 0,
-        max_balance_error: 0.0,
-        max_newton_residual: 0.0,
-        hamiltonian_initial: sim.energies().hamiltonian(),
-        hamiltonian_final: sim.energies().hamiltonian(),
-        time_loop_s: 0.0,
-        resumed: opts.resume.is_some(),
-        run_id: run_id.clone(),
-        plots: Vec::new(),
-        plots_skipped: Vec::new(),
-        warnings: Vec::new(),
-        scenario: serde_json::to_value(&file.scenario).unwrap_or(serde_json::Value::Null),
-        history: History::default(),
-    };
-    let end_of_loading = opts
-        .resume
-        .as_ref()
-        .map_or(opts.end_of_loading, |cp| cp.end_of_loading);
-    let fresh = opts.resume.is_none();
-    let writers = match opts.resume {
-        Some(cp) => {
-            // Everything is checked before the folder is touched.
-            check_resume_folder(&cp, out)?;
-            cp.check_against(&sim, &settings)?;
-            sim.restore(cp.sim.to_checkpoint::<D>())?;
-            let c = cp.counters;
-            info.steps = c.steps;
-            info.total_newton_iterations = c.total_newton_iterations;
-            info.max_balance_error = c.max_balance_error;
-            info.max_newton_residual = c.max_newton_residual;
-            info.rejected_steps = c.rejected_steps;
-            info.line_search_backtracks = c.line_search_backtracks;
-            info.rejected_newton_iterations = c.rejected_newton_iterations;
-            info.local_newton_iterations = c.local_newton_iterations;
-            info.local_newton_work = c.local_newton_work;
-            info.steps_at_roundoff = c.steps_at_roundoff;
-            info.time_loop_s = c.time_loop_s;
-            info.hamiltonian_initial = c.hamiltonian_initial;
-            Writers::resume(
-                out,
-                settings.stride,
-                settings.output.vtk,
-                snapshots,
-                cp.outputs,
-            )
-        }
-        None => Writers::start(
-            out,
-            &sim,
-            settings.stride,
-            settings.output.positions,
-            settings.output.vtk,
-            snapshots,
-        )
-        .and_then(|w| {
-            std::fs::write(out.join(RUN_ID_FILE), format!("{run_id}\n")).map_err(|source| {
-                OutputError::Io {
-                    path: out.join(RUN_ID_FILE),
-                    cause: source,
-                }
-            })?;
-            Ok(w)
-        }),
+    let mut info = new_info(&ctx, &sim, components, resume.is_some());
+    let fresh = resume.is_none();
+    let writers = match resume {
+        Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
+        None => start_writers(&ctx, &sim).map_err(RunError::from),
     };
     let mut writers = match writers {
         Ok(w) => w,
         Err(e) => {
-            let e = RunError::from(e);
             if fresh {
                 record_failure(out, &mut info, &e);
             }
             return Err(e);
         }
     };
-    let checkpoint_path = out.join(CHECKPOINT);
-    let write_checkpoint = |sim: &Simulation<D, Material>,
-                            writers: &mut Writers,
-                            info: &RunInfo|
-     -> Result<(), RunError> {
-        let cp = CheckpointFile {
-            format: FORMAT.into(),
-            version: env!("CARGO_PKG_VERSION").into(),
-            run_id: run_id.clone(),
-            scenario_path: file.path.clone(),
-            scenario_text: file.text().to_string(),
-            end_of_loading,
-            sim: SimState::from_checkpoint(&sim.checkpoint()),
-            outputs: writers.state()?,
-            counters: Counters {
-                steps: info.steps,
-                total_newton_iterations: info.total_newton_iterations,
-                max_balance_error: info.max_balance_error,
-                max_newton_residual: info.max_newton_residual,
-                rejected_steps: info.rejected_steps,
-                line_search_backtracks: info.line_search_backtracks,
-                rejected_newton_iterations: info.rejected_newton_iterations,
-                local_newton_iterations: info.local_newton_iterations,
-                local_newton_work: info.local_newton_work,
-                steps_at_roundoff: info.steps_at_roundoff,
-                time_loop_s: info.time_loop_s,
-                hamiltonian_initial: info.hamiltonian_initial,
-            },
-            checksum: String::new(),
-            path: checkpoint_path.clone(),
-        };
-        cp.write(&checkpoint_path)?;
-        Ok(())
-    };
-
-    progress.start(settings.t_end);
-    let t_end = settings.t_end;
-    let mut failure = None;
-    let mut interrupted = false;
-    let body = (|| -> Result<(), RunError> {
-        while sim.time() < t_end - 1e-9 * sim.step_size() {
-            // A stop request (the flag) is seen by the simulation itself, before and during
-            // the step: `StepError::Interrupted` below.
-            if opts.stop_after_steps.is_some_and(|n| sim.steps() >= n) {
-                interrupted = true;
-                break;
-            }
-            let t0 = Instant::now();
-            let res = sim.step_until(t_end);
-            info.time_loop_s += t0.elapsed().as_secs_f64();
-            match res {
-                Ok(report) => {
-                    info.steps += 1;
-                    info.rejected_steps += report.rejected;
-                    info.line_search_backtracks += report.backtracks;
-                    info.total_newton_iterations += report.newton_iterations;
-                    info.rejected_newton_iterations += report.rejected_iterations;
-                    info.local_newton_iterations += report.local_iterations;
-                    info.local_newton_work += (report.local_node_iterations
-                        + report.rejected_local_node_iterations)
-                        as f64
-                        / sim.system().mesh().n_nodes() as f64;
-                    info.max_balance_error =
-                        nan_max(info.max_balance_error, report.balance_error.abs());
-                    info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
-                    info.steps_at_roundoff += usize::from(report.at_roundoff);
-                    writers.step(&sim, &report)?;
-                    progress.step(report.step, report.t);
-                    if opts
-                        .checkpoint_every
-                        .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
-                    {
-                        write_checkpoint(&sim, &mut writers, &info)?;
-                    }
-                }
-                // A stop request during the step: the state is that of the last good step.
-                Err(StepError::Interrupted { .. }) => {
-                    interrupted = true;
-                    break;
-                }
-                Err(e) => {
-                    failure = Some(e);
-                    break;
-                }
-            }
-        }
-        if interrupted {
-            // The checkpoint records the file lengths of this moment: write it before the
-            // final frame and plots, which a resumed run writes itself.
-            write_checkpoint(&sim, &mut writers, &info)?;
-        } else {
-            // Completed, or failed: the last good state is written either way (a failed step
-            // leaves the state at the last good step, finite).
-            writers.finish(&sim)?;
-        }
-        writers.flush()?;
-        Ok(())
-    })();
+    progress.start(ctx.settings.t_end);
+    let looped = step_loop(&ctx, &mut sim, &mut writers, &mut info, progress, &opts);
     progress.finish();
     info.t_reached = sim.time();
     info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = sim.energies().hamiltonian();
-    if let Err(e) = body {
-        record_failure(out, &mut info, &e);
-        return Err(e);
-    }
+    let (failure, interrupted) = match looped {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            record_failure(out, &mut info, &e);
+            return Err(e);
+        }
+    };
     let detail = match &failure {
         Some(StepError::NonFinite {
             what: "load" | "prescribed position",
@@ -506,39 +346,19 @@ fn run_dim<const D: usize>(
             "interrupted at t = {} s; resume from {CHECKPOINT}",
             phstring::Num(sim.time())
         ));
-    } else if checkpoint_path.exists() {
+    } else if ctx.checkpoint_path.exists() {
         // A completed run needs no checkpoint; a stale one could be resumed by mistake.
-        let _ = std::fs::remove_file(&checkpoint_path);
+        let _ = std::fs::remove_file(&ctx.checkpoint_path);
     }
     // The summary is on disk before the plots, whatever happens to them.
     write_summary(out, &info)?;
-    if settings.output.plots {
-        // The plots' data, read back from energy.csv (the run keeps no history in memory).
-        let history = match output::read_history(
-            writers.energy_path(),
-            output::PLOT_POINTS,
-            writers.snapshots().to_vec(),
-            stop.as_deref(),
-        ) {
-            Ok(Some(h)) => Ok(h),
-            Ok(None) => Err("stop requested".to_string()),
-            Err(e) => Err(e.to_string()),
-        };
-        let title = file.scenario.title.as_deref().unwrap_or("phstring");
-        let report = output::draw_plots(
-            out,
-            D,
-            title,
-            end_of_loading,
-            history.as_ref().map_err(String::as_str),
-            stop.as_deref(),
-        );
-        info.plots = report.written;
-        info.plots_skipped = report.skipped;
-        info.warnings.extend(report.warnings);
-        write_summary(out, &info)?;
-        info.history = history.unwrap_or_default();
+    if ctx.settings.output.plots {
+        draw(&ctx, &writers, &mut info, opts.stop.as_deref())?;
     }
+    // TODO(animation): when `ctx.settings.animation` and D ≥ 2, write the animated GIF of
+    // the configuration here with `crate::animation::write_animation(...)` (unless a stop
+    // was requested), record it (or why it was skipped) in `info` like the plots, and
+    // rewrite `summary.json`.
     if let Some(e) = failure {
         return Err(RunError::Step(e, detail, out.to_path_buf()));
     }
@@ -547,10 +367,266 @@ fn run_dim<const D: usize>(
             t: sim.time(),
             steps: info.steps,
             dir: out.to_path_buf(),
-            checkpoint: checkpoint_path,
+            checkpoint: ctx.checkpoint_path,
         });
     }
     Ok(info)
+}
+
+/// The summary of a run that has not taken a step yet.
+fn new_info<const D: usize>(
+    ctx: &RunContext,
+    sim: &Simulation<D, Material>,
+    components: Components,
+    resumed: bool,
+) -> RunInfo {
+    let settings = &ctx.settings;
+    RunInfo {
+        program: "phstring",
+        version: env!("CARGO_PKG_VERSION"),
+        status: "completed".into(),
+        error: None,
+        title: ctx.file.scenario.title.clone(),
+        dimension: D,
+        elements: sim.system().mesh().n_elements(),
+        components,
+        scheme: settings.step.scheme.name(),
+        solver: sim.solver_name(),
+        h: settings.step.h,
+        t_end: settings.t_end,
+        steps_planned: (settings.t_end / settings.step.h).round() as usize,
+        steps: 0,
+        adaptive: settings.step.control.adaptive,
+        rejected_steps: 0,
+        h_min_used: settings.step.h,
+        line_search_backtracks: 0,
+        rejected_newton_iterations: 0,
+        local_newton_iterations: 0,
+        local_newton_work: 0.0,
+        t_reached: 0.0,
+        total_newton_iterations: 0,
+        newton_norm: "Euclidean norm of the force residual (momentum balance / h) over free DOFs [N], at most max(newton_tol, newton_rtol × force scale of the step)",
+        newton_tol: settings.step.newton.tol,
+        newton_rtol: settings.step.newton.rtol,
+        steps_at_roundoff: 0,
+        max_balance_error: 0.0,
+        max_newton_residual: 0.0,
+        hamiltonian_initial: sim.energies().hamiltonian(),
+        hamiltonian_final: sim.energies().hamiltonian(),
+        time_loop_s: 0.0,
+        resumed,
+        run_id: ctx.run_id.clone(),
+        plots: Vec::new(),
+        plots_skipped: Vec::new(),
+        warnings: Vec::new(),
+        scenario: serde_json::to_value(&ctx.file.scenario).unwrap_or(serde_json::Value::Null),
+        history: History::default(),
+    }
+}
+
+/// The times of the configuration snapshots: `t_end · k / (SNAPSHOTS − 1)`.
+fn snapshot_times(t_end: f64) -> Vec<f64> {
+    (0..output::SNAPSHOTS)
+        .map(|k| t_end * k as f64 / (output::SNAPSHOTS - 1) as f64)
+        .collect()
+}
+
+/// Creates the outputs of a fresh run (and the folder's run id).
+fn start_writers<const D: usize>(
+    ctx: &RunContext,
+    sim: &Simulation<D, Material>,
+) -> Result<Writers, OutputError> {
+    let s = &ctx.settings;
+    let w = Writers::start(
+        ctx.out,
+        sim,
+        s.stride,
+        s.output.positions,
+        s.output.vtk,
+        snapshot_times(s.t_end),
+    )?;
+    let path = ctx.out.join(RUN_ID_FILE);
+    std::fs::write(&path, format!("{}\n", ctx.run_id))
+        .map_err(|cause| OutputError::Io { path, cause })?;
+    Ok(w)
+}
+
+/// Restores `sim` and the counters of `info` from checkpoint `cp` and reopens the outputs
+/// at its state; everything is checked before the folder is touched.
+fn resume_writers<const D: usize>(
+    ctx: &RunContext,
+    sim: &mut Simulation<D, Material>,
+    info: &mut RunInfo,
+    cp: CheckpointFile,
+) -> Result<Writers, RunError> {
+    check_resume_folder(&cp, ctx.out)?;
+    cp.check_against(sim, &ctx.settings)?;
+    sim.restore(cp.sim.to_checkpoint::<D>())?;
+    let c = cp.counters;
+    info.steps = c.steps;
+    info.total_newton_iterations = c.total_newton_iterations;
+    info.max_balance_error = c.max_balance_error;
+    info.max_newton_residual = c.max_newton_residual;
+    info.rejected_steps = c.rejected_steps;
+    info.line_search_backtracks = c.line_search_backtracks;
+    info.rejected_newton_iterations = c.rejected_newton_iterations;
+    info.local_newton_iterations = c.local_newton_iterations;
+    info.local_newton_work = c.local_newton_work;
+    info.steps_at_roundoff = c.steps_at_roundoff;
+    info.time_loop_s = c.time_loop_s;
+    info.hamiltonian_initial = c.hamiltonian_initial;
+    let s = &ctx.settings;
+    Ok(Writers::resume(
+        ctx.out,
+        s.stride,
+        s.output.vtk,
+        snapshot_times(s.t_end),
+        cp.outputs,
+    )?)
+}
+
+/// Writes `checkpoint.json` (atomically) with the state of `sim`, the outputs and `info`.
+fn write_checkpoint<const D: usize>(
+    ctx: &RunContext,
+    sim: &Simulation<D, Material>,
+    writers: &mut Writers,
+    info: &RunInfo,
+) -> Result<(), RunError> {
+    let cp = CheckpointFile {
+        format: FORMAT.into(),
+        version: env!("CARGO_PKG_VERSION").into(),
+        run_id: ctx.run_id.clone(),
+        scenario_path: ctx.file.path.clone(),
+        scenario_text: ctx.file.text().to_string(),
+        end_of_loading: ctx.end_of_loading,
+        sim: SimState::from_checkpoint(&sim.checkpoint()),
+        outputs: writers.state()?,
+        counters: Counters {
+            steps: info.steps,
+            total_newton_iterations: info.total_newton_iterations,
+            max_balance_error: info.max_balance_error,
+            max_newton_residual: info.max_newton_residual,
+            rejected_steps: info.rejected_steps,
+            line_search_backtracks: info.line_search_backtracks,
+            rejected_newton_iterations: info.rejected_newton_iterations,
+            local_newton_iterations: info.local_newton_iterations,
+            local_newton_work: info.local_newton_work,
+            steps_at_roundoff: info.steps_at_roundoff,
+            time_loop_s: info.time_loop_s,
+            hamiltonian_initial: info.hamiltonian_initial,
+        },
+        checksum: String::new(),
+        path: ctx.checkpoint_path.clone(),
+    };
+    cp.write(&ctx.checkpoint_path)?;
+    Ok(())
+}
+
+/// Steps to the end time (or a failed step, or a stop), writing the outputs as it goes;
+/// then writes the checkpoint (stopped) or the final state (completed or failed) and
+/// flushes. Returns the failed step's error, if any, and whether the run was stopped.
+fn step_loop<const D: usize>(
+    ctx: &RunContext,
+    sim: &mut Simulation<D, Material>,
+    writers: &mut Writers,
+    info: &mut RunInfo,
+    progress: &mut dyn Progress,
+    opts: &RunOptions,
+) -> Result<(Option<StepError>, bool), RunError> {
+    let t_end = ctx.settings.t_end;
+    let mut failure = None;
+    let mut interrupted = false;
+    while sim.time() < t_end - 1e-9 * sim.step_size() {
+        // A stop request (the flag) is seen by the simulation itself, before and during
+        // the step: `StepError::Interrupted` below.
+        if opts.stop_after_steps.is_some_and(|n| sim.steps() >= n) {
+            interrupted = true;
+            break;
+        }
+        let t0 = Instant::now();
+        let res = sim.step_until(t_end);
+        info.time_loop_s += t0.elapsed().as_secs_f64();
+        match res {
+            Ok(report) => {
+                info.steps += 1;
+                info.rejected_steps += report.rejected;
+                info.line_search_backtracks += report.backtracks;
+                info.total_newton_iterations += report.newton_iterations;
+                info.rejected_newton_iterations += report.rejected_iterations;
+                info.local_newton_iterations += report.local_iterations;
+                info.local_newton_work +=
+                    (report.local_node_iterations + report.rejected_local_node_iterations) as f64
+                        / sim.system().mesh().n_nodes() as f64;
+                info.max_balance_error =
+                    nan_max(info.max_balance_error, report.balance_error.abs());
+                info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
+                info.steps_at_roundoff += usize::from(report.at_roundoff);
+                writers.step(sim, &report)?;
+                progress.step(report.step, report.t);
+                if opts
+                    .checkpoint_every
+                    .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
+                {
+                    write_checkpoint(ctx, sim, writers, info)?;
+                }
+            }
+            // A stop request during the step: the state is that of the last good step.
+            Err(StepError::Interrupted { .. }) => {
+                interrupted = true;
+                break;
+            }
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        }
+    }
+    if interrupted {
+        // The checkpoint records the file lengths of this moment: write it before the
+        // final frame and plots, which a resumed run writes itself.
+        write_checkpoint(ctx, sim, writers, info)?;
+    } else {
+        // Completed, or failed: the last good state is written either way (a failed step
+        // leaves the state at the last good step, finite).
+        writers.finish(sim)?;
+    }
+    writers.flush()?;
+    Ok((failure, interrupted))
+}
+
+/// Draws the plots from `energy.csv` read back (the run keeps no history in memory),
+/// records them in `info` and rewrites `summary.json`.
+fn draw(
+    ctx: &RunContext,
+    writers: &Writers,
+    info: &mut RunInfo,
+    stop: Option<&AtomicBool>,
+) -> Result<(), RunError> {
+    let history = match output::read_history(
+        writers.energy_path(),
+        output::PLOT_POINTS,
+        writers.snapshots().to_vec(),
+        stop,
+    ) {
+        Ok(Some(h)) => Ok(h),
+        Ok(None) => Err("stop requested".to_string()),
+        Err(e) => Err(e.to_string()),
+    };
+    let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
+    let report = output::draw_plots(
+        ctx.out,
+        info.dimension,
+        title,
+        ctx.end_of_loading,
+        history.as_ref().map_err(String::as_str),
+        stop,
+    );
+    info.plots = report.written;
+    info.plots_skipped = report.skipped;
+    info.warnings.extend(report.warnings);
+    write_summary(ctx.out, info)?;
+    info.history = history.unwrap_or_default();
+    Ok(())
 }
 
 /// Marks `info` failed with `e` and tries to write `summary.json` (an error writing it is

@@ -200,7 +200,15 @@ fn set_with_a_line_break_is_one_value_or_refused() {
     )
     .unwrap();
     assert_eq!(
-        file.scenario.geometry.end.as_ref().unwrap().get_ref(),
+        file.scenario
+            .geometry
+            .as_ref()
+            .unwrap()
+            .get_ref()
+            .end
+            .as_ref()
+            .unwrap()
+            .get_ref(),
         &vec![1.0, 2.0]
     );
 }
@@ -258,24 +266,32 @@ fn prescribed_positions_are_validated() {
     let m = &v.problem.boundary.motions;
     assert_eq!(m.len(), 1);
     assert_eq!((m[0].node, m[0].component), (0, 0));
-    assert_eq!((m[0].position)(2.0), 2.0);
-    for (set, expected) in [
+    // Accelerating at 0.5 m/s² for 2 s (1 m), then 1 m/s.
+    assert_eq!((m[0].position)(2.0), 1.0);
+    assert_eq!((m[0].position)(4.0), 3.0);
+    for (set, key, expected) in [
         (
             r#"boundary.0.position=["1 + t", ""]"#,
+            "boundary.0.position.0",
             "component x is at 1 m at t = 0, but node 0 starts at 0 m",
         ),
         (
             r#"boundary.0.position=["t", "t"]"#,
+            "boundary.0.position.1",
             "node 0 is also fixed in component y",
         ),
-        (r#"boundary.0.position=["t"]"#, "must have 2 expressions"),
+        (
+            r#"boundary.0.position=["t"]"#,
+            "boundary.0.position",
+            "must have 2 expressions",
+        ),
     ] {
         let err = scenario::parse(&base, Path::new("crane.toml"), &[set.to_string()])
             .and_then(|f| f.check())
             .err()
             .unwrap_or_else(|| panic!("{set} accepted"))
             .to_string();
-        assert!(err.contains("`boundary.0.position`"), "{set}: {err}");
+        assert!(err.contains(&format!("`{key}`")), "{set}: {err}");
         assert!(err.contains(expected), "{set}: {err}");
     }
 }

@@ -1,0 +1,168 @@
+//! The components of a validated scenario, for reports (`phstring check`, the
+//! `components` object of `summary.json`): named nodes, strings, springs, point masses,
+//! supports, prescribed motions and loads, with the mesh nodes and elements they occupy.
+
+use serde::Serialize;
+
+/// Everything a scenario is made of, in mesh numbering.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Components {
+    /// Named nodes (`[[node]]`), in file order (their mesh indices are 0, 1, …).
+    pub nodes: Vec<NamedNode>,
+    /// Strings, in element order (a single-string scenario has one, named `string`).
+    pub strings: Vec<StringComponent>,
+    /// Springs, in element order (after the strings).
+    pub springs: Vec<SpringComponent>,
+    /// Point masses, in file order.
+    pub point_masses: Vec<PointMassComponent>,
+    /// Nodes with fixed components, in increasing node order (the ends of springs with
+    /// `to_point` included).
+    pub supports: Vec<SupportComponent>,
+    /// Prescribed motions, in file order.
+    pub motions: Vec<MotionComponent>,
+    /// Nodal loads, in file order (the order of the force ports).
+    pub loads: Vec<LoadComponent>,
+}
+
+/// A named node.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NamedNode {
+    /// Name.
+    pub name: String,
+    /// Mesh node index.
+    pub node: usize,
+    /// Initial position [m].
+    pub position: Vec<f64>,
+}
+
+/// A string: one element group.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StringComponent {
+    /// Name.
+    pub name: String,
+    /// Its elements `[first, one past the last]` (mesh element indices).
+    pub elements: [usize; 2],
+    /// Number of nodes along the string (elements + 1).
+    pub nodes: usize,
+    /// Mesh nodes of its path, in order. Along the string, each span from `path_nodes[i]`
+    /// to `path_nodes[i+1]` has `elements_per_span − 1` interior nodes in between.
+    pub path_nodes: Vec<usize>,
+    /// Elements per span.
+    pub elements_per_span: usize,
+    /// Its interior nodes `[first, one past the last]`: consecutive mesh indices, span
+    /// after span, in the order along the string.
+    pub interior_nodes: [usize; 2],
+    /// Material law (`hyperelastic`, …).
+    pub law: &'static str,
+    /// Material name (`[materials.NAME]`; `material` for a single string).
+    pub material: String,
+    /// Axial stiffness `EA` [N].
+    pub ea: f64,
+    /// Mass per unit reference length `ρA` [kg/m].
+    pub rho_a: f64,
+    /// Mass matrix: `consistent` or `lumped`.
+    pub mass: &'static str,
+    /// Body force per unit reference length [N/m].
+    pub body_force: Vec<f64>,
+    /// Unstretched length `Σ l_e` [m].
+    pub reference_length: f64,
+}
+
+/// A linear spring: a one-element group.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpringComponent {
+    /// Name.
+    pub name: String,
+    /// Its element (mesh element index).
+    pub element: usize,
+    /// Its end nodes (with `to_point`, the second is the fixed node created at that point).
+    pub nodes: [usize; 2],
+    /// Stiffness `k` [N/m].
+    pub k: f64,
+    /// Rest length [m].
+    pub rest: f64,
+    /// The fixed point [m] of a spring given with `to_point`.
+    pub to_point: Option<Vec<f64>>,
+}
+
+/// A point mass.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PointMassComponent {
+    /// Mesh node index.
+    pub node: usize,
+    /// Mass [kg].
+    pub kg: f64,
+    /// Weight [N] (`kg · body_force.gravity`).
+    pub weight: Vec<f64>,
+}
+
+/// A node with fixed components (a velocity port).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SupportComponent {
+    /// Mesh node index.
+    pub node: usize,
+    /// Fixed components, e.g. `["x", "y"]`.
+    pub fixed: Vec<&'static str>,
+}
+
+/// A prescribed motion of one component of a node.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MotionComponent {
+    /// Mesh node index.
+    pub node: usize,
+    /// Component: `x`, `y` or `z`.
+    pub component: &'static str,
+    /// Absolute position [m] as an expression of `t` [s].
+    pub position: String,
+}
+
+/// A nodal load (a force port).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoadComponent {
+    /// Mesh node index.
+    pub node: usize,
+    /// Force [N], one expression of `t` [s] per component.
+    pub force: Vec<String>,
+}
+
+/// Component names, by index.
+pub(super) const AXES: [&str; 3] = ["x", "y", "z"];
+
+impl Components {
+    /// The name of mesh node `node`, if it is a named node.
+    pub fn node_name(&self, node: usize) -> Option<&str> {
+        // Named nodes are numbered 0, 1, … in file order.
+        self.nodes
+            .get(node)
+            .filter(|n| n.node == node)
+            .map(|n| n.name.as_str())
+    }
+
+    /// Where mesh node `node` lies along a string of a network: `(string, index along
+    /// it)` for an interior node (path nodes are shared; see [`Self::node_name`]).
+    pub fn along_string(&self, node: usize) -> Option<(&str, usize)> {
+        self.strings.iter().find_map(|st| {
+            let [first, end] = st.interior_nodes;
+            let per_span = st.elements_per_span;
+            (first..end).contains(&node).then(|| {
+                let o = node - first;
+                let k = o / (per_span - 1) * per_span + o % (per_span - 1) + 1;
+                (st.name.as_str(), k)
+            })
+        })
+    }
+
+    /// Mesh node `node` for messages: `node 5`, `node 0 "platform"`, or in a network
+    /// `node 10 "cable0:6"` for the 6th node along string `cable0`.
+    pub fn node_label(&self, node: usize) -> String {
+        if let Some(name) = self.node_name(node) {
+            return format!("node {node} \"{name}\"");
+        }
+        match self.along_string(node) {
+            Some((string, k)) if !self.nodes.is_empty() || self.strings.len() > 1 => {
+                format!("node {node} \"{string}:{k}\"")
+            }
+            _ => format!("node {node}"),
+        }
+    }
+}

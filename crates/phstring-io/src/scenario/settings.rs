@@ -1,0 +1,262 @@
+//! Validation of the parts shared by every scenario that are not components: `[body_force]`,
+//! `[time]`, `[newton]` and `[output]`.
+
+use phstring::{NewtonParams, Predictor, Scheme, SolverKind, StepControl, StepParams, Vector};
+
+use super::{RunSettings, ScenarioError, ScenarioFile};
+use crate::text::{clip, num};
+
+/// Most planned steps (`time.end / time.h`) of a run: 1e10 steps take days even on the
+/// smallest mesh.
+pub const MAX_STEPS: f64 = 1e10;
+
+/// The validated `[body_force]`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BodyForce<const D: usize> {
+    /// `body_force.gravity` [m/s²], if given.
+    pub gravity: Option<Vector<D>>,
+    /// `body_force.per_length` [N/m], if given.
+    pub per_length: Option<Vector<D>>,
+}
+
+impl<const D: usize> BodyForce<D> {
+    /// Gravity [m/s²] (zero if not given).
+    pub fn g(&self) -> Vector<D> {
+        self.gravity.unwrap_or_else(Vector::zeros)
+    }
+    /// The body force per unit reference length of a string of mass per length `rho_a`
+    /// [kg/m]: `rho_a · gravity + per_length` [N/m] (added in this order to zero, as the
+    /// single-string validation always did, so that results stay bit-identical).
+    pub fn on_string(&self, rho_a: f64) -> Vector<D> {
+        let mut body = Vector::<D>::zeros();
+        if let Some(g) = self.gravity {
+            body += g * rho_a;
+        }
+        if let Some(pl) = self.per_length {
+            body += pl;
+        }
+        body
+    }
+}
+
+/// The validated `[time]` table.
+struct Time {
+    h: f64,
+    t_end: f64,
+    scheme: Scheme,
+    max_halvings: u32,
+}
+
+/// The validated `[newton]` table.
+struct Newton {
+    params: NewtonParams,
+    solver: SolverKind,
+    predictor: Predictor,
+}
+
+impl ScenarioFile {
+    /// `[body_force]`: vectors of `dimension` finite components.
+    pub(super) fn body_force<const D: usize>(&self) -> Result<BodyForce<D>, ScenarioError> {
+        let b = &self.scenario.body_force;
+        let gravity = match &b.gravity {
+            Some(g) => Some(self.vector::<D>("body_force.gravity", g)?),
+            None => None,
+        };
+        let per_length = match &b.per_length {
+            Some(p) => Some(self.vector::<D>("body_force.per_length", p)?),
+            None => None,
+        };
+        Ok(BodyForce {
+            gravity,
+            per_length,
+        })
+    }
+
+    /// The time at which expressions are first evaluated: the mid time `h/2` of the first
+    /// step (0 if `time.h` is invalid; that error is reported by [`Self::run_settings`]).
+    pub(super) fn first_mid_time(&self) -> f64 {
+        match *self.scenario.time.h.get_ref() {
+            h if h > 0.0 && h.is_finite() => 0.5 * h,
+            _ => 0.0,
+        }
+    }
+
+    /// `[time]`: positive `h` and `end`, a whole number of steps (at most [`MAX_STEPS`]).
+    fn time(&self) -> Result<Time, ScenarioError> {
+        let s = &self.scenario.time;
+        let h = self.positive("time.h", &s.h)?;
+        let t_end = self.positive("time.end", &s.end)?;
+        let steps = (t_end / h).round();
+        if steps > MAX_STEPS {
+            return Err(self.invalid(
+                "time.h",
+                s.h.span(),
+                format!(
+                    "= {} gives {} steps up to time.end = {}; at most {MAX_STEPS:.0e} are allowed (use a larger time.h or a shorter time.end)",
+                    num(h),
+                    if steps.is_finite() {
+                        format!("{steps:.2e}")
+                    } else {
+                        "too many".to_string()
+                    },
+                    num(t_end)
+                ),
+            ));
+        }
+        if steps < 1.0 || ((steps * h) - t_end).abs() > 1e-9 * t_end {
+            return Err(self.invalid(
+                "time.h",
+                s.h.span(),
+                format!(
+                    "= {} does not divide time.end = {} into a whole number of steps",
+                    num(h),
+                    num(t_end)
+                ),
+            ));
+        }
+        let scheme = match s.scheme.get_ref().as_str() {
+            "dg" => Scheme::DiscreteGradient,
+            "mp" => Scheme::Midpoint,
+            other => {
+                return Err(self.invalid(
+                    "time.scheme",
+                    s.scheme.span(),
+                    format!("must be dg or mp, got \"{}\"", clip(other)),
+                ));
+            }
+        };
+        let mh = *s.max_halvings.get_ref();
+        if !(0..=40).contains(&mh) {
+            return Err(self.invalid(
+                "time.max_halvings",
+                s.max_halvings.span(),
+                format!("must be between 0 and 40, got {mh}"),
+            ));
+        }
+        Ok(Time {
+            h,
+            t_end,
+            scheme,
+            max_halvings: mh as u32,
+        })
+    }
+
+    /// `[newton]`: tolerances, iteration limit, solver and predictor names.
+    fn newton(&self) -> Result<Newton, ScenarioError> {
+        let s = &self.scenario.newton;
+        let tol = match &s.tol {
+            Some(t) => Some(self.positive("newton.tol", t)?),
+            None => None,
+        };
+        let rtol = match &s.rtol {
+            Some(r) => {
+                let x = *r.get_ref();
+                if !(0.0..1.0).contains(&x) {
+                    return Err(self.invalid(
+                        "newton.rtol",
+                        r.span(),
+                        format!("must be at least 0 and below 1, got {}", phstring::Num(x)),
+                    ));
+                }
+                Some(x)
+            }
+            None => None,
+        };
+        // `tol` alone: absolute test; otherwise relative with `tol` (or the default) as floor.
+        let (tol, rtol) = match (tol, rtol) {
+            (Some(t), None) => (t, 0.0),
+            (t, r) => (
+                t.unwrap_or(phstring::newton::DEFAULT_ATOL),
+                r.unwrap_or(phstring::newton::DEFAULT_RTOL),
+            ),
+        };
+        let max_iter = *s.max_iter.get_ref();
+        if !(1..=10_000).contains(&max_iter) {
+            return Err(self.invalid(
+                "newton.max_iter",
+                s.max_iter.span(),
+                format!("must be between 1 and 10000, got {max_iter}"),
+            ));
+        }
+        let solver = match s.solver.get_ref().as_str() {
+            "auto" => SolverKind::Auto,
+            "block_tridiagonal" => SolverKind::BlockTridiagonal,
+            "sparse_lu" => SolverKind::SparseLu,
+            other => {
+                return Err(self.invalid(
+                    "newton.solver",
+                    s.solver.span(),
+                    format!(
+                        "must be auto, block_tridiagonal or sparse_lu, got \"{}\"",
+                        clip(other)
+                    ),
+                ));
+            }
+        };
+        let predictor = match s.predictor.get_ref().as_str() {
+            "velocity" => Predictor::Velocity,
+            "acceleration" => Predictor::Acceleration,
+            "midpoint_velocity" => Predictor::MidpointVelocity,
+            other => {
+                return Err(self.invalid(
+                    "newton.predictor",
+                    s.predictor.span(),
+                    format!(
+                        "must be velocity, acceleration or midpoint_velocity, got \"{}\"",
+                        clip(other)
+                    ),
+                ));
+            }
+        };
+        Ok(Newton {
+            params: NewtonParams {
+                tol,
+                rtol,
+                max_iter: max_iter as usize,
+                line_search: s.line_search,
+                elimination: s.elimination,
+            },
+            solver,
+            predictor,
+        })
+    }
+
+    /// `[output]`: the stride (the switches need no check).
+    fn output_stride(&self) -> Result<usize, ScenarioError> {
+        let stride = &self.scenario.output.stride;
+        match *stride.get_ref() {
+            n if n >= 1 => Ok(n as usize),
+            n => Err(self.invalid(
+                "output.stride",
+                stride.span(),
+                format!("must be at least 1, got {n}"),
+            )),
+        }
+    }
+
+    /// The run settings: `[time]`, `[newton]` and `[output]`.
+    pub(super) fn run_settings(&self) -> Result<RunSettings, ScenarioError> {
+        let time = self.time()?;
+        let newton = self.newton()?;
+        let stride = self.output_stride()?;
+        let output = self.scenario.output.clone();
+        Ok(RunSettings {
+            step: StepParams {
+                h: time.h,
+                scheme: time.scheme,
+                newton: newton.params,
+                solver: newton.solver,
+                predictor: newton.predictor,
+                control: StepControl {
+                    adaptive: self.scenario.time.adaptive,
+                    max_halvings: time.max_halvings,
+                    ..Default::default()
+                },
+            },
+            t_end: time.t_end,
+            stride,
+            animation: output.animation,
+            output,
+        })
+    }
+}

@@ -1,0 +1,339 @@
+//! The scenario file as written: serde data with `toml::Spanned` values, so that
+//! validation can point at the line and column of a value. Every key is documented in
+//! `docs/scenario.md`.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use super::refs::NodeRef;
+
+/// A scenario as written in the file (before validation): one string (`[geometry]`,
+/// `[mesh]`, `[material]`) or a network (`[[node]]`, `[materials.NAME]`, `[[string]]`,
+/// `[[spring]]`); the other tables belong to both.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Free-text title, printed in reports.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// Spatial dimension `d` ∈ {1, 2, 3}.
+    pub dimension: Spanned<i64>,
+    /// Initial (and reference) geometry of a single string (not in a network).
+    #[serde(default)]
+    pub geometry: Option<Spanned<Geometry>>,
+    /// Discretization of a single string (not in a network).
+    #[serde(default)]
+    pub mesh: Option<Spanned<MeshSpec>>,
+    /// Material law and parameters of a single string (not in a network).
+    #[serde(default)]
+    pub material: Option<Spanned<MaterialSpec>>,
+    /// Named points of a network: junctions, anchors, attachment points.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub node: Vec<Spanned<NodeSpec>>,
+    /// Named cross-sections of a network, used by its strings.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub materials: BTreeMap<String, Spanned<MaterialSpec>>,
+    /// The strings of a network, each running straight from node to node along its path.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub string: Vec<Spanned<StringPathSpec>>,
+    /// Linear springs of a network.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spring: Vec<Spanned<SpringSpec>>,
+    /// Body force.
+    #[serde(default)]
+    pub body_force: BodyForceSpec,
+    /// Boundary conditions, one table per node.
+    #[serde(default)]
+    pub boundary: Vec<BoundarySpec>,
+    /// Point masses at nodes (payloads, clump weights), one table each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub point_mass: Vec<PointMassSpec>,
+    /// Time stepping.
+    pub time: TimeSpec,
+    /// Newton's method and the linear solver.
+    #[serde(default)]
+    pub newton: NewtonSpec,
+    /// What to write.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// A named point of a network (`[[node]]`): a junction, an anchor, an attachment point.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeSpec {
+    /// Name, referred to as `"NAME"` by strings, springs, point masses and boundaries.
+    pub name: Spanned<String>,
+    /// Initial position [m].
+    pub position: Spanned<Vec<f64>>,
+}
+
+/// A string of a network (`[[string]]`): it runs straight from node to node along `path`,
+/// with `elements` elements between two consecutive path nodes.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StringPathSpec {
+    /// Name, referred to as `"NAME:INDEX"` (the INDEX-th node along the string).
+    pub name: Spanned<String>,
+    /// Node references, at least 2; consecutive ones must differ.
+    pub path: Spanned<Vec<Spanned<NodeRef>>>,
+    /// Elements per span (between two consecutive path nodes).
+    pub elements: Spanned<i64>,
+    /// Name of a `[materials.NAME]` table.
+    pub material: Spanned<String>,
+    /// Initial stretch `|Δr|/l` of every element (default 1: stress-free; above 1: taut).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prestretch: Option<Spanned<f64>>,
+}
+
+/// A linear spring of a network (`[[spring]]`), massless: between two nodes, or from one
+/// node to a fixed point.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringSpec {
+    /// Name (for outputs and messages).
+    pub name: Spanned<String>,
+    /// Two node references, or one with `to_point`.
+    pub between: Spanned<Vec<Spanned<NodeRef>>>,
+    /// Fixed end point [m] (with one node in `between`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub to_point: Option<Spanned<Vec<f64>>>,
+    /// Stiffness `k` [N/m].
+    pub k: Spanned<f64>,
+    /// Rest length [m], at least 0.
+    pub rest: Spanned<f64>,
+}
+
+/// Geometry: a straight string from `start` to `end`, or an explicit polyline `nodes`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Geometry {
+    /// First node position [m] (with `end`).
+    #[serde(default)]
+    pub start: Option<Spanned<Vec<f64>>>,
+    /// Last node position [m] (with `start`).
+    #[serde(default)]
+    pub end: Option<Spanned<Vec<f64>>>,
+    /// Explicit node positions [m] of a chain (instead of `start`/`end` and
+    /// `mesh.elements`).
+    #[serde(default)]
+    pub nodes: Option<Spanned<Vec<Vec<f64>>>>,
+    /// Unstretched (reference) length `L` [m]; default: the length of the initial polyline
+    /// (no prestretch). Reference lengths of elements are proportional to their initial
+    /// lengths.
+    #[serde(default)]
+    pub length: Option<Spanned<f64>>,
+}
+
+/// Mesh size.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// Number of elements (with `geometry.start`/`end`).
+    #[serde(default)]
+    pub elements: Option<Spanned<i64>>,
+}
+
+/// Material law.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// `hyperelastic` (default), `linear_elastic`, `st_venant_kirchhoff`,
+    /// `tension_only_linear` or `tension_only_hyperelastic`.
+    #[serde(default = "default_law")]
+    pub law: Spanned<String>,
+    /// Axial stiffness `EA` [N].
+    pub ea: Spanned<f64>,
+    /// Mass per unit length `ρA` [kg/m].
+    pub rho_a: Spanned<f64>,
+    /// Mass matrix: `consistent` (default) or `lumped`.
+    #[serde(default = "default_mass")]
+    pub mass: Spanned<String>,
+}
+
+fn default_law() -> Spanned<String> {
+    Spanned::new(0..0, "hyperelastic".into())
+}
+fn default_mass() -> Spanned<String> {
+    Spanned::new(0..0, "consistent".into())
+}
+
+/// Body force `b = ρA g + per_length`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyForceSpec {
+    /// Gravitational acceleration vector `g` [m/s²], e.g. `[0, -9.81]`.
+    #[serde(default)]
+    pub gravity: Option<Spanned<Vec<f64>>>,
+    /// Additional force per unit reference length [N/m].
+    #[serde(default)]
+    pub per_length: Option<Spanned<Vec<f64>>>,
+}
+
+/// Which components of a node are fixed.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum FixedSpec {
+    /// `true`: all components; `false`: none.
+    All(bool),
+    /// A list of components, e.g. `["x", "z"]`.
+    Components(Vec<String>),
+}
+
+/// A boundary condition at one node.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// Node reference: an index (negative values count from the end, `-1` is the last
+    /// node), `"NAME"` of a `[[node]]` or `"STRING:INDEX"` (a node along a string).
+    pub node: Spanned<NodeRef>,
+    /// Fixed components (Dirichlet): `true` or a list like `["x", "y"]`.
+    #[serde(default)]
+    pub fixed: Option<Spanned<FixedSpec>>,
+    /// Nodal force [N], one expression in `t` [s] per component.
+    #[serde(default)]
+    pub force: Option<Spanned<Vec<String>>>,
+    /// Prescribed absolute position [m], one expression in `t` [s] per component; `""` leaves
+    /// a component free. Each must equal the initial position at `t = 0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<Spanned<Vec<Spanned<String>>>>,
+}
+
+/// A point mass at a node; gravity (`body_force.gravity`) acts on it.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMassSpec {
+    /// Node reference: an index (negative values count from the end, `-1` is the last
+    /// node), `"NAME"` of a `[[node]]` or `"STRING:INDEX"` (a node along a string).
+    pub node: Spanned<NodeRef>,
+    /// Mass [kg].
+    pub kg: Spanned<f64>,
+}
+
+/// Time stepping.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// `dg` (discrete gradient, default) or `mp` (implicit midpoint).
+    #[serde(default = "default_scheme")]
+    pub scheme: Spanned<String>,
+    /// Step size `h` [s].
+    pub h: Spanned<f64>,
+    /// End time `T` [s].
+    pub end: Spanned<f64>,
+    /// Step-size control: halve `h` when a step fails, grow it back after easy steps
+    /// (default `true`). `false`: fixed steps, the run stops at the first failure.
+    #[serde(default = "yes")]
+    pub adaptive: bool,
+    /// Most successive halvings of one step (default 12: `h` down to `h/4096`).
+    #[serde(default = "default_max_halvings")]
+    pub max_halvings: Spanned<i64>,
+}
+
+fn default_max_halvings() -> Spanned<i64> {
+    Spanned::new(0..0, 12)
+}
+
+fn default_scheme() -> Spanned<String> {
+    Spanned::new(0..0, "dg".into())
+}
+
+/// Newton's method.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NewtonSpec {
+    /// Absolute residual tolerance [N] (Euclidean norm of the force residual). Given alone,
+    /// the convergence test is absolute (the paper's 1e-11 N); with `rtol`, a floor under
+    /// the relative test.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tol: Option<Spanned<f64>>,
+    /// Tolerance relative to the step's force scale (see docs/method.md §9). When neither
+    /// `tol` nor `rtol` is given: `rtol = 1e-12` with an absolute floor of 1e-15 N.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rtol: Option<Spanned<f64>>,
+    /// Iteration limit per step.
+    #[serde(default = "default_max_iter")]
+    pub max_iter: Spanned<i64>,
+    /// Linear solver: `auto` (default), `block_tridiagonal` or `sparse_lu`.
+    #[serde(default = "default_solver")]
+    pub solver: Spanned<String>,
+    /// Backtracking line search on `½‖R‖²` (default `true`); `false`: plain Newton.
+    #[serde(default = "yes")]
+    pub line_search: bool,
+    /// Nonlinear elimination: local Newton solves on the node range that carries the residual
+    /// (default `true`; chain meshes with line search only).
+    #[serde(default = "yes")]
+    pub elimination: bool,
+    /// Starting guess: `velocity` (`Δ = h v`), `acceleration`
+    /// (`Δ = h v + ½h² a` with `a` from the previous step) or `midpoint_velocity`
+    /// (`Δ = h v_{n−½}`, the previous step's mid-step velocity; the default).
+    #[serde(default = "default_predictor")]
+    pub predictor: Spanned<String>,
+}
+
+fn default_predictor() -> Spanned<String> {
+    Spanned::new(0..0, "midpoint_velocity".into())
+}
+
+fn default_max_iter() -> Spanned<i64> {
+    Spanned::new(0..0, 25)
+}
+fn default_solver() -> Spanned<String> {
+    Spanned::new(0..0, "auto".into())
+}
+
+impl Default for NewtonSpec {
+    fn default() -> Self {
+        Self {
+            tol: None,
+            rtol: None,
+            max_iter: default_max_iter(),
+            solver: default_solver(),
+            line_search: true,
+            elimination: true,
+            predictor: default_predictor(),
+        }
+    }
+}
+
+/// Output options.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write positions and VTK frames every `stride` steps (energies: every step).
+    #[serde(default = "default_stride")]
+    pub stride: Spanned<i64>,
+    /// Write `positions.csv`.
+    #[serde(default = "yes")]
+    pub positions: bool,
+    /// Write `paraview/string.pvd` and frames.
+    #[serde(default = "yes")]
+    pub vtk: bool,
+    /// Write plots (SVG and PNG).
+    #[serde(default = "yes")]
+    pub plots: bool,
+    /// Write an animated GIF of the configuration (dimension 2 and 3).
+    #[serde(default = "yes")]
+    pub animation: bool,
+}
+
+fn default_stride() -> Spanned<i64> {
+    Spanned::new(0..0, 1)
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            stride: default_stride(),
+            positions: true,
+            vtk: true,
+            plots: true,
+            animation: true,
+        }
+    }
+}
