@@ -32,6 +32,9 @@ pub const RUN_FILES: &[&str] = &[
     "configuration.png",
     "increments.svg",
     "increments.png",
+    crate::output::ELEMENTS_FILE,
+    crate::output::POINT_MASSES_FILE,
+    crate::animation::ANIMATION_FILE,
 ];
 
 /// The ParaView sub-folder of a run.
