@@ -4,6 +4,7 @@ mod broken;
 mod examples;
 mod hardening_cli;
 mod hardening_io;
+mod network;
 mod reliability;
 
 use std::path::{Path, PathBuf};

@@ -162,6 +162,16 @@ impl ScenarioFile {
         if let Some(f) = &b.fixed {
             match f.get_ref() {
                 FixedSpec::All(v) => fixed = [*v; D],
+                FixedSpec::Mask(flags) => {
+                    if flags.len() != D {
+                        return Err(self.invalid(
+                            &key("fixed"),
+                            f.span(),
+                            format!("must have {D} flags (dimension = {D}), got {}", flags.len()),
+                        ));
+                    }
+                    fixed.copy_from_slice(flags);
+                }
                 FixedSpec::Components(list) => {
                     for name in list {
                         let Some(i) = AXES[..D].iter().position(|a| a == name) else {

@@ -545,7 +545,7 @@ impl ScenarioFile {
         if layout == Layout::Network {
             self.check_spring_nodes(&skeleton, &parts.boundary, &point_masses)?;
         }
-        let settings = self.run_settings()?;
+        let settings = self.run_settings(layout == Layout::Single)?;
         let mut components = std::mem::take(&mut skeleton.components);
         let problem = skeleton
             .finish(parts.boundary, point_masses)

@@ -105,7 +105,8 @@ impl ScenarioFile {
     fn materials(&self) -> Result<BTreeMap<&str, CrossSection>, ScenarioError> {
         let mut out = BTreeMap::new();
         for (name, spec) in &self.scenario.materials {
-            let key = format!("materials.{name}");
+            // The name is user text of any length: the key in messages is clipped.
+            let key = format!("materials.{}", clip(name));
             self.checked_name(&key, name, spec.span())?;
             out.insert(name.as_str(), self.cross_section(&key, spec.get_ref())?);
         }

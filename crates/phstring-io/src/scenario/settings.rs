@@ -182,12 +182,13 @@ impl ScenarioFile {
             "auto" => SolverKind::Auto,
             "block_tridiagonal" => SolverKind::BlockTridiagonal,
             "sparse_lu" => SolverKind::SparseLu,
+            "network" => SolverKind::Network,
             other => {
                 return Err(self.invalid(
                     "newton.solver",
                     s.solver.span(),
                     format!(
-                        "must be auto, block_tridiagonal or sparse_lu, got \"{}\"",
+                        "must be auto, block_tridiagonal, sparse_lu or network, got \"{}\"",
                         clip(other)
                     ),
                 ));
@@ -234,10 +235,18 @@ impl ScenarioFile {
         }
     }
 
-    /// The run settings: `[time]`, `[newton]` and `[output]`.
-    pub(super) fn run_settings(&self) -> Result<RunSettings, ScenarioError> {
+    /// The run settings: `[time]`, `[newton]` and `[output]`; `chain`: whether the mesh is a
+    /// chain (a single string), which `newton.solver = "block_tridiagonal"` needs.
+    pub(super) fn run_settings(&self, chain: bool) -> Result<RunSettings, ScenarioError> {
         let time = self.time()?;
         let newton = self.newton()?;
+        if !chain && newton.solver == SolverKind::BlockTridiagonal {
+            return Err(self.invalid(
+                "newton.solver",
+                self.scenario.newton.solver.span(),
+                "= block_tridiagonal solves chains (one string) only: use auto, network or sparse_lu for a network",
+            ));
+        }
         let stride = self.output_stride()?;
         let output = self.scenario.output.clone();
         Ok(RunSettings {

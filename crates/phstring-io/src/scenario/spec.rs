@@ -180,6 +180,8 @@ pub enum FixedSpec {
     All(bool),
     /// A list of components, e.g. `["x", "z"]`.
     Components(Vec<String>),
+    /// One flag per component, e.g. `[true, true, false]` (x and y fixed).
+    Mask(Vec<bool>),
 }
 
 /// A boundary condition at one node.
