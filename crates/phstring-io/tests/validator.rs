@@ -1042,3 +1042,26 @@ fn documented_examples_are_valid() {
         file.check().unwrap_or_else(|e| panic!("{section}: {e}"));
     }
 }
+
+/// A spring with `to_point` ends at a new node, fixed in every component, after the
+/// strings' nodes; another spring may use that node by its index.
+#[test]
+fn springs_to_points_make_fixed_nodes() {
+    let text = NET.replacen(
+        "between = [\"b\", \"c\"]",
+        "between = [\"c\"]\nto_point = [2.0, -1.0]",
+        1,
+    ) + "\n[[spring]]\nname = \"k1\"\nbetween = [8, \"b\"]\nk = 10.0\nrest = 0.0\n";
+    let file = scenario::parse(&text, Path::new("net.toml"), &[]).unwrap();
+    file.check().unwrap_or_else(|e| panic!("{e}"));
+    let v = file.validate::<2>().unwrap();
+    assert_eq!(v.problem.mesh.n_nodes(), 9);
+    assert_eq!(v.components.springs[0].nodes, [2, 8]);
+    assert_eq!(v.components.springs[1].nodes, [8, 1]);
+    let s = v.components.supports.iter().find(|s| s.node == 8).unwrap();
+    assert_eq!(s.fixed, ["x", "y"]);
+    assert_eq!(
+        v.problem.initial.r[8],
+        phstring::Vector::<2>::new(2.0, -1.0)
+    );
+}

@@ -555,18 +555,28 @@ impl ScenarioFile {
         for m in &boundary.motions {
             held[m.node][m.component] = true;
         }
+        // The fixed ends of springs with `to_point` (fixed when the network is built).
+        for sp in sk
+            .components
+            .springs
+            .iter()
+            .filter(|sp| sp.to_point.is_some())
+        {
+            held[sp.nodes[1]] = [true; D];
+        }
         let mut has_mass = vec![false; sk.massless.len()];
         for pm in point_masses {
             has_mass[pm.node] = true;
         }
         for (k, sp) in sk.components.springs.iter().enumerate() {
             for (j, &n) in sp.nodes.iter().enumerate() {
-                let anchor = sp.to_point.is_some() && j == 1;
-                if anchor || !sk.massless[n] || has_mass[n] || held[n].iter().all(|&h| h) {
+                if !sk.massless[n] || has_mass[n] || held[n].iter().all(|&h| h) {
                     continue;
                 }
                 let spec = self.scenario.spring[k].get_ref();
-                let r = &spec.between.get_ref()[j];
+                let Some(r) = spec.between.get_ref().get(j) else {
+                    continue;
+                };
                 return Err(self.invalid(
                     &format!("spring.{k}.between.{j}"),
                     r.span(),
