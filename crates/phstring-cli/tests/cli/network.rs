@@ -312,3 +312,54 @@ fn single_string_file_with_a_network_table_is_refused() {
         "{err}"
     );
 }
+
+/// A network run interrupted and resumed writes what an uninterrupted run writes, and a
+/// sweep varies a network's keys.
+#[test]
+fn network_runs_resume_bit_identically_and_sweep() {
+    let dir = temp_dir("network-resume");
+    let (whole, parts) = (dir.join("whole"), dir.join("parts"));
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            "examples/platform_3d.toml",
+            "--set",
+            "time.end=0.04",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        phstring(&args)
+    };
+    let o = run(&whole, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(&parts, &["--stop-after-steps", "7"]);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let cp = parts.join("checkpoint.json");
+    let o = phstring(&["run", "--resume", cp.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["energy.csv", "positions.csv", "ports.csv"] {
+        assert_eq!(read(&whole.join(f)), read(&parts.join(f)), "{f}");
+    }
+    let sweep = dir.join("sweep");
+    let o = phstring(&[
+        "sweep",
+        "examples/platform_3d.toml",
+        "--set",
+        "time.end=0.01",
+        "--vary",
+        "materials.steel.ea=5e7,1e8",
+        "--vary",
+        "point_mass.0.kg=1000,2000",
+        "--jobs",
+        "2",
+        "--out",
+        sweep.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = read(&sweep.join("sweep.csv"));
+    assert_eq!(table.lines().count(), 5, "{table}");
+    let s = summary(&sweep.join("run_003"));
+    assert_eq!(s["components"]["strings"][0]["ea"], 1e8);
+    assert_eq!(s["components"]["point_masses"][0]["kg"], 2000.0);
+}
