@@ -355,10 +355,16 @@ fn run_dim<const D: usize>(
     if ctx.settings.output.plots {
         draw(&ctx, &writers, &mut info, opts.stop.as_deref())?;
     }
-    // TODO(animation): when `ctx.settings.animation` and D ≥ 2, write the animated GIF of
-    // the configuration here with `crate::animation::write_animation(...)` (unless a stop
-    // was requested), record it (or why it was skipped) in `info` like the plots, and
-    // rewrite `summary.json`.
+    // The animation reads positions.csv back; without it (output.positions = false) there is
+    // nothing to animate. Written for failed runs too: it shows how far the run got.
+    if ctx.settings.animation && ctx.settings.output.positions && info.dimension >= 2 {
+        let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
+        let anim = output::draw_animation(out, info.dimension, title, opts.stop.as_deref());
+        info.plots.extend(anim.written);
+        info.plots_skipped.extend(anim.skipped);
+        info.warnings.extend(anim.warnings);
+        write_summary(out, &info)?;
+    }
     if let Some(e) = failure {
         return Err(RunError::Step(e, detail, out.to_path_buf()));
     }

@@ -62,6 +62,15 @@ fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: u
     if dim >= 2 {
         plots.push("configuration");
     }
+    if dim >= 2 {
+        let gif = std::fs::read(dir.join("animation.gif")).unwrap();
+        assert_eq!(&gif[..6], b"GIF89a", "animation.gif");
+    }
+    let elements = read(&dir.join("elements.csv"));
+    assert!(
+        elements.starts_with("element,node_a,node_b,group,kind"),
+        "elements.csv"
+    );
     for stem in plots {
         assert!(
             read(&dir.join(format!("{stem}.svg"))).contains("<svg"),

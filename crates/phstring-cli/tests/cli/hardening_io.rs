@@ -583,9 +583,10 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
     let s = summary(&b);
     assert_eq!(s["status"], "interrupted");
     assert_eq!(s["steps"], 30);
-    // The plots of the interrupted run were skipped because of the stop, and say so.
+    // The plots and the animation of the interrupted run were skipped because of the stop,
+    // and say so.
     assert_eq!(s["plots"].as_array().unwrap().len(), 0, "{s}");
-    assert_eq!(s["plots_skipped"].as_array().unwrap().len(), 3, "{s}");
+    assert_eq!(s["plots_skipped"].as_array().unwrap().len(), 4, "{s}");
     let cp = CheckpointFile::read(&b.join("checkpoint.json")).unwrap();
     let opts = RunOptions {
         stop: Some(Arc::new(AtomicBool::new(false))),
@@ -629,8 +630,12 @@ fn stop_during_plots_skips_them_and_lists_them() {
         .iter()
         .map(|v| v.as_str().unwrap())
         .collect();
-    assert_eq!(skipped, ["energy", "configuration", "increments"]);
+    assert_eq!(
+        skipped,
+        ["energy", "configuration", "increments", "animation"]
+    );
     assert!(s["warnings"].to_string().contains("stop requested"));
+    assert!(!out.join("animation.gif").exists());
     assert!(!out.join("energy.svg").exists());
 }
 
