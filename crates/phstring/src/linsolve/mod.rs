@@ -7,6 +7,7 @@
 //! strings between junction nodes, sparse LU on the junctions; any mesh). All analyse the
 //! mesh once at construction and refactor new values at every call without allocating.
 
+mod block_lu;
 mod block_tridiagonal;
 mod network;
 mod sparse_lu;
