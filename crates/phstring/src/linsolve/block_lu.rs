@@ -45,10 +45,13 @@ use nalgebra::SVector;
 
 use super::Block;
 
-/// Where the entries of one block of the matrix are stored in a [`BlockLu`]: entry `(k, l)`
-/// at `base + k·rs + l·cs` (see [`BlockLu::slot`]).
+/// Where a block of the matrix is assembled in a [`BlockLu`] (see [`BlockLu::slot`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Slot {
+pub(crate) struct Slot(usize);
+
+/// Where a block lies in the factor storage: entry `(k, l)` at `base + k·rs + l·cs`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct FacPos {
     base: usize,
     rs: usize,
     cs: usize,
@@ -181,10 +184,20 @@ pub(crate) struct BlockLu<const D: usize> {
     arena: Vec<f64>,
     /// Inverted pivot blocks (new numbering).
     pinv: Vec<Block<D>>,
-    /// Storage of the diagonal blocks (original numbering).
+    /// The assembled blocks of the pattern, ordered by the supernode they belong to.
+    values: Vec<Block<D>>,
+    /// Blocks `(i, j)` of the pattern (new numbering) with their index in `values`, sorted.
+    lookup: Vec<([usize; 2], usize)>,
+    /// Position in the factor storage of every block in `values`.
+    value_pos: Vec<FacPos>,
+    /// The blocks of supernode `s` are `values[value_ptr[s]..value_ptr[s + 1]]`.
+    value_ptr: Vec<usize>,
+    /// Assembly slots of the diagonal blocks (original numbering).
     diag_slots: Vec<Slot>,
     /// Permuted right-hand side and solution, `n·D`.
     x: Vec<f64>,
+    /// Rows below one supernode in the solves, `max h·D`.
+    work: Vec<f64>,
     /// Blocks in the strictly lower triangle of `L` (as many in `Ũ`).
     nnz_l: usize,
     /// `D×D` block products of one factorization.
@@ -495,6 +508,7 @@ impl<const D: usize> BlockLu<D> {
             fac_len += sn.len::<D>();
         }
         let ns = supernodes.len();
+        let max_height = supernodes.iter().map(|s| s.height).max().unwrap_or(0);
         // Supernodal elimination tree: the parent holds the first row below.
         let parent = |sn: &Supernode| (sn.height > 0).then(|| supernode_of[rows[sn.rows]]);
         let mut child_ptr = vec![0usize; ns + 1];
@@ -575,11 +589,36 @@ impl<const D: usize> BlockLu<D> {
             fac: vec![0.0; fac_len],
             arena: vec![0.0; plan.peak],
             pinv: vec![Block::zeros(); n],
+            values: Vec::new(),
+            lookup: Vec::new(),
+            value_pos: Vec::new(),
+            value_ptr: Vec::new(),
             diag_slots: Vec::new(),
             x: vec![0.0; n * D],
+            work: vec![0.0; max_height * D],
             nnz_l: row_idx.len(),
             n_products,
         };
+        // The blocks of the pattern, grouped by the supernode whose panels hold them.
+        let owner = |[i, j]: [usize; 2]| lu.supernode_of[i.min(j)];
+        let mut blocks: Vec<[usize; 2]> = (0..n).map(|j| [j, j]).collect();
+        for &[a, b] in pairs.iter().filter(|[a, b]| a != b) {
+            let (i, j) = (lu.inv_perm[a], lu.inv_perm[b]);
+            blocks.extend([[i, j], [j, i]]);
+        }
+        blocks.sort_unstable_by_key(|&ij| (owner(ij), ij));
+        blocks.dedup();
+        lu.value_ptr = vec![0; lu.supernodes.len() + 1];
+        for &ij in &blocks {
+            lu.value_ptr[owner(ij) + 1] += 1;
+        }
+        for s in 0..lu.supernodes.len() {
+            lu.value_ptr[s + 1] += lu.value_ptr[s];
+        }
+        lu.value_pos = blocks.iter().map(|&[i, j]| lu.fac_pos(i, j)).collect();
+        lu.lookup = blocks.iter().enumerate().map(|(v, &ij)| (ij, v)).collect();
+        lu.lookup.sort_unstable();
+        lu.values = vec![Block::zeros(); blocks.len()];
         lu.diag_slots = (0..n)
             .map(|a| lu.block_slot(lu.inv_perm[a], lu.inv_perm[a]))
             .collect();
@@ -605,14 +644,23 @@ impl<const D: usize> BlockLu<D> {
         }
     }
 
-    /// Storage of block `(i, j)` (new numbering).
+    /// Assembly slot of block `(i, j)` (new numbering) of the pattern.
     fn block_slot(&self, i: usize, j: usize) -> Slot {
+        let k = self
+            .lookup
+            .binary_search_by_key(&[i, j], |&(ij, _)| ij)
+            .expect("block is in the pattern");
+        Slot(self.lookup[k].1)
+    }
+
+    /// Position of block `(i, j)` (new numbering) in the factor storage.
+    fn fac_pos(&self, i: usize, j: usize) -> FacPos {
         if i >= j {
             // Column j of the L panel.
             let t = &self.supernodes[self.supernode_of[j]];
             let ld = t.ld::<D>();
             let p = self.position(t, i);
-            Slot {
+            FacPos {
                 base: t.fac + (j - t.first) * D * ld + p * D,
                 rs: 1,
                 cs: ld,
@@ -624,14 +672,14 @@ impl<const D: usize> BlockLu<D> {
             let p = self.position(t, j);
             let c = i - t.first;
             if p < t.width {
-                Slot {
+                FacPos {
                     base: t.fac + p * D * ld + c * D,
                     rs: 1,
                     cs: ld,
                 }
             } else {
                 let ldu = t.height * D;
-                Slot {
+                FacPos {
                     base: t.up::<D>() + c * D * ldu + (p - t.width) * D,
                     rs: ldu,
                     cs: 1,
@@ -649,17 +697,13 @@ impl<const D: usize> BlockLu<D> {
 
     /// Sets all blocks to zero (before assembling new values).
     pub(crate) fn clear(&mut self) {
-        self.fac.fill(0.0);
+        self.values.fill(Block::zeros());
     }
 
-    /// Adds `blk` to the block stored at `slot`.
+    /// Adds `blk` to the block assembled at `slot`.
     #[inline]
     pub(crate) fn add(&mut self, slot: Slot, blk: &Block<D>) {
-        for l in 0..D {
-            for k in 0..D {
-                self.fac[slot.base + k * slot.rs + l * slot.cs] += blk[(k, l)];
-            }
-        }
+        self.values[slot.0] += blk;
     }
 
     /// Adds `blk` to the diagonal block of row `a`.
@@ -674,6 +718,17 @@ impl<const D: usize> BlockLu<D> {
     pub(crate) fn factor(&mut self) -> Result<(), usize> {
         for s in 0..self.supernodes.len() {
             let sn = self.supernodes[s];
+            // The supernode's storage: zero, then its assembled blocks (just before use, so
+            // that it is in cache).
+            self.fac[sn.fac..sn.fac + sn.len::<D>()].fill(0.0);
+            let vals = self.value_ptr[s]..self.value_ptr[s + 1];
+            for (blk, pos) in self.values[vals.clone()].iter().zip(&self.value_pos[vals]) {
+                for l in 0..D {
+                    for k in 0..D {
+                        self.fac[pos.base + k * pos.rs + l * pos.cs] = blk[(k, l)];
+                    }
+                }
+            }
             let kids = sn.children[0]..sn.children[1];
             for i in kids.clone() {
                 let c = self.supernodes[self.children[i]];
@@ -793,20 +848,25 @@ impl<const D: usize> BlockLu<D> {
         for (new, &old) in self.perm.iter().enumerate() {
             x[new * D..(new + 1) * D].copy_from_slice(v[rows[old]].as_slice());
         }
-        // L y = b.
+        // L y = b; the rows below a supernode are updated through the contiguous `t`.
         for sn in &self.supernodes {
-            let (wd, ld, f) = (sn.width * D, sn.ld::<D>(), sn.first * D);
-            let below = &self.rows[sn.rows..sn.rows + sn.height];
+            let (wd, hd, ld, f) = (sn.width * D, sn.height * D, sn.ld::<D>(), sn.first * D);
+            let t = &mut self.work[..hd];
+            t.fill(0.0);
             for c in 0..wd {
                 let col = &self.fac[sn.fac + c * ld..][..ld];
                 let xc = x[f + c];
                 for r in c + 1..wd {
                     x[f + r] -= col[r] * xc;
                 }
-                for (&i, lik) in below.iter().zip(col[wd..].chunks_exact(D)) {
-                    for k in 0..D {
-                        x[i * D + k] -= lik[k] * xc;
-                    }
+                for (ti, l) in t.iter_mut().zip(&col[wd..]) {
+                    *ti += l * xc;
+                }
+            }
+            let below = &self.rows[sn.rows..sn.rows + sn.height];
+            for (&i, ti) in below.iter().zip(t.chunks_exact(D)) {
+                for (xi, ti) in x[i * D..(i + 1) * D].iter_mut().zip(ti) {
+                    *xi -= ti;
                 }
             }
         }
@@ -815,14 +875,13 @@ impl<const D: usize> BlockLu<D> {
             let (wd, ld, f) = (sn.width * D, sn.ld::<D>(), sn.first * D);
             let below = &self.rows[sn.rows..sn.rows + sn.height];
             let ldu = sn.height * D;
+            let t = &mut self.work[..ldu];
+            for (&i, ti) in below.iter().zip(t.chunks_exact_mut(D)) {
+                ti.copy_from_slice(&x[i * D..(i + 1) * D]);
+            }
             for c in 0..wd {
                 let col = &self.fac[sn.up::<D>() + c * ldu..][..ldu];
-                let mut s = 0.0;
-                for (&i, u) in below.iter().zip(col.chunks_exact(D)) {
-                    for k in 0..D {
-                        s += u[k] * x[i * D + k];
-                    }
-                }
+                let s: f64 = col.iter().zip(t.iter()).map(|(u, xi)| u * xi).sum();
                 x[f + c] -= s;
             }
             for (b, p) in self.pinv[sn.first..sn.first + sn.width].iter().enumerate() {
@@ -1033,16 +1092,12 @@ mod tests {
             assemble(&mut lu, k * k, &pairs, &mut rng);
             // Node `bad` is decoupled and its diagonal block is zero: a zero pivot whenever
             // it is eliminated.
-            let d = Block::<2>::from_fn(|r, c| {
-                let s = lu.diag_slots[bad];
-                lu.fac[s.base + r * s.rs + c * s.cs]
-            });
-            lu.add_diag(bad, &(-d));
+            let Slot(d) = lu.diag_slots[bad];
+            lu.values[d] = Block::zeros();
             for &[a, b] in pairs.iter().filter(|p| p.contains(&bad)) {
                 for (i, j) in [(a, b), (b, a)] {
-                    let s = lu.slot(i, j);
-                    let blk = Block::<2>::from_fn(|r, c| lu.fac[s.base + r * s.rs + c * s.cs]);
-                    lu.add(s, &(-blk));
+                    let Slot(v) = lu.slot(i, j);
+                    lu.values[v] = Block::zeros();
                 }
             }
             assert_eq!(lu.factor(), Err(bad));
