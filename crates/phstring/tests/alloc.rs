@@ -255,6 +255,11 @@ fn network_step_loop_does_not_allocate() {
             "network, {}: {n} allocations in 50 steps ({iters} Newton iterations)",
             sim.solver_name()
         );
-        assert_eq!(n, 0, "{}: the network step loop allocated {n} times", sim.solver_name());
+        assert_eq!(
+            n,
+            0,
+            "{}: the network step loop allocated {n} times",
+            sim.solver_name()
+        );
     }
 }
