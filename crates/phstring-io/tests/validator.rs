@@ -806,7 +806,7 @@ between"#,
             "[newton]\nsolver = \"block_tridiagonal\"\n\n[time]",
             "solver = |\"block_tridiagonal\"",
             "newton.solver",
-            "= block_tridiagonal solves chains (one string) only",
+            "= block_tridiagonal solves chains (element e joining nodes e and e+1, as one string) only",
         ),
         (
             "ea = 1.0e5",
@@ -1051,17 +1051,45 @@ fn springs_to_points_make_fixed_nodes() {
         "between = [\"b\", \"c\"]",
         "between = [\"c\"]\nto_point = [2.0, -1.0]",
         1,
-    ) + "\n[[spring]]\nname = \"k1\"\nbetween = [8, \"b\"]\nk = 10.0\nrest = 0.0\n";
+    );
     let file = scenario::parse(&text, Path::new("net.toml"), &[]).unwrap();
     file.check().unwrap_or_else(|e| panic!("{e}"));
     let v = file.validate::<2>().unwrap();
     assert_eq!(v.problem.mesh.n_nodes(), 9);
     assert_eq!(v.components.springs[0].nodes, [2, 8]);
-    assert_eq!(v.components.springs[1].nodes, [8, 1]);
     let s = v.components.supports.iter().find(|s| s.node == 8).unwrap();
     assert_eq!(s.fixed, ["x", "y"]);
     assert_eq!(
         v.problem.initial.r[8],
         phstring::Vector::<2>::new(2.0, -1.0)
     );
+    // The fixed point is held in every component: nothing can be attached to it.
+    for extra in [
+        "\n[[boundary]]\nnode = 8\nforce = [\"0\", \"100\"]\n",
+        "\n[[boundary]]\nnode = -1\nposition = [\"2 + 0.1*sin(t)\", \"\"]\n",
+        "\n[[point_mass]]\nnode = -1\nkg = 5.0\n",
+    ] {
+        let err = scenario::parse(&(text.clone() + extra), Path::new("net.toml"), &[])
+            .and_then(|f| f.check())
+            .expect_err(extra)
+            .to_string();
+        assert!(
+            err.contains("the fixed point of spring \"k0\""),
+            "{extra}: {err}"
+        );
+    }
+    // In a spring's `between`, indices count in the strings' nodes: -1 is the last interior
+    // node of s1 (node 7), not the fixed point of k0, and 8 is out of range.
+    let more = "\n[[spring]]\nname = \"k1\"\nbetween = [-1, \"b\"]\nk = 10.0\nrest = 0.5\n";
+    let v = scenario::parse(&(text.clone() + more), Path::new("net.toml"), &[])
+        .unwrap()
+        .validate::<2>()
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(v.components.springs[1].nodes, [7, 1]);
+    let bad = "\n[[spring]]\nname = \"k1\"\nbetween = [8, \"b\"]\nk = 10.0\nrest = 0.0\n";
+    let err = scenario::parse(&(text + bad), Path::new("net.toml"), &[])
+        .and_then(|f| f.check())
+        .expect_err("index of a fixed point")
+        .to_string();
+    assert!(err.contains("spring.1.between.0"), "{err}");
 }

@@ -421,6 +421,10 @@ impl StoredEnergy for LinearSpring {
         0.5 * self.k * (1.0 - self.rest / c.sqrt())
     }
     fn d2w(&self, c: f64) -> f64 {
+        if self.rest == 0.0 {
+            // W is linear in C; 0/0 at C = 0 must not leak into the midpoint Jacobian.
+            return 0.0;
+        }
         0.25 * self.k * self.rest / (c * c.sqrt())
     }
     fn admissible(&self, c: f64) -> bool {

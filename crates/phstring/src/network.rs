@@ -111,17 +111,30 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
         for &p in path {
             self.check_node("string path", p)?;
         }
+        // Every span is checked before anything is added, so a refused string leaves the
+        // builder as it was.
+        for (k, pair) in path.windows(2).enumerate() {
+            let (a, b) = (pair[0], pair[1]);
+            let length = (self.r[b] - self.r[a]).norm();
+            if a == b {
+                return Err(SetupError::DegenerateElement {
+                    element: self.elements.len() + k * elements_per_span,
+                    node: a,
+                });
+            }
+            if !(length > 0.0 && length.is_finite()) {
+                return Err(SetupError::NonPositive {
+                    what: "length of string span (path nodes at the same place)",
+                    index: Some(k),
+                    value: length,
+                });
+            }
+        }
         let first = self.elements.len();
         let mut nodes = Vec::with_capacity((path.len() - 1) * elements_per_span + 1);
         nodes.push(path[0]);
         for pair in path.windows(2) {
             let (a, b) = (pair[0], pair[1]);
-            if a == b {
-                return Err(SetupError::DegenerateElement {
-                    element: self.elements.len(),
-                    node: a,
-                });
-            }
             let (ra, rb) = (self.r[a], self.r[b]);
             let l = (rb - ra).norm() / elements_per_span as f64 / spec.prestretch;
             let mut prev = a;

@@ -59,6 +59,34 @@ struct Force {
 }
 
 impl ScenarioFile {
+    /// Refuses `node` (given at `key`) if it is the fixed point of a spring with `to_point`:
+    /// that node is held in every component, so a condition or a mass there would do nothing
+    /// (or move the "fixed" point).
+    fn not_an_anchor<const D: usize>(
+        &self,
+        key: &str,
+        span: Range<usize>,
+        node: usize,
+        sk: &Skeleton<D>,
+    ) -> Result<(), ScenarioError> {
+        let anchor_of = sk
+            .components
+            .springs
+            .iter()
+            .find(|sp| sp.to_point.is_some() && sp.nodes[1] == node);
+        match anchor_of {
+            Some(sp) => Err(self.invalid(
+                key,
+                span,
+                format!(
+                    "is node {node}, the fixed point of spring \"{}\" (to_point): it is held in every component, so nothing can be attached to, fixed, moved or loaded there",
+                    clip(&sp.name)
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// `[[point_mass]]`: a node, a positive mass and its finite weight `kg · gravity`.
     pub(super) fn point_masses<const D: usize>(
         &self,
@@ -71,6 +99,7 @@ impl ScenarioFile {
         for (k, pm) in list.iter().enumerate() {
             let key = |f: &str| format!("point_mass.{k}.{f}");
             let node = self.resolve(&key("node"), &pm.node, &sk.nodes)?;
+            self.not_an_anchor(&key("node"), pm.node.span(), node, sk)?;
             let kg = self.positive(&key("kg"), &pm.kg)?;
             let weight = gravity * kg;
             if !weight.iter().all(|w| w.is_finite()) {
@@ -108,6 +137,7 @@ impl ScenarioFile {
         let b = &self.scenario.boundary[k];
         let key = |f: &str| format!("boundary.{k}.{f}");
         let node = self.resolve(&key("node"), &b.node, &sk.nodes)?;
+        self.not_an_anchor(&key("node"), b.node.span(), node, sk)?;
         let label = label(b.node.get_ref(), node);
         if b.fixed.is_none() && b.force.is_none() && b.position.is_none() {
             return Err(self.invalid(

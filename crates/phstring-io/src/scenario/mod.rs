@@ -545,11 +545,12 @@ impl ScenarioFile {
         if layout == Layout::Network {
             self.check_spring_nodes(&skeleton, &parts.boundary, &point_masses)?;
         }
-        let settings = self.run_settings(layout == Layout::Single)?;
         let mut components = std::mem::take(&mut skeleton.components);
         let problem = skeleton
             .finish(parts.boundary, point_masses)
             .map_err(|cause| self.setup_error(cause))?;
+        // Block Thomas needs a chain mesh: every single string, and a network numbered as one.
+        let settings = self.run_settings(problem.mesh.is_chain())?;
         for st in &mut components.strings {
             st.reference_length = problem.mesh.lengths()[st.elements[0]..st.elements[1]]
                 .iter()

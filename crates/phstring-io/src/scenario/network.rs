@@ -462,8 +462,10 @@ impl ScenarioFile {
                 rest,
                 to_point: to_point.map(|p| p.as_slice().to_vec()),
             });
-            nodes.n_nodes = b.n_nodes();
         }
+        // Spring indices count in the strings' mesh (a spring's fixed point is not a node
+        // another spring can be meant to reach by `-1`); later references see every node.
+        nodes.n_nodes = b.n_nodes();
         Ok(())
     }
 

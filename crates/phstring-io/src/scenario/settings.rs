@@ -236,7 +236,8 @@ impl ScenarioFile {
     }
 
     /// The run settings: `[time]`, `[newton]` and `[output]`; `chain`: whether the mesh is a
-    /// chain (a single string), which `newton.solver = "block_tridiagonal"` needs.
+    /// chain (element `e` joins nodes `e` and `e+1`: a single string, or a network numbered
+    /// like one), which `newton.solver = "block_tridiagonal"` needs.
     pub(super) fn run_settings(&self, chain: bool) -> Result<RunSettings, ScenarioError> {
         let time = self.time()?;
         let newton = self.newton()?;
@@ -244,7 +245,7 @@ impl ScenarioFile {
             return Err(self.invalid(
                 "newton.solver",
                 self.scenario.newton.solver.span(),
-                "= block_tridiagonal solves chains (one string) only: use auto, network or sparse_lu for a network",
+                "= block_tridiagonal solves chains (element e joining nodes e and e+1, as one string) only: use auto, network or sparse_lu for this network",
             ));
         }
         let stride = self.output_stride()?;

@@ -307,3 +307,61 @@ fn network_solver_and_sparse_lu_give_the_same_trajectory() {
         "trajectories differ: {dr:e} m, {dv:e} m/s"
     );
 }
+
+/// A refused string leaves the builder as it was; a zero-rest-length spring whose ends start
+/// at the same point runs with the midpoint rule too (its `W''` is 0, not 0/0).
+#[test]
+fn refused_strings_leave_the_builder_alone_and_zero_length_springs_step() {
+    use phstring::Scheme;
+    let spec = |name: &str| StringSpec {
+        name: name.into(),
+        material: Material::tension_only_linear(1e6),
+        rho_a: 1.0,
+        mass: MassMatrix::Consistent,
+        body_force: Vector::<2>::new(0.0, -9.81),
+        prestretch: 1.0,
+    };
+    let mut b = NetworkBuilder::<2, Material>::new();
+    let n0 = b.node(Vector::<2>::new(0.0, 0.0));
+    let n1 = b.node(Vector::<2>::new(0.0, -5.0));
+    let n2 = b.node(Vector::<2>::new(0.0, -5.0));
+    for bad in [&[n0, n1, n1][..], &[n0, n1, n2][..]] {
+        assert!(b.clone().string(spec("bad"), bad, 2).is_err());
+        let mut probe = b.clone();
+        assert!(probe.string(spec("bad"), bad, 2).is_err());
+        assert_eq!(probe.n_nodes(), 3, "a refused string added nodes");
+    }
+    b.string(spec("rope"), &[n0, n1], 10).unwrap();
+    // n2 coincides with the rope's end: a zero-length spring at rest length 0 ties them.
+    b.spring("tie", n1, n2, 1e5, 0.0).unwrap();
+    let net = b
+        .build(
+            Boundary {
+                fixed: vec![Fixed::node(n0)],
+                ..Boundary::default()
+            },
+            vec![PointMass {
+                node: n2,
+                mass: 100.0,
+                weight: Vector::<2>::new(0.0, -981.0),
+            }],
+        )
+        .unwrap();
+    for scheme in [Scheme::DiscreteGradient, Scheme::Midpoint] {
+        let mut sim = Simulation::new(
+            net.clone(),
+            StepParams {
+                h: 1e-3,
+                scheme,
+                ..StepParams::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        for _ in 0..50 {
+            sim.step().unwrap_or_else(|e| panic!("{scheme:?}: {e}"));
+        }
+        // The mass hangs on the spring below the rope's end: 981 N / 1e5 N/m ≈ 1 cm at rest.
+        let gap = (sim.state().r[n2] - sim.state().r[n1]).norm();
+        assert!(gap > 1e-4 && gap < 0.03, "{scheme:?}: spring length {gap}");
+    }
+}
