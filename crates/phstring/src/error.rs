@@ -294,7 +294,8 @@ pub enum StepError {
         step: usize,
         /// Start time of the step [s].
         t: f64,
-        /// `"residual"`, `"state"`, `"energy"`, `"load"` or `"prescribed position"`.
+        /// `"residual"`, `"residual's norm (it overflows …)"`, `"state"`, `"energy"`, `"load"`
+        /// or `"prescribed position"`.
         what: &'static str,
         /// Node index.
         node: usize,

@@ -212,10 +212,13 @@ pub enum NewtonError<E> {
     Eval(E),
     /// The linear solve failed.
     Linear(LinearSolveError),
-    /// The residual is NaN or infinite at this node.
+    /// The residual is NaN or infinite at this node, or (`overflow`) every entry is finite
+    /// but its norm overflows; `node` is then the node with the largest residual.
     NonFinite {
         /// Node index.
         node: usize,
+        /// Finite entries whose norm overflows (forces of about 1e154 N and more).
+        overflow: bool,
     },
     /// No convergence within the iteration limit.
     MaxIterations(NewtonStats),
@@ -626,9 +629,23 @@ fn evaluate_checked<const D: usize, P: NewtonProblem<D>>(
 }
 
 fn non_finite<const D: usize, E>(res: &[Vector<D>]) -> NewtonError<E> {
-    let node = res.iter().position(|v| !v.iter().all(|c| c.is_finite()));
-    NewtonError::NonFinite {
-        node: node.unwrap_or(0),
+    match res.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
+        Some(node) => NewtonError::NonFinite {
+            node,
+            overflow: false,
+        },
+        None => NewtonError::NonFinite {
+            node: res
+                .iter()
+                .map(|v| v.amax())
+                .enumerate()
+                .fold(
+                    (0, 0.0),
+                    |best, (i, m)| if m > best.1 { (i, m) } else { best },
+                )
+                .0,
+            overflow: true,
+        },
     }
 }
 

@@ -584,10 +584,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 t,
                 cause: source,
             },
-            NewtonError::NonFinite { node } => StepError::NonFinite {
+            NewtonError::NonFinite { node, overflow } => StepError::NonFinite {
                 step: step_no,
                 t,
-                what: "residual",
+                what: if overflow {
+                    "residual's norm (it overflows: forces of 1e154 N or more; largest at this node)"
+                } else {
+                    "residual"
+                },
                 node,
             },
             NewtonError::MaxIterations(s) => StepError::NewtonDiverged {

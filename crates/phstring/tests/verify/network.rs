@@ -365,3 +365,50 @@ fn refused_strings_leave_the_builder_alone_and_zero_length_springs_step() {
         assert!(gap > 1e-4 && gap < 0.03, "{scheme:?}: spring length {gap}");
     }
 }
+
+/// A spring so stiff that the residual's norm overflows (its entries are finite) fails with a
+/// message that says so and names the node with the largest residual, not node 0.
+#[test]
+fn overflowing_residual_norm_names_its_node() {
+    let mut b = NetworkBuilder::<2, Material>::new();
+    let top = b.node(Vector::<2>::new(0.0, 0.0));
+    let end = b.node(Vector::<2>::new(0.0, -10.0));
+    b.string(
+        StringSpec {
+            name: "rope".into(),
+            material: Material::tension_only_linear(1e7),
+            rho_a: 1.0,
+            mass: MassMatrix::Consistent,
+            body_force: Vector::<2>::new(0.0, -9.81),
+            prestretch: 1.0,
+        },
+        &[top, end],
+        4,
+    )
+    .unwrap();
+    b.spring_to_point("stiff", end, Vector::<2>::new(1.0, -10.0), 1e160, 0.5)
+        .unwrap();
+    let net = b
+        .build(
+            Boundary {
+                fixed: vec![Fixed::node(top)],
+                ..Boundary::default()
+            },
+            vec![],
+        )
+        .unwrap();
+    let mut sim = Simulation::new(
+        net,
+        StepParams {
+            h: 1e-3,
+            ..StepParams::default()
+        },
+    )
+    .unwrap();
+    let err = sim.step().unwrap_err().to_string();
+    println!("{err}");
+    assert!(
+        err.contains("overflows") && err.contains(&format!("node {end}")),
+        "{err}"
+    );
+}
