@@ -18,6 +18,7 @@ use faer::{Conj, MatMut, Par};
 use nalgebra::SVector;
 
 use super::block_lu::{BlockLu, Slot};
+use super::sparse_lu::{add_block, block_pattern};
 use super::{Block, BlockJacobian, LinearSolver};
 use crate::error::LinearSolveError;
 use crate::mesh::Mesh;
@@ -110,13 +111,9 @@ impl<const D: usize> Reduced<D> {
             Reduced::Faer(red) => {
                 let dd = D * D;
                 let vals = red.mat.val_mut();
-                let base = red.n_junctions * dd + coupling * 2 * dd;
                 for (h, blk) in blocks.iter().enumerate() {
-                    for k in 0..D {
-                        for m in 0..D {
-                            vals[red.slots[base + h * dd + k * D + m]] += blk[(k, m)];
-                        }
-                    }
+                    let base = (red.n_junctions + 2 * coupling + h) * dd;
+                    add_block(vals, &red.slots, base, blk);
                 }
             }
         }
@@ -128,57 +125,15 @@ impl FaerReduced {
     /// and its symbolic simplicial LU.
     fn new<const D: usize>(nj: usize, pairs: &[[usize; 2]]) -> Self {
         let n = nj * D;
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
-        let mut add_block = |i: usize, j: usize| {
-            for k in 0..D {
-                for l in 0..D {
-                    cols[j * D + l].push(i * D + k);
-                }
-            }
-        };
-        for r in 0..nj {
-            add_block(r, r);
-        }
-        for &[a, b] in pairs {
-            add_block(a, b);
-            add_block(b, a);
-        }
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        for c in &mut cols {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
-            col_ptr.push(row_idx.len());
-        }
-        let nnz = row_idx.len();
-        let slot = |i: usize, j: usize| -> usize {
-            let (s, e) = (col_ptr[j], col_ptr[j + 1]);
-            s + row_idx[s..e]
-                .binary_search(&i)
-                .expect("entry is in the pattern")
-        };
-        let block_slots = |i: usize, j: usize, out: &mut Vec<usize>| {
-            for k in 0..D {
-                for l in 0..D {
-                    out.push(slot(i * D + k, j * D + l));
-                }
-            }
-        };
-        let mut slots = Vec::with_capacity((nj + 2 * pairs.len()) * D * D);
-        for r in 0..nj {
-            block_slots(r, r, &mut slots);
-        }
-        for &[a, b] in pairs {
-            block_slots(a, b, &mut slots);
-            block_slots(b, a, &mut slots);
-        }
+        let (col_ptr, row_idx, slots) = block_pattern::<D>(nj, pairs);
         // Diagonally dominant values on the pattern, for a warm-up factorization that
         // sizes faer's numeric storage here rather than in the first solve.
-        let mut warm = vec![1.0; nnz];
-        for (j, w) in col_ptr.windows(2).enumerate() {
-            warm[slot(j, j)] = (w[1] - w[0]) as f64 + 1.0;
+        let mut warm = vec![1.0; row_idx.len()];
+        for r in 0..nj {
+            for k in 0..D {
+                let j = r * D + k;
+                warm[slots[r * D * D + k * D + k]] = (col_ptr[j + 1] - col_ptr[j]) as f64 + 1.0;
+            }
         }
         let symbolic_mat = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let params = LuSymbolicParams {
@@ -637,11 +592,7 @@ impl<const D: usize> NetworkSolver<D> {
                 let vals = red.mat.val_mut();
                 let dd = D * D;
                 for (r, (blk, &j)) in self.jdiag.iter().zip(&self.junctions).enumerate() {
-                    for k in 0..D {
-                        for l in 0..D {
-                            vals[red.slots[r * dd + k * D + l]] += blk[(k, l)];
-                        }
-                    }
+                    add_block(vals, &red.slots, r * dd, blk);
                     red.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
                 }
                 let lu = red

@@ -6,7 +6,7 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par};
 use nalgebra::SVector;
 
-use super::{BlockJacobian, LinearSolver};
+use super::{Block, BlockJacobian, LinearSolver};
 use crate::error::LinearSolveError;
 use crate::mesh::Mesh;
 
@@ -18,10 +18,9 @@ pub struct SparseLu<const D: usize> {
     factor_buf: MemBuffer,
     solve_buf: MemBuffer,
     rhs: Vec<f64>,
-    /// CSC value slot of entry `(k, l)` of node `i`'s diagonal block: `diag_slots[i·D² + k·D + l]`.
-    diag_slots: Vec<usize>,
-    /// Slots of the element blocks `[a→b, b→a]`: `off_slots[(e·2 + s)·D² + k·D + l]`.
-    off_slots: Vec<usize>,
+    /// CSC value slots of the blocks, as [`block_pattern`] numbers them (diagonal blocks, then
+    /// the element blocks `[a→b, b→a]`).
+    slots: Vec<usize>,
 }
 
 impl<const D: usize> std::fmt::Debug for SparseLu<D> {
@@ -36,53 +35,8 @@ impl<const D: usize> SparseLu<D> {
     /// Analyses the sparsity pattern of `mesh`'s Newton matrix.
     pub fn new(mesh: &Mesh) -> Self {
         let n = mesh.n_nodes() * D;
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
-        let mut add_block = |i: usize, j: usize| {
-            for k in 0..D {
-                for l in 0..D {
-                    cols[j * D + l].push(i * D + k);
-                }
-            }
-        };
-        for i in 0..mesh.n_nodes() {
-            add_block(i, i);
-        }
-        for &[a, b] in mesh.elements() {
-            add_block(a, b);
-            add_block(b, a);
-        }
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        for c in &mut cols {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
-            col_ptr.push(row_idx.len());
-        }
+        let (col_ptr, row_idx, slots) = block_pattern::<D>(mesh.n_nodes(), mesh.elements());
         let nnz = row_idx.len();
-        let slot = |i: usize, j: usize| -> usize {
-            let (s, e) = (col_ptr[j], col_ptr[j + 1]);
-            s + row_idx[s..e]
-                .binary_search(&i)
-                .expect("entry is in the pattern")
-        };
-        let block_slots = |i: usize, j: usize, out: &mut Vec<usize>| {
-            for k in 0..D {
-                for l in 0..D {
-                    out.push(slot(i * D + k, j * D + l));
-                }
-            }
-        };
-        let mut diag_slots = Vec::with_capacity(mesh.n_nodes() * D * D);
-        for i in 0..mesh.n_nodes() {
-            block_slots(i, i, &mut diag_slots);
-        }
-        let mut off_slots = Vec::with_capacity(mesh.n_elements() * 2 * D * D);
-        for &[a, b] in mesh.elements() {
-            block_slots(a, b, &mut off_slots);
-            block_slots(b, a, &mut off_slots);
-        }
         let symbolic_mat = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let symbolic = factorize_symbolic_lu(symbolic_mat.as_ref(), Default::default())
             .expect("symbolic LU of a valid square pattern");
@@ -97,8 +51,70 @@ impl<const D: usize> SparseLu<D> {
             factor_buf,
             solve_buf,
             rhs: vec![0.0; n],
-            diag_slots,
-            off_slots,
+            slots,
+        }
+    }
+}
+
+/// The scalar CSC pattern (column pointers, row indices) of a matrix of `n × n` blocks of size
+/// `D×D` with every diagonal block and both coupling blocks `a→b`, `b→a` of every pair
+/// `[a, b]`, and the CSC value slot of every block entry: diagonal block `i`'s entry `(k, l)`
+/// at `i·D² + k·D + l`, then pair `p`'s blocks `a→b` (`s = 0`) and `b→a` (`s = 1`) at
+/// `(n + 2p + s)·D² + k·D + l`.
+pub(crate) fn block_pattern<const D: usize>(
+    n: usize,
+    pairs: &[[usize; 2]],
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let blocks = || {
+        (0..n)
+            .map(|i| (i, i))
+            .chain(pairs.iter().flat_map(|&[a, b]| [(a, b), (b, a)]))
+    };
+    let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n * D];
+    for (i, j) in blocks() {
+        for k in 0..D {
+            for l in 0..D {
+                cols[j * D + l].push(i * D + k);
+            }
+        }
+    }
+    let mut col_ptr = Vec::with_capacity(n * D + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0);
+    for c in &mut cols {
+        c.sort_unstable();
+        c.dedup();
+        row_idx.extend_from_slice(c);
+        col_ptr.push(row_idx.len());
+    }
+    let slot = |i: usize, j: usize| -> usize {
+        let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+        s + row_idx[s..e]
+            .binary_search(&i)
+            .expect("entry is in the pattern")
+    };
+    let mut slots = Vec::with_capacity((n + 2 * pairs.len()) * D * D);
+    for (i, j) in blocks() {
+        for k in 0..D {
+            for l in 0..D {
+                slots.push(slot(i * D + k, j * D + l));
+            }
+        }
+    }
+    (col_ptr, row_idx, slots)
+}
+
+/// Adds `blk` to the CSC values `vals` at its slots `slots[base..base + D²]` (row-major).
+#[inline]
+pub(crate) fn add_block<const D: usize>(
+    vals: &mut [f64],
+    slots: &[usize],
+    base: usize,
+    blk: &Block<D>,
+) {
+    for k in 0..D {
+        for l in 0..D {
+            vals[slots[base + k * D + l]] += blk[(k, l)];
         }
     }
 }
@@ -113,20 +129,12 @@ impl<const D: usize> LinearSolver<D> for SparseLu<D> {
         vals.fill(0.0);
         let dd = D * D;
         for (i, blk) in jac.diag.iter().enumerate() {
-            for k in 0..D {
-                for l in 0..D {
-                    vals[self.diag_slots[i * dd + k * D + l]] += blk[(k, l)];
-                }
-            }
+            add_block(vals, &self.slots, i * dd, blk);
         }
+        let n_nodes = jac.diag.len();
         for (e, blks) in jac.off.iter().enumerate() {
             for (s, blk) in blks.iter().enumerate() {
-                let base = (e * 2 + s) * dd;
-                for k in 0..D {
-                    for l in 0..D {
-                        vals[self.off_slots[base + k * D + l]] += blk[(k, l)];
-                    }
-                }
+                add_block(vals, &self.slots, (n_nodes + 2 * e + s) * dd, blk);
             }
         }
         for (i, x) in rhs.iter().enumerate() {
