@@ -714,6 +714,31 @@ pub struct PlotReport {
     pub warnings: Vec<String>,
 }
 
+impl PlotReport {
+    /// Records the outcome of drawing `stem` (called `label` in warnings): written, skipped
+    /// with the error, or skipped because the plotting library panicked.
+    fn record<T, E: std::fmt::Display>(
+        &mut self,
+        stem: &str,
+        label: &str,
+        outcome: std::thread::Result<Result<T, E>>,
+    ) {
+        match outcome {
+            Ok(Ok(_)) => self.written.push(stem.to_string()),
+            Ok(Err(e)) => {
+                self.skipped.push(stem.to_string());
+                self.warnings.push(format!("{label} skipped: {e}"));
+            }
+            Err(_) => {
+                self.skipped.push(stem.to_string());
+                self.warnings.push(format!(
+                    "{label} skipped: the plotting library failed on this data"
+                ));
+            }
+        }
+    }
+}
+
 /// Draws the `energy`, `configuration` (2D and 3D) and `increments` plots of a run into
 /// `dir`. A plot that cannot be drawn (degenerate or extreme ranges, an I/O error, a
 /// failure inside the plotting library) is skipped with a warning and never fails the run;
@@ -787,19 +812,11 @@ pub fn draw_plots(
             ),
         };
         // A panic inside the plotting library must not take the run's summary with it.
-        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(draw)) {
-            Ok(Ok(())) => report.written.push(stem.to_string()),
-            Ok(Err(e)) => {
-                report.skipped.push(stem.to_string());
-                report.warnings.push(format!("{stem} plot skipped: {e}"));
-            }
-            Err(_) => {
-                report.skipped.push(stem.to_string());
-                report.warnings.push(format!(
-                    "{stem} plot skipped: the plotting library failed on this data"
-                ));
-            }
-        }
+        report.record(
+            stem,
+            &format!("{stem} plot"),
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(draw)),
+        );
     }
     report
 }
@@ -825,19 +842,11 @@ pub fn draw_animation(
             .ok_or_else(|| format!("{ELEMENTS_FILE} was not written"))?;
         crate::animation::write_animation(dir, dim, title, &topology, stop)
     };
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(draw)) {
-        Ok(Ok(_)) => report.written.push(stem.to_string()),
-        Ok(Err(why)) => {
-            report.skipped.push(stem.to_string());
-            report.warnings.push(format!("{stem} skipped: {why}"));
-        }
-        Err(_) => {
-            report.skipped.push(stem.to_string());
-            report.warnings.push(format!(
-                "{stem} skipped: the plotting library failed on this data"
-            ));
-        }
-    }
+    report.record(
+        stem,
+        stem,
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(draw)),
+    );
     report
 }
 

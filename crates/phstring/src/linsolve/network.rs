@@ -639,26 +639,7 @@ mod tests {
     use super::*;
     use crate::linsolve::{SolverKind, SparseLu, make_solver};
 
-    /// SplitMix64: a small deterministic generator for test matrices and permutations.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        /// Uniform in `[−1, 1)`.
-        fn sym(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        }
-        /// Uniform in `0..n`.
-        fn below(&mut self, n: usize) -> usize {
-            (self.next_u64() % n as u64) as usize
-        }
-    }
+    use crate::linsolve::test_rng::Rng;
 
     fn mesh(n_nodes: usize, elements: Vec<[usize; 2]>) -> Mesh {
         let n = elements.len();
