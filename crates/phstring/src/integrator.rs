@@ -176,9 +176,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         }
         // Force scale (docs/method.md §9, eq. (9.2)): squares of the magnitudes of every force term of
         // the residual, summed over the full evaluation.
-        let measure = MEASURE;
         let mut strain2 = 0.0;
-        let mut scale2 = if measure {
+        let mut scale2 = if MEASURE {
             self.f_ext.iter().map(|f| f.norm_squared()).sum::<f64>()
         } else {
             0.0
@@ -264,7 +263,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 mask(&mut j.off[e][1], fb, fa);
             }
         }
-        if measure {
+        if MEASURE {
             self.scale = scale2.sqrt();
             self.strain_scale = strain2.sqrt();
             self.measure = false;
@@ -291,7 +290,6 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         let h = self.h;
         let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
         let (els, full, nodes) = (k.els.clone(), k.full, k.nodes.clone());
-        let measure = MEASURE;
         let eye = SMatrix::<f64, D, D>::identity();
         for (e, (&[a, b], &l)) in sys.mesh.elements()[els.clone()]
             .iter()
@@ -314,7 +312,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
             let (q, dq) = self.scheme.half_stress(law, c0, c1);
             let f = rpm * (2.0 * q);
-            if measure {
+            if MEASURE {
                 // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
                 // force on both nodes.
                 let m = (2.0 * inv_h) * (md + mo.abs());

@@ -602,19 +602,6 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         })
     }
 
-    /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of element `e` (see
-    /// [`Self::mass_mul`]); springs have none.
-    pub fn element_mass(&self, e: usize) -> (f64, f64) {
-        let g = self.group_of(e);
-        element_mass(g.mass, g.rho_a, self.mesh.lengths()[e])
-    }
-
-    /// The group element `e` belongs to.
-    pub fn group_of(&self, e: usize) -> &ElementGroup<D, M> {
-        let g = self.groups.partition_point(|g| g.elements.end <= e);
-        &self.groups[g.min(self.groups.len() - 1)]
-    }
-
     /// The first element whose strain `c[e]` is outside its law's domain, if any.
     pub fn first_inadmissible(&self, c: &[f64]) -> Option<usize> {
         self.each_element()
