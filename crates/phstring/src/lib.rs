@@ -67,6 +67,7 @@ pub mod benchmarks;
 pub mod boundary;
 pub mod error;
 pub mod integrator;
+pub mod linear;
 pub mod linsolve;
 pub mod material;
 pub mod mesh;
@@ -74,6 +75,7 @@ pub mod network;
 pub mod newton;
 pub mod observe;
 pub mod simulation;
+pub mod statics;
 pub mod system;
 
 pub use boundary::{Boundary, Fixed, ForceFn, Motion, NodalLoad, PortKind, PortSample, PositionFn};

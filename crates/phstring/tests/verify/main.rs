@@ -12,3 +12,4 @@ mod point_mass;
 mod quotient;
 mod real_units;
 mod solvers;
+mod statics;

@@ -1,0 +1,929 @@
+//! Static equilibrium (docs/method.md §15): the rest state `∇V̂(r) = F` of a string or
+//! network under its loads at `t = 0`.
+//!
+//! The equations are the dynamic step's without inertia: for every free position component
+//! `R(r) = K(r) S(C(r)) − F_b − F_N(0) = 0` with `C_e = |r'_e|²` and `S = 2 W'(C)`, the same
+//! element laws as the time step. Fixed components and prescribed motions stay at their
+//! `t = 0` positions; there the residual is the support reaction (the force the support
+//! exerts on the string, as in the dynamic ports).
+//!
+//! Three paths, tried in this order, each with Newton's method, the line search and the
+//! linear solvers of the time step:
+//! 1. **Newton** at the full load, from the scenario's initial positions.
+//! 2. **Load continuation**: the load `λ F`, `λ` from 0 to 1 in steps that halve on failure
+//!    and grow after success.
+//! 3. **Pseudo-transient continuation**: proximal steps
+//!    `μ M_ρ (r − r_k) + R(r) = 0` with the mass matrix as metric and the shift `μ` [1/s²]
+//!    lowered after easy steps. Each such step lowers `V̂` (it minimizes
+//!    `V̂(r) − r·F + ½ μ |r − r_k|²_M`), and the shifted matrix stays non-singular where
+//!    elements are slack (tension-only laws) or compressed. It ends when the unshifted
+//!    residual meets the tolerance.
+//!
+//! Which path succeeded is reported in [`Equilibrium::path`].
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nalgebra::SMatrix;
+use thiserror::Error;
+
+use crate::error::SetupError;
+use crate::linear::{positive_definite, tangent_blocks};
+use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
+use crate::material::StoredEnergy;
+use crate::newton::{self, NewtonError, NewtonParams, NewtonProblem, NewtonWorkspace};
+use crate::system::{Energies, Law, Network, PhSystem, State, Vector, element_mass};
+
+/// Parameters of the equilibrium solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticsParams {
+    /// Newton's method (tolerances as in a time step: `‖R‖ ≤ max(tol, rtol·F)` with `F` the
+    /// force scale of the loads and internal forces, or the round-off floor).
+    pub newton: NewtonParams,
+    /// Linear solver.
+    pub solver: SolverKind,
+    /// Most load steps of the continuation (path 2).
+    pub max_load_steps: usize,
+    /// Most pseudo-time steps (path 3).
+    pub max_pseudo_steps: usize,
+}
+
+impl Default for StaticsParams {
+    fn default() -> Self {
+        Self {
+            newton: NewtonParams {
+                max_iter: 40,
+                ..NewtonParams::default()
+            },
+            solver: SolverKind::Auto,
+            max_load_steps: 200,
+            max_pseudo_steps: 2000,
+        }
+    }
+}
+
+/// How the equilibrium was reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StaticsPath {
+    /// Newton's method at the full load.
+    Newton,
+    /// Load continuation in `steps` load steps.
+    LoadContinuation {
+        /// Accepted load steps.
+        steps: usize,
+    },
+    /// Pseudo-transient continuation in `steps` pseudo-time steps.
+    PseudoTransient {
+        /// Accepted pseudo-time steps.
+        steps: usize,
+    },
+}
+
+impl StaticsPath {
+    /// Short name: `newton`, `load_continuation` or `pseudo_transient`.
+    pub fn name(self) -> &'static str {
+        match self {
+            StaticsPath::Newton => "newton",
+            StaticsPath::LoadContinuation { .. } => "load_continuation",
+            StaticsPath::PseudoTransient { .. } => "pseudo_transient",
+        }
+    }
+    /// Steps of the path (1 for Newton).
+    pub fn steps(self) -> usize {
+        match self {
+            StaticsPath::Newton => 1,
+            StaticsPath::LoadContinuation { steps } | StaticsPath::PseudoTransient { steps } => {
+                steps
+            }
+        }
+    }
+}
+
+/// A static equilibrium.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Equilibrium<const D: usize> {
+    /// The rest state: equilibrium positions [m], zero velocities, `C_e = |r'_e|²`.
+    pub state: State<D>,
+    /// Per node, the force [N] that the supports (fixed components and prescribed motions)
+    /// exert on the string; zero at free components.
+    pub reactions: Vec<Vector<D>>,
+    /// Euclidean norm of the residual over the free components [N].
+    pub residual: f64,
+    /// The tolerance it met [N] (or the round-off floor, see `at_roundoff`).
+    pub tolerance: f64,
+    /// Force scale `F` of the equilibrium [N]: root-sum-square of the loads and the internal
+    /// nodal forces.
+    pub force_scale: f64,
+    /// The residual met the round-off floor rather than the tolerance.
+    pub at_roundoff: bool,
+    /// Path that reached it.
+    pub path: StaticsPath,
+    /// Newton iterations (linear solves) over all paths, failed attempts included.
+    pub iterations: usize,
+    /// Energies at the equilibrium [J] (kinetic energy 0).
+    pub energies: Energies,
+    /// The tangent stiffness is positive definite on the free components: a stable
+    /// equilibrium (Newton and the load continuation accept only stable ones; the
+    /// pseudo-transient path lowers `V̂` and so ends at a minimum unless it is degenerate).
+    pub stable: bool,
+}
+
+/// Why no equilibrium was found.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum StaticsError {
+    /// The problem definition is invalid.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// A rigid-body translation is free and the loads push along it.
+    #[error(
+        "no equilibrium: the structure is under-constrained, free to translate along {axis} (no node is held in {axis}), and the net load along {axis} is {net:.6e} N; hold a node in {axis} or remove that load"
+    )]
+    UnderConstrained {
+        /// Axis name, `x`, `y` or `z`.
+        axis: &'static str,
+        /// Net load along it [N].
+        net: f64,
+    },
+    /// Every path failed.
+    #[error("{0}")]
+    NotFound(Box<NotFound>),
+    /// The stop flag was set.
+    #[error("interrupted")]
+    Interrupted,
+}
+
+/// What every path of a failed equilibrium solve ended with.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[error(
+    "no equilibrium found: Newton at the full load failed ({newton}); the load continuation failed at load step {load_step}, load factor {lambda:.6} of the full load ({continuation}); the pseudo-transient continuation failed after {pseudo_steps} steps ({pseudo}). Largest strain C = {c_max:.6e} at element {element}{hint}"
+)]
+pub struct NotFound {
+    /// Why Newton at the full load failed.
+    pub newton: String,
+    /// Load step of the continuation that failed (1-based).
+    pub load_step: usize,
+    /// Last load factor reached by the continuation.
+    pub lambda: f64,
+    /// Why that step failed.
+    pub continuation: String,
+    /// Pseudo-time steps taken.
+    pub pseudo_steps: usize,
+    /// Why the pseudo-transient continuation stopped.
+    pub pseudo: String,
+    /// Largest strain of the last pseudo-transient iterate.
+    pub c_max: f64,
+    /// Its element.
+    pub element: usize,
+    /// What may be wrong, e.g. free rigid-body motions; empty if nothing is known.
+    pub hint: String,
+}
+
+/// The static equations `R(u) = K S − λ F + μ M (u − u_k)` in the displacement `u = r − r₀`
+/// from the starting positions `r₀`.
+struct StaticEquations<'a, const D: usize, M> {
+    sys: &'a PhSystem<D, M>,
+    r0: &'a [Vector<D>],
+    /// Full load `F = F_b + F_N(0)` per node [N].
+    f_ext: &'a [Vector<D>],
+    /// Load factor.
+    lambda: f64,
+    /// Pseudo-transient shift [1/s²] and its anchor `u_k`.
+    mu: f64,
+    anchor: Vec<Vector<D>>,
+    /// A shift `ε M_ρ` [kg/s²] of the Newton matrix only (not of the residual): it keeps the
+    /// matrix regular where a free direction has no stiffness yet (a stress-free start),
+    /// without moving the solution.
+    jac_shift: f64,
+    /// Strings carry no compression (an element with `C < 1` is slack) while set.
+    release: bool,
+    /// Reactions of the last full evaluation [N].
+    reaction: Vec<Vector<D>>,
+    scale: f64,
+    strain_scale: f64,
+}
+
+/// A strain outside the law's domain during the equilibrium iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Inadmissible {
+    element: usize,
+    c: f64,
+}
+
+impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D, M> {
+    type Error = Inadmissible;
+
+    fn evaluate(
+        &mut self,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+    ) -> Result<(), Inadmissible> {
+        let sys = self.sys;
+        for (r, f) in res.iter_mut().zip(self.f_ext) {
+            *r = -f * self.lambda;
+        }
+        let mut scale2 = self.lambda * self.lambda * sq_sum(self.f_ext);
+        let mut strain2 = 0.0;
+        if let Some(j) = jac.as_deref_mut() {
+            j.clear();
+        }
+        for grp in &sys.groups {
+            let els = grp.elements.clone();
+            match &grp.law {
+                Law::String(m) => {
+                    let scales = (&mut scale2, &mut strain2);
+                    self.elements(m, self.release, els, x, res, jac.as_deref_mut(), scales)?
+                }
+                Law::Spring(s) => {
+                    let scales = (&mut scale2, &mut strain2);
+                    self.elements(s, false, els, x, res, jac.as_deref_mut(), scales)?
+                }
+            }
+            if self.mu > 0.0 || self.jac_shift > 0.0 {
+                let eye = SMatrix::<f64, D, D>::identity();
+                let shift = self.mu + self.jac_shift;
+                for e in grp.elements.clone() {
+                    let [a, b] = sys.mesh.elements()[e];
+                    let (md, mo) = element_mass(grp.mass, grp.rho_a, sys.mesh.lengths()[e]);
+                    if self.mu > 0.0 {
+                        let (da, db) = (x[a] - self.anchor[a], x[b] - self.anchor[b]);
+                        let fa = (da * md + db * mo) * self.mu;
+                        let fb = (db * md + da * mo) * self.mu;
+                        res[a] += fa;
+                        res[b] += fb;
+                        scale2 += fa.norm_squared() + fb.norm_squared();
+                    }
+                    if let Some(j) = jac.as_deref_mut() {
+                        j.diag[a] += eye * (shift * md);
+                        j.diag[b] += eye * (shift * md);
+                        j.off[e][0] += eye * (shift * mo);
+                        j.off[e][1] += eye * (shift * mo);
+                    }
+                }
+            }
+        }
+        if self.mu > 0.0 || self.jac_shift > 0.0 {
+            let shift = self.mu + self.jac_shift;
+            for &(i, m) in &sys.point_mass {
+                if self.mu > 0.0 {
+                    let fi = (x[i] - self.anchor[i]) * (self.mu * m);
+                    res[i] += fi;
+                    scale2 += fi.norm_squared();
+                }
+                if let Some(j) = jac.as_deref_mut() {
+                    j.diag[i] += SMatrix::<f64, D, D>::identity() * (shift * m);
+                }
+            }
+        }
+        for &i in &sys.constrained {
+            for k in 0..D {
+                if !sys.free[i][k] {
+                    self.reaction[i][k] = res[i][k];
+                    res[i][k] = 0.0;
+                }
+            }
+        }
+        if let Some(j) = jac {
+            mask_fixed(sys, j);
+        }
+        self.scale = scale2.sqrt();
+        self.strain_scale = strain2.sqrt();
+        Ok(())
+    }
+
+    fn force_scale(&self) -> f64 {
+        self.scale
+    }
+
+    fn strain_scale(&self) -> f64 {
+        self.strain_scale
+    }
+}
+
+/// Zeroes the rows and columns of fixed components and puts 1 on their diagonal.
+fn mask_fixed<const D: usize, M>(sys: &PhSystem<D, M>, j: &mut BlockJacobian<D>) {
+    let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
+        for k in 0..D {
+            for m in 0..D {
+                if !row[k] || !col[m] {
+                    blk[(k, m)] = 0.0;
+                }
+            }
+        }
+    };
+    for &i in &sys.constrained {
+        let fi = &sys.free[i];
+        mask(&mut j.diag[i], fi, fi);
+        for k in 0..D {
+            if !fi[k] {
+                j.diag[i][(k, k)] = 1.0;
+            }
+        }
+    }
+    for &e in &sys.constrained_elements {
+        let [a, b] = sys.mesh.elements()[e];
+        let (fa, fb) = (&sys.free[a], &sys.free[b]);
+        mask(&mut j.off[e][0], fa, fb);
+        mask(&mut j.off[e][1], fb, fa);
+    }
+}
+
+fn sq_sum<const D: usize>(v: &[Vector<D>]) -> f64 {
+    v.iter().map(|f| f.norm_squared()).sum()
+}
+
+/// The tangent stiffness of one element, `∂(S r')/∂r_b = (S I + 4 W'' r' r'ᵀ)/l` [N/m], and
+/// its internal force `S r'` [N], at the positions `ra`, `rb`.
+#[inline]
+pub(crate) fn element_tangent<const D: usize, L: StoredEnergy>(
+    law: &L,
+    ra: &Vector<D>,
+    rb: &Vector<D>,
+    l: f64,
+) -> (f64, Vector<D>, SMatrix<f64, D, D>) {
+    let rp = (rb - ra) / l;
+    let c = rp.norm_squared();
+    let s = 2.0 * law.dw(c);
+    let g = (SMatrix::<f64, D, D>::identity() * s + rp * rp.transpose() * (4.0 * law.d2w(c))) / l;
+    (c, rp * s, g)
+}
+
+impl<const D: usize, M: StoredEnergy> StaticEquations<'_, D, M> {
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn elements<L: StoredEnergy>(
+        &self,
+        law: &L,
+        release: bool,
+        els: std::ops::Range<usize>,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+        (scale2, strain2): (&mut f64, &mut f64),
+    ) -> Result<(), Inadmissible> {
+        let sys = self.sys;
+        for e in els {
+            let [a, b] = sys.mesh.elements()[e];
+            let l = sys.mesh.lengths()[e];
+            // Relative positions from the displacement, without forming r = r₀ + u first.
+            let dr = (self.r0[b] - self.r0[a]) + (x[b] - x[a]);
+            let rp = dr / l;
+            let c = rp.norm_squared();
+            let slack = release && c < 1.0;
+            if !slack && !law.admissible(c) {
+                return Err(Inadmissible { element: e, c });
+            }
+            let (dw, d2w) = if slack {
+                (0.0, 0.0)
+            } else {
+                (law.dw(c), law.d2w(c))
+            };
+            let f = rp * (2.0 * dw);
+            res[a] -= f;
+            res[b] += f;
+            let f2 = f.norm_squared();
+            *scale2 += 2.0 * f2;
+            let kk = 2.0 * d2w * c;
+            *strain2 += 2.0 * kk * kk * rp.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                let g = (SMatrix::<f64, D, D>::identity() * (2.0 * dw)
+                    + rp * rp.transpose() * (4.0 * d2w))
+                    / l;
+                j.diag[a] += g;
+                j.diag[b] += g;
+                j.off[e] = [-g, -g];
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The full load `F = F_b + F_N(0)` per node [N] of a system: body forces, point-mass
+/// weights and the nodal loads at `t = 0`.
+pub fn static_load<const D: usize, M: StoredEnergy>(sys: &PhSystem<D, M>) -> Vec<Vector<D>> {
+    let mut f = sys.f_body.clone();
+    for load in &sys.boundary.loads {
+        f[load.node] += (load.force)(0.0);
+    }
+    f
+}
+
+/// The static residual `K(r) S(C(r)) − F` [N] per node at positions `r`, with the reactions
+/// (the residual at fixed components) moved to `reactions` and zeros left in their place.
+/// `Err(element)` if a strain leaves its law's domain.
+pub fn static_residual<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+) -> Result<(Vec<Vector<D>>, Vec<Vector<D>>), usize> {
+    let f = static_load(sys);
+    let zeros = vec![Vector::<D>::zeros(); r.len()];
+    let mut eq = StaticEquations {
+        sys,
+        r0: r,
+        f_ext: &f,
+        lambda: 1.0,
+        mu: 0.0,
+        anchor: Vec::new(),
+        jac_shift: 0.0,
+        release: false,
+        reaction: zeros.clone(),
+        scale: 0.0,
+        strain_scale: 0.0,
+    };
+    let mut res = zeros.clone();
+    eq.evaluate(&zeros, &mut res, None).map_err(|e| e.element)?;
+    Ok((res, eq.reaction))
+}
+
+/// Finds the static equilibrium of `problem` under its loads at `t = 0`, starting from its
+/// initial positions (the initial velocities are ignored). `stop`, when set, interrupts it
+/// between Newton iterations.
+pub fn solve<const D: usize, M: StoredEnergy>(
+    problem: impl Into<Network<D, M>>,
+    params: &StaticsParams,
+    stop: Option<&AtomicBool>,
+) -> Result<Equilibrium<D>, StaticsError> {
+    let (sys, initial) = PhSystem::new(problem)?;
+    solve_system(&sys, &initial.r, params, stop)
+}
+
+/// [`solve`] for a validated system, from positions `r_start` [m] (fixed components must be
+/// at their `t = 0` positions).
+pub fn solve_system<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r_start: &[Vector<D>],
+    params: &StaticsParams,
+    stop: Option<&AtomicBool>,
+) -> Result<Equilibrium<D>, StaticsError> {
+    let f = static_load(sys);
+    let free_motions = free_translations(sys);
+    for &k in &free_motions {
+        let net: f64 = f.iter().map(|v| v[k]).sum();
+        let total: f64 = f.iter().map(|v| v[k].abs()).sum();
+        if net.abs() > 1e-9 * total && net.abs() > 0.0 {
+            return Err(StaticsError::UnderConstrained { axis: AXES[k], net });
+        }
+    }
+    let n = sys.mesh.n_nodes();
+    let mut solver = make_solver::<D>(params.solver, &sys.mesh)?;
+    let mut ws = NewtonWorkspace::<D>::new(&sys.mesh);
+    let mut eq = StaticEquations {
+        sys,
+        r0: r_start,
+        f_ext: &f,
+        lambda: 1.0,
+        mu: 0.0,
+        anchor: vec![Vector::zeros(); n],
+        jac_shift: JAC_SHIFT * initial_shift(sys, r_start, &f),
+        release: false,
+        reaction: vec![Vector::zeros(); n],
+        scale: 0.0,
+        strain_scale: 0.0,
+    };
+    let mut iterations = 0;
+    let mut u = vec![Vector::<D>::zeros(); n];
+
+    // Path 1: Newton at the full load.
+    let newton_msg = match newton::solve(
+        &mut eq,
+        &mut u,
+        &mut ws,
+        solver.as_mut(),
+        &params.newton,
+        stop,
+    ) {
+        Ok(st) => {
+            iterations += st.iterations;
+            let found = finish(
+                sys,
+                r_start,
+                &u,
+                &mut eq,
+                st,
+                StaticsPath::Newton,
+                iterations,
+            );
+            if found.stable {
+                return Ok(found);
+            }
+            UNSTABLE.to_string()
+        }
+        Err(e) => {
+            iterations += ws.last_stats().iterations;
+            if matches!(e, NewtonError::Interrupted(_)) {
+                return Err(StaticsError::Interrupted);
+            }
+            describe(&e)
+        }
+    };
+
+    // Path 2: load continuation.
+    let (mut lambda, mut dl, mut steps) = (0.0f64, 0.25f64, 0usize);
+    let mut u_ok = vec![Vector::<D>::zeros(); n];
+    u.iter_mut().for_each(|x| *x = Vector::zeros());
+    let mut cont_msg = String::new();
+    let mut failed_step = 0;
+    let mut attempts = 0;
+    while attempts < params.max_load_steps {
+        attempts += 1;
+        let target = (lambda + dl).min(1.0);
+        eq.lambda = target;
+        match newton::solve(
+            &mut eq,
+            &mut u,
+            &mut ws,
+            solver.as_mut(),
+            &params.newton,
+            stop,
+        ) {
+            Ok(st) => {
+                iterations += st.iterations;
+                steps += 1;
+                lambda = target;
+                cont_msg.clear();
+                u_ok.copy_from_slice(&u);
+                if lambda >= 1.0 {
+                    let path = StaticsPath::LoadContinuation { steps };
+                    let found = finish(sys, r_start, &u, &mut eq, st, path, iterations);
+                    if found.stable {
+                        return Ok(found);
+                    }
+                    cont_msg = UNSTABLE.to_string();
+                    failed_step = steps;
+                    break;
+                }
+                if st.iterations <= 4 {
+                    dl *= 2.0;
+                }
+            }
+            Err(e) => {
+                iterations += ws.last_stats().iterations;
+                if matches!(e, NewtonError::Interrupted(_)) {
+                    return Err(StaticsError::Interrupted);
+                }
+                cont_msg = describe(&e);
+                failed_step = steps + 1;
+                u.copy_from_slice(&u_ok);
+                dl *= 0.25;
+                if dl < 1e-6 {
+                    break;
+                }
+            }
+        }
+    }
+    if cont_msg.is_empty() {
+        cont_msg = format!("{} load steps were not enough", params.max_load_steps);
+        failed_step = steps + 1;
+    }
+
+    // Path 3: pseudo-transient continuation at the full load from the start, first with
+    // the strings' compression released (slack instead: a string whose start is longer than
+    // its hanging shape falls into it instead of snapping through), then with the law as is.
+    eq.lambda = 1.0;
+    eq.jac_shift = 0.0;
+    let mu0 = initial_shift(sys, r_start, &f);
+    let mut pseudo_steps = 0;
+    let mut pseudo_msg = String::new();
+    for release in [true, false] {
+        u.iter_mut().for_each(|x| *x = Vector::zeros());
+        eq.release = release;
+        let end = pseudo_transient(&mut eq, &mut u, &mut ws, solver.as_mut(), params, mu0, stop);
+        eq.release = false;
+        let (steps, st) = match end {
+            Ok(x) => x,
+            Err(PseudoEnd::Interrupted) => return Err(StaticsError::Interrupted),
+            Err(PseudoEnd::Failed(steps, msg)) => {
+                pseudo_steps += steps;
+                pseudo_msg = msg;
+                continue;
+            }
+        };
+        pseudo_steps += steps;
+        let path = StaticsPath::PseudoTransient {
+            steps: pseudo_steps,
+        };
+        if !release {
+            return Ok(finish(
+                sys,
+                r_start,
+                &u,
+                &mut eq,
+                st,
+                path,
+                iterations + st.iterations,
+            ));
+        }
+        // The slack equilibrium; now Newton with the law as is from there.
+        match newton::solve(
+            &mut eq,
+            &mut u,
+            &mut ws,
+            solver.as_mut(),
+            &params.newton,
+            stop,
+        ) {
+            Ok(st2) => {
+                let found = finish(sys, r_start, &u, &mut eq, st2, path, iterations);
+                if found.stable {
+                    return Ok(found);
+                }
+                pseudo_msg = UNSTABLE.into();
+            }
+            Err(NewtonError::Interrupted(_)) => return Err(StaticsError::Interrupted),
+            Err(e) => pseudo_msg = describe(&e),
+        }
+    }
+    let (element, c_max) = largest_strain(sys, r_start, &u);
+    let hint = if free_motions.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; the structure is free to translate along {}",
+            free_motions
+                .iter()
+                .map(|&k| AXES[k])
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    Err(StaticsError::NotFound(Box::new(NotFound {
+        newton: newton_msg,
+        load_step: failed_step,
+        lambda,
+        continuation: cont_msg,
+        pseudo_steps,
+        pseudo: pseudo_msg,
+        c_max,
+        element,
+        hint,
+    })))
+}
+
+/// How a pseudo-transient run ended without an equilibrium.
+enum PseudoEnd {
+    Interrupted,
+    /// Steps taken and why it stopped.
+    Failed(usize, String),
+}
+
+/// Pseudo-transient continuation (path 3) from `u` at the load of `eq`: proximal steps with the
+/// shift `μ` starting at `mu0`, until the unshifted residual meets the tolerance or an
+/// unshifted Newton solve from the iterate reaches a stable equilibrium. Returns the steps
+/// and the statistics of the last solve; `u` holds the equilibrium.
+#[allow(clippy::too_many_arguments)]
+fn pseudo_transient<const D: usize, M: StoredEnergy>(
+    eq: &mut StaticEquations<'_, D, M>,
+    u: &mut [Vector<D>],
+    ws: &mut NewtonWorkspace<D>,
+    solver: &mut dyn crate::linsolve::LinearSolver<D>,
+    params: &StaticsParams,
+    mu0: f64,
+    stop: Option<&AtomicBool>,
+) -> Result<(usize, newton::NewtonStats), PseudoEnd> {
+    let n = u.len();
+    let mut res = vec![Vector::<D>::zeros(); n];
+    let mut trial = vec![Vector::<D>::zeros(); n];
+    // Pseudo-time steps need not be solved to round-off: only the path's end must be.
+    let loose = NewtonParams {
+        rtol: PSEUDO_RTOL,
+        max_iter: 15,
+        ..params.newton
+    };
+    let polish = NewtonParams {
+        max_iter: 15,
+        ..params.newton
+    };
+    let mut mu = mu0;
+    let mut steps = 0;
+    let mut iterations = 0;
+    while steps < params.max_pseudo_steps {
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Err(PseudoEnd::Interrupted);
+        }
+        eq.mu = mu;
+        eq.anchor.copy_from_slice(u);
+        match newton::solve(eq, u, ws, solver, &loose, stop) {
+            Ok(st) => {
+                iterations += st.iterations;
+                steps += 1;
+                // The unshifted residual at the new iterate.
+                eq.mu = 0.0;
+                let r = match eq.evaluate(u, &mut res, None) {
+                    Ok(()) => newton::norm(&res),
+                    Err(_) => f64::INFINITY,
+                };
+                let tol = params.newton.tolerance(eq.scale);
+                let floor = newton::roundoff_floor(eq.scale, eq.strain_scale);
+                if r <= tol || r <= floor {
+                    let st = newton::NewtonStats {
+                        iterations,
+                        residual: r,
+                        tolerance: tol,
+                        force_scale: eq.scale,
+                        at_roundoff: r > tol,
+                        ..st
+                    };
+                    return Ok((steps, st));
+                }
+                // Newton without the shift, once the residual is small or every few steps.
+                if r <= POLISH_BELOW * eq.scale || steps % POLISH_EVERY == 0 {
+                    trial.copy_from_slice(u);
+                    let polished = newton::solve(eq, &mut trial, ws, solver, &polish, stop);
+                    iterations += ws.last_stats().iterations;
+                    if let Ok(st2) = polished {
+                        let k = tangent_or_released(eq, &trial);
+                        if positive_definite(eq.sys, &k) {
+                            u.copy_from_slice(&trial);
+                            return Ok((steps, newton::NewtonStats { iterations, ..st2 }));
+                        }
+                    }
+                }
+                mu *= match st.iterations {
+                    0..=5 => 0.2,
+                    6..=10 => 0.5,
+                    _ => 1.0,
+                };
+            }
+            Err(NewtonError::Interrupted(_)) => return Err(PseudoEnd::Interrupted),
+            Err(e) => {
+                iterations += ws.last_stats().iterations;
+                u.copy_from_slice(&eq.anchor);
+                mu *= 4.0;
+                if mu > 1e12 * mu0 {
+                    let msg = format!(
+                        "the shift grew beyond 1e12 times its start ({})",
+                        describe(&e)
+                    );
+                    return Err(PseudoEnd::Failed(steps, msg));
+                }
+            }
+        }
+    }
+    Err(PseudoEnd::Failed(
+        steps,
+        format!(
+            "{} pseudo-time steps were not enough",
+            params.max_pseudo_steps
+        ),
+    ))
+}
+
+/// The tangent stiffness at `r₀ + u`, of the released laws while `eq.release` is set.
+fn tangent_or_released<const D: usize, M: StoredEnergy>(
+    eq: &mut StaticEquations<'_, D, M>,
+    u: &[Vector<D>],
+) -> BlockJacobian<D> {
+    let mut j = BlockJacobian::zeros(&eq.sys.mesh);
+    let mut res = vec![Vector::<D>::zeros(); u.len()];
+    let (mu, shift) = (eq.mu, eq.jac_shift);
+    eq.mu = 0.0;
+    eq.jac_shift = 0.0;
+    let ok = eq.evaluate(u, &mut res, Some(&mut j)).is_ok();
+    eq.mu = mu;
+    eq.jac_shift = shift;
+    if !ok {
+        j.clear();
+    }
+    j
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+/// The Newton-matrix shift of paths 1 and 2, relative to the starting shift of path 3.
+const JAC_SHIFT: f64 = 1e-10;
+/// Why a converged path is not taken.
+const UNSTABLE: &str =
+    "it converged to an unstable equilibrium (the tangent stiffness is not positive definite)";
+/// Relative tolerance of a pseudo-time step (the path, not the end, is solved loosely).
+const PSEUDO_RTOL: f64 = 1e-8;
+/// Unshifted Newton is tried once the residual is below this fraction of the force scale…
+const POLISH_BELOW: f64 = 1e-3;
+/// …or every this many pseudo-time steps.
+const POLISH_EVERY: usize = 10;
+
+/// Axes along which no node is held.
+fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
+    (0..D).filter(|&k| sys.free.iter().all(|f| f[k])).collect()
+}
+
+/// The starting shift `μ₀` [1/s²]: the ratio of the stiffness to the mass on the diagonal
+/// (so that the first pseudo-time step is about as stiff as it is heavy), or, where nothing
+/// is stiff yet, the load's acceleration over the shortest element.
+fn initial_shift<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r0: &[Vector<D>],
+    f: &[Vector<D>],
+) -> f64 {
+    let (mut k_tr, mut m_tr, mut l_min) = (0.0, 0.0, f64::INFINITY);
+    for (g, _, [a, b], l) in sys.each_element() {
+        let (_, _, t) = match &g.law {
+            Law::String(m) => element_tangent(m, &r0[a], &r0[b], l),
+            Law::Spring(s) => element_tangent(s, &r0[a], &r0[b], l),
+        };
+        k_tr += 2.0 * t.trace().abs();
+        m_tr += 2.0 * D as f64 * element_mass(g.mass, g.rho_a, l).0;
+        if g.rho_a > 0.0 {
+            l_min = l_min.min(l);
+        }
+    }
+    m_tr += sys
+        .point_mass
+        .iter()
+        .map(|&(_, m)| D as f64 * m)
+        .sum::<f64>();
+    let stiff = if m_tr > 0.0 { k_tr / m_tr } else { 0.0 };
+    let f_norm: f64 = f.iter().map(|v| v.norm()).sum();
+    let accel = if m_tr > 0.0 && l_min.is_finite() {
+        f_norm / (m_tr / D as f64) / l_min
+    } else {
+        0.0
+    };
+    let mu = stiff.max(accel);
+    if mu > 0.0 && mu.is_finite() { mu } else { 1.0 }
+}
+
+/// The element with the largest strain at `r₀ + u`, and that strain.
+fn largest_strain<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    r0: &[Vector<D>],
+    u: &[Vector<D>],
+) -> (usize, f64) {
+    let mut best = (0, f64::NEG_INFINITY);
+    for (e, (&[a, b], &l)) in sys
+        .mesh
+        .elements()
+        .iter()
+        .zip(sys.mesh.lengths())
+        .enumerate()
+    {
+        let c = (((r0[b] - r0[a]) + (u[b] - u[a])) / l).norm_squared();
+        if c > best.1 || c.is_nan() {
+            best = (e, c);
+        }
+    }
+    best
+}
+
+fn describe<E: std::fmt::Debug>(e: &NewtonError<E>) -> String {
+    match e {
+        NewtonError::Eval(x) => format!("a strain left the law's domain: {x:?}"),
+        NewtonError::Linear(l) => format!("singular Newton matrix: {l}"),
+        NewtonError::NonFinite { node, overflow } => {
+            if *overflow {
+                format!("the residual norm overflows (largest at node {node})")
+            } else {
+                format!("non-finite residual at node {node}")
+            }
+        }
+        NewtonError::MaxIterations(s) => format!(
+            "no convergence in {} iterations, residual {:.3e} N against tolerance {:.3e} N",
+            s.iterations, s.residual, s.tolerance
+        ),
+        NewtonError::LineSearch(s) => format!(
+            "the line search found no descent after {} iterations, residual {:.3e} N",
+            s.iterations, s.residual
+        ),
+        NewtonError::Interrupted(_) => "interrupted".into(),
+    }
+}
+
+fn finish<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r0: &[Vector<D>],
+    u: &[Vector<D>],
+    eq: &mut StaticEquations<'_, D, M>,
+    st: newton::NewtonStats,
+    path: StaticsPath,
+    iterations: usize,
+) -> Equilibrium<D> {
+    let r: Vec<Vector<D>> = r0.iter().zip(u).map(|(a, b)| a + b).collect();
+    let state = State::at_rest(&sys.mesh, r);
+    // Reactions and the residual at the final displacement, without shift.
+    eq.mu = 0.0;
+    eq.lambda = 1.0;
+    let mut res = vec![Vector::<D>::zeros(); u.len()];
+    let (residual, scale) = match eq.evaluate(u, &mut res, None) {
+        Ok(()) => (newton::norm(&res), eq.scale),
+        Err(_) => (st.residual, st.force_scale),
+    };
+    let mut reactions = vec![Vector::<D>::zeros(); u.len()];
+    for &i in &sys.constrained {
+        for k in 0..D {
+            if !sys.free[i][k] {
+                reactions[i][k] = eq.reaction[i][k];
+            }
+        }
+    }
+    let energies = sys.energies(&state);
+    let stable = positive_definite(sys, &tangent_blocks(sys, &state.r));
+    Equilibrium {
+        stable,
+        state,
+        reactions,
+        residual,
+        tolerance: st.tolerance,
+        force_scale: scale,
+        at_roundoff: st.at_roundoff,
+        path,
+        iterations,
+        energies,
+    }
+}
