@@ -117,6 +117,21 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Find the static equilibrium of a scenario under its loads at t = 0 (positions,
+    /// tensions, support reactions; CSV, ParaView, plot, summary.json).
+    Statics {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Output folder (default: out/<scenario name>_statics).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scenario key by its dotted path.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Overwrite a non-empty output folder.
+        #[arg(long)]
+        force: bool,
+    },
     /// Validate a scenario file and print what would run.
     Check {
         /// Scenario file (TOML).
@@ -256,6 +271,44 @@ fn dispatch(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Check { scenario, sets } => check(&scenario, &sets),
+        Command::Statics {
+            scenario,
+            out,
+            sets,
+            force,
+        } => {
+            let stop = stop_flag();
+            let file = scenario::load(&scenario, &sets)?;
+            check_budget(&file)?;
+            file.check()?;
+            let out = out.unwrap_or_else(|| {
+                let stem = scenario
+                    .file_stem()
+                    .map_or("run".into(), |s| s.to_string_lossy().into_owned());
+                Path::new("out").join(format!("{stem}_statics"))
+            });
+            let _lock = prepare_out(&out, force)?;
+            let info = phstring_io::statics_run::statics(&file, &out, Some(&stop))?;
+            say!(
+                "equilibrium by {} ({} steps, {} Newton iterations, {:.3} s): residual {:.3e} N (tolerance {:.3e} N){}, tension {} … {} N, internal energy {} J",
+                info.path,
+                info.path_steps,
+                info.newton_iterations,
+                info.solve_s,
+                info.residual,
+                info.tolerance,
+                if info.stable {
+                    ", stable"
+                } else {
+                    ", NOT stable (tangent stiffness not positive definite)"
+                },
+                energy(info.min_tension),
+                energy(info.max_tension),
+                energy(info.internal_energy)
+            );
+            say!("outputs in {}", out.display());
+            Ok(())
+        }
         Command::Sweep {
             scenario,
             vary,

@@ -9,6 +9,7 @@ pub mod output;
 pub mod plot;
 pub mod runner;
 pub mod scenario;
+pub mod statics_run;
 pub mod sweep;
 #[cfg(test)]
 mod test_util;

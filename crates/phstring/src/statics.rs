@@ -586,7 +586,15 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
     for release in [true, false] {
         u.iter_mut().for_each(|x| *x = Vector::zeros());
         eq.release = release;
-        let end = pseudo_transient(&mut eq, &mut u, &mut ws, solver.as_mut(), params, mu0, stop);
+        let end = pseudo_transient(
+            &mut eq,
+            &mut u,
+            (&mut ws, solver.as_mut()),
+            params,
+            mu0,
+            stop,
+            &mut iterations,
+        );
         eq.release = false;
         let (steps, st) = match end {
             Ok(x) => x,
@@ -602,25 +610,19 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
             steps: pseudo_steps,
         };
         if !release {
-            return Ok(finish(
-                sys,
-                r_start,
-                &u,
-                &mut eq,
-                st,
-                path,
-                iterations + st.iterations,
-            ));
+            return Ok(finish(sys, r_start, &u, &mut eq, st, path, iterations));
         }
         // The slack equilibrium; now Newton with the law as is from there.
-        match newton::solve(
+        let solved = newton::solve(
             &mut eq,
             &mut u,
             &mut ws,
             solver.as_mut(),
             &params.newton,
             stop,
-        ) {
+        );
+        iterations += ws.last_stats().iterations;
+        match solved {
             Ok(st2) => {
                 let found = finish(sys, r_start, &u, &mut eq, st2, path, iterations);
                 if found.stable {
@@ -673,11 +675,14 @@ enum PseudoEnd {
 fn pseudo_transient<const D: usize, M: StoredEnergy>(
     eq: &mut StaticEquations<'_, D, M>,
     u: &mut [Vector<D>],
-    ws: &mut NewtonWorkspace<D>,
-    solver: &mut dyn crate::linsolve::LinearSolver<D>,
+    (ws, solver): (
+        &mut NewtonWorkspace<D>,
+        &mut dyn crate::linsolve::LinearSolver<D>,
+    ),
     params: &StaticsParams,
     mu0: f64,
     stop: Option<&AtomicBool>,
+    iterations: &mut usize,
 ) -> Result<(usize, newton::NewtonStats), PseudoEnd> {
     let n = u.len();
     let mut res = vec![Vector::<D>::zeros(); n];
@@ -694,7 +699,6 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
     };
     let mut mu = mu0;
     let mut steps = 0;
-    let mut iterations = 0;
     while steps < params.max_pseudo_steps {
         if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
             return Err(PseudoEnd::Interrupted);
@@ -703,7 +707,7 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
         eq.anchor.copy_from_slice(u);
         match newton::solve(eq, u, ws, solver, &loose, stop) {
             Ok(st) => {
-                iterations += st.iterations;
+                *iterations += st.iterations;
                 steps += 1;
                 // The unshifted residual at the new iterate.
                 eq.mu = 0.0;
@@ -715,7 +719,6 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
                 let floor = newton::roundoff_floor(eq.scale, eq.strain_scale);
                 if r <= tol || r <= floor {
                     let st = newton::NewtonStats {
-                        iterations,
                         residual: r,
                         tolerance: tol,
                         force_scale: eq.scale,
@@ -728,12 +731,12 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
                 if r <= POLISH_BELOW * eq.scale || steps % POLISH_EVERY == 0 {
                     trial.copy_from_slice(u);
                     let polished = newton::solve(eq, &mut trial, ws, solver, &polish, stop);
-                    iterations += ws.last_stats().iterations;
+                    *iterations += ws.last_stats().iterations;
                     if let Ok(st2) = polished {
                         let k = tangent_or_released(eq, &trial);
                         if positive_definite(eq.sys, &k) {
                             u.copy_from_slice(&trial);
-                            return Ok((steps, newton::NewtonStats { iterations, ..st2 }));
+                            return Ok((steps, st2));
                         }
                     }
                 }
@@ -745,7 +748,7 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
             }
             Err(NewtonError::Interrupted(_)) => return Err(PseudoEnd::Interrupted),
             Err(e) => {
-                iterations += ws.last_stats().iterations;
+                *iterations += ws.last_stats().iterations;
                 u.copy_from_slice(&eq.anchor);
                 mu *= 4.0;
                 if mu > 1e12 * mu0 {
