@@ -272,3 +272,333 @@ mod tests {
         }
     }
 }
+
+/// A sparse linear port-Hamiltonian descriptor model
+/// `E ẋ = (J − R) Q x + B u`, `y = Bᵀ Q x`, with Hamiltonian `H = ½ xᵀ Eᵀ Q x`.
+#[derive(Debug, Clone)]
+pub struct LinearPh {
+    /// `E` (symmetric positive definite here).
+    pub e: SparseColMat<usize, f64>,
+    /// `J = −Jᵀ`.
+    pub j: SparseColMat<usize, f64>,
+    /// `R = Rᵀ ⪰ 0` (zero: the string has no dissipation yet).
+    pub r: SparseColMat<usize, f64>,
+    /// `Q`, with `Eᵀ Q` symmetric (positive semidefinite at a stable equilibrium).
+    pub q: SparseColMat<usize, f64>,
+    /// `B`: one column per input.
+    pub b: SparseColMat<usize, f64>,
+    /// Name of every state component, in order, e.g. `r[12].y`, `v[3].x`, `C[7]`, `q[12].y`.
+    pub states: Vec<String>,
+}
+
+/// One input of the linear model: a force component at a node, with the velocity of that
+/// component as its output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ForcePort {
+    /// Node index.
+    pub node: usize,
+    /// Component (0 = x, 1 = y, 2 = z).
+    pub component: usize,
+}
+
+/// The force ports of a system: every component of every loaded node that is free, in the
+/// order of the loads.
+pub fn force_ports<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<ForcePort> {
+    let mut ports = Vec::new();
+    for load in &sys.boundary.loads {
+        for k in 0..D {
+            let p = ForcePort {
+                node: load.node,
+                component: k,
+            };
+            if sys.free[load.node][k] && !ports.contains(&p) {
+                ports.push(p);
+            }
+        }
+    }
+    ports
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+fn sparse(n: usize, m: usize, t: &[Triplet<usize, usize, f64>]) -> SparseColMat<usize, f64> {
+    SparseColMat::try_new_from_triplets(n, m, t).expect("indices in range by construction")
+}
+
+fn triplets(
+    a: &SparseColMat<usize, f64>,
+    row0: usize,
+    col0: usize,
+    sign: f64,
+    out: &mut Vec<Triplet<usize, usize, f64>>,
+) {
+    let a = a.as_ref();
+    for c in 0..a.ncols() {
+        for (r, v) in a.row_idx_of_col(c).zip(a.val_of_col(c)) {
+            out.push(Triplet::new(row0 + r, col0 + c, sign * v));
+        }
+    }
+}
+
+fn identity_triplets(
+    n: usize,
+    row0: usize,
+    col0: usize,
+    sign: f64,
+    out: &mut Vec<Triplet<usize, usize, f64>>,
+) {
+    out.extend((0..n).map(|i| Triplet::new(row0 + i, col0 + i, sign)));
+}
+
+/// The input matrix of `ports` on the free components numbered by `dof` (rows `row0…`).
+fn input_matrix<const D: usize>(
+    ports: &[ForcePort],
+    dof: &[Option<usize>],
+    rows: usize,
+    row0: usize,
+) -> SparseColMat<usize, f64> {
+    let t: Vec<_> = ports
+        .iter()
+        .enumerate()
+        .filter_map(|(c, p)| dof[p.node * D + p.component].map(|r| Triplet::new(row0 + r, c, 1.0)))
+        .collect();
+    sparse(rows, ports.len(), &t)
+}
+
+/// The reduced second-order model on the free position components, about the rest state at
+/// positions `r` [m]: state `x = (q, v)` (displacements [m] and velocities [m/s] of the free
+/// components), `E = diag(I, M)`, `J = [[0, I], [−I, 0]]`, `R = 0`, `Q = diag(K_T, I)`,
+/// `B = [0; B_f]`. So `M q̈ + K_T q = B_f u` and `y = B_fᵀ v`, `H = ½ qᵀ K_T q + ½ vᵀ M v`.
+pub fn reduced_model<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+    ports: &[ForcePort],
+) -> LinearPh {
+    let (dof, n) = free_dofs(sys);
+    let k = restrict(&sys.mesh, &tangent_blocks(sys, r), &dof, n);
+    let m = restrict(&sys.mesh, &mass_blocks(sys), &dof, n);
+    let mut te = Vec::new();
+    identity_triplets(n, 0, 0, 1.0, &mut te);
+    triplets(&m, n, n, 1.0, &mut te);
+    let mut tj = Vec::new();
+    identity_triplets(n, 0, n, 1.0, &mut tj);
+    identity_triplets(n, n, 0, -1.0, &mut tj);
+    let mut tq = Vec::new();
+    triplets(&k, 0, 0, 1.0, &mut tq);
+    identity_triplets(n, n, n, 1.0, &mut tq);
+    let names = free_names(sys, &dof);
+    let states = names
+        .iter()
+        .map(|s| format!("q{s}"))
+        .chain(names.iter().map(|s| format!("v{s}")))
+        .collect();
+    LinearPh {
+        e: sparse(2 * n, 2 * n, &te),
+        j: sparse(2 * n, 2 * n, &tj),
+        r: sparse(2 * n, 2 * n, &[]),
+        q: sparse(2 * n, 2 * n, &tq),
+        b: input_matrix::<D>(ports, &dof, 2 * n, n),
+        states,
+    }
+}
+
+/// `[i].x` for every free component, in free-DOF order.
+fn free_names<const D: usize, M>(sys: &PhSystem<D, M>, dof: &[Option<usize>]) -> Vec<String> {
+    let _ = sys;
+    dof.iter()
+        .enumerate()
+        .filter(|(_, d)| d.is_some())
+        .map(|(i, _)| format!("[{}].{}", i / D, AXES[i % D]))
+        .collect()
+}
+
+/// The paper's mixed model linearized about the rest state at positions `r` [m]: state
+/// `x = (δr, δv, δC)` (free position and velocity components, every element strain),
+/// `E = diag(I, M_ρ, M_S)`, `J = [[0, I, 0], [−I, 0, −2K], [0, 2Kᵀ, 0]]` with `K = K(r)`,
+/// `R = 0`, `Q = diag(K_G, I, diag(W''(C_e)))` with the geometric stiffness `K_G` (the
+/// `S_e I/l_e` part of the tangent stiffness), `B = [0; B_f; 0]`. `Eᵀ Q = diag(K_G, M_ρ,
+/// diag(l_e W''))` is symmetric, and positive semidefinite where every element is in tension.
+pub fn full_model<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+    ports: &[ForcePort],
+) -> LinearPh {
+    let (dof, n) = free_dofs(sys);
+    let n_el = sys.mesh.n_elements();
+    let m = restrict(&sys.mesh, &mass_blocks(sys), &dof, n);
+    // Geometric stiffness, the coupling K(r) (rows: free components, columns: elements) and
+    // W''(C_e).
+    let mut kg = BlockJacobian::zeros(&sys.mesh);
+    let mut tk = Vec::new();
+    let mut w2 = Vec::with_capacity(n_el);
+    for (g, e, [a, b], l) in sys.each_element() {
+        let rp = (r[b] - r[a]) / l;
+        let c = rp.norm_squared();
+        let (s, d2w) = match &g.law {
+            Law::String(m) => (2.0 * m.dw(c), m.d2w(c)),
+            Law::Spring(sp) => (2.0 * sp.dw(c), sp.d2w(c)),
+        };
+        let blk = SMatrix::<f64, D, D>::identity() * (s / l);
+        kg.diag[a] += blk;
+        kg.diag[b] += blk;
+        kg.off[e] = [-blk, -blk];
+        for k in 0..D {
+            if let Some(i) = dof[a * D + k] {
+                tk.push(Triplet::new(i, e, -rp[k]));
+            }
+            if let Some(i) = dof[b * D + k] {
+                tk.push(Triplet::new(i, e, rp[k]));
+            }
+        }
+        w2.push(d2w);
+    }
+    let kg = restrict(&sys.mesh, &kg, &dof, n);
+    let kc = sparse(n, n_el, &tk);
+    let size = 2 * n + n_el;
+    let mut te = Vec::new();
+    identity_triplets(n, 0, 0, 1.0, &mut te);
+    triplets(&m, n, n, 1.0, &mut te);
+    te.extend((0..n_el).map(|e| Triplet::new(2 * n + e, 2 * n + e, sys.mesh.lengths()[e])));
+    let mut tj = Vec::new();
+    identity_triplets(n, 0, n, 1.0, &mut tj);
+    identity_triplets(n, n, 0, -1.0, &mut tj);
+    triplets(&kc, n, 2 * n, -2.0, &mut tj);
+    let kct = kc
+        .as_ref()
+        .transpose()
+        .to_col_major()
+        .expect("transpose of a valid matrix");
+    triplets(&kct, 2 * n, n, 2.0, &mut tj);
+    let mut tq = Vec::new();
+    triplets(&kg, 0, 0, 1.0, &mut tq);
+    identity_triplets(n, n, n, 1.0, &mut tq);
+    tq.extend(
+        w2.iter()
+            .enumerate()
+            .map(|(e, &w)| Triplet::new(2 * n + e, 2 * n + e, w)),
+    );
+    let names = free_names(sys, &dof);
+    let states = names
+        .iter()
+        .map(|s| format!("r{s}"))
+        .chain(names.iter().map(|s| format!("v{s}")))
+        .chain((0..n_el).map(|e| format!("C[{e}]")))
+        .collect();
+    LinearPh {
+        e: sparse(size, size, &te),
+        j: sparse(size, size, &tj),
+        r: sparse(size, size, &[]),
+        q: sparse(size, size, &tq),
+        b: input_matrix::<D>(ports, &dof, size, n),
+        states,
+    }
+}
+
+#[cfg(test)]
+mod model_tests {
+    use super::*;
+    use crate::boundary::{Boundary, Fixed, NodalLoad};
+    use crate::material::Material;
+    use crate::statics::{StaticsParams, solve_system};
+    use crate::system::{MassMatrix, Problem, State};
+    use faer::Mat;
+
+    fn dense(a: &SparseColMat<usize, f64>) -> Mat<f64> {
+        a.as_ref().to_dense()
+    }
+
+    /// A 2D steel rope hanging from node 0 with a tip load port, at its equilibrium.
+    fn hanging() -> (PhSystem<2, Material>, Vec<Vector<2>>) {
+        let mesh = Mesh::uniform_chain(6, 30.0).unwrap();
+        let initial = State::straight(&mesh, Vector::<2>::zeros(), Vector::<2>::new(0.0, -30.0));
+        let p = Problem {
+            mesh,
+            initial,
+            material: Material::hyperelastic(1e7),
+            rho_a: 1.5,
+            body_force: Vector::<2>::new(0.0, -9.81 * 1.5),
+            mass: MassMatrix::Consistent,
+            boundary: Boundary {
+                fixed: vec![Fixed::node(0)],
+                loads: vec![NodalLoad::new(6, |_| Vector::<2>::zeros())],
+                motions: vec![],
+            },
+            point_masses: vec![],
+        };
+        let (sys, init) = PhSystem::new(p).unwrap();
+        let eq = solve_system(&sys, &init.r, &StaticsParams::default(), None).unwrap();
+        (sys, eq.state.r)
+    }
+
+    /// `J = −Jᵀ`, `R = 0`, `Eᵀ Q` symmetric and positive semidefinite, `B` picks the port, in
+    /// both forms; and the full form's momentum row applied to a consistent strain
+    /// `δC = 2 M_S⁻¹ Kᵀ δr` gives the reduced form's `−K_T δr`.
+    #[test]
+    fn full_and_reduced_forms_agree() {
+        let (sys, r) = hanging();
+        let ports = force_ports(&sys);
+        assert_eq!(ports.len(), 2);
+        let full = full_model(&sys, &r, &ports);
+        let red = reduced_model(&sys, &r, &ports);
+        for model in [&full, &red] {
+            let (j, e, q) = (dense(&model.j), dense(&model.e), dense(&model.q));
+            let n = j.nrows();
+            assert_eq!(model.states.len(), n);
+            let eq = e.transpose() * &q;
+            let mut scale = 0.0f64;
+            for a in 0..n {
+                for b in 0..n {
+                    scale = scale.max(eq[(a, b)].abs());
+                }
+            }
+            for a in 0..n {
+                for b in 0..n {
+                    assert_eq!(j[(a, b)], -j[(b, a)]);
+                    assert!((eq[(a, b)] - eq[(b, a)]).abs() <= 1e-12 * scale);
+                }
+            }
+            let ev = eq.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+            assert!(ev.iter().all(|&x| x >= -1e-9 * scale), "{ev:?}");
+            assert_eq!(model.r.compute_nnz(), 0);
+        }
+        let nf = 12; // 6 free nodes × 2
+        let n_el = 6;
+        let jq = dense(&full.j) * dense(&full.q);
+        let kt = dense(&red.q);
+        let mut x = Mat::<f64>::zeros(2 * nf + n_el, 1);
+        for i in 0..nf {
+            x[(i, 0)] = (i as f64 * 0.37).sin();
+        }
+        // δC_e = 2 r'_e·(δr_b − δr_a)/l_e.
+        let dr = |node: usize, k: usize| {
+            if node == 0 {
+                0.0
+            } else {
+                x[((node - 1) * 2 + k, 0)]
+            }
+        };
+        let mut dc = vec![0.0; n_el];
+        for (e, dc) in dc.iter_mut().enumerate() {
+            let l = sys.mesh.lengths()[e];
+            let rp = (r[e + 1] - r[e]) / l;
+            let d: f64 = (0..2).map(|k| rp[k] * (dr(e + 1, k) - dr(e, k))).sum();
+            *dc = 2.0 * d / l;
+        }
+        for (e, dc) in dc.into_iter().enumerate() {
+            x[(2 * nf + e, 0)] = dc;
+        }
+        let y = &jq * &x;
+        for i in 0..nf {
+            let want: f64 = -(0..nf).map(|c| kt[(i, c)] * x[(c, 0)]).sum::<f64>();
+            assert!(
+                (y[(nf + i, 0)] - want).abs() <= 1e-8 * kt[(i, i)].abs(),
+                "{i}: {} vs {want}",
+                y[(nf + i, 0)]
+            );
+        }
+        // The port: the tip's x and y velocity.
+        let b = dense(&red.b);
+        assert_eq!(b[(nf + 10, 0)], 1.0);
+        assert_eq!(b[(nf + 11, 1)], 1.0);
+    }
+}
