@@ -10,6 +10,7 @@ use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
+use phstring_io::export::LinearizeAt;
 use phstring_io::outdir::{self, OutLock};
 use phstring_io::plot::{self, Series};
 use phstring_io::runner::{self, Progress, RunError, RunInfo, RunOptions};
@@ -123,6 +124,24 @@ enum Command {
         /// Scenario file (TOML).
         scenario: PathBuf,
         /// Output folder (default: out/<scenario name>_statics).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scenario key by its dotted path.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Overwrite a non-empty output folder.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Write the linear port-Hamiltonian model about the static equilibrium (or a
+    /// checkpoint's positions): MatrixMarket and scipy .npz matrices and manifest.json.
+    Linearize {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Linearize at this checkpoint's positions instead of the equilibrium.
+        #[arg(long, value_name = "CHECKPOINT")]
+        at: Option<PathBuf>,
+        /// Output folder (default: out/<scenario name>_linear).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Override a scenario key by its dotted path.
@@ -271,6 +290,38 @@ fn dispatch(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Check { scenario, sets } => check(&scenario, &sets),
+        Command::Linearize {
+            scenario,
+            at,
+            out,
+            sets,
+            force,
+        } => {
+            let stop = stop_flag();
+            let file = scenario::load(&scenario, &sets)?;
+            check_budget(&file)?;
+            file.check()?;
+            let out = out.unwrap_or_else(|| default_out(&scenario, "_linear"));
+            let _lock = prepare_out(&out, force)?;
+            let at = at.map_or(LinearizeAt::Equilibrium, LinearizeAt::Checkpoint);
+            let m = phstring_io::export::linearize(&file, &at, &out, Some(&stop))?;
+            for (name, form) in &m.forms {
+                say!(
+                    "{name}: {} states, {} inputs, {} outputs",
+                    form.states.len(),
+                    m.inputs.len(),
+                    m.outputs.len()
+                );
+            }
+            say!(
+                "linearized at {} (static residual {:.3e} N, {})",
+                m.linearized_at,
+                m.static_residual,
+                if m.stable { "stable" } else { "NOT stable" }
+            );
+            say!("outputs in {}", out.display());
+            Ok(())
+        }
         Command::Statics {
             scenario,
             out,
@@ -281,12 +332,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             let file = scenario::load(&scenario, &sets)?;
             check_budget(&file)?;
             file.check()?;
-            let out = out.unwrap_or_else(|| {
-                let stem = scenario
-                    .file_stem()
-                    .map_or("run".into(), |s| s.to_string_lossy().into_owned());
-                Path::new("out").join(format!("{stem}_statics"))
-            });
+            let out = out.unwrap_or_else(|| default_out(&scenario, "_statics"));
             let _lock = prepare_out(&out, force)?;
             let info = phstring_io::statics_run::statics(&file, &out, Some(&stop))?;
             say!(
@@ -323,6 +369,14 @@ fn dispatch(cli: Cli) -> Result<()> {
 /// Prepares and locks an output folder ([`outdir::prepare`]): refuses a non-empty folder
 /// unless `force`, a folder another run is using, and symbolic links among phstring's
 /// output names; with `force`, removes exactly the outputs of an earlier run.
+/// `out/<scenario file stem><suffix>`.
+fn default_out(scenario: &Path, suffix: &str) -> PathBuf {
+    let stem = scenario
+        .file_stem()
+        .map_or("run".into(), |s| s.to_string_lossy().into_owned());
+    Path::new("out").join(format!("{stem}{suffix}"))
+}
+
 fn prepare_out(out: &Path, force: bool) -> Result<OutLock> {
     Ok(outdir::prepare(out, force)?)
 }

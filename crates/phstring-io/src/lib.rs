@@ -4,6 +4,7 @@
 
 pub mod animation;
 pub mod checkpoint;
+pub mod export;
 pub mod outdir;
 pub mod output;
 pub mod plot;

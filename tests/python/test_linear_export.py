@@ -1,0 +1,87 @@
+"""The linear port-Hamiltonian export of `phstring linearize`, read back with scipy (and
+pyMOR when it is installed): the matrices are what manifest.json says they are."""
+
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+import scipy.io
+import scipy.linalg
+import scipy.sparse
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+BIN = os.environ.get("PHSTRING_BIN", str(ROOT / "target" / "debug" / "phstring"))
+
+
+def linearize(tmp_path, example, *sets):
+    out = tmp_path / example
+    args = [BIN, "linearize", str(ROOT / "examples" / f"{example}.toml"), "--out", str(out), "--quiet"]
+    for s in sets:
+        args += ["--set", s]
+    subprocess.run(args, check=True, capture_output=True)
+    return out, json.loads((out / "manifest.json").read_text())
+
+
+def load(out, entry):
+    a = scipy.io.mmread(out / entry["mtx"]).tocsc()
+    b = scipy.sparse.load_npz(out / entry["npz"]).tocsc()
+    assert a.shape == tuple(entry["shape"]) == b.shape
+    # MatrixMarket text round-trips exactly (shortest representation).
+    assert (a != b).nnz == 0
+    return b
+
+
+def forms(out, manifest):
+    for name, form in manifest["forms"].items():
+        yield name, form, {k: load(out, v) for k, v in form["matrices"].items()}
+
+
+@pytest.mark.parametrize("example", ["paper_pendulum", "steel_hoist"])
+def test_structure(tmp_path, example):
+    out, m = linearize(tmp_path, example)
+    assert m["stable"]
+    for name, form, mats in forms(out, m):
+        n = len(form["states"])
+        assert len(form["state_units"]) == n
+        E, J, R, Q, B = (mats[k].toarray() for k in "EJRQB")
+        assert E.shape == J.shape == R.shape == Q.shape == (n, n)
+        assert B.shape == (n, len(m["inputs"])) and len(m["outputs"]) == len(m["inputs"])
+        assert np.array_equal(J, -J.T), name
+        assert np.array_equal(R, R.T) and np.linalg.eigvalsh(R).min() >= 0.0
+        EQ = E.T @ Q
+        scale = np.abs(EQ).max()
+        assert np.abs(EQ - EQ.T).max() <= 1e-12 * scale, name
+        assert np.abs(Q - Q.T).max() <= 1e-12 * np.abs(Q).max(), name
+        # Positive semidefinite at the stable equilibrium: the hanging string is in tension.
+        assert np.linalg.eigvalsh(0.5 * (EQ + EQ.T)).min() >= -1e-10 * scale, name
+        assert np.linalg.eigvalsh(Q).min() >= -1e-10 * np.abs(Q).max(), name
+
+
+def transfer(mats, s):
+    E, J, R, Q, B = (mats[k].toarray() for k in "EJRQB")
+    A = (J - R) @ Q
+    return B.T @ Q @ np.linalg.solve(s * E - A, B)
+
+
+def test_full_and_reduced_forms_have_one_transfer_function(tmp_path):
+    out, m = linearize(tmp_path, "paper_pendulum")
+    f = dict((name, mats) for name, _, mats in forms(out, m))
+    for w in [0.3, 1.0, 7.0, 50.0]:
+        gf = transfer(f["full"], 1j * w)
+        gr = transfer(f["reduced"], 1j * w)
+        assert np.abs(gf - gr).max() <= 1e-8 * np.abs(gr).max(), w
+
+
+def test_pymor_phltimodel(tmp_path):
+    pymor = pytest.importorskip("pymor.models.iosys")
+    out, m = linearize(tmp_path, "paper_pendulum")
+    for name, _, mats in forms(out, m):
+        fom = pymor.PHLTIModel.from_matrices(mats["J"], mats["R"], mats["B"], E=mats["E"], Q=mats["Q"])
+        assert fom.dim_input == len(m["inputs"]) and fom.dim_output == len(m["outputs"])
+        for w in [0.5, 5.0]:
+            got = fom.transfer_function.eval_tf(1j * w)
+            want = transfer(mats, 1j * w)
+            assert np.abs(got - want).max() <= 1e-8 * np.abs(want).max(), (name, w)
