@@ -172,7 +172,7 @@ fn linearize_dim<const D: usize>(
                 .sim
                 .r
                 .chunks(D)
-                .map(|c| Vector::<D>::from_column_slice(c))
+                .map(Vector::<D>::from_column_slice)
                 .collect();
             let t = cp.sim.t_base + cp.sim.k as f64 * cp.sim.h_cur;
             (sys, r, t, path.display().to_string())
