@@ -65,6 +65,7 @@
 
 pub mod benchmarks;
 pub mod boundary;
+pub mod eigen;
 pub mod error;
 pub mod integrator;
 pub mod linear;
