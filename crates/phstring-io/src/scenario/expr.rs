@@ -1,5 +1,6 @@
 //! Expressions of time in `force` and `position` (nanoexpr), and their evaluation during a
-//! run, where a failure becomes NaN (the step fails) and is recorded for the message.
+//! run, where a failure becomes NaN (the step fails) and is recorded for the message. The
+//! expressions of `[initial]` (of `s`, `L`, `x`, `y`, `z`) are in `initial.rs`.
 
 use nanoexpr::Math;
 
@@ -34,6 +35,20 @@ pub(super) fn eval_or_record(
     f64::NAN
 }
 
+/// The error `e` of expression `text` for a message: its kind and the part of the text it
+/// concerns, e.g. `division by zero (at "1/s", characters 0..3)`.
+pub(super) fn describe(text: &str, e: &nanoexpr::Error) -> String {
+    let s = e.span;
+    let part = text.get(s.start..s.end).unwrap_or("");
+    format!(
+        "{} (at \"{}\", characters {}..{})",
+        e.kind,
+        clip(part),
+        s.start,
+        s.end
+    )
+}
+
 /// Whether a force expression is the literal zero (`"0"`, `"0.0"`, …).
 pub(super) fn is_zero(text: &str) -> bool {
     text.trim().parse::<f64>() == Ok(0.0)
@@ -59,17 +74,7 @@ impl Expr {
     /// Evaluates at time `t` [s].
     pub fn eval(&self, t: f64) -> Result<f64, String> {
         let ctx = ([("t", t)], Math);
-        nanoexpr::evaluate_with::<f64, _>(&self.text, &ctx).map_err(|e| {
-            let s = e.span;
-            let part = self.text.get(s.start..s.end).unwrap_or("");
-            format!(
-                "{} (at \"{}\", characters {}..{})",
-                e.kind,
-                clip(part),
-                s.start,
-                s.end
-            )
-        })
+        nanoexpr::evaluate_with::<f64, _>(&self.text, &ctx).map_err(|e| describe(&self.text, &e))
     }
     /// The expression text.
     pub fn text(&self) -> &str {
