@@ -5,8 +5,9 @@
 //!
 //! Each part of a scenario has its own validator, in its own file: `single.rs` (geometry,
 //! mesh), `material.rs` (cross-sections), `network.rs` (materials, nodes, strings,
-//! springs), `attach.rs` (point masses, boundary conditions), `settings.rs` (body force,
-//! time, Newton, output); `refs.rs` resolves node references.
+//! springs), `attach.rs` (point masses, boundary conditions), `initial.rs` (the initial
+//! state), `settings.rs` (body force, time, Newton, output); `refs.rs` resolves node
+//! references.
 //!
 //! Errors name the key and its `line:column` in the file (or the `--set` option that gave
 //! the value).
@@ -14,6 +15,7 @@
 mod attach;
 mod components;
 mod expr;
+mod initial;
 mod material;
 mod network;
 mod overrides;
@@ -28,7 +30,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use phstring::{
-    Boundary, Material, Network, NetworkBuilder, PointMass, Problem, StepParams, Vector,
+    Boundary, Material, Network, NetworkBuilder, PointMass, Problem, State, StepParams, Vector,
 };
 use toml::Spanned;
 
@@ -37,14 +39,16 @@ pub use components::{
     StringComponent, SupportComponent,
 };
 pub use expr::Expr;
+pub use initial::InitialConditions;
 pub use network::{MAX_NAME_BYTES, MAX_NAMED_NODES, MAX_PATH, MAX_SPRINGS, MAX_STRINGS};
 pub use overrides::{MAX_BRACES, MAX_KEY_BYTES, MAX_KEY_SEGMENTS};
 pub use refs::NodeRef;
 pub use settings::MAX_STEPS;
 pub use single::MAX_ELEMENTS;
 pub use spec::{
-    BodyForceSpec, BoundarySpec, FixedSpec, Geometry, MaterialSpec, MeshSpec, NewtonSpec, NodeSpec,
-    OutputSpec, PointMassSpec, Scenario, SpringSpec, StringPathSpec, TimeSpec,
+    BodyForceSpec, BoundarySpec, FixedSpec, Geometry, InitialSpec, MaterialSpec, MeshSpec,
+    NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec, StringPathSpec,
+    TimeSpec,
 };
 
 use components::AXES;
@@ -276,8 +280,13 @@ pub struct RunSettings {
 /// A validated problem in dimension `D` plus run settings and what reports need.
 pub struct Validated<const D: usize> {
     /// The problem: a network (a single-string scenario is a network of one group, built
-    /// as the chain it always was).
+    /// as the chain it always was). Its initial state is the one `[initial]` gives on the
+    /// geometry's shape — unless `initial.equilibrium` is set: then it is the geometry's
+    /// shape at rest, the starting point for the equilibrium solve, and the run builds the
+    /// state with [`Validated::initial_state`] on the equilibrium positions.
     pub problem: Network<D, Material>,
+    /// `[initial]`: equilibrium start, displacement and velocity fields, per-node lists.
+    pub initial: InitialConditions<D>,
     /// Settings.
     pub settings: RunSettings,
     /// Whether the scenario is a network (`[[string]]` tables) rather than one string.
@@ -546,9 +555,18 @@ impl ScenarioFile {
             self.check_spring_nodes(&skeleton, &parts.boundary, &point_masses)?;
         }
         let mut components = std::mem::take(&mut skeleton.components);
-        let problem = skeleton
+        let mut problem = skeleton
             .finish(parts.boundary, point_masses)
             .map_err(|cause| self.setup_error(cause))?;
+        let initial = self.initial_conditions(&problem, layout == Layout::Network)?;
+        if initial.changes_base() {
+            // Every expression is evaluated at every node now, on the geometry's shape; with
+            // `equilibrium` the run applies them again to the equilibrium shape.
+            let state = initial.apply(&problem, &problem.initial.r)?;
+            if !initial.equilibrium {
+                problem.initial = state;
+            }
+        }
         // Block Thomas needs a chain mesh: every single string, and a network numbered as one.
         let settings = self.run_settings(problem.mesh.is_chain())?;
         for st in &mut components.strings {
@@ -569,6 +587,7 @@ impl ScenarioFile {
             .collect();
         Ok(Validated {
             problem,
+            initial,
             settings,
             network: layout == Layout::Network,
             components,
@@ -584,6 +603,15 @@ impl ScenarioFile {
             with_sets: !self.overrides.is_empty(),
             cause,
         }
+    }
+}
+
+impl<const D: usize> Validated<D> {
+    /// The initial state from the base positions `base` [m] (one per mesh node: the
+    /// equilibrium positions with `initial.equilibrium`), with the displacement, velocity,
+    /// positions and velocities of `[initial]`: [`InitialConditions::apply`] on this problem.
+    pub fn initial_state(&self, base: &[Vector<D>]) -> Result<State<D>, ScenarioError> {
+        self.initial.apply(&self.problem, base)
     }
 }
 

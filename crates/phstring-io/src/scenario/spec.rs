@@ -50,6 +50,10 @@ pub struct Scenario {
     /// Point masses at nodes (payloads, clump weights), one table each.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point_mass: Vec<PointMassSpec>,
+    /// The initial state, if it is not the straight one at rest: static equilibrium,
+    /// displacement and velocity fields, or per-node lists.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial: Option<InitialSpec>,
     /// Time stepping.
     pub time: TimeSpec,
     /// Newton's method and the linear solver.
@@ -212,6 +216,35 @@ pub struct PointMassSpec {
     pub node: Spanned<NodeRef>,
     /// Mass [kg].
     pub kg: Spanned<f64>,
+}
+
+/// `[initial]`: how the run starts, instead of at rest in the straight (or polyline, or
+/// straight-span) shape the geometry gives.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    /// Start from the static equilibrium under the loads at `t = 0` (default `false`); the
+    /// displacement and velocity are then applied to the equilibrium shape.
+    #[serde(default = "no")]
+    pub equilibrium: Spanned<bool>,
+    /// Displacement [m] added to the base shape: one expression per component of the
+    /// reference arc length `s` [m], the string's reference length `L` [m] and the base
+    /// position `x`, `y`, `z` [m] of the node.
+    #[serde(default)]
+    pub displacement: Option<Spanned<Vec<Spanned<String>>>>,
+    /// Initial velocity [m/s]: one expression per component, of the same variables.
+    #[serde(default)]
+    pub velocity: Option<Spanned<Vec<Spanned<String>>>>,
+    /// Initial position of every mesh node [m], in mesh order (replaces the base shape).
+    #[serde(default)]
+    pub positions: Option<Spanned<Vec<Spanned<Vec<f64>>>>>,
+    /// Initial velocity of every mesh node [m/s], in mesh order.
+    #[serde(default)]
+    pub velocities: Option<Spanned<Vec<Spanned<Vec<f64>>>>>,
+}
+
+fn no() -> Spanned<bool> {
+    Spanned::new(0..0, false)
 }
 
 /// Time stepping.
