@@ -72,6 +72,7 @@ pub mod linear;
 pub mod linsolve;
 pub mod material;
 pub mod mesh;
+pub mod modes;
 pub mod network;
 pub mod newton;
 pub mod observe;

@@ -473,7 +473,8 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
         lambda: 1.0,
         mu: 0.0,
         anchor: vec![Vector::zeros(); n],
-        jac_shift: JAC_SHIFT * initial_shift(sys, r_start, &f),
+        jac_shift: JAC_SHIFT * initial_shift(sys, r_start, &f)
+            / (sys.mesh.n_elements() as f64).powi(2),
         release: false,
         reaction: vec![Vector::zeros(); n],
         scale: 0.0,
@@ -483,7 +484,7 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
     let mut u = vec![Vector::<D>::zeros(); n];
 
     // Path 1: Newton at the full load.
-    let newton_msg = match newton::solve(
+    let newton_msg = match solve_rescaled(
         &mut eq,
         &mut u,
         &mut ws,
@@ -527,7 +528,7 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
         attempts += 1;
         let target = (lambda + dl).min(1.0);
         eq.lambda = target;
-        match newton::solve(
+        match solve_rescaled(
             &mut eq,
             &mut u,
             &mut ws,
@@ -613,7 +614,7 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
             return Ok(finish(sys, r_start, &u, &mut eq, st, path, iterations));
         }
         // The slack equilibrium; now Newton with the law as is from there.
-        let solved = newton::solve(
+        let solved = solve_rescaled(
             &mut eq,
             &mut u,
             &mut ws,
@@ -621,7 +622,10 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
             &params.newton,
             stop,
         );
-        iterations += ws.last_stats().iterations;
+        iterations += match &solved {
+            Ok(st) => st.iterations,
+            Err(_) => ws.last_stats().iterations,
+        };
         match solved {
             Ok(st2) => {
                 let found = finish(sys, r_start, &u, &mut eq, st2, path, iterations);
@@ -659,6 +663,73 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
         hint,
     })))
 }
+
+/// Newton's method on the static equations, in rounds of at most [`ROUND_ITER`] iterations
+/// (up to `params.max_iter` in all), each starting with the force and strain scales measured
+/// at its starting point. One solve would measure them once, at its start, which for a
+/// stress-free start holds the loads only: its tolerance and round-off floor would be far
+/// below what the tensioned equilibrium can resolve. A round whose line search can no longer
+/// reduce a residual of at most [`STALL_RTOL`] times the force scale ends the solve at the
+/// round-off floor: a 1e6-element steel rope stalls at 1.5e-3 N against forces of 3.5e7 N.
+fn solve_rescaled<const D: usize, M: StoredEnergy>(
+    eq: &mut StaticEquations<'_, D, M>,
+    u: &mut [Vector<D>],
+    ws: &mut NewtonWorkspace<D>,
+    solver: &mut dyn crate::linsolve::LinearSolver<D>,
+    params: &NewtonParams,
+    stop: Option<&AtomicBool>,
+) -> Result<newton::NewtonStats, NewtonError<Inadmissible>> {
+    let mut res = vec![Vector::<D>::zeros(); u.len()];
+    let mut done = 0;
+    loop {
+        let floor = match eq.evaluate(u, &mut res, None) {
+            Ok(()) => FLOOR_MARGIN * newton::roundoff_floor(eq.scale, eq.strain_scale),
+            Err(_) => 0.0,
+        };
+        let round = NewtonParams {
+            tol: params.tol.max(floor),
+            max_iter: ROUND_ITER.min(params.max_iter.saturating_sub(done)).max(1),
+            ..*params
+        };
+        let add = |mut st: newton::NewtonStats| {
+            st.iterations += done;
+            st
+        };
+        match newton::solve(eq, u, ws, solver, &round, stop) {
+            Ok(mut st) => {
+                st.at_roundoff |= st.residual > params.tolerance(st.force_scale);
+                return Ok(add(st));
+            }
+            Err(NewtonError::LineSearch(mut st))
+                if st.residual <= STALL_RTOL * eq.scale.max(st.force_scale) =>
+            {
+                st.at_roundoff = true;
+                st.tolerance = STALL_RTOL * eq.scale.max(st.force_scale);
+                return Ok(add(st));
+            }
+            Err(NewtonError::MaxIterations(st) | NewtonError::LineSearch(st))
+                if st.residual.is_finite() && done + st.iterations.max(1) < params.max_iter =>
+            {
+                done += st.iterations.max(1);
+            }
+            Err(NewtonError::MaxIterations(st)) => {
+                return Err(NewtonError::MaxIterations(add(st)));
+            }
+            Err(NewtonError::LineSearch(st)) => return Err(NewtonError::LineSearch(add(st))),
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Newton iterations per round of [`solve_rescaled`].
+const ROUND_ITER: usize = 4;
+/// A static residual that the line search cannot reduce is at round-off below this fraction
+/// of the force scale.
+const STALL_RTOL: f64 = 1e-10;
+/// Margin on the round-off floor estimate of a round's tolerance: the rounding noise of
+/// long stiff chains exceeds the estimate (a 2e5-element steel rope: 1.37e-4 N against
+/// 1.12e-4 N).
+const FLOOR_MARGIN: f64 = 4.0;
 
 /// How a pseudo-transient run ended without an equilibrium.
 enum PseudoEnd {
@@ -730,7 +801,7 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
                 // Newton without the shift, once the residual is small or every few steps.
                 if r <= POLISH_BELOW * eq.scale || steps % POLISH_EVERY == 0 {
                     trial.copy_from_slice(u);
-                    let polished = newton::solve(eq, &mut trial, ws, solver, &polish, stop);
+                    let polished = solve_rescaled(eq, &mut trial, ws, solver, &polish, stop);
                     *iterations += ws.last_stats().iterations;
                     if let Ok(st2) = polished {
                         let k = tangent_or_released(eq, &trial);
@@ -790,8 +861,12 @@ fn tangent_or_released<const D: usize, M: StoredEnergy>(
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
-/// The Newton-matrix shift of paths 1 and 2, relative to the starting shift of path 3.
-const JAC_SHIFT: f64 = 1e-10;
+/// The Newton-matrix shift of paths 1 and 2, relative to the starting shift of path 3
+/// divided by the squared number of elements. `μ₀` is an element's stiffness over its mass;
+/// a chain of `n` elements is `n²` times softer as a whole (its lowest axial mode), and a
+/// shift near that would slow Newton to linear convergence (a 1e5-element rope: factor 0.5
+/// per iteration with `1e-10 μ₀`).
+const JAC_SHIFT: f64 = 1e-8;
 /// Why a converged path is not taken.
 const UNSTABLE: &str =
     "it converged to an unstable equilibrium (the tangent stiffness is not positive definite)";

@@ -4,6 +4,7 @@
 mod common;
 mod elimination;
 mod momentum;
+mod modes;
 mod motion;
 mod network;
 mod order;
