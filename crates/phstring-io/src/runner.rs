@@ -133,6 +133,9 @@ pub enum RunError {
     /// Reading or writing a checkpoint failed.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
+    /// The starting equilibrium (`initial.equilibrium`) was not found.
+    #[error("initial.equilibrium: {0}")]
+    Statics(phstring::statics::StaticsError),
     /// The run was stopped (Ctrl-C or `--stop-after-steps`); it can be resumed.
     #[error("interrupted at t = {} s after {steps} steps; outputs so far are in {}; continue with `phstring run --resume {}`", phstring::Num(*t), dir.display(), checkpoint.display())]
     Interrupted {
@@ -227,6 +230,10 @@ pub struct RunInfo {
     pub time_loop_s: f64,
     /// Whether the run was resumed from a checkpoint.
     pub resumed: bool,
+    /// With `initial.equilibrium`: how the starting equilibrium was found (path, steps,
+    /// iterations, residual); absent otherwise and on a resume.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub initial_equilibrium: Option<String>,
     /// Id of the run (also in the folder's [`RUN_ID_FILE`] and in its checkpoints).
     pub run_id: String,
     /// Plots written (stems, each as `.svg` and `.png`).
@@ -278,7 +285,23 @@ fn run_dim<const D: usize>(
     progress: &mut dyn Progress,
     mut opts: RunOptions,
 ) -> Result<RunInfo, RunError> {
-    let v = file.validate::<D>()?;
+    let mut v = file.validate::<D>()?;
+    // The starting equilibrium, then the scenario's displacement and velocity on it; a
+    // resume takes its state from the checkpoint instead.
+    let mut initial_equilibrium = None;
+    if v.initial.equilibrium && opts.resume.is_none() {
+        let (_, eq) = crate::statics_run::solve_validated(&v, opts.stop.as_deref())
+            .map_err(RunError::Statics)?;
+        v.problem.initial = v.initial_state(&eq.state.r)?;
+        initial_equilibrium = Some(format!(
+            "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
+            eq.path.name(),
+            eq.path.steps(),
+            eq.iterations,
+            eq.residual,
+            if eq.stable { "stable" } else { "not stable" }
+        ));
+    }
     let settings = v.settings.clone();
     let load_error = v.load_error.clone();
     let components = v.components;
@@ -298,6 +321,7 @@ fn run_dim<const D: usize>(
         settings,
     };
     let mut info = new_info(&ctx, &sim, components, resume.is_some());
+    info.initial_equilibrium = initial_equilibrium;
     let fresh = resume.is_none();
     let writers = match resume {
         Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
@@ -421,6 +445,7 @@ fn new_info<const D: usize>(
         hamiltonian_final: sim.energies().hamiltonian(),
         time_loop_s: 0.0,
         resumed,
+        initial_equilibrium: None,
         run_id: ctx.run_id.clone(),
         plots: Vec::new(),
         plots_skipped: Vec::new(),

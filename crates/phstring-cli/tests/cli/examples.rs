@@ -94,6 +94,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("crane_2d", 2, 3600, 10, 41),
         ("platform_3d", 3, 1500, 10, 50),
         ("net_3d", 3, 1000, 10, 1321),
+        ("mooring_line", 2, 2000, 20, 161),
     ];
     let mut files: Vec<String> = std::fs::read_dir(workspace_root().join("examples"))
         .unwrap()

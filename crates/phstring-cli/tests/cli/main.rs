@@ -6,6 +6,7 @@ mod hardening_cli;
 mod hardening_io;
 mod network;
 mod reliability;
+mod statics;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

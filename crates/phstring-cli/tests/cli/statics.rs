@@ -1,0 +1,172 @@
+//! `phstring statics` and `phstring linearize`, and a run that starts from the equilibrium
+//! (issue 12), on the mooring-line example.
+
+use super::{phstring, temp_dir};
+
+fn summary(p: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p.join("summary.json")).unwrap()).unwrap()
+}
+
+fn csv_rows(p: &std::path::Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(p)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect()
+}
+
+/// The slack mooring line reaches a stable equilibrium; the support reactions carry the
+/// line's weight (20 kg/m × 160 m × g) to 1e-9, every element is in tension, and the outputs
+/// are complete.
+#[test]
+fn statics_of_the_mooring_line_balances_its_weight() {
+    let out = temp_dir("statics-mooring");
+    let o = phstring(&[
+        "statics",
+        "examples/mooring_line.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    assert_eq!(s["stable"], true);
+    assert_eq!(
+        s["path"], "pseudo_transient",
+        "a slack start needs the robust path"
+    );
+    let weight = 20.0 * 160.0 * 9.81;
+    let total_y = s["total_reaction"][1].as_f64().unwrap();
+    assert!(
+        (total_y - weight).abs() <= 1e-9 * weight,
+        "{total_y} vs {weight}"
+    );
+    assert!(s["total_reaction"][0].as_f64().unwrap().abs() <= 1e-9 * weight);
+    assert!(s["min_tension"].as_f64().unwrap() > 0.0);
+    let tension = csv_rows(&out.join("tension.csv"));
+    assert_eq!(tension.len(), 160);
+    for f in [
+        "equilibrium.csv",
+        "equilibrium.vtp",
+        "equilibrium.png",
+        "equilibrium.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+}
+
+/// `initial.equilibrium = true`: the run's first positions are the statics positions, bit for
+/// bit, and its summary says how they were found.
+#[test]
+fn a_run_starts_from_the_statics_equilibrium() {
+    let st = temp_dir("statics-for-run");
+    let o = phstring(&[
+        "statics",
+        "examples/mooring_line.toml",
+        "--out",
+        st.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let run = temp_dir("run-from-equilibrium");
+    let o = phstring(&[
+        "run",
+        "examples/mooring_line.toml",
+        "--out",
+        run.to_str().unwrap(),
+        "--set",
+        "time.end=0.2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let eq = csv_rows(&st.join("equilibrium.csv"));
+    let first: Vec<Vec<f64>> = csv_rows(&run.join("positions.csv"))
+        .into_iter()
+        .filter(|r| r[0] == 0.0)
+        .collect();
+    assert_eq!(first.len(), eq.len());
+    for (a, b) in first.iter().zip(&eq) {
+        assert_eq!(&a[2..4], &b[1..3], "node {}", b[0]);
+    }
+    let s = summary(&run);
+    assert!(
+        s["initial_equilibrium"]
+            .as_str()
+            .unwrap()
+            .starts_with("pseudo_transient")
+    );
+    let err = s["max_balance_error"].as_f64().unwrap();
+    let h0 = s["hamiltonian_initial"].as_f64().unwrap().abs();
+    assert!(err <= 1e-13 * h0, "balance {err} of {h0}");
+}
+
+/// A string held in x only, under gravity in y: no equilibrium, and the message says why.
+#[test]
+fn statics_names_a_free_translation() {
+    let dir = temp_dir("statics-free");
+    let file = dir.join("free.toml");
+    std::fs::write(
+        &file,
+        r#"dimension = 2
+[geometry]
+start = [0.0, 0.0]
+end = [10.0, 0.0]
+[mesh]
+elements = 10
+[material]
+law = "linear_elastic"
+ea = 1e6
+rho_a = 1.0
+[body_force]
+gravity = [0.0, -9.81]
+[[boundary]]
+node = 0
+fixed = [true, false]
+[time]
+h = 0.01
+end = 0.1
+"#,
+    )
+    .unwrap();
+    let o = phstring(&[
+        "statics",
+        file.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("free to translate along y"), "{e}");
+    assert!(e.contains("-9.81"), "the net load is named: {e}");
+}
+
+/// `phstring linearize` writes both forms and the manifest (the Python tests read them).
+#[test]
+fn linearize_writes_both_forms_and_a_manifest() {
+    let out = temp_dir("linearize");
+    let o = phstring(&[
+        "linearize",
+        "examples/paper_pendulum.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(m["inputs"].as_array().unwrap().len(), 2);
+    assert_eq!(
+        m["forms"]["reduced"]["states"].as_array().unwrap().len(),
+        120
+    );
+    assert_eq!(m["forms"]["full"]["states"].as_array().unwrap().len(), 150);
+    for form in ["full", "reduced"] {
+        for name in ["E", "J", "R", "Q", "B"] {
+            let mtx = std::fs::read_to_string(out.join(form).join(format!("{name}.mtx"))).unwrap();
+            assert!(mtx.starts_with("%%MatrixMarket matrix coordinate real general"));
+            let npz = std::fs::read(out.join(form).join(format!("{name}.npz"))).unwrap();
+            assert_eq!(&npz[..2], b"PK");
+        }
+    }
+}
