@@ -16,9 +16,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 BIN = os.environ.get("PHSTRING_BIN", str(ROOT / "target" / "debug" / "phstring"))
 
 
-def linearize(tmp_path, example, *sets):
+def linearize(tmp_path, example, *sets, modes=None):
     out = tmp_path / example
     args = [BIN, "linearize", str(ROOT / "examples" / f"{example}.toml"), "--out", str(out), "--quiet"]
+    if modes is not None:
+        args += ["--modes", str(modes)]
     for s in sets:
         args += ["--set", s]
     subprocess.run(args, check=True, capture_output=True)
@@ -85,3 +87,26 @@ def test_pymor_phltimodel(tmp_path):
             got = fom.transfer_function.eval_tf(1j * w)
             want = transfer(mats, 1j * w)
             assert np.abs(got - want).max() <= 1e-8 * np.abs(want).max(), (name, w)
+
+
+def test_modal_truncation(tmp_path):
+    """All 60 modes of the pendulum: the modal form has the reduced form's transfer function."""
+    out, m = linearize(tmp_path, "paper_pendulum", modes=60)
+    f = dict((name, mats) for name, _, mats in forms(out, m))
+    Q = f["modal"]["Q"].toarray()
+    assert np.all(np.diag(Q) >= 0.0) and np.array_equal(Q, np.diag(np.diag(Q)))
+    for w in [0.3, 1.0, 7.0]:
+        gm = transfer(f["modal"], 1j * w)
+        gr = transfer(f["reduced"], 1j * w)
+        assert np.abs(gm - gr).max() <= 1e-7 * np.abs(gr).max(), w
+    # Fewer modes: still port-Hamiltonian, and the low-frequency error shrinks as modes are
+    # added (measured 2.6 % of |G| at 0.3 rad/s with 10 modes).
+    errs = []
+    for k in [10, 20, 40]:
+        out, m = linearize(tmp_path / f"k{k}", "paper_pendulum", modes=k)
+        f = dict((name, mats) for name, _, mats in forms(out, m))
+        assert len(m["forms"]["modal"]["states"]) == 2 * k
+        gm = transfer(f["modal"], 0.3j)
+        gr = transfer(f["reduced"], 0.3j)
+        errs.append(np.abs(gm - gr).max() / np.abs(gr).max())
+    assert errs[0] > errs[1] > errs[2], errs

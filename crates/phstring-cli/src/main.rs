@@ -141,6 +141,9 @@ enum Command {
         /// Linearize at this checkpoint's positions instead of the equilibrium.
         #[arg(long, value_name = "CHECKPOINT")]
         at: Option<PathBuf>,
+        /// Also write the modal truncation to the K lowest natural modes (form `modal`).
+        #[arg(long, value_name = "K", value_parser = at_least_one)]
+        modes: Option<usize>,
         /// Output folder (default: out/<scenario name>_linear).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -293,6 +296,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Linearize {
             scenario,
             at,
+            modes,
             out,
             sets,
             force,
@@ -304,7 +308,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             let out = out.unwrap_or_else(|| default_out(&scenario, "_linear"));
             let _lock = prepare_out(&out, force)?;
             let at = at.map_or(LinearizeAt::Equilibrium, LinearizeAt::Checkpoint);
-            let m = phstring_io::export::linearize(&file, &at, &out, Some(&stop))?;
+            let m = phstring_io::export::linearize(&file, &at, modes, &out, Some(&stop))?;
             for (name, form) in &m.forms {
                 say!(
                     "{name}: {} states, {} inputs, {} outputs",

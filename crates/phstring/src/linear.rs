@@ -602,3 +602,52 @@ mod model_tests {
         assert_eq!(b[(nf + 11, 1)], 1.0);
     }
 }
+
+/// Structure-preserving modal truncation: the reduced model projected onto the natural modes
+/// `φ_1 … φ_k` ([`crate::modes::modes`], `M`-orthonormal), state `x = (η, ν)` (modal
+/// coordinates [kg^½·m] and their rates), `E = I`, `J = [[0, I], [−I, 0]]`, `R = 0`,
+/// `Q = diag(ω_1², …, ω_k², I)`, `B = [0; Φᵀ B_f]`, so `η̈_i + ω_i² η_i = φ_iᵀ B_f u` and
+/// `y = B_fᵀ Φ η̇`. It is again port-Hamiltonian (`H = ½ Σ (ω_i² η_i² + ν_i²)`), and with every
+/// mode kept it has the transfer function of the reduced model.
+pub fn modal_model<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    modes: &[crate::modes::Mode<D>],
+    ports: &[ForcePort],
+) -> LinearPh {
+    let k = modes.len();
+    let mut te = Vec::new();
+    identity_triplets(2 * k, 0, 0, 1.0, &mut te);
+    let mut tj = Vec::new();
+    identity_triplets(k, 0, k, 1.0, &mut tj);
+    identity_triplets(k, k, 0, -1.0, &mut tj);
+    let mut tq: Vec<_> = modes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| Triplet::new(i, i, m.omega * m.omega))
+        .collect();
+    identity_triplets(k, k, k, 1.0, &mut tq);
+    let mut tb = Vec::new();
+    for (c, p) in ports.iter().enumerate() {
+        if !sys.free[p.node][p.component] {
+            continue;
+        }
+        for (i, m) in modes.iter().enumerate() {
+            let v = m.shape[p.node][p.component];
+            if v != 0.0 {
+                tb.push(Triplet::new(k + i, c, v));
+            }
+        }
+    }
+    let states = (0..k)
+        .map(|i| format!("eta[{i}]"))
+        .chain((0..k).map(|i| format!("nu[{i}]")))
+        .collect();
+    LinearPh {
+        e: sparse(2 * k, 2 * k, &te),
+        j: sparse(2 * k, 2 * k, &tj),
+        r: sparse(2 * k, 2 * k, &[]),
+        q: sparse(2 * k, 2 * k, &tq),
+        b: sparse(2 * k, ports.len(), &tb),
+        states,
+    }
+}

@@ -11,6 +11,7 @@ mod order;
 mod paper;
 mod point_mass;
 mod quotient;
+mod reduction;
 mod real_units;
 mod solvers;
 mod statics;
