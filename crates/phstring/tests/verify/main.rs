@@ -3,15 +3,15 @@
 
 mod common;
 mod elimination;
-mod momentum;
 mod modes;
+mod momentum;
 mod motion;
 mod network;
 mod order;
 mod paper;
 mod point_mass;
 mod quotient;
-mod reduction;
 mod real_units;
+mod reduction;
 mod solvers;
 mod statics;
