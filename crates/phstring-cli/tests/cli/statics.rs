@@ -170,3 +170,63 @@ fn linearize_writes_both_forms_and_a_manifest() {
         }
     }
 }
+
+/// `--at checkpoint.json`: the model about a state of an interrupted run, whose time and
+/// (nonzero, off equilibrium) static residual the manifest states.
+#[test]
+fn linearize_at_a_checkpoint() {
+    let run = temp_dir("linearize-at-run");
+    let o = phstring(&[
+        "run",
+        "examples/paper_pendulum.toml",
+        "--out",
+        run.to_str().unwrap(),
+        "--stop-after-steps",
+        "10",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let cp = run.join("checkpoint.json");
+    let out = temp_dir("linearize-at");
+    let o = phstring(&[
+        "linearize",
+        "examples/paper_pendulum.toml",
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert!(
+        m["linearized_at"]
+            .as_str()
+            .unwrap()
+            .ends_with("checkpoint.json")
+    );
+    assert!(
+        (m["time"].as_f64().unwrap() - 0.1).abs() < 1e-12,
+        "{}",
+        m["time"]
+    );
+    assert!(
+        m["static_residual"].as_f64().unwrap() > 1e-3,
+        "the swinging pendulum is not at rest"
+    );
+    // A checkpoint of another scenario is refused with a message.
+    let o = phstring(&[
+        "linearize",
+        "examples/taut_string.toml",
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        temp_dir("linearize-at-wrong").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("position values"));
+}
