@@ -154,6 +154,24 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// The lowest natural frequencies and mode shapes about the static equilibrium
+    /// (modes.csv, ParaView frames, plot, summary.json).
+    Modes {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Number of modes.
+        #[arg(long, default_value_t = 10, value_parser = at_least_one)]
+        count: usize,
+        /// Output folder (default: out/<scenario name>_modes).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scenario key by its dotted path.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Overwrite a non-empty output folder.
+        #[arg(long)]
+        force: bool,
+    },
     /// Validate a scenario file and print what would run.
     Check {
         /// Scenario file (TOML).
@@ -293,6 +311,38 @@ fn dispatch(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Check { scenario, sets } => check(&scenario, &sets),
+        Command::Modes {
+            scenario,
+            count,
+            out,
+            sets,
+            force,
+        } => {
+            let stop = stop_flag();
+            let file = scenario::load(&scenario, &sets)?;
+            check_budget(&file)?;
+            file.check()?;
+            let out = out.unwrap_or_else(|| default_out(&scenario, "_modes"));
+            let _lock = prepare_out(&out, force)?;
+            let info = phstring_io::modes_run::modes(&file, count, &out, Some(&stop))?;
+            for (k, m) in info.modes.iter().enumerate() {
+                say!(
+                    "mode {:>3}: {:.6e} Hz  {:.6e} rad/s  {}",
+                    k + 1,
+                    m.frequency_hz,
+                    m.omega_rad_s,
+                    m.character
+                );
+            }
+            say!(
+                "{} ({} solves) about the equilibrium ({}); outputs in {}",
+                info.method,
+                info.solves,
+                info.equilibrium_path,
+                out.display()
+            );
+            Ok(())
+        }
         Command::Linearize {
             scenario,
             at,

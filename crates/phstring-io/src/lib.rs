@@ -5,6 +5,7 @@
 pub mod animation;
 pub mod checkpoint;
 pub mod export;
+pub mod modes_run;
 pub mod outdir;
 pub mod output;
 pub mod plot;

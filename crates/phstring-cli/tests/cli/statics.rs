@@ -230,3 +230,53 @@ fn linearize_at_a_checkpoint() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("position values"));
 }
+
+/// `phstring modes` on the taut-string example (St. Venant–Kirchhoff, EA = 50 N, ρA =
+/// 0.5 kg/m, L = 1 m stretched to 1.2 m, 40 elements): `S = EA/2 (C − 1) = 11 N` with
+/// `C = 1.44`; transverse stiffness `S`, longitudinal `S + 4W''C = S + EA·C = 83 N`;
+/// `ω_j² = 6k/(ρA l²) · 2 sin²(θ/2)/(2 + cos θ)`, `θ = jπ/40`. The four lowest: transverse
+/// j = 1, 2, longitudinal j = 1, transverse j = 3, to 1e-9.
+#[test]
+fn modes_of_the_taut_string_example_match_the_closed_form() {
+    let out = temp_dir("modes-taut");
+    let o = phstring(&[
+        "modes",
+        "examples/taut_string.toml",
+        "--count",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let w = |k: f64, j: f64| {
+        let (l, th) = (1.0 / 40.0, j * std::f64::consts::PI / 40.0);
+        (6.0 * k / (0.5 * l * l) * 2.0 * (th / 2.0).sin().powi(2) / (2.0 + th.cos())).sqrt()
+    };
+    let want = [
+        (w(11.0, 1.0), "transverse"),
+        (w(11.0, 2.0), "transverse"),
+        (w(83.0, 1.0), "longitudinal"),
+        (w(11.0, 3.0), "transverse"),
+    ];
+    let text = std::fs::read_to_string(out.join("modes.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    for (row, (omega, character)) in rows.iter().zip(want) {
+        let got: f64 = row[1].parse().unwrap();
+        assert!((got - omega).abs() <= 1e-9 * omega, "{got} vs {omega}");
+        assert_eq!(row[4], character);
+    }
+    for f in [
+        "modes.pvd",
+        "mode_001.vtp",
+        "mode_004.vtp",
+        "modes.png",
+        "summary.json",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+}

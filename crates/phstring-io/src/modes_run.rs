@@ -1,0 +1,234 @@
+//! `phstring modes`: the lowest natural modes about the static equilibrium of a scenario
+//! (docs/method.md §17).
+//!
+//! Files written into the output folder:
+//! * `modes.csv`: `mode,omega_rad_s,frequency_hz,period_s,character,axial_share`;
+//! * `modes.pvd` and `mode_NNN.vtp`: one ParaView frame per mode (its "time" is the mode
+//!   number), positions = equilibrium + `scale · φ`, point data `shape_x`, `shape_y`,
+//!   `shape_z` (the unscaled `M`-normalized shape);
+//! * `modes.png` / `.svg`: the equilibrium and up to four scaled mode shapes (the snapshot
+//!   labelled `t = k s` is mode `k`; the x–y plane in 3D);
+//! * `summary.json`: method, solves, frequencies, the equilibrium path and the scale.
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use phstring::Law;
+use phstring::modes::{self, ModesError};
+use phstring::statics::StaticsError;
+use serde::Serialize;
+
+use crate::output::{OutputError, atomic_write, num};
+use crate::plot::{GroupDrawing, Topology, network_plot};
+use crate::scenario::{ScenarioError, ScenarioFile};
+use crate::vtk::{FrameData, PvdWriter, write_vtp_frame};
+
+/// Why `phstring modes` failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ModesRunError {
+    /// The scenario is invalid.
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// No equilibrium.
+    #[error(transparent)]
+    Statics(#[from] StaticsError),
+    /// No modes.
+    #[error(transparent)]
+    Modes(#[from] ModesError),
+    /// Writing failed.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// One mode in `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModeInfo {
+    /// Angular frequency [rad/s].
+    pub omega_rad_s: f64,
+    /// Frequency [Hz].
+    pub frequency_hz: f64,
+    /// `longitudinal`, `transverse` or `mixed`.
+    pub character: &'static str,
+}
+
+/// `summary.json` of `phstring modes`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModesInfo {
+    /// `dense` or `lanczos`.
+    pub method: &'static str,
+    /// Linear solves (Lanczos).
+    pub solves: usize,
+    /// How the equilibrium was found.
+    pub equilibrium_path: &'static str,
+    /// Scale of the shapes in the ParaView frames and the plot [m per unit of φ].
+    pub shape_scale: f64,
+    /// The modes, ascending.
+    pub modes: Vec<ModeInfo>,
+}
+
+/// Solves the equilibrium of `file`, then its `count` lowest modes, and writes the outputs
+/// into `out` (which must exist).
+pub fn modes(
+    file: &ScenarioFile,
+    count: usize,
+    out: &Path,
+    stop: Option<&AtomicBool>,
+) -> Result<ModesInfo, ModesRunError> {
+    match file.dimension()? {
+        1 => modes_dim::<1>(file, count, out, stop),
+        2 => modes_dim::<2>(file, count, out, stop),
+        _ => modes_dim::<3>(file, count, out, stop),
+    }
+}
+
+fn write(out: &Path, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
+    let path = out.join(name);
+    atomic_write(&path, bytes).map_err(|cause| OutputError::Io { path, cause })
+}
+
+fn modes_dim<const D: usize>(
+    file: &ScenarioFile,
+    count: usize,
+    out: &Path,
+    stop: Option<&AtomicBool>,
+) -> Result<ModesInfo, ModesRunError> {
+    let v = file.validate::<D>()?;
+    let (sys, eq) = crate::statics_run::solve_validated(&v, stop)?;
+    let r = &eq.state.r;
+    let found = modes::modes(&sys, r, count, v.settings.step.solver)?;
+    // The shapes are drawn with their largest nodal amplitude at 5 % of the largest extent.
+    let extent = (0..D)
+        .map(|k| {
+            let (lo, hi) = r
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p[k]), hi.max(p[k]))
+                });
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    let mut csv = String::from("mode,omega_rad_s,frequency_hz,period_s,character,axial_share\n");
+    let mut infos = Vec::new();
+    for (i, m) in found.modes.iter().enumerate() {
+        let period = if m.omega > 0.0 {
+            num(1.0 / m.hertz())
+        } else {
+            "inf".into()
+        };
+        let _ = writeln!(
+            csv,
+            "{},{},{},{period},{},{}",
+            i + 1,
+            num(m.omega),
+            num(m.hertz()),
+            m.character.name(),
+            num(m.axial_share)
+        );
+        infos.push(ModeInfo {
+            omega_rad_s: m.omega,
+            frequency_hz: m.hertz(),
+            character: m.character.name(),
+        });
+    }
+    write(out, "modes.csv", csv.as_bytes())?;
+    let amax = |m: &modes::Mode<D>| m.shape.iter().map(|p| p.norm()).fold(0.0, f64::max);
+    let scale_of = |m: &modes::Mode<D>| {
+        let a = amax(m);
+        if a > 0.0 && extent > 0.0 {
+            0.05 * extent / a
+        } else {
+            0.0
+        }
+    };
+    let mut pvd = PvdWriter::new(&out.join("modes.pvd"));
+    let zero = vec![[0.0; 3]; r.len()];
+    let names = ["shape_x", "shape_y", "shape_z"];
+    let mut snapshots = vec![(0.0, r.iter().map(plane).collect::<Vec<_>>())];
+    for (i, m) in found.modes.iter().enumerate() {
+        let s = scale_of(m);
+        let points: Vec<[f64; 3]> = r
+            .iter()
+            .zip(&m.shape)
+            .map(|(p, f)| pad(&(p + f * s)))
+            .collect();
+        let comps: Vec<Vec<f64>> = (0..D)
+            .map(|k| m.shape.iter().map(|f| f[k]).collect())
+            .collect();
+        let point_data: Vec<(&str, &[f64])> = comps
+            .iter()
+            .enumerate()
+            .map(|(k, c)| (names[k], c.as_slice()))
+            .collect();
+        let name = format!("mode_{:03}.vtp", i + 1);
+        write_vtp_frame(
+            &out.join(&name),
+            &FrameData {
+                points: &points,
+                segments: sys.mesh().elements(),
+                velocity: &zero,
+                cell_data: &[],
+                cell_ints: &[],
+                point_data: &point_data,
+            },
+        )
+        .map_err(OutputError::from)?;
+        pvd.add((i + 1) as f64, &name);
+        if i < 4 && D >= 2 {
+            snapshots.push((
+                (i + 1) as f64,
+                r.iter()
+                    .zip(&m.shape)
+                    .map(|(p, f)| plane(&(p + f * s)))
+                    .collect(),
+            ));
+        }
+    }
+    pvd.write().map_err(OutputError::from)?;
+    let shape_scale = found.modes.first().map_or(0.0, scale_of);
+    if D >= 2 {
+        let topology = Topology {
+            elements: sys.mesh().elements().to_vec(),
+            groups: sys
+                .groups()
+                .iter()
+                .map(|g| GroupDrawing {
+                    name: g.name.clone(),
+                    elements: g.elements.clone(),
+                    spring: matches!(g.law, Law::Spring(_)),
+                })
+                .collect(),
+            masses: sys.point_masses().to_vec(),
+        };
+        let title = format!(
+            "{}: equilibrium (t = 0) and modes 1–{} (t = k)",
+            file.scenario.title.clone().unwrap_or_default(),
+            snapshots.len() - 1
+        );
+        network_plot(&out.join("modes"), &title, &topology, &snapshots)
+            .map_err(OutputError::from)?;
+    }
+    let info = ModesInfo {
+        method: found.method,
+        solves: found.solves,
+        equilibrium_path: eq.path.name(),
+        shape_scale,
+        modes: infos,
+    };
+    let json = serde_json::to_string_pretty(&info).expect("plain data serializes");
+    write(out, "summary.json", json.as_bytes())?;
+    Ok(info)
+}
+
+fn pad<const D: usize>(r: &phstring::Vector<D>) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for k in 0..D {
+        p[k] = r[k];
+    }
+    p
+}
+
+/// The first two components (the plot's plane).
+fn plane<const D: usize>(r: &phstring::Vector<D>) -> [f64; 2] {
+    [r[0], if D > 1 { r[1] } else { 0.0 }]
+}
