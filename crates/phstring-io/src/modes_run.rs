@@ -14,13 +14,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use phstring::Law;
 use phstring::modes::{self, ModesError};
 use phstring::statics::StaticsError;
 use serde::Serialize;
 
 use crate::output::{OutputError, atomic_write, num};
-use crate::plot::{GroupDrawing, Topology, network_plot};
+use crate::plot::network_plot;
 use crate::scenario::{ScenarioError, ScenarioFile};
 use crate::vtk::{FrameData, PvdWriter, write_vtp_frame};
 
@@ -187,19 +186,7 @@ fn modes_dim<const D: usize>(
     pvd.write().map_err(OutputError::from)?;
     let shape_scale = found.modes.first().map_or(0.0, scale_of);
     if D >= 2 {
-        let topology = Topology {
-            elements: sys.mesh().elements().to_vec(),
-            groups: sys
-                .groups()
-                .iter()
-                .map(|g| GroupDrawing {
-                    name: g.name.clone(),
-                    elements: g.elements.clone(),
-                    spring: matches!(g.law, Law::Spring(_)),
-                })
-                .collect(),
-            masses: sys.point_masses().to_vec(),
-        };
+        let topology = crate::output::system_topology(&sys);
         let title = format!(
             "{}: equilibrium (t = 0) and modes 1–{} (t = k)",
             file.scenario.title.clone().unwrap_or_default(),

@@ -112,7 +112,11 @@ pub fn elements_header() -> &'static str {
 
 /// The drawing of the network of `sim`: its elements, groups and point masses.
 pub fn topology<const D: usize>(sim: &Simulation<D, Material>) -> Topology {
-    let sys = sim.system();
+    system_topology(sim.system())
+}
+
+/// The drawing of the network of `sys`: its elements, groups and point masses.
+pub fn system_topology<const D: usize>(sys: &phstring::PhSystem<D, Material>) -> Topology {
     Topology {
         elements: sys.mesh().elements().to_vec(),
         groups: sys

@@ -17,11 +17,11 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use phstring::statics::{self, Equilibrium, StaticsError, StaticsParams};
-use phstring::{Law, Material, PhSystem, Vector};
+use phstring::{Material, PhSystem, Vector};
 use serde::Serialize;
 
 use crate::output::{OutputError, atomic_write, num};
-use crate::plot::{GroupDrawing, Topology, network_plot};
+use crate::plot::network_plot;
 use crate::scenario::{ScenarioError, ScenarioFile};
 use crate::vtk::{FrameData, write_vtp_frame};
 
@@ -327,19 +327,7 @@ fn plot<const D: usize>(
     } else {
         (0, 1)
     };
-    let topology = Topology {
-        elements: sys.mesh().elements().to_vec(),
-        groups: sys
-            .groups()
-            .iter()
-            .map(|g| GroupDrawing {
-                name: g.name.clone(),
-                elements: g.elements.clone(),
-                spring: matches!(g.law, Law::Spring(_)),
-            })
-            .collect(),
-        masses: sys.point_masses().to_vec(),
-    };
+    let topology = crate::output::system_topology(sys);
     let nodes: Vec<[f64; 2]> = eq.state.r.iter().map(|r| [r[a], r[b]]).collect();
     let axes = ["x", "y", "z"];
     let title = format!(
