@@ -64,6 +64,9 @@ pub struct SimState {
     pub v_mid: Vec<f64>,
     /// Cumulative supplied energy [J].
     pub supplied_total: f64,
+    /// Cumulative dissipated energy [J] (0 in checkpoints written before dissipation existed).
+    #[serde(default)]
+    pub dissipated_total: f64,
     /// Newton iterations so far.
     pub total_newton: usize,
 }
@@ -97,6 +100,7 @@ impl SimState {
             acc: flat(&cp.acc),
             v_mid: flat(&cp.v_mid),
             supplied_total: cp.supplied_total,
+            dissipated_total: cp.dissipated_total,
             total_newton: cp.total_newton,
         }
     }
@@ -118,6 +122,7 @@ impl SimState {
             acc: unflat(&self.acc),
             v_mid: unflat(&self.v_mid),
             supplied_total: self.supplied_total,
+            dissipated_total: self.dissipated_total,
             total_newton: self.total_newton,
         }
     }
@@ -353,6 +358,7 @@ impl CheckpointFile {
             ("sim.h_cur", s.h_cur),
             ("sim.h_min_used", s.h_min_used),
             ("sim.supplied_total", s.supplied_total),
+            ("sim.dissipated_total", s.dissipated_total),
             ("counters.max_balance_error", c.max_balance_error),
             ("counters.max_newton_residual", c.max_newton_residual),
             ("counters.local_newton_work", c.local_newton_work),
@@ -583,6 +589,7 @@ impl CheckpointFile {
         }
         for (name, value, nonneg) in [
             ("sim.supplied_total", s.supplied_total, false),
+            ("sim.dissipated_total", s.dissipated_total, true),
             ("counters.hamiltonian_initial", c.hamiltonian_initial, false),
             ("counters.max_balance_error", c.max_balance_error, true),
             ("counters.max_newton_residual", c.max_newton_residual, true),

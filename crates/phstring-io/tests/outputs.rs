@@ -74,6 +74,7 @@ fn y_network() -> (Simulation<2, Material>, [usize; 4]) {
                 ],
                 loads: vec![NodalLoad::new(p, |t| Vector::<2>::new(5.0 * t, 0.0))],
                 motions: vec![Motion::new(c, 0, |t| 4.0 + 0.5 * t * t)],
+                feedback: vec![],
             },
             vec![
                 PointMass {

@@ -41,6 +41,7 @@ fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             motions: vec![],
+            feedback: vec![],
             fixed: vec![Fixed::node(0), Fixed::node(n_el)],
             loads: vec![],
         },
@@ -136,6 +137,7 @@ fn net<const D: usize>(k: usize, span: usize) -> Network<D, Material> {
                 fixed,
                 loads: vec![],
                 motions: vec![],
+                feedback: vec![],
             },
             vec![],
         )

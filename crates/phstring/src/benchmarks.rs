@@ -55,6 +55,7 @@ pub fn paper_pendulum(n_el: usize) -> Problem<2, Material> {
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             motions: vec![],
+            feedback: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![NodalLoad::new(tip, |t| paper_load(1.0, t))],
         },

@@ -5,11 +5,15 @@
 //! * A **load** applies a nodal force `F(t)` [N] (Neumann). Its port has the force as input
 //!   and the node velocity as output. The discrete-gradient scheme evaluates `F` at the mid
 //!   time `t_{n+½}` (docs/method.md §5).
+//! * A **feedback** port ([`FeedbackLoad`]) is a load whose force is a law of the port's own
+//!   output and state, `u = F(t, r, y)` ([`PortLaw`]): damping injection, PD tracking
+//!   ([`PdLaw`]). It is evaluated at the mid-step inside Newton, so its power is part of the
+//!   exact energy balance (docs/method.md §18).
 
 use std::fmt;
 use std::sync::Arc;
 
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 /// A nodal force signal `t ↦ F(t)` [s ↦ N].
 pub type ForceFn<const D: usize> = Arc<dyn Fn(f64) -> SVector<f64, D> + Send + Sync>;
@@ -104,6 +108,124 @@ impl fmt::Debug for Motion {
     }
 }
 
+/// A user port law: the force `u = F(t, r, y)` [N] on a port node as a function of the time
+/// `t` [s], the node's position `r` [m] and the port output `y` (the node's velocity) [m/s],
+/// with its derivatives. The stepper evaluates it at the mid-step, `t_{n+½}`,
+/// `r_{n+½} = (r_n + r_{n+1})/2` and `y = v_{n+½} = (r_{n+1} − r_n)/h`, inside Newton.
+pub trait PortLaw<const D: usize>: Send + Sync {
+    /// The force [N].
+    fn force(&self, t: f64, r: &SVector<f64, D>, y: &SVector<f64, D>) -> SVector<f64, D>;
+    /// The derivatives `(∂F/∂r [N/m], ∂F/∂y [N·s/m])` at the same arguments.
+    fn jacobian(
+        &self,
+        t: f64,
+        r: &SVector<f64, D>,
+        y: &SVector<f64, D>,
+    ) -> (SMatrix<f64, D, D>, SMatrix<f64, D, D>);
+}
+
+/// A reference-path signal `t ↦ r_ref(t)` [s ↦ m] or its velocity [s ↦ m/s].
+pub type PathFn<const D: usize> = Arc<dyn Fn(f64) -> SVector<f64, D> + Send + Sync>;
+
+/// PD tracking of a reference path with diagonal gains:
+/// `u = K_p (r_ref(t) − r) − K_d (y − v_ref(t))`. With `K_p = 0` and `v_ref = 0` it is damping
+/// injection `u = −K_d y`, which is passive: its supplied energy `h u·y = −h y·K_d y ≤ 0`.
+/// A PD law is a spring (`K_p`) and a dashpot (`K_d`) to the moving point `r_ref`: control by
+/// interconnection.
+#[derive(Clone)]
+pub struct PdLaw<const D: usize> {
+    /// Proportional gains per component [N/m] (≥ 0).
+    pub kp: SVector<f64, D>,
+    /// Derivative gains per component [N·s/m] (≥ 0).
+    pub kd: SVector<f64, D>,
+    /// Reference position `r_ref(t)` [m].
+    pub r_ref: PathFn<D>,
+    /// Reference velocity `v_ref(t)` [m/s].
+    pub v_ref: PathFn<D>,
+}
+
+impl<const D: usize> PdLaw<D> {
+    /// Damping injection `u = −K_d y` with the same gain `kd` [N·s/m] in every component.
+    pub fn damping_injection(kd: f64) -> Self {
+        Self {
+            kp: SVector::zeros(),
+            kd: SVector::from_element(kd),
+            r_ref: Arc::new(|_| SVector::zeros()),
+            v_ref: Arc::new(|_| SVector::zeros()),
+        }
+    }
+    /// PD tracking of `r_ref` [m] with velocity `v_ref` [m/s], gains `kp` [N/m] and `kd`
+    /// [N·s/m] in every component.
+    pub fn tracking(
+        kp: f64,
+        kd: f64,
+        r_ref: impl Fn(f64) -> SVector<f64, D> + Send + Sync + 'static,
+        v_ref: impl Fn(f64) -> SVector<f64, D> + Send + Sync + 'static,
+    ) -> Self {
+        Self {
+            kp: SVector::from_element(kp),
+            kd: SVector::from_element(kd),
+            r_ref: Arc::new(r_ref),
+            v_ref: Arc::new(v_ref),
+        }
+    }
+}
+
+impl<const D: usize> PortLaw<D> for PdLaw<D> {
+    fn force(&self, t: f64, r: &SVector<f64, D>, y: &SVector<f64, D>) -> SVector<f64, D> {
+        let (rr, vr) = ((self.r_ref)(t), (self.v_ref)(t));
+        self.kp.component_mul(&(rr - r)) - self.kd.component_mul(&(y - vr))
+    }
+    fn jacobian(
+        &self,
+        _t: f64,
+        _r: &SVector<f64, D>,
+        _y: &SVector<f64, D>,
+    ) -> (SMatrix<f64, D, D>, SMatrix<f64, D, D>) {
+        (
+            SMatrix::from_diagonal(&(-self.kp)),
+            SMatrix::from_diagonal(&(-self.kd)),
+        )
+    }
+}
+
+impl<const D: usize> fmt::Debug for PdLaw<D> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("PdLaw")
+            .field("kp", &self.kp)
+            .field("kd", &self.kd)
+            .finish_non_exhaustive()
+    }
+}
+
+/// A feedback port: the force on `node` is the law `law` of the port's output
+/// (force in, velocity out, like a [`NodalLoad`]).
+#[derive(Clone)]
+pub struct FeedbackLoad<const D: usize> {
+    /// Node index.
+    pub node: usize,
+    /// The port law.
+    pub law: Arc<dyn PortLaw<D>>,
+}
+
+impl<const D: usize> FeedbackLoad<D> {
+    /// A feedback port at `node` with `law`.
+    pub fn new(node: usize, law: impl PortLaw<D> + 'static) -> Self {
+        Self {
+            node,
+            law: Arc::new(law),
+        }
+    }
+}
+
+impl<const D: usize> fmt::Debug for FeedbackLoad<D> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("FeedbackLoad")
+            .field("node", &self.node)
+            .finish_non_exhaustive()
+    }
+}
+
 /// All boundary conditions of a problem.
 #[derive(Debug, Clone, Default)]
 pub struct Boundary<const D: usize> {
@@ -113,6 +235,8 @@ pub struct Boundary<const D: usize> {
     pub loads: Vec<NodalLoad<D>>,
     /// Prescribed motions (moving supports).
     pub motions: Vec<Motion>,
+    /// Feedback ports (force laws of the port output).
+    pub feedback: Vec<FeedbackLoad<D>>,
 }
 
 /// What a port's input is.

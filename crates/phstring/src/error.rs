@@ -150,6 +150,26 @@ pub enum SetupError {
         /// Group name.
         name: String,
     },
+    /// A damping kind on an element group that does not take it.
+    #[error("element group {group} ({name}): {what}")]
+    MisplacedDamping {
+        /// Group index.
+        group: usize,
+        /// Group name.
+        name: String,
+        /// The damping kind and where it belongs.
+        what: &'static str,
+    },
+    /// A feedback law given for a node out of range or combined with something it cannot be.
+    #[error("feedback port {index} at node {node}: {reason}")]
+    Feedback {
+        /// Index of the feedback port.
+        index: usize,
+        /// Its node.
+        node: usize,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// A node with a free component has no mass (only springs, no string and no point mass
     /// attached): its equation of motion would have no inertia.
     #[error(

@@ -6,14 +6,18 @@
 //! `C_{e,n+1} = C_{e,n} + (r'_{n+1} + r'_n)·(r'_{n+1} − r'_n)` (paper Remark 5). The
 //! remaining momentum balance, divided by `h`, is the Newton residual [N]:
 //!
-//! `R(Δ) = M_ρ (v_{n+1} − v_n)/h − F_b + K(r_{n+½}) S̄ − F_N(t_{n+½})`.
+//! `R(Δ) = M_ρ (v_{n+1} − v_n)/h − F_b + K(r_{n+½}) S̄ − F_N(t_{n+½})`,
+//!
+//! plus, with dissipation and feedback (docs/method.md §18), the Kelvin–Voigt stress
+//! `η ΔC/h` in `S̄`, the drag `c M_c Δ/h`, the dashpots `c (Δ_b − Δ_a)/h` and the feedback
+//! forces `−F(t_{n+½}, r_{n+½}, Δ/h)`.
 
 use nalgebra::SMatrix;
 
 use crate::linsolve::BlockJacobian;
 use crate::material::StoredEnergy;
 use crate::newton::NewtonProblem;
-use crate::system::{Law, MassMatrix, PhSystem, Vector, element_mass};
+use crate::system::{Damping, Law, MassMatrix, PhSystem, Vector, element_mass};
 
 /// The part of a residual evaluation that one element group takes.
 struct ElementKernel {
@@ -25,6 +29,8 @@ struct ElementKernel {
     full: bool,
     /// Rows evaluated when not `full`.
     nodes: std::ops::Range<usize>,
+    /// The group's dissipation.
+    damping: Damping,
 }
 
 /// Time-stepping scheme: how the stress `S̄` of a step is formed.
@@ -91,6 +97,8 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub r0: &'a [Vector<D>],
     pub v0: &'a [Vector<D>],
     pub c0: &'a [f64],
+    /// Mid time `t_{n+½}` [s] (feedback laws are evaluated there).
+    pub t_mid: f64,
     /// `F_b + F_N(t_{n+½})` per node [N].
     pub f_ext: &'a [Vector<D>],
     /// Reaction forces at the constrained components [N] (output).
@@ -147,6 +155,38 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
 }
 
 impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
+    /// The energy `D_n ≥ 0` [J] that the dissipation takes out in a step with increment `x`
+    /// (docs/method.md §18): `Σ_e l_e η ΔC_e²/(2h)` (Kelvin–Voigt), `Δᵀ M_c Δ / h` (drag, with
+    /// the group's mass-matrix pattern) and `c |Δ_b − Δ_a|²/h` (dashpots). Each term is a
+    /// sum of squares with non-negative coefficients, so the computed value is ≥ 0 exactly.
+    pub(crate) fn dissipated(&self, x: &[Vector<D>]) -> f64 {
+        let sys = self.sys;
+        let inv_h = 1.0 / self.h;
+        let mut total = 0.0;
+        for grp in sys.groups.iter().filter(|g| !g.damping.is_none()) {
+            let d = grp.damping;
+            for e in grp.elements.clone() {
+                let [a, b] = sys.mesh.elements()[e];
+                let l = sys.mesh.lengths()[e];
+                if d.kelvin_voigt != 0.0 {
+                    let dc = element_step(&self.r0[a], &self.r0[b], &x[a], &x[b], l).2;
+                    total += 0.5 * d.kelvin_voigt * l * dc * dc * inv_h;
+                }
+                if d.drag != 0.0 {
+                    // Δᵀ [[cd, co], [co, cd]] Δ = (cd − co)(|Δ_a|² + |Δ_b|²) + co |Δ_a + Δ_b|².
+                    let (cd, co) = element_mass(grp.mass, d.drag, l);
+                    let q = (cd - co) * (x[a].norm_squared() + x[b].norm_squared())
+                        + co * (x[a] + x[b]).norm_squared();
+                    total += q * inv_h;
+                }
+                if d.dashpot != 0.0 {
+                    total += d.dashpot * (x[b] - x[a]).norm_squared() * inv_h;
+                }
+            }
+        }
+        total
+    }
+
     /// [`NewtonProblem::evaluate_nodes`]; with `MEASURE` (a full range only) also the force
     /// and strain scales.
     fn evaluate_range<const MEASURE: bool>(
@@ -202,6 +242,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 els: sub,
                 full,
                 nodes: nodes.clone(),
+                damping: grp.damping,
             };
             let jac = jac.as_deref_mut();
             match &grp.law {
@@ -211,6 +252,25 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 Law::Spring(sp) => {
                     self.elements::<_, MEASURE>(sp, k, x, res, jac, &mut scale2, &mut strain2)?
                 }
+            }
+        }
+        // Feedback ports: the force F(t_{n+½}, r_{n+½}, Δ/h) is an input, so −F in the residual.
+        for fb in sys
+            .boundary
+            .feedback
+            .iter()
+            .filter(|f| nodes.contains(&f.node))
+        {
+            let i = fb.node;
+            let (rm, y) = (self.r0[i] + x[i] * 0.5, x[i] * inv_h);
+            let f = fb.law.force(self.t_mid, &rm, &y);
+            res[i] -= f;
+            if let Some(j) = jac.as_deref_mut() {
+                let (dr, dy) = fb.law.jacobian(self.t_mid, &rm, &y);
+                j.diag[i] -= dr * 0.5 + dy * inv_h;
+            }
+            if MEASURE {
+                scale2 += f.norm_squared();
             }
         }
         // Point masses: inertia m (v_{n+1} − v_n)/h at their nodes.
@@ -291,6 +351,9 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
         let (els, full, nodes) = (k.els.clone(), k.full, k.nodes.clone());
         let eye = SMatrix::<f64, D, D>::identity();
+        // Kelvin–Voigt: η/(2h) [N], the change of S̄/2 per unit ΔC.
+        let kv = 0.5 * k.damping.kelvin_voigt * inv_h;
+        let lossy = k.damping.drag != 0.0 || k.damping.dashpot != 0.0;
         for (e, (&[a, b], &l)) in sys.mesh.elements()[els.clone()]
             .iter()
             .zip(&sys.mesh.lengths()[els.clone()])
@@ -310,7 +373,12 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             if !law.admissible(c1) {
                 return Err(StrainError { element: e, c: c1 });
             }
-            let (q, dq) = self.scheme.half_stress(law, c0, c1);
+            let (mut q, mut dq) = self.scheme.half_stress(law, c0, c1);
+            if kv != 0.0 {
+                // Kelvin–Voigt: S̄ gains η ΔC/h, so S̄/2 gains η ΔC/(2h).
+                q += kv * dc;
+                dq += kv;
+            }
             let f = rpm * (2.0 * q);
             if MEASURE {
                 // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
@@ -332,17 +400,38 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 res[b] += wb * md + wa * mo;
                 res[b] += f;
             }
+            // Drag c M_c Δ/h and dashpot c (Δ_b − Δ_a)/h: `(rd, ro)` are their diagonal and
+            // coupling coefficients per unit velocity [N·s/m].
+            let (rd, ro) = if lossy {
+                let (cd, co) = element_mass(k.mass, k.damping.drag, l);
+                (cd + k.damping.dashpot, co - k.damping.dashpot)
+            } else {
+                (0.0, 0.0)
+            };
+            if lossy {
+                let (ua, ub) = (x[a] * inv_h, x[b] * inv_h);
+                if in_a {
+                    res[a] += ua * rd + ub * ro;
+                }
+                if in_b {
+                    res[b] += ub * rd + ua * ro;
+                }
+                if MEASURE {
+                    let m = rd.abs() + ro.abs();
+                    *scale2 += m * m * (ua.norm_squared() + ub.norm_squared());
+                }
+            }
             if let Some(j) = jac.as_deref_mut() {
                 // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
                 let rp1 = rpm + dr * 0.5;
                 let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
                 if in_a {
-                    j.diag[a] += g + eye * (mass_scale * md);
+                    j.diag[a] += g + eye * (mass_scale * md + inv_h * rd);
                 }
                 if in_b {
-                    j.diag[b] += g + eye * (mass_scale * md);
+                    j.diag[b] += g + eye * (mass_scale * md + inv_h * rd);
                 }
-                let off = eye * (mass_scale * mo) - g;
+                let off = eye * (mass_scale * mo + inv_h * ro) - g;
                 j.off[e] = [off, off];
             }
         }
@@ -395,6 +484,30 @@ mod tests {
         }
     }
 
+    /// A nonlinear feedback law for the Jacobian checks:
+    /// `F = −k (|r|² r + t y + (y·y) y)`.
+    struct Cubic {
+        k: f64,
+    }
+
+    impl<const D: usize> crate::boundary::PortLaw<D> for Cubic {
+        fn force(&self, t: f64, r: &Vector<D>, y: &Vector<D>) -> Vector<D> {
+            -(r * r.norm_squared() + y * t + y * y.norm_squared()) * self.k
+        }
+        fn jacobian(
+            &self,
+            t: f64,
+            r: &Vector<D>,
+            y: &Vector<D>,
+        ) -> (SMatrix<f64, D, D>, SMatrix<f64, D, D>) {
+            let eye = SMatrix::<f64, D, D>::identity();
+            (
+                -(eye * r.norm_squared() + r * r.transpose() * 2.0) * self.k,
+                -(eye * (t + y.norm_squared()) + y * y.transpose() * 2.0) * self.k,
+            )
+        }
+    }
+
     /// Random chain state in `D` dimensions with positive strains; node 0 fixed in all
     /// components and node 1 in the first, to exercise the Dirichlet masking.
     fn check_jacobian<const D: usize>(seed: &[f64], scheme: Scheme, material: Material) {
@@ -422,6 +535,7 @@ mod tests {
             mass: MassMatrix::Consistent,
             boundary: Boundary {
                 motions: vec![],
+                feedback: vec![],
                 fixed: vec![
                     Fixed::node(0),
                     Fixed {
@@ -432,7 +546,22 @@ mod tests {
                 loads: vec![],
             },
         };
-        let (sys, state) = PhSystem::new(problem).unwrap();
+        let mut net: crate::system::Network<D, Material> = problem.into();
+        // Kelvin–Voigt and drag of random size (zero in about a quarter of the cases), and a
+        // nonlinear feedback law at the last node.
+        let coef = |x: f64| (x - 0.5).max(0.0) * 4.0;
+        net.groups[0].damping = crate::system::Damping {
+            kelvin_voigt: coef(next()),
+            drag: coef(next()),
+            dashpot: 0.0,
+        };
+        net.boundary
+            .feedback
+            .push(crate::boundary::FeedbackLoad::new(
+                n_el,
+                Cubic { k: next() },
+            ));
+        let (sys, state) = PhSystem::new(net).unwrap();
         let kink = matches!(
             material,
             Material::TensionOnlyLinear(_) | Material::TensionOnlyHyperelastic(_)
@@ -481,6 +610,7 @@ mod tests {
             r0: &state.r,
             v0: &state.v,
             c0: &state.c,
+            t_mid: 0.3,
             f_ext: &f_ext,
             reaction: &mut reaction,
             scale: 0.0,
@@ -619,6 +749,25 @@ mod tests {
         b.spring("link", m0, m1, 5.0, 0.3).unwrap();
         b.spring_to_point("tie", junction, Vector::from_fn(|_, _| 0.5), 3.0, 0.0)
             .unwrap();
+        // A pure dashpot (stiffness 0) from the junction to a fixed point, a dashpot across
+        // the link spring, Kelvin–Voigt and drag on the strings.
+        let pure = b
+            .spring_to_point("damper", ends[2], Vector::from_fn(|_, _| -0.5), 0.0, 0.2)
+            .unwrap();
+        let dash = |c: f64| crate::system::Damping {
+            dashpot: c,
+            ..Default::default()
+        };
+        b.set_damping(pure, dash(0.5 + next().abs())).unwrap();
+        b.set_damping(3, dash(next().abs())).unwrap();
+        for g in 0..3 {
+            let d = crate::system::Damping {
+                kelvin_voigt: next().abs() * 2.0,
+                drag: next().abs(),
+                dashpot: 0.0,
+            };
+            b.set_damping(g, d).unwrap();
+        }
         let mut net = b
             .build(
                 Boundary {
@@ -632,6 +781,7 @@ mod tests {
                     }],
                     loads: vec![],
                     motions: vec![],
+                    feedback: vec![],
                 },
                 vec![PointMass {
                     node: junction,
@@ -647,6 +797,24 @@ mod tests {
         for v in &mut net.initial.v {
             *v = Vector::from_fn(|_, _| next());
         }
+        net.boundary
+            .feedback
+            .push(crate::boundary::FeedbackLoad::new(
+                junction,
+                Cubic { k: next().abs() },
+            ));
+        let (rr, kp, kd) = (next(), next().abs(), next().abs());
+        net.boundary
+            .feedback
+            .push(crate::boundary::FeedbackLoad::new(
+                ends[2],
+                crate::boundary::PdLaw::tracking(
+                    kp,
+                    kd,
+                    move |t| Vector::from_element(rr + t),
+                    |_| Vector::from_element(1.0),
+                ),
+            ));
         let (sys, state) = PhSystem::new(net).unwrap();
         check_system_jacobian(&sys, &state, &mut next, scheme, false);
     }

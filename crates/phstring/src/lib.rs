@@ -52,7 +52,7 @@
 //!     rho_a: 1.0,
 //!     body_force: Vector::<2>::new(0.0, -9.81),                      // −g ρA e_y
 //!     mass: MassMatrix::Consistent,
-//!     boundary: Boundary { fixed: vec![Fixed::node(0)], loads: vec![load], motions: vec![] },
+//!     boundary: Boundary { fixed: vec![Fixed::node(0)], loads: vec![load], motions: vec![], feedback: vec![] },
 //!     point_masses: vec![],                                          // none here
 //! };
 //! let params = StepParams { h: 0.01, scheme: Scheme::DiscreteGradient, ..Default::default() };
@@ -80,7 +80,10 @@ pub mod simulation;
 pub mod statics;
 pub mod system;
 
-pub use boundary::{Boundary, Fixed, ForceFn, Motion, NodalLoad, PortKind, PortSample, PositionFn};
+pub use boundary::{
+    Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
+    PortSample, PositionFn,
+};
 pub use error::{LinearSolveError, Num, SetupError, StepError};
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};
@@ -96,5 +99,6 @@ pub use simulation::{
     estimated_seconds_per_iteration,
 };
 pub use system::{
-    ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State, Vector,
+    Damping, ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State,
+    Vector,
 };

@@ -522,6 +522,7 @@ mod model_tests {
                 fixed: vec![Fixed::node(0)],
                 loads: vec![NodalLoad::new(6, |_| Vector::<2>::zeros())],
                 motions: vec![],
+                feedback: vec![],
             },
             point_masses: vec![],
         };

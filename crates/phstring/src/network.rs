@@ -10,7 +10,7 @@ use crate::boundary::{Boundary, Fixed};
 use crate::error::SetupError;
 use crate::material::LinearSpring;
 use crate::mesh::Mesh;
-use crate::system::{ElementGroup, Law, MassMatrix, Network, PointMass, State, Vector};
+use crate::system::{Damping, ElementGroup, Law, MassMatrix, Network, PointMass, State, Vector};
 
 /// The cross-section and law of one string of a network.
 #[derive(Debug, Clone, PartialEq)]
@@ -157,6 +157,7 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
             rho_a: spec.rho_a,
             mass: spec.mass,
             body_force: spec.body_force,
+            damping: Damping::NONE,
         });
         self.paths.push(nodes);
         Ok(self.groups.len() - 1)
@@ -190,6 +191,7 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
             rho_a: 0.0,
             mass: MassMatrix::Lumped,
             body_force: Vector::zeros(),
+            damping: Damping::NONE,
         });
         self.paths.push(vec![a, b]);
         Ok(self.groups.len() - 1)
@@ -209,6 +211,19 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
         let anchor = self.node(p);
         self.anchors.push(anchor);
         self.spring(name, a, anchor, k, rest)
+    }
+
+    /// Sets the dissipation of group `g` (a string's Kelvin–Voigt viscosity and drag, a
+    /// spring's dashpot); the values are checked when the system is set up.
+    pub fn set_damping(&mut self, g: usize, damping: Damping) -> Result<(), SetupError> {
+        let n = self.groups.len();
+        let grp = self.groups.get_mut(g).ok_or(SetupError::NodeOutOfRange {
+            what: "element group (set_damping)",
+            node: g,
+            n_nodes: n,
+        })?;
+        grp.damping = damping;
+        Ok(())
     }
 
     /// The nodes of group `g` in path order (a spring: its two ends).

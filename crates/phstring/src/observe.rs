@@ -41,7 +41,9 @@ pub struct StepReport {
     pub after: Energies,
     /// Energy supplied through the ports in this step, `h û_{n+½}·ŷ_{n+½}` [J].
     pub supplied: f64,
-    /// Energy-balance error `Ĥ_{n+1} − Ĥ_n − h û·ŷ` [J].
+    /// Energy dissipated in this step `D_n ≥ 0` [J] (docs/method.md §18; 0 without damping).
+    pub dissipated: f64,
+    /// Energy-balance error `Ĥ_{n+1} − Ĥ_n − h û·ŷ + D_n` [J].
     pub balance_error: f64,
 }
 

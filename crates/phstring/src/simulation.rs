@@ -152,6 +152,8 @@ pub struct Checkpoint<const D: usize> {
     pub v_mid: Vec<Vector<D>>,
     /// Cumulative supplied energy [J].
     pub supplied_total: f64,
+    /// Cumulative dissipated energy [J].
+    pub dissipated_total: f64,
     /// Newton iterations so far.
     pub total_newton: usize,
 }
@@ -175,6 +177,7 @@ pub struct Simulation<const D: usize, M> {
     v_mid: Vec<Vector<D>>,
     energies: Energies,
     supplied_total: f64,
+    dissipated_total: f64,
     // Workspaces (allocated once).
     x: Vec<Vector<D>>,
     f_ext: Vec<Vector<D>>,
@@ -237,6 +240,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 output: Vector::zeros(),
             })
             .collect();
+        ports.extend(sys.boundary.feedback.iter().map(|f| PortSample {
+            node: f.node,
+            kind: PortKind::Force,
+            input: Vector::zeros(),
+            output: Vector::zeros(),
+        }));
         ports.extend(sys.constrained.iter().map(|&node| PortSample {
             node,
             kind: PortKind::Velocity,
@@ -260,6 +269,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             v_mid: vec![Vector::zeros(); n],
             energies,
             supplied_total: 0.0,
+            dissipated_total: 0.0,
             x: vec![Vector::zeros(); n],
             f_ext: vec![Vector::zeros(); n],
             reaction: vec![Vector::zeros(); n],
@@ -332,6 +342,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             acc: self.acc.clone(),
             v_mid: self.v_mid.clone(),
             supplied_total: self.supplied_total,
+            dissipated_total: self.dissipated_total,
             total_newton: self.total_newton,
         }
     }
@@ -373,6 +384,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.acc = cp.acc;
         self.v_mid = cp.v_mid;
         self.supplied_total = cp.supplied_total;
+        self.dissipated_total = cp.dissipated_total;
         self.total_newton = cp.total_newton;
         Ok(())
     }
@@ -394,6 +406,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn supplied_energy(&self) -> f64 {
         self.supplied_total
     }
+    /// Cumulative dissipated energy `Σ D_n` [J] (docs/method.md §18).
+    pub fn dissipated_energy(&self) -> f64 {
+        self.dissipated_total
+    }
     /// Total Newton iterations so far.
     pub fn total_newton_iterations(&self) -> usize {
         self.total_newton
@@ -402,8 +418,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn solver_name(&self) -> &'static str {
         self.solver.name()
     }
-    /// Port inputs and outputs of the last step (loads first, in the order given, then
-    /// constrained nodes in increasing order). Before the first step both are zero.
+    /// Port inputs and outputs of the last step (loads first, in the order given, then the
+    /// feedback ports in the order given, then constrained nodes in increasing order). Before
+    /// the first step both are zero.
     pub fn ports(&self) -> &[PortSample<D>] {
         &self.ports
     }
@@ -552,6 +569,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             r0: &self.state.r,
             v0: &self.state.v,
             c0: &self.state.c,
+            t_mid,
             f_ext: &self.f_ext,
             reaction: &mut self.reaction,
             scale: 0.0,
@@ -566,6 +584,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.params.newton,
             self.stop.as_deref(),
         );
+        let dissipated = if result.is_ok() && self.sys.has_damping() {
+            eqs.dissipated(&self.x)
+        } else {
+            0.0
+        };
         let worst_node = || {
             let res = self.newton_ws.residual();
             (0..res.len())
@@ -670,6 +693,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
+        // Feedback inputs: the law at the converged step, formed as the residual forms it
+        // (from r_n, before the update).
+        let n_loads = self.sys.boundary.loads.len();
+        for (port, fb) in self.ports[n_loads..]
+            .iter_mut()
+            .zip(&self.sys.boundary.feedback)
+        {
+            let i = fb.node;
+            let (r_mid, y) = (self.state.r[i] + self.x[i] * 0.5, self.x[i] * inv_h);
+            port.input = fb.law.force(t_mid, &r_mid, &y);
+        }
         std::mem::swap(&mut self.state.c, &mut self.c_next);
         for ((((r, v), a), vm), x) in self
             .state
@@ -686,11 +720,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             *a = (v_new - *v) * inv_h;
             *v = v_new;
         }
-        // Port outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces.
+        // Port outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces (feedback inputs
+        // were set above).
         let n_loads = self.sys.boundary.loads.len();
+        let n_force = n_loads + self.sys.boundary.feedback.len();
         for (i, port) in self.ports.iter_mut().enumerate() {
             let v_mid = self.x[port.node] * inv_h;
             if i < n_loads {
+                port.output = v_mid;
+            } else if i < n_force {
                 port.output = v_mid;
             } else {
                 let free = &self.sys.free[port.node];
@@ -710,6 +748,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         debug_assert_eq!(after, self.sys.energies(&self.state));
         self.energies = after;
         self.supplied_total += supplied;
+        self.dissipated_total += dissipated;
         self.step += 1;
         self.total_newton += stats.iterations;
         Ok(StepReport {
@@ -730,7 +769,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             before,
             after,
             supplied,
-            balance_error: after.hamiltonian() - before.hamiltonian() - supplied,
+            dissipated,
+            balance_error: after.hamiltonian() - before.hamiltonian() - supplied + dissipated,
         })
     }
 

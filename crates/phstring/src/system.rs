@@ -205,6 +205,38 @@ pub struct ElementGroup<const D: usize, M> {
     /// Constant body force per unit reference length `b` [N/m] (gravity: `ρA g`; 0 for
     /// springs).
     pub body_force: Vector<D>,
+    /// Dissipation of the group's elements (none by default; docs/method.md §18).
+    pub damping: Damping,
+}
+
+/// Dissipation of an element group, the resistive structure `R ≥ 0` of the port-Hamiltonian
+/// system (docs/method.md §18). Every coefficient is ≥ 0; all zero (the default) is a
+/// lossless group.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Damping {
+    /// Kelvin–Voigt viscosity `η` [N·s] of a string: the stress is `S = 2W'(C) + η Ċ`, the
+    /// dissipated power `∫ ½ η Ċ² ds` (reference arc length). Strings only.
+    pub kelvin_voigt: f64,
+    /// Linear drag per unit reference length `c` [N·s/m²]: the distributed force `−c v`,
+    /// the dissipated power `∫ c |v|² ds`. Strings only.
+    pub drag: f64,
+    /// Linear dashpot `c` [N·s/m] across each spring element: the forces `∓c (v_b − v_a)` on
+    /// its ends `a` and `b` (all components: a Cartesian damper), the dissipated power
+    /// `c |v_b − v_a|²`. Springs only (a spring of stiffness 0 is a pure dashpot).
+    pub dashpot: f64,
+}
+
+impl Damping {
+    /// No dissipation.
+    pub const NONE: Self = Self {
+        kelvin_voigt: 0.0,
+        drag: 0.0,
+        dashpot: 0.0,
+    };
+    /// Whether every coefficient is zero.
+    pub fn is_none(&self) -> bool {
+        self.kelvin_voigt == 0.0 && self.drag == 0.0 && self.dashpot == 0.0
+    }
 }
 
 /// A network: any number of strings and springs on one mesh, joined at shared nodes, with
@@ -235,6 +267,7 @@ impl<const D: usize, M> From<Problem<D, M>> for Network<D, M> {
                 rho_a: p.rho_a,
                 mass: p.mass,
                 body_force: p.body_force,
+                damping: Damping::NONE,
             }],
             mesh: p.mesh,
             boundary: p.boundary,
@@ -315,7 +348,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                             name: grp.name.clone(),
                         });
                     }
-                    if !(sp.k > 0.0 && sp.k.is_finite()) {
+                    // A spring of stiffness 0 is allowed as the carrier of a dashpot.
+                    let pure_dashpot = sp.k == 0.0 && grp.damping.dashpot > 0.0;
+                    if !(pure_dashpot || sp.k > 0.0 && sp.k.is_finite()) {
                         return Err(SetupError::NonPositive {
                             what: "spring stiffness k [N/m] of group",
                             index: Some(g),
@@ -330,6 +365,36 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                         });
                     }
                 }
+            }
+            let d = &grp.damping;
+            for (what, value) in [
+                ("Kelvin-Voigt viscosity eta [N s]", d.kelvin_voigt),
+                ("drag coefficient [N s/m^2]", d.drag),
+                ("dashpot coefficient [N s/m]", d.dashpot),
+            ] {
+                if !(value >= 0.0 && value.is_finite()) {
+                    return Err(SetupError::OutOfRange {
+                        what,
+                        value,
+                        range: "0 <= value < infinity",
+                    });
+                }
+            }
+            let is_string = matches!(grp.law, Law::String(_));
+            let misplaced = if is_string {
+                (d.dashpot != 0.0)
+                    .then_some("dashpot (springs only; strings take kelvin_voigt or drag)")
+            } else if d.kelvin_voigt != 0.0 {
+                Some("Kelvin-Voigt viscosity (strings only; springs take a dashpot)")
+            } else {
+                (d.drag != 0.0).then_some("drag (strings only; springs take a dashpot)")
+            };
+            if let Some(what) = misplaced {
+                return Err(SetupError::MisplacedDamping {
+                    group: g,
+                    name: grp.name.clone(),
+                    what,
+                });
             }
             for (i, x) in grp.body_force.iter().enumerate() {
                 if !x.is_finite() {
@@ -434,6 +499,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 return Err(SetupError::NodeOutOfRange {
                     what: "load",
                     node: load.node,
+                    n_nodes: n,
+                });
+            }
+        }
+        for fb in &boundary.feedback {
+            if fb.node >= n {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "feedback port",
+                    node: fb.node,
                     n_nodes: n,
                 });
             }
@@ -585,6 +659,10 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// Nodal body-force vector `F_b = ∫ Φᵀ b` [N] (docs/method.md §4).
     pub fn body_force_vector(&self) -> &[Vector<D>] {
         &self.f_body
+    }
+    /// Whether any element group dissipates (Kelvin–Voigt, drag or dashpots).
+    pub fn has_damping(&self) -> bool {
+        self.groups.iter().any(|g| !g.damping.is_none())
     }
     /// Which components of each node are free.
     pub fn free_components(&self) -> &[[bool; D]] {

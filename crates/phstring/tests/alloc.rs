@@ -95,6 +95,7 @@ fn memory_estimate_matches_the_allocator() {
             mass: phstring::MassMatrix::Consistent,
             boundary: phstring::Boundary {
                 motions: vec![],
+                feedback: vec![],
                 fixed: vec![phstring::Fixed::node(0)],
                 loads: vec![],
             },
@@ -230,6 +231,7 @@ fn network_step_loop_does_not_allocate() {
                     ],
                     loads: vec![],
                     motions: vec![Motion::new(tops[0], 2, move |t| z0 + 0.1 * t * t)],
+                    feedback: vec![],
                 },
                 vec![PointMass {
                     node: hub,

@@ -38,6 +38,7 @@ fn crane(n_el: usize, start: f64) -> Problem<2, Material> {
             }],
             loads: vec![],
             motions: vec![Motion::new(0, 0, trolley)],
+            feedback: vec![],
         },
         point_masses: vec![PointMass {
             node: n_el,

@@ -64,6 +64,7 @@ fn platform() -> (Network<3, Material>, usize) {
                 fixed,
                 loads: vec![],
                 motions: vec![Motion::new(corners[0], 2, heave)],
+                feedback: vec![],
             },
             vec![PointMass {
                 node: p,

@@ -30,6 +30,7 @@ fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             motions: vec![],
+            feedback: vec![],
             fixed: vec![Fixed::node(0), Fixed::node(n_el)],
             loads: vec![],
         },

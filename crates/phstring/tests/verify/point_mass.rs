@@ -31,6 +31,7 @@ fn payload_on_a_light_rope_bounces_like_a_spring_mass() {
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             motions: vec![],
+            feedback: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![],
         },

@@ -97,6 +97,7 @@ fn hanging(rope: Rope, material: Material, n_el: usize) -> Problem<2, Material> 
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             motions: vec![],
+            feedback: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![NodalLoad::new(n_el, move |_| {
                 Vector::<2>::new(0.0, -weight)
@@ -315,6 +316,7 @@ fn stiff_rope_at_rest_stays_at_rest() {
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             motions: vec![],
+            feedback: vec![],
             fixed: vec![Fixed::node(0)],
             loads: vec![],
         },
@@ -352,6 +354,7 @@ fn non_finite_derived_quantities_are_refused_at_setup() {
             mass: MassMatrix::Consistent,
             boundary: Boundary {
                 motions: vec![],
+                feedback: vec![],
                 fixed: vec![Fixed::node(0)],
                 loads: vec![],
             },

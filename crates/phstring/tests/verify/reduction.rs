@@ -32,6 +32,7 @@ fn problem(a: f64, tau: f64) -> Problem<2, Material> {
                 Vector::<2>::new(0.0, a * s * s)
             })],
             motions: vec![],
+            feedback: vec![],
         },
         point_masses: vec![],
     }
