@@ -307,6 +307,25 @@ fn dispatch(cli: Cli) -> Result<()> {
                 info.total_newton_iterations,
                 info.time_loop_s
             );
+            if info.dissipated_energy > 0.0 {
+                say!(
+                    "dissipated {} J (Ĥ(T) − Ĥ(0) = supplied − dissipated)",
+                    energy(info.dissipated_energy)
+                );
+            }
+            if let Some(s) = &info.settled {
+                if s.settled {
+                    say!(
+                        "settled at t = {} s (step {}): kinetic energy {:.3e} J below {:.3e} J for {} s; fastest node {} at {:.3e} m/s",
+                        s.t, s.step, s.kinetic, s.threshold, s.hold, s.fastest_node, s.speed
+                    );
+                } else {
+                    say!(
+                        "did not settle by t = {} s: kinetic energy {:.3e} J (threshold {:.3e} J); fastest node {} at {:.3e} m/s",
+                        s.t, s.kinetic, s.threshold, s.fastest_node, s.speed
+                    );
+                }
+            }
             say!("outputs in {}", out.display());
             Ok(())
         }

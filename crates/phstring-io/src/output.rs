@@ -94,7 +94,7 @@ pub fn remove_stale_temp_files(dir: &Path) {
 pub fn headers(d: usize) -> (String, String, String) {
     let comps = ["x", "y", "z"];
     let d = d.clamp(1, 3);
-    let energy = "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h".to_string();
+    let energy = "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h,dissipated_energy".to_string();
     let positions = format!("t,node,{}", comps[..d].join(","));
     let u: Vec<String> = comps[..d].iter().map(|c| format!("u_{c}")).collect();
     let y: Vec<String> = comps[..d].iter().map(|c| format!("y_{c}")).collect();
@@ -931,7 +931,7 @@ impl Writers {
         let values = [e.kinetic, e.potential(), e.hamiltonian()];
         check_finite(&w.energy.path, "initial energy", 0.0, &values)?;
         w.energy.line(&format!(
-            "{},{},{},{},0,0,0,0,0",
+            "{},{},{},{},0,0,0,0,0,0",
             num(0.0),
             num(values[0]),
             num(values[1]),
@@ -1062,6 +1062,7 @@ impl Writers {
             r.balance_error,
             r.residual,
             r.h,
+            sim.dissipated_energy(),
         ];
         check_finite(&self.energy.path, "energy row value", r.t, &values)?;
         let t_mid = r.t - 0.5 * r.h;
@@ -1071,7 +1072,7 @@ impl Writers {
             check_finite(&self.ports.path, "port power", t_mid, &[p.power()])?;
         }
         self.energy.line(&format!(
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}",
             num(values[0]),
             num(values[1]),
             num(values[2]),
@@ -1080,7 +1081,8 @@ impl Writers {
             num(values[5]),
             r.newton_iterations,
             num(values[6]),
-            num(values[7])
+            num(values[7]),
+            num(values[8])
         ))?;
         for (k, p) in sim.ports().iter().enumerate() {
             let kind = match p.kind {

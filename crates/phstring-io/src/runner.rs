@@ -14,7 +14,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
-use phstring::{Material, Simulation, StepError};
+use phstring::{Material, SettleWatch, Simulation, StepError};
 use serde::Serialize;
 
 use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimState};
@@ -226,6 +226,13 @@ pub struct RunInfo {
     pub hamiltonian_initial: f64,
     /// `Ĥ` at the last completed step [J].
     pub hamiltonian_final: f64,
+    /// Cumulative dissipated energy `Σ D_n` at the last completed step [J] (0 without
+    /// damping).
+    pub dissipated_energy: f64,
+    /// With `time.settle`: where and when the run came to rest (it then ended before
+    /// `t_end`); `null` if it did not settle.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settled: Option<SettledInfo>,
     /// Wall time of the time loop alone (stepping, no output) [s], summed over resumes.
     pub time_loop_s: f64,
     /// Whether the run was resumed from a checkpoint.
@@ -250,6 +257,27 @@ pub struct RunInfo {
     /// serialized; empty if `output.plots` is off or the run was stopped before it was read).
     #[serde(skip)]
     pub history: History,
+}
+
+/// Where and when a run with `time.settle` came to rest.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SettledInfo {
+    /// Whether it settled before `time.end`.
+    pub settled: bool,
+    /// Time [s] at which it met the criterion (the end time reached if it did not).
+    pub t: f64,
+    /// Step index.
+    pub step: usize,
+    /// Kinetic energy there [J].
+    pub kinetic: f64,
+    /// The threshold [J].
+    pub threshold: f64,
+    /// The hold time [s].
+    pub hold: f64,
+    /// The fastest node there.
+    pub fastest_node: usize,
+    /// Its speed [m/s].
+    pub speed: f64,
 }
 
 /// Runs `file` into folder `out` (created if needed). Writes all outputs as it goes; on a
@@ -342,6 +370,7 @@ fn run_dim<const D: usize>(
     info.t_reached = sim.time();
     info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = sim.energies().hamiltonian();
+    info.dissipated_energy = sim.dissipated_energy();
     let (failure, interrupted) = match looped {
         Ok(outcome) => outcome,
         Err(e) => {
@@ -443,6 +472,8 @@ fn new_info<const D: usize>(
         max_newton_residual: 0.0,
         hamiltonian_initial: sim.energies().hamiltonian(),
         hamiltonian_final: sim.energies().hamiltonian(),
+        dissipated_energy: 0.0,
+        settled: None,
         time_loop_s: 0.0,
         resumed,
         initial_equilibrium: None,
@@ -567,6 +598,7 @@ fn step_loop<const D: usize>(
     let t_end = ctx.settings.t_end;
     let mut failure = None;
     let mut interrupted = false;
+    let mut watch = ctx.settings.settle.map(SettleWatch::new);
     while sim.time() < t_end - 1e-9 * sim.step_size() {
         // A stop request (the flag) is seen by the simulation itself, before and during
         // the step: `StepError::Interrupted` below.
@@ -594,6 +626,21 @@ fn step_loop<const D: usize>(
                 info.steps_at_roundoff += usize::from(report.at_roundoff);
                 writers.step(sim, &report)?;
                 progress.step(report.step, report.t);
+                if let (Some(w), Some(s)) = (watch.as_mut(), ctx.settings.settle)
+                    && let Some(at) = w.check(sim, &report)
+                {
+                    info.settled = Some(SettledInfo {
+                        settled: true,
+                        t: at.t,
+                        step: at.step,
+                        kinetic: at.kinetic,
+                        threshold: s.kinetic,
+                        hold: s.hold,
+                        fastest_node: at.node,
+                        speed: at.speed,
+                    });
+                    break;
+                }
                 if opts
                     .checkpoint_every
                     .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
@@ -611,6 +658,29 @@ fn step_loop<const D: usize>(
                 break;
             }
         }
+    }
+    if let Some(s) = ctx.settings.settle
+        && info.settled.is_none()
+        && failure.is_none()
+        && !interrupted
+    {
+        let (fastest_node, speed) = sim
+            .state()
+            .v
+            .iter()
+            .map(|v| v.norm())
+            .enumerate()
+            .fold((0, 0.0), |b, (i, x)| if x > b.1 { (i, x) } else { b });
+        info.settled = Some(SettledInfo {
+            settled: false,
+            t: sim.time(),
+            step: sim.steps(),
+            kinetic: sim.energies().kinetic,
+            threshold: s.kinetic,
+            hold: s.hold,
+            fastest_node,
+            speed,
+        });
     }
     if interrupted {
         // The checkpoint records the file lengths of this moment: write it before the

@@ -93,7 +93,7 @@ pub use material::{
 pub use mesh::Mesh;
 pub use network::{NetworkBuilder, StringSpec};
 pub use newton::{NewtonParams, NewtonStats};
-pub use observe::{Observer, RunSummary, StepReport, nan_max};
+pub use observe::{Observer, RunSummary, Settle, SettleWatch, Settled, StepReport, nan_max};
 pub use simulation::{
     Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
     estimated_seconds_per_iteration,

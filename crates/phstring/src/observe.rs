@@ -86,6 +86,93 @@ impl RunSummary {
     }
 }
 
+/// Static settling: a run that ends once the string has come to rest, `T̂ < kinetic` for at
+/// least `hold` seconds. The watch arms only once `T̂` has been at or above `kinetic` (a run
+/// that starts at rest does not stop at once).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settle {
+    /// Kinetic-energy threshold [J] (> 0).
+    pub kinetic: f64,
+    /// How long `T̂` must stay below it [s] (≥ 0; 0: the first step below it). Use about a
+    /// period of the slowest swing, so that a turning point, where `T̂` dips, is not taken
+    /// for rest.
+    pub hold: f64,
+}
+
+/// Where and when a run came to rest ([`Settle`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settled {
+    /// Time [s] at the end of the step that met the criterion.
+    pub t: f64,
+    /// That step's index.
+    pub step: usize,
+    /// Kinetic energy `T̂` there [J].
+    pub kinetic: f64,
+    /// The fastest node there.
+    pub node: usize,
+    /// Its speed [m/s].
+    pub speed: f64,
+}
+
+/// Watches a run for [`Settle`]: call [`SettleWatch::check`] after every step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SettleWatch {
+    settle: Settle,
+    armed: bool,
+    /// Start of the current stretch below the threshold [s].
+    since: Option<f64>,
+}
+
+impl SettleWatch {
+    /// A watch for `settle` (armed once `T̂ ≥ settle.kinetic`).
+    pub fn new(settle: Settle) -> Self {
+        Self {
+            settle,
+            armed: false,
+            since: None,
+        }
+    }
+    /// After a step that ended at time `t` [s] with kinetic energy `kinetic` [J]: whether
+    /// the run has settled.
+    pub fn update(&mut self, t: f64, kinetic: f64) -> bool {
+        if !(kinetic < self.settle.kinetic) {
+            self.armed = true;
+            self.since = None;
+            return false;
+        }
+        if !self.armed {
+            return false;
+        }
+        let since = *self.since.get_or_insert(t);
+        t - since >= self.settle.hold
+    }
+    /// [`Self::update`] with the simulation's state after its last step (`report`): where
+    /// it came to rest, if it has.
+    pub fn check<const D: usize, M: crate::StoredEnergy>(
+        &mut self,
+        sim: &crate::Simulation<D, M>,
+        report: &StepReport,
+    ) -> Option<Settled> {
+        let kinetic = report.after.kinetic;
+        if !self.update(report.t, kinetic) {
+            return None;
+        }
+        let v = &sim.state().v;
+        let (node, speed) = v
+            .iter()
+            .map(|x| x.norm())
+            .enumerate()
+            .fold((0, 0.0), |best, (i, s)| if s > best.1 { (i, s) } else { best });
+        Some(Settled {
+            t: report.t,
+            step: report.step,
+            kinetic,
+            node,
+            speed,
+        })
+    }
+}
+
 /// Receives the simulation at the start, after each step and at the end of a run.
 /// Everything that records (files, progress) is an observer; the library never prints.
 pub trait Observer<const D: usize, M> {

@@ -10,7 +10,7 @@ use crate::integrator::{Scheme, StepEquations, element_step};
 use crate::linsolve::{LinearSolver, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonWorkspace};
-use crate::observe::{Observer, RunSummary, StepReport};
+use crate::observe::{Observer, RunSummary, Settle, SettleWatch, Settled, StepReport};
 
 use crate::system::{Energies, Network, PhSystem, State, Vector};
 
@@ -784,6 +784,31 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             .each_element()
             .position(|(g, e, _, l)| !(l * g.law.w(self.c_next[e])).is_finite());
         bad.map_or(0, |e| mesh.elements()[e][0])
+    }
+
+    /// Like [`Self::run_until`], but ends early once the run has settled (`settle`, static
+    /// settling); returns where it came to rest, or `None` if it reached `t_end` first.
+    pub fn run_until_settled(
+        &mut self,
+        t_end: f64,
+        settle: Settle,
+        observer: &mut dyn Observer<D, M>,
+    ) -> Result<(RunSummary, Option<Settled>), StepError> {
+        observer.on_start(self);
+        let mut summary = RunSummary::default();
+        let mut watch = SettleWatch::new(settle);
+        let mut settled = None;
+        while self.time() < t_end - 1e-9 * self.h_cur {
+            let report = self.step_until(t_end)?;
+            summary.record(&report);
+            observer.on_step(self, &report);
+            settled = watch.check(self, &report);
+            if settled.is_some() {
+                break;
+            }
+        }
+        observer.on_end(self);
+        Ok((summary, settled))
     }
 
     /// Steps until `t_end` [s] (the last step is shortened if it would pass `t_end`), calling

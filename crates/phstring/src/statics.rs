@@ -149,6 +149,19 @@ pub enum StaticsError {
     /// The stop flag was set.
     #[error("interrupted")]
     Interrupted,
+    /// A feedback port pushes at the equilibrium found without it (statics leave feedback
+    /// laws out: they are taken at rest, `F(0, r, 0)`, and must vanish there).
+    #[error(
+        "feedback port {index} at node {node} pushes with {force:.6e} N at rest at the equilibrium found without the feedback (its reference must start at that equilibrium; statics leave feedback laws out)"
+    )]
+    Feedback {
+        /// Index of the feedback port.
+        index: usize,
+        /// Its node.
+        node: usize,
+        /// Magnitude of its force on the free components there [N].
+        force: f64,
+    },
 }
 
 /// What every path of a failed equilibrium solve ended with.
@@ -447,8 +460,37 @@ pub fn solve<const D: usize, M: StoredEnergy>(
 }
 
 /// [`solve`] for a validated system, from positions `r_start` [m] (fixed components must be
-/// at their `t = 0` positions).
+/// at their `t = 0` positions). Feedback ports are left out; each must exert no force at
+/// rest at the equilibrium found (`F(0, r, 0)` within the tolerance), else
+/// [`StaticsError::Feedback`]: damping injection always passes, a PD law if its reference
+/// starts at the equilibrium.
 pub fn solve_system<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r_start: &[Vector<D>],
+    params: &StaticsParams,
+    stop: Option<&AtomicBool>,
+) -> Result<Equilibrium<D>, StaticsError> {
+    let eq = solve_without_feedback(sys, r_start, params, stop)?;
+    for (index, fb) in sys.boundary.feedback.iter().enumerate() {
+        let node = fb.node;
+        let f = fb.law.force(0.0, &eq.state.r[node], &Vector::zeros());
+        let on_free: f64 = (0..D)
+            .filter(|&k| sys.free[node][k])
+            .map(|k| f[k] * f[k])
+            .sum::<f64>()
+            .sqrt();
+        if !(on_free <= eq.tolerance.max(1e-9 * eq.force_scale)) {
+            return Err(StaticsError::Feedback {
+                index,
+                node,
+                force: on_free,
+            });
+        }
+    }
+    Ok(eq)
+}
+
+fn solve_without_feedback<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r_start: &[Vector<D>],
     params: &StaticsParams,

@@ -6,12 +6,12 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
-use phstring::{Boundary, Fixed, Motion, NodalLoad, PointMass, Vector};
+use phstring::{Boundary, FeedbackLoad, Fixed, Motion, NodalLoad, PdLaw, PointMass, Vector};
 
-use super::components::{AXES, MotionComponent, PointMassComponent};
+use super::components::{AXES, ControlComponent, MotionComponent, PointMassComponent};
 use super::expr::{Expr, eval_or_record, is_zero};
 use super::refs::label;
-use super::spec::FixedSpec;
+use super::spec::{ControlSpec, FixedSpec, GainSpec};
 use super::{ScenarioError, ScenarioFile, Skeleton};
 use crate::text::{clip, num};
 
@@ -25,6 +25,8 @@ pub(super) struct BoundaryParts<const D: usize> {
     pub load_error: Arc<Mutex<Option<String>>>,
     /// The motions, for reports.
     pub motions: Vec<MotionComponent>,
+    /// The feedback controls, for reports.
+    pub controls: Vec<ControlComponent>,
 }
 
 /// What holds one component of a node: fixed or moved by boundary table `k`.
@@ -44,7 +46,26 @@ struct Entry<const D: usize> {
     /// Moved components: (component, expression, span of its text).
     motions: Vec<(usize, Expr, Range<usize>)>,
     force: Option<Force>,
+    control: Option<Control<D>>,
 }
+
+/// The `control` of a `[[boundary]]` table.
+struct Control<const D: usize> {
+    kp: Vector<D>,
+    kd: Vector<D>,
+    /// Reference position expressions (none: zero).
+    reference: Option<Vec<Expr>>,
+    /// Reference velocity expressions (none: central difference of `reference`, or zero).
+    velocity: Option<Vec<Expr>>,
+    /// Span of the table.
+    span: Range<usize>,
+}
+
+/// Half-width [s] of the central difference that gives a control's reference velocity when
+/// only its position is given: `v_ref(t) ≈ (r_ref(t + δ) − r_ref(t − δ)) / 2δ` with
+/// `δ = REFERENCE_DT · max(1, |t|)` (a relative error of about 1e-10 for references that
+/// vary on time scales of 1e-3 s or longer).
+pub const REFERENCE_DT: f64 = 1e-6;
 
 /// The `force` of a `[[boundary]]` table.
 struct Force {
@@ -139,11 +160,12 @@ impl ScenarioFile {
         let node = self.resolve(&key("node"), &b.node, &sk.nodes)?;
         self.not_an_anchor(&key("node"), b.node.span(), node, sk)?;
         let label = label(b.node.get_ref(), node);
-        if b.fixed.is_none() && b.force.is_none() && b.position.is_none() {
+        if b.fixed.is_none() && b.force.is_none() && b.position.is_none() && b.control.is_none()
+        {
             return Err(self.invalid(
                 &key("node"),
                 b.node.span(),
-                "has neither `fixed`, `force` nor `position`",
+                "has neither `fixed`, `force`, `position` nor `control`",
             ));
         }
         let mut motions = Vec::new();
@@ -249,12 +271,150 @@ impl ScenarioFile {
                 })
             }
         };
+        let control = match &b.control {
+            None => None,
+            Some(c) => Some(self.control::<D>(k, c.get_ref(), c.span(), t_check)?),
+        };
         Ok(Entry {
             node,
             label,
             fixed,
             motions,
             force,
+            control,
+        })
+    }
+
+    /// The PD law of `boundary.{k}.control`; expression failures during the run become NaN
+    /// (the step fails) and are recorded in `errors`.
+    fn pd_law<const D: usize>(
+        &self,
+        k: usize,
+        c: Control<D>,
+        errors: &Arc<Mutex<Option<String>>>,
+    ) -> PdLaw<D> {
+        let reference = c.reference.map(Arc::new);
+        let position = {
+            let (reference, errors) = (reference.clone(), errors.clone());
+            move |t: f64| match &reference {
+                None => Vector::<D>::zeros(),
+                Some(x) => Vector::<D>::from_fn(|i, _| {
+                    eval_or_record(&x[i], &errors, "control.reference", k, i, t)
+                }),
+            }
+        };
+        let velocity: Arc<dyn Fn(f64) -> Vector<D> + Send + Sync> = match c.velocity {
+            Some(v) => {
+                let errors = errors.clone();
+                Arc::new(move |t| {
+                    Vector::<D>::from_fn(|i, _| {
+                        eval_or_record(&v[i], &errors, "control.reference_velocity", k, i, t)
+                    })
+                })
+            }
+            None if reference.is_some() => {
+                let position = position.clone();
+                Arc::new(move |t: f64| {
+                    let dt = REFERENCE_DT * t.abs().max(1.0);
+                    (position(t + dt) - position(t - dt)) / (2.0 * dt)
+                })
+            }
+            None => Arc::new(|_| Vector::<D>::zeros()),
+        };
+        PdLaw {
+            kp: c.kp,
+            kd: c.kd,
+            r_ref: Arc::new(position),
+            v_ref: velocity,
+        }
+    }
+
+    /// `boundary.{k}.control`: gains at least 0 (not both all zero), `reference` with `kp`,
+    /// expressions valid.
+    fn control<const D: usize>(
+        &self,
+        k: usize,
+        c: &ControlSpec,
+        span: Range<usize>,
+        t_check: f64,
+    ) -> Result<Control<D>, ScenarioError> {
+        let key = |f: &str| format!("boundary.{k}.control.{f}");
+        let gain = |name: &str, g: &Option<toml::Spanned<GainSpec>>| -> Result<Vector<D>, ScenarioError> {
+            let Some(g) = g else {
+                return Ok(Vector::zeros());
+            };
+            let v = match g.get_ref() {
+                GainSpec::One(x) => Vector::<D>::from_element(*x),
+                GainSpec::Each(list) if list.len() == D => Vector::<D>::from_column_slice(list),
+                GainSpec::Each(list) => {
+                    return Err(self.invalid(
+                        &key(name),
+                        g.span(),
+                        format!(
+                            "must be one number or {D} (dimension = {D}), got {}",
+                            list.len()
+                        ),
+                    ));
+                }
+            };
+            if let Some(x) = v.iter().find(|x| !(**x >= 0.0 && x.is_finite())) {
+                return Err(self.invalid(
+                    &key(name),
+                    g.span(),
+                    format!("must be at least 0 and finite, got {}", num(*x)),
+                ));
+            }
+            Ok(v)
+        };
+        let kp = gain("kp", &c.kp)?;
+        let kd = gain("kd", &c.kd)?;
+        if kp.iter().chain(kd.iter()).all(|&x| x == 0.0) {
+            return Err(self.invalid(
+                &format!("boundary.{k}.control"),
+                span,
+                "has no gain: give `kp` [N/m] (with `reference`) and/or `kd` [N s/m]",
+            ));
+        }
+        let exprs = |name: &str,
+                     list: &Option<toml::Spanned<Vec<toml::Spanned<String>>>>|
+         -> Result<Option<Vec<Expr>>, ScenarioError> {
+            let Some(list) = list else { return Ok(None) };
+            let texts = list.get_ref();
+            if texts.len() != D {
+                return Err(self.invalid(
+                    &key(name),
+                    list.span(),
+                    format!(
+                        "must have {D} expressions (dimension = {D}), got {}",
+                        texts.len()
+                    ),
+                ));
+            }
+            texts
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    Expr::new(t.get_ref(), t_check)
+                        .map_err(|m| self.invalid(&format!("{}.{i}", key(name)), t.span(), m))
+                })
+                .collect::<Result<Vec<_>, _>>()
+                .map(Some)
+        };
+        let reference = exprs("reference", &c.reference)?;
+        let velocity = exprs("reference_velocity", &c.reference_velocity)?;
+        if reference.is_none() && kp.iter().any(|&x| x != 0.0) {
+            return Err(self.invalid(
+                &key("kp"),
+                c.kp.as_ref().map_or(span.clone(), |g| g.span()),
+                "needs `reference`: the position [m] the node is pulled to, one expression of t per component",
+            ));
+        }
+        Ok(Control {
+            kp,
+            kd,
+            reference,
+            velocity,
+            span,
         })
     }
 
@@ -335,8 +495,31 @@ impl ScenarioFile {
                 ));
             }
         }
+        for (k, e) in entries.iter().enumerate() {
+            let Some(c) = &e.control else { continue };
+            let h = held.get(&e.node).copied().unwrap_or([Hold::Free; D]);
+            for i in (0..D).filter(|&i| c.kp[i] != 0.0 || c.kd[i] != 0.0) {
+                let axis = AXES[i];
+                let how = match h[i] {
+                    Hold::Free => continue,
+                    Hold::Fixed(_) => format!("is fixed in component {axis}"),
+                    Hold::Moved(j) => format!(
+                        "has a prescribed position (boundary.{j}.position) in component {axis}"
+                    ),
+                };
+                return Err(self.invalid(
+                    &format!("boundary.{k}.control"),
+                    c.span.clone(),
+                    format!(
+                        "{} {how}, where a control can do nothing (give gain 0 there)",
+                        e.label
+                    ),
+                ));
+            }
+        }
         let load_error: Arc<Mutex<Option<String>>> = Arc::default();
         let mut boundary = Boundary::<D>::default();
+        let mut controls = Vec::new();
         let mut loads = Vec::new();
         let mut motions = Vec::new();
         for (k, e) in entries.into_iter().enumerate() {
@@ -368,12 +551,33 @@ impl ScenarioFile {
                     })
                 }));
             }
+            if let Some(c) = e.control {
+                let spec = self.scenario.boundary[k].control.as_ref();
+                let texts = |l: Option<&toml::Spanned<Vec<toml::Spanned<String>>>>| {
+                    l.map_or_else(Vec::new, |l| {
+                        l.get_ref().iter().map(|t| t.get_ref().clone()).collect()
+                    })
+                };
+                controls.push(ControlComponent {
+                    node: e.node,
+                    kp: c.kp.as_slice().to_vec(),
+                    kd: c.kd.as_slice().to_vec(),
+                    reference: texts(spec.and_then(|s| s.get_ref().reference.as_ref())),
+                    reference_velocity: texts(
+                        spec.and_then(|s| s.get_ref().reference_velocity.as_ref()),
+                    ),
+                });
+                boundary
+                    .feedback
+                    .push(FeedbackLoad::new(e.node, self.pd_law(k, c, &load_error)));
+            }
         }
         Ok(BoundaryParts {
             boundary,
             loads,
             load_error,
             motions,
+            controls,
         })
     }
 }

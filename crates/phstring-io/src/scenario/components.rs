@@ -22,6 +22,24 @@ pub struct Components {
     pub motions: Vec<MotionComponent>,
     /// Nodal loads, in file order (the order of the force ports).
     pub loads: Vec<LoadComponent>,
+    /// Feedback controls, in file order (their force ports follow the loads').
+    pub controls: Vec<ControlComponent>,
+}
+
+/// A feedback control at a node (a force port whose force is a law of its output).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ControlComponent {
+    /// Mesh node index.
+    pub node: usize,
+    /// Proportional gains per component [N/m].
+    pub kp: Vec<f64>,
+    /// Derivative gains per component [N·s/m].
+    pub kd: Vec<f64>,
+    /// Reference position [m], one expression of `t` [s] per component (empty: none).
+    pub reference: Vec<String>,
+    /// Reference velocity [m/s], one expression per component (empty: the central
+    /// difference of `reference`, or 0).
+    pub reference_velocity: Vec<String>,
 }
 
 /// A named node.
@@ -66,6 +84,10 @@ pub struct StringComponent {
     pub body_force: Vec<f64>,
     /// Unstretched length `Σ l_e` [m].
     pub reference_length: f64,
+    /// Kelvin–Voigt viscosity `η` [N·s] (0: none).
+    pub kelvin_voigt: f64,
+    /// Drag per unit reference length [N·s/m²] (0: none).
+    pub drag: f64,
 }
 
 /// A linear spring: a one-element group.
@@ -83,6 +105,8 @@ pub struct SpringComponent {
     pub rest: f64,
     /// The fixed point [m] of a spring given with `to_point`.
     pub to_point: Option<Vec<f64>>,
+    /// Dashpot across the spring [N·s/m] (0: none).
+    pub damping: f64,
 }
 
 /// A point mass.

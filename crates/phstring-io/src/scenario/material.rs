@@ -1,7 +1,7 @@
 //! Validation of a cross-section: `[material]` of a single string, or one
 //! `[materials.NAME]` of a network (same keys).
 
-use phstring::{MassMatrix, Material};
+use phstring::{Damping, MassMatrix, Material};
 
 use super::spec::MaterialSpec;
 use super::{ScenarioError, ScenarioFile};
@@ -16,6 +16,8 @@ pub(super) struct CrossSection {
     pub rho_a: f64,
     /// Mass matrix variant.
     pub mass: MassMatrix,
+    /// Kelvin–Voigt viscosity and drag.
+    pub damping: Damping,
 }
 
 /// `consistent` or `lumped`.
@@ -59,10 +61,16 @@ impl ScenarioFile {
                 ));
             }
         };
+        let damping = Damping {
+            kelvin_voigt: self.non_negative(&key("kelvin_voigt"), spec.kelvin_voigt.as_ref())?,
+            drag: self.non_negative(&key("drag"), spec.drag.as_ref())?,
+            dashpot: 0.0,
+        };
         Ok(CrossSection {
             material,
             rho_a,
             mass,
+            damping,
         })
     }
 }

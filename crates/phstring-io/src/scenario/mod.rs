@@ -275,6 +275,8 @@ pub struct RunSettings {
     pub animation: bool,
     /// Output switches.
     pub output: OutputSpec,
+    /// Static settling (`time.settle`), if asked for.
+    pub settle: Option<phstring::Settle>,
 }
 
 /// A validated problem in dimension `D` plus run settings and what reports need.
@@ -321,6 +323,8 @@ struct Skeleton<'s, const D: usize> {
     /// Per node of a network: whether no string touches it (only springs); empty for a
     /// single string.
     massless: Vec<bool>,
+    /// Dissipation of a single string (a network's groups carry their own).
+    single_damping: phstring::Damping,
 }
 
 impl<const D: usize> Skeleton<'_, D> {
@@ -342,7 +346,9 @@ impl<const D: usize> Skeleton<'_, D> {
             Frame::Single(mut p) => {
                 p.boundary = boundary;
                 p.point_masses = point_masses;
-                Ok(Network::from(p))
+                let mut net = Network::from(p);
+                net.groups[0].damping = self.single_damping;
+                Ok(net)
             }
             Frame::Network(b) => b.build(boundary, point_masses),
         }
@@ -425,6 +431,21 @@ impl ScenarioFile {
             2 => Ok(2),
             3 => Ok(3),
             v => Err(self.invalid("dimension", d.span(), format!("must be 1, 2 or 3, got {v}"))),
+        }
+    }
+
+    /// An optional coefficient at `key`: 0 when absent, else at least 0 and finite.
+    fn non_negative(&self, key: &str, v: Option<&Spanned<f64>>) -> Result<f64, ScenarioError> {
+        let Some(v) = v else { return Ok(0.0) };
+        let x = *v.get_ref();
+        if x >= 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.invalid(
+                key,
+                v.span(),
+                format!("must be at least 0 and finite, got {}", num(x)),
+            ))
         }
     }
 
@@ -577,6 +598,7 @@ impl ScenarioFile {
         components.point_masses = mass_report;
         components.supports = supports(&problem.boundary);
         components.motions = parts.motions;
+        components.controls = parts.controls;
         components.loads = parts
             .loads
             .iter()

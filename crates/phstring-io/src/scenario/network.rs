@@ -240,7 +240,7 @@ impl ScenarioFile {
             let first_interior = b.n_nodes();
             let body_force = body.on_string(cs.rho_a);
             let first_element = total;
-            b.string(
+            let g = b.string(
                 StringSpec {
                     name: name.to_string(),
                     material: cs.material,
@@ -253,6 +253,8 @@ impl ScenarioFile {
                 per_span,
             )
             .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
+            b.set_damping(g, cs.damping)
+                .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
             total += count;
             let along = Along {
                 path,
@@ -274,6 +276,8 @@ impl ScenarioFile {
                 body_force: body_force.as_slice().to_vec(),
                 // Filled in from the mesh when the network is built.
                 reference_length: 0.0,
+                kelvin_voigt: cs.damping.kelvin_voigt,
+                drag: cs.damping.drag,
             });
             nodes.add_string(name, along);
             nodes.n_nodes = b.n_nodes();
@@ -368,7 +372,13 @@ impl ScenarioFile {
             let spec = spec.get_ref();
             let key = |f: &str| format!("spring.{k}.{f}");
             let name = self.unique_name(names, &key("name"), &spec.name, "spring", k)?;
-            let stiffness = self.positive(&key("k"), &spec.k)?;
+            let damping = self.non_negative(&key("damping"), spec.damping.as_ref())?;
+            // A spring of stiffness 0 is a pure dashpot.
+            let stiffness = if damping > 0.0 {
+                self.non_negative(&key("k"), Some(&spec.k))?
+            } else {
+                self.positive(&key("k"), &spec.k)?
+            };
             let rest = *spec.rest.get_ref();
             if !(rest >= 0.0 && rest.is_finite()) {
                 return Err(self.invalid(
@@ -446,7 +456,13 @@ impl ScenarioFile {
                 None => b.spring(name, a, ends[1], stiffness, rest),
                 Some(p) => b.spring_to_point(name, a, p, stiffness, rest),
             };
-            built.map_err(|e| self.invalid(&format!("spring.{k}"), 0..0, e.to_string()))?;
+            let g = built.map_err(|e| self.invalid(&format!("spring.{k}"), 0..0, e.to_string()))?;
+            let dashpot = phstring::Damping {
+                dashpot: damping,
+                ..phstring::Damping::NONE
+            };
+            b.set_damping(g, dashpot)
+                .map_err(|e| self.invalid(&format!("spring.{k}"), 0..0, e.to_string()))?;
             let b_end = b.n_nodes() - 1;
             let nodes_of = [a, if to_point.is_some() { b_end } else { ends[1] }];
             for &n in &nodes_of {
@@ -461,6 +477,7 @@ impl ScenarioFile {
                 k: stiffness,
                 rest,
                 to_point: to_point.map(|p| p.as_slice().to_vec()),
+                damping,
             });
         }
         // Spring indices count in the strings' mesh (a spring's fixed point is not a node
@@ -533,6 +550,7 @@ impl ScenarioFile {
             nodes,
             components,
             massless,
+            single_damping: phstring::Damping::NONE,
         })
     }
 

@@ -264,6 +264,16 @@ impl ScenarioFile {
                 },
             },
             t_end: time.t_end,
+            settle: match &self.scenario.time.settle {
+                None => None,
+                Some(s) => {
+                    let s = s.get_ref();
+                    Some(phstring::Settle {
+                        kinetic: self.positive("time.settle.kinetic", &s.kinetic)?,
+                        hold: self.non_negative("time.settle.hold", s.hold.as_ref())?,
+                    })
+                }
+            },
             stride,
             animation: output.animation,
             output,

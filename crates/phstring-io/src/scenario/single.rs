@@ -219,6 +219,8 @@ impl ScenarioFile {
                 body_force: body_force.as_slice().to_vec(),
                 // Filled in from the mesh when the network is built.
                 reference_length: 0.0,
+                kelvin_voigt: cs.damping.kelvin_voigt,
+                drag: cs.damping.drag,
             }],
             ..Components::default()
         };
@@ -237,6 +239,7 @@ impl ScenarioFile {
             nodes: Nodes::chain(n_nodes),
             components,
             massless: Vec::new(),
+            single_damping: cs.damping,
         })
     }
 }

@@ -104,10 +104,13 @@ pub struct SpringSpec {
     /// Fixed end point [m] (with one node in `between`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub to_point: Option<Spanned<Vec<f64>>>,
-    /// Stiffness `k` [N/m].
+    /// Stiffness `k` [N/m] (0 allowed with `damping`: a pure dashpot).
     pub k: Spanned<f64>,
     /// Rest length [m], at least 0.
     pub rest: Spanned<f64>,
+    /// Dashpot across the spring `c` [N·s/m]: the forces `∓c (v_b − v_a)` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<Spanned<f64>>,
 }
 
 /// Geometry: a straight string from `start` to `end`, or an explicit polyline `nodes`.
@@ -155,6 +158,12 @@ pub struct MaterialSpec {
     /// Mass matrix: `consistent` (default) or `lumped`.
     #[serde(default = "default_mass")]
     pub mass: Spanned<String>,
+    /// Kelvin–Voigt viscosity `η` [N·s]: the stress gains `η Ċ` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kelvin_voigt: Option<Spanned<f64>>,
+    /// Linear drag per unit reference length `c` [N·s/m²]: the force `−c v` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drag: Option<Spanned<f64>>,
 }
 
 fn default_law() -> Spanned<String> {
@@ -205,6 +214,40 @@ pub struct BoundarySpec {
     /// a component free. Each must equal the initial position at `t = 0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<Spanned<Vec<Spanned<String>>>>,
+    /// Feedback control through the node's force port (PD tracking or damping injection).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub control: Option<Spanned<ControlSpec>>,
+}
+
+/// A gain: one value for every component, or one per component.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum GainSpec {
+    /// The same gain in every component.
+    One(f64),
+    /// One gain per component.
+    Each(Vec<f64>),
+}
+
+/// `control = { … }` of a `[[boundary]]` table: the force
+/// `u = kp (r_ref(t) − r) − kd (v − v_ref(t))` on the node, evaluated at the mid-step.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlSpec {
+    /// Proportional gain [N/m] (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kp: Option<Spanned<GainSpec>>,
+    /// Derivative gain [N·s/m] (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd: Option<Spanned<GainSpec>>,
+    /// Reference position `r_ref(t)` [m], one expression in `t` [s] per component (needed
+    /// with `kp`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<Spanned<Vec<Spanned<String>>>>,
+    /// Reference velocity `v_ref(t)` [m/s], one expression per component (default: the
+    /// central difference of `reference`, or 0 without one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_velocity: Option<Spanned<Vec<Spanned<String>>>>,
 }
 
 /// A point mass at a node; gravity (`body_force.gravity`) acts on it.
@@ -265,6 +308,21 @@ pub struct TimeSpec {
     /// Most successive halvings of one step (default 12: `h` down to `h/4096`).
     #[serde(default = "default_max_halvings")]
     pub max_halvings: Spanned<i64>,
+    /// Static settling: end the run once the kinetic energy has stayed below a threshold.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle: Option<Spanned<SettleSpec>>,
+}
+
+/// `time.settle = { kinetic = …, hold = … }`: the run ends (before `time.end`) once the
+/// kinetic energy has stayed below `kinetic` [J] for `hold` [s], after it was above it.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettleSpec {
+    /// Kinetic-energy threshold [J] (> 0).
+    pub kinetic: Spanned<f64>,
+    /// How long the kinetic energy must stay below it [s] (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold: Option<Spanned<f64>>,
 }
 
 fn default_max_halvings() -> Spanned<i64> {
