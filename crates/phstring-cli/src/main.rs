@@ -317,12 +317,22 @@ fn dispatch(cli: Cli) -> Result<()> {
                 if s.settled {
                     say!(
                         "settled at t = {} s (step {}): kinetic energy {:.3e} J below {:.3e} J for {} s; fastest node {} at {:.3e} m/s",
-                        s.t, s.step, s.kinetic, s.threshold, s.hold, s.fastest_node, s.speed
+                        s.t,
+                        s.step,
+                        s.kinetic,
+                        s.threshold,
+                        s.hold,
+                        s.fastest_node,
+                        s.speed
                     );
                 } else {
                     say!(
                         "did not settle by t = {} s: kinetic energy {:.3e} J (threshold {:.3e} J); fastest node {} at {:.3e} m/s",
-                        s.t, s.kinetic, s.threshold, s.fastest_node, s.speed
+                        s.t,
+                        s.kinetic,
+                        s.threshold,
+                        s.fastest_node,
+                        s.speed
                     );
                 }
             }

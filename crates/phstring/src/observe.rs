@@ -158,11 +158,14 @@ impl SettleWatch {
             return None;
         }
         let v = &sim.state().v;
-        let (node, speed) = v
-            .iter()
-            .map(|x| x.norm())
-            .enumerate()
-            .fold((0, 0.0), |best, (i, s)| if s > best.1 { (i, s) } else { best });
+        let (node, speed) =
+            v.iter()
+                .map(|x| x.norm())
+                .enumerate()
+                .fold(
+                    (0, 0.0),
+                    |best, (i, s)| if s > best.1 { (i, s) } else { best },
+                );
         Some(Settled {
             t: report.t,
             step: report.step,

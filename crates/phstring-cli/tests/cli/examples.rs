@@ -21,7 +21,7 @@ fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: u
     let (h, rows) = csv_rows(&dir.join("energy.csv"));
     assert_eq!(
         h.join(","),
-        "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h"
+        "t,kinetic,potential,hamiltonian,supplied_energy,balance_error,newton_iterations,newton_residual,h,dissipated_energy"
     );
     assert_eq!(rows.len(), steps + 1, "{}", dir.display());
     for row in &rows {
@@ -96,6 +96,10 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("net_3d", 3, 1000, 10, 1321),
         // 2000 planned steps; one is halved where the heave starts (t = 0.065 s)
         ("mooring_line", 2, 2001, 20, 161),
+        ("damped_pendulum", 2, 300, 1, 31),
+        // Ends early: it settles (time.settle) at step 622.
+        ("damping_injection", 2, 622, 10, 21),
+        ("pd_tip_tracking", 2, 1200, 5, 26),
     ];
     let mut files: Vec<String> = std::fs::read_dir(workspace_root().join("examples"))
         .unwrap()

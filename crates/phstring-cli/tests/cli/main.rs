@@ -1,6 +1,7 @@
 //! End-to-end tests of the `phstring` binary (issue 3).
 
 mod broken;
+mod control;
 mod examples;
 mod hardening_cli;
 mod hardening_io;

@@ -57,7 +57,7 @@ fn assert_failed_cleanly(code: Option<i32>, err: &str, out: &Path, expect: &[&st
     let rows: Vec<&str> = energy.lines().skip(1).collect();
     assert_eq!(rows.len(), s["steps"].as_u64().unwrap() as usize + 1);
     for r in &rows {
-        assert_eq!(r.split(',').count(), 9, "incomplete row {r}");
+        assert_eq!(r.split(',').count(), 10, "incomplete row {r}");
         for f in r.split(',') {
             assert!(f.parse::<f64>().unwrap().is_finite(), "{r}");
         }

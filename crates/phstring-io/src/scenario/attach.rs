@@ -160,8 +160,7 @@ impl ScenarioFile {
         let node = self.resolve(&key("node"), &b.node, &sk.nodes)?;
         self.not_an_anchor(&key("node"), b.node.span(), node, sk)?;
         let label = label(b.node.get_ref(), node);
-        if b.fixed.is_none() && b.force.is_none() && b.position.is_none() && b.control.is_none()
-        {
+        if b.fixed.is_none() && b.force.is_none() && b.position.is_none() && b.control.is_none() {
             return Err(self.invalid(
                 &key("node"),
                 b.node.span(),
@@ -339,33 +338,34 @@ impl ScenarioFile {
         t_check: f64,
     ) -> Result<Control<D>, ScenarioError> {
         let key = |f: &str| format!("boundary.{k}.control.{f}");
-        let gain = |name: &str, g: &Option<toml::Spanned<GainSpec>>| -> Result<Vector<D>, ScenarioError> {
-            let Some(g) = g else {
-                return Ok(Vector::zeros());
-            };
-            let v = match g.get_ref() {
-                GainSpec::One(x) => Vector::<D>::from_element(*x),
-                GainSpec::Each(list) if list.len() == D => Vector::<D>::from_column_slice(list),
-                GainSpec::Each(list) => {
+        let gain =
+            |name: &str, g: &Option<toml::Spanned<GainSpec>>| -> Result<Vector<D>, ScenarioError> {
+                let Some(g) = g else {
+                    return Ok(Vector::zeros());
+                };
+                let v = match g.get_ref() {
+                    GainSpec::One(x) => Vector::<D>::from_element(*x),
+                    GainSpec::Each(list) if list.len() == D => Vector::<D>::from_column_slice(list),
+                    GainSpec::Each(list) => {
+                        return Err(self.invalid(
+                            &key(name),
+                            g.span(),
+                            format!(
+                                "must be one number or {D} (dimension = {D}), got {}",
+                                list.len()
+                            ),
+                        ));
+                    }
+                };
+                if let Some(x) = v.iter().find(|x| !(**x >= 0.0 && x.is_finite())) {
                     return Err(self.invalid(
                         &key(name),
                         g.span(),
-                        format!(
-                            "must be one number or {D} (dimension = {D}), got {}",
-                            list.len()
-                        ),
+                        format!("must be at least 0 and finite, got {}", num(*x)),
                     ));
                 }
+                Ok(v)
             };
-            if let Some(x) = v.iter().find(|x| !(**x >= 0.0 && x.is_finite())) {
-                return Err(self.invalid(
-                    &key(name),
-                    g.span(),
-                    format!("must be at least 0 and finite, got {}", num(*x)),
-                ));
-            }
-            Ok(v)
-        };
         let kp = gain("kp", &c.kp)?;
         let kd = gain("kd", &c.kd)?;
         if kp.iter().chain(kd.iter()).all(|&x| x == 0.0) {

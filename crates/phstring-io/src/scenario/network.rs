@@ -240,19 +240,20 @@ impl ScenarioFile {
             let first_interior = b.n_nodes();
             let body_force = body.on_string(cs.rho_a);
             let first_element = total;
-            let g = b.string(
-                StringSpec {
-                    name: name.to_string(),
-                    material: cs.material,
-                    rho_a: cs.rho_a,
-                    mass: cs.mass,
-                    body_force,
-                    prestretch,
-                },
-                &path,
-                per_span,
-            )
-            .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
+            let g = b
+                .string(
+                    StringSpec {
+                        name: name.to_string(),
+                        material: cs.material,
+                        rho_a: cs.rho_a,
+                        mass: cs.mass,
+                        body_force,
+                        prestretch,
+                    },
+                    &path,
+                    per_span,
+                )
+                .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
             b.set_damping(g, cs.damping)
                 .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
             total += count;

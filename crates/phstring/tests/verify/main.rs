@@ -2,6 +2,7 @@
 //! Issue 2's acceptance list, one module each.
 
 mod common;
+mod damping;
 mod elimination;
 mod modes;
 mod momentum;
