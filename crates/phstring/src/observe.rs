@@ -135,7 +135,9 @@ impl SettleWatch {
     /// After a step that ended at time `t` [s] with kinetic energy `kinetic` [J]: whether
     /// the run has settled.
     pub fn update(&mut self, t: f64, kinetic: f64) -> bool {
-        if !(kinetic < self.settle.kinetic) {
+        // NaN counts as not at rest.
+        let below = kinetic < self.settle.kinetic;
+        if !below {
             self.armed = true;
             self.since = None;
             return false;

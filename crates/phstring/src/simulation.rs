@@ -722,13 +722,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         // Port outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces (feedback inputs
         // were set above).
-        let n_loads = self.sys.boundary.loads.len();
         let n_force = n_loads + self.sys.boundary.feedback.len();
         for (i, port) in self.ports.iter_mut().enumerate() {
             let v_mid = self.x[port.node] * inv_h;
-            if i < n_loads {
-                port.output = v_mid;
-            } else if i < n_force {
+            if i < n_force {
                 port.output = v_mid;
             } else {
                 let free = &self.sys.free[port.node];

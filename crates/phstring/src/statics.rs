@@ -479,7 +479,9 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
             .map(|k| f[k] * f[k])
             .sum::<f64>()
             .sqrt();
-        if !(on_free <= eq.tolerance.max(1e-9 * eq.force_scale)) {
+        // NaN fails too.
+        let vanishes = on_free <= eq.tolerance.max(1e-9 * eq.force_scale);
+        if !vanishes {
             return Err(StaticsError::Feedback {
                 index,
                 node,
