@@ -41,7 +41,7 @@ def forms(out, manifest):
         yield name, form, {k: load(out, v) for k, v in form["matrices"].items()}
 
 
-@pytest.mark.parametrize("example", ["paper_pendulum", "steel_hoist"])
+@pytest.mark.parametrize("example", ["paper_pendulum", "steel_hoist", "damped_pendulum", "pd_tip_tracking"])
 def test_structure(tmp_path, example):
     out, m = linearize(tmp_path, example)
     assert m["stable"]
@@ -52,7 +52,11 @@ def test_structure(tmp_path, example):
         assert E.shape == J.shape == R.shape == Q.shape == (n, n)
         assert B.shape == (n, len(m["inputs"])) and len(m["outputs"]) == len(m["inputs"])
         assert np.array_equal(J, -J.T), name
-        assert np.array_equal(R, R.T) and np.linalg.eigvalsh(R).min() >= 0.0
+        assert np.array_equal(R, R.T)
+        # R = 0 without damping; with it positive semidefinite (eigvalsh rounds: a relative
+        # 1e-12 below zero is a zero eigenvalue).
+        assert np.linalg.eigvalsh(R).min() >= -1e-12 * max(np.abs(R).max(), 1e-300), name
+        assert (np.abs(R).max() > 0) == (example == "damped_pendulum"), name
         EQ = E.T @ Q
         scale = np.abs(EQ).max()
         assert np.abs(EQ - EQ.T).max() <= 1e-12 * scale, name
@@ -68,8 +72,9 @@ def transfer(mats, s):
     return B.T @ Q @ np.linalg.solve(s * E - A, B)
 
 
-def test_full_and_reduced_forms_have_one_transfer_function(tmp_path):
-    out, m = linearize(tmp_path, "paper_pendulum")
+@pytest.mark.parametrize("example", ["paper_pendulum", "damped_pendulum"])
+def test_full_and_reduced_forms_have_one_transfer_function(tmp_path, example):
+    out, m = linearize(tmp_path, example)
     f = dict((name, mats) for name, _, mats in forms(out, m))
     for w in [0.3, 1.0, 7.0, 50.0]:
         gf = transfer(f["full"], 1j * w)

@@ -93,7 +93,7 @@ fn modes_dim<const D: usize>(
     stop: Option<&AtomicBool>,
 ) -> Result<ModesInfo, ModesRunError> {
     let v = file.validate::<D>()?;
-    let (sys, eq) = crate::statics_run::solve_validated(&v, stop)?;
+    let (sys, eq) = crate::statics_run::solve_validated(&v, true, stop)?;
     let r = &eq.state.r;
     let found = modes::modes(&sys, r, count, v.settings.step.solver)?;
     // The shapes are drawn with their largest nodal amplitude at 5 % of the largest extent.

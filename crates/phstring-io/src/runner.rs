@@ -318,7 +318,7 @@ fn run_dim<const D: usize>(
     // resume takes its state from the checkpoint instead.
     let mut initial_equilibrium = None;
     if v.initial.equilibrium && opts.resume.is_none() {
-        let (_, eq) = crate::statics_run::solve_validated(&v, opts.stop.as_deref())
+        let (_, eq) = crate::statics_run::solve_validated(&v, false, opts.stop.as_deref())
             .map_err(RunError::Statics)?;
         v.problem.initial = v.initial_state(&eq.state.r)?;
         initial_equilibrium = Some(format!(

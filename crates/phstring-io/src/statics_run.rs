@@ -97,9 +97,11 @@ pub fn statics(
     }
 }
 
-/// The equilibrium of a validated scenario with its Newton settings and linear solver.
+/// The equilibrium of a validated scenario with its Newton settings and linear solver; with
+/// `open_loop`, feedback laws are left out unchecked (the linear model and modes).
 pub fn solve_validated<const D: usize>(
     v: &crate::scenario::Validated<D>,
+    open_loop: bool,
     stop: Option<&AtomicBool>,
 ) -> Result<(PhSystem<D, Material>, Equilibrium<D>), StaticsError> {
     let (sys, initial) = PhSystem::new(v.problem.clone())?;
@@ -109,6 +111,7 @@ pub fn solve_validated<const D: usize>(
             ..v.settings.step.newton
         },
         solver: v.settings.step.solver,
+        open_loop,
         ..Default::default()
     };
     let eq = statics::solve_system(&sys, &initial.r, &params, stop)?;
@@ -122,7 +125,7 @@ fn statics_dim<const D: usize>(
 ) -> Result<StaticsInfo, StaticsRunError> {
     let v = file.validate::<D>()?;
     let start = Instant::now();
-    let (sys, eq) = solve_validated(&v, stop)?;
+    let (sys, eq) = solve_validated(&v, false, stop)?;
     let solve_s = start.elapsed().as_secs_f64();
     let tension = tensions(&sys, &eq);
     write_files(out, &sys, &eq, &tension)?;

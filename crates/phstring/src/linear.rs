@@ -50,6 +50,32 @@ pub fn mass_blocks<const D: usize, M: StoredEnergy>(sys: &PhSystem<D, M>) -> Blo
     j
 }
 
+/// The damping matrix `R_v` [N·s/m] in node-block form at positions `r` [m]: the derivative
+/// of the dissipative forces by the velocities at rest (docs/method.md §18). Kelvin–Voigt adds
+/// `(2η/l) r' r'ᵀ`, drag `c` times the mass pattern, a dashpot `c I`, to the diagonal blocks
+/// of an element's nodes and the negative (drag: the mass pattern's coupling) to its coupling
+/// blocks. Symmetric positive semidefinite; zero without damping.
+pub fn damping_blocks<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+) -> BlockJacobian<D> {
+    let mut j = BlockJacobian::zeros(&sys.mesh);
+    let eye = SMatrix::<f64, D, D>::identity();
+    for (g, e, [a, b], l) in sys.each_element() {
+        let d = g.damping;
+        if d.is_none() {
+            continue;
+        }
+        let rp = (r[b] - r[a]) / l;
+        let axial = rp * rp.transpose() * (2.0 * d.kelvin_voigt / l) + eye * d.dashpot;
+        let (cd, co) = element_mass(g.mass, d.drag, l);
+        j.diag[a] += axial + eye * cd;
+        j.diag[b] += axial + eye * cd;
+        j.off[e] = [eye * co - axial, eye * co - axial];
+    }
+    j
+}
+
 /// Numbering of the free position components: `dof[i·D + k]` is the index of component `k`
 /// of node `i` among the free ones, or `None` where it is fixed or prescribed.
 pub fn free_dofs<const D: usize, M>(sys: &PhSystem<D, M>) -> (Vec<Option<usize>>, usize) {
@@ -281,7 +307,7 @@ pub struct LinearPh {
     pub e: SparseColMat<usize, f64>,
     /// `J = −Jᵀ`.
     pub j: SparseColMat<usize, f64>,
-    /// `R = Rᵀ ⪰ 0` (zero: the string has no dissipation yet).
+    /// `R = Rᵀ ⪰ 0`: the damping matrix on the velocities (zero without damping).
     pub r: SparseColMat<usize, f64>,
     /// `Q`, with `Eᵀ Q` symmetric (positive semidefinite at a stable equilibrium).
     pub q: SparseColMat<usize, f64>,
@@ -302,16 +328,15 @@ pub struct ForcePort {
 }
 
 /// The force ports of a system: every component of every loaded node that is free, in the
-/// order of the loads.
+/// order of the loads, then those of the feedback ports (the linear model is the open-loop
+/// plant: a feedback law is not applied, its port is an input to close the loop with).
 pub fn force_ports<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<ForcePort> {
     let mut ports = Vec::new();
-    for load in &sys.boundary.loads {
+    let nodes = sys.boundary.loads.iter().map(|l| l.node);
+    for node in nodes.chain(sys.boundary.feedback.iter().map(|f| f.node)) {
         for k in 0..D {
-            let p = ForcePort {
-                node: load.node,
-                component: k,
-            };
-            if sys.free[load.node][k] && !ports.contains(&p) {
+            let p = ForcePort { node, component: k };
+            if sys.free[node][k] && !ports.contains(&p) {
                 ports.push(p);
             }
         }
@@ -367,8 +392,9 @@ fn input_matrix<const D: usize>(
 
 /// The reduced second-order model on the free position components, about the rest state at
 /// positions `r` [m]: state `x = (q, v)` (displacements [m] and velocities [m/s] of the free
-/// components), `E = diag(I, M)`, `J = [[0, I], [−I, 0]]`, `R = 0`, `Q = diag(K_T, I)`,
-/// `B = [0; B_f]`. So `M q̈ + K_T q = B_f u` and `y = B_fᵀ v`, `H = ½ qᵀ K_T q + ½ vᵀ M v`.
+/// components), `E = diag(I, M)`, `J = [[0, I], [−I, 0]]`, `R = diag(0, R_v)`
+/// ([`damping_blocks`]), `Q = diag(K_T, I)`, `B = [0; B_f]`. So
+/// `M q̈ + R_v q̇ + K_T q = B_f u` and `y = B_fᵀ v`, `H = ½ qᵀ K_T q + ½ vᵀ M v`.
 pub fn reduced_model<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r: &[Vector<D>],
@@ -386,6 +412,14 @@ pub fn reduced_model<const D: usize, M: StoredEnergy>(
     let mut tq = Vec::new();
     triplets(&k, 0, 0, 1.0, &mut tq);
     identity_triplets(n, n, n, 1.0, &mut tq);
+    let mut tr = Vec::new();
+    triplets(
+        &restrict(&sys.mesh, &damping_blocks(sys, r), &dof, n),
+        n,
+        n,
+        1.0,
+        &mut tr,
+    );
     let names = free_names(sys, &dof);
     let states = names
         .iter()
@@ -395,7 +429,7 @@ pub fn reduced_model<const D: usize, M: StoredEnergy>(
     LinearPh {
         e: sparse(2 * n, 2 * n, &te),
         j: sparse(2 * n, 2 * n, &tj),
-        r: sparse(2 * n, 2 * n, &[]),
+        r: sparse(2 * n, 2 * n, &tr),
         q: sparse(2 * n, 2 * n, &tq),
         b: input_matrix::<D>(ports, &dof, 2 * n, n),
         states,
@@ -415,7 +449,8 @@ fn free_names<const D: usize, M>(sys: &PhSystem<D, M>, dof: &[Option<usize>]) ->
 /// The paper's mixed model linearized about the rest state at positions `r` [m]: state
 /// `x = (δr, δv, δC)` (free position and velocity components, every element strain),
 /// `E = diag(I, M_ρ, M_S)`, `J = [[0, I, 0], [−I, 0, −2K], [0, 2Kᵀ, 0]]` with `K = K(r)`,
-/// `R = 0`, `Q = diag(K_G, I, diag(W''(C_e)))` with the geometric stiffness `K_G` (the
+/// `R = diag(0, R_v, 0)` ([`damping_blocks`]: the Kelvin–Voigt stress acts through `Ċ`, which
+/// is `2 M_S⁻¹ Kᵀ v`), `Q = diag(K_G, I, diag(W''(C_e)))` with the geometric stiffness `K_G` (the
 /// `S_e I/l_e` part of the tangent stiffness), `B = [0; B_f; 0]`. `Eᵀ Q = diag(K_G, M_ρ,
 /// diag(l_e W''))` is symmetric, and positive semidefinite where every element is in tension.
 pub fn full_model<const D: usize, M: StoredEnergy>(
@@ -477,6 +512,14 @@ pub fn full_model<const D: usize, M: StoredEnergy>(
             .enumerate()
             .map(|(e, &w)| Triplet::new(2 * n + e, 2 * n + e, w)),
     );
+    let mut tr = Vec::new();
+    triplets(
+        &restrict(&sys.mesh, &damping_blocks(sys, r), &dof, n),
+        n,
+        n,
+        1.0,
+        &mut tr,
+    );
     let names = free_names(sys, &dof);
     let states = names
         .iter()
@@ -487,7 +530,7 @@ pub fn full_model<const D: usize, M: StoredEnergy>(
     LinearPh {
         e: sparse(size, size, &te),
         j: sparse(size, size, &tj),
-        r: sparse(size, size, &[]),
+        r: sparse(size, size, &tr),
         q: sparse(size, size, &tq),
         b: input_matrix::<D>(ports, &dof, size, n),
         states,
@@ -606,16 +649,43 @@ mod model_tests {
 
 /// Structure-preserving modal truncation: the reduced model projected onto the natural modes
 /// `φ_1 … φ_k` ([`crate::modes::modes`], `M`-orthonormal), state `x = (η, ν)` (modal
-/// coordinates [kg^½·m] and their rates), `E = I`, `J = [[0, I], [−I, 0]]`, `R = 0`,
+/// coordinates [kg^½·m] and their rates), `E = I`, `J = [[0, I], [−I, 0]]`,
+/// `R = diag(0, Φᵀ R_v Φ)` (the damping projected on the modes; dense, zero without damping),
 /// `Q = diag(ω_1², …, ω_k², I)`, `B = [0; Φᵀ B_f]`, so `η̈_i + ω_i² η_i = φ_iᵀ B_f u` and
 /// `y = B_fᵀ Φ η̇`. It is again port-Hamiltonian (`H = ½ Σ (ω_i² η_i² + ν_i²)`), and with every
 /// mode kept it has the transfer function of the reduced model.
-pub fn modal_model<const D: usize, M>(
+pub fn modal_model<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
     modes: &[crate::modes::Mode<D>],
     ports: &[ForcePort],
 ) -> LinearPh {
     let k = modes.len();
+    // Φᵀ R_v Φ, from the node blocks (the shapes are zero at fixed components).
+    let mut tr = Vec::new();
+    if sys.has_damping() {
+        let rv = damping_blocks(sys, r);
+        let rv_phi: Vec<Vec<Vector<D>>> = modes
+            .iter()
+            .map(|m| {
+                let mut out = vec![Vector::<D>::zeros(); m.shape.len()];
+                rv.mul(&sys.mesh, &m.shape, &mut out);
+                out
+            })
+            .collect();
+        // Upper triangle, mirrored: exactly symmetric.
+        for (i, mi) in modes.iter().enumerate() {
+            for (j, rj) in rv_phi.iter().enumerate().skip(i) {
+                let v: f64 = mi.shape.iter().zip(rj).map(|(a, b)| a.dot(b)).sum();
+                if v != 0.0 {
+                    tr.push(Triplet::new(k + i, k + j, v));
+                    if j != i {
+                        tr.push(Triplet::new(k + j, k + i, v));
+                    }
+                }
+            }
+        }
+    }
     let mut te = Vec::new();
     identity_triplets(2 * k, 0, 0, 1.0, &mut te);
     let mut tj = Vec::new();
@@ -646,7 +716,7 @@ pub fn modal_model<const D: usize, M>(
     LinearPh {
         e: sparse(2 * k, 2 * k, &te),
         j: sparse(2 * k, 2 * k, &tj),
-        r: sparse(2 * k, 2 * k, &[]),
+        r: sparse(2 * k, 2 * k, &tr),
         q: sparse(2 * k, 2 * k, &tq),
         b: sparse(2 * k, ports.len(), &tb),
         states,

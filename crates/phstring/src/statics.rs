@@ -45,6 +45,10 @@ pub struct StaticsParams {
     pub max_load_steps: usize,
     /// Most pseudo-time steps (path 3).
     pub max_pseudo_steps: usize,
+    /// The equilibrium of the open-loop plant: feedback laws are left out without the check
+    /// that they vanish at rest (for the linear model and modes, whose feedback ports are
+    /// open inputs). Default `false`.
+    pub open_loop: bool,
 }
 
 impl Default for StaticsParams {
@@ -57,6 +61,7 @@ impl Default for StaticsParams {
             solver: SolverKind::Auto,
             max_load_steps: 200,
             max_pseudo_steps: 2000,
+            open_loop: false,
         }
     }
 }
@@ -460,8 +465,9 @@ pub fn solve<const D: usize, M: StoredEnergy>(
 }
 
 /// [`solve`] for a validated system, from positions `r_start` [m] (fixed components must be
-/// at their `t = 0` positions). Feedback ports are left out; each must exert no force at
-/// rest at the equilibrium found (`F(0, r, 0)` within the tolerance), else
+/// at their `t = 0` positions). Feedback ports are left out; unless
+/// [`StaticsParams::open_loop`], each must exert no force at rest at the equilibrium found
+/// (`F(0, r, 0)` within the tolerance), else
 /// [`StaticsError::Feedback`]: damping injection always passes, a PD law if its reference
 /// starts at the equilibrium.
 pub fn solve_system<const D: usize, M: StoredEnergy>(
@@ -471,7 +477,12 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
     let eq = solve_without_feedback(sys, r_start, params, stop)?;
-    for (index, fb) in sys.boundary.feedback.iter().enumerate() {
+    let checked = if params.open_loop {
+        &[][..]
+    } else {
+        &sys.boundary.feedback[..]
+    };
+    for (index, fb) in checked.iter().enumerate() {
         let node = fb.node;
         let f = fb.law.force(0.0, &eq.state.r[node], &Vector::zeros());
         let on_free: f64 = (0..D)

@@ -235,3 +235,42 @@ fn bad_damping_and_control_keys_name_the_key() {
         );
     }
 }
+
+/// Statics leave feedback laws out: a PD law that pulls at rest at the equilibrium found
+/// without it is refused with its port, node and force (the pd_tip_tracking reference starts
+/// 0.5 m beside the hanging hook), while damping injection, which is zero at rest, passes;
+/// `linearize` takes the open-loop plant, whose feedback port is an input.
+#[test]
+fn statics_refuse_a_feedback_law_that_pushes_at_rest() {
+    let dir = temp_dir("statics-feedback");
+    let o = phstring(&[
+        "statics",
+        "examples/pd_tip_tracking.toml",
+        "--out",
+        dir.join("pd").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("feedback port 0 at node 25 pushes with"),
+        "{err}"
+    );
+    let o = phstring(&[
+        "statics",
+        "examples/damping_injection.toml",
+        "--out",
+        dir.join("di").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = phstring(&[
+        "linearize",
+        "examples/pd_tip_tracking.toml",
+        "--out",
+        dir.join("lin").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("lin/manifest.json")).unwrap())
+            .unwrap();
+    assert_eq!(m["inputs"].as_array().unwrap().len(), 2, "{}", m["inputs"]);
+}

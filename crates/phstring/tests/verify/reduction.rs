@@ -1,12 +1,13 @@
 //! Structure-preserving modal truncation (docs/method.md §17): the modal PH model's port
-//! output against the nonlinear run as the load amplitude goes to zero.
+//! output against the nonlinear run as the load amplitude goes to zero; with dissipation
+//! (§18), the linear models' `R` against a damped run.
 
 use nalgebra::{DMatrix, DVector};
-use phstring::linear::{ForcePort, LinearPh, modal_model};
+use phstring::linear::{ForcePort, LinearPh, modal_model, reduced_model};
 use phstring::modes;
 use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, NodalLoad, PhSystem, PortKind, Problem,
-    Simulation, SolverKind, State, StepParams, Vector,
+    Boundary, Damping, Fixed, MassMatrix, Material, Mesh, Network, NodalLoad, PhSystem, PortKind,
+    Problem, Simulation, SolverKind, State, StepParams, Vector,
 };
 use std::f64::consts::PI;
 
@@ -43,21 +44,22 @@ fn dense(m: &faer::sparse::SparseColMat<usize, f64>) -> DMatrix<f64> {
     DMatrix::from_fn(d.nrows(), d.ncols(), |i, j| d[(i, j)])
 }
 
-/// The port outputs `y_{n+½}` of the linear model under the implicit midpoint rule (the DG
-/// step on a quadratic energy), inputs at the mid times.
+/// The port outputs `y_{n+½}` of the linear model `E ẋ = (J − R) Q x + B u` under the implicit
+/// midpoint rule (the DG step on a quadratic energy), inputs at the mid times.
 fn linear_outputs(
     model: &LinearPh,
     h: f64,
     steps: usize,
     u: impl Fn(f64) -> DVector<f64>,
 ) -> Vec<DVector<f64>> {
-    let (e, j, q, b) = (
+    let (e, j, r, q, b) = (
         dense(&model.e),
         dense(&model.j),
+        dense(&model.r),
         dense(&model.q),
         dense(&model.b),
     );
-    let a = &j * &q;
+    let a = (&j - &r) * &q;
     let lhs = (&e - &a * (0.5 * h)).lu();
     let rhs = &e + &a * (0.5 * h);
     let mut x = DVector::zeros(e.nrows());
@@ -116,7 +118,7 @@ fn modal_truncation_matches_the_nonlinear_run_at_small_amplitude() {
             DVector::from_vec(vec![0.0, a * s * s])
         };
         for (k, errs) in [(all.len(), &mut errs_full), (8, &mut errs_trunc)] {
-            let model = modal_model(&sys, &all[..k], &ports);
+            let model = modal_model(&sys, &st.r, &all[..k], &ports);
             let y = linear_outputs(&model, h, steps, u);
             let scale = y.iter().map(|v| v.amax()).fold(0.0, f64::max);
             let err = y
@@ -142,4 +144,102 @@ fn modal_truncation_matches_the_nonlinear_run_at_small_amplitude() {
         "{errs_trunc:?}"
     );
     assert!(floor > errs_full[2] && floor < 0.2, "{errs_trunc:?}");
+}
+
+/// The taut wire of [`problem`] with Kelvin–Voigt damping (η = 1e4 N·s) and drag
+/// (1 N·s/m², about 6 % of critical on the first transverse mode).
+fn damped(a: f64, tau: f64) -> Network<2, Material> {
+    let mut net: Network<2, Material> = problem(a, tau).into();
+    net.groups[0].damping = Damping {
+        kelvin_voigt: 1e4,
+        drag: 1.0,
+        dashpot: 0.0,
+    };
+    net
+}
+
+/// With damping, the reduced linear model (with its `R`) and the modal model with every mode
+/// (with `Φᵀ R_v Φ`) follow the damped nonlinear run to a difference that vanishes linearly
+/// with the amplitude, while the same models without `R` are off by the damping's effect.
+#[test]
+fn linear_models_carry_the_damping() {
+    let (sys, st) = PhSystem::new(damped(0.0, 1.0)).unwrap();
+    let all = modes::modes(&sys, &st.r, usize::MAX, SolverKind::Auto)
+        .unwrap()
+        .modes;
+    let w1 = all[0].omega;
+    let (h, tau) = (2.0 * PI / w1 / 200.0, 0.3 * 2.0 * PI / w1);
+    let steps = 400;
+    let ports = [
+        ForcePort {
+            node: NODE,
+            component: 0,
+        },
+        ForcePort {
+            node: NODE,
+            component: 1,
+        },
+    ];
+    let reduced = reduced_model(&sys, &st.r, &ports);
+    let modal = modal_model(&sys, &st.r, &all, &ports);
+    let undamped = LinearPh {
+        r: faer::sparse::SparseColMat::try_new_from_triplets(
+            reduced.r.nrows(),
+            reduced.r.ncols(),
+            &[],
+        )
+        .unwrap(),
+        ..reduced.clone()
+    };
+    let mut errs: [Vec<f64>; 3] = Default::default();
+    for a in [100.0, 10.0, 1.0] {
+        let mut sim = Simulation::new(
+            damped(a, tau),
+            StepParams {
+                h,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let mut y_nl = Vec::new();
+        for _ in 0..steps {
+            let r = sim.step().unwrap();
+            assert!(r.dissipated >= 0.0);
+            let p = sim
+                .ports()
+                .iter()
+                .find(|p| p.node == NODE && p.kind == PortKind::Force)
+                .unwrap();
+            y_nl.push(DVector::from_column_slice(p.output.as_slice()));
+        }
+        let u = |t: f64| {
+            let s = if t < tau { (PI * t / tau).sin() } else { 0.0 };
+            DVector::from_vec(vec![0.0, a * s * s])
+        };
+        for (model, errs) in [&reduced, &modal, &undamped]
+            .into_iter()
+            .zip(errs.iter_mut())
+        {
+            let y = linear_outputs(model, h, steps, u);
+            let scale = y_nl.iter().map(|v| v.amax()).fold(0.0, f64::max);
+            let err = y
+                .iter()
+                .zip(&y_nl)
+                .map(|(a, b)| (a - b).amax())
+                .fold(0.0, f64::max);
+            errs.push(err / scale);
+        }
+    }
+    eprintln!(
+        "damped: reduced {:?}, modal {:?}, without R {:?}",
+        errs[0], errs[1], errs[2]
+    );
+    for e in &errs[..2] {
+        for w in e.windows(2) {
+            let ratio = w[1] / w[0];
+            assert!((0.09..0.11).contains(&ratio), "{errs:?}");
+        }
+    }
+    // Without R the difference stays at the damping's effect however small the load.
+    assert!(errs[2][2] > 100.0 * errs[0][2], "{errs:?}");
 }
