@@ -160,16 +160,6 @@ pub enum SetupError {
         /// The damping kind and where it belongs.
         what: &'static str,
     },
-    /// A feedback law given for a node out of range or combined with something it cannot be.
-    #[error("feedback port {index} at node {node}: {reason}")]
-    Feedback {
-        /// Index of the feedback port.
-        index: usize,
-        /// Its node.
-        node: usize,
-        /// What is wrong.
-        reason: &'static str,
-    },
     /// A node with a free component has no mass (only springs, no string and no point mass
     /// attached): its equation of motion would have no inertia.
     #[error(
