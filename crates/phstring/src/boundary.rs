@@ -249,7 +249,8 @@ pub enum PortKind {
     Velocity,
 }
 
-/// Input and output of one port over the last step, both at the mid time `t_{n+½}`.
+/// Input and output of one port over the last step, both at the mid time `t_{n+½}` (for
+/// `dg4`, means over the sub-steps).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PortSample<const D: usize> {
     /// Node index.
@@ -260,11 +261,15 @@ pub struct PortSample<const D: usize> {
     pub input: SVector<f64, D>,
     /// Output `ŷ_{n+½}`: velocity [m/s] or reaction force [N].
     pub output: SVector<f64, D>,
+    /// Mean power over the step [W]: `û·ŷ` of a single step; for `dg4` the sub-steps'
+    /// `Σ_k h_k û_k·ŷ_k / h`, with `input` and `output` their `h_k`-weighted means.
+    pub mean_power: f64,
 }
 
 impl<const D: usize> PortSample<D> {
-    /// Power `û·ŷ` [W] flowing into the string through this port.
+    /// Power [W] flowing into the string through this port over the last step (positive
+    /// into the string): `h` times it is the energy the port supplied.
     pub fn power(&self) -> f64 {
-        self.input.dot(&self.output)
+        self.mean_power
     }
 }

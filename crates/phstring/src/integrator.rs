@@ -41,6 +41,16 @@ pub enum Scheme {
     DiscreteGradient,
     /// Implicit midpoint: `S̄ = 2 W'((C₀ + C₁)/2)`.
     Midpoint,
+    /// Fourth order: the triple-jump composition of three discrete-gradient sub-steps
+    /// `γ₁h, γ₂h, γ₁h` with `γ₁ = 1/(2 − 2^{1/3})`, `γ₂ = 1 − 2γ₁` (docs/method.md §19). Each
+    /// sub-step balances energy exactly, so the step does.
+    DiscreteGradient4,
+}
+
+/// The triple-jump weights `[γ₁, γ₂, γ₁]` (`γ₁ = 1/(2 − 2^{1/3})`, `γ₂ = 1 − 2γ₁ < 0`).
+pub fn triple_jump() -> [f64; 3] {
+    let g1 = 1.0 / (2.0 - 2f64.cbrt());
+    [g1, 1.0 - 2.0 * g1, g1]
 }
 
 impl Scheme {
@@ -48,18 +58,26 @@ impl Scheme {
     #[inline]
     pub fn half_stress<M: StoredEnergy>(self, material: &M, c0: f64, c1: f64) -> (f64, f64) {
         match self {
-            Scheme::DiscreteGradient => material.quotient(c0, c1),
+            Scheme::DiscreteGradient | Scheme::DiscreteGradient4 => material.quotient(c0, c1),
             Scheme::Midpoint => {
                 let m = 0.5 * (c0 + c1);
                 (material.dw(m), 0.5 * material.d2w(m))
             }
         }
     }
-    /// Short name: `dg` or `mp`.
+    /// Short name: `dg`, `mp` or `dg4`.
     pub fn name(self) -> &'static str {
         match self {
             Scheme::DiscreteGradient => "dg",
             Scheme::Midpoint => "mp",
+            Scheme::DiscreteGradient4 => "dg4",
+        }
+    }
+    /// Order of accuracy in `h`: 2, or 4 for [`Scheme::DiscreteGradient4`].
+    pub fn order(self) -> u32 {
+        match self {
+            Scheme::DiscreteGradient4 => 4,
+            _ => 2,
         }
     }
 }

@@ -191,6 +191,21 @@ pub struct Simulation<const D: usize, M> {
     total_newton: usize,
     /// Set from outside (Ctrl-C) to end the current step between Newton iterations.
     stop: Option<Arc<AtomicBool>>,
+    /// The state before the current step, for `dg4` and error control (allocated on first
+    /// use, reused after).
+    backup: Option<Backup<D>>,
+}
+
+/// What a step changes, saved to put it back (a failed `dg4` sub-step, a step rejected by
+/// error control). Buffers are reused from step to step.
+#[derive(Debug, Clone, Default)]
+struct Backup<const D: usize> {
+    state: Option<State<D>>,
+    acc: Vec<Vector<D>>,
+    v_mid: Vec<Vector<D>>,
+    energies: Energies,
+    supplied_total: f64,
+    dissipated_total: f64,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -238,6 +253,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 kind: PortKind::Force,
                 input: Vector::zeros(),
                 output: Vector::zeros(),
+                mean_power: 0.0,
             })
             .collect();
         ports.extend(sys.boundary.feedback.iter().map(|f| PortSample {
@@ -245,12 +261,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             kind: PortKind::Force,
             input: Vector::zeros(),
             output: Vector::zeros(),
+            mean_power: 0.0,
         }));
         ports.extend(sys.constrained.iter().map(|&node| PortSample {
             node,
             kind: PortKind::Velocity,
             input: Vector::zeros(),
             output: Vector::zeros(),
+            mean_power: 0.0,
         }));
         let energies = sys.energies(&state);
         Ok(Self {
@@ -278,6 +296,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             solver,
             total_newton: 0,
             stop: None,
+            backup: None,
         })
     }
 
@@ -387,6 +406,31 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.dissipated_total = cp.dissipated_total;
         self.total_newton = cp.total_newton;
         Ok(())
+    }
+
+    /// Saves what a step changes into `b`.
+    fn save(&self, b: &mut Backup<D>) {
+        match &mut b.state {
+            Some(s) => s.clone_from(&self.state),
+            None => b.state = Some(self.state.clone()),
+        }
+        b.acc.clone_from(&self.acc);
+        b.v_mid.clone_from(&self.v_mid);
+        b.energies = self.energies;
+        b.supplied_total = self.supplied_total;
+        b.dissipated_total = self.dissipated_total;
+    }
+
+    /// Puts back what [`Self::save`] saved.
+    fn restore_from(&mut self, b: &Backup<D>) {
+        if let Some(s) = &b.state {
+            self.state.clone_from(s);
+        }
+        self.acc.clone_from(&b.acc);
+        self.v_mid.clone_from(&b.v_mid);
+        self.energies = b.energies;
+        self.supplied_total = b.supplied_total;
+        self.dissipated_total = b.dissipated_total;
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -504,13 +548,105 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
     }
 
-    /// One attempt at a step of size `h` to `t_next` (default `t_base + (k+1) h_cur`).
-    /// Leaves the state untouched on failure.
+    /// One attempt at a step of size `h` to `t_next` (default `t_base + (k+1) h_cur`):
+    /// one step of the scheme, or for `dg4` its three sub-steps. Leaves the state untouched
+    /// on failure.
     fn try_step(&mut self, h: f64, t_next: Option<f64>) -> Result<StepReport, StepError> {
         let t = self.time();
         let t_next = t_next.unwrap_or(self.t_base + (self.k + 1) as f64 * self.h_cur);
-        let t_mid = t + 0.5 * h;
         let step_no = self.step + 1;
+        let report = if self.params.scheme == Scheme::DiscreteGradient4 {
+            self.try_composed(t, h, t_next, step_no)?
+        } else {
+            self.try_single(t, h, t_next, step_no)?
+        };
+        self.step += 1;
+        self.total_newton += report.newton_iterations;
+        Ok(report)
+    }
+
+    /// The triple jump (docs/method.md §19): DG sub-steps `γ_k h` from `t`, with the state
+    /// saved first and put back if one fails. The report sums the sub-steps' Newton work,
+    /// supplied and dissipated energy; its ports hold the `h_k`-weighted means.
+    fn try_composed(
+        &mut self,
+        t: f64,
+        h: f64,
+        t_next: f64,
+        step_no: usize,
+    ) -> Result<StepReport, StepError> {
+        let mut backup = self.backup.take().unwrap_or_default();
+        self.save(&mut backup);
+        let gammas = crate::integrator::triple_jump();
+        let n_ports = self.ports.len();
+        let mut sums = vec![(Vector::<D>::zeros(), Vector::<D>::zeros(), 0.0); n_ports];
+        let mut total: Option<StepReport> = None;
+        let mut start = t;
+        let mut frac = 0.0;
+        for (k, g) in gammas.iter().enumerate() {
+            frac += g;
+            let hk = g * h;
+            let end = if k == 2 { t_next } else { t + frac * h };
+            match self.try_single(start, hk, end, step_no) {
+                Ok(r) => {
+                    for (s, p) in sums.iter_mut().zip(&self.ports) {
+                        s.0 += p.input * hk;
+                        s.1 += p.output * hk;
+                        s.2 += p.mean_power * hk;
+                    }
+                    total = Some(match total {
+                        None => r,
+                        Some(a) => StepReport {
+                            newton_iterations: a.newton_iterations + r.newton_iterations,
+                            backtracks: a.backtracks + r.backtracks,
+                            local_iterations: a.local_iterations + r.local_iterations,
+                            local_node_iterations: a.local_node_iterations
+                                + r.local_node_iterations,
+                            residual: a.residual.max(r.residual),
+                            tolerance: a.tolerance.max(r.tolerance),
+                            force_scale: a.force_scale.max(r.force_scale),
+                            at_roundoff: a.at_roundoff || r.at_roundoff,
+                            after: r.after,
+                            supplied: a.supplied + r.supplied,
+                            dissipated: a.dissipated + r.dissipated,
+                            ..a
+                        },
+                    });
+                }
+                Err(e) => {
+                    // Newton's work of the failed sub-step is what the caller counts.
+                    self.restore_from(&backup);
+                    self.backup = Some(backup);
+                    return Err(e);
+                }
+            }
+            start = end;
+        }
+        self.backup = Some(backup);
+        for (p, s) in self.ports.iter_mut().zip(&sums) {
+            p.input = s.0 / h;
+            p.output = s.1 / h;
+            p.mean_power = s.2 / h;
+        }
+        let mut r = total.expect("three sub-steps");
+        r.t = t_next;
+        r.h = h;
+        r.balance_error =
+            r.after.hamiltonian() - r.before.hamiltonian() - r.supplied + r.dissipated;
+        Ok(r)
+    }
+
+    /// One step of the scheme's stress formula from `t` by `h` (negative for the backward
+    /// sub-step of `dg4`) to `t_next`; commits the state, energies, ports and energy totals
+    /// on success, leaves them untouched on failure.
+    fn try_single(
+        &mut self,
+        t: f64,
+        h: f64,
+        t_next: f64,
+        step_no: usize,
+    ) -> Result<StepReport, StepError> {
+        let t_mid = t + 0.5 * h;
 
         // External forces F_b + F_N(t_{n+½}); load ports get their inputs here.
         self.f_ext.copy_from_slice(&self.sys.f_body);
@@ -740,14 +876,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 }
             }
         }
+        for p in &mut self.ports {
+            p.mean_power = p.input.dot(&p.output);
+        }
         let supplied = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
         let before = self.energies;
         debug_assert_eq!(after, self.sys.energies(&self.state));
         self.energies = after;
         self.supplied_total += supplied;
         self.dissipated_total += dissipated;
-        self.step += 1;
-        self.total_newton += stats.iterations;
         Ok(StepReport {
             step: step_no,
             t: t_next,

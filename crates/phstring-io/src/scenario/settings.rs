@@ -117,11 +117,12 @@ impl ScenarioFile {
         let scheme = match s.scheme.get_ref().as_str() {
             "dg" => Scheme::DiscreteGradient,
             "mp" => Scheme::Midpoint,
+            "dg4" => Scheme::DiscreteGradient4,
             other => {
                 return Err(self.invalid(
                     "time.scheme",
                     s.scheme.span(),
-                    format!("must be dg or mp, got \"{}\"", clip(other)),
+                    format!("must be dg, mp or dg4, got \"{}\"", clip(other)),
                 ));
             }
         };
