@@ -64,8 +64,7 @@ pub struct SimState {
     pub v_mid: Vec<f64>,
     /// Cumulative supplied energy [J].
     pub supplied_total: f64,
-    /// Cumulative dissipated energy [J] (0 in checkpoints written before dissipation existed).
-    #[serde(default)]
+    /// Cumulative dissipated energy [J].
     pub dissipated_total: f64,
     /// Newton iterations so far.
     pub total_newton: usize,
@@ -181,6 +180,12 @@ pub struct Counters {
     pub time_loop_s: f64,
     /// `Ĥ(0)` [J].
     pub hamiltonian_initial: f64,
+    /// `time.settle`: whether the watch is armed.
+    #[serde(default)]
+    pub settle_armed: bool,
+    /// `time.settle`: start of the current stretch below the threshold [s].
+    #[serde(default)]
+    pub settle_since: Option<f64>,
 }
 
 /// A checkpoint file.

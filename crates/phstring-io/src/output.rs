@@ -679,7 +679,7 @@ pub fn read_history(
         for (k, x) in v.iter_mut().enumerate() {
             let field = fields
                 .next()
-                .ok_or_else(|| bad(format!("{} fields, expected 9", k)))?;
+                .ok_or_else(|| bad(format!("{} fields, expected 10", k)))?;
             *x = field
                 .parse()
                 .map_err(|_| bad(format!("not a number: {}", plot::sanitize_text(field, 40))))?;

@@ -230,9 +230,13 @@ pub struct RunInfo {
     /// damping).
     pub dissipated_energy: f64,
     /// With `time.settle`: where and when the run came to rest (it then ended before
-    /// `t_end`); `null` if it did not settle.
+    /// `t_end`), or `settled: false` with the state at the end if it did not; absent
+    /// without `time.settle`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub settled: Option<SettledInfo>,
+    /// Progress of the `time.settle` watch `(armed, since)`, carried in checkpoints.
+    #[serde(skip)]
+    pub settle_progress: (bool, Option<f64>),
     /// Wall time of the time loop alone (stepping, no output) [s], summed over resumes.
     pub time_loop_s: f64,
     /// Whether the run was resumed from a checkpoint.
@@ -380,7 +384,7 @@ fn run_dim<const D: usize>(
     };
     let detail = match &failure {
         Some(StepError::NonFinite {
-            what: "load" | "prescribed position",
+            what: "load" | "prescribed position" | "feedback force",
             ..
         }) => load_error
             .lock()
@@ -474,6 +478,7 @@ fn new_info<const D: usize>(
         hamiltonian_final: sim.energies().hamiltonian(),
         dissipated_energy: 0.0,
         settled: None,
+        settle_progress: (false, None),
         time_loop_s: 0.0,
         resumed,
         initial_equilibrium: None,
@@ -537,6 +542,7 @@ fn resume_writers<const D: usize>(
     info.steps_at_roundoff = c.steps_at_roundoff;
     info.time_loop_s = c.time_loop_s;
     info.hamiltonian_initial = c.hamiltonian_initial;
+    info.settle_progress = (c.settle_armed, c.settle_since);
     let s = &ctx.settings;
     Ok(Writers::resume(
         ctx.out,
@@ -576,6 +582,8 @@ fn write_checkpoint<const D: usize>(
             steps_at_roundoff: info.steps_at_roundoff,
             time_loop_s: info.time_loop_s,
             hamiltonian_initial: info.hamiltonian_initial,
+            settle_armed: info.settle_progress.0,
+            settle_since: info.settle_progress.1,
         },
         checksum: String::new(),
         path: ctx.checkpoint_path.clone(),
@@ -598,7 +606,16 @@ fn step_loop<const D: usize>(
     let t_end = ctx.settings.t_end;
     let mut failure = None;
     let mut interrupted = false;
-    let mut watch = ctx.settings.settle.map(SettleWatch::new);
+    // A fresh run arms the watch on the initial state; a resumed one continues it.
+    let mut watch = ctx.settings.settle.map(|s| {
+        if info.resumed {
+            SettleWatch::resume(s, info.settle_progress)
+        } else {
+            let mut w = SettleWatch::new(s);
+            w.update(sim.time(), sim.energies().kinetic);
+            w
+        }
+    });
     while sim.time() < t_end - 1e-9 * sim.step_size() {
         // A stop request (the flag) is seen by the simulation itself, before and during
         // the step: `StepError::Interrupted` below.
@@ -626,9 +643,11 @@ fn step_loop<const D: usize>(
                 info.steps_at_roundoff += usize::from(report.at_roundoff);
                 writers.step(sim, &report)?;
                 progress.step(report.step, report.t);
-                if let (Some(w), Some(s)) = (watch.as_mut(), ctx.settings.settle)
-                    && let Some(at) = w.check(sim, &report)
-                {
+                let at_rest = watch.as_mut().and_then(|w| w.check(sim, &report));
+                if let Some(w) = &watch {
+                    info.settle_progress = w.progress();
+                }
+                if let (Some(at), Some(s)) = (at_rest, ctx.settings.settle) {
                     info.settled = Some(SettledInfo {
                         settled: true,
                         t: at.t,

@@ -729,7 +729,7 @@ between"#,
             "k = 0.0",
             "k = |0.0",
             "spring.0.k",
-            "must be positive and finite, got 0",
+            "= 0: a spring of stiffness 0 does nothing; give `damping` [N s/m] for a pure dashpot",
         ),
         (
             r#"between = ["b", "c"]"#,

@@ -195,7 +195,7 @@ impl StepError {
         !matches!(
             self,
             StepError::NonFinite {
-                what: "load" | "prescribed position",
+                what: "load" | "prescribed position" | "feedback force",
                 ..
             } | StepError::StepSizeTooSmall { .. }
                 | StepError::Interrupted { .. }

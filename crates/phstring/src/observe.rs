@@ -124,7 +124,9 @@ pub struct SettleWatch {
 }
 
 impl SettleWatch {
-    /// A watch for `settle` (armed once `T̂ ≥ settle.kinetic`).
+    /// A watch for `settle` (armed once `T̂ ≥ settle.kinetic`); call [`Self::update`] with
+    /// the initial state's `(0, T̂(0))` too, so that a run that starts moving is armed from
+    /// the start. A threshold that is not positive and finite never settles.
     pub fn new(settle: Settle) -> Self {
         Self {
             settle,
@@ -132,9 +134,25 @@ impl SettleWatch {
             since: None,
         }
     }
+    /// The watch's progress, to store in a checkpoint: `(armed, start of the current
+    /// stretch below the threshold [s])`.
+    pub fn progress(&self) -> (bool, Option<f64>) {
+        (self.armed, self.since)
+    }
+    /// A watch for `settle` that continues from `progress` ([`Self::progress`]).
+    pub fn resume(settle: Settle, progress: (bool, Option<f64>)) -> Self {
+        Self {
+            settle,
+            armed: progress.0,
+            since: progress.1,
+        }
+    }
     /// After a step that ended at time `t` [s] with kinetic energy `kinetic` [J]: whether
     /// the run has settled.
     pub fn update(&mut self, t: f64, kinetic: f64) -> bool {
+        if !(self.settle.kinetic > 0.0 && self.settle.kinetic.is_finite()) {
+            return false;
+        }
         // NaN counts as not at rest.
         let below = kinetic < self.settle.kinetic;
         if !below {

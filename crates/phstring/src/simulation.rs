@@ -663,6 +663,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             port.input = f;
             self.f_ext[load.node] += f;
         }
+        // A feedback law that is not finite at the start of the step (a failing reference
+        // expression) fails the step at once, like a load, rather than through Newton.
+        for fb in &self.sys.boundary.feedback {
+            let i = fb.node;
+            let f = fb.law.force(t_mid, &self.state.r[i], &self.state.v[i]);
+            if !f.iter().all(|x| x.is_finite()) {
+                return Err(StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "feedback force",
+                    node: i,
+                });
+            }
+        }
         // Predictor on free components.
         let (acc_w, mid) = match self.params.predictor {
             Predictor::Velocity => (0.0, false),
@@ -931,6 +945,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         observer.on_start(self);
         let mut summary = RunSummary::default();
         let mut watch = SettleWatch::new(settle);
+        watch.update(self.time(), self.energies.kinetic);
         let mut settled = None;
         while self.time() < t_end - 1e-9 * self.h_cur {
             let report = self.step_until(t_end)?;

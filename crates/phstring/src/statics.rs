@@ -157,7 +157,7 @@ pub enum StaticsError {
     /// A feedback port pushes at the equilibrium found without it (statics leave feedback
     /// laws out: they are taken at rest, `F(0, r, 0)`, and must vanish there).
     #[error(
-        "feedback port {index} at node {node} pushes with {force:.6e} N at rest at the equilibrium found without the feedback (its reference must start at that equilibrium; statics leave feedback laws out)"
+        "feedback port {index} (the {ordinal} control) at node {node} pushes with {force:.6e} N at rest at the equilibrium found without the feedback: statics leave feedback laws out, so at t = 0 its reference must be at that equilibrium and its reference velocity 0", ordinal = ordinal(*index + 1)
     )]
     Feedback {
         /// Index of the feedback port.
@@ -1071,4 +1071,16 @@ fn finish<const D: usize, M: StoredEnergy>(
         iterations,
         energies,
     }
+}
+
+/// `1st`, `2nd`, `3rd`, `4th`, … for messages.
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (1, 11) | (2, 12) | (3, 13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
 }

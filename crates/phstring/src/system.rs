@@ -348,8 +348,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                             name: grp.name.clone(),
                         });
                     }
-                    // A spring of stiffness 0 is allowed as the carrier of a dashpot.
-                    let pure_dashpot = sp.k == 0.0 && grp.damping.dashpot > 0.0;
+                    // A spring of stiffness 0 and rest length 0 is allowed as the carrier of a
+                    // dashpot (a rest length would restrict its strain to C > 0 for nothing).
+                    let pure_dashpot = sp.k == 0.0 && sp.rest == 0.0 && grp.damping.dashpot > 0.0;
                     if !(pure_dashpot || sp.k > 0.0 && sp.k.is_finite()) {
                         return Err(SetupError::NonPositive {
                             what: "spring stiffness k [N/m] of group",

@@ -63,8 +63,10 @@ struct Control<const D: usize> {
 
 /// Half-width [s] of the central difference that gives a control's reference velocity when
 /// only its position is given: `v_ref(t) ≈ (r_ref(t + δ) − r_ref(t − δ)) / 2δ` with
-/// `δ = REFERENCE_DT · max(1, |t|)` (a relative error of about 1e-10 for references that
-/// vary on time scales of 1e-3 s or longer).
+/// `δ = REFERENCE_DT · max(1, |t|)`; for `t < δ` the forward difference
+/// `(r_ref(t + δ) − r_ref(t)) / δ`, so that the reference is never evaluated before `t = 0`.
+/// Truncation error about `(δ/τ)²/6` relative for a reference that varies on the time scale
+/// `τ` (2e-7 at τ = 1 ms); rounding about `ε |r_ref| / (δ |v_ref|)`.
 pub const REFERENCE_DT: f64 = 1e-6;
 
 /// The `force` of a `[[boundary]]` table.
@@ -315,7 +317,11 @@ impl ScenarioFile {
                 let position = position.clone();
                 Arc::new(move |t: f64| {
                     let dt = REFERENCE_DT * t.abs().max(1.0);
-                    (position(t + dt) - position(t - dt)) / (2.0 * dt)
+                    if t < dt {
+                        (position(t + dt) - position(t)) / dt
+                    } else {
+                        (position(t + dt) - position(t - dt)) / (2.0 * dt)
+                    }
                 })
             }
             None => Arc::new(|_| Vector::<D>::zeros()),
@@ -402,6 +408,15 @@ impl ScenarioFile {
         };
         let reference = exprs("reference", &c.reference)?;
         let velocity = exprs("reference_velocity", &c.reference_velocity)?;
+        if let Some(v) = &c.reference_velocity
+            && kd.iter().all(|&x| x == 0.0)
+        {
+            return Err(self.invalid(
+                &key("reference_velocity"),
+                v.span(),
+                "has no effect without `kd` (it enters only as kd (y - v_ref))",
+            ));
+        }
         if reference.is_none() && kp.iter().any(|&x| x != 0.0) {
             return Err(self.invalid(
                 &key("kp"),

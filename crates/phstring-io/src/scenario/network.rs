@@ -378,9 +378,27 @@ impl ScenarioFile {
             let stiffness = if damping > 0.0 {
                 self.non_negative(&key("k"), Some(&spec.k))?
             } else {
+                let k = *spec.k.get_ref();
+                if k == 0.0 {
+                    return Err(self.invalid(
+                        &key("k"),
+                        spec.k.span(),
+                        "= 0: a spring of stiffness 0 does nothing; give `damping` [N s/m] for a pure dashpot",
+                    ));
+                }
                 self.positive(&key("k"), &spec.k)?
             };
             let rest = *spec.rest.get_ref();
+            if stiffness == 0.0 && rest != 0.0 {
+                return Err(self.invalid(
+                    &key("rest"),
+                    spec.rest.span(),
+                    format!(
+                        "= {}: a pure dashpot (k = 0) has no rest length; give rest = 0",
+                        num(rest)
+                    ),
+                ));
+            }
             if !(rest >= 0.0 && rest.is_finite()) {
                 return Err(self.invalid(
                     &key("rest"),
