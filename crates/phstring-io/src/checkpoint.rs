@@ -66,8 +66,18 @@ pub struct SimState {
     pub supplied_total: f64,
     /// Cumulative dissipated energy [J].
     pub dissipated_total: f64,
+    /// Error control: `(mid time [s], mean accelerations [m/s²] flattened)` of the last steps.
+    #[serde(default)]
+    pub acc_history: Vec<(f64, Vec<f64>)>,
+    /// Error control: the last accepted step's error.
+    #[serde(default = "one")]
+    pub err_prev: f64,
     /// Newton iterations so far.
     pub total_newton: usize,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 fn flat<const D: usize>(v: &[Vector<D>]) -> Vec<f64> {
@@ -100,6 +110,13 @@ impl SimState {
             v_mid: flat(&cp.v_mid),
             supplied_total: cp.supplied_total,
             dissipated_total: cp.dissipated_total,
+            acc_history: cp
+                .acc_history
+                .points
+                .iter()
+                .map(|(t, a)| (*t, flat(a)))
+                .collect(),
+            err_prev: cp.err_prev,
             total_newton: cp.total_newton,
         }
     }
@@ -122,6 +139,14 @@ impl SimState {
             v_mid: unflat(&self.v_mid),
             supplied_total: self.supplied_total,
             dissipated_total: self.dissipated_total,
+            acc_history: phstring::accuracy::AccelerationHistory {
+                points: self
+                    .acc_history
+                    .iter()
+                    .map(|(t, a)| (*t, unflat(a)))
+                    .collect(),
+            },
+            err_prev: self.err_prev,
             total_newton: self.total_newton,
         }
     }

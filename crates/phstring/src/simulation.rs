@@ -103,7 +103,7 @@ pub enum Predictor {
 /// line search fails, a strain leaves the material's domain), double it back (up to
 /// [`StepParams::h`]) after a run of easy steps. Every accepted step satisfies the scheme's
 /// equations, so the DG energy balance holds for every accepted step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepControl {
     /// On (`true`) or a fixed-step run that stops at the first failure (`false`).
     pub adaptive: bool,
@@ -113,6 +113,20 @@ pub struct StepControl {
     pub grow_after: usize,
     /// A step is easy if it needs at most this many Newton iterations and no backtracking.
     pub easy_iterations: usize,
+    /// Error control (docs/method.md §19), relative tolerance (dimensionless); 0 with
+    /// `atol = 0`: off (the default), and `h` is chosen for solvability alone as above.
+    pub rtol: f64,
+    /// Error control, absolute tolerance on positions [m]; velocities get `atol / h_max`
+    /// [m/s] (`h_max` = [`StepParams::h`]: a velocity error that moves a node by `atol` in one
+    /// largest step).
+    pub atol: f64,
+}
+
+impl StepControl {
+    /// Whether error control is on (`rtol > 0` or `atol > 0`).
+    pub fn error_control(&self) -> bool {
+        self.rtol > 0.0 || self.atol > 0.0
+    }
 }
 
 impl Default for StepControl {
@@ -122,6 +136,8 @@ impl Default for StepControl {
             max_halvings: 12,
             grow_after: 2,
             easy_iterations: 6,
+            rtol: 0.0,
+            atol: 0.0,
         }
     }
 }
@@ -156,6 +172,10 @@ pub struct Checkpoint<const D: usize> {
     pub dissipated_total: f64,
     /// Newton iterations so far.
     pub total_newton: usize,
+    /// Error control: mean accelerations of the last steps (docs/method.md §19).
+    pub acc_history: crate::accuracy::AccelerationHistory<D>,
+    /// Error control: the last accepted step's error.
+    pub err_prev: f64,
 }
 
 /// A running simulation: system, state, time and all workspaces.
@@ -194,6 +214,10 @@ pub struct Simulation<const D: usize, M> {
     /// The state before the current step, for `dg4` and error control (allocated on first
     /// use, reused after).
     backup: Option<Backup<D>>,
+    /// Error control: mean accelerations of the last accepted steps.
+    acc_history: crate::accuracy::AccelerationHistory<D>,
+    /// Error control: the last accepted step's error (1 before the first).
+    err_prev: f64,
 }
 
 /// What a step changes, saved to put it back (a failed `dg4` sub-step, a step rejected by
@@ -232,6 +256,16 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 value: nw.rtol,
                 range: "0 <= rtol < 1",
             });
+        }
+        let c = &params.control;
+        for (what, v) in [("time.rtol", c.rtol), ("time.atol [m]", c.atol)] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(SetupError::OutOfRange {
+                    what,
+                    value: v,
+                    range: "0 <= value < infinity",
+                });
+            }
         }
         if params.control.max_halvings > MAX_HALVINGS {
             return Err(SetupError::OutOfRange {
@@ -297,6 +331,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             total_newton: 0,
             stop: None,
             backup: None,
+            acc_history: Default::default(),
+            err_prev: 1.0,
         })
     }
 
@@ -363,6 +399,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             supplied_total: self.supplied_total,
             dissipated_total: self.dissipated_total,
             total_newton: self.total_newton,
+            acc_history: self.acc_history.clone(),
+            err_prev: self.err_prev,
         }
     }
 
@@ -404,6 +442,21 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.v_mid = cp.v_mid;
         self.supplied_total = cp.supplied_total;
         self.dissipated_total = cp.dissipated_total;
+        if cp.acc_history.points.iter().any(|(_, a)| a.len() != n) {
+            return Err(SetupError::StateSize {
+                what: "error-control accelerations",
+                got: cp
+                    .acc_history
+                    .points
+                    .iter()
+                    .map(|p| p.1.len())
+                    .max()
+                    .unwrap_or(0),
+                expected: n,
+            });
+        }
+        self.acc_history = cp.acc_history;
+        self.err_prev = cp.err_prev;
         self.total_newton = cp.total_newton;
         Ok(())
     }
@@ -481,6 +534,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut rejected_here = 0;
         let (mut rejected_its, mut rejected_local) = (0, 0);
         let floor = self.step_size_floor();
+        let tolerant = self.params.control.error_control();
+        if tolerant && self.acc_history.points.is_empty() {
+            let a0 = self.initial_acceleration()?;
+            self.acc_history.push(self.time(), &a0);
+        }
         loop {
             let t = self.time();
             if self.stop_requested() {
@@ -495,8 +553,58 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             } else {
                 (self.h_cur, None)
             };
+            // Error control needs the state before the step (dg4 saves it itself).
+            if tolerant && self.params.scheme != Scheme::DiscreteGradient4 {
+                let mut b = self.backup.take().unwrap_or_default();
+                self.save(&mut b);
+                self.backup = Some(b);
+            }
             match self.try_step(h, t_next) {
                 Ok(mut report) => {
+                    if tolerant {
+                        let err = self.step_error(t, h, report.t);
+                        // The local error is O(h³), the error per unit step O(h²).
+                        let p = 1;
+                        // step_error maps NaN to infinity.
+                        if err > 1.0 && h > floor * (1.0 + 1e-12) {
+                            // Rejected for accuracy: back to the state before the step.
+                            let b = self.backup.take().expect("saved before the step");
+                            self.restore_from(&b);
+                            self.backup = Some(b);
+                            self.step -= 1;
+                            self.total_newton -= report.newton_iterations;
+                            rejected_its += report.newton_iterations;
+                            rejected_local += report.local_node_iterations;
+                            rejected_here += 1;
+                            self.rejected += 1;
+                            let cut = crate::accuracy::reject_factor(err, p);
+                            self.set_step_size((h * cut).max(floor));
+                            continue;
+                        }
+                        let tau = t + 0.5 * h;
+                        if self.params.scheme != Scheme::DiscreteGradient4 {
+                            let acc = std::mem::take(&mut self.acc);
+                            self.acc_history.push(tau, &acc);
+                            self.acc = acc;
+                        }
+                        let grow = crate::accuracy::accept_factor(err, self.err_prev, p);
+                        self.err_prev = err.max(1e-10);
+                        report.rejected = rejected_here;
+                        report.rejected_iterations = rejected_its;
+                        report.rejected_local_node_iterations = rejected_local;
+                        self.h_min_used = self.h_min_used.min(h);
+                        // A step clipped to t_end continues from the unclipped size.
+                        let base = if t_next.is_some() {
+                            h.max(self.h_cur)
+                        } else {
+                            h
+                        };
+                        let next = (base * grow).min(self.params.h).max(floor);
+                        self.t_base = report.t;
+                        self.k = 0;
+                        self.h_cur = next;
+                        return Ok(report);
+                    }
                     report.rejected = rejected_here;
                     report.rejected_iterations = rejected_its;
                     report.rejected_local_node_iterations = rejected_local;
@@ -523,7 +631,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     if !c.adaptive || !e.is_recoverable() {
                         return Err(e);
                     }
-                    // The floor is absolute: h_cur is always time.h / 2^k.
+                    // The floor is absolute: without error control h_cur is always
+                    // time.h / 2^k.
                     if 0.5 * self.h_cur < floor * (1.0 - 1e-12) {
                         return Err(StepError::StepSizeTooSmall {
                             step: self.step + 1,
@@ -546,6 +655,199 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 }
             }
         }
+    }
+
+    /// The error of the step just taken from `t` by `h` to `t_next` (docs/method.md §19),
+    /// relative to the tolerances: ≤ 1 to accept. The state before the step is in the backup.
+    fn step_error(&mut self, t: f64, h: f64, t_next: f64) -> f64 {
+        let c = self.params.control;
+        let (rtol, atol, atol_v) = (c.rtol, c.atol, c.atol / self.params.h);
+        let b = self.backup.take().expect("saved before the step");
+        let before = b.state.as_ref().expect("saved before the step");
+        let mut err: f64 = 0.0;
+        if self.params.scheme == Scheme::DiscreteGradient4 {
+            match self.embedded_second_order(before, t, h, t_next) {
+                Ok(()) => {
+                    // self.x holds the second-order increment.
+                    let inv_h = 1.0 / h;
+                    for i in 0..self.state.r.len() {
+                        if !self.sys.free[i].iter().any(|&f| f) {
+                            continue;
+                        }
+                        let mask = |v: Vector<D>| {
+                            Vector::<D>::from_fn(
+                                |k, _| if self.sys.free[i][k] { v[k] } else { 0.0 },
+                            )
+                        };
+                        let r2 = before.r[i] + self.x[i];
+                        let v2 = self.x[i] * (2.0 * inv_h) - before.v[i];
+                        let e_r = mask(r2 - self.state.r[i]).norm();
+                        let e_v = mask(v2 - self.state.v[i]).norm();
+                        let r_mag = before.r[i].norm().max(self.state.r[i].norm());
+                        let v_mag = before.v[i].norm().max(self.state.v[i].norm());
+                        err = err.max(crate::accuracy::ratio(
+                            e_r, e_v, r_mag, v_mag, rtol, atol, atol_v,
+                        ));
+                    }
+                }
+                Err(_) => err = f64::INFINITY,
+            }
+        } else {
+            let tau = t + 0.5 * h;
+            for i in 0..self.state.r.len() {
+                if !self.sys.free[i].iter().any(|&f| f) {
+                    continue;
+                }
+                let (e_r, e_v) = crate::accuracy::second_order_estimate(
+                    h,
+                    tau,
+                    &self.acc,
+                    &self.acc_history,
+                    i,
+                    &self.sys.free[i],
+                );
+                let r_mag = before.r[i].norm().max(self.state.r[i].norm());
+                let v_mag = before.v[i].norm().max(self.state.v[i].norm());
+                err = err.max(crate::accuracy::ratio(
+                    e_r, e_v, r_mag, v_mag, rtol, atol, atol_v,
+                ));
+            }
+        }
+        self.backup = Some(b);
+        // Error per unit step (relative to the largest step): a step of h/k may make 1/k of
+        // the error of a step of h, so that the global error is proportional to the tolerance.
+        let err = err * (self.params.h / h);
+        if err.is_nan() { f64::INFINITY } else { err }
+    }
+
+    /// The second-order DG step from `before` (at `t`) by `h` to `t_next`, started from the
+    /// increment the step just taken made; its increment is left in `self.x`. Nothing else
+    /// changes.
+    fn embedded_second_order(
+        &mut self,
+        before: &State<D>,
+        t: f64,
+        h: f64,
+        t_next: f64,
+    ) -> Result<(), StepError> {
+        let t_mid = t + 0.5 * h;
+        self.f_ext.copy_from_slice(&self.sys.f_body);
+        for load in &self.sys.boundary.loads {
+            self.f_ext[load.node] += (load.force)(t_mid);
+        }
+        for (x, (a, b)) in self.x.iter_mut().zip(self.state.r.iter().zip(&before.r)) {
+            *x = a - b;
+        }
+        let _ = t_next;
+        let mut eqs = StepEquations {
+            sys: &self.sys,
+            scheme: Scheme::DiscreteGradient,
+            h,
+            r0: &before.r,
+            v0: &before.v,
+            c0: &before.c,
+            t_mid,
+            f_ext: &self.f_ext,
+            reaction: &mut self.reaction,
+            scale: 0.0,
+            strain_scale: 0.0,
+            measure: true,
+        };
+        newton::solve(
+            &mut eqs,
+            &mut self.x,
+            &mut self.newton_ws,
+            self.solver.as_mut(),
+            &self.params.newton,
+            self.stop.as_deref(),
+        )
+        .map(|_| ())
+        .map_err(|_| StepError::Interrupted { step: self.step, t })
+    }
+
+    /// The acceleration [m/s²] at the current state, `M_ρ a = F(t, r, v)` on the free
+    /// components (0 on the others): the first point of the second-order error estimate.
+    fn initial_acceleration(&mut self) -> Result<Vec<Vector<D>>, StepError> {
+        let t = self.time();
+        // The step residual at Δ = ε v (so v_{n+1} = v_n: no inertia) is −F at r + εv/2.
+        let eps = 1e-9 * self.params.h;
+        self.f_ext.copy_from_slice(&self.sys.f_body);
+        for load in &self.sys.boundary.loads {
+            self.f_ext[load.node] += (load.force)(t + 0.5 * eps);
+        }
+        for ((x, v), free) in self.x.iter_mut().zip(&self.state.v).zip(&self.sys.free) {
+            *x = Vector::from_fn(|k, _| if free[k] { v[k] * eps } else { 0.0 });
+        }
+        let n = self.x.len();
+        let mut res = vec![Vector::<D>::zeros(); n];
+        let mut eqs = StepEquations {
+            sys: &self.sys,
+            scheme: Scheme::DiscreteGradient,
+            h: eps,
+            r0: &self.state.r,
+            v0: &self.state.v,
+            c0: &self.state.c,
+            t_mid: t + 0.5 * eps,
+            f_ext: &self.f_ext,
+            reaction: &mut self.reaction,
+            scale: 0.0,
+            strain_scale: 0.0,
+            measure: false,
+        };
+        use crate::newton::NewtonProblem;
+        eqs.evaluate(&self.x, &mut res, None)
+            .map_err(|s| StepError::InvalidStrain {
+                step: self.step + 1,
+                t,
+                element: s.element,
+                c: s.c,
+            })?;
+        // M a = −res on the free components; identity rows and columns elsewhere.
+        let mut m = crate::linear::mass_blocks(&self.sys);
+        for i in 0..n {
+            let fi = self.sys.free[i];
+            for k in 0..D {
+                if !fi[k] {
+                    for j in 0..D {
+                        m.diag[i][(k, j)] = 0.0;
+                        m.diag[i][(j, k)] = 0.0;
+                    }
+                    m.diag[i][(k, k)] = 1.0;
+                }
+            }
+        }
+        for (e, &[a, b]) in self.sys.mesh.elements().iter().enumerate() {
+            let (fa, fb) = (self.sys.free[a], self.sys.free[b]);
+            for k in 0..D {
+                for j in 0..D {
+                    if !fa[k] || !fb[j] {
+                        m.off[e][0][(k, j)] = 0.0;
+                    }
+                    if !fb[k] || !fa[j] {
+                        m.off[e][1][(k, j)] = 0.0;
+                    }
+                }
+            }
+        }
+        for (r, free) in res.iter_mut().zip(&self.sys.free) {
+            *r = Vector::from_fn(|k, _| if free[k] { -r[k] } else { 0.0 });
+        }
+        self.solver
+            .solve(&m, &mut res)
+            .map_err(|cause| StepError::Linear {
+                step: self.step + 1,
+                t,
+                cause,
+            })?;
+        if let Some(node) = res.iter().position(|a| !a.iter().all(|x| x.is_finite())) {
+            return Err(StepError::NonFinite {
+                step: self.step + 1,
+                t,
+                what: "initial acceleration",
+                node,
+            });
+        }
+        Ok(res)
     }
 
     /// One attempt at a step of size `h` to `t_next` (default `t_base + (k+1) h_cur`):

@@ -261,6 +261,8 @@ impl ScenarioFile {
                 control: StepControl {
                     adaptive: self.scenario.time.adaptive,
                     max_halvings: time.max_halvings,
+                    rtol: self.non_negative("time.rtol", self.scenario.time.rtol.as_ref())?,
+                    atol: self.non_negative("time.atol", self.scenario.time.atol.as_ref())?,
                     ..Default::default()
                 },
             },

@@ -308,6 +308,14 @@ pub struct TimeSpec {
     /// Most successive halvings of one step (default 12: `h` down to `h/4096`).
     #[serde(default = "default_max_halvings")]
     pub max_halvings: Spanned<i64>,
+    /// Error control: relative tolerance of the local error (docs/method.md §19); with
+    /// `atol`, `h` is chosen for accuracy, `time.h` being the first and largest step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rtol: Option<Spanned<f64>>,
+    /// Error control: absolute tolerance of the local error of positions [m] (velocities:
+    /// `atol / time.h` [m/s]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atol: Option<Spanned<f64>>,
     /// Static settling: end the run once the kinetic energy has stayed below a threshold.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle: Option<Spanned<SettleSpec>>,
