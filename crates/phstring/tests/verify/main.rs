@@ -1,6 +1,7 @@
 //! Verification of the method against theorems, closed forms and the paper (docs/method.md §13).
 //! Issue 2's acceptance list, one module each.
 
+mod accuracy;
 mod common;
 mod damping;
 mod elimination;
