@@ -83,7 +83,8 @@ fn dg4_is_fourth_order_on_the_taut_string() {
 /// with error control. The balance `Ĥ_{n+1} − Ĥ_n − h û·ŷ + D_n` is ≤ 1e-11 J on every step.
 #[test]
 fn balance_holds_for_every_substep_configuration() {
-    let variants: [(&str, fn() -> Network<2, Material>); 3] = [
+    type Make = fn() -> Network<2, Material>;
+    let variants: [(&str, Make); 3] = [
         ("plain", || paper_pendulum(30).into()),
         ("Kelvin-Voigt", || {
             let mut n: Network<2, Material> = paper_pendulum(30).into();
