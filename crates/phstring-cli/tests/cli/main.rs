@@ -1,5 +1,6 @@
 //! End-to-end tests of the `phstring` binary (issue 3).
 
+mod accuracy;
 mod broken;
 mod control;
 mod examples;

@@ -1,0 +1,105 @@
+//! `time.scheme = "dg4"` and error control (`time.rtol`, `time.atol`) from the command line
+//! (issue 14): they run with exact balance, resume bit for bit, and bad values name the key.
+
+use std::path::Path;
+
+use crate::{phstring, temp_dir};
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+fn run(out: &Path, sets: &[&str], extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "run",
+        "examples/paper_pendulum.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ];
+    for s in sets {
+        args.push("--set");
+        args.push(s);
+    }
+    args.extend_from_slice(extra);
+    phstring(&args)
+}
+
+/// The paper pendulum with `dg4` and with error control: completed, the balance at
+/// round-off, and error control takes more steps than `time.h` alone where the tolerance
+/// asks for it.
+#[test]
+fn dg4_and_error_control_run_with_exact_balance() {
+    let dir = temp_dir("dg4-run");
+    for (name, sets) in [
+        ("dg4", vec!["time.scheme=\"dg4\""]),
+        ("dg-tol", vec!["time.rtol=1e-6", "time.atol=1e-6"]),
+        (
+            "dg4-tol",
+            vec!["time.scheme=\"dg4\"", "time.rtol=1e-6", "time.atol=1e-6"],
+        ),
+    ] {
+        let out = dir.join(name);
+        let o = run(&out, &sets, &[]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let s = summary(&out);
+        assert_eq!(s["status"], "completed", "{name}");
+        assert!(
+            s["max_balance_error"].as_f64().unwrap() <= 1e-11,
+            "{name}: {s}"
+        );
+        let steps = s["steps"].as_u64().unwrap();
+        if name.ends_with("tol") {
+            assert!(steps > 1000, "{name}: {steps} steps");
+        } else {
+            assert_eq!(steps, 100, "{name}");
+        }
+    }
+}
+
+/// An error-controlled run interrupted after 700 steps and resumed writes the same
+/// `energy.csv` as an uninterrupted one (the controller's history is in the checkpoint).
+#[test]
+fn error_control_resumes_bit_for_bit() {
+    let dir = temp_dir("tol-resume");
+    let sets = ["time.rtol=1e-6", "time.atol=1e-6"];
+    let whole = dir.join("whole");
+    assert!(run(&whole, &sets, &[]).status.success());
+    let parts = dir.join("parts");
+    let first = run(&parts, &sets, &["--stop-after-steps", "700"]);
+    assert_eq!(
+        first.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let cp = parts.join("checkpoint.json");
+    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    let read = |d: &Path| std::fs::read_to_string(d.join("energy.csv")).unwrap();
+    assert_eq!(read(&whole), read(&parts));
+}
+
+/// Bad `time.scheme`, `time.rtol` and `time.atol` are refused with their key.
+#[test]
+fn bad_accuracy_keys_name_the_key() {
+    let dir = temp_dir("bad-accuracy");
+    for (set, key) in [
+        ("time.scheme=\"rk4\"", "time.scheme"),
+        ("time.rtol=-1e-3", "time.rtol"),
+        ("time.atol=nan", "time.atol"),
+    ] {
+        let o = run(&dir.join("out"), &[set], &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{set} accepted");
+        assert!(err.contains(key), "{set}: {err}");
+    }
+}
