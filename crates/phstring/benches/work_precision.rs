@@ -15,7 +15,7 @@ use std::time::Instant;
 use phstring::benchmarks::paper_pendulum;
 use phstring::{
     Boundary, Fixed, MassMatrix, Material, Mesh, Network, Problem, Scheme, Simulation, State,
-    StepControl, StepParams, StoredEnergy, Vector,
+    StepControl, StepParams, Vector,
 };
 use plotters::prelude::*;
 
@@ -42,7 +42,7 @@ impl Case {
     fn network(self, mass: MassMatrix) -> Network<2, Material> {
         let mut net: Network<2, Material> = match self {
             Case::Pendulum(n) => paper_pendulum(n).into(),
-            Case::Taut => taut().into(),
+            Case::Taut => phstring::benchmarks::taut_string(TAUT_N).into(),
             Case::SteelPendulum => steel().into(),
         };
         net.groups[0].mass = mass;
@@ -80,31 +80,6 @@ fn steel() -> Problem<2, Material> {
         mass: MassMatrix::Consistent,
         boundary: Boundary {
             fixed: vec![Fixed::node(0)],
-            ..Default::default()
-        },
-    }
-}
-
-/// A taut string (1 m, stretched by 1.2, EA = 20 N, ρA = 1 kg/m, fixed ends) released from a
-/// sine of 0.1 m amplitude: smooth.
-fn taut() -> Problem<2, Material> {
-    let mesh = Mesh::uniform_chain(TAUT_N, 1.0).unwrap();
-    let r = (0..=TAUT_N)
-        .map(|i| {
-            let s = i as f64 / TAUT_N as f64;
-            Vector::<2>::new(1.2 * s, 0.1 * (std::f64::consts::PI * s).sin())
-        })
-        .collect();
-    Problem {
-        point_masses: Vec::new(),
-        initial: State::at_rest(&mesh, r),
-        mesh,
-        material: Material::hyperelastic(20.0),
-        rho_a: 1.0,
-        body_force: Vector::zeros(),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            fixed: vec![Fixed::node(0), Fixed::node(TAUT_N)],
             ..Default::default()
         },
     }
@@ -238,10 +213,8 @@ fn rk4_run(case: Case, h: f64) -> Option<(Vector<2>, usize, f64)> {
     out.map(|r| (r, steps, best))
 }
 
-/// One point of a curve: parameter, steps, wall [s], error [m].
+/// One point of a curve: wall [s], error [m].
 struct Point {
-    param: f64,
-    steps: usize,
     wall: f64,
     err: f64,
 }
@@ -306,12 +279,7 @@ fn main() {
                     if let Some((r, steps, wall)) = f(p) {
                         let err = (r - reference).norm();
                         println!("{name:>16} {p:>10.3e} {steps:>8} {wall:>10.4e} {err:>10.3e}");
-                        pts.push(Point {
-                            param: p,
-                            steps,
-                            wall,
-                            err,
-                        });
+                        pts.push(Point { wall, err });
                     } else {
                         println!("{name:>16} {p:>10.3e}   failed or unstable");
                     }
@@ -347,7 +315,8 @@ fn main() {
         );
         let hr: Vec<f64> = (0..12).map(|k| 0.01 / 2f64.powi(k)).collect();
         add("rk4 (explicit)", &|h| rk4_run(case, h), &hr);
-        for target in [1e-5] {
+        {
+            let target = 1e-5;
             let best = curves
                 .iter()
                 .filter(|(n, _)| !n.starts_with("rk4"))
@@ -468,7 +437,6 @@ fn fine_mesh() {
             w.3
         );
     }
-    let _ = Material::hyperelastic(1.0).w(1.0);
 }
 
 /// Log–log plot of wall time against error, one series per method, as SVG or PNG.
@@ -543,7 +511,6 @@ fn draw<DB: DrawingBackend>(
                 .iter()
                 .map(|&(x, y)| Circle::new((x, y), 3, color.filled())),
         );
-        let _ = c.iter().map(|p| (p.param, p.steps)).count();
     }
     let _ = chart
         .configure_series_labels()

@@ -62,3 +62,31 @@ pub fn paper_pendulum(n_el: usize) -> Problem<2, Material> {
         initial,
     }
 }
+
+/// A taut string for order-of-accuracy checks (docs/method.md §13, §19): `n_el` elements,
+/// reference length 1 m stretched to 1.2 m (`C = 1.44`), `EA = 20 N` hyperelastic,
+/// `ρA = 1 kg/m`, no gravity, both ends fixed, released at rest from a transverse sine of
+/// 0.1 m amplitude. Its motion is smooth.
+pub fn taut_string(n_el: usize) -> Problem<2, Material> {
+    let n_el = n_el.max(1);
+    let mesh = Mesh::uniform_chain(n_el, 1.0).expect("n_el ≥ 1 and L = 1 > 0");
+    let r = (0..=n_el)
+        .map(|i| {
+            let s = i as f64 / n_el as f64;
+            Vector::<2>::new(1.2 * s, 0.1 * (std::f64::consts::PI * s).sin())
+        })
+        .collect();
+    Problem {
+        point_masses: Vec::new(),
+        initial: State::at_rest(&mesh, r),
+        mesh,
+        material: Material::hyperelastic(20.0),
+        rho_a: 1.0,
+        body_force: Vector::zeros(),
+        mass: MassMatrix::Consistent,
+        boundary: Boundary {
+            fixed: vec![Fixed::node(0), Fixed::node(n_el)],
+            ..Default::default()
+        },
+    }
+}

@@ -132,6 +132,37 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub measure: bool,
 }
 
+impl<'a, const D: usize, M> StepEquations<'a, D, M> {
+    /// The equations of a step of size `h` [s] from `state` with mid time `t_mid` [s] and
+    /// external forces `f_ext` [N] (`F_b + F_N(t_mid)` per node); reactions go to `reaction`.
+    /// The scales are measured at the first full evaluation.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        sys: &'a PhSystem<D, M>,
+        scheme: Scheme,
+        h: f64,
+        state: &'a crate::system::State<D>,
+        t_mid: f64,
+        f_ext: &'a [Vector<D>],
+        reaction: &'a mut [Vector<D>],
+    ) -> Self {
+        Self {
+            sys,
+            scheme,
+            h,
+            r0: &state.r,
+            v0: &state.v,
+            c0: &state.c,
+            t_mid,
+            f_ext,
+            reaction,
+            scale: 0.0,
+            strain_scale: 0.0,
+            measure: true,
+        }
+    }
+}
+
 impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, M> {
     type Error = StrainError;
 

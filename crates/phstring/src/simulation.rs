@@ -739,20 +739,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             *x = a - b;
         }
         let _ = t_next;
-        let mut eqs = StepEquations {
-            sys: &self.sys,
-            scheme: Scheme::DiscreteGradient,
+        let mut eqs = StepEquations::new(
+            &self.sys,
+            Scheme::DiscreteGradient,
             h,
-            r0: &before.r,
-            v0: &before.v,
-            c0: &before.c,
+            before,
             t_mid,
-            f_ext: &self.f_ext,
-            reaction: &mut self.reaction,
-            scale: 0.0,
-            strain_scale: 0.0,
-            measure: true,
-        };
+            &self.f_ext,
+            &mut self.reaction,
+        );
         newton::solve(
             &mut eqs,
             &mut self.x,
@@ -780,20 +775,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         let n = self.x.len();
         let mut res = vec![Vector::<D>::zeros(); n];
-        let mut eqs = StepEquations {
-            sys: &self.sys,
-            scheme: Scheme::DiscreteGradient,
-            h: eps,
-            r0: &self.state.r,
-            v0: &self.state.v,
-            c0: &self.state.c,
-            t_mid: t + 0.5 * eps,
-            f_ext: &self.f_ext,
-            reaction: &mut self.reaction,
-            scale: 0.0,
-            strain_scale: 0.0,
-            measure: false,
-        };
+        let mut eqs = StepEquations::new(
+            &self.sys,
+            Scheme::DiscreteGradient,
+            eps,
+            &self.state,
+            t + 0.5 * eps,
+            &self.f_ext,
+            &mut self.reaction,
+        );
         use crate::newton::NewtonProblem;
         eqs.evaluate(&self.x, &mut res, None)
             .map_err(|s| StepError::InvalidStrain {
@@ -1014,20 +1004,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
             self.x[m.node][m.component] = target - self.state.r[m.node][m.component];
         }
-        let mut eqs = StepEquations {
-            sys: &self.sys,
-            scheme: self.params.scheme,
+        let mut eqs = StepEquations::new(
+            &self.sys,
+            self.params.scheme,
             h,
-            r0: &self.state.r,
-            v0: &self.state.v,
-            c0: &self.state.c,
+            &self.state,
             t_mid,
-            f_ext: &self.f_ext,
-            reaction: &mut self.reaction,
-            scale: 0.0,
-            strain_scale: 0.0,
-            measure: true,
-        };
+            &self.f_ext,
+            &mut self.reaction,
+        );
         let result = newton::solve(
             &mut eqs,
             &mut self.x,

@@ -10,19 +10,7 @@ fn summary(dir: &Path) -> serde_json::Value {
 }
 
 fn run(out: &Path, sets: &[&str], extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "run",
-        "examples/paper_pendulum.toml",
-        "--out",
-        out.to_str().unwrap(),
-        "-q",
-    ];
-    for s in sets {
-        args.push("--set");
-        args.push(s);
-    }
-    args.extend_from_slice(extra);
-    phstring(&args)
+    crate::run_with("examples/paper_pendulum.toml", out, sets, extra)
 }
 
 /// The paper pendulum with `dg4` and with error control: completed, the balance at

@@ -11,14 +11,7 @@ use crate::{phstring, temp_dir};
 /// Runs `example` into a fresh folder and returns it.
 fn run_example(example: &str, name: &str) -> std::path::PathBuf {
     let out = temp_dir(name);
-    let o = phstring(&[
-        "run",
-        &format!("examples/{example}"),
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
-        "-q",
-    ]);
+    let o = crate::run_with(&format!("examples/{example}"), &out, &[], &["--force"]);
     assert!(
         o.status.success(),
         "{example}: {}",

@@ -31,6 +31,17 @@ pub fn phstring(args: &[&str]) -> Output {
         .expect("binary runs")
 }
 
+/// Runs `phstring run SCENARIO --out OUT -q` with `--set` for each of `sets`, then `extra`.
+pub fn run_with(scenario: &str, out: &Path, sets: &[&str], extra: &[&str]) -> Output {
+    let mut args = vec!["run", scenario, "--out", out.to_str().unwrap(), "-q"];
+    for s in sets {
+        args.push("--set");
+        args.push(s);
+    }
+    args.extend_from_slice(extra);
+    phstring(&args)
+}
+
 /// The workspace root (where `examples/` is).
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -17,18 +17,7 @@ fn summary(dir: &Path) -> serde_json::Value {
 /// Runs the paper example with `sets` into a fresh folder; returns (exit code, stderr, dir).
 fn run_paper(name: &str, sets: &[&str]) -> (Option<i32>, String, PathBuf) {
     let out = temp_dir(name).join("out");
-    let mut args = vec![
-        "run",
-        "examples/paper_pendulum.toml",
-        "--out",
-        out.to_str().unwrap(),
-        "-q",
-    ];
-    for s in sets {
-        args.push("--set");
-        args.push(s);
-    }
-    let o = phstring(&args);
+    let o = crate::run_with("examples/paper_pendulum.toml", &out, sets, &[]);
     (
         o.status.code(),
         String::from_utf8_lossy(&o.stderr).into_owned(),

@@ -1,36 +1,16 @@
 //! Accuracy per cost (docs/method.md §19): the fourth-order composition's observed order, its
 //! exact energy balance in every configuration, and error control that tracks the tolerance.
 
-use phstring::benchmarks::{paper_params, paper_pendulum};
+use phstring::benchmarks::{paper_params, paper_pendulum, taut_string};
 use phstring::{
-    Boundary, Damping, FeedbackLoad, Fixed, MassMatrix, Material, Mesh, Network, NewtonParams,
-    PdLaw, Problem, Scheme, Simulation, State, StepControl, StepParams, Vector,
+    Damping, FeedbackLoad, Material, Network, NewtonParams, PdLaw, Scheme, Simulation, StepControl,
+    StepParams, Vector,
 };
 
 /// The taut string of `order.rs` (8 elements, C = 1.44, released from a sine of 0.1 m) at
 /// T = 0.4 s with `scheme` and step `h`: the node positions.
 fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
-    let n_el = 8;
-    let mesh = Mesh::uniform_chain(n_el, 1.0).unwrap();
-    let r = (0..=n_el)
-        .map(|i| {
-            let s = i as f64 / n_el as f64;
-            Vector::<2>::new(1.2 * s, 0.1 * (std::f64::consts::PI * s).sin())
-        })
-        .collect();
-    let problem = Problem {
-        point_masses: Vec::new(),
-        initial: State::at_rest(&mesh, r),
-        mesh,
-        material: Material::hyperelastic(20.0),
-        rho_a: 1.0,
-        body_force: Vector::zeros(),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            fixed: vec![Fixed::node(0), Fixed::node(n_el)],
-            ..Default::default()
-        },
-    };
+    let problem = taut_string(8);
     let params = StepParams {
         h,
         scheme,

@@ -6,35 +6,11 @@
 //! the fastest longitudinal modes, excited by the nonlinear coupling, are not resolved at
 //! h = 0.02 and the first observed order drops to 1.89: pre-asymptotic, not a defect.)
 
-use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, NewtonParams, Problem, Scheme, Simulation, State,
-    StepParams, Vector,
-};
+use phstring::benchmarks::taut_string;
+use phstring::{NewtonParams, Scheme, Simulation, StepParams, Vector};
 
 fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
-    let n_el = 8;
-    let mesh = Mesh::uniform_chain(n_el, 1.0).unwrap();
-    let r = (0..=n_el)
-        .map(|i| {
-            let s = i as f64 / n_el as f64;
-            Vector::<2>::new(1.2 * s, 0.1 * (std::f64::consts::PI * s).sin())
-        })
-        .collect();
-    let problem = Problem {
-        point_masses: Vec::new(),
-        initial: State::at_rest(&mesh, r),
-        mesh,
-        material: Material::hyperelastic(20.0),
-        rho_a: 1.0,
-        body_force: Vector::zeros(),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            motions: vec![],
-            feedback: vec![],
-            fixed: vec![Fixed::node(0), Fixed::node(n_el)],
-            loads: vec![],
-        },
-    };
+    let problem = taut_string(8);
     let params = StepParams {
         h,
         scheme,
