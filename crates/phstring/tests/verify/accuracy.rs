@@ -1,30 +1,12 @@
 //! Accuracy per cost (docs/method.md §19): the fourth-order composition's observed order, its
 //! exact energy balance in every configuration, and error control that tracks the tolerance.
 
-use phstring::benchmarks::{paper_params, paper_pendulum, taut_string};
+use crate::order::{observed_orders, taut};
+use phstring::benchmarks::{paper_params, paper_pendulum};
 use phstring::{
-    Damping, FeedbackLoad, Material, Network, NewtonParams, PdLaw, Scheme, Simulation, StepControl,
-    StepParams, Vector,
+    Damping, FeedbackLoad, Material, Network, PdLaw, Scheme, Simulation, StepControl, StepParams,
+    Vector,
 };
-
-/// The taut string of `order.rs` (8 elements, C = 1.44, released from a sine of 0.1 m) at
-/// T = 0.4 s with `scheme` and step `h`: the node positions.
-fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
-    let problem = taut_string(8);
-    let params = StepParams {
-        h,
-        scheme,
-        newton: NewtonParams {
-            tol: 1e-14,
-            rtol: 0.0,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    let mut sim = Simulation::new(problem, params).unwrap();
-    sim.run_until(0.4, &mut ()).unwrap();
-    sim.state().r.clone()
-}
 
 /// `dg4` on the smooth taut string: the largest nodal position error at T = 0.4 s against a
 /// reference with h/16 of the finest step falls with observed orders ≥ 3.8 for
@@ -32,25 +14,18 @@ fn taut(scheme: Scheme, h: f64) -> Vec<Vector<2>> {
 /// longitudinal modes are not resolved there, as for `dg` in `order.rs`.)
 #[test]
 fn dg4_is_fourth_order_on_the_taut_string() {
-    let reference = taut(Scheme::DiscreteGradient4, 0.00125 / 16.0);
-    let hs = [0.01, 0.005, 0.0025, 0.00125];
-    let errs: Vec<f64> = hs
-        .iter()
-        .map(|&h| {
-            taut(Scheme::DiscreteGradient4, h)
-                .iter()
-                .zip(&reference)
-                .map(|(a, b)| (a - b).norm())
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    let (errs, orders) = observed_orders(
+        Scheme::DiscreteGradient4,
+        &[0.01, 0.005, 0.0025, 0.00125],
+        1e-14,
+    );
     eprintln!("dg4: errors {errs:?}, observed orders {orders:?}");
     for p in &orders {
         assert!(*p >= 3.8, "observed order {p} ({errs:?})");
     }
     // And it beats the second-order step at the same h by far.
-    let dg = taut(Scheme::DiscreteGradient, 0.0025)
+    let reference = taut(Scheme::DiscreteGradient4, 0.00125 / 16.0, 1e-14);
+    let dg = taut(Scheme::DiscreteGradient, 0.0025, 1e-14)
         .iter()
         .zip(&reference)
         .map(|(a, b)| (a - b).norm())

@@ -73,60 +73,102 @@ fn linear_outputs(
     ys
 }
 
-#[test]
-fn modal_truncation_matches_the_nonlinear_run_at_small_amplitude() {
-    let (sys, st) = PhSystem::new(problem(0.0, 1.0)).unwrap();
-    let all = modes::modes(&sys, &st.r, usize::MAX, SolverKind::Auto)
+/// A force pulse on the taut wire: its system and initial state, every mode about it, the
+/// step (1/200 of the first period), the pulse length (0.3 periods), the steps (two periods)
+/// and the force ports at `NODE`.
+struct Pulse {
+    sys: PhSystem<2, Material>,
+    st: State<2>,
+    modes: Vec<modes::Mode<2>>,
+    h: f64,
+    tau: f64,
+    steps: usize,
+    ports: [ForcePort; 2],
+}
+
+fn pulse(net: Network<2, Material>) -> Pulse {
+    let (sys, st) = PhSystem::new(net).unwrap();
+    let modes = modes::modes(&sys, &st.r, usize::MAX, SolverKind::Auto)
         .unwrap()
         .modes;
-    let w1 = all[0].omega;
-    let (h, tau) = (2.0 * PI / w1 / 200.0, 0.3 * 2.0 * PI / w1);
-    let steps = 400;
-    let ports = [
-        ForcePort {
-            node: NODE,
-            component: 0,
-        },
-        ForcePort {
-            node: NODE,
-            component: 1,
-        },
-    ];
-    let mut errs_full = Vec::new();
-    let mut errs_trunc = Vec::new();
-    for a in [100.0, 10.0, 1.0] {
-        let mut sim = Simulation::new(
-            problem(a, tau),
-            StepParams {
-                h,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        let mut y_nl = Vec::with_capacity(steps);
-        for _ in 0..steps {
-            sim.step().unwrap();
+    let w1 = modes[0].omega;
+    let port = |component| ForcePort {
+        node: NODE,
+        component,
+    };
+    Pulse {
+        sys,
+        st,
+        modes,
+        h: 2.0 * PI / w1 / 200.0,
+        tau: 0.3 * 2.0 * PI / w1,
+        steps: 400,
+        ports: [port(0), port(1)],
+    }
+}
+
+/// The nonlinear run's port outputs `y_{n+½}` at `NODE` for `steps` steps of `h`.
+fn nonlinear_outputs(net: Network<2, Material>, h: f64, steps: usize) -> Vec<DVector<f64>> {
+    let params = StepParams {
+        h,
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    (0..steps)
+        .map(|_| {
+            let r = sim.step().unwrap();
+            assert!(r.dissipated >= 0.0);
             let p = sim
                 .ports()
                 .iter()
                 .find(|p| p.node == NODE && p.kind == PortKind::Force)
                 .unwrap();
-            y_nl.push(DVector::from_column_slice(p.output.as_slice()));
-        }
-        let u = |t: f64| {
-            let s = if t < tau { (PI * t / tau).sin() } else { 0.0 };
-            DVector::from_vec(vec![0.0, a * s * s])
-        };
+            DVector::from_column_slice(p.output.as_slice())
+        })
+        .collect()
+}
+
+/// The input of the pulse of amplitude `a` [N] and length `tau` [s].
+fn pulse_input(a: f64, tau: f64) -> impl Fn(f64) -> DVector<f64> {
+    move |t: f64| {
+        let s = if t < tau { (PI * t / tau).sin() } else { 0.0 };
+        DVector::from_vec(vec![0.0, a * s * s])
+    }
+}
+
+/// The largest difference of two output histories, over `scale`.
+fn largest_difference(y: &[DVector<f64>], z: &[DVector<f64>], scale: f64) -> f64 {
+    y.iter()
+        .zip(z)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, f64::max)
+        / scale
+}
+
+/// The largest output magnitude.
+fn largest(y: &[DVector<f64>]) -> f64 {
+    y.iter().map(|v| v.amax()).fold(0.0, f64::max)
+}
+
+#[test]
+fn modal_truncation_matches_the_nonlinear_run_at_small_amplitude() {
+    let Pulse {
+        sys,
+        st,
+        modes: all,
+        h,
+        tau,
+        steps,
+        ports,
+    } = pulse(problem(0.0, 1.0).into());
+    let mut errs_full = Vec::new();
+    let mut errs_trunc = Vec::new();
+    for a in [100.0, 10.0, 1.0] {
+        let y_nl = nonlinear_outputs(problem(a, tau).into(), h, steps);
         for (k, errs) in [(all.len(), &mut errs_full), (8, &mut errs_trunc)] {
             let model = modal_model(&sys, &st.r, &all[..k], &ports);
-            let y = linear_outputs(&model, h, steps, u);
-            let scale = y.iter().map(|v| v.amax()).fold(0.0, f64::max);
-            let err = y
-                .iter()
-                .zip(&y_nl)
-                .map(|(a, b)| (a - b).amax())
-                .fold(0.0, f64::max);
-            errs.push(err / scale);
+            let y = linear_outputs(&model, h, steps, pulse_input(a, tau));
+            errs.push(largest_difference(&y, &y_nl, largest(&y)));
         }
     }
     // Every mode kept: the difference is the nonlinearity, and it vanishes with the amplitude.
@@ -163,23 +205,15 @@ fn damped(a: f64, tau: f64) -> Network<2, Material> {
 /// with the amplitude, while the same models without `R` are off by the damping's effect.
 #[test]
 fn linear_models_carry_the_damping() {
-    let (sys, st) = PhSystem::new(damped(0.0, 1.0)).unwrap();
-    let all = modes::modes(&sys, &st.r, usize::MAX, SolverKind::Auto)
-        .unwrap()
-        .modes;
-    let w1 = all[0].omega;
-    let (h, tau) = (2.0 * PI / w1 / 200.0, 0.3 * 2.0 * PI / w1);
-    let steps = 400;
-    let ports = [
-        ForcePort {
-            node: NODE,
-            component: 0,
-        },
-        ForcePort {
-            node: NODE,
-            component: 1,
-        },
-    ];
+    let Pulse {
+        sys,
+        st,
+        modes: all,
+        h,
+        tau,
+        steps,
+        ports,
+    } = pulse(damped(0.0, 1.0));
     let reduced = reduced_model(&sys, &st.r, &ports);
     let modal = modal_model(&sys, &st.r, &all, &ports);
     let undamped = LinearPh {
@@ -193,41 +227,13 @@ fn linear_models_carry_the_damping() {
     };
     let mut errs: [Vec<f64>; 3] = Default::default();
     for a in [100.0, 10.0, 1.0] {
-        let mut sim = Simulation::new(
-            damped(a, tau),
-            StepParams {
-                h,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        let mut y_nl = Vec::new();
-        for _ in 0..steps {
-            let r = sim.step().unwrap();
-            assert!(r.dissipated >= 0.0);
-            let p = sim
-                .ports()
-                .iter()
-                .find(|p| p.node == NODE && p.kind == PortKind::Force)
-                .unwrap();
-            y_nl.push(DVector::from_column_slice(p.output.as_slice()));
-        }
-        let u = |t: f64| {
-            let s = if t < tau { (PI * t / tau).sin() } else { 0.0 };
-            DVector::from_vec(vec![0.0, a * s * s])
-        };
+        let y_nl = nonlinear_outputs(damped(a, tau), h, steps);
         for (model, errs) in [&reduced, &modal, &undamped]
             .into_iter()
             .zip(errs.iter_mut())
         {
-            let y = linear_outputs(model, h, steps, u);
-            let scale = y_nl.iter().map(|v| v.amax()).fold(0.0, f64::max);
-            let err = y
-                .iter()
-                .zip(&y_nl)
-                .map(|(a, b)| (a - b).amax())
-                .fold(0.0, f64::max);
-            errs.push(err / scale);
+            let y = linear_outputs(model, h, steps, pulse_input(a, tau));
+            errs.push(largest_difference(&y, &y_nl, largest(&y_nl)));
         }
     }
     eprintln!(
