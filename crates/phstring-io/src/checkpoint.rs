@@ -389,6 +389,7 @@ impl CheckpointFile {
             ("sim.h_min_used", s.h_min_used),
             ("sim.supplied_total", s.supplied_total),
             ("sim.dissipated_total", s.dissipated_total),
+            ("sim.err_prev", s.err_prev),
             ("counters.max_balance_error", c.max_balance_error),
             ("counters.max_newton_residual", c.max_newton_residual),
             ("counters.local_newton_work", c.local_newton_work),
@@ -400,6 +401,12 @@ impl CheckpointFile {
             .into_iter()
             .find(|(_, a)| a.iter().any(|x| !x.is_finite()))
             .map(|(n, _)| n)
+            .or_else(|| {
+                s.acc_history
+                    .iter()
+                    .any(|(t, a)| !t.is_finite() || a.iter().any(|x| !x.is_finite()))
+                    .then_some("sim.acc_history")
+            })
             .or_else(|| {
                 scalars
                     .into_iter()
@@ -522,6 +529,30 @@ impl CheckpointFile {
                 return Err(bad(format!("{name}[{i}] is not finite")));
             }
         }
+        if s.acc_history.len() > 2 {
+            return Err(bad(format!(
+                "sim.acc_history has {} points, at most 2",
+                s.acc_history.len()
+            )));
+        }
+        for (k, (t, a)) in s.acc_history.iter().enumerate() {
+            if a.len() != D * n {
+                return Err(bad(format!(
+                    "sim.acc_history[{k}] has {} numbers, the scenario needs {} ({n} nodes × {D} components)",
+                    a.len(),
+                    D * n
+                )));
+            }
+            if !t.is_finite() || a.iter().any(|x| !x.is_finite()) {
+                return Err(bad(format!("sim.acc_history[{k}] is not finite")));
+            }
+        }
+        if !(s.err_prev > 0.0 && s.err_prev.is_finite()) {
+            return Err(bad(format!(
+                "sim.err_prev = {:e} must be positive and finite",
+                s.err_prev
+            )));
+        }
         if let Some(i) = sim.system().first_inadmissible(&s.c) {
             return Err(bad(format!(
                 "sim.c[{i}] = {:e} is outside the material's domain",
@@ -619,7 +650,8 @@ impl CheckpointFile {
         }
         for (name, value, nonneg) in [
             ("sim.supplied_total", s.supplied_total, false),
-            ("sim.dissipated_total", s.dissipated_total, true),
+            // dg4's backward sub-step can give back dissipated energy: finite only.
+            ("sim.dissipated_total", s.dissipated_total, false),
             ("counters.hamiltonian_initial", c.hamiltonian_initial, false),
             ("counters.max_balance_error", c.max_balance_error, true),
             ("counters.max_newton_residual", c.max_newton_residual, true),

@@ -190,7 +190,7 @@ pub struct RunInfo {
     pub steps: usize,
     /// Whether step-size control was on.
     pub adaptive: bool,
-    /// Step attempts rejected and retried with half the step size.
+    /// Step attempts rejected and retried with a smaller step (Newton failure: half; error control: its cut).
     pub rejected_steps: usize,
     /// Smallest accepted step size [s].
     pub h_min_used: f64,

@@ -207,7 +207,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
     /// The energy `D_n ≥ 0` [J] that the dissipation takes out in a step with increment `x`
     /// (docs/method.md §18): `Σ_e l_e η ΔC_e²/(2h)` (Kelvin–Voigt), `Δᵀ M_c Δ / h` (drag, with
     /// the group's mass-matrix pattern) and `c |Δ_b − Δ_a|²/h` (dashpots). Each term is a
-    /// sum of squares with non-negative coefficients, so the computed value is ≥ 0 exactly.
+    /// sum of squares with non-negative coefficients, so the computed value is ≥ 0 exactly for
+    /// `h > 0` (a backward `dg4` sub-step has `h < 0` and gives energy back).
     pub(crate) fn dissipated(&self, x: &[Vector<D>]) -> f64 {
         let sys = self.sys;
         let inv_h = 1.0 / self.h;

@@ -20,7 +20,7 @@ pub struct StepReport {
     /// `Σ` range length × local iterations: the local work in node-iterations (a global
     /// iteration costs one per node).
     pub local_node_iterations: usize,
-    /// Attempts rejected (and retried with half the step size) before this step.
+    /// Attempts rejected (and retried with a smaller step) before this step.
     pub rejected: usize,
     /// Newton iterations (linear solves) spent in those rejected attempts.
     pub rejected_iterations: usize,

@@ -378,7 +378,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn smallest_step_size(&self) -> f64 {
         self.h_min_used
     }
-    /// Steps rejected (and retried with half the step size) so far.
+    /// Steps rejected (and retried with a smaller step) so far.
     pub fn rejected_steps(&self) -> usize {
         self.rejected
     }
@@ -429,6 +429,33 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 value: cp.h_cur,
             });
         }
+        // Error-control history: at most two points of n finite accelerations, a finite
+        // positive last error.
+        let points = &cp.acc_history.points;
+        if let Some(bad) = points.iter().find(|(_, a)| a.len() != n) {
+            return Err(SetupError::StateSize {
+                what: "error-control accelerations",
+                got: bad.1.len(),
+                expected: n,
+            });
+        }
+        let finite = points
+            .iter()
+            .all(|(t, a)| t.is_finite() && a.iter().all(|x| x.iter().all(|y| y.is_finite())));
+        if points.len() > 2 || !finite {
+            return Err(SetupError::OutOfRange {
+                what: "error-control history (points)",
+                value: points.len() as f64,
+                range: "at most 2 points, all finite",
+            });
+        }
+        if !(cp.err_prev > 0.0 && cp.err_prev.is_finite()) {
+            return Err(SetupError::NonPositive {
+                what: "checkpoint error-control error",
+                index: None,
+                value: cp.err_prev,
+            });
+        }
         self.energies = self.sys.energies(&cp.state);
         self.state = cp.state;
         self.t_base = cp.t_base;
@@ -442,19 +469,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.v_mid = cp.v_mid;
         self.supplied_total = cp.supplied_total;
         self.dissipated_total = cp.dissipated_total;
-        if cp.acc_history.points.iter().any(|(_, a)| a.len() != n) {
-            return Err(SetupError::StateSize {
-                what: "error-control accelerations",
-                got: cp
-                    .acc_history
-                    .points
-                    .iter()
-                    .map(|p| p.1.len())
-                    .max()
-                    .unwrap_or(0),
-                expected: n,
-            });
-        }
         self.acc_history = cp.acc_history;
         self.err_prev = cp.err_prev;
         self.total_newton = cp.total_newton;
@@ -535,7 +549,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let (mut rejected_its, mut rejected_local) = (0, 0);
         let floor = self.step_size_floor();
         let tolerant = self.params.control.error_control();
-        if tolerant && self.acc_history.points.is_empty() {
+        let composed = self.params.scheme == Scheme::DiscreteGradient4;
+        if tolerant && !composed && self.acc_history.points.is_empty() {
             let a0 = self.initial_acceleration()?;
             self.acc_history.push(self.time(), &a0);
         }
@@ -562,17 +577,21 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             match self.try_step(h, t_next) {
                 Ok(mut report) => {
                     if tolerant {
-                        let err = self.step_error(t, h, report.t);
+                        let err = match self.step_error(t, h) {
+                            Ok(err) => err,
+                            Err(e) => {
+                                // A stop request during the embedded solve: the step is
+                                // undone, nothing is counted.
+                                self.undo_step(&report);
+                                return Err(e);
+                            }
+                        };
                         // The local error is O(h³), the error per unit step O(h²).
                         let p = 1;
                         // step_error maps NaN to infinity.
                         if err > 1.0 && h > floor * (1.0 + 1e-12) {
                             // Rejected for accuracy: back to the state before the step.
-                            let b = self.backup.take().expect("saved before the step");
-                            self.restore_from(&b);
-                            self.backup = Some(b);
-                            self.step -= 1;
-                            self.total_newton -= report.newton_iterations;
+                            self.undo_step(&report);
                             rejected_its += report.newton_iterations;
                             rejected_local += report.local_node_iterations;
                             rejected_here += 1;
@@ -588,18 +607,25 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             self.acc = acc;
                         }
                         let grow = crate::accuracy::accept_factor(err, self.err_prev, p);
-                        self.err_prev = err.max(1e-10);
+                        // Finite, also for a step accepted at the floor with err = ∞.
+                        self.err_prev = err.clamp(1e-10, 1e4);
                         report.rejected = rejected_here;
                         report.rejected_iterations = rejected_its;
                         report.rejected_local_node_iterations = rejected_local;
                         self.h_min_used = self.h_min_used.min(h);
-                        // A step clipped to t_end continues from the unclipped size.
-                        let base = if t_next.is_some() {
-                            h.max(self.h_cur)
+                        // After a rejection in this step, no growth (Hairer–Wanner's facmax = 1);
+                        // a step clipped to t_end does not grow the unclipped size.
+                        let grow = if rejected_here > 0 {
+                            grow.min(1.0)
                         } else {
-                            h
+                            grow
                         };
-                        let next = (base * grow).min(self.params.h).max(floor);
+                        let next = if t_next.is_some() {
+                            self.h_cur * grow.min(1.0)
+                        } else {
+                            h * grow
+                        };
+                        let next = next.min(self.params.h).max(floor);
                         self.t_base = report.t;
                         self.k = 0;
                         self.h_cur = next;
@@ -616,8 +642,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     }
                     self.h_min_used = self.h_min_used.min(h);
                     let c = self.params.control;
-                    let easy =
-                        report.newton_iterations <= c.easy_iterations && report.backtracks == 0;
+                    // dg4 makes three solves per step.
+                    let solves = if composed { 3 } else { 1 };
+                    let easy = report.newton_iterations <= c.easy_iterations * solves
+                        && report.backtracks == 0;
                     self.easy_streak = if easy { self.easy_streak + 1 } else { 0 };
                     if c.adaptive && self.easy_streak >= c.grow_after && self.h_cur < self.params.h
                     {
@@ -632,8 +660,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         return Err(e);
                     }
                     // The floor is absolute: without error control h_cur is always
-                    // time.h / 2^k.
-                    if 0.5 * self.h_cur < floor * (1.0 - 1e-12) {
+                    // time.h / 2^k; with it, the step tried is halved down to the floor.
+                    let at_floor = if tolerant {
+                        h <= floor * (1.0 + 1e-12)
+                    } else {
+                        0.5 * self.h_cur < floor * (1.0 - 1e-12)
+                    };
+                    if at_floor {
                         return Err(StepError::StepSizeTooSmall {
                             step: self.step + 1,
                             t,
@@ -651,23 +684,47 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     rejected_here += 1;
                     self.rejected += 1;
                     self.easy_streak = 0;
-                    self.set_step_size(0.5 * self.h_cur);
+                    if tolerant {
+                        self.set_step_size((0.5 * h).max(floor));
+                    } else {
+                        self.set_step_size(0.5 * self.h_cur);
+                    }
                 }
             }
         }
     }
 
-    /// The error of the step just taken from `t` by `h` to `t_next` (docs/method.md §19),
-    /// relative to the tolerances: ≤ 1 to accept. The state before the step is in the backup.
-    fn step_error(&mut self, t: f64, h: f64, t_next: f64) -> f64 {
+    /// Puts back the state before the step of `report` (in the backup) and undoes its
+    /// counters.
+    fn undo_step(&mut self, report: &StepReport) {
+        let b = self.backup.take().expect("saved before the step");
+        self.restore_from(&b);
+        self.backup = Some(b);
+        self.step -= 1;
+        self.total_newton -= report.newton_iterations;
+    }
+
+    /// The error of the step just taken from `t` by `h` (docs/method.md §19), relative to the
+    /// tolerances: ≤ 1 to accept (NaN is infinite). The state before the step is in the
+    /// backup. `Err` only for a stop request during `dg4`'s embedded solve.
+    fn step_error(&mut self, t: f64, h: f64) -> Result<f64, StepError> {
         let c = self.params.control;
         let (rtol, atol, atol_v) = (c.rtol, c.atol, c.atol / self.params.h);
         let b = self.backup.take().expect("saved before the step");
         let before = b.state.as_ref().expect("saved before the step");
         let mut err: f64 = 0.0;
+        // The larger of the two, NaN kept.
+        let worse = |err: f64, r: f64| if r <= err { err } else { r };
         if self.params.scheme == Scheme::DiscreteGradient4 {
-            match self.embedded_second_order(before, t, h, t_next) {
-                Ok(()) => {
+            let converged = match self.embedded_second_order(before, t, h) {
+                Ok(c) => c,
+                Err(e) => {
+                    self.backup = Some(b);
+                    return Err(e);
+                }
+            };
+            match converged {
+                true => {
                     // self.x holds the second-order increment.
                     let inv_h = 1.0 / h;
                     for i in 0..self.state.r.len() {
@@ -685,12 +742,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         let e_v = mask(v2 - self.state.v[i]).norm();
                         let r_mag = before.r[i].norm().max(self.state.r[i].norm());
                         let v_mag = before.v[i].norm().max(self.state.v[i].norm());
-                        err = err.max(crate::accuracy::ratio(
-                            e_r, e_v, r_mag, v_mag, rtol, atol, atol_v,
-                        ));
+                        err = worse(
+                            err,
+                            crate::accuracy::ratio(e_r, e_v, r_mag, v_mag, rtol, atol, atol_v),
+                        );
                     }
                 }
-                Err(_) => err = f64::INFINITY,
+                false => err = f64::INFINITY,
             }
         } else {
             let tau = t + 0.5 * h;
@@ -708,28 +766,28 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 );
                 let r_mag = before.r[i].norm().max(self.state.r[i].norm());
                 let v_mag = before.v[i].norm().max(self.state.v[i].norm());
-                err = err.max(crate::accuracy::ratio(
-                    e_r, e_v, r_mag, v_mag, rtol, atol, atol_v,
-                ));
+                err = worse(
+                    err,
+                    crate::accuracy::ratio(e_r, e_v, r_mag, v_mag, rtol, atol, atol_v),
+                );
             }
         }
         self.backup = Some(b);
         // Error per unit step (relative to the largest step): a step of h/k may make 1/k of
         // the error of a step of h, so that the global error is proportional to the tolerance.
         let err = err * (self.params.h / h);
-        if err.is_nan() { f64::INFINITY } else { err }
+        Ok(if err.is_nan() { f64::INFINITY } else { err })
     }
 
-    /// The second-order DG step from `before` (at `t`) by `h` to `t_next`, started from the
-    /// increment the step just taken made; its increment is left in `self.x`. Nothing else
-    /// changes.
+    /// The second-order DG step from `before` (at `t`) by `h`, started from the increment the
+    /// step just taken made; its increment is left in `self.x`. `Ok(false)` if Newton did
+    /// not converge, `Err` on a stop request. Nothing else changes.
     fn embedded_second_order(
         &mut self,
         before: &State<D>,
         t: f64,
         h: f64,
-        t_next: f64,
-    ) -> Result<(), StepError> {
+    ) -> Result<bool, StepError> {
         let t_mid = t + 0.5 * h;
         self.f_ext.copy_from_slice(&self.sys.f_body);
         for load in &self.sys.boundary.loads {
@@ -738,7 +796,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for (x, (a, b)) in self.x.iter_mut().zip(self.state.r.iter().zip(&before.r)) {
             *x = a - b;
         }
-        let _ = t_next;
         let mut eqs = StepEquations::new(
             &self.sys,
             Scheme::DiscreteGradient,
@@ -748,16 +805,18 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.f_ext,
             &mut self.reaction,
         );
-        newton::solve(
+        match newton::solve(
             &mut eqs,
             &mut self.x,
             &mut self.newton_ws,
             self.solver.as_mut(),
             &self.params.newton,
             self.stop.as_deref(),
-        )
-        .map(|_| ())
-        .map_err(|_| StepError::Interrupted { step: self.step, t })
+        ) {
+            Ok(_) => Ok(true),
+            Err(NewtonError::Interrupted(_)) => Err(StepError::Interrupted { step: self.step, t }),
+            Err(_) => Ok(false),
+        }
     }
 
     /// The acceleration [m/s²] at the current state, `M_ρ a = F(t, r, v)` on the free
@@ -770,8 +829,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for load in &self.sys.boundary.loads {
             self.f_ext[load.node] += (load.force)(t + 0.5 * eps);
         }
-        for ((x, v), free) in self.x.iter_mut().zip(&self.state.v).zip(&self.sys.free) {
-            *x = Vector::from_fn(|k, _| if free[k] { v[k] * eps } else { 0.0 });
+        // Every component, prescribed ones too, so that no inertia term appears anywhere.
+        for (x, v) in self.x.iter_mut().zip(&self.state.v) {
+            *x = v * eps;
         }
         let n = self.x.len();
         let mut res = vec![Vector::<D>::zeros(); n];
