@@ -218,6 +218,8 @@ pub struct Simulation<const D: usize, M> {
     acc_history: crate::accuracy::AccelerationHistory<D>,
     /// Error control: the last accepted step's error (1 before the first).
     err_prev: f64,
+    /// Newton iterations of the last embedded second-order solve (`dg4` with error control).
+    embedded_iterations: usize,
 }
 
 /// What a step changes, saved to put it back (a failed `dg4` sub-step, a step rejected by
@@ -230,6 +232,7 @@ struct Backup<const D: usize> {
     energies: Energies,
     supplied_total: f64,
     dissipated_total: f64,
+    ports: Vec<PortSample<D>>,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -333,6 +336,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             backup: None,
             acc_history: Default::default(),
             err_prev: 1.0,
+            embedded_iterations: 0,
         })
     }
 
@@ -486,6 +490,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         b.energies = self.energies;
         b.supplied_total = self.supplied_total;
         b.dissipated_total = self.dissipated_total;
+        b.ports.clone_from(&self.ports);
     }
 
     /// Puts back what [`Self::save`] saved.
@@ -498,6 +503,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.energies = b.energies;
         self.supplied_total = b.supplied_total;
         self.dissipated_total = b.dissipated_total;
+        self.ports.clone_from(&b.ports);
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -577,6 +583,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             match self.try_step(h, t_next) {
                 Ok(mut report) => {
                     if tolerant {
+                        self.embedded_iterations = 0;
                         let err = match self.step_error(t, h) {
                             Ok(err) => err,
                             Err(e) => {
@@ -586,6 +593,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                                 return Err(e);
                             }
                         };
+                        // The embedded solve is part of the step's work.
+                        report.newton_iterations += self.embedded_iterations;
+                        self.total_newton += self.embedded_iterations;
                         // The local error is O(h³), the error per unit step O(h²).
                         let p = 1;
                         // step_error maps NaN to infinity.
@@ -813,7 +823,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.params.newton,
             self.stop.as_deref(),
         ) {
-            Ok(_) => Ok(true),
+            Ok(stats) => {
+                self.embedded_iterations = stats.iterations;
+                Ok(true)
+            }
             Err(NewtonError::Interrupted(_)) => Err(StepError::Interrupted { step: self.step, t }),
             Err(_) => Ok(false),
         }
