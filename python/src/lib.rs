@@ -1,0 +1,282 @@
+//! Python bindings of phstring (work in progress, issue 15): scenarios, the stepper and a
+//! run that returns NumPy arrays. Units as in the library: SI (m, s, kg, N, J).
+
+use std::path::Path;
+
+use numpy::{PyArray1, PyArrayMethods};
+use phstring::{Material, Simulation as Sim, StepReport};
+use phstring_io::scenario::{self, ScenarioFile};
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+create_exception!(
+    _phstring,
+    ScenarioError,
+    PyValueError,
+    "An invalid scenario; the message names the key and its file:line:col."
+);
+create_exception!(
+    _phstring,
+    StepError,
+    pyo3::exceptions::PyRuntimeError,
+    "A failed time step; the message names the step, the time and where."
+);
+
+/// A validated scenario file (TOML), with `set` overrides applied as `phstring run --set`.
+#[pyclass(module = "phstring._phstring")]
+struct Scenario {
+    file: ScenarioFile,
+}
+
+fn scenario_err(e: impl std::fmt::Display) -> PyErr {
+    ScenarioError::new_err(e.to_string())
+}
+
+fn sets(set: Option<Vec<String>>) -> Vec<String> {
+    set.unwrap_or_default()
+}
+
+#[pymethods]
+impl Scenario {
+    /// Loads and checks the scenario file at `path`, with `set` overrides (`"KEY=VALUE"`).
+    #[staticmethod]
+    #[pyo3(signature = (path, set=None))]
+    fn from_file(path: &str, set: Option<Vec<String>>) -> PyResult<Self> {
+        let file = scenario::load(Path::new(path), &sets(set)).map_err(scenario_err)?;
+        file.check().map_err(scenario_err)?;
+        Ok(Self { file })
+    }
+
+    /// Parses and checks a scenario given as TOML text (`name` appears in messages).
+    #[staticmethod]
+    #[pyo3(signature = (text, set=None, name="<string>"))]
+    fn from_toml(text: &str, set: Option<Vec<String>>, name: &str) -> PyResult<Self> {
+        let file = scenario::parse(text, Path::new(name), &sets(set)).map_err(scenario_err)?;
+        file.check().map_err(scenario_err)?;
+        Ok(Self { file })
+    }
+
+    /// A scenario from its JSON text (e.g. `json.dumps(d)` of a dict with the TOML layout).
+    #[staticmethod]
+    #[pyo3(signature = (json, set=None))]
+    fn from_json(json: &str, set: Option<Vec<String>>) -> PyResult<Self> {
+        let value: serde_json::Value = serde_json::from_str(json).map_err(scenario_err)?;
+        let text = toml::to_string(&value).map_err(scenario_err)?;
+        Self::from_toml(&text, set, "<dict>")
+    }
+
+    /// Spatial dimension (1, 2 or 3).
+    #[getter]
+    fn dimension(&self) -> PyResult<usize> {
+        self.file.dimension().map_err(scenario_err)
+    }
+
+    /// The scenario text as run (after the overrides).
+    #[getter]
+    fn text(&self) -> String {
+        self.file.text().to_string()
+    }
+}
+
+/// A simulation of one of the three dimensions.
+enum Any {
+    D1(Sim<1, Material>),
+    D2(Sim<2, Material>),
+    D3(Sim<3, Material>),
+}
+
+macro_rules! each {
+    ($any:expr, $s:ident => $body:expr) => {
+        match $any {
+            Any::D1($s) => $body,
+            Any::D2($s) => $body,
+            Any::D3($s) => $body,
+        }
+    };
+}
+
+fn new_sim<const D: usize>(file: &ScenarioFile) -> PyResult<(Sim<D, Material>, f64)> {
+    let v = file.validate::<D>().map_err(scenario_err)?;
+    let t_end = v.settings.t_end;
+    let sim = Sim::new(v.problem, v.settings.step).map_err(scenario_err)?;
+    Ok((sim, t_end))
+}
+
+fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("step", r.step)?;
+    d.set_item("t", r.t)?;
+    d.set_item("h", r.h)?;
+    d.set_item("newton_iterations", r.newton_iterations)?;
+    d.set_item("rejected", r.rejected)?;
+    d.set_item("residual", r.residual)?;
+    d.set_item("hamiltonian", r.after.hamiltonian())?;
+    d.set_item("supplied", r.supplied)?;
+    d.set_item("dissipated", r.dissipated)?;
+    d.set_item("balance_error", r.balance_error)?;
+    Ok(d)
+}
+
+/// The stepper of a scenario (`phstring::Simulation`): `step()` advances one step.
+#[pyclass(module = "phstring._phstring")]
+struct Simulation {
+    /// Behind a mutex: Python objects may be shared between threads.
+    sim: std::sync::Mutex<Any>,
+    t_end: f64,
+}
+
+impl Simulation {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Any> {
+        // A panic in another thread cannot leave the simulation half-stepped (a failed
+        // step leaves the state untouched), so a poisoned lock is still usable.
+        self.sim.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+#[pymethods]
+impl Simulation {
+    /// Sets up the scenario's simulation at `t = 0`.
+    #[new]
+    fn new(scenario: &Scenario) -> PyResult<Self> {
+        let file = &scenario.file;
+        let (sim, t_end) = match file.dimension().map_err(scenario_err)? {
+            1 => new_sim::<1>(file).map(|(s, t)| (Any::D1(s), t))?,
+            2 => new_sim::<2>(file).map(|(s, t)| (Any::D2(s), t))?,
+            _ => new_sim::<3>(file).map(|(s, t)| (Any::D3(s), t))?,
+        };
+        Ok(Self {
+            sim: std::sync::Mutex::new(sim),
+            t_end,
+        })
+    }
+
+    /// Advances one step (not beyond the scenario's `time.end`); returns its report as a dict
+    /// (`step`, `t` [s], `h` [s], `newton_iterations`, `rejected`, `residual` [N],
+    /// `hamiltonian`, `supplied`, `dissipated`, `balance_error` [J]).
+    fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let t_end = self.t_end;
+        let r = each!(&mut *self.lock(), s => s.step_until(t_end))
+            .map_err(|e| StepError::new_err(e.to_string()))?;
+        report_dict(py, &r)
+    }
+
+    /// Current time [s].
+    #[getter]
+    fn time(&self) -> f64 {
+        each!(&*self.lock(), s => s.time())
+    }
+
+    /// The scenario's end time [s].
+    #[getter]
+    fn t_end(&self) -> f64 {
+        self.t_end
+    }
+
+    /// Steps taken.
+    #[getter]
+    fn steps(&self) -> usize {
+        each!(&*self.lock(), s => s.steps())
+    }
+
+    /// Node positions [m], a copy of shape `(nodes, d)`.
+    #[getter]
+    fn r<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let (flat, n, d) = each!(&*self.lock(), s => {
+            let r = &s.state().r;
+            (r.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>(), r.len(), x_dim(&r[..]))
+        });
+        Ok(PyArray1::from_vec(py, flat).reshape([n, d])?.into_any())
+    }
+
+    /// Energies [J] as a dict: `kinetic`, `potential`, `hamiltonian`, `supplied` and
+    /// `dissipated` (cumulative).
+    #[getter]
+    fn energies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (e, sup, dis) =
+            each!(&*self.lock(), s => (s.energies(), s.supplied_energy(), s.dissipated_energy()));
+        let d = PyDict::new(py);
+        d.set_item("kinetic", e.kinetic)?;
+        d.set_item("potential", e.potential())?;
+        d.set_item("hamiltonian", e.hamiltonian())?;
+        d.set_item("supplied", sup)?;
+        d.set_item("dissipated", dis)?;
+        Ok(d)
+    }
+}
+
+fn x_dim<const D: usize>(_: &[phstring::Vector<D>]) -> usize {
+    D
+}
+
+/// Runs `scenario` to its end time in-process and returns a dict of NumPy arrays, one entry
+/// per step from `t = 0`: `t` [s], `kinetic`, `potential`, `hamiltonian`, `supplied`,
+/// `dissipated`, `balance_error` [J], `h` [s], `newton_iterations`. The values are those of
+/// `phstring run`'s `energy.csv`, bit for bit.
+#[pyfunction]
+fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>> {
+    let sim = Simulation::new(scenario)?;
+    let e0 = each!(&*sim.lock(), s => s.energies());
+    let mut cols: [Vec<f64>; 8] = Default::default();
+    let mut its = vec![0usize];
+    for (c, v) in cols.iter_mut().zip([
+        0.0,
+        e0.kinetic,
+        e0.potential(),
+        e0.hamiltonian(),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ]) {
+        c.push(v);
+    }
+    let t_end = sim.t_end;
+    while sim.time() < t_end - 1e-9 * each!(&*sim.lock(), s => s.step_size()) {
+        let (r, sup, dis) = each!(&mut *sim.lock(), s => {
+            let r = s.step_until(t_end).map_err(|e| StepError::new_err(e.to_string()))?;
+            (r, s.supplied_energy(), s.dissipated_energy())
+        });
+        for (c, v) in cols.iter_mut().zip([
+            r.t,
+            r.after.kinetic,
+            r.after.potential(),
+            r.after.hamiltonian(),
+            sup,
+            dis,
+            r.balance_error,
+            r.h,
+        ]) {
+            c.push(v);
+        }
+        its.push(r.newton_iterations);
+    }
+    let d = PyDict::new(py);
+    let names = [
+        "t",
+        "kinetic",
+        "potential",
+        "hamiltonian",
+        "supplied",
+        "dissipated",
+        "balance_error",
+        "h",
+    ];
+    for (name, c) in names.iter().zip(cols) {
+        d.set_item(*name, PyArray1::from_vec(py, c))?;
+    }
+    d.set_item("newton_iterations", PyArray1::from_vec(py, its))?;
+    Ok(d)
+}
+
+/// The compiled part of the `phstring` package.
+#[pymodule]
+fn _phstring(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Scenario>()?;
+    m.add_class::<Simulation>()?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add("ScenarioError", m.py().get_type::<ScenarioError>())?;
+    m.add("StepError", m.py().get_type::<StepError>())?;
+    Ok(())
+}

@@ -1,0 +1,82 @@
+"""The Python package against the command line (issue 15, first part): the paper's run from
+Python is the CLI's, bit for bit; errors map to ScenarioError and StepError."""
+
+import csv
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import phstring
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+PAPER = ROOT / "examples" / "paper_pendulum.toml"
+BIN = os.environ.get("PHSTRING_BIN", str(ROOT / "target" / "debug" / "phstring"))
+
+
+def cli_energy(tmp_path, *sets):
+    args = [BIN, "run", str(PAPER), "--out", str(tmp_path / "out"), "-q"]
+    for s in sets:
+        args += ["--set", s]
+    subprocess.run(args, check=True, capture_output=True)
+    with open(tmp_path / "out" / "energy.csv") as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+@pytest.mark.skipif(not pathlib.Path(BIN).exists(), reason="the CLI binary is not built")
+def test_paper_run_is_the_cli_run_bit_for_bit(tmp_path):
+    res = phstring.run(phstring.Scenario.from_file(str(PAPER)))
+    cli = cli_energy(tmp_path)
+    for key, col in [("t", "t"), ("hamiltonian", "hamiltonian"), ("kinetic", "kinetic"),
+                     ("supplied", "supplied_energy"), ("balance_error", "balance_error"), ("h", "h")]:
+        assert np.array_equal(res[key], cli[col]), key
+    # The paper's published values.
+    assert abs(res["hamiltonian"][0] - (-3.468359)) < 1e-6
+    assert abs(res["hamiltonian"][-1] - (-3.403762)) < 1e-6
+
+
+def test_simulation_steps_and_state():
+    sim = phstring.Simulation(phstring.Scenario.from_file(str(PAPER), set=["mesh.elements=10"]))
+    assert sim.r.shape == (11, 2)
+    h0 = sim.energies["hamiltonian"]
+    rep = sim.step()
+    assert rep["step"] == 1 and abs(rep["t"] - 0.01) < 1e-15
+    assert abs(rep["balance_error"]) < 1e-12
+    e = sim.energies
+    assert abs(e["hamiltonian"] - h0 - e["supplied"] + e["dissipated"]) < 1e-12
+    while sim.time < sim.t_end - 1e-12:
+        sim.step()
+    assert sim.steps == 100
+    # A copy: it does not change when the simulation moves on.
+    r = sim.r
+    r[0, 0] = 99.0
+    assert sim.r[0, 0] == 0.0
+
+
+def test_scenario_from_dict_and_toml():
+    text = PAPER.read_text()
+    a = phstring.Scenario.from_toml(text, set=["time.end=0.05"])
+    assert a.dimension == 2
+    import tomllib
+    b = phstring.Scenario.from_json(json.dumps(tomllib.loads(text)), set=["time.end=0.05"])
+    ra, rb = phstring.run(a), phstring.run(b)
+    assert np.array_equal(ra["hamiltonian"], rb["hamiltonian"])
+
+
+def test_errors_are_mapped():
+    with pytest.raises(phstring.ScenarioError, match="mesh.elements"):
+        phstring.Scenario.from_file(str(PAPER), set=["mesh.elements=-3"])
+    with pytest.raises(phstring.ScenarioError):
+        phstring.Scenario.from_toml("dimension = 2\n[time]\nh = 0.1\n")
+    # A load that stops being defined after t = 0.02 s fails the third step.
+    sc = phstring.Scenario.from_file(str(PAPER), set=['boundary.1.force=["sqrt(0.02 - t)", "0"]'])
+    sim = phstring.Simulation(sc)
+    sim.step()
+    sim.step()
+    with pytest.raises(phstring.StepError, match="step 3"):
+        sim.step()
+    assert sim.steps == 2
