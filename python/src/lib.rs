@@ -2,6 +2,7 @@
 //! run that returns NumPy arrays. Units as in the library: SI (m, s, kg, N, J).
 
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 use numpy::{PyArray1, PyArrayMethods};
 use phstring::{Material, Simulation as Sim, StepReport};
@@ -97,11 +98,33 @@ macro_rules! each {
     };
 }
 
-fn new_sim<const D: usize>(file: &ScenarioFile) -> PyResult<(Sim<D, Material>, f64)> {
-    let v = file.validate::<D>().map_err(scenario_err)?;
+/// One port of the last step: node, force port?, input, output, power [W].
+type PortRow = (usize, bool, Vec<f64>, Vec<f64>, f64);
+
+/// A force port's input set from Python: `None` follows the scenario's expression.
+type InputSlot = Arc<Mutex<Option<[f64; 3]>>>;
+
+fn new_sim<const D: usize>(
+    file: &ScenarioFile,
+) -> PyResult<(Sim<D, Material>, f64, Vec<InputSlot>)> {
+    let mut v = file.validate::<D>().map_err(scenario_err)?;
     let t_end = v.settings.t_end;
+    // Every load reads its slot first: `set_input` holds a value there.
+    let mut slots = Vec::new();
+    for load in &mut v.problem.boundary.loads {
+        let slot: InputSlot = Arc::default();
+        let (scenario_force, held) = (load.force.clone(), slot.clone());
+        load.force = Arc::new(move |t| {
+            let value = *held.lock().unwrap_or_else(|p| p.into_inner());
+            match value {
+                Some(u) => phstring::Vector::<D>::from_fn(|i, _| u[i]),
+                None => scenario_force(t),
+            }
+        });
+        slots.push(slot);
+    }
     let sim = Sim::new(v.problem, v.settings.step).map_err(scenario_err)?;
-    Ok((sim, t_end))
+    Ok((sim, t_end, slots))
 }
 
 fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
@@ -125,6 +148,8 @@ struct Simulation {
     /// Behind a mutex: Python objects may be shared between threads.
     sim: std::sync::Mutex<Any>,
     t_end: f64,
+    /// The inputs of the loads (force ports), in port order.
+    inputs: Vec<InputSlot>,
 }
 
 impl Simulation {
@@ -141,14 +166,15 @@ impl Simulation {
     #[new]
     fn new(scenario: &Scenario) -> PyResult<Self> {
         let file = &scenario.file;
-        let (sim, t_end) = match file.dimension().map_err(scenario_err)? {
-            1 => new_sim::<1>(file).map(|(s, t)| (Any::D1(s), t))?,
-            2 => new_sim::<2>(file).map(|(s, t)| (Any::D2(s), t))?,
-            _ => new_sim::<3>(file).map(|(s, t)| (Any::D3(s), t))?,
+        let (sim, t_end, inputs) = match file.dimension().map_err(scenario_err)? {
+            1 => new_sim::<1>(file).map(|(s, t, i)| (Any::D1(s), t, i))?,
+            2 => new_sim::<2>(file).map(|(s, t, i)| (Any::D2(s), t, i))?,
+            _ => new_sim::<3>(file).map(|(s, t, i)| (Any::D3(s), t, i))?,
         };
         Ok(Self {
             sim: std::sync::Mutex::new(sim),
             t_end,
+            inputs,
         })
     }
 
@@ -160,6 +186,76 @@ impl Simulation {
         let r = each!(&mut *self.lock(), s => s.step_until(t_end))
             .map_err(|e| StepError::new_err(e.to_string()))?;
         report_dict(py, &r)
+    }
+
+    /// Holds the force [N] of load port `port` (0, 1, … in the order of the scenario's
+    /// `force` tables) at `value` (one number per component) from the next step on, until
+    /// set again (zero-order hold); `None` returns it to the scenario's expression. A
+    /// controller written in Python closes its loop this way, one step at a time.
+    #[pyo3(signature = (port, value))]
+    fn set_input(&self, port: usize, value: Option<Vec<f64>>) -> PyResult<()> {
+        let d = each!(&*self.lock(), s => x_dim(&s.state().r[..]));
+        let slot = self.inputs.get(port).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "port {port} is not a load: the scenario has {} force ports (0 … {})",
+                self.inputs.len(),
+                self.inputs.len().saturating_sub(1)
+            ))
+        })?;
+        let held = match value {
+            None => None,
+            Some(v) => {
+                if v.len() != d {
+                    return Err(PyValueError::new_err(format!(
+                        "the input of port {port} needs {d} components (dimension {d}), got {}",
+                        v.len()
+                    )));
+                }
+                if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+                    return Err(PyValueError::new_err(format!(
+                        "the input of port {port} must be finite, got {x}"
+                    )));
+                }
+                let mut u = [0.0; 3];
+                u[..d].copy_from_slice(&v);
+                Some(u)
+            }
+        };
+        *slot.lock().unwrap_or_else(|p| p.into_inner()) = held;
+        Ok(())
+    }
+
+    /// The ports of the last step as a list of dicts: `node`, `kind` (`force` or
+    /// `velocity`), `u` and `y` (NumPy arrays: force [N] and mid-step velocity [m/s], or
+    /// velocity and reaction force), `power` [W]. Loads first, then controls, then supports.
+    #[getter]
+    fn ports<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let samples: Vec<PortRow> = each!(&*self.lock(), s => {
+            s.ports()
+                .iter()
+                .map(|p| {
+                    (
+                        p.node,
+                        p.kind == phstring::PortKind::Force,
+                        p.input.as_slice().to_vec(),
+                        p.output.as_slice().to_vec(),
+                        p.power(),
+                    )
+                })
+                .collect()
+        });
+        samples
+            .into_iter()
+            .map(|(node, force, u, y, power)| {
+                let d = PyDict::new(py);
+                d.set_item("node", node)?;
+                d.set_item("kind", if force { "force" } else { "velocity" })?;
+                d.set_item("u", PyArray1::from_vec(py, u))?;
+                d.set_item("y", PyArray1::from_vec(py, y))?;
+                d.set_item("power", power)?;
+                Ok(d)
+            })
+            .collect()
     }
 
     /// Current time [s].

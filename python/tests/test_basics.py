@@ -80,3 +80,44 @@ def test_errors_are_mapped():
     with pytest.raises(phstring.StepError, match="step 3"):
         sim.step()
     assert sim.steps == 2
+
+
+def test_constant_set_input_equals_the_scenario_force():
+    """`set_input` with a constant force gives the run of the scenario with that force, bit
+    for bit (the load is sampled at the mid-step either way)."""
+    steps = 30
+    with_force = phstring.Simulation(
+        phstring.Scenario.from_file(str(PAPER), set=['boundary.1.force=["0.3", "-0.1"]']))
+    held = phstring.Simulation(
+        phstring.Scenario.from_file(str(PAPER), set=['boundary.1.force=["0", "0"]']))
+    held.set_input(0, [0.3, -0.1])
+    for _ in range(steps):
+        a, b = with_force.step(), held.step()
+        assert a["hamiltonian"] == b["hamiltonian"] and a["supplied"] == b["supplied"]
+    assert np.array_equal(with_force.r, held.r)
+    port = held.ports[0]
+    assert port["kind"] == "force" and port["node"] == 30
+    assert np.array_equal(port["u"], [0.3, -0.1])
+    assert port["power"] == pytest.approx(float(port["u"] @ port["y"]), rel=0, abs=0)
+    # Back to the scenario's expression.
+    held.set_input(0, None)
+    held.step()
+    assert np.array_equal(held.ports[0]["u"], [0.0, 0.0])
+
+
+def test_set_input_refuses_bad_values():
+    sim = phstring.Simulation(phstring.Scenario.from_file(str(PAPER)))
+    with pytest.raises(ValueError, match="port 3 is not a load"):
+        sim.set_input(3, [0.0, 0.0])
+    with pytest.raises(ValueError, match="needs 2 components"):
+        sim.set_input(0, [1.0])
+    with pytest.raises(ValueError, match="finite"):
+        sim.set_input(0, [float("nan"), 0.0])
+
+
+def test_pd_control_example_tracks_the_point():
+    out = subprocess.run(
+        ["python3", str(ROOT / "python" / "examples" / "pd_control.py")],
+        check=True, capture_output=True, text=True)
+    first, last = (float(x) for x in out.stdout.split()[-2:])
+    assert first > 0.1 and last < 0.2 * first, out.stdout
