@@ -1,9 +1,69 @@
-"""phstring: port-Hamiltonian strings and cables with exact energy behaviour.
+"""phstring: port-Hamiltonian strings and cables with exact energy behaviour, from Python.
 
-Work in progress (issue 15): `Scenario`, `Simulation` and `run` exist; outputs to a folder,
-statics, modes, linear models, checkpoints, progress and Ctrl-C handling do not yet.
+Units are SI (m, s, kg, N, J). In progress (issue 15): `Scenario`, `Simulation` (stepping,
+inputs, ports, checkpoints) and `run` exist; statics, modes and the linear model do not yet.
 """
 
-from ._phstring import Scenario, ScenarioError, Simulation, StepError, run
+from __future__ import annotations
 
-__all__ = ["Scenario", "ScenarioError", "Simulation", "StepError", "run"]
+import json
+import os
+from typing import Any, Dict, Optional
+
+import numpy as np
+
+from ._phstring import Checkpoint, Scenario, ScenarioError, Simulation, StepError
+from ._phstring import run as _run_in_process
+from ._phstring import run_to_folder as _run_to_folder
+
+__all__ = ["Checkpoint", "Result", "Scenario", "ScenarioError", "Simulation", "StepError", "run"]
+
+_ENERGY = {
+    "t": "t",
+    "kinetic": "kinetic",
+    "potential": "potential",
+    "hamiltonian": "hamiltonian",
+    "supplied": "supplied_energy",
+    "dissipated": "dissipated_energy",
+    "balance_error": "balance_error",
+    "h": "h",
+    "newton_iterations": "newton_iterations",
+}
+
+
+class Result:
+    """What `run` returns. One entry per step from t = 0 (NumPy arrays): `t` [s],
+    `kinetic`, `potential`, `hamiltonian`, `supplied`, `dissipated`, `balance_error` [J],
+    `h` [s], `newton_iterations`; `positions` [m] of shape (frames, nodes, d) at the times
+    `t_positions` [s] (every `output.stride` steps and the last); `summary`: `summary.json`
+    as a dict when the run wrote a folder, else None."""
+
+    def __init__(self, arrays: Dict[str, Any], summary: Optional[dict]):
+        for key, value in arrays.items():
+            setattr(self, key, value)
+        self.summary = summary
+
+    def __repr__(self) -> str:
+        return f"Result(steps={len(self.t) - 1}, t_end={self.t[-1]})"
+
+
+def run(scenario: Scenario, out: Optional[str] = None) -> Result:
+    """Runs `scenario` to its end time and returns a `Result`. With `out`, it runs exactly as
+    `phstring run` into that folder (all outputs, plots, ParaView) and reads the arrays back
+    from it; without, in-process, writing nothing. Either way the values are those of the
+    CLI's `energy.csv`, bit for bit. Ctrl-C raises KeyboardInterrupt after the current step
+    (with `out`, the folder then holds a checkpoint to resume from)."""
+    if out is None:
+        return Result(_run_in_process(scenario), None)
+    summary = json.loads(_run_to_folder(scenario, os.fspath(out)))
+    energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
+    arrays: Dict[str, Any] = {key: np.asarray(energy[col]) for key, col in _ENERGY.items()}
+    arrays["newton_iterations"] = arrays["newton_iterations"].astype(np.int64)
+    pos_file = os.path.join(out, "positions.csv")
+    if os.path.exists(pos_file):
+        pos = np.loadtxt(pos_file, delimiter=",", skiprows=1, ndmin=2)
+        nodes = int(pos[:, 1].max()) + 1
+        frames = pos.shape[0] // nodes
+        arrays["t_positions"] = pos[::nodes, 0]
+        arrays["positions"] = pos[:, 2:].reshape(frames, nodes, -1)
+    return Result(arrays, summary)

@@ -106,9 +106,10 @@ type InputSlot = Arc<Mutex<Option<[f64; 3]>>>;
 
 fn new_sim<const D: usize>(
     file: &ScenarioFile,
-) -> PyResult<(Sim<D, Material>, f64, Vec<InputSlot>)> {
+) -> PyResult<(Sim<D, Material>, f64, Vec<InputSlot>, usize)> {
     let mut v = file.validate::<D>().map_err(scenario_err)?;
     let t_end = v.settings.t_end;
+    let stride = v.settings.stride.max(1);
     // Every load reads its slot first: `set_input` holds a value there.
     let mut slots = Vec::new();
     for load in &mut v.problem.boundary.loads {
@@ -124,7 +125,7 @@ fn new_sim<const D: usize>(
         slots.push(slot);
     }
     let sim = Sim::new(v.problem, v.settings.step).map_err(scenario_err)?;
-    Ok((sim, t_end, slots))
+    Ok((sim, t_end, slots, stride))
 }
 
 fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
@@ -150,6 +151,8 @@ struct Simulation {
     t_end: f64,
     /// The inputs of the loads (force ports), in port order.
     inputs: Vec<InputSlot>,
+    /// The scenario's `output.stride`.
+    stride: usize,
 }
 
 impl Simulation {
@@ -166,15 +169,16 @@ impl Simulation {
     #[new]
     fn new(scenario: &Scenario) -> PyResult<Self> {
         let file = &scenario.file;
-        let (sim, t_end, inputs) = match file.dimension().map_err(scenario_err)? {
-            1 => new_sim::<1>(file).map(|(s, t, i)| (Any::D1(s), t, i))?,
-            2 => new_sim::<2>(file).map(|(s, t, i)| (Any::D2(s), t, i))?,
-            _ => new_sim::<3>(file).map(|(s, t, i)| (Any::D3(s), t, i))?,
+        let (sim, t_end, inputs, stride) = match file.dimension().map_err(scenario_err)? {
+            1 => new_sim::<1>(file).map(|(s, t, i, k)| (Any::D1(s), t, i, k))?,
+            2 => new_sim::<2>(file).map(|(s, t, i, k)| (Any::D2(s), t, i, k))?,
+            _ => new_sim::<3>(file).map(|(s, t, i, k)| (Any::D3(s), t, i, k))?,
         };
         Ok(Self {
             sim: std::sync::Mutex::new(sim),
             t_end,
             inputs,
+            stride,
         })
     }
 
@@ -258,6 +262,34 @@ impl Simulation {
             .collect()
     }
 
+    /// The complete dynamic state, to continue from with [`Simulation::restore`] (bit for
+    /// bit as if the run had not stopped). Held inputs (`set_input`) are not part of it.
+    fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            inner: match &*self.lock() {
+                Any::D1(s) => AnyCheckpoint::D1(s.checkpoint()),
+                Any::D2(s) => AnyCheckpoint::D2(s.checkpoint()),
+                Any::D3(s) => AnyCheckpoint::D3(s.checkpoint()),
+            },
+        }
+    }
+
+    /// Continues from `checkpoint`, taken from a simulation of the same scenario.
+    fn restore(&self, checkpoint: &Checkpoint) -> PyResult<()> {
+        let mut guard = self.lock();
+        let result = match (&mut *guard, &checkpoint.inner) {
+            (Any::D1(s), AnyCheckpoint::D1(c)) => s.restore(c.clone()),
+            (Any::D2(s), AnyCheckpoint::D2(c)) => s.restore(c.clone()),
+            (Any::D3(s), AnyCheckpoint::D3(c)) => s.restore(c.clone()),
+            _ => {
+                return Err(PyValueError::new_err(
+                    "the checkpoint is of a simulation of another dimension",
+                ));
+            }
+        };
+        result.map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
     /// Current time [s].
     #[getter]
     fn time(&self) -> f64 {
@@ -302,6 +334,18 @@ impl Simulation {
     }
 }
 
+enum AnyCheckpoint {
+    D1(phstring::Checkpoint<1>),
+    D2(phstring::Checkpoint<2>),
+    D3(phstring::Checkpoint<3>),
+}
+
+/// A simulation's complete dynamic state ([`Simulation::checkpoint`]).
+#[pyclass(module = "phstring._phstring", frozen)]
+struct Checkpoint {
+    inner: AnyCheckpoint,
+}
+
 fn x_dim<const D: usize>(_: &[phstring::Vector<D>]) -> usize {
     D
 }
@@ -329,7 +373,18 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>
         c.push(v);
     }
     let t_end = sim.t_end;
+    let stride = sim.stride;
+    let (mut positions, mut t_positions) = (Vec::new(), Vec::new());
+    let (n, dim) = each!(&*sim.lock(), s => (s.state().r.len(), x_dim(&s.state().r[..])));
+    let mut record = |sim: &Simulation, t: f64| {
+        each!(&*sim.lock(), s => positions.extend(s.state().r.iter().flat_map(|x| x.iter().copied())));
+        t_positions.push(t);
+    };
+    record(&sim, 0.0);
+    let mut steps = 0;
     while sim.time() < t_end - 1e-9 * each!(&*sim.lock(), s => s.step_size()) {
+        // Ctrl-C: KeyboardInterrupt after the current step.
+        py.check_signals()?;
         let (r, sup, dis) = each!(&mut *sim.lock(), s => {
             let r = s.step_until(t_end).map_err(|e| StepError::new_err(e.to_string()))?;
             (r, s.supplied_energy(), s.dissipated_energy())
@@ -347,6 +402,11 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>
             c.push(v);
         }
         its.push(r.newton_iterations);
+        steps += 1;
+        let done = sim.time() >= t_end - 1e-9 * each!(&*sim.lock(), s => s.step_size());
+        if steps % stride == 0 || done {
+            record(&sim, r.t);
+        }
     }
     let d = PyDict::new(py);
     let names = [
@@ -363,7 +423,62 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>
         d.set_item(*name, PyArray1::from_vec(py, c))?;
     }
     d.set_item("newton_iterations", PyArray1::from_vec(py, its))?;
+    let frames = t_positions.len();
+    d.set_item("t_positions", PyArray1::from_vec(py, t_positions))?;
+    d.set_item(
+        "positions",
+        PyArray1::from_vec(py, positions).reshape([frames, n, dim])?,
+    )?;
     Ok(d)
+}
+
+/// Progress of a run to a folder: checks for Ctrl-C after every step.
+struct Signals<'py> {
+    py: Python<'py>,
+    stop: Arc<std::sync::atomic::AtomicBool>,
+    interrupted: Option<PyErr>,
+}
+
+impl phstring_io::runner::Progress for Signals<'_> {
+    fn step(&mut self, _step: usize, _t: f64) {
+        if self.interrupted.is_none()
+            && let Err(e) = self.py.check_signals()
+        {
+            self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            self.interrupted = Some(e);
+        }
+    }
+}
+
+/// Runs `scenario` as `phstring run` does, writing its output folder `out` (created if
+/// needed; it must be empty or a folder of an earlier run), and returns `summary.json`'s
+/// text. Ctrl-C stops after the current step with the outputs and a checkpoint written,
+/// then raises `KeyboardInterrupt`.
+#[pyfunction]
+fn run_to_folder(py: Python<'_>, scenario: &Scenario, out: &str) -> PyResult<String> {
+    let out = Path::new(out);
+    std::fs::create_dir_all(out)
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", out.display())))?;
+    let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let mut progress = Signals {
+        py,
+        stop: stop.clone(),
+        interrupted: None,
+    };
+    let opts = phstring_io::runner::RunOptions {
+        stop: Some(stop),
+        ..Default::default()
+    };
+    let result = phstring_io::runner::run(&scenario.file, out, &mut progress, opts);
+    if let Some(e) = progress.interrupted {
+        return Err(e);
+    }
+    match result {
+        Ok(_) => std::fs::read_to_string(out.join("summary.json"))
+            .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string())),
+        Err(phstring_io::runner::RunError::Scenario(e)) => Err(scenario_err(e)),
+        Err(e) => Err(StepError::new_err(e.to_string())),
+    }
 }
 
 /// The compiled part of the `phstring` package.
@@ -372,6 +487,8 @@ fn _phstring(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Scenario>()?;
     m.add_class::<Simulation>()?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(run_to_folder, m)?)?;
+    m.add_class::<Checkpoint>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioError>())?;
     m.add("StepError", m.py().get_type::<StepError>())?;
     Ok(())

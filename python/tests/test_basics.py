@@ -29,14 +29,20 @@ def cli_energy(tmp_path, *sets):
 
 @pytest.mark.skipif(not pathlib.Path(BIN).exists(), reason="the CLI binary is not built")
 def test_paper_run_is_the_cli_run_bit_for_bit(tmp_path):
-    res = phstring.run(phstring.Scenario.from_file(str(PAPER)))
+    sc = phstring.Scenario.from_file(str(PAPER))
+    res = phstring.run(sc)
+    folder = phstring.run(sc, out=str(tmp_path / "py"))
     cli = cli_energy(tmp_path)
     for key, col in [("t", "t"), ("hamiltonian", "hamiltonian"), ("kinetic", "kinetic"),
                      ("supplied", "supplied_energy"), ("balance_error", "balance_error"), ("h", "h")]:
-        assert np.array_equal(res[key], cli[col]), key
+        assert np.array_equal(getattr(res, key), cli[col]), key
+        assert np.array_equal(getattr(folder, key), cli[col]), key
+    assert np.array_equal(res.positions, folder.positions)
+    assert res.positions.shape == (101, 31, 2)
+    assert folder.summary["status"] == "completed" and folder.summary["steps"] == 100
     # The paper's published values.
-    assert abs(res["hamiltonian"][0] - (-3.468359)) < 1e-6
-    assert abs(res["hamiltonian"][-1] - (-3.403762)) < 1e-6
+    assert abs(res.hamiltonian[0] - (-3.468359)) < 1e-6
+    assert abs(res.hamiltonian[-1] - (-3.403762)) < 1e-6
 
 
 def test_simulation_steps_and_state():
@@ -64,7 +70,7 @@ def test_scenario_from_dict_and_toml():
     import tomllib
     b = phstring.Scenario.from_json(json.dumps(tomllib.loads(text)), set=["time.end=0.05"])
     ra, rb = phstring.run(a), phstring.run(b)
-    assert np.array_equal(ra["hamiltonian"], rb["hamiltonian"])
+    assert np.array_equal(ra.hamiltonian, rb.hamiltonian)
 
 
 def test_errors_are_mapped():
@@ -121,3 +127,59 @@ def test_pd_control_example_tracks_the_point():
         check=True, capture_output=True, text=True)
     first, last = (float(x) for x in out.stdout.split()[-2:])
     assert first > 0.1 and last < 0.2 * first, out.stdout
+
+
+def test_checkpoint_and_restore_continue_bit_for_bit():
+    sc = phstring.Scenario.from_file(str(PAPER))
+    a = phstring.Simulation(sc)
+    for _ in range(40):
+        a.step()
+    cp = a.checkpoint()
+    rest_a = [a.step()["hamiltonian"] for _ in range(30)]
+    b = phstring.Simulation(sc)
+    b.restore(cp)
+    assert b.steps == 40
+    rest_b = [b.step()["hamiltonian"] for _ in range(30)]
+    assert rest_a == rest_b
+    three = phstring.Simulation(phstring.Scenario.from_file(str(ROOT / "examples" / "hoist_3d.toml")))
+    with pytest.raises(ValueError, match="dimension"):
+        three.restore(cp)
+
+
+def test_ctrl_c_stops_a_run_after_the_current_step(tmp_path):
+    """An OS signal during a run (here SIGALRM after 0.3 s, whose handler raises
+    KeyboardInterrupt as Ctrl-C's does) stops it after the current step, in-process and into
+    a folder (which then holds a checkpoint)."""
+    import signal
+
+    def interrupt(*_):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        # 1e7 steps: the run cannot end before the signal.
+        sc = phstring.Scenario.from_file(str(PAPER), set=["mesh.elements=300", "time.end=1e5"])
+        for out in [None, str(tmp_path / "run")]:
+            signal.setitimer(signal.ITIMER_REAL, 0.3)
+            with pytest.raises(KeyboardInterrupt):
+                phstring.run(sc, out=out)
+        summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+        assert summary["status"] == "interrupted"
+        assert (tmp_path / "run" / "checkpoint.json").exists()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def test_no_memory_growth_over_1e5_steps():
+    import resource
+    sim = phstring.Simulation(phstring.Scenario.from_file(
+        str(PAPER), set=["mesh.elements=4", "time.end=2000.0"]))
+    for _ in range(10000):
+        sim.step()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for _ in range(100000):
+        sim.step()
+    after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    # ru_maxrss is in KiB on Linux: less than 1 MiB more after 1e5 steps.
+    assert after - before < 1024, (before, after)
