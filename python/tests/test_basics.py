@@ -183,3 +183,46 @@ def test_no_memory_growth_over_1e5_steps():
     after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     # ru_maxrss is in KiB on Linux: less than 1 MiB more after 1e5 steps.
     assert after - before < 1024, (before, after)
+
+
+def test_paper_figures_example(tmp_path):
+    out = subprocess.run(
+        ["python3", str(ROOT / "python" / "examples" / "paper_figures.py"), str(tmp_path)],
+        check=True, capture_output=True, text=True)
+    assert "H(0) = -3.468359 J, H(1) = -3.403762 J (dg)" in out.stdout
+    for name in ["paper_energy.png", "paper_configuration.png"]:
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_dask_sweep_example():
+    pytest.importorskip("distributed")
+    out = subprocess.run(
+        ["python3", str(ROOT / "python" / "examples" / "dask_sweep.py")],
+        check=True, capture_output=True, text=True)
+    rows = [line.split(",") for line in out.stdout.strip().splitlines()[1:]]
+    assert [int(r[0]) for r in rows] == [10, 20, 30, 60, 120]
+    # The N = 30 row is the paper's value; every run keeps its energy balance.
+    assert abs(float(rows[2][1]) - (-3.403762)) < 1e-6
+    assert all(float(r[2]) < 1e-11 for r in rows)
+
+
+def test_every_error_kind_is_mapped(tmp_path):
+    """Each kind of failure reaches Python as its own exception, with the message."""
+    # A missing file and a bad value: ScenarioError, naming the file or the key.
+    with pytest.raises(phstring.ScenarioError, match="no_such.toml"):
+        phstring.Scenario.from_file(str(tmp_path / "no_such.toml"))
+    with pytest.raises(phstring.ScenarioError, match="time.h"):
+        phstring.Scenario.from_file(str(PAPER), set=["time.h=-1"])
+    with pytest.raises(phstring.ScenarioError):
+        phstring.Scenario.from_json("[1, 2]")
+    # A failing step, in-process and into a folder: StepError with step and time.
+    bad = phstring.Scenario.from_file(str(PAPER), set=['boundary.1.force=["sqrt(0.02 - t)", "0"]'])
+    with pytest.raises(phstring.StepError, match="step 3"):
+        phstring.run(bad)
+    with pytest.raises(phstring.StepError, match="boundary.1.force"):
+        phstring.run(bad, out=str(tmp_path / "failed"))
+    # An output folder that cannot be made: OSError.
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(OSError):
+        phstring.run(phstring.Scenario.from_file(str(PAPER)), out=str(blocker / "sub"))
