@@ -1,7 +1,7 @@
 """phstring: port-Hamiltonian strings and cables with exact energy behaviour, from Python.
 
-Units are SI (m, s, kg, N, J). In progress (issue 15): `Scenario`, `Simulation` (stepping,
-inputs, ports, checkpoints) and `run` exist; statics, modes and the linear model do not yet.
+Units are SI (m, s, kg, N, J). `Scenario`, `Simulation` (stepping, inputs, ports,
+checkpoints), `run`, `statics`, `modes` and `linearize` (scipy.sparse matrices).
 """
 
 from __future__ import annotations
@@ -13,10 +13,23 @@ from typing import Any, Dict, Optional
 import numpy as np
 
 from ._phstring import Checkpoint, Scenario, ScenarioError, Simulation, StepError
+from ._phstring import linearize_raw as _linearize_raw
+from ._phstring import modes, statics
 from ._phstring import run as _run_in_process
 from ._phstring import run_to_folder as _run_to_folder
 
-__all__ = ["Checkpoint", "Result", "Scenario", "ScenarioError", "Simulation", "StepError", "run"]
+__all__ = [
+    "Checkpoint",
+    "Result",
+    "Scenario",
+    "ScenarioError",
+    "Simulation",
+    "StepError",
+    "linearize",
+    "modes",
+    "run",
+    "statics",
+]
 
 _ENERGY = {
     "t": "t",
@@ -47,15 +60,16 @@ class Result:
         return f"Result(steps={len(self.t) - 1}, t_end={self.t[-1]})"
 
 
-def run(scenario: Scenario, out: Optional[str] = None) -> Result:
+def run(scenario: Scenario, out: Optional[str] = None, progress: bool = False) -> Result:
     """Runs `scenario` to its end time and returns a `Result`. With `out`, it runs exactly as
     `phstring run` into that folder (all outputs, plots, ParaView) and reads the arrays back
     from it; without, in-process, writing nothing. Either way the values are those of the
     CLI's `energy.csv`, bit for bit. Ctrl-C raises KeyboardInterrupt after the current step
-    (with `out`, the folder then holds a checkpoint to resume from)."""
+    (with `out`, the folder then holds a checkpoint to resume from). With `progress`, a
+    one-line progress display on standard error."""
     if out is None:
-        return Result(_run_in_process(scenario), None)
-    summary = json.loads(_run_to_folder(scenario, os.fspath(out)))
+        return Result(_run_in_process(scenario, progress), None)
+    summary = json.loads(_run_to_folder(scenario, os.fspath(out), progress))
     energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
     arrays: Dict[str, Any] = {key: np.asarray(energy[col]) for key, col in _ENERGY.items()}
     arrays["newton_iterations"] = arrays["newton_iterations"].astype(np.int64)
@@ -67,3 +81,19 @@ def run(scenario: Scenario, out: Optional[str] = None) -> Result:
         arrays["t_positions"] = pos[::nodes, 0]
         arrays["positions"] = pos[:, 2:].reshape(frames, nodes, -1)
     return Result(arrays, summary)
+
+
+def linearize(scenario: Scenario, form: str = "reduced") -> Dict[str, Any]:
+    """The linear port-Hamiltonian model `E x' = (J - R) Q x + B u`, `y = B^T Q x` about the
+    static equilibrium (docs/method.md §16), form "reduced" (x = (q, v)) or "full"
+    (x = (r, v, C)): a dict with `E`, `J`, `R`, `Q`, `B` as scipy.sparse CSC matrices,
+    `states` (names) and `inputs` ((node, component) of each force port). Needs scipy.
+    For pyMOR: `PHLTIModel.from_matrices(m["J"], m["R"], m["B"], E=m["E"], Q=m["Q"])`."""
+    import scipy.sparse
+
+    raw = _linearize_raw(scenario, form)
+    out: Dict[str, Any] = {"states": raw["states"], "inputs": raw["inputs"]}
+    for name in "EJRQB":
+        m = raw[name]
+        out[name] = scipy.sparse.csc_matrix((m["data"], m["indices"], m["indptr"]), shape=m["shape"])
+    return out

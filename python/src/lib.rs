@@ -355,7 +355,9 @@ fn x_dim<const D: usize>(_: &[phstring::Vector<D>]) -> usize {
 /// `dissipated`, `balance_error` [J], `h` [s], `newton_iterations`. The values are those of
 /// `phstring run`'s `energy.csv`, bit for bit.
 #[pyfunction]
-fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (scenario, progress=false))]
+fn run<'py>(py: Python<'py>, scenario: &Scenario, progress: bool) -> PyResult<Bound<'py, PyDict>> {
+    let mut bar = Bar::new(progress);
     let sim = Simulation::new(scenario)?;
     let e0 = each!(&*sim.lock(), s => s.energies());
     let mut cols: [Vec<f64>; 8] = Default::default();
@@ -402,6 +404,7 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>
             c.push(v);
         }
         its.push(r.newton_iterations);
+        bar.show(r.t, t_end);
         steps += 1;
         let done = sim.time() >= t_end - 1e-9 * each!(&*sim.lock(), s => s.step_size());
         if steps % stride == 0 || done {
@@ -423,6 +426,7 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>
         d.set_item(*name, PyArray1::from_vec(py, c))?;
     }
     d.set_item("newton_iterations", PyArray1::from_vec(py, its))?;
+    bar.done();
     let frames = t_positions.len();
     d.set_item("t_positions", PyArray1::from_vec(py, t_positions))?;
     d.set_item(
@@ -432,15 +436,47 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>
     Ok(d)
 }
 
-/// Progress of a run to a folder: checks for Ctrl-C after every step.
+/// A one-line progress display on standard error (`t / T` and percent), redrawn at most
+/// every percent; silent unless asked for.
+struct Bar {
+    on: bool,
+    last: i64,
+}
+
+impl Bar {
+    fn new(on: bool) -> Self {
+        Self { on, last: -1 }
+    }
+    fn show(&mut self, t: f64, t_end: f64) {
+        let pct = (100.0 * t / t_end).floor() as i64;
+        if self.on && pct > self.last {
+            self.last = pct;
+            eprint!("\rphstring: t = {t:.4} s of {t_end} s ({pct:>3} %)");
+        }
+    }
+    fn done(&mut self) {
+        if self.on {
+            eprintln!();
+        }
+    }
+}
+
+/// Progress of a run to a folder: checks for Ctrl-C after every step, and shows a bar if
+/// asked.
 struct Signals<'py> {
     py: Python<'py>,
     stop: Arc<std::sync::atomic::AtomicBool>,
     interrupted: Option<PyErr>,
+    bar: Bar,
+    t_end: f64,
 }
 
 impl phstring_io::runner::Progress for Signals<'_> {
-    fn step(&mut self, _step: usize, _t: f64) {
+    fn start(&mut self, t_end: f64) {
+        self.t_end = t_end;
+    }
+    fn step(&mut self, _step: usize, t: f64) {
+        self.bar.show(t, self.t_end);
         if self.interrupted.is_none()
             && let Err(e) = self.py.check_signals()
         {
@@ -455,7 +491,13 @@ impl phstring_io::runner::Progress for Signals<'_> {
 /// text. Ctrl-C stops after the current step with the outputs and a checkpoint written,
 /// then raises `KeyboardInterrupt`.
 #[pyfunction]
-fn run_to_folder(py: Python<'_>, scenario: &Scenario, out: &str) -> PyResult<String> {
+#[pyo3(signature = (scenario, out, progress=false))]
+fn run_to_folder(
+    py: Python<'_>,
+    scenario: &Scenario,
+    out: &str,
+    progress: bool,
+) -> PyResult<String> {
     let out = Path::new(out);
     std::fs::create_dir_all(out)
         .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", out.display())))?;
@@ -464,12 +506,15 @@ fn run_to_folder(py: Python<'_>, scenario: &Scenario, out: &str) -> PyResult<Str
         py,
         stop: stop.clone(),
         interrupted: None,
+        bar: Bar::new(progress),
+        t_end: 0.0,
     };
     let opts = phstring_io::runner::RunOptions {
         stop: Some(stop),
         ..Default::default()
     };
     let result = phstring_io::runner::run(&scenario.file, out, &mut progress, opts);
+    progress.bar.done();
     if let Some(e) = progress.interrupted {
         return Err(e);
     }
@@ -481,6 +526,173 @@ fn run_to_folder(py: Python<'_>, scenario: &Scenario, out: &str) -> PyResult<Str
     }
 }
 
+fn flat<const D: usize>(v: &[phstring::Vector<D>]) -> Vec<f64> {
+    v.iter().flat_map(|x| x.iter().copied()).collect()
+}
+
+/// `(n, d)` array of nodal vectors.
+fn nodal<'py, const D: usize>(
+    py: Python<'py>,
+    v: &[phstring::Vector<D>],
+) -> PyResult<Bound<'py, PyAny>> {
+    Ok(PyArray1::from_vec(py, flat(v))
+        .reshape([v.len(), D])?
+        .into_any())
+}
+
+fn statics_err(e: impl std::fmt::Display) -> PyErr {
+    StepError::new_err(format!("statics: {e}"))
+}
+
+fn statics_dim<'py, const D: usize>(
+    py: Python<'py>,
+    file: &ScenarioFile,
+) -> PyResult<Bound<'py, PyDict>> {
+    let v = file.validate::<D>().map_err(scenario_err)?;
+    let (_, eq) =
+        phstring_io::statics_run::solve_validated(&v, false, None).map_err(statics_err)?;
+    let d = PyDict::new(py);
+    d.set_item("positions", nodal(py, &eq.state.r)?)?;
+    d.set_item("reactions", nodal(py, &eq.reactions)?)?;
+    d.set_item("strains", PyArray1::from_vec(py, eq.state.c.clone()))?;
+    d.set_item("residual", eq.residual)?;
+    d.set_item("tolerance", eq.tolerance)?;
+    d.set_item("stable", eq.stable)?;
+    d.set_item("path", eq.path.name())?;
+    d.set_item("iterations", eq.iterations)?;
+    d.set_item("hamiltonian", eq.energies.hamiltonian())?;
+    Ok(d)
+}
+
+/// The static equilibrium under the loads at `t = 0` (as `phstring statics`): a dict with
+/// `positions` and `reactions` (`(nodes, d)` arrays [m], [N]), `strains`, `residual` and
+/// `tolerance` [N], `stable`, `path`, `iterations`, `hamiltonian` [J].
+#[pyfunction]
+fn statics<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>> {
+    match scenario.file.dimension().map_err(scenario_err)? {
+        1 => statics_dim::<1>(py, &scenario.file),
+        2 => statics_dim::<2>(py, &scenario.file),
+        _ => statics_dim::<3>(py, &scenario.file),
+    }
+}
+
+fn modes_dim<'py, const D: usize>(
+    py: Python<'py>,
+    file: &ScenarioFile,
+    count: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let v = file.validate::<D>().map_err(scenario_err)?;
+    let (sys, eq) =
+        phstring_io::statics_run::solve_validated(&v, true, None).map_err(statics_err)?;
+    let found = phstring::modes::modes(&sys, &eq.state.r, count, v.settings.step.solver)
+        .map_err(|e| StepError::new_err(format!("modes: {e}")))?;
+    let k = found.modes.len();
+    let n = eq.state.r.len();
+    let d = PyDict::new(py);
+    let omega: Vec<f64> = found.modes.iter().map(|m| m.omega).collect();
+    let shapes: Vec<f64> = found.modes.iter().flat_map(|m| flat(&m.shape)).collect();
+    let character: Vec<&str> = found.modes.iter().map(|m| m.character.name()).collect();
+    d.set_item("omega", PyArray1::from_vec(py, omega))?;
+    d.set_item("shapes", PyArray1::from_vec(py, shapes).reshape([k, n, D])?)?;
+    d.set_item("character", character)?;
+    d.set_item("positions", nodal(py, &eq.state.r)?)?;
+    Ok(d)
+}
+
+/// The `count` lowest natural modes about the equilibrium (as `phstring modes`): a dict with
+/// `omega` [rad/s], `shapes` (`(count, nodes, d)`, `M`-normalized [kg^-½]), `character`
+/// (`longitudinal`, `transverse` or `mixed`) and the equilibrium `positions` [m].
+#[pyfunction]
+fn modes<'py>(py: Python<'py>, scenario: &Scenario, count: usize) -> PyResult<Bound<'py, PyDict>> {
+    match scenario.file.dimension().map_err(scenario_err)? {
+        1 => modes_dim::<1>(py, &scenario.file, count),
+        2 => modes_dim::<2>(py, &scenario.file, count),
+        _ => modes_dim::<3>(py, &scenario.file, count),
+    }
+}
+
+/// `(shape, indptr, indices, data)` of a CSC matrix.
+type Csc = ((usize, usize), Vec<usize>, Vec<usize>, Vec<f64>);
+
+/// The matrices by name, the state names and the inputs `(node, component)`.
+type LinearParts = (Vec<(&'static str, Csc)>, Vec<String>, Vec<(usize, usize)>);
+
+fn csc(a: &faer::sparse::SparseColMat<usize, f64>) -> Csc {
+    let a = a.as_ref();
+    let mut indptr = vec![0];
+    let (mut indices, mut data) = (Vec::new(), Vec::new());
+    for c in 0..a.ncols() {
+        for (r, v) in a.row_idx_of_col(c).zip(a.val_of_col(c)) {
+            indices.push(r);
+            data.push(*v);
+        }
+        indptr.push(indices.len());
+    }
+    ((a.nrows(), a.ncols()), indptr, indices, data)
+}
+
+fn linear_dim<const D: usize>(file: &ScenarioFile, form: &str) -> PyResult<LinearParts> {
+    let v = file.validate::<D>().map_err(scenario_err)?;
+    let (sys, eq) =
+        phstring_io::statics_run::solve_validated(&v, true, None).map_err(statics_err)?;
+    let ports = phstring::linear::force_ports(&sys);
+    let model = match form {
+        "reduced" => phstring::linear::reduced_model(&sys, &eq.state.r, &ports),
+        "full" => phstring::linear::full_model(&sys, &eq.state.r, &ports),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "form must be \"reduced\" or \"full\", got \"{other}\""
+            )));
+        }
+    };
+    let mats = vec![
+        ("E", csc(&model.e)),
+        ("J", csc(&model.j)),
+        ("R", csc(&model.r)),
+        ("Q", csc(&model.q)),
+        ("B", csc(&model.b)),
+    ];
+    let inputs = ports.iter().map(|p| (p.node, p.component)).collect();
+    Ok((mats, model.states, inputs))
+}
+
+/// The linear port-Hamiltonian model about the equilibrium (as `phstring linearize`,
+/// docs/method.md §16), form `reduced` (`x = (q, v)`) or `full` (`x = (r, v, C)`): a dict
+/// with `E`, `J`, `R`, `Q`, `B` as `(shape, indptr, indices, data)` of CSC matrices (the
+/// Python wrapper makes scipy.sparse matrices of them), `states` and `inputs`
+/// (`(node, component)` of each force port).
+#[pyfunction]
+#[pyo3(signature = (scenario, form="reduced"))]
+fn linearize_raw<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    form: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (mats, states, inputs) = match scenario.file.dimension().map_err(scenario_err)? {
+        1 => linear_dim::<1>(&scenario.file, form)?,
+        2 => linear_dim::<2>(&scenario.file, form)?,
+        _ => linear_dim::<3>(&scenario.file, form)?,
+    };
+    let d = PyDict::new(py);
+    for (name, (shape, indptr, indices, data)) in mats {
+        let m = PyDict::new(py);
+        m.set_item("shape", shape)?;
+        m.set_item(
+            "indptr",
+            PyArray1::from_vec(py, indptr.iter().map(|&x| x as i64).collect()),
+        )?;
+        m.set_item(
+            "indices",
+            PyArray1::from_vec(py, indices.iter().map(|&x| x as i64).collect()),
+        )?;
+        m.set_item("data", PyArray1::from_vec(py, data))?;
+        d.set_item(name, m)?;
+    }
+    d.set_item("states", states)?;
+    d.set_item("inputs", inputs)?;
+    Ok(d)
+}
+
 /// The compiled part of the `phstring` package.
 #[pymodule]
 fn _phstring(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -488,6 +700,9 @@ fn _phstring(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Simulation>()?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(run_to_folder, m)?)?;
+    m.add_function(wrap_pyfunction!(statics, m)?)?;
+    m.add_function(wrap_pyfunction!(modes, m)?)?;
+    m.add_function(wrap_pyfunction!(linearize_raw, m)?)?;
     m.add_class::<Checkpoint>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioError>())?;
     m.add("StepError", m.py().get_type::<StepError>())?;

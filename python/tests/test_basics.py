@@ -226,3 +226,35 @@ def test_every_error_kind_is_mapped(tmp_path):
     blocker.write_text("x")
     with pytest.raises(OSError):
         phstring.run(phstring.Scenario.from_file(str(PAPER)), out=str(blocker / "sub"))
+
+
+def test_statics_modes_and_linear_model():
+    """Statics, modes and the linear model from Python agree with each other: the taut
+    string's lowest frequencies solve the linear model's pencil, `R = 0` without damping and
+    `R` positive semidefinite with it."""
+    import scipy.linalg
+    taut = phstring.Scenario.from_file(str(ROOT / "examples" / "taut_string.toml"))
+    eq = phstring.statics(taut)
+    assert eq["stable"] and eq["residual"] <= eq["tolerance"]
+    m = phstring.modes(taut, 4)
+    assert m["shapes"].shape == (4, eq["positions"].shape[0], 2)
+    lin = phstring.linearize(taut)
+    n = lin["E"].shape[0] // 2
+    K = lin["Q"].toarray()[:n, :n]
+    M = lin["E"].toarray()[n:, n:]
+    w2 = scipy.linalg.eigh(K, M, eigvals_only=True)[:4]
+    assert np.allclose(np.sqrt(w2), m["omega"], rtol=1e-9)
+    assert lin["R"].nnz == 0
+    damped = phstring.linearize(phstring.Scenario.from_file(str(ROOT / "examples" / "damped_pendulum.toml")))
+    R = damped["R"].toarray()
+    assert np.array_equal(R, R.T) and np.linalg.eigvalsh(R).min() >= -1e-12 * np.abs(R).max()
+    with pytest.raises(phstring.StepError, match="statics"):
+        phstring.statics(phstring.Scenario.from_file(str(ROOT / "examples" / "pd_tip_tracking.toml")))
+
+
+def test_progress_only_when_asked(tmp_path):
+    code = "import phstring, sys; sc = phstring.Scenario.from_file(sys.argv[1]); phstring.run(sc, progress=sys.argv[2] == '1')"
+    quiet = subprocess.run(["python3", "-c", code, str(PAPER), "0"], check=True, capture_output=True, text=True)
+    shown = subprocess.run(["python3", "-c", code, str(PAPER), "1"], check=True, capture_output=True, text=True)
+    assert quiet.stderr == ""
+    assert "100 %" in shown.stderr
