@@ -318,6 +318,23 @@ impl Simulation {
         Ok(PyArray1::from_vec(py, flat).reshape([n, d])?.into_any())
     }
 
+    /// Node velocities [m/s], a copy of shape `(nodes, d)`.
+    #[getter]
+    fn v<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let (flat, n, d) = each!(&*self.lock(), s => {
+            let v = &s.state().v;
+            (v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>(), v.len(), x_dim(&v[..]))
+        });
+        Ok(PyArray1::from_vec(py, flat).reshape([n, d])?.into_any())
+    }
+
+    /// Element strains `C` (dimensionless), a copy of shape `(elements,)`.
+    #[getter]
+    fn c<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let c = each!(&*self.lock(), s => s.state().c.clone());
+        PyArray1::from_vec(py, c)
+    }
+
     /// Energies [J] as a dict: `kinetic`, `potential`, `hamiltonian`, `supplied` and
     /// `dissipated` (cumulative).
     #[getter]

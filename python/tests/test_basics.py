@@ -57,6 +57,10 @@ def test_simulation_steps_and_state():
     while sim.time < sim.t_end - 1e-12:
         sim.step()
     assert sim.steps == 100
+    assert sim.v.shape == (11, 2) and sim.c.shape == (10,)
+    # The kinematic relation C = |r'|² holds for the state (docs/method.md §7).
+    rp = np.diff(sim.r, axis=0) / 0.1
+    assert np.allclose(sim.c, (rp ** 2).sum(axis=1), rtol=1e-12)
     # A copy: it does not change when the simulation moves on.
     r = sim.r
     r[0, 0] = 99.0
