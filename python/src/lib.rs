@@ -311,21 +311,13 @@ impl Simulation {
     /// Node positions [m], a copy of shape `(nodes, d)`.
     #[getter]
     fn r<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let (flat, n, d) = each!(&*self.lock(), s => {
-            let r = &s.state().r;
-            (r.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>(), r.len(), x_dim(&r[..]))
-        });
-        Ok(PyArray1::from_vec(py, flat).reshape([n, d])?.into_any())
+        each!(&*self.lock(), s => nodal(py, &s.state().r))
     }
 
     /// Node velocities [m/s], a copy of shape `(nodes, d)`.
     #[getter]
     fn v<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let (flat, n, d) = each!(&*self.lock(), s => {
-            let v = &s.state().v;
-            (v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>(), v.len(), x_dim(&v[..]))
-        });
-        Ok(PyArray1::from_vec(py, flat).reshape([n, d])?.into_any())
+        each!(&*self.lock(), s => nodal(py, &s.state().v))
     }
 
     /// Element strains `C` (dimensionless), a copy of shape `(elements,)`.

@@ -683,13 +683,7 @@ fn step_loop<const D: usize>(
         && failure.is_none()
         && !interrupted
     {
-        let (fastest_node, speed) = sim
-            .state()
-            .v
-            .iter()
-            .map(|v| v.norm())
-            .enumerate()
-            .fold((0, 0.0), |b, (i, x)| if x > b.1 { (i, x) } else { b });
+        let (fastest_node, speed) = phstring::fastest_node(&sim.state().v);
         info.settled = Some(SettledInfo {
             settled: false,
             t: sim.time(),

@@ -94,7 +94,9 @@ pub use material::{
 pub use mesh::Mesh;
 pub use network::{NetworkBuilder, StringSpec};
 pub use newton::{NewtonParams, NewtonStats};
-pub use observe::{Observer, RunSummary, Settle, SettleWatch, Settled, StepReport, nan_max};
+pub use observe::{
+    Observer, RunSummary, Settle, SettleWatch, Settled, StepReport, fastest_node, nan_max,
+};
 pub use simulation::{
     Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
     estimated_seconds_per_iteration,

@@ -177,15 +177,7 @@ impl SettleWatch {
         if !self.update(report.t, kinetic) {
             return None;
         }
-        let v = &sim.state().v;
-        let (node, speed) =
-            v.iter()
-                .map(|x| x.norm())
-                .enumerate()
-                .fold(
-                    (0, 0.0),
-                    |best, (i, s)| if s > best.1 { (i, s) } else { best },
-                );
+        let (node, speed) = fastest_node(&sim.state().v);
         Some(Settled {
             t: report.t,
             step: report.step,
@@ -194,6 +186,15 @@ impl SettleWatch {
             speed,
         })
     }
+}
+
+/// The fastest node of the velocities `v` [m/s] and its speed (node 0 and 0 if all are at
+/// rest).
+pub fn fastest_node<const D: usize>(v: &[crate::Vector<D>]) -> (usize, f64) {
+    v.iter().map(|x| x.norm()).enumerate().fold(
+        (0, 0.0),
+        |best, (i, s)| if s > best.1 { (i, s) } else { best },
+    )
 }
 
 /// Receives the simulation at the start, after each step and at the end of a run.

@@ -220,6 +220,8 @@ pub struct Simulation<const D: usize, M> {
     err_prev: f64,
     /// Newton iterations of the last embedded second-order solve (`dg4` with error control).
     embedded_iterations: usize,
+    /// `dg4`: the ports' sums over the sub-steps (a buffer reused from step to step).
+    port_sums: Vec<(Vector<D>, Vector<D>, f64)>,
 }
 
 /// What a step changes, saved to put it back (a failed `dg4` sub-step, a step rejected by
@@ -337,6 +339,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             acc_history: Default::default(),
             err_prev: 1.0,
             embedded_iterations: 0,
+            port_sums: Vec::new(),
         })
     }
 
@@ -799,10 +802,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         h: f64,
     ) -> Result<bool, StepError> {
         let t_mid = t + 0.5 * h;
-        self.f_ext.copy_from_slice(&self.sys.f_body);
-        for load in &self.sys.boundary.loads {
-            self.f_ext[load.node] += (load.force)(t_mid);
-        }
+        self.sum_loads(t_mid);
         for (x, (a, b)) in self.x.iter_mut().zip(self.state.r.iter().zip(&before.r)) {
             *x = a - b;
         }
@@ -832,16 +832,22 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
     }
 
+    /// `f_ext = F_b + F_N(t)` (the loads unchecked: a step evaluates them first and refuses
+    /// non-finite ones).
+    fn sum_loads(&mut self, t: f64) {
+        self.f_ext.copy_from_slice(&self.sys.f_body);
+        for load in &self.sys.boundary.loads {
+            self.f_ext[load.node] += (load.force)(t);
+        }
+    }
+
     /// The acceleration [m/s²] at the current state, `M_ρ a = F(t, r, v)` on the free
     /// components (0 on the others): the first point of the second-order error estimate.
     fn initial_acceleration(&mut self) -> Result<Vec<Vector<D>>, StepError> {
         let t = self.time();
         // The step residual at Δ = ε v (so v_{n+1} = v_n: no inertia) is −F at r + εv/2.
         let eps = 1e-9 * self.params.h;
-        self.f_ext.copy_from_slice(&self.sys.f_body);
-        for load in &self.sys.boundary.loads {
-            self.f_ext[load.node] += (load.force)(t + 0.5 * eps);
-        }
+        self.sum_loads(t + 0.5 * eps);
         // Every component, prescribed ones too, so that no inertia term appears anywhere.
         for (x, v) in self.x.iter_mut().zip(&self.state.v) {
             *x = v * eps;
@@ -943,8 +949,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut backup = self.backup.take().unwrap_or_default();
         self.save(&mut backup);
         let gammas = crate::integrator::triple_jump();
-        let n_ports = self.ports.len();
-        let mut sums = vec![(Vector::<D>::zeros(), Vector::<D>::zeros(), 0.0); n_ports];
+        // The ports' h_k-weighted sums, in a buffer kept from step to step.
+        let mut sums = std::mem::take(&mut self.port_sums);
+        sums.clear();
+        sums.resize(self.ports.len(), (Vector::zeros(), Vector::zeros(), 0.0));
         let mut total: Option<StepReport> = None;
         let mut start = t;
         let mut frac = 0.0;
@@ -982,6 +990,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     // Newton's work of the failed sub-step is what the caller counts.
                     self.restore_from(&backup);
                     self.backup = Some(backup);
+                    self.port_sums = sums;
                     return Err(e);
                 }
             }
@@ -993,6 +1002,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             p.output = s.1 / h;
             p.mean_power = s.2 / h;
         }
+        self.port_sums = sums;
         let mut r = total.expect("three sub-steps");
         r.t = t_next;
         r.h = h;
