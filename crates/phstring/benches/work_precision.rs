@@ -101,11 +101,7 @@ fn phstring_run(
         let params = StepParams {
             h,
             scheme,
-            control: StepControl {
-                rtol: tol,
-                atol: tol,
-                ..Default::default()
-            },
+            control: StepControl::with_tolerance(tol, tol),
             ..Default::default()
         };
         let mut sim = Simulation::new(case.network(mass), params).ok()?;
@@ -388,11 +384,7 @@ fn fine_mesh() {
     for tol in [1e-1, 1e-2] {
         let params = StepParams {
             h: 0.01,
-            control: StepControl {
-                rtol: tol,
-                atol: tol,
-                ..Default::default()
-            },
+            control: StepControl::with_tolerance(tol, tol),
             ..Default::default()
         };
         let mut sim = Simulation::new(damped(), params).unwrap();
@@ -408,11 +400,7 @@ fn fine_mesh() {
     // Where the controller cuts: the step sizes over time at tol = 1e-2, undamped.
     let params = StepParams {
         h: 0.01,
-        control: StepControl {
-            rtol: 1e-2,
-            atol: 1e-2,
-            ..Default::default()
-        },
+        control: StepControl::with_tolerance(1e-2, 1e-2),
         ..Default::default()
     };
     let mut sim = Simulation::new(case.network(mass), params).unwrap();

@@ -123,6 +123,15 @@ pub struct StepControl {
 }
 
 impl StepControl {
+    /// The default control with error control at `rtol` (dimensionless) and `atol` [m].
+    pub fn with_tolerance(rtol: f64, atol: f64) -> Self {
+        Self {
+            rtol,
+            atol,
+            ..Self::default()
+        }
+    }
+
     /// Whether error control is on (`rtol > 0` or `atol > 0`).
     pub fn error_control(&self) -> bool {
         self.rtol > 0.0 || self.atol > 0.0

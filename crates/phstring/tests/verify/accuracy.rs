@@ -66,11 +66,7 @@ fn balance_holds_for_every_substep_configuration() {
         for (scheme, tol) in configs {
             let params = StepParams {
                 scheme,
-                control: StepControl {
-                    rtol: tol,
-                    atol: tol,
-                    ..Default::default()
-                },
+                control: StepControl::with_tolerance(tol, tol),
                 ..paper_params()
             };
             let mut sim = Simulation::new(make(), params).unwrap();
@@ -102,11 +98,7 @@ fn error_control_tracks_the_tolerance() {
         let params = StepParams {
             h,
             scheme,
-            control: StepControl {
-                rtol: tol,
-                atol: tol,
-                ..Default::default()
-            },
+            control: StepControl::with_tolerance(tol, tol),
             ..paper_params()
         };
         let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
