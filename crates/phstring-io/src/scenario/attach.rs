@@ -19,8 +19,8 @@ use crate::text::{clip, num};
 pub(super) struct BoundaryParts<const D: usize> {
     /// The conditions, in file order within each kind.
     pub boundary: Boundary<D>,
-    /// Force expressions per load (node, component texts).
-    pub loads: Vec<(usize, Vec<String>)>,
+    /// Force expressions per load (node, component texts, FMU input).
+    pub loads: Vec<(usize, Vec<String>, bool)>,
     /// The first failure of an expression during the run.
     pub load_error: Arc<Mutex<Option<String>>>,
     /// The motions, for reports.
@@ -47,6 +47,8 @@ struct Entry<const D: usize> {
     motions: Vec<(usize, Expr, Range<usize>)>,
     force: Option<Force>,
     control: Option<Control<D>>,
+    /// `external = true`: the force or the motion is an FMU input.
+    external: bool,
 }
 
 /// The `control` of a `[[boundary]]` table.
@@ -276,6 +278,26 @@ impl ScenarioFile {
             None => None,
             Some(c) => Some(self.control::<D>(k, c.get_ref(), c.span(), t_check)?),
         };
+        let external = match &b.external {
+            Some(x) if *x.get_ref() => {
+                if b.force.is_none() && b.position.is_none() {
+                    return Err(self.invalid(
+                        &key("external"),
+                        x.span(),
+                        "marks a force or position port as an FMU input, but this table has neither `force` nor `position`",
+                    ));
+                }
+                if b.force.is_some() && b.position.is_some() {
+                    return Err(self.invalid(
+                        &key("external"),
+                        x.span(),
+                        "is ambiguous: this table has both `force` and `position`; split it into two tables and mark the one that is an input",
+                    ));
+                }
+                true
+            }
+            _ => false,
+        };
         Ok(Entry {
             node,
             label,
@@ -283,6 +305,7 @@ impl ScenarioFile {
             motions,
             force,
             control,
+            external,
         })
     }
 
@@ -544,6 +567,7 @@ impl ScenarioFile {
                     node: e.node,
                     component: AXES[i],
                     position: texts.map_or_else(String::new, |t| t.get_ref()[i].get_ref().clone()),
+                    external: e.external,
                 });
                 let errors = load_error.clone();
                 boundary.motions.push(Motion::new(e.node, i, move |t| {
@@ -557,7 +581,7 @@ impl ScenarioFile {
                 });
             }
             if let Some(Force { exprs, texts, .. }) = e.force {
-                loads.push((e.node, texts));
+                loads.push((e.node, texts, e.external));
                 let exprs = Arc::new(exprs);
                 let errors = load_error.clone();
                 boundary.loads.push(NodalLoad::new(e.node, move |t| {

@@ -138,6 +138,9 @@ pub struct MotionComponent {
     pub component: &'static str,
     /// Absolute position [m] as an expression of `t` [s].
     pub position: String,
+    /// An input of the FMU (`external = true`).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub external: bool,
 }
 
 /// A nodal load (a force port).
@@ -147,6 +150,9 @@ pub struct LoadComponent {
     pub node: usize,
     /// Force [N], one expression of `t` [s] per component.
     pub force: Vec<String>,
+    /// An input of the FMU (`external = true`).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub external: bool,
 }
 
 /// Component names, by index.

@@ -46,7 +46,7 @@ pub use refs::NodeRef;
 pub use settings::MAX_STEPS;
 pub use single::MAX_ELEMENTS;
 pub use spec::{
-    BodyForceSpec, BoundarySpec, FixedSpec, Geometry, InitialSpec, MaterialSpec, MeshSpec,
+    BodyForceSpec, BoundarySpec, FixedSpec, FmuSpec, Geometry, InitialSpec, MaterialSpec, MeshSpec,
     NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec, StringPathSpec,
     TimeSpec,
 };
@@ -301,6 +301,8 @@ pub struct Validated<const D: usize> {
     /// The first failure of a force expression during the run (a load that evaluates to an
     /// error is NaN to the library, which stops the step; this says why).
     pub load_error: Arc<std::sync::Mutex<Option<String>>>,
+    /// `[fmu] nodes`: the mesh nodes whose positions an FMU reports, in file order.
+    pub fmu_nodes: Vec<usize>,
 }
 
 /// What the strings and springs of a scenario assemble to, before boundary conditions and
@@ -572,6 +574,7 @@ impl ScenarioFile {
         };
         let (point_masses, mass_report) = self.point_masses(&skeleton, body.g())?;
         let parts = self.boundary(&skeleton, self.first_mid_time())?;
+        let fmu_nodes = self.fmu_nodes(&skeleton.nodes)?;
         if layout == Layout::Network {
             self.check_spring_nodes(&skeleton, &parts.boundary, &point_masses)?;
         }
@@ -602,9 +605,10 @@ impl ScenarioFile {
         components.loads = parts
             .loads
             .iter()
-            .map(|(node, force)| LoadComponent {
+            .map(|(node, force, external)| LoadComponent {
                 node: *node,
                 force: force.clone(),
+                external: *external,
             })
             .collect();
         Ok(Validated {
@@ -613,9 +617,35 @@ impl ScenarioFile {
             settings,
             network: layout == Layout::Network,
             components,
-            loads: parts.loads,
+            loads: parts
+                .loads
+                .into_iter()
+                .map(|(node, force, _)| (node, force))
+                .collect(),
             load_error: parts.load_error,
+            fmu_nodes,
         })
+    }
+
+    /// `[fmu] nodes`, resolved: each node once.
+    fn fmu_nodes(&self, nodes: &refs::Nodes) -> Result<Vec<usize>, ScenarioError> {
+        let Some(fmu) = &self.scenario.fmu else {
+            return Ok(Vec::new());
+        };
+        let mut out: Vec<usize> = Vec::new();
+        for (i, r) in fmu.get_ref().nodes.iter().enumerate() {
+            let key = format!("fmu.nodes.{i}");
+            let node = self.resolve(&key, r, nodes)?;
+            if let Some(j) = out.iter().position(|&n| n == node) {
+                return Err(self.invalid(
+                    &key,
+                    r.span(),
+                    format!("is node {node} again (fmu.nodes.{j}): list each node once"),
+                ));
+            }
+            out.push(node);
+        }
+        Ok(out)
     }
 
     /// `cause` as the error of this scenario's setup.

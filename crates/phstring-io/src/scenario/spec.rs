@@ -62,6 +62,9 @@ pub struct Scenario {
     /// What to write.
     #[serde(default)]
     pub output: OutputSpec,
+    /// What an FMU built from this scenario reports (`phstring fmu`; ignored otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fmu: Option<Spanned<FmuSpec>>,
 }
 
 /// A named point of a network (`[[node]]`): a junction, an anchor, an attachment point.
@@ -217,6 +220,21 @@ pub struct BoundarySpec {
     /// Feedback control through the node's force port (PD tracking or damping injection).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub control: Option<Spanned<ControlSpec>>,
+    /// Whether this table's `force` or `position` is an input of the FMU that
+    /// `phstring fmu` builds (its expression at `t = 0` is the input's start value).
+    /// `phstring run` and the other commands follow the expression regardless.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<Spanned<bool>>,
+}
+
+/// `[fmu]`: what the FMU built by `phstring fmu` reports besides its ports and energies.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmuSpec {
+    /// Nodes whose positions [m] are outputs: indices (negative from the end), names or
+    /// `"STRING:INDEX"`.
+    #[serde(default)]
+    pub nodes: Vec<Spanned<NodeRef>>,
 }
 
 /// A gain: one value for every component, or one per component.
