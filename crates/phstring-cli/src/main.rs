@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use anyhow::{Result, bail};
+use anyhow::{Context as _, Result, anyhow, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
@@ -180,7 +180,28 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
     },
+    /// Build an FMI 2.0 Co-Simulation FMU of a scenario: its ports (external = true) as
+    /// inputs, port outputs, energies and listed node positions as outputs, EA, ρA and h as
+    /// parameters.
+    Fmu {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// The FMU file to write; its name (without .fmu) is the model identifier.
+        #[arg(short, long, value_name = "NAME.fmu")]
+        out: PathBuf,
+        /// Override a scenario key by its dotted path (the FMU holds the result).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// The FMU's shared library (default: the one built next to this executable, or
+        /// $PHSTRING_FMU_LIBRARY).
+        #[arg(long, value_name = "PATH")]
+        library: Option<PathBuf>,
+    },
 }
+
+/// Environment variable naming the FMU's shared library (instead of looking next to the
+/// `phstring` executable).
+const FMU_LIBRARY_ENV: &str = "PHSTRING_FMU_LIBRARY";
 
 /// A count option that must be at least 1 (`--jobs 0` or `--checkpoint-every 0` would do
 /// nothing, and are refused rather than ignored).
@@ -340,6 +361,12 @@ fn dispatch(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Check { scenario, sets } => check(&scenario, &sets),
+        Command::Fmu {
+            scenario,
+            out,
+            sets,
+            library,
+        } => fmu(&scenario, &out, &sets, library),
         Command::Modes {
             scenario,
             count,
@@ -649,6 +676,79 @@ fn sweep(
     );
     if failed > 0 {
         bail!("{failed} of {} runs failed (see sweep.csv)", runs.len());
+    }
+    Ok(())
+}
+
+/// `phstring fmu`: the FMI 2.0 Co-Simulation FMU of a scenario.
+fn fmu(path: &Path, out: &Path, sets: &[String], library: Option<PathBuf>) -> Result<()> {
+    use phstring_fmu::{model::ModelSpec, package};
+    if out.extension().and_then(|e| e.to_str()) != Some("fmu") {
+        bail!(
+            "-o {}: an FMU's file name ends in .fmu (e.g. -o crane.fmu)",
+            out.display()
+        );
+    }
+    if out.is_dir() {
+        bail!("-o {}: is a folder, not a file name", out.display());
+    }
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let identifier =
+        package::model_identifier(&stem).map_err(|e| anyhow!("-o {}: {e}", out.display()))?;
+    let file = scenario::load(path, sets)?;
+    check_budget(&file)?;
+    let spec = ModelSpec::new(&file)?;
+    let library = match library.or_else(|| std::env::var_os(FMU_LIBRARY_ENV).map(PathBuf::from)) {
+        Some(l) => l,
+        None => {
+            let exe = std::env::current_exe().context("cannot locate the phstring executable")?;
+            let candidates = package::library_candidates(&exe);
+            match candidates.iter().find(|p| p.is_file()) {
+                Some(p) => p.clone(),
+                None => bail!(
+                    "the FMU's shared library {} is not next to {} (looked in {}); build it with `cargo build --release -p phstring-fmu`, then give it with --library PATH or {FMU_LIBRARY_ENV}",
+                    package::library_file_name(),
+                    exe.display(),
+                    candidates
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            }
+        }
+    };
+    package::write_fmu(&file, &spec, &identifier, &library, out)?;
+    let count = |c: phstring_fmu::model::Causality| {
+        spec.variables.iter().filter(|v| v.causality == c).count()
+    };
+    use phstring_fmu::model::Causality as C;
+    say!(
+        "wrote {} (FMI 2.0 Co-Simulation, model identifier {identifier}): {} inputs, {} outputs, {} parameters",
+        out.display(),
+        count(C::Input),
+        count(C::Output),
+        count(C::Parameter)
+    );
+    if count(C::Input) == 0 {
+        say!(
+            "  no inputs: mark a [[boundary]] table's force or position with external = true to make it one"
+        );
+    }
+    for v in &spec.variables {
+        say!(
+            "  {:<10} {:<22} [{}]",
+            match v.causality {
+                C::Parameter => "parameter",
+                C::Input => "input",
+                C::Output => "output",
+            },
+            v.name,
+            v.unit
+        );
     }
     Ok(())
 }

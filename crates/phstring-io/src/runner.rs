@@ -301,6 +301,29 @@ pub fn run(
     }
 }
 
+/// With `initial.equilibrium`: solves for the starting equilibrium and sets the problem's
+/// initial state to it, with `[initial]`'s displacement and velocity applied on it; returns
+/// how it was found (for reports). Without it, does nothing and returns `None`. `stop`
+/// ends the solve early (Ctrl-C).
+pub fn start_at_equilibrium<const D: usize>(
+    v: &mut crate::scenario::Validated<D>,
+    stop: Option<&AtomicBool>,
+) -> Result<Option<String>, RunError> {
+    if !v.initial.equilibrium {
+        return Ok(None);
+    }
+    let (_, eq) = crate::statics_run::solve_validated(v, false, stop).map_err(RunError::Statics)?;
+    v.problem.initial = v.initial_state(&eq.state.r)?;
+    Ok(Some(format!(
+        "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
+        eq.path.name(),
+        eq.path.steps(),
+        eq.iterations,
+        eq.residual,
+        if eq.stable { "stable" } else { "not stable" }
+    )))
+}
+
 /// What a run needs besides the simulation and the writers, shared by its parts.
 struct RunContext<'a> {
     file: &'a ScenarioFile,
@@ -320,20 +343,11 @@ fn run_dim<const D: usize>(
     let mut v = file.validate::<D>()?;
     // The starting equilibrium, then the scenario's displacement and velocity on it; a
     // resume takes its state from the checkpoint instead.
-    let mut initial_equilibrium = None;
-    if v.initial.equilibrium && opts.resume.is_none() {
-        let (_, eq) = crate::statics_run::solve_validated(&v, false, opts.stop.as_deref())
-            .map_err(RunError::Statics)?;
-        v.problem.initial = v.initial_state(&eq.state.r)?;
-        initial_equilibrium = Some(format!(
-            "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
-            eq.path.name(),
-            eq.path.steps(),
-            eq.iterations,
-            eq.residual,
-            if eq.stable { "stable" } else { "not stable" }
-        ));
-    }
+    let initial_equilibrium = if opts.resume.is_none() {
+        start_at_equilibrium(&mut v, opts.stop.as_deref())?
+    } else {
+        None
+    };
     let settings = v.settings.clone();
     let load_error = v.load_error.clone();
     let components = v.components;

@@ -1,0 +1,546 @@
+//! The FMU's variables, derived from a scenario, and its `modelDescription.xml`.
+//!
+//! The CLI (which writes the description) and the shared library (which serves the
+//! variables) both derive the list from the same scenario text with [`ModelSpec::new`], so
+//! value references agree; the GUID is a hash of that list and the scenario text, and the
+//! library refuses an instance whose GUID does not match.
+
+use phstring::{Material, PortKind, Simulation};
+use phstring_io::checkpoint::fnv1a64_hex;
+use phstring_io::scenario::{ScenarioError, ScenarioFile, Validated};
+
+/// FMI causality of a variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    /// Set before initialization (`variability = "fixed"`).
+    Parameter,
+    /// Set by the master at communication points (zero-order hold over the step).
+    Input,
+    /// Computed by the FMU.
+    Output,
+}
+
+/// What a variable's value is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// Parameter `k` of [`ModelSpec::parameters`].
+    Parameter(usize),
+    /// Component `component` of the force [N] of load `load` (force port, file order).
+    LoadForce {
+        /// Index among the scenario's loads.
+        load: usize,
+        /// Component (0 = x).
+        component: usize,
+    },
+    /// The position [m] that prescribed motion `motion` reaches at the end of the
+    /// communication step (index into the problem's motions, one component each).
+    MotionPosition {
+        /// Index among the problem's motions.
+        motion: usize,
+    },
+    /// Component `component` of the output of port `port` over the last step: mid-step
+    /// velocity [m/s] of a force port, reaction force [N] of a velocity port.
+    PortOutput {
+        /// Port index (loads, feedback, supports).
+        port: usize,
+        /// Component.
+        component: usize,
+    },
+    /// Component `component` of the input of port `port` over the last step (the force
+    /// [N] a feedback law applied).
+    PortInput {
+        /// Port index.
+        port: usize,
+        /// Component.
+        component: usize,
+    },
+    /// Component `component` of the position [m] of mesh node `node`.
+    NodePosition {
+        /// Mesh node index.
+        node: usize,
+        /// Component.
+        component: usize,
+    },
+    /// `Ĥ` [J].
+    Hamiltonian,
+    /// `T̂` [J].
+    Kinetic,
+    /// `V̂` [J] (internal plus external potential).
+    Potential,
+    /// Energy supplied through the ports since `t = 0` [J].
+    Supplied,
+    /// Energy dissipated since `t = 0` [J].
+    Dissipated,
+    /// `Ĥ(t) − Ĥ(0) − supplied + dissipated` [J]: zero up to the Newton tolerance and
+    /// rounding.
+    BalanceError,
+}
+
+/// One FMI scalar variable (all are `Real`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    /// Name in `modelDescription.xml` (flat naming convention).
+    pub name: String,
+    /// Causality.
+    pub causality: Causality,
+    /// Unit symbol: `N`, `m`, `m/s`, `J`, `kg/m`, `s`.
+    pub unit: &'static str,
+    /// Description shown by tools.
+    pub description: String,
+    /// Start value (parameters and inputs).
+    pub start: Option<f64>,
+    /// What it is.
+    pub quantity: Quantity,
+}
+
+/// A parameter: a scenario key the FMU overrides (as `--set key=value`) before it sets up
+/// the simulation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    /// Dotted scenario key (`material.ea`, `materials.NAME.rho_a`, `time.h`).
+    pub key: String,
+    /// The scenario's value.
+    pub value: f64,
+}
+
+/// Everything the FMU exposes, in value-reference order (value reference = index).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelSpec {
+    /// `modelName`: the scenario's title, or the file name.
+    pub model_name: String,
+    /// Spatial dimension.
+    pub dimension: usize,
+    /// The variables; a variable's value reference is its index.
+    pub variables: Vec<Variable>,
+    /// The parameters, in the order of their variables.
+    pub parameters: Vec<Parameter>,
+    /// `time.end` [s] (the default experiment's stop time).
+    pub t_end: f64,
+    /// `time.h` [s] (the default experiment's step size).
+    pub h: f64,
+    /// The GUID, `{8-4-4-4-12}` hexadecimal digits.
+    pub guid: String,
+}
+
+/// Axis names.
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+impl ModelSpec {
+    /// The variables of the FMU of scenario `file` (validated in full, the simulation set
+    /// up once to learn its ports).
+    pub fn new(file: &ScenarioFile) -> Result<Self, ScenarioError> {
+        match file.dimension()? {
+            1 => Self::of::<1>(file),
+            2 => Self::of::<2>(file),
+            _ => Self::of::<3>(file),
+        }
+    }
+
+    fn of<const D: usize>(file: &ScenarioFile) -> Result<Self, ScenarioError> {
+        let v: Validated<D> = file.validate::<D>()?;
+        let s = &file.scenario;
+        let mut vars = Vec::new();
+        let mut parameters = Vec::new();
+        let mut param = |vars: &mut Vec<Variable>, name: String, key: String, value: f64| {
+            let (unit, what) = match key.rsplit('.').next() {
+                Some("ea") => ("N", "axial stiffness EA"),
+                Some("rho_a") => ("kg/m", "mass per unit length ρA"),
+                _ => ("s", "internal step size h (largest)"),
+            };
+            vars.push(Variable {
+                name,
+                causality: Causality::Parameter,
+                unit,
+                description: format!("{what} (scenario key {key})"),
+                start: Some(value),
+                quantity: Quantity::Parameter(parameters.len()),
+            });
+            parameters.push(Parameter { key, value });
+        };
+        if let Some(m) = &s.material {
+            let m = m.get_ref();
+            param(
+                &mut vars,
+                "EA".into(),
+                "material.ea".into(),
+                *m.ea.get_ref(),
+            );
+            param(
+                &mut vars,
+                "rhoA".into(),
+                "material.rho_a".into(),
+                *m.rho_a.get_ref(),
+            );
+        }
+        for (name, m) in &s.materials {
+            let m = m.get_ref();
+            param(
+                &mut vars,
+                format!("EA.{name}"),
+                format!("materials.{name}.ea"),
+                *m.ea.get_ref(),
+            );
+            param(
+                &mut vars,
+                format!("rhoA.{name}"),
+                format!("materials.{name}.rho_a"),
+                *m.rho_a.get_ref(),
+            );
+        }
+        param(&mut vars, "h".into(), "time.h".into(), *s.time.h.get_ref());
+
+        let c = &v.components;
+        let node_label = |node: usize| match c.node_name(node) {
+            Some(name) => format!("node {node} (\"{name}\")"),
+            None => format!("node {node}"),
+        };
+        // Inputs: external loads, then external motions.
+        for (k, load) in v.problem.boundary.loads.iter().enumerate() {
+            if !c.loads[k].external {
+                continue;
+            }
+            let at_zero = (load.force)(0.0);
+            for i in 0..D {
+                vars.push(Variable {
+                    name: format!("load{k}.F.{}", AXES[i]),
+                    causality: Causality::Input,
+                    unit: "N",
+                    description: format!(
+                        "force on {} in {} (held over each communication step)",
+                        node_label(load.node),
+                        AXES[i]
+                    ),
+                    start: Some(at_zero[i]),
+                    quantity: Quantity::LoadForce {
+                        load: k,
+                        component: i,
+                    },
+                });
+            }
+        }
+        for (m, motion) in v.problem.boundary.motions.iter().enumerate() {
+            if !c.motions[m].external {
+                continue;
+            }
+            vars.push(Variable {
+                name: format!("motion{m}.{}", AXES[motion.component]),
+                causality: Causality::Input,
+                unit: "m",
+                description: format!(
+                    "position in {} that {} reaches at the end of each communication step (moving there at constant speed)",
+                    AXES[motion.component],
+                    node_label(motion.node)
+                ),
+                start: Some((motion.position)(0.0)),
+                quantity: Quantity::MotionPosition { motion: m },
+            });
+        }
+        // Outputs: the ports (one simulation is set up to learn them), energies, nodes.
+        let fmu_nodes = v.fmu_nodes.clone();
+        let loads = v.problem.boundary.loads.len();
+        let feedback = v.problem.boundary.feedback.len();
+        let held = |node: usize| -> Vec<usize> {
+            let mut comps: Vec<usize> = c
+                .supports
+                .iter()
+                .filter(|sc| sc.node == node)
+                .flat_map(|sc| sc.fixed.iter())
+                .filter_map(|a| AXES.iter().position(|x| x == a))
+                .collect();
+            comps.extend(
+                c.motions
+                    .iter()
+                    .filter(|mc| mc.node == node)
+                    .filter_map(|mc| AXES.iter().position(|x| *x == mc.component)),
+            );
+            comps.sort_unstable();
+            comps.dedup();
+            comps
+        };
+        let (t_end, h) = (v.settings.t_end, v.settings.step.h);
+        let model_name = s
+            .title
+            .clone()
+            .unwrap_or_else(|| file.path.display().to_string());
+        let sim: Simulation<D, Material> =
+            Simulation::new(v.problem, v.settings.step).map_err(|cause| ScenarioError::Setup {
+                path: file.path.clone(),
+                with_sets: false,
+                cause,
+            })?;
+        for (p, port) in sim.ports().iter().enumerate() {
+            let (prefix, comps) = if p < loads {
+                (format!("load{p}"), (0..D).collect::<Vec<_>>())
+            } else if p < loads + feedback {
+                (format!("control{}", p - loads), (0..D).collect())
+            } else {
+                (format!("support{}", port.node), held(port.node))
+            };
+            for &i in &comps {
+                let (name, unit, what) = match port.kind {
+                    PortKind::Force => (
+                        format!("{prefix}.v.{}", AXES[i]),
+                        "m/s",
+                        "mid-step velocity",
+                    ),
+                    PortKind::Velocity => (
+                        format!("{prefix}.R.{}", AXES[i]),
+                        "N",
+                        "reaction force on the support",
+                    ),
+                };
+                vars.push(Variable {
+                    name,
+                    causality: Causality::Output,
+                    unit,
+                    description: format!(
+                        "{what} of {} in {} over the last internal step",
+                        node_label(port.node),
+                        AXES[i]
+                    ),
+                    start: None,
+                    quantity: Quantity::PortOutput {
+                        port: p,
+                        component: i,
+                    },
+                });
+            }
+            if prefix.starts_with("control") {
+                for i in 0..D {
+                    vars.push(Variable {
+                        name: format!("{prefix}.F.{}", AXES[i]),
+                        causality: Causality::Output,
+                        unit: "N",
+                        description: format!(
+                            "force of the feedback law on {} in {} over the last internal step",
+                            node_label(port.node),
+                            AXES[i]
+                        ),
+                        start: None,
+                        quantity: Quantity::PortInput {
+                            port: p,
+                            component: i,
+                        },
+                    });
+                }
+            }
+        }
+        let energies = [
+            ("H", Quantity::Hamiltonian, "Hamiltonian Ĥ = T̂ + V̂"),
+            ("T", Quantity::Kinetic, "kinetic energy T̂"),
+            (
+                "V",
+                Quantity::Potential,
+                "potential energy V̂ (strain energy plus potential of the body force)",
+            ),
+            (
+                "supplied",
+                Quantity::Supplied,
+                "energy supplied through the ports since the start",
+            ),
+            (
+                "dissipated",
+                Quantity::Dissipated,
+                "energy dissipated since the start",
+            ),
+            (
+                "balance_error",
+                Quantity::BalanceError,
+                "energy balance Ĥ(t) − Ĥ(0) − supplied + dissipated",
+            ),
+        ];
+        for (name, quantity, description) in energies {
+            vars.push(Variable {
+                name: name.into(),
+                causality: Causality::Output,
+                unit: "J",
+                description: description.into(),
+                start: None,
+                quantity,
+            });
+        }
+        for node in fmu_nodes {
+            for i in 0..D {
+                vars.push(Variable {
+                    name: format!("node{node}.r.{}", AXES[i]),
+                    causality: Causality::Output,
+                    unit: "m",
+                    description: format!("position of {} in {}", node_label(node), AXES[i]),
+                    start: None,
+                    quantity: Quantity::NodePosition { node, component: i },
+                });
+            }
+        }
+        let mut spec = Self {
+            model_name,
+            dimension: D,
+            variables: vars,
+            parameters,
+            t_end,
+            h,
+            guid: String::new(),
+        };
+        spec.guid = spec.compute_guid(file.text());
+        Ok(spec)
+    }
+
+    /// The GUID: FNV-1a hashes of the crate version, the variable list and the scenario.
+    fn compute_guid(&self, text: &str) -> String {
+        let mut content = format!("phstring-fmu {}\n", env!("CARGO_PKG_VERSION"));
+        for v in &self.variables {
+            content.push_str(&format!("{}|{:?}|{:?}\n", v.name, v.causality, v.start));
+        }
+        content.push_str(text);
+        let a = fnv1a64_hex(content.as_bytes());
+        let b = fnv1a64_hex(format!("guid\n{content}").as_bytes());
+        format!(
+            "{{{}-{}-{}-{}-{}}}",
+            &a[..8],
+            &a[8..12],
+            &a[12..16],
+            &b[..4],
+            &b[4..16]
+        )
+    }
+
+    /// `modelDescription.xml` for FMI 2.0 Co-Simulation with the shared library
+    /// `model_identifier`.
+    pub fn model_description(&self, model_identifier: &str) -> String {
+        let mut x = String::new();
+        x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        x.push_str(&format!(
+            "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" guid=\"{}\" description=\"{}\" generationTool=\"phstring {}\" variableNamingConvention=\"flat\" numberOfEventIndicators=\"0\">\n",
+            escape(&self.model_name),
+            self.guid,
+            escape(&format!(
+                "Port-Hamiltonian string (dimension {}): exact energy balance through its ports",
+                self.dimension
+            )),
+            env!("CARGO_PKG_VERSION")
+        ));
+        x.push_str(&format!(
+            "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\"/>\n",
+            escape(model_identifier)
+        ));
+        x.push_str("  <UnitDefinitions>\n");
+        for (unit, base) in UNITS {
+            x.push_str(&format!(
+                "    <Unit name=\"{unit}\"><BaseUnit {base}/></Unit>\n"
+            ));
+        }
+        x.push_str("  </UnitDefinitions>\n");
+        x.push_str("  <LogCategories>\n");
+        for (name, what) in LOG_CATEGORIES {
+            x.push_str(&format!(
+                "    <Category name=\"{name}\" description=\"{}\"/>\n",
+                escape(what)
+            ));
+        }
+        x.push_str("  </LogCategories>\n");
+        x.push_str(&format!(
+            "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>\n",
+            num(self.t_end),
+            num(self.h)
+        ));
+        x.push_str("  <ModelVariables>\n");
+        for (vr, v) in self.variables.iter().enumerate() {
+            let (causality, variability, initial) = match v.causality {
+                Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
+                Causality::Input => ("input", "continuous", ""),
+                Causality::Output => ("output", "continuous", " initial=\"calculated\""),
+            };
+            x.push_str(&format!(
+                "    <ScalarVariable name=\"{}\" valueReference=\"{vr}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial}>\n",
+                escape(&v.name),
+                escape(&v.description)
+            ));
+            let start = v
+                .start
+                .map_or_else(String::new, |s| format!(" start=\"{}\"", num(s)));
+            let min = match v.quantity {
+                Quantity::Parameter(_) => " min=\"0\"",
+                _ => "",
+            };
+            x.push_str(&format!(
+                "      <Real unit=\"{}\"{min}{start}/>\n",
+                escape(v.unit)
+            ));
+            x.push_str("    </ScalarVariable>\n");
+        }
+        x.push_str("  </ModelVariables>\n");
+        x.push_str("  <ModelStructure>\n");
+        let outputs: Vec<usize> = (0..self.variables.len())
+            .filter(|&i| self.variables[i].causality == Causality::Output)
+            .collect();
+        if !outputs.is_empty() {
+            x.push_str("    <Outputs>\n");
+            for &i in &outputs {
+                x.push_str(&format!("      <Unknown index=\"{}\"/>\n", i + 1));
+            }
+            x.push_str("    </Outputs>\n");
+            x.push_str("    <InitialUnknowns>\n");
+            for &i in &outputs {
+                x.push_str(&format!("      <Unknown index=\"{}\"/>\n", i + 1));
+            }
+            x.push_str("    </InitialUnknowns>\n");
+        }
+        x.push_str("  </ModelStructure>\n");
+        x.push_str("</fmiModelDescription>\n");
+        x
+    }
+}
+
+/// The units used, with their SI base-unit exponents.
+const UNITS: [(&str, &str); 6] = [
+    ("N", "kg=\"1\" m=\"1\" s=\"-2\""),
+    ("m", "m=\"1\""),
+    ("m/s", "m=\"1\" s=\"-1\""),
+    ("J", "kg=\"1\" m=\"2\" s=\"-2\""),
+    ("kg/m", "kg=\"1\" m=\"-1\""),
+    ("s", "s=\"1\""),
+];
+
+/// The log categories the FMU reports under.
+pub const LOG_CATEGORIES: [(&str, &str); 3] = [
+    (
+        "logStatusError",
+        "errors: bad values, calls out of order, failures that end the run",
+    ),
+    (
+        "logStatusDiscard",
+        "a step that failed (the FMU stays at the last step it completed)",
+    ),
+    ("logEvents", "set-up and progress of the simulation"),
+];
+
+/// A real number as XML attribute text, shortest round-trip form.
+fn num(x: f64) -> String {
+    format!("{x:?}")
+}
+
+/// `s` with the five XML special characters escaped.
+fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c if (c as u32) < 0x20 && c != '\t' && c != '\n' && c != '\r' => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escape_handles_markup_and_control_characters() {
+        assert_eq!(escape("a<b & \"c\"\u{1}"), "a&lt;b &amp; &quot;c&quot; ");
+    }
+}

@@ -1,0 +1,149 @@
+//! Writing the `.fmu` archive: `modelDescription.xml`, the shared library under
+//! `binaries/<platform>/<modelIdentifier>.<ext>`, the scenario under
+//! `resources/scenario.toml`.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use phstring_io::scenario::ScenarioFile;
+
+use crate::model::ModelSpec;
+
+/// The FMI platform folder and shared-library extension of this build's target, if FMI 2.0
+/// names one.
+pub fn platform() -> Option<(&'static str, &'static str)> {
+    let bits64 = cfg!(target_pointer_width = "64");
+    if cfg!(target_os = "linux") {
+        Some((if bits64 { "linux64" } else { "linux32" }, "so"))
+    } else if cfg!(target_os = "macos") {
+        Some(("darwin64", "dylib"))
+    } else if cfg!(target_os = "windows") {
+        Some((if bits64 { "win64" } else { "win32" }, "dll"))
+    } else {
+        None
+    }
+}
+
+/// File name of this crate's shared library as Cargo builds it (`libphstring_fmu.so`, …).
+pub fn library_file_name() -> String {
+    format!(
+        "{}phstring_fmu{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    )
+}
+
+/// Where Cargo puts the shared library when it builds the `phstring` executable at `exe`:
+/// next to it, or in its `deps/` folder (the library is a dependency of the CLI).
+pub fn library_candidates(exe: &Path) -> Vec<PathBuf> {
+    let name = library_file_name();
+    exe.parent()
+        .map(|dir| vec![dir.join(&name), dir.join("deps").join(&name)])
+        .unwrap_or_default()
+}
+
+/// The model identifier for an FMU file named `stem` (`crane.fmu` → `crane`): a C
+/// identifier, since FMI tools use it in file and function names.
+pub fn model_identifier(stem: &str) -> Result<String, String> {
+    let ok = stem
+        .chars()
+        .enumerate()
+        .all(|(i, c)| c == '_' || c.is_ascii_alphabetic() || (i > 0 && c.is_ascii_digit()));
+    if stem.is_empty() || !ok {
+        return Err(format!(
+            "the FMU's file name {stem:?} must be a C identifier (letters, digits and _, not starting with a digit): FMI tools name the model's shared library after it"
+        ));
+    }
+    Ok(stem.to_string())
+}
+
+/// A failure to write the archive.
+#[derive(Debug)]
+pub struct PackageError(pub String);
+
+impl std::fmt::Display for PackageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for PackageError {}
+
+/// Writes the FMU of `file` (variables `spec`) with the shared library `library` to `out`.
+/// The archive is written to a temporary file next to `out` and renamed into place, so `out`
+/// is either the complete FMU or untouched.
+pub fn write_fmu(
+    file: &ScenarioFile,
+    spec: &ModelSpec,
+    identifier: &str,
+    library: &Path,
+    out: &Path,
+) -> Result<(), PackageError> {
+    let (folder, ext) = platform().ok_or_else(|| {
+        PackageError("FMI 2.0 names no binaries folder for this operating system".into())
+    })?;
+    let lib = std::fs::read(library).map_err(|e| {
+        PackageError(format!(
+            "cannot read the FMU library {}: {e}",
+            library.display()
+        ))
+    })?;
+    let description = spec.model_description(identifier);
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let tmp = dir.join(format!(
+        ".{}.partial-{}",
+        out.file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        std::process::id()
+    ));
+    let result = write_archive(
+        &tmp,
+        &[
+            ("modelDescription.xml".to_string(), description.as_bytes()),
+            (format!("binaries/{folder}/{identifier}.{ext}"), &lib),
+            (
+                "resources/scenario.toml".to_string(),
+                file.text().as_bytes(),
+            ),
+        ],
+    )
+    .and_then(|()| std::fs::rename(&tmp, out));
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(PackageError(format!("cannot write {}: {e}", out.display())));
+    }
+    Ok(())
+}
+
+/// A zip archive at `path` with `entries` (name, bytes), deflated.
+fn write_archive(path: &Path, entries: &[(String, &[u8])]) -> std::io::Result<()> {
+    let f = std::fs::File::create(path)?;
+    let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(f));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .unix_permissions(0o644);
+    for (name, bytes) in entries {
+        zip.start_file(name.as_str(), options)
+            .map_err(std::io::Error::other)?;
+        zip.write_all(bytes)?;
+    }
+    let mut w = zip.finish().map_err(std::io::Error::other)?;
+    w.flush()?;
+    w.into_inner().map_err(|e| e.into_error())?.sync_all()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn model_identifiers_are_c_identifiers() {
+        assert_eq!(model_identifier("crane_2d").unwrap(), "crane_2d");
+        for bad in ["", "2d", "my-crane", "a b", "kran\u{e4}"] {
+            assert!(model_identifier(bad).is_err(), "{bad:?}");
+        }
+    }
+}
