@@ -64,16 +64,17 @@ unsafe impl Send for CLogger {}
 impl CLogger {
     fn log(&self, status: Status, category: &str, message: &str) {
         let category = c_string(category);
-        let message = c_string(message);
-        // SAFETY: `f` is the master's logger; "%s" makes the message a plain argument, so a
-        // `%` in it is printed, not interpreted.
+        // The message is the format string, its `%` doubled: a logger that formats prints
+        // it as it is, and so does one that ignores the variable arguments (FMPy's default).
+        let message = c_string(&message.replace('%', "%%"));
+        // SAFETY: `f` is the master's logger, called with valid NUL-terminated strings and
+        // no variable arguments (the format has no conversions).
         unsafe {
             (self.f)(
                 self.env,
                 self.name.as_ptr(),
                 status as c_int,
                 category.as_ptr(),
-                c"%s".as_ptr(),
                 message.as_ptr(),
             );
         }
@@ -728,8 +729,9 @@ pub extern "C" fn fmi2GetIntegerStatus(
     with(c, |i| i.refused("fmi2GetIntegerStatus is not provided"))
 }
 
-/// `fmi2GetBooleanStatus`: `fmi2Terminated` (kind 3) is always false (the FMU never ends a
-/// run on its own).
+/// `fmi2GetBooleanStatus`: `fmi2Terminated` (kind 3) is true after a discarded step: the
+/// FMU already halved its internal step down to the floor, so a retry from the same state
+/// with the same inputs fails again (a master may still restore an earlier FMU state).
 ///
 /// # Safety
 /// `value` is a valid pointer.
@@ -743,8 +745,9 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
         if value.is_null() || kind != 3 {
             return i.refused("fmi2GetBooleanStatus: only fmi2Terminated is provided");
         }
+        let failed = i.mode() == crate::instance::Mode::StepFailed;
         // SAFETY: FMI contract.
-        unsafe { *value = 0 };
+        unsafe { *value = c_int::from(failed) };
         Status::Ok
     })
 }

@@ -351,7 +351,24 @@ impl Instance {
                 }
             }
         }
-        let error = |e: String| (Status::Error, e);
+        // The master chooses the stop time; `time.end` only has to fit the step size (a
+        // whole number of steps), so it moves to the nearest multiple of a changed `h`.
+        let h = self.step_size();
+        if h.to_bits() != self.spec.h.to_bits() {
+            let n = (self.spec.t_end / h).round().max(1.0);
+            sets.push(format!("time.end={:?}", n * h));
+        }
+        let error = |e: String| {
+            let e = if sets.is_empty() {
+                e
+            } else {
+                format!(
+                    "the parameters ({}) do not fit the scenario: {e}",
+                    sets.join(", ")
+                )
+            };
+            (Status::Error, e)
+        };
         let file = phstring_io::scenario::parse(&self.text, &self.path, &sets)
             .map_err(|e| error(e.to_string()))?;
         let live = match self.spec.dimension {
@@ -359,7 +376,7 @@ impl Instance {
             2 => self.live_dim::<2>(&file),
             _ => self.live_dim::<3>(&file),
         }
-        .map_err(error)?;
+        .map_err(&error)?;
         self.live = Some(live);
         Ok(())
     }

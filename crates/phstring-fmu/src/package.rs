@@ -34,11 +34,12 @@ pub fn library_file_name() -> String {
 }
 
 /// Where Cargo puts the shared library when it builds the `phstring` executable at `exe`:
-/// next to it, or in its `deps/` folder (the library is a dependency of the CLI).
+/// in its `deps/` folder (built with the executable, as a dependency of the CLI), or next to
+/// it (`cargo build -p phstring-fmu`, or an installation that copied it there).
 pub fn library_candidates(exe: &Path) -> Vec<PathBuf> {
     let name = library_file_name();
     exe.parent()
-        .map(|dir| vec![dir.join(&name), dir.join("deps").join(&name)])
+        .map(|dir| vec![dir.join("deps").join(&name), dir.join(&name)])
         .unwrap_or_default()
 }
 
