@@ -544,7 +544,8 @@ impl Instance {
         }
         let h = self.step_size();
         let now = self.time();
-        if !((t - now).abs() <= 1e-6 * h.min(comm_h)) {
+        let off = (t - now).abs();
+        if off.is_nan() || off > 1e-6 * h.min(comm_h) {
             return self.refuse(format!(
                 "fmi2DoStep at currentCommunicationPoint = {t} s, but the FMU is at t = {now} s"
             ));

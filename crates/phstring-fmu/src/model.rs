@@ -286,7 +286,7 @@ impl ModelSpec {
                     PortKind::Velocity => (
                         format!("{prefix}.R.{}", AXES[i]),
                         "N",
-                        "reaction force on the support",
+                        "force the support exerts on the string",
                     ),
                 };
                 vars.push(Variable {

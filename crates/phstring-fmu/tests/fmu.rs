@@ -1,0 +1,494 @@
+//! The FMU instance against the library's `Simulation` (bit for bit), its inputs (zero-order
+//! hold of forces, ramps of positions), its error paths and its saved states; the C
+//! functions in-process.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use phstring::{Material, Simulation};
+use phstring_fmu::instance::{Instance, Mode, Status};
+use phstring_fmu::model::{Causality, ModelSpec};
+use phstring_io::scenario::parse;
+
+/// The log of an instance: (status, message).
+type Log = Arc<Mutex<Vec<(Status, String)>>>;
+
+fn pendulum_text() -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fmu/pendulum.toml");
+    std::fs::read_to_string(path).expect("examples/fmu/pendulum.toml")
+}
+
+fn spec_of(text: &str) -> ModelSpec {
+    let file = parse(text, Path::new("scenario.toml"), &[]).expect("scenario parses");
+    ModelSpec::new(&file).expect("scenario is valid")
+}
+
+fn instance(text: &str) -> (Instance, Log) {
+    let spec = spec_of(text);
+    let log: Log = Arc::default();
+    let sink = log.clone();
+    let inst = Instance::new(
+        "test",
+        &spec.guid,
+        text.to_string(),
+        PathBuf::from("scenario.toml"),
+        Box::new(move |s, _, m| sink.lock().unwrap().push((s, m.to_string()))),
+        false,
+    )
+    .expect("instance");
+    (inst, log)
+}
+
+fn vr(inst: &Instance, name: &str) -> u32 {
+    inst.spec()
+        .variables
+        .iter()
+        .position(|v| v.name == name)
+        .unwrap_or_else(|| panic!("no variable {name}")) as u32
+}
+
+fn get(inst: &mut Instance, name: &str) -> f64 {
+    let r = vr(inst, name);
+    let mut out = [0.0];
+    assert_eq!(inst.get_real(&[r], &mut out), Status::Ok);
+    out[0]
+}
+
+fn set(inst: &mut Instance, name: &str, x: f64) -> Status {
+    let r = vr(inst, name);
+    inst.set_real(&[r], &[x])
+}
+
+fn initialize(inst: &mut Instance) {
+    assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+    assert_eq!(inst.enter_initialization(), Status::Ok);
+    assert_eq!(inst.exit_initialization(), Status::Ok);
+}
+
+fn last_message(log: &Log) -> String {
+    log.lock()
+        .unwrap()
+        .last()
+        .map(|(_, m)| m.clone())
+        .unwrap_or_default()
+}
+
+#[test]
+fn variables_of_the_pendulum() {
+    let spec = spec_of(&pendulum_text());
+    let names: Vec<(&str, Causality)> = spec
+        .variables
+        .iter()
+        .map(|v| (v.name.as_str(), v.causality))
+        .collect();
+    use Causality::*;
+    assert_eq!(
+        names,
+        [
+            ("EA", Parameter),
+            ("rhoA", Parameter),
+            ("h", Parameter),
+            ("load0.F.x", Input),
+            ("load0.F.y", Input),
+            ("load0.v.x", Output),
+            ("load0.v.y", Output),
+            ("support0.R.x", Output),
+            ("support0.R.y", Output),
+            ("H", Output),
+            ("T", Output),
+            ("V", Output),
+            ("supplied", Output),
+            ("dissipated", Output),
+            ("balance_error", Output),
+            ("node30.r.x", Output),
+            ("node30.r.y", Output),
+        ]
+    );
+    // The input's start value is the pulse at t = 0; the parameters are the scenario's.
+    assert_eq!(spec.variables[3].start, Some(0.0));
+    assert_eq!(spec.variables[0].start, Some(20.0));
+    assert_eq!(spec.variables[2].start, Some(0.01));
+    // The GUID depends on the scenario.
+    let other = spec_of(&pendulum_text().replace("elements = 30", "elements = 31"));
+    assert_ne!(spec.guid, other.guid);
+    let xml = spec.model_description("pendulum");
+    assert!(xml.contains("modelIdentifier=\"pendulum\""));
+    assert!(xml.contains(&format!("guid=\"{}\"", spec.guid)));
+}
+
+/// Communication step = internal step, inputs = the forces the scenario's own run applied:
+/// the same Hamiltonian, bit for bit, at every step.
+#[test]
+fn one_internal_step_per_communication_step_is_the_run_bit_for_bit() {
+    let text = pendulum_text();
+    let file = parse(&text, Path::new("scenario.toml"), &[]).unwrap();
+    let v = file.validate::<2>().unwrap();
+    let mut sim: Simulation<2, Material> = Simulation::new(v.problem, v.settings.step).unwrap();
+    let (mut inst, _) = instance(&text);
+    initialize(&mut inst);
+    let h = 0.01;
+    let mut t = 0.0;
+    for n in 0..100 {
+        sim.step().unwrap();
+        let u = sim.ports()[0].input;
+        assert_eq!(set(&mut inst, "load0.F.x", u[0]), Status::Ok);
+        assert_eq!(set(&mut inst, "load0.F.y", u[1]), Status::Ok);
+        assert_eq!(inst.do_step(t, h), Status::Ok, "step {n}");
+        t += h;
+        let (h_fmu, h_run) = (get(&mut inst, "H"), sim.energies().hamiltonian());
+        assert_eq!(
+            h_fmu.to_bits(),
+            h_run.to_bits(),
+            "step {n}: {h_fmu} vs {h_run}"
+        );
+        assert_eq!(get(&mut inst, "node30.r.y"), sim.state().r[30][1]);
+        assert_eq!(get(&mut inst, "load0.v.x"), sim.ports()[0].output[0]);
+        assert_eq!(get(&mut inst, "support0.R.y"), sim.ports()[1].output[1]);
+    }
+    assert!(get(&mut inst, "balance_error").abs() <= 1e-12);
+    assert!(get(&mut inst, "supplied") > 0.06);
+}
+
+/// A communication step of 3.5 internal steps lands on `t + H` exactly, holds the force,
+/// and keeps the energy balance.
+#[test]
+fn a_communication_step_of_several_internal_steps() {
+    let text = pendulum_text();
+    let (mut inst, _) = instance(&text);
+    initialize(&mut inst);
+    assert_eq!(set(&mut inst, "load0.F.x", 0.5), Status::Ok);
+    assert_eq!(set(&mut inst, "load0.F.y", 0.5), Status::Ok);
+    assert_eq!(inst.do_step(0.0, 0.035), Status::Ok);
+    assert_eq!(inst.time(), 0.035);
+    // The same with the library: a constant load, steps of h up to 0.035 s.
+    let sets = vec![
+        "boundary.1.force=[\"0.5\", \"0.5\"]".to_string(),
+        "boundary.1.external=false".to_string(),
+    ];
+    let file = parse(&text, Path::new("scenario.toml"), &sets).unwrap();
+    let v = file.validate::<2>().unwrap();
+    let mut sim: Simulation<2, Material> = Simulation::new(v.problem, v.settings.step).unwrap();
+    while sim.time() < 0.035 - 1e-12 {
+        sim.step_until(0.035).unwrap();
+    }
+    assert_eq!(sim.steps(), 4);
+    assert_eq!(
+        get(&mut inst, "H").to_bits(),
+        sim.energies().hamiltonian().to_bits()
+    );
+    // Work of the held force: F · (r(T) − r(0)) in each component, exactly what `supplied`
+    // sums step by step (h F · v_mid = F · Δr).
+    let dx = get(&mut inst, "node30.r.x") - v_tip0(&text)[0];
+    let dy = get(&mut inst, "node30.r.y") - v_tip0(&text)[1];
+    let work = 0.5 * (dx + dy);
+    assert!((get(&mut inst, "supplied") - work).abs() <= 1e-14, "{work}");
+    assert!(get(&mut inst, "balance_error").abs() <= 1e-12);
+}
+
+/// The tip's initial position [m].
+fn v_tip0(text: &str) -> [f64; 2] {
+    let file = parse(text, Path::new("scenario.toml"), &[]).unwrap();
+    let v = file.validate::<2>().unwrap();
+    let r = v.problem.initial.r[30];
+    [r[0], r[1]]
+}
+
+/// A 10 m steel wire (EA = 1e7 N) whose right end is an FMU input.
+const WIRE: &str = r#"
+dimension = 2
+[geometry]
+start = [0.0, 0.0]
+end = [10.0, 0.0]
+[mesh]
+elements = 20
+[material]
+law = "linear_elastic"
+ea = 1e7
+rho_a = 0.6
+[[boundary]]
+node = 0
+fixed = true
+[[boundary]]
+node = -1
+position = ["10.0", "0.0"]
+external = true
+[time]
+h = 1e-4
+end = 0.1
+[fmu]
+nodes = [-1, 10]
+"#;
+
+/// A position input is reached at the end of the communication step, at constant speed
+/// from where the support was; the balance holds with the support's power.
+#[test]
+fn a_position_input_is_reached_at_the_end_of_the_communication_step() {
+    let (mut inst, _) = instance(WIRE);
+    let names: Vec<&str> = inst
+        .spec()
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Input)
+        .map(|v| v.name.as_str())
+        .collect();
+    assert_eq!(names, ["motion0.x", "motion1.y"]);
+    initialize(&mut inst);
+    assert_eq!(get(&mut inst, "motion0.x"), 10.0);
+    assert_eq!(set(&mut inst, "motion0.x", 10.002), Status::Ok);
+    assert_eq!(inst.do_step(0.0, 0.001), Status::Ok);
+    assert_eq!(get(&mut inst, "node20.r.x"), 10.002);
+    assert_eq!(get(&mut inst, "node20.r.y"), 0.0);
+    // 2 mm in 1 ms stretches the end elements.
+    // The support holds the stretched wire: it pulls the end outward (+x) [N].
+    assert!(get(&mut inst, "support20.R.x") > 100.0);
+    // Held: the next step does not move the support.
+    assert_eq!(inst.do_step(0.001, 0.001), Status::Ok);
+    assert_eq!(get(&mut inst, "node20.r.x"), 10.002);
+    let (h, supplied) = (get(&mut inst, "H"), get(&mut inst, "supplied"));
+    assert!(supplied > 0.0);
+    assert!(
+        get(&mut inst, "balance_error").abs() <= 1e-12 * h.abs().max(supplied),
+        "balance {}",
+        get(&mut inst, "balance_error")
+    );
+}
+
+#[test]
+fn bad_values_are_refused_with_their_name() {
+    let (mut inst, log) = instance(&pendulum_text());
+    assert_eq!(set(&mut inst, "EA", -1.0), Status::Error);
+    assert!(
+        last_message(&log).contains("EA = -1"),
+        "{}",
+        last_message(&log)
+    );
+    assert_eq!(
+        inst.mode(),
+        Mode::Instantiated,
+        "a refused value changes nothing"
+    );
+    assert_eq!(set(&mut inst, "load0.F.x", f64::NAN), Status::Error);
+    assert!(last_message(&log).contains("load0.F.x"));
+    assert_eq!(set(&mut inst, "H", 1.0), Status::Error);
+    assert!(last_message(&log).contains("output"));
+    assert_eq!(inst.set_real(&[999], &[1.0]), Status::Error);
+    assert!(last_message(&log).contains("999"));
+    // A value that is positive but does not fit the scenario: refused when the simulation
+    // is set up, with the scenario's message.
+    assert_eq!(set(&mut inst, "h", 1e-300), Status::Ok);
+    assert_eq!(inst.setup_experiment(0.0, Some(1.0)), Status::Ok);
+    assert_eq!(inst.enter_initialization(), Status::Ok);
+    assert_eq!(inst.exit_initialization(), Status::Error);
+    let m = last_message(&log);
+    assert!(m.contains("time.h") && m.contains("1e10"), "{m}");
+    assert_eq!(inst.mode(), Mode::Error);
+    // Reset starts over with the start values.
+    assert_eq!(inst.reset(), Status::Ok);
+    initialize(&mut inst);
+    assert_eq!(get(&mut inst, "h"), 0.01);
+    // A changed parameter takes effect: a heavier string has more (negative) potential.
+    let (mut heavy, _) = instance(&pendulum_text());
+    assert_eq!(set(&mut heavy, "rhoA", 2.0), Status::Ok);
+    initialize(&mut heavy);
+    let ratio = get(&mut heavy, "V") / get(&mut inst, "V");
+    assert!((ratio - 2.0).abs() < 1e-12, "{ratio}");
+    // After initialization a fixed parameter cannot change.
+    assert_eq!(set(&mut heavy, "rhoA", 3.0), Status::Error);
+    assert!(last_message(&log).contains("fixed parameter") || heavy.mode() == Mode::StepComplete);
+}
+
+#[test]
+fn calls_out_of_order_are_refused() {
+    let (mut inst, log) = instance(&pendulum_text());
+    assert_eq!(inst.do_step(0.0, 0.01), Status::Error);
+    assert!(last_message(&log).contains("fmi2DoStep"));
+    assert_eq!(inst.setup_experiment(0.0, Some(0.05)), Status::Ok);
+    assert_eq!(inst.enter_initialization(), Status::Ok);
+    assert_eq!(inst.exit_initialization(), Status::Ok);
+    assert_eq!(inst.do_step(0.5, 0.01), Status::Error);
+    assert!(last_message(&log).contains("the FMU is at t = 0 s"));
+    assert_eq!(inst.do_step(0.0, -0.01), Status::Error);
+    assert_eq!(inst.do_step(0.0, 0.06), Status::Error);
+    assert!(last_message(&log).contains("stopTime"));
+    // None of these changed anything.
+    assert_eq!(inst.do_step(0.0, 0.05), Status::Ok);
+    assert_eq!(inst.time(), 0.05);
+}
+
+/// A step that cannot converge is discarded: the FMU stays at the last step it completed,
+/// says why, and continues from a saved state.
+#[test]
+fn a_diverging_step_is_discarded_and_a_saved_state_continues() {
+    let (mut inst, log) = instance(&pendulum_text());
+    initialize(&mut inst);
+    assert_eq!(inst.do_step(0.0, 0.02), Status::Ok);
+    let saved = inst.save().unwrap();
+    assert_eq!(set(&mut inst, "load0.F.x", 1e160), Status::Ok);
+    assert_eq!(inst.do_step(0.02, 0.01), Status::Discard);
+    assert_eq!(inst.mode(), Mode::StepFailed);
+    assert_eq!(inst.time(), 0.02);
+    let m = last_message(&log);
+    assert!(m.contains("step 3") && m.contains("t = 0.02 s"), "{m}");
+    assert_eq!(inst.do_step(0.02, 0.01), Status::Error);
+    assert_eq!(inst.restore(&saved), Status::Ok);
+    assert_eq!(inst.mode(), Mode::StepComplete);
+    assert_eq!(get(&mut inst, "load0.F.x"), 0.0);
+    assert_eq!(inst.do_step(0.02, 0.01), Status::Ok);
+}
+
+/// Saving, continuing, restoring and continuing again gives the same run bit for bit, also
+/// in another instance and through the JSON form.
+#[test]
+fn saved_states_continue_bit_for_bit() {
+    let text = pendulum_text();
+    let (mut a, _) = instance(&text);
+    initialize(&mut a);
+    let h = 0.01;
+    let pulse = |t: f64| (std::f64::consts::PI * (t + 0.5 * h) / 0.2).sin() * 0.5;
+    let run = |inst: &mut Instance, from: usize, to: usize| -> Vec<u64> {
+        (from..to)
+            .map(|n| {
+                let t = n as f64 * h;
+                set(inst, "load0.F.x", pulse(t));
+                set(inst, "load0.F.y", pulse(t));
+                assert_eq!(inst.do_step(t, h), Status::Ok);
+                get(inst, "H").to_bits()
+            })
+            .collect()
+    };
+    run(&mut a, 0, 15);
+    let saved = a.save().unwrap();
+    let first = run(&mut a, 15, 40);
+    assert_eq!(a.restore(&saved), Status::Ok);
+    assert_eq!(run(&mut a, 15, 40), first);
+    let json = serde_json::to_string(&saved).unwrap();
+    let back = serde_json::from_str(&json).unwrap();
+    let (mut b, _) = instance(&text);
+    initialize(&mut b);
+    assert_eq!(b.restore(&back), Status::Ok);
+    assert_eq!(b.time(), 0.15);
+    assert_eq!(run(&mut b, 15, 40), first);
+}
+
+#[test]
+fn a_guid_of_another_scenario_is_refused() {
+    let text = pendulum_text();
+    let other = spec_of(&text.replace("ea = 20.0", "ea = 21.0"));
+    let err = Instance::new(
+        "x",
+        &other.guid,
+        text,
+        PathBuf::from("scenario.toml"),
+        Box::new(|_, _, _| {}),
+        false,
+    )
+    .err()
+    .expect("refused");
+    assert!(err.contains("GUID"), "{err}");
+}
+
+mod c_functions {
+    //! The FMI C functions, called as a master would (without a logger).
+    #![allow(unsafe_code)]
+
+    use super::*;
+    use phstring_fmu::ffi::*;
+    use std::ffi::CString;
+
+    #[test]
+    fn resource_uris_decode() {
+        assert_eq!(
+            resource_dir("file:///tmp/my%20fmu/resources").unwrap(),
+            PathBuf::from("/tmp/my fmu/resources")
+        );
+        assert_eq!(
+            resource_dir("file:/tmp/r").unwrap(),
+            PathBuf::from("/tmp/r")
+        );
+        assert_eq!(
+            resource_dir("file://localhost/tmp/r%").unwrap(),
+            PathBuf::from("/tmp/r%")
+        );
+        assert!(resource_dir("http://example.org/r").is_err());
+    }
+
+    #[test]
+    fn a_master_s_calls() {
+        let text = pendulum_text();
+        let spec = spec_of(&text);
+        let dir = tempfile::tempdir().unwrap();
+        let resources = dir.path().join("with space").join("resources");
+        std::fs::create_dir_all(&resources).unwrap();
+        std::fs::write(resources.join("scenario.toml"), &text).unwrap();
+        let uri = format!(
+            "file://{}",
+            resources.display().to_string().replace(' ', "%20")
+        );
+        let (name, uri) = (CString::new("c").unwrap(), CString::new(uri).unwrap());
+        let guid = CString::new(spec.guid.clone()).unwrap();
+        let h_vr = spec.variables.iter().position(|v| v.name == "H").unwrap() as u32;
+        let fx_vr = spec
+            .variables
+            .iter()
+            .position(|v| v.name == "load0.F.x")
+            .unwrap() as u32;
+        unsafe {
+            let wrong = CString::new("{00000000-0000-0000-0000-000000000000}").unwrap();
+            let none = fmi2Instantiate(
+                name.as_ptr(),
+                1,
+                wrong.as_ptr(),
+                uri.as_ptr(),
+                std::ptr::null(),
+                0,
+                0,
+            );
+            assert!(none.is_null());
+            let c = fmi2Instantiate(
+                name.as_ptr(),
+                1,
+                guid.as_ptr(),
+                uri.as_ptr(),
+                std::ptr::null(),
+                0,
+                0,
+            );
+            assert!(!c.is_null());
+            assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 1, 1.0), 0);
+            assert_eq!(fmi2EnterInitializationMode(c), 0);
+            assert_eq!(fmi2ExitInitializationMode(c), 0);
+            assert_eq!(fmi2SetReal(c, &fx_vr, 1, &0.3), 0);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.05, 1), 0);
+            let mut state: Fmi2FmuState = std::ptr::null_mut();
+            assert_eq!(fmi2GetFMUstate(c, &mut state), 0);
+            let mut size = 0usize;
+            assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), 0);
+            let mut bytes = vec![0 as std::ffi::c_char; size];
+            assert_eq!(fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr(), size), 0);
+            let mut h_then = 0.0;
+            assert_eq!(fmi2GetReal(c, &h_vr, 1, &mut h_then), 0);
+            assert_eq!(fmi2DoStep(c, 0.05, 0.05, 1), 0);
+            let mut copy: Fmi2FmuState = std::ptr::null_mut();
+            assert_eq!(
+                fmi2DeSerializeFMUstate(c, bytes.as_ptr(), size, &mut copy),
+                0
+            );
+            assert_eq!(fmi2SetFMUstate(c, copy), 0);
+            let mut h_back = 0.0;
+            assert_eq!(fmi2GetReal(c, &h_vr, 1, &mut h_back), 0);
+            assert_eq!(h_back.to_bits(), h_then.to_bits());
+            let mut t = 0.0;
+            assert_eq!(fmi2GetRealStatus(c, 2, &mut t), 0);
+            assert_eq!(t, 0.05);
+            // Null arrays and other types are errors, not crashes.
+            assert_eq!(fmi2GetReal(c, std::ptr::null(), 1, &mut h_back), 3);
+            assert_eq!(fmi2GetInteger(c, &h_vr, 1, std::ptr::null_mut()), 3);
+            assert_eq!(fmi2DoStep(std::ptr::null_mut(), 0.0, 0.1, 1), 3);
+            assert_eq!(fmi2FreeFMUstate(c, &mut state), 0);
+            assert_eq!(fmi2FreeFMUstate(c, &mut copy), 0);
+            assert!(state.is_null() && copy.is_null());
+            assert_eq!(fmi2Terminate(c), 0);
+            fmi2FreeInstance(c);
+        }
+    }
+}
