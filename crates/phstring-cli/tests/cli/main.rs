@@ -4,6 +4,7 @@ mod accuracy;
 mod broken;
 mod control;
 mod examples;
+mod fmu;
 mod hardening_cli;
 mod hardening_io;
 mod network;
