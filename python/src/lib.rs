@@ -108,6 +108,8 @@ fn new_sim<const D: usize>(
     file: &ScenarioFile,
 ) -> PyResult<(Sim<D, Material>, f64, Vec<InputSlot>, usize)> {
     let mut v = file.validate::<D>().map_err(scenario_err)?;
+    // `initial.equilibrium`: start from the static equilibrium, as `phstring run` does.
+    phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(scenario_err)?;
     let t_end = v.settings.t_end;
     let stride = v.settings.stride.max(1);
     // Every load reads its slot first: `set_input` holds a value there.

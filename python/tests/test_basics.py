@@ -262,3 +262,15 @@ def test_progress_only_when_asked(tmp_path):
     shown = subprocess.run(["python3", "-c", code, str(PAPER), "1"], check=True, capture_output=True, text=True)
     assert quiet.stderr == ""
     assert "100 %" in shown.stderr
+
+
+def test_simulation_starts_at_the_equilibrium_when_asked():
+    """`initial.equilibrium = true` (the mooring line): `Simulation` starts where
+    `phstring run` does, at the static equilibrium, at rest."""
+    sc = phstring.Scenario.from_file(str(ROOT / "examples" / "mooring_line.toml"), set=["mesh.elements=40"])
+    eq = phstring.statics(sc)
+    sim = phstring.Simulation(sc)
+    assert np.array_equal(sim.r, eq["positions"])
+    assert sim.energies["kinetic"] == 0.0
+    # The straight line between anchor and fairlead would be 134 m; the line sags.
+    assert sim.r[:, 1].min() < -1.0

@@ -70,9 +70,10 @@ impl Ramp {
             to: x,
         }
     }
-    /// Position at time `t` [s].
+    /// Position at time `t` [s]; a step that ends within `1e-9` of the communication step
+    /// of its end (rounding of the step's end time) ends at `to` exactly.
     fn position(&self, t: f64) -> f64 {
-        if t >= self.t1 {
+        if t >= self.t1 - 1e-9 * (self.t1 - self.t0) {
             self.to
         } else if t <= self.t0 {
             self.from

@@ -32,7 +32,10 @@ fn the_pendulum_fmu_holds_description_library_and_scenario() {
     let o = fmu(&["examples/fmu/pendulum.toml", "-o", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let said = String::from_utf8_lossy(&o.stdout);
-    assert!(said.contains("2 inputs, 12 outputs, 3 parameters"), "{said}");
+    assert!(
+        said.contains("2 inputs, 12 outputs, 3 parameters"),
+        "{said}"
+    );
     let e = entries(&out);
     let names: Vec<&str> = e.iter().map(|(n, _)| n.as_str()).collect();
     let lib = format!(
@@ -42,14 +45,23 @@ fn the_pendulum_fmu_holds_description_library_and_scenario() {
     );
     assert_eq!(
         names,
-        ["modelDescription.xml", lib.as_str(), "resources/scenario.toml"]
+        [
+            "modelDescription.xml",
+            lib.as_str(),
+            "resources/scenario.toml"
+        ]
     );
     let scenario = std::fs::read(workspace_root().join("examples/fmu/pendulum.toml")).unwrap();
     assert_eq!(e[2].1, scenario, "the scenario is packaged as it is");
     // The library is a shared object of this build, with the FMI functions.
     let so = &e[1].1;
     assert!(so.len() > 100_000);
-    for f in ["fmi2Instantiate", "fmi2DoStep", "fmi2GetFMUstate", "fmi2SerializeFMUstate"] {
+    for f in [
+        "fmi2Instantiate",
+        "fmi2DoStep",
+        "fmi2GetFMUstate",
+        "fmi2SerializeFMUstate",
+    ] {
         assert!(
             so.windows(f.len()).any(|w| w == f.as_bytes()),
             "{f} is not in the library"
@@ -75,7 +87,10 @@ fn a_network_has_parameters_per_material() {
     let o = fmu(&["examples/platform_3d.toml", "-o", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let said = String::from_utf8_lossy(&o.stdout);
-    assert!(said.contains("EA.steel") && said.contains("rhoA.steel"), "{said}");
+    assert!(
+        said.contains("EA.steel") && said.contains("rhoA.steel"),
+        "{said}"
+    );
     assert!(said.contains("no inputs: mark a [[boundary]]"), "{said}");
 }
 
