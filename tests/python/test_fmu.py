@@ -193,7 +193,9 @@ def test_serialized_states_continue_bit_for_bit(pendulum):
     for n in range(10):
         a.setReal([vr["load0.F.x"], vr["load0.F.y"]], [0.3, 0.2])
         a.doStep(n * H, H)
-    blob = a.serializeFMUstate(a.getFMUState())
+    state = a.getFMUState()
+    blob = a.serializeFMUstate(state)
+    a.freeFMUState(state)
     first = []
     for n in range(10, 30):
         a.doStep(n * H, H)

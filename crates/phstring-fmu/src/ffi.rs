@@ -64,9 +64,10 @@ unsafe impl Send for CLogger {}
 impl CLogger {
     fn log(&self, status: Status, category: &str, message: &str) {
         let category = c_string(category);
-        // The message is the format string, its `%` doubled: a logger that formats prints
-        // it as it is, and so does one that ignores the variable arguments (FMPy's default).
-        let message = c_string(&message.replace('%', "%%"));
+        // The message is the format string (FMI 2.0 §2.1.5): `%` doubled for the printf-style
+        // formatting of the master's logger, `#` doubled since `#…#` marks a value
+        // reference. A logger that does not format shows the doubled characters.
+        let message = c_string(&message.replace('%', "%%").replace('#', "##"));
         // SAFETY: `f` is the master's logger, called with valid NUL-terminated strings and
         // no variable arguments (the format has no conversions).
         unsafe {
@@ -112,11 +113,15 @@ where
     match catch_unwind(AssertUnwindSafe(|| f(inst))) {
         Ok(s) => s as c_int,
         Err(_) => {
-            inst.log(
-                Status::Fatal,
-                "logStatusError",
-                "internal error (a panic in phstring); please report it with the scenario",
-            );
+            // The simulation may be half-updated: only getters, reset and free remain.
+            inst.poison();
+            let _ = catch_unwind(AssertUnwindSafe(|| {
+                inst.log(
+                    Status::Fatal,
+                    "logStatusError",
+                    "internal error (a panic in phstring); please report it with the scenario",
+                )
+            }));
             FATAL
         }
     }
@@ -519,8 +524,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
 }
 
 /// The serialized form of a saved state: JSON (floats in round-trip form).
-fn serialize(saved: &Saved) -> Vec<u8> {
-    serde_json::to_vec(saved).unwrap_or_default()
+fn serialize(saved: &Saved) -> Result<Vec<u8>, String> {
+    serde_json::to_vec(saved).map_err(|e| e.to_string())
 }
 
 /// `fmi2SerializedFMUstateSize`.
@@ -538,7 +543,11 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
             return i.refused("fmi2SerializedFMUstateSize: null argument");
         }
         // SAFETY: FMI contract.
-        unsafe { *size = serialize(&*(state as *const Saved)).len() };
+        match serialize(unsafe { &*(state as *const Saved) }) {
+            // SAFETY: FMI contract.
+            Ok(data) => unsafe { *size = data.len() },
+            Err(m) => return i.refused(&format!("fmi2SerializedFMUstateSize: {m}")),
+        }
         Status::Ok
     })
 }
@@ -559,7 +568,10 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
             return i.refused("fmi2SerializeFMUstate: null FMUstate");
         }
         // SAFETY: FMI contract.
-        let data = serialize(unsafe { &*(state as *const Saved) });
+        let data = match serialize(unsafe { &*(state as *const Saved) }) {
+            Ok(d) => d,
+            Err(m) => return i.refused(&format!("fmi2SerializeFMUstate: {m}")),
+        };
         // SAFETY: FMI contract.
         let Some(out) = (unsafe { slice_mut(bytes as *mut u8, size) }) else {
             return i.refused("fmi2SerializeFMUstate: null buffer");
@@ -597,8 +609,14 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
         }
         match serde_json::from_slice::<Saved>(data) {
             Ok(saved) => {
-                // SAFETY: FMI contract.
-                unsafe { *state = Box::into_raw(Box::new(saved)) as Fmi2FmuState };
+                // SAFETY: FMI contract: a non-null `*state` is a state of ours, reused.
+                unsafe {
+                    if (*state).is_null() {
+                        *state = Box::into_raw(Box::new(saved)) as Fmi2FmuState;
+                    } else {
+                        *(*state as *mut Saved) = saved;
+                    }
+                }
                 Status::Ok
             }
             Err(e) => i.refused(&format!(

@@ -145,6 +145,10 @@ struct Live {
     motions: Vec<Option<Arc<Mutex<Ramp>>>>,
     /// The first failure of a scenario expression during the run.
     expression_error: Arc<Mutex<Option<String>>>,
+    /// After `fmi2SetFMUstate`: the port variables' values at the saved point, by value
+    /// reference, served until the next internal step (the simulation's port samples are
+    /// those of its last step, not part of its checkpoint).
+    ports_saved: Option<Vec<Option<f64>>>,
 }
 
 /// A saved FMU state (`fmi2GetFMUstate`): the simulation's checkpoint and the instance's
@@ -153,7 +157,13 @@ struct Live {
 pub struct Saved {
     mode: Mode,
     values: Vec<f64>,
+    start_time: f64,
+    stop_time: Option<f64>,
+    /// The master's time [s].
+    time: f64,
     ramps: Vec<Option<Ramp>>,
+    /// The port variables' values by value reference (`None` for the others).
+    ports: Vec<Option<f64>>,
     sim: Option<SimState>,
 }
 
@@ -172,7 +182,20 @@ pub struct Instance {
     mode: Mode,
     start_time: f64,
     stop_time: Option<f64>,
+    /// The master's time: the end of the last communication step [s].
+    time: f64,
     live: Option<Live>,
+}
+
+/// Tolerance [s] for times near `t` [s] in a run with steps `h` [s]: the library's landing
+/// rule (`1e-9 h`) plus a few units of rounding of `t` itself.
+fn time_tol(h: f64, t: f64) -> f64 {
+    1e-9 * h + 8.0 * f64::EPSILON * t.abs()
+}
+
+/// Whether `q` is read from the simulation's port samples.
+fn is_port(q: Quantity) -> bool {
+    matches!(q, Quantity::PortOutput { .. } | Quantity::PortInput { .. })
 }
 
 /// A failed call: its status and the message logged.
@@ -213,6 +236,7 @@ impl Instance {
             mode: Mode::Instantiated,
             start_time: 0.0,
             stop_time: None,
+            time: 0.0,
             live: None,
         })
     }
@@ -297,6 +321,7 @@ impl Instance {
         }
         self.start_time = start;
         self.stop_time = stop;
+        self.time = start;
         Status::Ok
     }
 
@@ -339,14 +364,20 @@ impl Instance {
 
     /// Sets up the simulation if it is not yet (parameters are final from here on).
     fn ensure_live(&mut self) -> Result<(), Fail> {
-        if self.live.is_some() {
-            return Ok(());
+        if self.live.is_none() {
+            self.live = Some(self.build_live(&self.values)?);
         }
+        Ok(())
+    }
+
+    /// A simulation of the packaged scenario with the parameters and inputs in `values` (by
+    /// value reference).
+    fn build_live(&self, values: &[f64]) -> Result<Live, Fail> {
         let mut sets = Vec::new();
         for (vr, v) in self.spec.variables.iter().enumerate() {
             if let Quantity::Parameter(k) = v.quantity {
                 let p = &self.spec.parameters[k];
-                let x = self.values[vr];
+                let x = values[vr];
                 if x.to_bits() != p.value.to_bits() {
                     sets.push(format!("{}={x:?}", p.key));
                 }
@@ -354,7 +385,7 @@ impl Instance {
         }
         // The master chooses the stop time; `time.end` only has to fit the step size (a
         // whole number of steps), so it moves to the nearest multiple of a changed `h`.
-        let h = self.step_size();
+        let h = self.step_size(values);
         if h.to_bits() != self.spec.h.to_bits() {
             let n = (self.spec.t_end / h).round().max(1.0);
             sets.push(format!("time.end={:?}", n * h));
@@ -372,19 +403,20 @@ impl Instance {
         };
         let file = phstring_io::scenario::parse(&self.text, &self.path, &sets)
             .map_err(|e| error(e.to_string()))?;
-        let live = match self.spec.dimension {
-            1 => self.live_dim::<1>(&file),
-            2 => self.live_dim::<2>(&file),
-            _ => self.live_dim::<3>(&file),
+        match self.spec.dimension {
+            1 => self.live_dim::<1>(&file, values),
+            2 => self.live_dim::<2>(&file, values),
+            _ => self.live_dim::<3>(&file, values),
         }
-        .map_err(&error)?;
-        self.live = Some(live);
-        Ok(())
+        .map_err(&error)
     }
 
-    fn live_dim<const D: usize>(&self, file: &ScenarioFile) -> Result<Live, String> {
+    fn live_dim<const D: usize>(
+        &self,
+        file: &ScenarioFile,
+        values: &[f64],
+    ) -> Result<Live, String> {
         let mut v: Validated<D> = file.validate::<D>().map_err(|e| e.to_string())?;
-        phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
         let mut loads: Vec<Option<Held>> = vec![None; v.problem.boundary.loads.len()];
         let mut motions: Vec<Option<Arc<Mutex<Ramp>>>> =
             vec![None; v.problem.boundary.motions.len()];
@@ -392,7 +424,7 @@ impl Instance {
             match var.quantity {
                 Quantity::LoadForce { load, component } => {
                     let held = loads[load].get_or_insert_with(Held::default);
-                    lock(held)[component] = self.values[vr];
+                    lock(held)[component] = values[vr];
                 }
                 Quantity::MotionPosition { motion } => {
                     // Until the first step, the support rests where the scenario starts it.
@@ -417,6 +449,8 @@ impl Instance {
                 m.position = Arc::new(move |t| lock(&ramp).position(t));
             }
         }
+        // With `initial.equilibrium`, the equilibrium under the inputs as set now.
+        phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
         let expression_error = v.load_error.clone();
         let sim = Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
         let h0 = sim.energies().hamiltonian();
@@ -425,12 +459,25 @@ impl Instance {
             loads,
             motions,
             expression_error,
+            ports_saved: None,
         })
     }
 
     /// `fmi2SetReal`: parameters before initialization ends, inputs at any time before
-    /// termination. A refused value leaves everything as it was.
+    /// termination except after a discarded step. A refused value leaves everything as it
+    /// was.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        if matches!(self.mode, Mode::StepFailed | Mode::Terminated | Mode::Error) {
+            return self.refuse(format!(
+                "fmi2SetReal is not allowed now (the instance is {:?}{})",
+                self.mode,
+                if self.mode == Mode::StepFailed {
+                    ": restore a saved FMU state with fmi2SetFMUstate, or terminate"
+                } else {
+                    ""
+                }
+            ));
+        }
         for (&vr, &x) in vrs.iter().zip(values) {
             let Some(var) = self.spec.variables.get(vr as usize) else {
                 return self.refuse(format!(
@@ -457,12 +504,6 @@ impl Instance {
                     }
                 }
                 Causality::Input => {
-                    if matches!(self.mode, Mode::Terminated | Mode::Error) {
-                        return self.refuse(format!(
-                            "{name} cannot be set after the run ended ({:?})",
-                            self.mode
-                        ));
-                    }
                     if !x.is_finite() {
                         return self.refuse(format!("input {name} = {x} must be finite"));
                     }
@@ -470,28 +511,38 @@ impl Instance {
             }
         }
         for (&vr, &x) in vrs.iter().zip(values) {
-            if let Quantity::Parameter(_) = self.spec.variables[vr as usize].quantity {
-                // A changed parameter sets the simulation up anew.
-                self.live = None;
-            }
             self.values[vr as usize] = x;
+        }
+        // Before initialization ends the simulation is set up anew with these values (a
+        // parameter changes the system; an input changes a starting equilibrium).
+        if matches!(self.mode, Mode::Instantiated | Mode::Initialization) {
+            self.live = None;
         }
         Status::Ok
     }
 
-    /// `fmi2GetReal`.
+    /// `fmi2GetReal`: parameters and inputs at any time; outputs from initialization mode
+    /// on (and in the error state, for a look at where the run stopped).
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
-        if self.mode == Mode::Error {
-            return self.refuse("the instance is in the error state".into());
-        }
         let needs_live = vrs.iter().any(|&vr| {
             self.spec
                 .variables
                 .get(vr as usize)
                 .is_some_and(|v| v.causality == Causality::Output)
         });
-        if needs_live && let Err(e) = self.ensure_live() {
-            return self.fail(e);
+        if needs_live {
+            match self.mode {
+                Mode::Instantiated => {
+                    return self
+                        .refuse("outputs can be read from fmi2EnterInitializationMode on".into());
+                }
+                Mode::Error | Mode::Terminated => {}
+                _ => {
+                    if let Err(e) = self.ensure_live() {
+                        return self.fail(e);
+                    }
+                }
+            }
         }
         for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
             let Some(var) = self.spec.variables.get(vr as usize) else {
@@ -500,31 +551,36 @@ impl Instance {
                     self.spec.variables.len().saturating_sub(1)
                 ));
             };
-            *slot = match var.causality {
-                Causality::Output => match &self.live {
-                    Some(l) => l.stepper.value(var.quantity),
-                    None => f64::NAN,
+            *slot = match (var.causality, &self.live) {
+                (Causality::Output, Some(l)) => match &l.ports_saved {
+                    Some(saved) if is_port(var.quantity) => saved[vr as usize].unwrap_or(f64::NAN),
+                    _ => l.stepper.value(var.quantity),
                 },
+                (Causality::Output, None) => f64::NAN,
                 _ => self.values[vr as usize],
             };
         }
         Status::Ok
     }
 
-    /// The internal step size `h` [s] (the parameter's current value).
-    fn step_size(&self) -> f64 {
+    /// The internal step size `h` [s] in `values` (by value reference).
+    fn step_size(&self, values: &[f64]) -> f64 {
         self.spec
             .variables
             .iter()
             .position(|v| {
                 matches!(v.quantity, Quantity::Parameter(k) if self.spec.parameters[k].key == "time.h")
             })
-            .map_or(self.spec.h, |vr| self.values[vr])
+            .map_or(self.spec.h, |vr| values[vr])
     }
 
-    /// The time the FMU is at, on the master's clock [s].
+    /// The time the FMU is at, on the master's clock [s]: the end of the last communication
+    /// step, or after a discarded step the last internal step completed.
     pub fn time(&self) -> f64 {
-        self.start_time + self.live.as_ref().map_or(0.0, |l| l.stepper.time())
+        match (&self.live, self.mode) {
+            (Some(l), Mode::StepFailed) => self.start_time + l.stepper.time(),
+            _ => self.time,
+        }
     }
 
     /// `fmi2DoStep(t, H)`: internal steps of at most the parameter `h` to reach `t + H`,
@@ -543,16 +599,16 @@ impl Instance {
                 "the communication step size must be positive and finite, got {comm_h}"
             ));
         }
-        let h = self.step_size();
-        let now = self.time();
-        let off = (t - now).abs();
-        if off.is_nan() || off > 1e-6 * h.min(comm_h) {
+        let h = self.step_size(&self.values);
+        let off = (t - self.time).abs();
+        if off.is_nan() || off > time_tol(h, self.time) {
             return self.refuse(format!(
-                "fmi2DoStep at currentCommunicationPoint = {t} s, but the FMU is at t = {now} s"
+                "fmi2DoStep at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
+                self.time
             ));
         }
         if let Some(stop) = self.stop_time
-            && t + comm_h > stop + 1e-9 * comm_h.max(h)
+            && t + comm_h > stop + time_tol(h, stop)
         {
             return self.refuse(format!(
                 "fmi2DoStep to t = {} s passes stopTime = {stop} s",
@@ -587,35 +643,40 @@ impl Instance {
                 _ => {}
             }
         }
-        while live.stepper.time() < target - 1e-9 * h {
-            if let Err(e) = live.stepper.step_until(target) {
-                let expression = lock(&live.expression_error).take();
-                let at = self.start_time + live.stepper.time();
-                return match expression {
-                    Some(why) => self.fail((
-                        Status::Error,
-                        format!("{e}; a scenario expression failed: {why}"),
-                    )),
-                    None => {
-                        self.mode = Mode::StepFailed;
-                        self.fail((
-                            Status::Discard,
-                            format!(
-                                "{e}; the FMU stays at t = {at} s, the last internal step it completed (fmi2GetRealStatus(fmi2LastSuccessfulTime))"
-                            ),
-                        ))
-                    }
-                };
+        // A communication step shorter than the landing tolerance moves only the clock.
+        while live.stepper.time() < target - time_tol(h, target) {
+            match live.stepper.step_until(target) {
+                Ok(()) => live.ports_saved = None,
+                Err(e) => {
+                    let expression = lock(&live.expression_error).take();
+                    let at = self.start_time + live.stepper.time();
+                    return match expression {
+                        Some(why) => self.fail((
+                            Status::Error,
+                            format!("{e}; a scenario expression failed: {why}"),
+                        )),
+                        None => {
+                            self.mode = Mode::StepFailed;
+                            self.fail((
+                                Status::Discard,
+                                format!(
+                                    "{e}; the FMU stays at t = {at} s, the last internal step it completed (fmi2GetRealStatus(fmi2LastSuccessfulTime))"
+                                ),
+                            ))
+                        }
+                    };
+                }
             }
         }
+        self.time = t + comm_h;
         Status::Ok
     }
 
     /// `fmi2Terminate`.
     pub fn terminate(&mut self) -> Status {
-        if matches!(self.mode, Mode::Instantiated | Mode::Initialization) {
+        if !matches!(self.mode, Mode::StepComplete | Mode::StepFailed) {
             return self.refuse(format!(
-                "fmi2Terminate before initialization ended (the instance is {:?})",
+                "fmi2Terminate is allowed only after initialization (the instance is {:?})",
                 self.mode
             ));
         }
@@ -634,73 +695,108 @@ impl Instance {
         self.mode = Mode::Instantiated;
         self.start_time = 0.0;
         self.stop_time = None;
+        self.time = 0.0;
         self.live = None;
         Status::Ok
     }
 
+    /// Puts the instance in the error state after an internal failure (a caught panic):
+    /// only getters, reset and free remain.
+    pub fn poison(&mut self) {
+        self.mode = Mode::Error;
+    }
+
     /// `fmi2GetFMUstate`: everything needed to continue from here (bit for bit).
     pub fn save(&self) -> Result<Saved, String> {
-        if matches!(self.mode, Mode::Error) {
-            return Err("the instance is in the error state".into());
-        }
+        let ports = self
+            .spec
+            .variables
+            .iter()
+            .enumerate()
+            .map(|(vr, v)| match &self.live {
+                Some(l) if is_port(v.quantity) => match &l.ports_saved {
+                    Some(saved) => saved[vr],
+                    None => Some(l.stepper.value(v.quantity)),
+                },
+                _ => None,
+            })
+            .collect();
         Ok(Saved {
             mode: self.mode,
             values: self.values.clone(),
+            start_time: self.start_time,
+            stop_time: self.stop_time,
+            time: self.time(),
             ramps: self.live.as_ref().map_or_else(Vec::new, |l| {
                 l.motions
                     .iter()
                     .map(|r| r.as_ref().map(|r| *lock(r)))
                     .collect()
             }),
+            ports,
             sim: self.live.as_ref().map(|l| l.stepper.save()),
         })
     }
 
     /// `fmi2SetFMUstate`: continues from `saved`, taken from an instance of the same FMU.
+    /// If it cannot be restored, the instance stays as it was.
     pub fn restore(&mut self, saved: &Saved) -> Status {
-        if saved.values.len() != self.values.len() {
+        let n = self.values.len();
+        if saved.values.len() != n || (!saved.ports.is_empty() && saved.ports.len() != n) {
             return self.refuse(format!(
-                "the FMU state has {} values, this FMU {}: it is of another FMU",
-                saved.values.len(),
-                self.values.len()
+                "the FMU state has {} values, this FMU {n}: it is of another FMU",
+                saved.values.len()
             ));
         }
-        let values = std::mem::replace(&mut self.values, saved.values.clone());
-        let same_parameters = self
-            .spec
-            .variables
-            .iter()
-            .zip(values.iter().zip(&self.values))
-            .all(|(v, (a, b))| v.causality != Causality::Parameter || a.to_bits() == b.to_bits());
-        if !same_parameters {
-            self.live = None;
-        }
-        let result = match &saved.sim {
-            None => {
-                self.live = None;
-                Ok(())
-            }
-            Some(state) => self.ensure_live().map_err(|(_, m)| m).and_then(|()| {
-                let live = self.live.as_mut().expect("just set up");
-                for (slot, ramp) in live.motions.iter().zip(&saved.ramps) {
+        let live = match &saved.sim {
+            None => None,
+            Some(state) => {
+                let same_parameters = self.live.is_some()
+                    && self
+                        .spec
+                        .variables
+                        .iter()
+                        .zip(self.values.iter().zip(&saved.values))
+                        .all(|(v, (a, b))| {
+                            v.causality != Causality::Parameter || a.to_bits() == b.to_bits()
+                        });
+                // The running simulation if its parameters are the saved ones (kept as it is
+                // until the saved state is in), else a new one with the saved parameters.
+                let mut live = match same_parameters {
+                    true => None,
+                    false => match self.build_live(&saved.values) {
+                        Ok(l) => Some(l),
+                        Err((_, m)) => {
+                            return self.refuse(format!("cannot restore the FMU state: {m}"));
+                        }
+                    },
+                };
+                let target = match live.as_mut() {
+                    Some(l) => l,
+                    None => self.live.as_mut().expect("checked above"),
+                };
+                let before = target.stepper.save();
+                if let Err(m) = target.stepper.load(state) {
+                    // A failed load may have changed the running simulation: put it back.
+                    let _ = target.stepper.load(&before);
+                    return self.refuse(format!("cannot restore the FMU state: {m}"));
+                }
+                for (slot, ramp) in target.motions.iter().zip(&saved.ramps) {
                     if let (Some(slot), Some(ramp)) = (slot, ramp) {
                         *lock(slot) = *ramp;
                     }
                 }
-                live.stepper.load(state)
-            }),
+                target.ports_saved = (!saved.ports.is_empty()).then(|| saved.ports.clone());
+                Some(live.unwrap_or_else(|| self.live.take().expect("checked above")))
+            }
         };
-        match result {
-            Ok(()) => {
-                self.mode = saved.mode;
-                Status::Ok
-            }
-            Err(m) => {
-                self.values = values;
-                self.live = None;
-                self.refuse(format!("cannot restore the FMU state: {m}"))
-            }
-        }
+        self.live = live;
+        self.values = saved.values.clone();
+        self.mode = saved.mode;
+        self.start_time = saved.start_time;
+        self.stop_time = saved.stop_time;
+        self.time = saved.time;
+        Status::Ok
     }
 }
 

@@ -200,6 +200,26 @@ impl ModelSpec {
                 continue;
             }
             let at_zero = (load.force)(0.0);
+            if let Some(i) = (0..D).find(|&i| !at_zero[i].is_finite()) {
+                // The k-th table with a `force` is load k.
+                let (j, spec) = s
+                    .boundary
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, b)| b.force.is_some())
+                    .nth(k)
+                    .expect("one table per load");
+                let key = format!("boundary.{j}.force");
+                let span = spec.force.as_ref().map_or(0..0, |f| f.span());
+                return Err(ScenarioError::Invalid {
+                    origin: file.origin(&key, span),
+                    key,
+                    reason: format!(
+                        "component {} is {} at t = 0, the start value of the FMU input load{k}.F.{}: an input starts at a finite force",
+                        AXES[i], at_zero[i], AXES[i]
+                    ),
+                });
+            }
             for i in 0..D {
                 vars.push(Variable {
                     name: format!("load{k}.F.{}", AXES[i]),

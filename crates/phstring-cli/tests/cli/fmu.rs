@@ -97,7 +97,7 @@ fn a_network_has_parameters_per_material() {
 #[test]
 fn refusals_name_the_problem_and_write_nothing() {
     let dir = temp_dir("fmu-refusals");
-    let cases: [(Vec<String>, &str); 5] = [
+    let cases: [(Vec<String>, &str); 6] = [
         (
             vec!["-o".into(), dir.join("2d-crane.fmu").display().to_string()],
             "must be a C identifier",
@@ -132,6 +132,15 @@ fn refusals_name_the_problem_and_write_nothing() {
                 "fmu.nodes=[3, -28]".into(),
             ],
             "fmu.nodes.1",
+        ),
+        (
+            vec![
+                "-o".into(),
+                dir.join("crane.fmu").display().to_string(),
+                "--set".into(),
+                "boundary.1.force=[\"1/t\", \"0\"]".into(),
+            ],
+            "the start value of the FMU input load0.F.x",
         ),
     ];
     for (args, needle) in cases {
