@@ -23,9 +23,10 @@ import damping_master  # noqa: E402  (the example's master, tested here)
 H = 0.01  # s, the pendulum's time.h
 
 
-def build(tmp_path, scenario, name, *sets):
+def build(tmp_path, scenario, name, *sets, version="2"):
     out = tmp_path / f"{name}.fmu"
-    args = [BIN, "fmu", str(ROOT / "examples" / "fmu" / scenario), "-o", str(out), "--quiet"]
+    args = [BIN, "fmu", str(ROOT / "examples" / "fmu" / scenario), "-o", str(out), "--quiet",
+            "--fmi-version", version]
     for s in sets:
         args += ["--set", s]
     subprocess.run(args, check=True, capture_output=True)
@@ -35,6 +36,13 @@ def build(tmp_path, scenario, name, *sets):
 @pytest.fixture(scope="module")
 def pendulum(tmp_path_factory):
     return build(tmp_path_factory.mktemp("fmu"), "pendulum.toml", "pendulum")
+
+
+@pytest.fixture(scope="module", params=["2", "3"])
+def pendulum_any(request, tmp_path_factory):
+    """The pendulum's FMU in FMI 2.0 and in FMI 3.0 (one shared library serves both)."""
+    v = request.param
+    return build(tmp_path_factory.mktemp(f"fmi{v}"), "pendulum.toml", f"pendulum{v}", version=v)
 
 
 @pytest.fixture(scope="module")
@@ -56,21 +64,26 @@ def columns(path):
 
 
 class Log:
-    """Collects the FMU's log messages (FMPy logger callback)."""
+    """Collects the FMU's log messages (FMPy logger callback; FMI 3.0's has no instance
+    name)."""
 
-    def __init__(self):
+    def __init__(self, fmi="fmi2"):
         self.messages = []
+        self.fmi = fmi
 
-    def __call__(self, component, instance, status, category, message):
+    def __call__(self, *args):
+        status, message = (args[1], args[3]) if self.fmi == "fmi3" else (args[2], args[4])
         self.messages.append((status, message.decode()))
 
 
-def test_validates_and_describes_its_variables(pendulum):
-    assert validate_fmu(str(pendulum)) == []
-    md = read_model_description(str(pendulum))
-    assert md.fmiVersion == "2.0"
+def test_validates_and_describes_its_variables(pendulum_any):
+    assert validate_fmu(str(pendulum_any)) == []
+    md = read_model_description(str(pendulum_any))
+    assert md.fmiVersion in ("2.0", "3.0")
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
     v = {x.name: x for x in md.modelVariables}
+    if md.fmiVersion == "3.0":
+        assert (v["time"].causality, v["time"].type) == ("independent", "Float64")
     assert (v["EA"].causality, v["EA"].unit, float(v["EA"].start)) == ("parameter", "N", 20.0)
     assert (v["rhoA"].unit, v["h"].unit, float(v["h"].start)) == ("kg/m", "s", 0.01)
     assert (v["load0.F.x"].causality, v["load0.F.x"].unit) == ("input", "N")
@@ -84,7 +97,7 @@ def signal(t, fx, fy):
                                                    ("load0.F.y", np.float64)])
 
 
-def test_same_energy_as_phstring_run_bit_for_bit(pendulum, run_dir):
+def test_same_energy_as_phstring_run_bit_for_bit(pendulum_any, run_dir):
     """H = h and, as the input, the tip force the run applied in step n (its pulse at the
     mid-step t_n + h/2, from ports.csv), set at the communication point t_n: the run samples
     loads at the mid-step, the FMU holds the value set at t_n over [t_n, t_n + H]."""
@@ -92,7 +105,7 @@ def test_same_energy_as_phstring_run_bit_for_bit(pendulum, run_dir):
     tip = ports["port"] == 0
     ux, uy = ports["u_x"][tip], ports["u_y"][tip]
     t = np.arange(0.0, 1.0 + H / 2, H)
-    res = simulate_fmu(str(pendulum), stop_time=1.0, output_interval=H,
+    res = simulate_fmu(str(pendulum_any), stop_time=1.0, output_interval=H,
                        input=signal(t, np.append(ux, 0.0), np.append(uy, 0.0)),
                        output=["H", "T", "supplied", "balance_error"])
     energy = columns(run_dir / "energy.csv")
@@ -106,7 +119,7 @@ def test_same_energy_as_phstring_run_bit_for_bit(pendulum, run_dir):
     # last bit at some steps (3e-16 N); the energies then agree to rounding, not bit for bit.
     tm = t + H / 2
     pulse = np.where(tm <= 0.2, np.sin(np.pi * tm / 0.2), 0.0)
-    res2 = simulate_fmu(str(pendulum), stop_time=1.0, output_interval=H, input=signal(t, pulse, pulse),
+    res2 = simulate_fmu(str(pendulum_any), stop_time=1.0, output_interval=H, input=signal(t, pulse, pulse),
                         output=["H"])
     assert np.abs(res2["H"] - energy["hamiltonian"]).max() <= 1e-13
 
@@ -126,15 +139,17 @@ def test_closed_loop_damping_injection_comes_to_rest(tmp_path):
     assert abs((r["H"][-1] - r["H"][0]) - r["supplied"][-1]) <= 1e-12 * np.abs(r["H"]).max()
 
 
-def test_a_bad_parameter_is_refused_with_its_name(pendulum):
-    log = Log()
-    with pytest.raises(Exception, match="fmi2SetReal"):
-        simulate_fmu(str(pendulum), stop_time=0.1, start_values={"EA": -1.0}, logger=log)
+def test_a_bad_parameter_is_refused_with_its_name(pendulum_any):
+    fmi = "fmi3" if read_model_description(str(pendulum_any)).fmiVersion == "3.0" else "fmi2"
+    log = Log(fmi)
+    setter = "fmi3SetFloat64" if fmi == "fmi3" else "fmi2SetReal"
+    with pytest.raises(Exception, match=setter):
+        simulate_fmu(str(pendulum_any), stop_time=0.1, start_values={"EA": -1.0}, logger=log)
     assert any(s == 3 and "EA = -1" in m for s, m in log.messages), log.messages
     # Positive, but it does not fit the scenario: refused when the simulation is set up.
-    log = Log()
-    with pytest.raises(Exception, match="fmi2ExitInitializationMode"):
-        simulate_fmu(str(pendulum), stop_time=0.1, start_values={"h": 1e-300}, logger=log)
+    log = Log(fmi)
+    with pytest.raises(Exception, match=f"{fmi}ExitInitializationMode"):
+        simulate_fmu(str(pendulum_any), stop_time=0.1, start_values={"h": 1e-300}, logger=log)
     assert any(s == 3 and "time.h" in m for s, m in log.messages), log.messages
 
 
@@ -210,3 +225,35 @@ def test_serialized_states_continue_bit_for_bit(pendulum):
     for s in (a, b):
         s.terminate()
         s.freeInstance()
+
+
+def test_fmi3_a_diverging_step_stops_the_master(tmp_path):
+    """FMI 3.0: a discarded step sets terminateSimulation and lastSuccessfulTime."""
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu = build(tmp_path, "pendulum.toml", "pendulum3", version="3")
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu)),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t3")
+    s.instantiate()
+    s.enterInitializationMode(startTime=0.0)
+    s.exitInitializationMode()
+    s.setFloat64([vr["load0.F.x"]], [0.2])
+    s.doStep(0.0, 0.05)
+    assert s.getFloat64([vr["time"]])[0] == 0.05
+    state = s.getFMUState()
+    s.setFloat64([vr["load0.F.x"]], [1e160])
+    with pytest.raises(Exception) as e:
+        s.doStep(0.05, 0.01)
+    assert getattr(e.value, "status", None) == 2
+    s.setFMUState(state)
+    s.setFloat64([vr["load0.F.x"]], [0.2])
+    event, terminate, early, last = s.doStep(0.05, 0.01)
+    assert (event, terminate, early) == (False, False, False)
+    assert last == pytest.approx(0.06, abs=1e-15)
+    assert abs(s.getFloat64([vr["balance_error"]])[0]) <= 1e-12
+    s.freeFMUState(state)
+    s.terminate()
+    s.freeInstance()

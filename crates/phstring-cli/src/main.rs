@@ -180,7 +180,7 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
     },
-    /// Build an FMI 2.0 Co-Simulation FMU of a scenario: its ports (external = true) as
+    /// Build an FMI 2.0 (or 3.0) Co-Simulation FMU of a scenario: its ports (external = true) as
     /// inputs, port outputs, energies and listed node positions as outputs, EA, ρA and h as
     /// parameters.
     Fmu {
@@ -196,6 +196,9 @@ enum Command {
         /// $PHSTRING_FMU_LIBRARY).
         #[arg(long, value_name = "PATH")]
         library: Option<PathBuf>,
+        /// FMI version: 2 (2.0, the version most tools import) or 3 (3.0).
+        #[arg(long = "fmi-version", value_name = "2|3", default_value = "2", value_parser = ["2", "3"])]
+        fmi_version: String,
     },
 }
 
@@ -366,7 +369,15 @@ fn dispatch(cli: Cli) -> Result<()> {
             out,
             sets,
             library,
-        } => fmu(&scenario, &out, &sets, library),
+            fmi_version,
+        } => {
+            let version = if fmi_version == "3" {
+                phstring_fmu::package::FmiVersion::V3
+            } else {
+                phstring_fmu::package::FmiVersion::V2
+            };
+            fmu(&scenario, &out, &sets, library, version)
+        }
         Command::Modes {
             scenario,
             count,
@@ -681,7 +692,13 @@ fn sweep(
 }
 
 /// `phstring fmu`: the FMI 2.0 Co-Simulation FMU of a scenario.
-fn fmu(path: &Path, out: &Path, sets: &[String], library: Option<PathBuf>) -> Result<()> {
+fn fmu(
+    path: &Path,
+    out: &Path,
+    sets: &[String],
+    library: Option<PathBuf>,
+    version: phstring_fmu::package::FmiVersion,
+) -> Result<()> {
     use phstring_fmu::{model::ModelSpec, package};
     if out.extension().and_then(|e| e.to_str()) != Some("fmu") {
         bail!(
@@ -721,14 +738,19 @@ fn fmu(path: &Path, out: &Path, sets: &[String], library: Option<PathBuf>) -> Re
             }
         }
     };
-    package::write_fmu(&file, &spec, &identifier, &library, out)?;
+    package::write_fmu(&file, &spec, &identifier, &library, out, version)?;
     let count = |c: phstring_fmu::model::Causality| {
         spec.variables.iter().filter(|v| v.causality == c).count()
     };
     use phstring_fmu::model::Causality as C;
     say!(
-        "wrote {} (FMI 2.0 Co-Simulation, model identifier {identifier}): {} inputs, {} outputs, {} parameters",
+        "wrote {} (FMI {} Co-Simulation, model identifier {identifier}): {} inputs, {} outputs, {} parameters",
         out.display(),
+        if version == package::FmiVersion::V3 {
+            "3.0"
+        } else {
+            "2.0"
+        },
         count(C::Input),
         count(C::Output),
         count(C::Parameter)

@@ -91,7 +91,7 @@ fn c_string(s: &str) -> CString {
 ///
 /// # Safety
 /// `p` is null or a NUL-terminated string valid for the call.
-unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
+pub(crate) unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
     if p.is_null() {
         return None;
     }
@@ -131,7 +131,7 @@ where
 ///
 /// # Safety
 /// `p` points to `n` valid elements, or `n == 0`.
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+pub(crate) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         return Some(&[]);
     }
@@ -146,7 +146,7 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
 ///
 /// # Safety
 /// As [`slice`], and the elements are writable and not aliased.
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         return Some(&mut []);
     }

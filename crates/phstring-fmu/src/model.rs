@@ -442,26 +442,7 @@ impl ModelSpec {
             "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\"/>\n",
             escape(model_identifier)
         ));
-        x.push_str("  <UnitDefinitions>\n");
-        for (unit, base) in UNITS {
-            x.push_str(&format!(
-                "    <Unit name=\"{unit}\"><BaseUnit {base}/></Unit>\n"
-            ));
-        }
-        x.push_str("  </UnitDefinitions>\n");
-        x.push_str("  <LogCategories>\n");
-        for (name, what) in LOG_CATEGORIES {
-            x.push_str(&format!(
-                "    <Category name=\"{name}\" description=\"{}\"/>\n",
-                escape(what)
-            ));
-        }
-        x.push_str("  </LogCategories>\n");
-        x.push_str(&format!(
-            "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>\n",
-            num(self.t_end),
-            num(self.h)
-        ));
+        x.push_str(&self.common_sections());
         x.push_str("  <ModelVariables>\n");
         for (vr, v) in self.variables.iter().enumerate() {
             let (causality, variability, initial) = match v.causality {
@@ -503,6 +484,101 @@ impl ModelSpec {
                 x.push_str(&format!("      <Unknown index=\"{}\"/>\n", i + 1));
             }
             x.push_str("    </InitialUnknowns>\n");
+        }
+        x.push_str("  </ModelStructure>\n");
+        x.push_str("</fmiModelDescription>\n");
+        x
+    }
+}
+
+impl ModelSpec {
+    /// The value reference of the independent variable `time` in FMI 3.0 (after all others).
+    pub fn time_reference(&self) -> u32 {
+        self.variables.len() as u32
+    }
+
+    /// Units, log categories and the default experiment: the same elements in FMI 2.0 and
+    /// 3.0.
+    fn common_sections(&self) -> String {
+        let mut x = String::from("  <UnitDefinitions>\n");
+        for (unit, base) in UNITS {
+            x.push_str(&format!(
+                "    <Unit name=\"{unit}\"><BaseUnit {base}/></Unit>\n"
+            ));
+        }
+        x.push_str("  </UnitDefinitions>\n");
+        x.push_str("  <LogCategories>\n");
+        for (name, what) in LOG_CATEGORIES {
+            x.push_str(&format!(
+                "    <Category name=\"{name}\" description=\"{}\"/>\n",
+                escape(what)
+            ));
+        }
+        x.push_str("  </LogCategories>\n");
+        x.push_str(&format!(
+            "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>\n",
+            num(self.t_end),
+            num(self.h)
+        ));
+        x
+    }
+
+    /// `modelDescription.xml` for FMI 3.0 Co-Simulation with the shared library
+    /// `model_identifier`: the same variables as FMI 2.0 (`Float64`), plus the independent
+    /// variable `time` (value reference [`Self::time_reference`]).
+    pub fn model_description_fmi3(&self, model_identifier: &str) -> String {
+        let mut x = String::new();
+        x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        x.push_str(&format!(
+            "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"{}\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"phstring {}\" variableNamingConvention=\"flat\">\n",
+            escape(&self.model_name),
+            self.guid,
+            escape(&format!(
+                "Port-Hamiltonian string (dimension {}): exact energy balance through its ports",
+                self.dimension
+            )),
+            env!("CARGO_PKG_VERSION")
+        ));
+        x.push_str(&format!(
+            "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\" hasEventMode=\"false\" providesIntermediateUpdate=\"false\" canReturnEarlyAfterIntermediateUpdate=\"false\" maxOutputDerivativeOrder=\"0\"/>\n",
+            escape(model_identifier)
+        ));
+        x.push_str(&self.common_sections());
+        x.push_str("  <ModelVariables>\n");
+        x.push_str(&format!(
+            "    <Float64 name=\"time\" valueReference=\"{}\" causality=\"independent\" variability=\"continuous\" description=\"simulation time\" unit=\"s\"/>\n",
+            self.time_reference()
+        ));
+        for (vr, v) in self.variables.iter().enumerate() {
+            let (causality, variability, initial) = match v.causality {
+                Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
+                Causality::Input => ("input", "continuous", ""),
+                Causality::Output => ("output", "continuous", " initial=\"calculated\""),
+            };
+            let start = v
+                .start
+                .map_or_else(String::new, |s| format!(" start=\"{}\"", num(s)));
+            let min = match v.quantity {
+                Quantity::Parameter(_) => " min=\"0\"",
+                _ => "",
+            };
+            x.push_str(&format!(
+                "    <Float64 name=\"{}\" valueReference=\"{vr}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial} unit=\"{}\"{min}{start}/>\n",
+                escape(&v.name),
+                escape(&v.description),
+                escape(v.unit)
+            ));
+        }
+        x.push_str("  </ModelVariables>\n");
+        x.push_str("  <ModelStructure>\n");
+        let outputs: Vec<usize> = (0..self.variables.len())
+            .filter(|&i| self.variables[i].causality == Causality::Output)
+            .collect();
+        for &i in &outputs {
+            x.push_str(&format!("    <Output valueReference=\"{i}\"/>\n"));
+        }
+        for &i in &outputs {
+            x.push_str(&format!("    <InitialUnknown valueReference=\"{i}\"/>\n"));
         }
         x.push_str("  </ModelStructure>\n");
         x.push_str("</fmiModelDescription>\n");

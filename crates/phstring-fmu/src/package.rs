@@ -24,6 +24,43 @@ pub fn platform() -> Option<(&'static str, &'static str)> {
     }
 }
 
+/// The FMI 3.0 platform tuple (`x86_64-linux`, …) of this build's target, if FMI 3.0 names
+/// one.
+pub fn platform_fmi3() -> Option<&'static str> {
+    let arch = match std::env::consts::ARCH {
+        "x86_64" => "x86_64",
+        "aarch64" => "aarch64",
+        "x86" => "x86",
+        _ => return None,
+    };
+    let os = match std::env::consts::OS {
+        "linux" => "linux",
+        "macos" => "darwin",
+        "windows" => "windows",
+        _ => return None,
+    };
+    // Only the tuples the standard lists.
+    Some(match (arch, os) {
+        ("x86_64", "linux") => "x86_64-linux",
+        ("aarch64", "linux") => "aarch64-linux",
+        ("x86", "linux") => "x86-linux",
+        ("x86_64", "darwin") => "x86_64-darwin",
+        ("aarch64", "darwin") => "aarch64-darwin",
+        ("x86_64", "windows") => "x86_64-windows",
+        ("x86", "windows") => "x86-windows",
+        _ => return None,
+    })
+}
+
+/// The FMI version of an FMU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FmiVersion {
+    /// FMI 2.0 (the default: the version most tools import).
+    V2,
+    /// FMI 3.0.
+    V3,
+}
+
 /// File name of this crate's shared library as Cargo builds it (`libphstring_fmu.so`, …).
 pub fn library_file_name() -> String {
     format!(
@@ -70,26 +107,42 @@ impl std::fmt::Display for PackageError {
 
 impl std::error::Error for PackageError {}
 
-/// Writes the FMU of `file` (variables `spec`) with the shared library `library` to `out`.
-/// The archive is written to a temporary file next to `out` and renamed into place, so `out`
-/// is either the complete FMU or untouched.
+/// Writes the FMU (FMI `version`) of `file` (variables `spec`) with the shared library
+/// `library` to `out`. The archive is written to a temporary file next to `out` and renamed
+/// into place, so `out` is either the complete FMU or untouched.
 pub fn write_fmu(
     file: &ScenarioFile,
     spec: &ModelSpec,
     identifier: &str,
     library: &Path,
     out: &Path,
+    version: FmiVersion,
 ) -> Result<(), PackageError> {
-    let (folder, ext) = platform().ok_or_else(|| {
-        PackageError("FMI 2.0 names no binaries folder for this operating system".into())
-    })?;
+    let no_platform = || {
+        PackageError(format!(
+            "FMI {} names no binaries folder for this platform",
+            if version == FmiVersion::V2 {
+                "2.0"
+            } else {
+                "3.0"
+            }
+        ))
+    };
+    let (folder2, ext) = platform().ok_or_else(no_platform)?;
+    let folder = match version {
+        FmiVersion::V2 => folder2,
+        FmiVersion::V3 => platform_fmi3().ok_or_else(no_platform)?,
+    };
     let lib = std::fs::read(library).map_err(|e| {
         PackageError(format!(
             "cannot read the FMU library {}: {e}",
             library.display()
         ))
     })?;
-    let description = spec.model_description(identifier);
+    let description = match version {
+        FmiVersion::V2 => spec.model_description(identifier),
+        FmiVersion::V3 => spec.model_description_fmi3(identifier),
+    };
     let dir = out
         .parent()
         .filter(|p| !p.as_os_str().is_empty())

@@ -596,3 +596,150 @@ fn restored_states_report_their_own_port_outputs_and_a_failed_restore_changes_no
     assert_eq!(a.mode(), Mode::StepComplete);
     assert_eq!(a.do_step(t, 0.01), Status::Ok);
 }
+
+mod fmi3_functions {
+    //! The FMI 3.0 functions of the same library, called as a master would.
+    #![allow(unsafe_code)]
+
+    use super::*;
+    use phstring_fmu::ffi3::*;
+    use std::ffi::CString;
+
+    #[test]
+    fn a_master_s_calls() {
+        let text = pendulum_text();
+        let spec = spec_of(&text);
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("scenario.toml"), &text).unwrap();
+        let resources = CString::new(format!("{}/", dir.path().display())).unwrap();
+        let name = CString::new("c3").unwrap();
+        let token = CString::new(spec.guid.clone()).unwrap();
+        let vr = |n: &str| spec.variables.iter().position(|v| v.name == n).unwrap() as u32;
+        let (h_vr, fx_vr, time_vr) = (vr("H"), vr("load0.F.x"), spec.time_reference());
+        unsafe {
+            let c = fmi3InstantiateCoSimulation(
+                name.as_ptr(),
+                token.as_ptr(),
+                resources.as_ptr(),
+                false,
+                false,
+                false,
+                false,
+                std::ptr::null(),
+                0,
+                std::ptr::null_mut(),
+                None,
+                std::ptr::null(),
+            );
+            assert!(!c.is_null());
+            assert_eq!(
+                fmi3EnterInitializationMode(c, false, 0.0, 0.0, true, 1.0),
+                0
+            );
+            assert_eq!(fmi3ExitInitializationMode(c), 0);
+            assert_eq!(fmi3SetFloat64(c, &fx_vr, 1, &0.3, 1), 0);
+            assert_eq!(
+                fmi3SetFloat64(c, &time_vr, 1, &0.3, 1),
+                3,
+                "time cannot be set"
+            );
+            let (mut event, mut terminate, mut early, mut last) = (true, true, true, 0.0);
+            assert_eq!(
+                fmi3DoStep(
+                    c,
+                    0.0,
+                    0.05,
+                    false,
+                    &mut event,
+                    &mut terminate,
+                    &mut early,
+                    &mut last
+                ),
+                0
+            );
+            assert_eq!((event, terminate, early, last), (false, false, false, 0.05));
+            let mut t = 0.0;
+            assert_eq!(fmi3GetFloat64(c, &time_vr, 1, &mut t, 1), 0);
+            assert_eq!(t, 0.05);
+            let mut state: Fmi3FmuState = std::ptr::null_mut();
+            assert_eq!(fmi3GetFMUState(c, &mut state), 0);
+            let mut size = 0usize;
+            assert_eq!(fmi3SerializedFMUStateSize(c, state, &mut size), 0);
+            let mut bytes = vec![0u8; size];
+            assert_eq!(fmi3SerializeFMUState(c, state, bytes.as_mut_ptr(), size), 0);
+            let mut h_then = 0.0;
+            assert_eq!(fmi3GetFloat64(c, &h_vr, 1, &mut h_then, 1), 0);
+            assert_eq!(
+                fmi3DoStep(
+                    c,
+                    0.05,
+                    0.05,
+                    false,
+                    &mut event,
+                    &mut terminate,
+                    &mut early,
+                    &mut last
+                ),
+                0
+            );
+            let mut copy: Fmi3FmuState = std::ptr::null_mut();
+            assert_eq!(
+                fmi3DeserializeFMUState(c, bytes.as_ptr(), size, &mut copy),
+                0
+            );
+            assert_eq!(fmi3SetFMUState(c, copy), 0);
+            let mut h_back = 0.0;
+            assert_eq!(fmi3GetFloat64(c, &h_vr, 1, &mut h_back, 1), 0);
+            assert_eq!(h_back.to_bits(), h_then.to_bits());
+            // A diverging step: discarded, with terminateSimulation and the last time.
+            assert_eq!(fmi3SetFloat64(c, &fx_vr, 1, &1e160, 1), 0);
+            assert_eq!(
+                fmi3DoStep(
+                    c,
+                    0.05,
+                    0.01,
+                    false,
+                    &mut event,
+                    &mut terminate,
+                    &mut early,
+                    &mut last
+                ),
+                2
+            );
+            assert!(terminate);
+            assert_eq!(last, 0.05);
+            // What the FMU does not declare is refused, not a crash.
+            assert_eq!(fmi3EnterEventMode(c), 3);
+            let mut n = 0usize;
+            assert_eq!(fmi3GetNumberOfContinuousStates(c, &mut n), 3);
+            let mut i = 0i32;
+            assert_eq!(fmi3GetInt32(c, &h_vr, 1, &mut i, 1), 3);
+            assert_eq!(
+                fmi3GetInt32(c, std::ptr::null(), 0, std::ptr::null_mut(), 0),
+                0
+            );
+            assert_eq!(fmi3GetFloat64(c, &h_vr, 1, &mut h_back, 2), 3);
+            assert_eq!(fmi3FreeFMUState(c, &mut state), 0);
+            assert_eq!(fmi3FreeFMUState(c, &mut copy), 0);
+            assert_eq!(fmi3Terminate(c), 0);
+            fmi3FreeInstance(c);
+            // A wrong token is refused.
+            let wrong = CString::new("{x}").unwrap();
+            let none = fmi3InstantiateCoSimulation(
+                name.as_ptr(),
+                wrong.as_ptr(),
+                resources.as_ptr(),
+                false,
+                false,
+                false,
+                false,
+                std::ptr::null(),
+                0,
+                std::ptr::null_mut(),
+                None,
+                std::ptr::null(),
+            );
+            assert!(none.is_null());
+        }
+    }
+}

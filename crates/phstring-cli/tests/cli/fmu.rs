@@ -154,3 +154,35 @@ fn refusals_name_the_problem_and_write_nothing() {
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     assert!(left.is_empty(), "files left behind: {left:?}");
 }
+
+#[test]
+fn fmi_3_puts_the_library_under_the_platform_tuple() {
+    let dir = temp_dir("fmu-fmi3");
+    let out = dir.join("pendulum.fmu");
+    let o = fmu(&[
+        "examples/fmu/pendulum.toml",
+        "-o",
+        out.to_str().unwrap(),
+        "--fmi-version",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e = entries(&out);
+    let lib = format!(
+        "binaries/{}/pendulum.{}",
+        phstring_fmu::package::platform_fmi3().unwrap(),
+        phstring_fmu::package::platform().unwrap().1
+    );
+    assert_eq!(e[1].0, lib);
+    let xml = String::from_utf8(e[0].1.clone()).unwrap();
+    assert!(xml.contains("fmiVersion=\"3.0\""));
+    assert!(xml.contains("causality=\"independent\""));
+    let o = fmu(&[
+        "examples/fmu/pendulum.toml",
+        "-o",
+        out.to_str().unwrap(),
+        "--fmi-version",
+        "4",
+    ]);
+    assert!(!o.status.success());
+}

@@ -1,0 +1,680 @@
+//! The FMI 3.0 Co-Simulation C interface over the same [`Instance`] as FMI 2.0 (`ffi`):
+//! every function of `fmi3Functions.h` is exported; those of Model Exchange, Scheduled
+//! Execution, event mode, clocks and variable types other than `Float64` refuse with
+//! `fmi3Error` (or succeed for zero variables), since the FMU declares none of them.
+
+use std::ffi::{CString, c_char, c_int, c_void};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::PathBuf;
+
+use crate::ffi::{slice, slice_mut, str_arg};
+use crate::instance::{Instance, Logger, Mode, Saved, Status};
+
+/// `fmi3Status`.
+pub type Fmi3Status = c_int;
+/// `fmi3Instance`.
+pub type Fmi3Instance = *mut c_void;
+/// `fmi3FMUState`.
+pub type Fmi3FmuState = *mut c_void;
+/// `fmi3LogMessageCallback`.
+pub type Fmi3LogMessage = Option<
+    unsafe extern "C" fn(
+        env: *mut c_void,
+        status: c_int,
+        category: *const c_char,
+        message: *const c_char,
+    ),
+>;
+
+const OK: Fmi3Status = Status::Ok as c_int;
+const ERROR: Fmi3Status = Status::Error as c_int;
+const FATAL: Fmi3Status = Status::Fatal as c_int;
+
+/// An FMI 3.0 instance: the instance and the FMI 3.0 view of its variables.
+struct Inst3 {
+    inner: Instance,
+    /// The value reference of `time`.
+    time_vr: u32,
+}
+
+/// The master's logger with its environment.
+struct CLog3 {
+    f: unsafe extern "C" fn(*mut c_void, c_int, *const c_char, *const c_char),
+    env: *mut c_void,
+}
+
+// SAFETY: the FMI standard lets an instance be called from any thread (one call at a time);
+// the environment pointer is the master's and only passed back to it.
+unsafe impl Send for CLog3 {}
+
+impl CLog3 {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        let c = CString::new(category.replace('\0', " ")).unwrap_or_default();
+        let m = CString::new(message.replace('\0', " ")).unwrap_or_default();
+        // SAFETY: the master's callback with valid NUL-terminated strings (FMI 3.0 passes
+        // the message as it is, not as a format).
+        unsafe { (self.f)(self.env, status as c_int, c.as_ptr(), m.as_ptr()) };
+    }
+}
+
+/// Runs `f` on the instance `c`; a null instance or a panic is an error.
+fn with<F>(c: Fmi3Instance, f: F) -> Fmi3Status
+where
+    F: FnOnce(&mut Inst3) -> Status,
+{
+    if c.is_null() {
+        return ERROR;
+    }
+    // SAFETY: `c` was returned by `fmi3InstantiateCoSimulation` and not freed (the FMI
+    // contract), and the master makes one call at a time on it.
+    let inst = unsafe { &mut *(c as *mut Inst3) };
+    match catch_unwind(AssertUnwindSafe(|| f(inst))) {
+        Ok(s) => s as c_int,
+        Err(_) => {
+            inst.inner.poison();
+            let _ = catch_unwind(AssertUnwindSafe(|| {
+                inst.inner.log(
+                    Status::Fatal,
+                    "logStatusError",
+                    "internal error (a panic in phstring); please report it with the scenario",
+                )
+            }));
+            FATAL
+        }
+    }
+}
+
+/// `fmi3GetVersion`.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3GetVersion() -> *const c_char {
+    c"3.0".as_ptr()
+}
+
+/// `fmi3InstantiateCoSimulation`: reads `scenario.toml` in `resourcePath` and checks the
+/// instantiation token. Event mode and early return are not supported. Null on failure,
+/// with the reason logged.
+///
+/// # Safety
+/// The pointers follow the FMI 3.0 contract.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
+    instance_name: *const c_char,
+    token: *const c_char,
+    resource_path: *const c_char,
+    _visible: bool,
+    logging_on: bool,
+    event_mode_used: bool,
+    _early_return_allowed: bool,
+    _required_intermediate: *const u32,
+    _n_required_intermediate: usize,
+    env: *mut c_void,
+    log_message: Fmi3LogMessage,
+    _intermediate_update: *const c_void,
+) -> Fmi3Instance {
+    let result = catch_unwind(|| {
+        // SAFETY: FMI contract.
+        let name = unsafe { str_arg(instance_name) }.unwrap_or("phstring");
+        let log: Logger = match log_message {
+            Some(f) => {
+                let l = CLog3 { f, env };
+                Box::new(move |s, c, m| l.log(s, c, m))
+            }
+            None => Box::new(|_, _, _| {}),
+        };
+        let fail = |log: &Logger, m: String| {
+            log(Status::Error, "logStatusError", &m);
+            std::ptr::null_mut()
+        };
+        if event_mode_used {
+            return fail(
+                &log,
+                "this FMU has no event mode (hasEventMode=\"false\"); instantiate with eventModeUsed = false".into(),
+            );
+        }
+        // SAFETY: FMI contract.
+        let Some(token) = (unsafe { str_arg(token) }) else {
+            return fail(&log, "instantiationToken is missing".into());
+        };
+        // SAFETY: FMI contract.
+        let Some(dir) = (unsafe { str_arg(resource_path) }) else {
+            return fail(
+                &log,
+                "resourcePath is missing: the FMU's scenario is a resource".into(),
+            );
+        };
+        let path = PathBuf::from(dir).join("scenario.toml");
+        let text = match std::fs::read_to_string(&path) {
+            Ok(t) => t,
+            Err(e) => return fail(&log, format!("cannot read {}: {e}", path.display())),
+        };
+        match Instance::new(name, token, text, path, Box::new(|_, _, _| {}), false) {
+            Ok(mut inner) => {
+                inner.set_log(log, logging_on);
+                let time_vr = inner.spec().time_reference();
+                Box::into_raw(Box::new(Inst3 { inner, time_vr })) as Fmi3Instance
+            }
+            Err(m) => fail(&log, m),
+        }
+    });
+    result.unwrap_or(std::ptr::null_mut())
+}
+
+/// `fmi3FreeInstance`.
+///
+/// # Safety
+/// `c` is null or an instance from `fmi3InstantiateCoSimulation`, not used after this call.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
+    if !c.is_null() {
+        // SAFETY: FMI contract: `c` came from Box::into_raw and is freed once.
+        let _ = catch_unwind(|| drop(unsafe { Box::from_raw(c as *mut Inst3) }));
+    }
+}
+
+/// `fmi3SetDebugLogging`: informational messages on or off (errors are always logged).
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3SetDebugLogging(
+    c: Fmi3Instance,
+    logging_on: bool,
+    _n_categories: usize,
+    _categories: *const *const c_char,
+) -> Fmi3Status {
+    with(c, |i| {
+        i.inner.set_logging(logging_on);
+        Status::Ok
+    })
+}
+
+/// `fmi3EnterInitializationMode`: the experiment's start (the scenario's `t = 0`) and stop
+/// time; the tolerance is not used.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3EnterInitializationMode(
+    c: Fmi3Instance,
+    _tolerance_defined: bool,
+    _tolerance: f64,
+    start_time: f64,
+    stop_time_defined: bool,
+    stop_time: f64,
+) -> Fmi3Status {
+    with(c, |i| {
+        let s = i
+            .inner
+            .setup_experiment(start_time, stop_time_defined.then_some(stop_time));
+        if s != Status::Ok {
+            return s;
+        }
+        i.inner.enter_initialization()
+    })
+}
+
+/// `fmi3ExitInitializationMode`: the FMU is then in step mode.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3ExitInitializationMode(c: Fmi3Instance) -> Fmi3Status {
+    with(c, |i| i.inner.exit_initialization())
+}
+
+/// `fmi3Terminate`.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3Terminate(c: Fmi3Instance) -> Fmi3Status {
+    with(c, |i| i.inner.terminate())
+}
+
+/// `fmi3Reset`.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3Reset(c: Fmi3Instance) -> Fmi3Status {
+    with(c, |i| i.inner.reset())
+}
+
+/// `fmi3GetFloat64`: every variable, and `time`.
+///
+/// # Safety
+/// `vr` holds `n_vr` and `values` `n_values` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetFloat64(
+    c: Fmi3Instance,
+    vr: *const u32,
+    n_vr: usize,
+    values: *mut f64,
+    n_values: usize,
+) -> Fmi3Status {
+    with(c, |i| {
+        if n_values != n_vr {
+            return i.inner.refused(&format!(
+                "fmi3GetFloat64: {n_values} values for {n_vr} scalar variables"
+            ));
+        }
+        // SAFETY: FMI contract.
+        let (Some(vr), Some(out)) = (unsafe { slice(vr, n_vr) }, unsafe {
+            slice_mut(values, n_values)
+        }) else {
+            return i.inner.refused("fmi3GetFloat64: null array");
+        };
+        for (r, o) in vr.iter().zip(out.iter_mut()) {
+            if *r == i.time_vr {
+                *o = i.inner.time();
+                continue;
+            }
+            let s = i
+                .inner
+                .get_real(std::slice::from_ref(r), std::slice::from_mut(o));
+            if s != Status::Ok {
+                return s;
+            }
+        }
+        Status::Ok
+    })
+}
+
+/// `fmi3SetFloat64`: parameters and inputs (`time` cannot be set).
+///
+/// # Safety
+/// `vr` holds `n_vr` and `values` `n_values` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SetFloat64(
+    c: Fmi3Instance,
+    vr: *const u32,
+    n_vr: usize,
+    values: *const f64,
+    n_values: usize,
+) -> Fmi3Status {
+    with(c, |i| {
+        if n_values != n_vr {
+            return i.inner.refused(&format!(
+                "fmi3SetFloat64: {n_values} values for {n_vr} scalar variables"
+            ));
+        }
+        // SAFETY: FMI contract.
+        let (Some(vr), Some(v)) = (unsafe { slice(vr, n_vr) }, unsafe {
+            slice(values, n_values)
+        }) else {
+            return i.inner.refused("fmi3SetFloat64: null array");
+        };
+        if vr.contains(&i.time_vr) {
+            return i
+                .inner
+                .refused("time is the independent variable and cannot be set");
+        }
+        i.inner.set_real(vr, v)
+    })
+}
+
+/// `fmi3DoStep`: as `fmi2DoStep`; a discarded step sets `terminateSimulation` (a retry from
+/// there fails again) and `lastSuccessfulTime` to the last internal step completed.
+///
+/// # Safety
+/// The output pointers are valid.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3DoStep(
+    c: Fmi3Instance,
+    current_communication_point: f64,
+    communication_step_size: f64,
+    _no_set_fmu_state_prior: bool,
+    event_handling_needed: *mut bool,
+    terminate_simulation: *mut bool,
+    early_return: *mut bool,
+    last_successful_time: *mut f64,
+) -> Fmi3Status {
+    with(c, |i| {
+        let s = i
+            .inner
+            .do_step(current_communication_point, communication_step_size);
+        // SAFETY: FMI contract (each pointer is checked for null).
+        unsafe {
+            if !event_handling_needed.is_null() {
+                *event_handling_needed = false;
+            }
+            if !terminate_simulation.is_null() {
+                *terminate_simulation = i.inner.mode() == Mode::StepFailed;
+            }
+            if !early_return.is_null() {
+                *early_return = false;
+            }
+            if !last_successful_time.is_null() {
+                *last_successful_time = i.inner.time();
+            }
+        }
+        s
+    })
+}
+
+/// `fmi3GetFMUState`: a new saved state, or the given one overwritten.
+///
+/// # Safety
+/// `state` points to null or to a state from this function not yet freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetFMUState(c: Fmi3Instance, state: *mut Fmi3FmuState) -> Fmi3Status {
+    with(c, |i| {
+        if state.is_null() {
+            return i.inner.refused("fmi3GetFMUState: null FMUState pointer");
+        }
+        let saved = match i.inner.save() {
+            Ok(s) => s,
+            Err(m) => return i.inner.refused(&format!("fmi3GetFMUState: {m}")),
+        };
+        // SAFETY: FMI contract.
+        unsafe { put_state(state, saved) };
+        Status::Ok
+    })
+}
+
+/// Stores `saved` at `*state`: a new allocation, or the existing state overwritten.
+///
+/// # Safety
+/// `state` is valid; `*state` is null or a state of ours not yet freed.
+unsafe fn put_state(state: *mut Fmi3FmuState, saved: Saved) {
+    // SAFETY: by the caller's contract.
+    unsafe {
+        if (*state).is_null() {
+            *state = Box::into_raw(Box::new(saved)) as Fmi3FmuState;
+        } else {
+            *(*state as *mut Saved) = saved;
+        }
+    }
+}
+
+/// `fmi3SetFMUState`.
+///
+/// # Safety
+/// `state` is a state of this FMU, not freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, state: Fmi3FmuState) -> Fmi3Status {
+    with(c, |i| {
+        if state.is_null() {
+            return i.inner.refused("fmi3SetFMUState: null FMUState");
+        }
+        // SAFETY: FMI contract.
+        i.inner.restore(unsafe { &*(state as *const Saved) })
+    })
+}
+
+/// `fmi3FreeFMUState`.
+///
+/// # Safety
+/// `state` points to null or to a state not yet freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3FreeFMUState(c: Fmi3Instance, state: *mut Fmi3FmuState) -> Fmi3Status {
+    with(c, |_| {
+        // SAFETY: FMI contract.
+        unsafe {
+            if !state.is_null() && !(*state).is_null() {
+                drop(Box::from_raw(*state as *mut Saved));
+                *state = std::ptr::null_mut();
+            }
+        }
+        Status::Ok
+    })
+}
+
+/// `fmi3SerializedFMUStateSize`.
+///
+/// # Safety
+/// `state` is a valid saved state, `size` a valid pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
+    c: Fmi3Instance,
+    state: Fmi3FmuState,
+    size: *mut usize,
+) -> Fmi3Status {
+    with(c, |i| {
+        if state.is_null() || size.is_null() {
+            return i.inner.refused("fmi3SerializedFMUStateSize: null argument");
+        }
+        // SAFETY: FMI contract.
+        match serde_json::to_vec(unsafe { &*(state as *const Saved) }) {
+            // SAFETY: FMI contract.
+            Ok(d) => unsafe { *size = d.len() },
+            Err(e) => return i.inner.refused(&format!("fmi3SerializedFMUStateSize: {e}")),
+        }
+        Status::Ok
+    })
+}
+
+/// `fmi3SerializeFMUState`: JSON, floats in round-trip form.
+///
+/// # Safety
+/// `state` is a valid saved state; `bytes` has room for `size` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SerializeFMUState(
+    c: Fmi3Instance,
+    state: Fmi3FmuState,
+    bytes: *mut u8,
+    size: usize,
+) -> Fmi3Status {
+    with(c, |i| {
+        if state.is_null() {
+            return i.inner.refused("fmi3SerializeFMUState: null FMUState");
+        }
+        // SAFETY: FMI contract.
+        let data = match serde_json::to_vec(unsafe { &*(state as *const Saved) }) {
+            Ok(d) => d,
+            Err(e) => return i.inner.refused(&format!("fmi3SerializeFMUState: {e}")),
+        };
+        // SAFETY: FMI contract.
+        let Some(out) = (unsafe { slice_mut(bytes, size) }) else {
+            return i.inner.refused("fmi3SerializeFMUState: null buffer");
+        };
+        if out.len() != data.len() {
+            return i.inner.refused(&format!(
+                "fmi3SerializeFMUState: the buffer has {} bytes, the state {} (fmi3SerializedFMUStateSize)",
+                out.len(),
+                data.len()
+            ));
+        }
+        out.copy_from_slice(&data);
+        Status::Ok
+    })
+}
+
+/// `fmi3DeserializeFMUState`.
+///
+/// # Safety
+/// `bytes` holds `size` bytes; `state` is valid.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3DeserializeFMUState(
+    c: Fmi3Instance,
+    bytes: *const u8,
+    size: usize,
+    state: *mut Fmi3FmuState,
+) -> Fmi3Status {
+    with(c, |i| {
+        // SAFETY: FMI contract.
+        let Some(data) = (unsafe { slice(bytes, size) }) else {
+            return i.inner.refused("fmi3DeserializeFMUState: null buffer");
+        };
+        if state.is_null() {
+            return i
+                .inner
+                .refused("fmi3DeserializeFMUState: null FMUState pointer");
+        }
+        match serde_json::from_slice::<Saved>(data) {
+            Ok(saved) => {
+                // SAFETY: FMI contract.
+                unsafe { put_state(state, saved) };
+                Status::Ok
+            }
+            Err(e) => i.inner.refused(&format!(
+                "fmi3DeserializeFMUState: not a state of this FMU: {e}"
+            )),
+        }
+    })
+}
+
+/// A variable type the FMU does not declare: nothing to do for zero variables, an error for
+/// any other.
+fn no_such(c: Fmi3Instance, what: &str, n: usize) -> Fmi3Status {
+    if n == 0 {
+        return if c.is_null() { ERROR } else { OK };
+    }
+    with(c, |i| {
+        i.inner.refused(&format!(
+            "{what}: this FMU has only Float64 variables (fmi3GetFloat64/fmi3SetFloat64)"
+        ))
+    })
+}
+
+/// Getters and setters of the numeric types the FMU does not declare.
+macro_rules! other_types {
+    ($($name:ident: $ptr:ty;)*) => {$(
+        #[doc = concat!("`", stringify!($name), "`: the FMU has no variables of this type.")]
+        #[unsafe(no_mangle)]
+        pub extern "C" fn $name(
+            c: Fmi3Instance,
+            _vr: *const u32,
+            n_vr: usize,
+            _values: $ptr,
+            _n_values: usize,
+        ) -> Fmi3Status {
+            no_such(c, stringify!($name), n_vr)
+        }
+    )*};
+}
+
+other_types! {
+    fmi3GetFloat32: *mut f32;
+    fmi3GetInt8: *mut i8;
+    fmi3GetUInt8: *mut u8;
+    fmi3GetInt16: *mut i16;
+    fmi3GetUInt16: *mut u16;
+    fmi3GetInt32: *mut i32;
+    fmi3GetUInt32: *mut u32;
+    fmi3GetInt64: *mut i64;
+    fmi3GetUInt64: *mut u64;
+    fmi3GetBoolean: *mut bool;
+    fmi3GetString: *mut *const c_char;
+    fmi3SetFloat32: *const f32;
+    fmi3SetInt8: *const i8;
+    fmi3SetUInt8: *const u8;
+    fmi3SetInt16: *const i16;
+    fmi3SetUInt16: *const u16;
+    fmi3SetInt32: *const i32;
+    fmi3SetUInt32: *const u32;
+    fmi3SetInt64: *const i64;
+    fmi3SetUInt64: *const u64;
+    fmi3SetBoolean: *const bool;
+    fmi3SetString: *const *const c_char;
+}
+
+/// `fmi3GetBinary`: the FMU has no Binary variables.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3GetBinary(
+    c: Fmi3Instance,
+    _vr: *const u32,
+    n_vr: usize,
+    _sizes: *mut usize,
+    _values: *mut *const u8,
+    _n_values: usize,
+) -> Fmi3Status {
+    no_such(c, "fmi3GetBinary", n_vr)
+}
+
+/// `fmi3SetBinary`: the FMU has no Binary variables.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3SetBinary(
+    c: Fmi3Instance,
+    _vr: *const u32,
+    n_vr: usize,
+    _sizes: *const usize,
+    _values: *const *const u8,
+    _n_values: usize,
+) -> Fmi3Status {
+    no_such(c, "fmi3SetBinary", n_vr)
+}
+
+/// `fmi3GetClock`: the FMU has no clocks.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3GetClock(
+    c: Fmi3Instance,
+    _vr: *const u32,
+    n_vr: usize,
+    _values: *mut bool,
+) -> Fmi3Status {
+    no_such(c, "fmi3GetClock", n_vr)
+}
+
+/// `fmi3SetClock`: the FMU has no clocks.
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3SetClock(
+    c: Fmi3Instance,
+    _vr: *const u32,
+    n_vr: usize,
+    _values: *const bool,
+) -> Fmi3Status {
+    no_such(c, "fmi3SetClock", n_vr)
+}
+
+/// Functions of capabilities the FMU does not declare: each refuses with `fmi3Error` and a
+/// message naming it (`$args` are the C parameters after the instance).
+macro_rules! refused {
+    ($($name:ident($($arg:ty),*) $why:literal;)*) => {$(
+        #[doc = concat!("`", stringify!($name), "`: ", $why, ".")]
+        #[unsafe(no_mangle)]
+        pub extern "C" fn $name(c: Fmi3Instance, $(_: $arg),*) -> Fmi3Status {
+            with(c, |i| i.inner.refused(concat!(stringify!($name), ": ", $why)))
+        }
+    )*};
+}
+
+refused! {
+    fmi3EnterEventMode() "the FMU has no event mode";
+    fmi3EnterStepMode() "the FMU has no event mode; it is in step mode after initialization";
+    fmi3UpdateDiscreteStates(*mut bool, *mut bool, *mut bool, *mut bool, *mut bool, *mut f64) "the FMU has no event mode";
+    fmi3EvaluateDiscreteStates() "the FMU has no discrete states";
+    fmi3GetNumberOfVariableDependencies(u32, *mut usize) "dependencies are not provided (every output depends on every input)";
+    fmi3GetVariableDependencies(u32, *mut usize, *mut u32, *mut usize, *mut c_int, usize) "dependencies are not provided (every output depends on every input)";
+    fmi3GetDirectionalDerivative(*const u32, usize, *const u32, usize, *const f64, usize, *mut f64, usize) "not provided (providesDirectionalDerivatives=\"false\")";
+    fmi3GetAdjointDerivative(*const u32, usize, *const u32, usize, *const f64, usize, *mut f64, usize) "not provided (providesAdjointDerivatives=\"false\")";
+    fmi3EnterConfigurationMode() "the FMU has no structural parameters";
+    fmi3ExitConfigurationMode() "the FMU has no structural parameters";
+    fmi3GetIntervalDecimal(*const u32, usize, *mut f64, *mut c_int) "the FMU has no clocks";
+    fmi3GetIntervalFraction(*const u32, usize, *mut u64, *mut u64, *mut c_int) "the FMU has no clocks";
+    fmi3GetShiftDecimal(*const u32, usize, *mut f64) "the FMU has no clocks";
+    fmi3GetShiftFraction(*const u32, usize, *mut u64, *mut u64) "the FMU has no clocks";
+    fmi3SetIntervalDecimal(*const u32, usize, *const f64) "the FMU has no clocks";
+    fmi3SetIntervalFraction(*const u32, usize, *const u64, *const u64) "the FMU has no clocks";
+    fmi3SetShiftDecimal(*const u32, usize, *const f64) "the FMU has no clocks";
+    fmi3SetShiftFraction(*const u32, usize, *const u64, *const u64) "the FMU has no clocks";
+    fmi3GetOutputDerivatives(*const u32, usize, *const i32, *mut f64, usize) "not provided (maxOutputDerivativeOrder=\"0\")";
+    fmi3EnterContinuousTimeMode() "the FMU is for Co-Simulation only";
+    fmi3CompletedIntegratorStep(bool, *mut bool, *mut bool) "the FMU is for Co-Simulation only";
+    fmi3SetTime(f64) "the FMU is for Co-Simulation only";
+    fmi3SetContinuousStates(*const f64, usize) "the FMU is for Co-Simulation only";
+    fmi3GetContinuousStateDerivatives(*mut f64, usize) "the FMU is for Co-Simulation only";
+    fmi3GetEventIndicators(*mut f64, usize) "the FMU is for Co-Simulation only";
+    fmi3GetContinuousStates(*mut f64, usize) "the FMU is for Co-Simulation only";
+    fmi3GetNominalsOfContinuousStates(*mut f64, usize) "the FMU is for Co-Simulation only";
+    fmi3GetNumberOfEventIndicators(*mut usize) "the FMU is for Co-Simulation only";
+    fmi3GetNumberOfContinuousStates(*mut usize) "the FMU is for Co-Simulation only";
+    fmi3ActivateModelPartition(u32, f64) "the FMU is for Co-Simulation only";
+}
+
+/// `fmi3InstantiateModelExchange`: the FMU is for Co-Simulation only (null).
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3InstantiateModelExchange(
+    _name: *const c_char,
+    _token: *const c_char,
+    _resource_path: *const c_char,
+    _visible: bool,
+    _logging_on: bool,
+    _env: *mut c_void,
+    _log_message: Fmi3LogMessage,
+) -> Fmi3Instance {
+    std::ptr::null_mut()
+}
+
+/// `fmi3InstantiateScheduledExecution`: the FMU is for Co-Simulation only (null).
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi3InstantiateScheduledExecution(
+    _name: *const c_char,
+    _token: *const c_char,
+    _resource_path: *const c_char,
+    _visible: bool,
+    _logging_on: bool,
+    _env: *mut c_void,
+    _log_message: Fmi3LogMessage,
+    _clock_update: *const c_void,
+    _lock_preemption: *const c_void,
+    _unlock_preemption: *const c_void,
+) -> Fmi3Instance {
+    std::ptr::null_mut()
+}
