@@ -151,6 +151,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
         match Instance::new(name, token, text, path, Box::new(|_, _, _| {}), false) {
             Ok(mut inner) => {
                 inner.set_log(log, logging_on);
+                inner.set_api(crate::instance::Api::Fmi3);
                 let time_vr = inner.spec().time_reference();
                 Box::into_raw(Box::new(Inst3 { inner, time_vr })) as Fmi3Instance
             }

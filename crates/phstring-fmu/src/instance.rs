@@ -90,6 +90,9 @@ trait Stepper: Send {
     fn value(&self, q: Quantity) -> f64;
     fn save(&self) -> SimState;
     fn load(&mut self, s: &SimState) -> Result<(), String>;
+    /// `Ĥ(0)` [J], the reference of the balance.
+    fn h0(&self) -> f64;
+    fn set_h0(&mut self, h0: f64);
 }
 
 /// A running simulation of dimension `D` with its initial Hamiltonian.
@@ -134,6 +137,12 @@ impl<const D: usize> Stepper for Running<D> {
             .restore(s.to_checkpoint::<D>())
             .map_err(|e| e.to_string())
     }
+    fn h0(&self) -> f64 {
+        self.h0
+    }
+    fn set_h0(&mut self, h0: f64) {
+        self.h0 = h0;
+    }
 }
 
 /// The simulation with the handles through which the inputs reach it.
@@ -155,6 +164,8 @@ struct Live {
 /// own values, serializable to JSON (bit for bit: floats in round-trip form).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Saved {
+    /// The FMU's GUID (instantiation token): a state restores only into its own FMU.
+    guid: String,
     mode: Mode,
     values: Vec<f64>,
     start_time: f64,
@@ -165,6 +176,8 @@ pub struct Saved {
     /// The port variables' values by value reference (`None` for the others).
     ports: Vec<Option<f64>>,
     sim: Option<SimState>,
+    /// `Ĥ(0)` of the run [J] (it depends on the inputs a starting equilibrium was found for).
+    h0: Option<f64>,
 }
 
 /// One FMU instance.
@@ -185,6 +198,17 @@ pub struct Instance {
     /// The master's time: the end of the last communication step [s].
     time: f64,
     live: Option<Live>,
+    /// The FMI version of the calls, for messages.
+    api: Api,
+}
+
+/// The FMI version an instance is called through (for the function names in messages).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Api {
+    /// FMI 2.0 (`fmi2DoStep`, …).
+    Fmi2,
+    /// FMI 3.0 (`fmi3DoStep`, …).
+    Fmi3,
 }
 
 /// Tolerance [s] for times near `t` [s] in a run with steps `h` [s]: the library's landing
@@ -238,6 +262,7 @@ impl Instance {
             stop_time: None,
             time: 0.0,
             live: None,
+            api: Api::Fmi2,
         })
     }
 
@@ -254,6 +279,22 @@ impl Instance {
     /// The state-machine mode.
     pub fn mode(&self) -> Mode {
         self.mode
+    }
+
+    /// The FMI version the instance is called through (FMI 2.0 unless set).
+    pub fn set_api(&mut self, api: Api) {
+        self.api = api;
+    }
+
+    /// The name of FMI function `name` (`DoStep`) in the instance's version.
+    fn call(&self, name: &str) -> String {
+        match (self.api, name) {
+            (Api::Fmi2, _) => format!("fmi2{name}"),
+            (Api::Fmi3, "SetupExperiment") => "fmi3EnterInitializationMode".into(),
+            (Api::Fmi3, "SetReal") => "fmi3SetFloat64".into(),
+            (Api::Fmi3, "SetFMUstate") => "fmi3SetFMUState".into(),
+            (Api::Fmi3, _) => format!("fmi3{name}"),
+        }
     }
 
     /// Replaces the logger.
@@ -305,7 +346,8 @@ impl Instance {
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Status {
         if self.mode != Mode::Instantiated {
             return self.refuse(format!(
-                "fmi2SetupExperiment is allowed only right after instantiation (the instance is {:?})",
+                "{} (the experiment's start and stop) is allowed only right after instantiation (the instance is {:?})",
+                self.call("SetupExperiment"),
                 self.mode
             ));
         }
@@ -329,7 +371,8 @@ impl Instance {
     pub fn enter_initialization(&mut self) -> Status {
         if self.mode != Mode::Instantiated {
             return self.refuse(format!(
-                "fmi2EnterInitializationMode is allowed only after instantiation (the instance is {:?})",
+                "{} is allowed only after instantiation (the instance is {:?})",
+                self.call("EnterInitializationMode"),
                 self.mode
             ));
         }
@@ -341,7 +384,8 @@ impl Instance {
     pub fn exit_initialization(&mut self) -> Status {
         if self.mode != Mode::Initialization {
             return self.refuse(format!(
-                "fmi2ExitInitializationMode is allowed only in initialization mode (the instance is {:?})",
+                "{} is allowed only in initialization mode (the instance is {:?})",
+                self.call("ExitInitializationMode"),
                 self.mode
             ));
         }
@@ -365,14 +409,15 @@ impl Instance {
     /// Sets up the simulation if it is not yet (parameters are final from here on).
     fn ensure_live(&mut self) -> Result<(), Fail> {
         if self.live.is_none() {
-            self.live = Some(self.build_live(&self.values)?);
+            self.live = Some(self.build_live(&self.values, true)?);
         }
         Ok(())
     }
 
     /// A simulation of the packaged scenario with the parameters and inputs in `values` (by
-    /// value reference).
-    fn build_live(&self, values: &[f64]) -> Result<Live, Fail> {
+    /// value reference), at its starting equilibrium if the scenario asks for one and
+    /// `equilibrium` is set.
+    fn build_live(&self, values: &[f64], equilibrium: bool) -> Result<Live, Fail> {
         let mut sets = Vec::new();
         for (vr, v) in self.spec.variables.iter().enumerate() {
             if let Quantity::Parameter(k) = v.quantity {
@@ -404,9 +449,9 @@ impl Instance {
         let file = phstring_io::scenario::parse(&self.text, &self.path, &sets)
             .map_err(|e| error(e.to_string()))?;
         match self.spec.dimension {
-            1 => self.live_dim::<1>(&file, values),
-            2 => self.live_dim::<2>(&file, values),
-            _ => self.live_dim::<3>(&file, values),
+            1 => self.live_dim::<1>(&file, values, equilibrium),
+            2 => self.live_dim::<2>(&file, values, equilibrium),
+            _ => self.live_dim::<3>(&file, values, equilibrium),
         }
         .map_err(&error)
     }
@@ -415,6 +460,7 @@ impl Instance {
         &self,
         file: &ScenarioFile,
         values: &[f64],
+        equilibrium: bool,
     ) -> Result<Live, String> {
         let mut v: Validated<D> = file.validate::<D>().map_err(|e| e.to_string())?;
         let mut loads: Vec<Option<Held>> = vec![None; v.problem.boundary.loads.len()];
@@ -449,8 +495,11 @@ impl Instance {
                 m.position = Arc::new(move |t| lock(&ramp).position(t));
             }
         }
-        // With `initial.equilibrium`, the equilibrium under the inputs as set now.
-        phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
+        // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
+        // supports at their scenario positions).
+        if equilibrium {
+            phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
+        }
         let expression_error = v.load_error.clone();
         let sim = Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
         let h0 = sim.energies().hamiltonian();
@@ -469,12 +518,16 @@ impl Instance {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         if matches!(self.mode, Mode::StepFailed | Mode::Terminated | Mode::Error) {
             return self.refuse(format!(
-                "fmi2SetReal is not allowed now (the instance is {:?}{})",
+                "{} is not allowed now (the instance is {:?}{})",
+                self.call("SetReal"),
                 self.mode,
                 if self.mode == Mode::StepFailed {
-                    ": restore a saved FMU state with fmi2SetFMUstate, or terminate"
+                    format!(
+                        ": restore a saved FMU state with {}, or terminate",
+                        self.call("SetFMUstate")
+                    )
                 } else {
-                    ""
+                    String::new()
                 }
             ));
         }
@@ -493,7 +546,8 @@ impl Instance {
                 Causality::Parameter => {
                     if !matches!(self.mode, Mode::Instantiated | Mode::Initialization) {
                         return self.refuse(format!(
-                            "{name} is a fixed parameter: it can be set only before fmi2ExitInitializationMode"
+                            "{name} is a fixed parameter: it can be set only before {}",
+                            self.call("ExitInitializationMode")
                         ));
                     }
                     if !(x > 0.0 && x.is_finite()) {
@@ -533,13 +587,17 @@ impl Instance {
         if needs_live {
             match self.mode {
                 Mode::Instantiated => {
-                    return self
-                        .refuse("outputs can be read from fmi2EnterInitializationMode on".into());
+                    return self.refuse(format!(
+                        "outputs can be read from {} on",
+                        self.call("EnterInitializationMode")
+                    ));
                 }
                 Mode::Error | Mode::Terminated => {}
                 _ => {
-                    if let Err(e) = self.ensure_live() {
-                        return self.fail(e);
+                    // A parameter that does not fit is refused here, and the master can still
+                    // correct it before initialization ends.
+                    if let Err((_, m)) = self.ensure_live() {
+                        return self.refuse(m);
                     }
                 }
             }
@@ -578,7 +636,7 @@ impl Instance {
     /// step, or after a discarded step the last internal step completed.
     pub fn time(&self) -> f64 {
         match (&self.live, self.mode) {
-            (Some(l), Mode::StepFailed) => self.start_time + l.stepper.time(),
+            (Some(l), Mode::StepFailed | Mode::Error) => self.start_time + l.stepper.time(),
             _ => self.time,
         }
     }
@@ -590,7 +648,8 @@ impl Instance {
     pub fn do_step(&mut self, t: f64, comm_h: f64) -> Status {
         if self.mode != Mode::StepComplete {
             return self.refuse(format!(
-                "fmi2DoStep is allowed only after initialization and a completed step (the instance is {:?})",
+                "{} is allowed only after initialization and a completed step (the instance is {:?})",
+                self.call("DoStep"),
                 self.mode
             ));
         }
@@ -600,10 +659,13 @@ impl Instance {
             ));
         }
         let h = self.step_size(&self.values);
+        // Times are compared on the master's clock, rounding included (start time and all).
+        let scale = t.abs().max(self.start_time.abs()) + comm_h;
         let off = (t - self.time).abs();
-        if off.is_nan() || off > time_tol(h, self.time) {
+        if off.is_nan() || off > time_tol(h, scale) {
             return self.refuse(format!(
-                "fmi2DoStep at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
+                "{} at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
+                self.call("DoStep"),
                 self.time
             ));
         }
@@ -611,7 +673,8 @@ impl Instance {
             && t + comm_h > stop + time_tol(h, stop)
         {
             return self.refuse(format!(
-                "fmi2DoStep to t = {} s passes stopTime = {stop} s",
+                "{} to t = {} s passes stopTime = {stop} s",
+                self.call("DoStep"),
                 t + comm_h
             ));
         }
@@ -644,12 +707,16 @@ impl Instance {
             }
         }
         // A communication step shorter than the landing tolerance moves only the clock.
-        while live.stepper.time() < target - time_tol(h, target) {
+        while live.stepper.time() < target - time_tol(h, scale) {
             match live.stepper.step_until(target) {
                 Ok(()) => live.ports_saved = None,
                 Err(e) => {
                     let expression = lock(&live.expression_error).take();
                     let at = self.start_time + live.stepper.time();
+                    let last = match self.api {
+                        Api::Fmi2 => "fmi2GetRealStatus(fmi2LastSuccessfulTime)",
+                        Api::Fmi3 => "lastSuccessfulTime of fmi3DoStep",
+                    };
                     return match expression {
                         Some(why) => self.fail((
                             Status::Error,
@@ -660,7 +727,7 @@ impl Instance {
                             self.fail((
                                 Status::Discard,
                                 format!(
-                                    "{e}; the FMU stays at t = {at} s, the last internal step it completed (fmi2GetRealStatus(fmi2LastSuccessfulTime))"
+                                    "{e}; the FMU stays at t = {at} s, the last internal step it completed ({last})"
                                 ),
                             ))
                         }
@@ -676,7 +743,8 @@ impl Instance {
     pub fn terminate(&mut self) -> Status {
         if !matches!(self.mode, Mode::StepComplete | Mode::StepFailed) {
             return self.refuse(format!(
-                "fmi2Terminate is allowed only after initialization (the instance is {:?})",
+                "{} is allowed only after initialization (the instance is {:?})",
+                self.call("Terminate"),
                 self.mode
             ));
         }
@@ -722,6 +790,7 @@ impl Instance {
             })
             .collect();
         Ok(Saved {
+            guid: self.spec.guid.clone(),
             mode: self.mode,
             values: self.values.clone(),
             start_time: self.start_time,
@@ -735,14 +804,21 @@ impl Instance {
             }),
             ports,
             sim: self.live.as_ref().map(|l| l.stepper.save()),
+            h0: self.live.as_ref().map(|l| l.stepper.h0()),
         })
     }
 
     /// `fmi2SetFMUstate`: continues from `saved`, taken from an instance of the same FMU.
     /// If it cannot be restored, the instance stays as it was.
     pub fn restore(&mut self, saved: &Saved) -> Status {
+        if saved.guid != self.spec.guid {
+            return self.refuse(format!(
+                "the FMU state is of another FMU (GUID {}, this one {})",
+                saved.guid, self.spec.guid
+            ));
+        }
         let n = self.values.len();
-        if saved.values.len() != n || (!saved.ports.is_empty() && saved.ports.len() != n) {
+        if saved.values.len() != n || saved.ports.len() != n {
             return self.refuse(format!(
                 "the FMU state has {} values, this FMU {n}: it is of another FMU",
                 saved.values.len()
@@ -751,7 +827,9 @@ impl Instance {
         let live = match &saved.sim {
             None => None,
             Some(state) => {
+                // After an internal failure the running simulation is not trusted.
                 let same_parameters = self.live.is_some()
+                    && self.mode != Mode::Error
                     && self
                         .spec
                         .variables
@@ -764,7 +842,8 @@ impl Instance {
                 // until the saved state is in), else a new one with the saved parameters.
                 let mut live = match same_parameters {
                     true => None,
-                    false => match self.build_live(&saved.values) {
+                    // The saved state replaces the starting state: no equilibrium solve.
+                    false => match self.build_live(&saved.values, false) {
                         Ok(l) => Some(l),
                         Err((_, m)) => {
                             return self.refuse(format!("cannot restore the FMU state: {m}"));
@@ -786,7 +865,10 @@ impl Instance {
                         *lock(slot) = *ramp;
                     }
                 }
-                target.ports_saved = (!saved.ports.is_empty()).then(|| saved.ports.clone());
+                target.ports_saved = Some(saved.ports.clone());
+                if let Some(h0) = saved.h0 {
+                    target.stepper.set_h0(h0);
+                }
                 Some(live.unwrap_or_else(|| self.live.take().expect("checked above")))
             }
         };

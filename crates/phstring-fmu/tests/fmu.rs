@@ -588,13 +588,66 @@ fn restored_states_report_their_own_port_outputs_and_a_failed_restore_changes_no
     let (t, h) = (a.time(), get(&mut a, "H"));
     assert_eq!(a.restore(&foreign), Status::Error);
     assert!(
-        last_message(&log).contains("cannot restore"),
+        last_message(&log).contains("another FMU"),
         "{}",
         last_message(&log)
     );
     assert_eq!((a.time(), get(&mut a, "H")), (t, h));
+    // A state of this FMU whose parameters do not set up (h = 1e-300, edited in its JSON):
+    // the new simulation cannot be built, and the running one is kept.
+    let mut edited: serde_json::Value = serde_json::to_value(&saved).unwrap();
+    edited["values"][2] = serde_json::json!(1e-300);
+    let edited: phstring_fmu::instance::Saved = serde_json::from_value(edited).unwrap();
+    assert_eq!(a.restore(&edited), Status::Error);
+    assert!(
+        last_message(&log).contains("time.h"),
+        "{}",
+        last_message(&log)
+    );
+    assert_eq!((a.time(), get(&mut a, "H")), (t, h));
+    assert_eq!(get(&mut a, "h"), 0.01);
     assert_eq!(a.mode(), Mode::StepComplete);
     assert_eq!(a.do_step(t, 0.01), Status::Ok);
+}
+
+/// With `initial.equilibrium`, the start is the equilibrium under the load inputs set in
+/// initialization; a saved state carries its `Ĥ(0)`, so the balance is the same after a
+/// restore into a fresh instance (which does not solve for the equilibrium again).
+#[test]
+fn the_balance_survives_a_restore_of_a_run_from_its_equilibrium() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fmu/hoist.toml");
+    let file =
+        phstring_io::scenario::load(&path, &["initial.equilibrium=true".to_string()]).unwrap();
+    let text = file.text().to_string();
+    let (mut a, _) = instance(&text);
+    assert_eq!(a.setup_experiment(0.0, None), Status::Ok);
+    assert_eq!(a.enter_initialization(), Status::Ok);
+    assert_eq!(set(&mut a, "load0.F.x", 500.0), Status::Ok);
+    assert_eq!(a.exit_initialization(), Status::Ok);
+    // At rest at the start: the payload hangs pulled aside by the 500 N.
+    assert_eq!(get(&mut a, "T"), 0.0);
+    let x0 = get(&mut a, "node20.r.x");
+    assert!(x0 > 0.1, "{x0}");
+    for n in 0..10 {
+        set(&mut a, "load0.F.x", 500.0 + 100.0 * n as f64);
+        assert_eq!(a.do_step(n as f64 * 0.01, 0.01), Status::Ok);
+    }
+    let balance = get(&mut a, "balance_error");
+    assert!(balance.abs() <= 1e-9, "{balance}");
+    let saved = a.save().unwrap();
+    let (mut b, _) = instance(&text);
+    initialize(&mut b);
+    assert_eq!(b.restore(&saved), Status::Ok);
+    assert_eq!(get(&mut b, "balance_error").to_bits(), balance.to_bits());
+    for inst in [&mut a, &mut b] {
+        set(inst, "load0.F.x", 2000.0);
+        assert_eq!(inst.do_step(0.1, 0.01), Status::Ok);
+    }
+    assert_eq!(
+        get(&mut a, "balance_error").to_bits(),
+        get(&mut b, "balance_error").to_bits()
+    );
+    assert_eq!(get(&mut a, "H").to_bits(), get(&mut b, "H").to_bits());
 }
 
 mod fmi3_functions {
@@ -718,7 +771,8 @@ mod fmi3_functions {
                 fmi3GetInt32(c, std::ptr::null(), 0, std::ptr::null_mut(), 0),
                 0
             );
-            assert_eq!(fmi3GetFloat64(c, &h_vr, 1, &mut h_back, 2), 3);
+            let mut two = [0.0; 2];
+            assert_eq!(fmi3GetFloat64(c, &h_vr, 1, two.as_mut_ptr(), 2), 3);
             assert_eq!(fmi3FreeFMUState(c, &mut state), 0);
             assert_eq!(fmi3FreeFMUState(c, &mut copy), 0);
             assert_eq!(fmi3Terminate(c), 0);
