@@ -24,9 +24,10 @@ H = 0.01  # s, the pendulum's time.h
 
 
 def build(tmp_path, scenario, name, *sets, version="2"):
+    """`phstring fmu` of examples/fmu/SCENARIO (or of a path) with `--set` for each of `sets`."""
     out = tmp_path / f"{name}.fmu"
-    args = [BIN, "fmu", str(ROOT / "examples" / "fmu" / scenario), "-o", str(out), "--quiet",
-            "--fmi-version", version]
+    path = scenario if isinstance(scenario, pathlib.Path) else ROOT / "examples" / "fmu" / scenario
+    args = [BIN, "fmu", str(path), "-o", str(out), "--quiet", "--fmi-version", version]
     for s in sets:
         args += ["--set", s]
     subprocess.run(args, check=True, capture_output=True)
@@ -260,3 +261,36 @@ def test_fmi3_a_diverging_step_is_discarded_and_the_master_can_go_back(tmp_path)
     s.freeFMUState(state)
     s.terminate()
     s.freeInstance()
+
+
+def test_a_moving_support_from_the_master_is_the_run_bit_for_bit(tmp_path):
+    """The mooring line from its equilibrium, the fairlead's heave as the FMU's position
+    inputs: set at t_n to where `phstring run` has the fairlead at t_n + h (positions.csv),
+    the FMU moves it as the run does and gives the same Ĥ and tension, bit for bit."""
+    h = 0.005  # s: at 0.01 s the run halves a step, and a half step samples the heave's sine
+    sets = ["boundary.1.external=true", f"time.h={h}", "time.end=0.5"]
+    fmu = build(tmp_path, ROOT / "examples" / "mooring_line.toml", "mooring", *sets)
+    out = tmp_path / "run"
+    args = [BIN, "run", str(ROOT / "examples" / "mooring_line.toml"), "--out", str(out), "--quiet",
+            "--set", "output.stride=1", "--set", "output.vtk=false", "--set", "output.plots=false",
+            "--set", "output.animation=false"]
+    for s_ in sets:
+        args += ["--set", s_]
+    subprocess.run(args, check=True, capture_output=True)
+    pos = columns(out / "positions.csv")
+    fair = pos["node"] == 160
+    x, y = pos["x"][fair], pos["y"][fair]
+    assert len(x) == 101
+    t = np.arange(0.0, 0.5 + h / 2, h)
+    sig = np.array(list(zip(t, np.append(x[1:], x[-1]), np.append(y[1:], y[-1]))),
+                   dtype=[("time", np.float64), ("motion0.x", np.float64), ("motion1.y", np.float64)])
+    res = simulate_fmu(str(fmu), stop_time=0.5, output_interval=h, input=sig,
+                       output=["H", "supplied", "support160.R.y", "balance_error"])
+    energy = columns(out / "energy.csv")
+    assert np.all(energy["h"][1:] == h), "the run took a halved step"
+    assert np.array_equal(res["H"], energy["hamiltonian"])
+    assert np.array_equal(res["supplied"], energy["supplied_energy"])
+    ports = columns(out / "ports.csv")
+    fairlead_port = ports["node"] == 160
+    assert np.array_equal(res["support160.R.y"][1:], ports["y_y"][fairlead_port])
+    assert res["support160.R.y"][1] > 5e4  # N: the line pulls the fairlead down with ~75 kN
