@@ -227,6 +227,16 @@ pub extern "C" fn fmi3Reset(c: Fmi3Instance) -> Fmi3Status {
     with(c, |i| i.inner.reset())
 }
 
+/// Refuses a `Float64` call whose value count differs from its variable count (all the
+/// FMU's variables are scalars).
+fn count_mismatch(i: &Inst3, call: &str, n_vr: usize, n_values: usize) -> Option<Status> {
+    (n_values != n_vr).then(|| {
+        i.inner.refused(&format!(
+            "{call}: {n_values} values for {n_vr} scalar variables"
+        ))
+    })
+}
+
 /// `fmi3GetFloat64`: every variable, and `time`.
 ///
 /// # Safety
@@ -240,10 +250,8 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     n_values: usize,
 ) -> Fmi3Status {
     with(c, |i| {
-        if n_values != n_vr {
-            return i.inner.refused(&format!(
-                "fmi3GetFloat64: {n_values} values for {n_vr} scalar variables"
-            ));
+        if let Some(s) = count_mismatch(i, "fmi3GetFloat64", n_vr, n_values) {
+            return s;
         }
         // SAFETY: FMI contract.
         let (Some(vr), Some(out)) = (unsafe { slice(vr, n_vr) }, unsafe {
@@ -280,10 +288,8 @@ pub unsafe extern "C" fn fmi3SetFloat64(
     n_values: usize,
 ) -> Fmi3Status {
     with(c, |i| {
-        if n_values != n_vr {
-            return i.inner.refused(&format!(
-                "fmi3SetFloat64: {n_values} values for {n_vr} scalar variables"
-            ));
+        if let Some(s) = count_mismatch(i, "fmi3SetFloat64", n_vr, n_values) {
+            return s;
         }
         // SAFETY: FMI contract.
         let (Some(vr), Some(v)) = (unsafe { slice(vr, n_vr) }, unsafe {

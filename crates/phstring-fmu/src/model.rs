@@ -426,10 +426,30 @@ impl ModelSpec {
     /// `modelDescription.xml` for FMI 2.0 Co-Simulation with the shared library
     /// `model_identifier`.
     pub fn model_description(&self, model_identifier: &str) -> String {
-        let mut x = String::new();
-        x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        self.describe(false, model_identifier)
+    }
+
+    /// `modelDescription.xml` for FMI 3.0 Co-Simulation with the shared library
+    /// `model_identifier`: the same variables as FMI 2.0 (`Float64`), plus the independent
+    /// variable `time` (value reference [`Self::time_reference`]).
+    pub fn model_description_fmi3(&self, model_identifier: &str) -> String {
+        self.describe(true, model_identifier)
+    }
+
+    /// The value reference of the independent variable `time` in FMI 3.0 (after all others).
+    pub fn time_reference(&self) -> u32 {
+        self.variables.len() as u32
+    }
+
+    /// The model description in FMI 3.0 (`v3`) or 2.0.
+    fn describe(&self, v3: bool, model_identifier: &str) -> String {
+        let mut x = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        let (version, token, extra) = match v3 {
+            true => ("3.0", "instantiationToken", ""),
+            false => ("2.0", "guid", " numberOfEventIndicators=\"0\""),
+        };
         x.push_str(&format!(
-            "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" guid=\"{}\" description=\"{}\" generationTool=\"phstring {}\" variableNamingConvention=\"flat\" numberOfEventIndicators=\"0\">\n",
+            "<fmiModelDescription fmiVersion=\"{version}\" modelName=\"{}\" {token}=\"{}\" description=\"{}\" generationTool=\"phstring {}\" variableNamingConvention=\"flat\"{extra}>\n",
             escape(&self.model_name),
             self.guid,
             escape(&format!(
@@ -438,23 +458,37 @@ impl ModelSpec {
             )),
             env!("CARGO_PKG_VERSION")
         ));
+        let capabilities = match v3 {
+            true => {
+                "canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\" hasEventMode=\"false\" providesIntermediateUpdate=\"false\" canReturnEarlyAfterIntermediateUpdate=\"false\" maxOutputDerivativeOrder=\"0\""
+            }
+            false => {
+                "canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\""
+            }
+        };
         x.push_str(&format!(
-            "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\"/>\n",
+            "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" {capabilities}/>\n",
             escape(model_identifier)
         ));
         x.push_str(&self.common_sections());
         x.push_str("  <ModelVariables>\n");
+        if v3 {
+            x.push_str(&format!(
+                "    <Float64 name=\"time\" valueReference=\"{}\" causality=\"independent\" variability=\"continuous\" description=\"simulation time\" unit=\"s\"/>\n",
+                self.time_reference()
+            ));
+        }
         for (vr, v) in self.variables.iter().enumerate() {
             let (causality, variability, initial) = match v.causality {
                 Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
                 Causality::Input => ("input", "continuous", ""),
                 Causality::Output => ("output", "continuous", " initial=\"calculated\""),
             };
-            x.push_str(&format!(
-                "    <ScalarVariable name=\"{}\" valueReference=\"{vr}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial}>\n",
+            let common = format!(
+                "name=\"{}\" valueReference=\"{vr}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial}",
                 escape(&v.name),
                 escape(&v.description)
-            ));
+            );
             let start = v
                 .start
                 .map_or_else(String::new, |s| format!(" start=\"{}\"", num(s)));
@@ -462,39 +496,39 @@ impl ModelSpec {
                 Quantity::Parameter(_) => " min=\"0\"",
                 _ => "",
             };
-            x.push_str(&format!(
-                "      <Real unit=\"{}\"{min}{start}/>\n",
-                escape(v.unit)
-            ));
-            x.push_str("    </ScalarVariable>\n");
+            let real = format!("unit=\"{}\"{min}{start}", escape(v.unit));
+            x.push_str(&match v3 {
+                true => format!("    <Float64 {common} {real}/>\n"),
+                false => format!(
+                    "    <ScalarVariable {common}>\n      <Real {real}/>\n    </ScalarVariable>\n"
+                ),
+            });
         }
         x.push_str("  </ModelVariables>\n");
         x.push_str("  <ModelStructure>\n");
         let outputs: Vec<usize> = (0..self.variables.len())
             .filter(|&i| self.variables[i].causality == Causality::Output)
             .collect();
-        if !outputs.is_empty() {
-            x.push_str("    <Outputs>\n");
+        // FMI 2.0 names a variable by its 1-based position, FMI 3.0 by its value reference.
+        let unknowns = |element: &str, list: &str| {
+            let mut y = String::new();
             for &i in &outputs {
-                x.push_str(&format!("      <Unknown index=\"{}\"/>\n", i + 1));
+                y.push_str(&match v3 {
+                    true => format!("    <{element} valueReference=\"{i}\"/>\n"),
+                    false => format!("      <Unknown index=\"{}\"/>\n", i + 1),
+                });
             }
-            x.push_str("    </Outputs>\n");
-            x.push_str("    <InitialUnknowns>\n");
-            for &i in &outputs {
-                x.push_str(&format!("      <Unknown index=\"{}\"/>\n", i + 1));
+            match (v3, outputs.is_empty()) {
+                (true, _) => y,
+                (false, true) => String::new(),
+                (false, false) => format!("    <{list}>\n{y}    </{list}>\n"),
             }
-            x.push_str("    </InitialUnknowns>\n");
-        }
+        };
+        x.push_str(&unknowns("Output", "Outputs"));
+        x.push_str(&unknowns("InitialUnknown", "InitialUnknowns"));
         x.push_str("  </ModelStructure>\n");
         x.push_str("</fmiModelDescription>\n");
         x
-    }
-}
-
-impl ModelSpec {
-    /// The value reference of the independent variable `time` in FMI 3.0 (after all others).
-    pub fn time_reference(&self) -> u32 {
-        self.variables.len() as u32
     }
 
     /// Units, log categories and the default experiment: the same elements in FMI 2.0 and
@@ -520,68 +554,6 @@ impl ModelSpec {
             num(self.t_end),
             num(self.h)
         ));
-        x
-    }
-
-    /// `modelDescription.xml` for FMI 3.0 Co-Simulation with the shared library
-    /// `model_identifier`: the same variables as FMI 2.0 (`Float64`), plus the independent
-    /// variable `time` (value reference [`Self::time_reference`]).
-    pub fn model_description_fmi3(&self, model_identifier: &str) -> String {
-        let mut x = String::new();
-        x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-        x.push_str(&format!(
-            "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"{}\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"phstring {}\" variableNamingConvention=\"flat\">\n",
-            escape(&self.model_name),
-            self.guid,
-            escape(&format!(
-                "Port-Hamiltonian string (dimension {}): exact energy balance through its ports",
-                self.dimension
-            )),
-            env!("CARGO_PKG_VERSION")
-        ));
-        x.push_str(&format!(
-            "  <CoSimulation modelIdentifier=\"{}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\" hasEventMode=\"false\" providesIntermediateUpdate=\"false\" canReturnEarlyAfterIntermediateUpdate=\"false\" maxOutputDerivativeOrder=\"0\"/>\n",
-            escape(model_identifier)
-        ));
-        x.push_str(&self.common_sections());
-        x.push_str("  <ModelVariables>\n");
-        x.push_str(&format!(
-            "    <Float64 name=\"time\" valueReference=\"{}\" causality=\"independent\" variability=\"continuous\" description=\"simulation time\" unit=\"s\"/>\n",
-            self.time_reference()
-        ));
-        for (vr, v) in self.variables.iter().enumerate() {
-            let (causality, variability, initial) = match v.causality {
-                Causality::Parameter => ("parameter", "fixed", " initial=\"exact\""),
-                Causality::Input => ("input", "continuous", ""),
-                Causality::Output => ("output", "continuous", " initial=\"calculated\""),
-            };
-            let start = v
-                .start
-                .map_or_else(String::new, |s| format!(" start=\"{}\"", num(s)));
-            let min = match v.quantity {
-                Quantity::Parameter(_) => " min=\"0\"",
-                _ => "",
-            };
-            x.push_str(&format!(
-                "    <Float64 name=\"{}\" valueReference=\"{vr}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\"{initial} unit=\"{}\"{min}{start}/>\n",
-                escape(&v.name),
-                escape(&v.description),
-                escape(v.unit)
-            ));
-        }
-        x.push_str("  </ModelVariables>\n");
-        x.push_str("  <ModelStructure>\n");
-        let outputs: Vec<usize> = (0..self.variables.len())
-            .filter(|&i| self.variables[i].causality == Causality::Output)
-            .collect();
-        for &i in &outputs {
-            x.push_str(&format!("    <Output valueReference=\"{i}\"/>\n"));
-        }
-        for &i in &outputs {
-            x.push_str(&format!("    <InitialUnknown valueReference=\"{i}\"/>\n"));
-        }
-        x.push_str("  </ModelStructure>\n");
-        x.push_str("</fmiModelDescription>\n");
         x
     }
 }

@@ -670,20 +670,23 @@ mod fmi3_functions {
         let vr = |n: &str| spec.variables.iter().position(|v| v.name == n).unwrap() as u32;
         let (h_vr, fx_vr, time_vr) = (vr("H"), vr("load0.F.x"), spec.time_reference());
         unsafe {
-            let c = fmi3InstantiateCoSimulation(
-                name.as_ptr(),
-                token.as_ptr(),
-                resources.as_ptr(),
-                false,
-                false,
-                false,
-                false,
-                std::ptr::null(),
-                0,
-                std::ptr::null_mut(),
-                None,
-                std::ptr::null(),
-            );
+            let instantiate = |token: &CString| {
+                fmi3InstantiateCoSimulation(
+                    name.as_ptr(),
+                    token.as_ptr(),
+                    resources.as_ptr(),
+                    false,
+                    false,
+                    false,
+                    false,
+                    std::ptr::null(),
+                    0,
+                    std::ptr::null_mut(),
+                    None,
+                    std::ptr::null(),
+                )
+            };
+            let c = instantiate(&token);
             assert!(!c.is_null());
             assert_eq!(
                 fmi3EnterInitializationMode(c, false, 0.0, 0.0, true, 1.0),
@@ -779,20 +782,7 @@ mod fmi3_functions {
             fmi3FreeInstance(c);
             // A wrong token is refused.
             let wrong = CString::new("{x}").unwrap();
-            let none = fmi3InstantiateCoSimulation(
-                name.as_ptr(),
-                wrong.as_ptr(),
-                resources.as_ptr(),
-                false,
-                false,
-                false,
-                false,
-                std::ptr::null(),
-                0,
-                std::ptr::null_mut(),
-                None,
-                std::ptr::null(),
-            );
+            let none = instantiate(&wrong);
             assert!(none.is_null());
         }
     }
