@@ -83,7 +83,7 @@ impl CLogger {
 }
 
 /// `s` as a C string, interior NULs replaced.
-fn c_string(s: &str) -> CString {
+pub(crate) fn c_string(s: &str) -> CString {
     CString::new(s.replace('\0', " ")).unwrap_or_default()
 }
 
@@ -99,16 +99,17 @@ pub(crate) unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
     unsafe { CStr::from_ptr(p) }.to_str().ok()
 }
 
-/// Runs `f` on the instance `c`; a null instance or a panic is an error.
-fn with<F>(c: Fmi2Component, f: F) -> Fmi2Status
+/// Runs `f` on the instance `c` (of either FMI version); a null instance or a panic is an
+/// error.
+pub(crate) fn with<F>(c: Fmi2Component, f: F) -> Fmi2Status
 where
     F: FnOnce(&mut Instance) -> Status,
 {
     if c.is_null() {
         return ERROR;
     }
-    // SAFETY: `c` was returned by `fmi2Instantiate` and not freed (the FMI contract), and
-    // the master makes one call at a time on it.
+    // SAFETY: `c` was returned by `fmi2Instantiate` or `fmi3InstantiateCoSimulation` and
+    // not freed (the FMI contract), and the master makes one call at a time on it.
     let inst = unsafe { &mut *(c as *mut Instance) };
     match catch_unwind(AssertUnwindSafe(|| f(inst))) {
         Ok(s) => s as c_int,
@@ -382,17 +383,19 @@ pub unsafe extern "C" fn fmi2SetReal(
     })
 }
 
-/// The FMU has only `Real` variables: any other type with a reference is an error.
-fn no_such(c: Fmi2Component, what: &str, n: usize) -> Fmi2Status {
-    if n == 0 {
+/// A variable type the FMU does not declare: nothing to do for zero variables, an error for
+/// any other (`hint` names the type the FMU has and its calls).
+pub(crate) fn no_such(c: Fmi2Component, what: &str, n: usize, hint: &str) -> Fmi2Status {
+    if n == 0 && !c.is_null() {
         return OK;
     }
     with(c, |i| {
-        i.refused(&format!(
-            "{what}: this FMU has only Real variables (fmi2GetReal/fmi2SetReal)"
-        ))
+        i.refused(&format!("{what}: this FMU has only {hint}"))
     })
 }
+
+/// The FMI 2.0 calls' hint for [`no_such`].
+const REAL: &str = "Real variables (fmi2GetReal/fmi2SetReal)";
 
 /// `fmi2GetInteger` (no Integer variables).
 #[unsafe(no_mangle)]
@@ -402,7 +405,7 @@ pub extern "C" fn fmi2GetInteger(
     n: usize,
     _value: *mut c_int,
 ) -> Fmi2Status {
-    no_such(c, "fmi2GetInteger", n)
+    no_such(c, "fmi2GetInteger", n, REAL)
 }
 
 /// `fmi2GetBoolean` (no Boolean variables).
@@ -413,7 +416,7 @@ pub extern "C" fn fmi2GetBoolean(
     n: usize,
     _value: *mut c_int,
 ) -> Fmi2Status {
-    no_such(c, "fmi2GetBoolean", n)
+    no_such(c, "fmi2GetBoolean", n, REAL)
 }
 
 /// `fmi2GetString` (no String variables).
@@ -424,7 +427,7 @@ pub extern "C" fn fmi2GetString(
     n: usize,
     _value: *mut *const c_char,
 ) -> Fmi2Status {
-    no_such(c, "fmi2GetString", n)
+    no_such(c, "fmi2GetString", n, REAL)
 }
 
 /// `fmi2SetInteger` (no Integer variables).
@@ -435,7 +438,7 @@ pub extern "C" fn fmi2SetInteger(
     n: usize,
     _value: *const c_int,
 ) -> Fmi2Status {
-    no_such(c, "fmi2SetInteger", n)
+    no_such(c, "fmi2SetInteger", n, REAL)
 }
 
 /// `fmi2SetBoolean` (no Boolean variables).
@@ -446,7 +449,7 @@ pub extern "C" fn fmi2SetBoolean(
     n: usize,
     _value: *const c_int,
 ) -> Fmi2Status {
-    no_such(c, "fmi2SetBoolean", n)
+    no_such(c, "fmi2SetBoolean", n, REAL)
 }
 
 /// `fmi2SetString` (no String variables).
@@ -457,7 +460,163 @@ pub extern "C" fn fmi2SetString(
     n: usize,
     _value: *const *const c_char,
 ) -> Fmi2Status {
-    no_such(c, "fmi2SetString", n)
+    no_such(c, "fmi2SetString", n, REAL)
+}
+
+/// `GetFMUstate` of either version (`call` names it in messages): a new saved state, or the
+/// given one overwritten.
+///
+/// # Safety
+/// `state` is null or points to null or to a state of ours not yet freed.
+pub(crate) unsafe fn get_state(i: &mut Instance, call: &str, state: *mut *mut c_void) -> Status {
+    if state.is_null() {
+        return i.refused(&format!("{call}: null FMU state pointer"));
+    }
+    match i.save() {
+        // SAFETY: by the caller's contract.
+        Ok(saved) => unsafe { put_state(state, saved) },
+        Err(m) => return i.refused(&format!("{call}: {m}")),
+    }
+    Status::Ok
+}
+
+/// Stores `saved` at `*state`: a new allocation, or the existing state overwritten (FMI:
+/// a non-null `*state` is a state of ours, to be reused).
+///
+/// # Safety
+/// `state` is valid; `*state` is null or a state of ours not yet freed.
+unsafe fn put_state(state: *mut *mut c_void, saved: Saved) {
+    // SAFETY: by the caller's contract.
+    unsafe {
+        if (*state).is_null() {
+            *state = Box::into_raw(Box::new(saved)) as *mut c_void;
+        } else {
+            *(*state as *mut Saved) = saved;
+        }
+    }
+}
+
+/// `SetFMUstate` of either version.
+///
+/// # Safety
+/// `state` is null or a state of ours, not freed.
+pub(crate) unsafe fn set_state(i: &mut Instance, call: &str, state: *mut c_void) -> Status {
+    if state.is_null() {
+        return i.refused(&format!("{call}: null FMU state"));
+    }
+    // SAFETY: by the caller's contract.
+    i.restore(unsafe { &*(state as *const Saved) })
+}
+
+/// `FreeFMUstate` of either version: frees `*state` and sets it to null.
+///
+/// # Safety
+/// `state` is null or points to null or to a state of ours not yet freed.
+pub(crate) unsafe fn free_state(state: *mut *mut c_void) -> Status {
+    // SAFETY: by the caller's contract.
+    unsafe {
+        if !state.is_null() && !(*state).is_null() {
+            drop(Box::from_raw(*state as *mut Saved));
+            *state = std::ptr::null_mut();
+        }
+    }
+    Status::Ok
+}
+
+/// The serialized form of a saved state: JSON (floats in round-trip form).
+///
+/// # Safety
+/// `state` is a state of ours, not freed.
+unsafe fn serialize(i: &Instance, call: &str, state: *mut c_void) -> Result<Vec<u8>, Status> {
+    if state.is_null() {
+        return Err(i.refused(&format!("{call}: null FMU state")));
+    }
+    // SAFETY: by the caller's contract.
+    serde_json::to_vec(unsafe { &*(state as *const Saved) })
+        .map_err(|e| i.refused(&format!("{call}: {e}")))
+}
+
+/// `SerializedFMUstateSize` of either version.
+///
+/// # Safety
+/// `state` is null or a state of ours; `size` is null or valid.
+pub(crate) unsafe fn state_size(
+    i: &mut Instance,
+    call: &str,
+    state: *mut c_void,
+    size: *mut usize,
+) -> Status {
+    if size.is_null() {
+        return i.refused(&format!("{call}: null size pointer"));
+    }
+    // SAFETY: by the caller's contract.
+    match unsafe { serialize(i, call, state) } {
+        // SAFETY: checked for null above.
+        Ok(data) => unsafe { *size = data.len() },
+        Err(s) => return s,
+    }
+    Status::Ok
+}
+
+/// `SerializeFMUstate` of either version (`size_call` names the size function).
+///
+/// # Safety
+/// `state` is null or a state of ours; `bytes` is null or has room for `size` bytes.
+pub(crate) unsafe fn serialize_state(
+    i: &mut Instance,
+    call: &str,
+    size_call: &str,
+    state: *mut c_void,
+    bytes: *mut u8,
+    size: usize,
+) -> Status {
+    // SAFETY: by the caller's contract.
+    let data = match unsafe { serialize(i, call, state) } {
+        Ok(d) => d,
+        Err(s) => return s,
+    };
+    // SAFETY: by the caller's contract.
+    let Some(out) = (unsafe { slice_mut(bytes, size) }) else {
+        return i.refused(&format!("{call}: null buffer"));
+    };
+    if out.len() != data.len() {
+        return i.refused(&format!(
+            "{call}: the buffer has {} bytes, the state {} ({size_call})",
+            out.len(),
+            data.len()
+        ));
+    }
+    out.copy_from_slice(&data);
+    Status::Ok
+}
+
+/// `DeSerializeFMUstate` of either version.
+///
+/// # Safety
+/// `bytes` is null or holds `size` bytes; `state` is null or valid, pointing to null or to
+/// a state of ours.
+pub(crate) unsafe fn deserialize_state(
+    i: &mut Instance,
+    call: &str,
+    bytes: *const u8,
+    size: usize,
+    state: *mut *mut c_void,
+) -> Status {
+    // SAFETY: by the caller's contract.
+    let Some(data) = (unsafe { slice(bytes, size) }) else {
+        return i.refused(&format!("{call}: null buffer"));
+    };
+    if state.is_null() {
+        return i.refused(&format!("{call}: null FMU state pointer"));
+    }
+    match serde_json::from_slice::<Saved>(data) {
+        Ok(saved) => {
+            // SAFETY: by the caller's contract.
+            unsafe { put_state(state, saved) };
+            Status::Ok
+        }
+        Err(e) => i.refused(&format!("{call}: not a state of this FMU: {e}")),
+    }
 }
 
 /// `fmi2GetFMUstate`: a new saved state, or the given one overwritten.
@@ -466,24 +625,8 @@ pub extern "C" fn fmi2SetString(
 /// `state` points to null or to a state from this function not yet freed.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: Fmi2Component, state: *mut Fmi2FmuState) -> Fmi2Status {
-    with(c, |i| {
-        if state.is_null() {
-            return i.refused("fmi2GetFMUstate: null FMUstate pointer");
-        }
-        let saved = match i.save() {
-            Ok(s) => s,
-            Err(m) => return i.refused(&format!("fmi2GetFMUstate: {m}")),
-        };
-        // SAFETY: FMI contract.
-        unsafe {
-            if (*state).is_null() {
-                *state = Box::into_raw(Box::new(saved)) as Fmi2FmuState;
-            } else {
-                *(*state as *mut Saved) = saved;
-            }
-        }
-        Status::Ok
-    })
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe { get_state(i, "fmi2GetFMUstate", state) })
 }
 
 /// `fmi2SetFMUstate`.
@@ -492,14 +635,8 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: Fmi2Component, state: *mut Fmi2FmuSt
 /// `state` is a state from `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate`, not freed.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: Fmi2Component, state: Fmi2FmuState) -> Fmi2Status {
-    with(c, |i| {
-        if state.is_null() {
-            return i.refused("fmi2SetFMUstate: null FMUstate");
-        }
-        // SAFETY: FMI contract.
-        let saved = unsafe { &*(state as *const Saved) };
-        i.restore(saved)
-    })
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe { set_state(i, "fmi2SetFMUstate", state) })
 }
 
 /// `fmi2FreeFMUstate`.
@@ -511,21 +648,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: Fmi2Component,
     state: *mut Fmi2FmuState,
 ) -> Fmi2Status {
-    with(c, |_| {
-        // SAFETY: FMI contract.
-        unsafe {
-            if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw(*state as *mut Saved));
-                *state = std::ptr::null_mut();
-            }
-        }
-        Status::Ok
-    })
-}
-
-/// The serialized form of a saved state: JSON (floats in round-trip form).
-fn serialize(saved: &Saved) -> Result<Vec<u8>, String> {
-    serde_json::to_vec(saved).map_err(|e| e.to_string())
+    // SAFETY: FMI contract.
+    with(c, |_| unsafe { free_state(state) })
 }
 
 /// `fmi2SerializedFMUstateSize`.
@@ -538,21 +662,13 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     state: Fmi2FmuState,
     size: *mut usize,
 ) -> Fmi2Status {
-    with(c, |i| {
-        if state.is_null() || size.is_null() {
-            return i.refused("fmi2SerializedFMUstateSize: null argument");
-        }
-        // SAFETY: FMI contract.
-        match serialize(unsafe { &*(state as *const Saved) }) {
-            // SAFETY: FMI contract.
-            Ok(data) => unsafe { *size = data.len() },
-            Err(m) => return i.refused(&format!("fmi2SerializedFMUstateSize: {m}")),
-        }
-        Status::Ok
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe {
+        state_size(i, "fmi2SerializedFMUstateSize", state, size)
     })
 }
 
-/// `fmi2SerializeFMUstate`.
+/// `fmi2SerializeFMUstate`: JSON, floats in round-trip form.
 ///
 /// # Safety
 /// `state` is a valid saved state; `bytes` has room for `size` bytes.
@@ -563,28 +679,16 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     bytes: *mut c_char,
     size: usize,
 ) -> Fmi2Status {
-    with(c, |i| {
-        if state.is_null() {
-            return i.refused("fmi2SerializeFMUstate: null FMUstate");
-        }
-        // SAFETY: FMI contract.
-        let data = match serialize(unsafe { &*(state as *const Saved) }) {
-            Ok(d) => d,
-            Err(m) => return i.refused(&format!("fmi2SerializeFMUstate: {m}")),
-        };
-        // SAFETY: FMI contract.
-        let Some(out) = (unsafe { slice_mut(bytes as *mut u8, size) }) else {
-            return i.refused("fmi2SerializeFMUstate: null buffer");
-        };
-        if out.len() != data.len() {
-            return i.refused(&format!(
-                "fmi2SerializeFMUstate: the buffer has {} bytes, the state {} (fmi2SerializedFMUstateSize)",
-                out.len(),
-                data.len()
-            ));
-        }
-        out.copy_from_slice(&data);
-        Status::Ok
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe {
+        serialize_state(
+            i,
+            "fmi2SerializeFMUstate",
+            "fmi2SerializedFMUstateSize",
+            state,
+            bytes as *mut u8,
+            size,
+        )
     })
 }
 
@@ -599,30 +703,15 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut Fmi2FmuState,
 ) -> Fmi2Status {
-    with(c, |i| {
-        // SAFETY: FMI contract.
-        let Some(data) = (unsafe { slice(bytes as *const u8, size) }) else {
-            return i.refused("fmi2DeSerializeFMUstate: null buffer");
-        };
-        if state.is_null() {
-            return i.refused("fmi2DeSerializeFMUstate: null FMUstate pointer");
-        }
-        match serde_json::from_slice::<Saved>(data) {
-            Ok(saved) => {
-                // SAFETY: FMI contract: a non-null `*state` is a state of ours, reused.
-                unsafe {
-                    if (*state).is_null() {
-                        *state = Box::into_raw(Box::new(saved)) as Fmi2FmuState;
-                    } else {
-                        *(*state as *mut Saved) = saved;
-                    }
-                }
-                Status::Ok
-            }
-            Err(e) => i.refused(&format!(
-                "fmi2DeSerializeFMUstate: not a state of this FMU: {e}"
-            )),
-        }
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe {
+        deserialize_state(
+            i,
+            "fmi2DeSerializeFMUstate",
+            bytes as *const u8,
+            size,
+            state,
+        )
     })
 }
 

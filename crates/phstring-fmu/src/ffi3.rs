@@ -3,12 +3,15 @@
 //! Execution, event mode, clocks and variable types other than `Float64` refuse with
 //! `fmi3Error` (or succeed for zero variables), since the FMU declares none of them.
 
-use std::ffi::{CString, c_char, c_int, c_void};
-use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::ffi::{c_char, c_int, c_void};
+use std::panic::catch_unwind;
 use std::path::PathBuf;
 
-use crate::ffi::{slice, slice_mut, str_arg};
-use crate::instance::{Instance, Logger, Mode, Saved, Status};
+use crate::ffi::{
+    c_string, deserialize_state, free_state, get_state, no_such, serialize_state, set_state, slice,
+    slice_mut, state_size, str_arg, with,
+};
+use crate::instance::{Api, Instance, Logger, Mode, Status};
 
 /// `fmi3Status`.
 pub type Fmi3Status = c_int;
@@ -26,17 +29,6 @@ pub type Fmi3LogMessage = Option<
     ),
 >;
 
-const OK: Fmi3Status = Status::Ok as c_int;
-const ERROR: Fmi3Status = Status::Error as c_int;
-const FATAL: Fmi3Status = Status::Fatal as c_int;
-
-/// An FMI 3.0 instance: the instance and the FMI 3.0 view of its variables.
-struct Inst3 {
-    inner: Instance,
-    /// The value reference of `time`.
-    time_vr: u32,
-}
-
 /// The master's logger with its environment.
 struct CLog3 {
     f: unsafe extern "C" fn(*mut c_void, c_int, *const c_char, *const c_char),
@@ -49,38 +41,10 @@ unsafe impl Send for CLog3 {}
 
 impl CLog3 {
     fn log(&self, status: Status, category: &str, message: &str) {
-        let c = CString::new(category.replace('\0', " ")).unwrap_or_default();
-        let m = CString::new(message.replace('\0', " ")).unwrap_or_default();
+        let (c, m) = (c_string(category), c_string(message));
         // SAFETY: the master's callback with valid NUL-terminated strings (FMI 3.0 passes
         // the message as it is, not as a format).
         unsafe { (self.f)(self.env, status as c_int, c.as_ptr(), m.as_ptr()) };
-    }
-}
-
-/// Runs `f` on the instance `c`; a null instance or a panic is an error.
-fn with<F>(c: Fmi3Instance, f: F) -> Fmi3Status
-where
-    F: FnOnce(&mut Inst3) -> Status,
-{
-    if c.is_null() {
-        return ERROR;
-    }
-    // SAFETY: `c` was returned by `fmi3InstantiateCoSimulation` and not freed (the FMI
-    // contract), and the master makes one call at a time on it.
-    let inst = unsafe { &mut *(c as *mut Inst3) };
-    match catch_unwind(AssertUnwindSafe(|| f(inst))) {
-        Ok(s) => s as c_int,
-        Err(_) => {
-            inst.inner.poison();
-            let _ = catch_unwind(AssertUnwindSafe(|| {
-                inst.inner.log(
-                    Status::Fatal,
-                    "logStatusError",
-                    "internal error (a panic in phstring); please report it with the scenario",
-                )
-            }));
-            FATAL
-        }
     }
 }
 
@@ -149,11 +113,10 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             Err(e) => return fail(&log, format!("cannot read {}: {e}", path.display())),
         };
         match Instance::new(name, token, text, path, Box::new(|_, _, _| {}), false) {
-            Ok(mut inner) => {
-                inner.set_log(log, logging_on);
-                inner.set_api(crate::instance::Api::Fmi3);
-                let time_vr = inner.spec().time_reference();
-                Box::into_raw(Box::new(Inst3 { inner, time_vr })) as Fmi3Instance
+            Ok(mut inst) => {
+                inst.set_log(log, logging_on);
+                inst.set_api(Api::Fmi3);
+                Box::into_raw(Box::new(inst)) as Fmi3Instance
             }
             Err(m) => fail(&log, m),
         }
@@ -169,7 +132,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
 pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
     if !c.is_null() {
         // SAFETY: FMI contract: `c` came from Box::into_raw and is freed once.
-        let _ = catch_unwind(|| drop(unsafe { Box::from_raw(c as *mut Inst3) }));
+        let _ = catch_unwind(|| drop(unsafe { Box::from_raw(c as *mut Instance) }));
     }
 }
 
@@ -182,7 +145,7 @@ pub extern "C" fn fmi3SetDebugLogging(
     _categories: *const *const c_char,
 ) -> Fmi3Status {
     with(c, |i| {
-        i.inner.set_logging(logging_on);
+        i.set_logging(logging_on);
         Status::Ok
     })
 }
@@ -199,39 +162,37 @@ pub extern "C" fn fmi3EnterInitializationMode(
     stop_time: f64,
 ) -> Fmi3Status {
     with(c, |i| {
-        let s = i
-            .inner
-            .setup_experiment(start_time, stop_time_defined.then_some(stop_time));
+        let s = i.setup_experiment(start_time, stop_time_defined.then_some(stop_time));
         if s != Status::Ok {
             return s;
         }
-        i.inner.enter_initialization()
+        i.enter_initialization()
     })
 }
 
 /// `fmi3ExitInitializationMode`: the FMU is then in step mode.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3ExitInitializationMode(c: Fmi3Instance) -> Fmi3Status {
-    with(c, |i| i.inner.exit_initialization())
+    with(c, |i| i.exit_initialization())
 }
 
 /// `fmi3Terminate`.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3Terminate(c: Fmi3Instance) -> Fmi3Status {
-    with(c, |i| i.inner.terminate())
+    with(c, |i| i.terminate())
 }
 
 /// `fmi3Reset`.
 #[unsafe(no_mangle)]
 pub extern "C" fn fmi3Reset(c: Fmi3Instance) -> Fmi3Status {
-    with(c, |i| i.inner.reset())
+    with(c, |i| i.reset())
 }
 
 /// Refuses a `Float64` call whose value count differs from its variable count (all the
 /// FMU's variables are scalars).
-fn count_mismatch(i: &Inst3, call: &str, n_vr: usize, n_values: usize) -> Option<Status> {
+fn count_mismatch(i: &Instance, call: &str, n_vr: usize, n_values: usize) -> Option<Status> {
     (n_values != n_vr).then(|| {
-        i.inner.refused(&format!(
+        i.refused(&format!(
             "{call}: {n_values} values for {n_vr} scalar variables"
         ))
     })
@@ -257,16 +218,15 @@ pub unsafe extern "C" fn fmi3GetFloat64(
         let (Some(vr), Some(out)) = (unsafe { slice(vr, n_vr) }, unsafe {
             slice_mut(values, n_values)
         }) else {
-            return i.inner.refused("fmi3GetFloat64: null array");
+            return i.refused("fmi3GetFloat64: null array");
         };
+        let time_vr = i.spec().time_reference();
         for (r, o) in vr.iter().zip(out.iter_mut()) {
-            if *r == i.time_vr {
-                *o = i.inner.time();
+            if *r == time_vr {
+                *o = i.time();
                 continue;
             }
-            let s = i
-                .inner
-                .get_real(std::slice::from_ref(r), std::slice::from_mut(o));
+            let s = i.get_real(std::slice::from_ref(r), std::slice::from_mut(o));
             if s != Status::Ok {
                 return s;
             }
@@ -295,14 +255,12 @@ pub unsafe extern "C" fn fmi3SetFloat64(
         let (Some(vr), Some(v)) = (unsafe { slice(vr, n_vr) }, unsafe {
             slice(values, n_values)
         }) else {
-            return i.inner.refused("fmi3SetFloat64: null array");
+            return i.refused("fmi3SetFloat64: null array");
         };
-        if vr.contains(&i.time_vr) {
-            return i
-                .inner
-                .refused("time is the independent variable and cannot be set");
+        if vr.contains(&i.spec().time_reference()) {
+            return i.refused("time is the independent variable and cannot be set");
         }
-        i.inner.set_real(vr, v)
+        i.set_real(vr, v)
     })
 }
 
@@ -323,22 +281,20 @@ pub unsafe extern "C" fn fmi3DoStep(
     last_successful_time: *mut f64,
 ) -> Fmi3Status {
     with(c, |i| {
-        let s = i
-            .inner
-            .do_step(current_communication_point, communication_step_size);
+        let s = i.do_step(current_communication_point, communication_step_size);
         // SAFETY: FMI contract (each pointer is checked for null).
         unsafe {
             if !event_handling_needed.is_null() {
                 *event_handling_needed = false;
             }
             if !terminate_simulation.is_null() {
-                *terminate_simulation = i.inner.mode() == Mode::StepFailed;
+                *terminate_simulation = i.mode() == Mode::StepFailed;
             }
             if !early_return.is_null() {
                 *early_return = false;
             }
             if !last_successful_time.is_null() {
-                *last_successful_time = i.inner.time();
+                *last_successful_time = i.time();
             }
         }
         s
@@ -351,33 +307,8 @@ pub unsafe extern "C" fn fmi3DoStep(
 /// `state` points to null or to a state from this function not yet freed.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetFMUState(c: Fmi3Instance, state: *mut Fmi3FmuState) -> Fmi3Status {
-    with(c, |i| {
-        if state.is_null() {
-            return i.inner.refused("fmi3GetFMUState: null FMUState pointer");
-        }
-        let saved = match i.inner.save() {
-            Ok(s) => s,
-            Err(m) => return i.inner.refused(&format!("fmi3GetFMUState: {m}")),
-        };
-        // SAFETY: FMI contract.
-        unsafe { put_state(state, saved) };
-        Status::Ok
-    })
-}
-
-/// Stores `saved` at `*state`: a new allocation, or the existing state overwritten.
-///
-/// # Safety
-/// `state` is valid; `*state` is null or a state of ours not yet freed.
-unsafe fn put_state(state: *mut Fmi3FmuState, saved: Saved) {
-    // SAFETY: by the caller's contract.
-    unsafe {
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(saved)) as Fmi3FmuState;
-        } else {
-            *(*state as *mut Saved) = saved;
-        }
-    }
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe { get_state(i, "fmi3GetFMUState", state) })
 }
 
 /// `fmi3SetFMUState`.
@@ -386,13 +317,8 @@ unsafe fn put_state(state: *mut Fmi3FmuState, saved: Saved) {
 /// `state` is a state of this FMU, not freed.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, state: Fmi3FmuState) -> Fmi3Status {
-    with(c, |i| {
-        if state.is_null() {
-            return i.inner.refused("fmi3SetFMUState: null FMUState");
-        }
-        // SAFETY: FMI contract.
-        i.inner.restore(unsafe { &*(state as *const Saved) })
-    })
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe { set_state(i, "fmi3SetFMUState", state) })
 }
 
 /// `fmi3FreeFMUState`.
@@ -401,16 +327,8 @@ pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, state: Fmi3FmuState) -
 /// `state` points to null or to a state not yet freed.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3FreeFMUState(c: Fmi3Instance, state: *mut Fmi3FmuState) -> Fmi3Status {
-    with(c, |_| {
-        // SAFETY: FMI contract.
-        unsafe {
-            if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw(*state as *mut Saved));
-                *state = std::ptr::null_mut();
-            }
-        }
-        Status::Ok
-    })
+    // SAFETY: FMI contract.
+    with(c, |_| unsafe { free_state(state) })
 }
 
 /// `fmi3SerializedFMUStateSize`.
@@ -423,17 +341,9 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     state: Fmi3FmuState,
     size: *mut usize,
 ) -> Fmi3Status {
-    with(c, |i| {
-        if state.is_null() || size.is_null() {
-            return i.inner.refused("fmi3SerializedFMUStateSize: null argument");
-        }
-        // SAFETY: FMI contract.
-        match serde_json::to_vec(unsafe { &*(state as *const Saved) }) {
-            // SAFETY: FMI contract.
-            Ok(d) => unsafe { *size = d.len() },
-            Err(e) => return i.inner.refused(&format!("fmi3SerializedFMUStateSize: {e}")),
-        }
-        Status::Ok
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe {
+        state_size(i, "fmi3SerializedFMUStateSize", state, size)
     })
 }
 
@@ -448,28 +358,16 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     bytes: *mut u8,
     size: usize,
 ) -> Fmi3Status {
-    with(c, |i| {
-        if state.is_null() {
-            return i.inner.refused("fmi3SerializeFMUState: null FMUState");
-        }
-        // SAFETY: FMI contract.
-        let data = match serde_json::to_vec(unsafe { &*(state as *const Saved) }) {
-            Ok(d) => d,
-            Err(e) => return i.inner.refused(&format!("fmi3SerializeFMUState: {e}")),
-        };
-        // SAFETY: FMI contract.
-        let Some(out) = (unsafe { slice_mut(bytes, size) }) else {
-            return i.inner.refused("fmi3SerializeFMUState: null buffer");
-        };
-        if out.len() != data.len() {
-            return i.inner.refused(&format!(
-                "fmi3SerializeFMUState: the buffer has {} bytes, the state {} (fmi3SerializedFMUStateSize)",
-                out.len(),
-                data.len()
-            ));
-        }
-        out.copy_from_slice(&data);
-        Status::Ok
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe {
+        serialize_state(
+            i,
+            "fmi3SerializeFMUState",
+            "fmi3SerializedFMUStateSize",
+            state,
+            bytes,
+            size,
+        )
     })
 }
 
@@ -484,41 +382,14 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     state: *mut Fmi3FmuState,
 ) -> Fmi3Status {
-    with(c, |i| {
-        // SAFETY: FMI contract.
-        let Some(data) = (unsafe { slice(bytes, size) }) else {
-            return i.inner.refused("fmi3DeserializeFMUState: null buffer");
-        };
-        if state.is_null() {
-            return i
-                .inner
-                .refused("fmi3DeserializeFMUState: null FMUState pointer");
-        }
-        match serde_json::from_slice::<Saved>(data) {
-            Ok(saved) => {
-                // SAFETY: FMI contract.
-                unsafe { put_state(state, saved) };
-                Status::Ok
-            }
-            Err(e) => i.inner.refused(&format!(
-                "fmi3DeserializeFMUState: not a state of this FMU: {e}"
-            )),
-        }
+    // SAFETY: FMI contract.
+    with(c, |i| unsafe {
+        deserialize_state(i, "fmi3DeserializeFMUState", bytes, size, state)
     })
 }
 
-/// A variable type the FMU does not declare: nothing to do for zero variables, an error for
-/// any other.
-fn no_such(c: Fmi3Instance, what: &str, n: usize) -> Fmi3Status {
-    if n == 0 {
-        return if c.is_null() { ERROR } else { OK };
-    }
-    with(c, |i| {
-        i.inner.refused(&format!(
-            "{what}: this FMU has only Float64 variables (fmi3GetFloat64/fmi3SetFloat64)"
-        ))
-    })
-}
+/// The FMI 3.0 calls' hint for [`no_such`].
+const FLOAT64: &str = "Float64 variables (fmi3GetFloat64/fmi3SetFloat64)";
 
 /// Getters and setters of the numeric types the FMU does not declare.
 macro_rules! other_types {
@@ -532,7 +403,7 @@ macro_rules! other_types {
             _values: $ptr,
             _n_values: usize,
         ) -> Fmi3Status {
-            no_such(c, stringify!($name), n_vr)
+            no_such(c, stringify!($name), n_vr, FLOAT64)
         }
     )*};
 }
@@ -572,7 +443,7 @@ pub extern "C" fn fmi3GetBinary(
     _values: *mut *const u8,
     _n_values: usize,
 ) -> Fmi3Status {
-    no_such(c, "fmi3GetBinary", n_vr)
+    no_such(c, "fmi3GetBinary", n_vr, FLOAT64)
 }
 
 /// `fmi3SetBinary`: the FMU has no Binary variables.
@@ -585,7 +456,7 @@ pub extern "C" fn fmi3SetBinary(
     _values: *const *const u8,
     _n_values: usize,
 ) -> Fmi3Status {
-    no_such(c, "fmi3SetBinary", n_vr)
+    no_such(c, "fmi3SetBinary", n_vr, FLOAT64)
 }
 
 /// `fmi3GetClock`: the FMU has no clocks.
@@ -596,7 +467,7 @@ pub extern "C" fn fmi3GetClock(
     n_vr: usize,
     _values: *mut bool,
 ) -> Fmi3Status {
-    no_such(c, "fmi3GetClock", n_vr)
+    no_such(c, "fmi3GetClock", n_vr, FLOAT64)
 }
 
 /// `fmi3SetClock`: the FMU has no clocks.
@@ -607,7 +478,7 @@ pub extern "C" fn fmi3SetClock(
     n_vr: usize,
     _values: *const bool,
 ) -> Fmi3Status {
-    no_such(c, "fmi3SetClock", n_vr)
+    no_such(c, "fmi3SetClock", n_vr, FLOAT64)
 }
 
 /// Functions of capabilities the FMU does not declare: each refuses with `fmi3Error` and a
@@ -617,7 +488,7 @@ macro_rules! refused {
         #[doc = concat!("`", stringify!($name), "`: ", $why, ".")]
         #[unsafe(no_mangle)]
         pub extern "C" fn $name(c: Fmi3Instance, $(_: $arg),*) -> Fmi3Status {
-            with(c, |i| i.inner.refused(concat!(stringify!($name), ": ", $why)))
+            with(c, |i| i.refused(concat!(stringify!($name), ": ", $why)))
         }
     )*};
 }

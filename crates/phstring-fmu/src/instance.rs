@@ -90,64 +90,48 @@ trait Stepper: Send {
     fn value(&self, q: Quantity) -> f64;
     fn save(&self) -> SimState;
     fn load(&mut self, s: &SimState) -> Result<(), String>;
-    /// `Ĥ(0)` [J], the reference of the balance.
-    fn h0(&self) -> f64;
-    fn set_h0(&mut self, h0: f64);
 }
 
-/// A running simulation of dimension `D` with its initial Hamiltonian.
-struct Running<const D: usize> {
-    sim: Simulation<D, Material>,
-    h0: f64,
-}
-
-impl<const D: usize> Stepper for Running<D> {
+impl<const D: usize> Stepper for Simulation<D, Material> {
     fn time(&self) -> f64 {
-        self.sim.time()
+        Simulation::time(self)
     }
     fn step_until(&mut self, t_end: f64) -> Result<(), StepError> {
-        self.sim.step_until(t_end).map(|_| ())
+        Simulation::step_until(self, t_end).map(|_| ())
     }
     fn value(&self, q: Quantity) -> f64 {
-        let e = self.sim.energies();
+        let e = self.energies();
         match q {
-            Quantity::PortOutput { port, component } => self.sim.ports()[port].output[component],
-            Quantity::PortInput { port, component } => self.sim.ports()[port].input[component],
-            Quantity::NodePosition { node, component } => self.sim.state().r[node][component],
+            Quantity::PortOutput { port, component } => self.ports()[port].output[component],
+            Quantity::PortInput { port, component } => self.ports()[port].input[component],
+            Quantity::NodePosition { node, component } => self.state().r[node][component],
             Quantity::Hamiltonian => e.hamiltonian(),
             Quantity::Kinetic => e.kinetic,
             Quantity::Potential => e.potential(),
-            Quantity::Supplied => self.sim.supplied_energy(),
-            Quantity::Dissipated => self.sim.dissipated_energy(),
-            Quantity::BalanceError => {
-                e.hamiltonian() - self.h0 - self.sim.supplied_energy()
-                    + self.sim.dissipated_energy()
-            }
-            // Parameters and inputs are served by the instance.
-            Quantity::Parameter(_)
+            Quantity::Supplied => self.supplied_energy(),
+            Quantity::Dissipated => self.dissipated_energy(),
+            // The balance needs `Ĥ(0)` (the instance's), parameters and inputs are the
+            // instance's values.
+            Quantity::BalanceError
+            | Quantity::Parameter(_)
             | Quantity::LoadForce { .. }
             | Quantity::MotionPosition { .. } => f64::NAN,
         }
     }
     fn save(&self) -> SimState {
-        SimState::from_checkpoint(&self.sim.checkpoint())
+        SimState::from_checkpoint(&self.checkpoint())
     }
     fn load(&mut self, s: &SimState) -> Result<(), String> {
-        self.sim
-            .restore(s.to_checkpoint::<D>())
+        self.restore(s.to_checkpoint::<D>())
             .map_err(|e| e.to_string())
-    }
-    fn h0(&self) -> f64 {
-        self.h0
-    }
-    fn set_h0(&mut self, h0: f64) {
-        self.h0 = h0;
     }
 }
 
 /// The simulation with the handles through which the inputs reach it.
 struct Live {
     stepper: Box<dyn Stepper>,
+    /// `Ĥ(0)` [J], the reference of `balance_error`.
+    h0: f64,
     /// Per load: its held force, if it is an input.
     loads: Vec<Option<Held>>,
     /// Per motion: its ramp, if it is an input.
@@ -158,6 +142,20 @@ struct Live {
     /// reference, served until the next internal step (the simulation's port samples are
     /// those of its last step, not part of its checkpoint).
     ports_saved: Option<Vec<Option<f64>>>,
+}
+
+impl Live {
+    /// The value of output quantity `q`.
+    fn value(&self, q: Quantity) -> f64 {
+        match q {
+            Quantity::BalanceError => {
+                let s = &self.stepper;
+                s.value(Quantity::Hamiltonian) - self.h0 - s.value(Quantity::Supplied)
+                    + s.value(Quantity::Dissipated)
+            }
+            _ => self.stepper.value(q),
+        }
+    }
 }
 
 /// A saved FMU state (`fmi2GetFMUstate`): the simulation's checkpoint and the instance's
@@ -200,6 +198,8 @@ pub struct Instance {
     live: Option<Live>,
     /// The FMI version of the calls, for messages.
     api: Api,
+    /// The value reference of the parameter `h`.
+    h_vr: Option<usize>,
 }
 
 /// The FMI version an instance is called through (for the function names in messages).
@@ -255,7 +255,6 @@ impl Instance {
             logging_on,
             text,
             path,
-            spec,
             values,
             mode: Mode::Instantiated,
             start_time: 0.0,
@@ -263,6 +262,10 @@ impl Instance {
             time: 0.0,
             live: None,
             api: Api::Fmi2,
+            h_vr: spec.variables.iter().position(|v| {
+                matches!(v.quantity, Quantity::Parameter(k) if spec.parameters[k].key == "time.h")
+            }),
+            spec,
         })
     }
 
@@ -501,10 +504,11 @@ impl Instance {
             phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
         }
         let expression_error = v.load_error.clone();
-        let sim = Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
-        let h0 = sim.energies().hamiltonian();
+        let sim: Simulation<D, Material> =
+            Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
         Ok(Live {
-            stepper: Box::new(Running { sim, h0 }),
+            h0: sim.energies().hamiltonian(),
+            stepper: Box::new(sim),
             loads,
             motions,
             expression_error,
@@ -612,7 +616,7 @@ impl Instance {
             *slot = match (var.causality, &self.live) {
                 (Causality::Output, Some(l)) => match &l.ports_saved {
                     Some(saved) if is_port(var.quantity) => saved[vr as usize].unwrap_or(f64::NAN),
-                    _ => l.stepper.value(var.quantity),
+                    _ => l.value(var.quantity),
                 },
                 (Causality::Output, None) => f64::NAN,
                 _ => self.values[vr as usize],
@@ -623,13 +627,7 @@ impl Instance {
 
     /// The internal step size `h` [s] in `values` (by value reference).
     fn step_size(&self, values: &[f64]) -> f64 {
-        self.spec
-            .variables
-            .iter()
-            .position(|v| {
-                matches!(v.quantity, Quantity::Parameter(k) if self.spec.parameters[k].key == "time.h")
-            })
-            .map_or(self.spec.h, |vr| values[vr])
+        self.h_vr.map_or(self.spec.h, |vr| values[vr])
     }
 
     /// The time the FMU is at, on the master's clock [s]: the end of the last communication
@@ -784,7 +782,7 @@ impl Instance {
             .map(|(vr, v)| match &self.live {
                 Some(l) if is_port(v.quantity) => match &l.ports_saved {
                     Some(saved) => saved[vr],
-                    None => Some(l.stepper.value(v.quantity)),
+                    None => Some(l.value(v.quantity)),
                 },
                 _ => None,
             })
@@ -804,7 +802,7 @@ impl Instance {
             }),
             ports,
             sim: self.live.as_ref().map(|l| l.stepper.save()),
-            h0: self.live.as_ref().map(|l| l.stepper.h0()),
+            h0: self.live.as_ref().map(|l| l.h0),
         })
     }
 
@@ -867,7 +865,7 @@ impl Instance {
                 }
                 target.ports_saved = Some(saved.ports.clone());
                 if let Some(h0) = saved.h0 {
-                    target.stepper.set_h0(h0);
+                    target.h0 = h0;
                 }
                 Some(live.unwrap_or_else(|| self.live.take().expect("checked above")))
             }
