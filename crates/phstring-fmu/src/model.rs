@@ -289,6 +289,7 @@ impl ModelSpec {
                 cause,
             })?;
         for (p, port) in sim.ports().iter().enumerate() {
+            let control = (loads..loads + feedback).contains(&p);
             let (prefix, comps) = if p < loads {
                 (format!("load{p}"), (0..D).collect::<Vec<_>>())
             } else if p < loads + feedback {
@@ -325,7 +326,7 @@ impl ModelSpec {
                     },
                 });
             }
-            if prefix.starts_with("control") {
+            if control {
                 for i in 0..D {
                     vars.push(Variable {
                         name: format!("{prefix}.F.{}", AXES[i]),
