@@ -27,7 +27,7 @@ pub enum MassMatrix {
 }
 
 /// The state `(r̂, v̂, Ĉ)` of the semi-discrete system.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct State<const D: usize> {
     /// Nodal positions `r̂` [m].
     pub r: Vec<Vector<D>>,
@@ -35,6 +35,23 @@ pub struct State<const D: usize> {
     pub v: Vec<Vector<D>>,
     /// Element strains `Ĉ` (dimensionless), `C_e = |r'_e|²` for a consistent state.
     pub c: Vec<f64>,
+}
+
+// By hand: `clone_from` copies into the existing vectors (the derived one allocates anew),
+// so saving and restoring the state around a step (`dg4`, error control) does not allocate.
+impl<const D: usize> Clone for State<D> {
+    fn clone(&self) -> Self {
+        Self {
+            r: self.r.clone(),
+            v: self.v.clone(),
+            c: self.c.clone(),
+        }
+    }
+    fn clone_from(&mut self, source: &Self) {
+        self.r.clone_from(&source.r);
+        self.v.clone_from(&source.v);
+        self.c.clone_from(&source.c);
+    }
 }
 
 impl<const D: usize> State<D> {
