@@ -227,8 +227,6 @@ pub struct Simulation<const D: usize, M> {
     acc_history: crate::accuracy::AccelerationHistory<D>,
     /// Error control: the last accepted step's error (1 before the first).
     err_prev: f64,
-    /// Newton iterations of the last embedded second-order solve (`dg4` with error control).
-    embedded_iterations: usize,
     /// `dg4`: the ports' sums over the sub-steps (a buffer reused from step to step).
     port_sums: Vec<(Vector<D>, Vector<D>, f64)>,
 }
@@ -347,7 +345,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             backup: None,
             acc_history: Default::default(),
             err_prev: 1.0,
-            embedded_iterations: 0,
             port_sums: Vec::new(),
         })
     }
@@ -587,7 +584,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 (self.h_cur, None)
             };
             // Error control needs the state before the step (dg4 saves it itself).
-            if tolerant && self.params.scheme != Scheme::DiscreteGradient4 {
+            if tolerant && !composed {
                 let mut b = self.backup.take().unwrap_or_default();
                 self.save(&mut b);
                 self.backup = Some(b);
@@ -595,9 +592,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             match self.try_step(h, t_next) {
                 Ok(mut report) => {
                     if tolerant {
-                        self.embedded_iterations = 0;
-                        let err = match self.step_error(t, h) {
-                            Ok(err) => err,
+                        let (err, embedded_iterations) = match self.step_error(t, h) {
+                            Ok(e) => e,
                             Err(e) => {
                                 // A stop request during the embedded solve: the step is
                                 // undone, nothing is counted.
@@ -606,8 +602,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             }
                         };
                         // The embedded solve is part of the step's work.
-                        report.newton_iterations += self.embedded_iterations;
-                        self.total_newton += self.embedded_iterations;
+                        report.newton_iterations += embedded_iterations;
+                        self.total_newton += embedded_iterations;
                         // The local error is O(h³), the error per unit step O(h²).
                         let p = 1;
                         // step_error maps NaN to infinity.
@@ -623,10 +619,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             continue;
                         }
                         let tau = t + 0.5 * h;
-                        if self.params.scheme != Scheme::DiscreteGradient4 {
-                            let acc = std::mem::take(&mut self.acc);
-                            self.acc_history.push(tau, &acc);
-                            self.acc = acc;
+                        if !composed {
+                            self.acc_history.push(tau, &self.acc);
                         }
                         let grow = crate::accuracy::accept_factor(err, self.err_prev, p);
                         // Finite, also for a step accepted at the floor with err = ∞.
@@ -728,13 +722,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
 
     /// The error of the step just taken from `t` by `h` (docs/method.md §19), relative to the
     /// tolerances: ≤ 1 to accept (NaN is infinite). The state before the step is in the
-    /// backup. `Err` only for a stop request during `dg4`'s embedded solve.
-    fn step_error(&mut self, t: f64, h: f64) -> Result<f64, StepError> {
+    /// backup. With it, the Newton iterations of `dg4`'s embedded solve (0 otherwise). `Err`
+    /// only for a stop request during that solve.
+    fn step_error(&mut self, t: f64, h: f64) -> Result<(f64, usize), StepError> {
         let c = self.params.control;
         let (rtol, atol, atol_v) = (c.rtol, c.atol, c.atol / self.params.h);
         let b = self.backup.take().expect("saved before the step");
         let before = b.state.as_ref().expect("saved before the step");
         let mut err: f64 = 0.0;
+        let mut embedded_iterations = 0;
         // The larger of the two, NaN kept.
         let worse = |err: f64, r: f64| if r <= err { err } else { r };
         if self.params.scheme == Scheme::DiscreteGradient4 {
@@ -746,7 +742,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 }
             };
             match converged {
-                true => {
+                Some(iterations) => {
+                    embedded_iterations = iterations;
                     // self.x holds the second-order increment.
                     let inv_h = 1.0 / h;
                     for i in 0..self.state.r.len() {
@@ -770,7 +767,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         );
                     }
                 }
-                false => err = f64::INFINITY,
+                None => err = f64::INFINITY,
             }
         } else {
             let tau = t + 0.5 * h;
@@ -798,18 +795,21 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // Error per unit step (relative to the largest step): a step of h/k may make 1/k of
         // the error of a step of h, so that the global error is proportional to the tolerance.
         let err = err * (self.params.h / h);
-        Ok(if err.is_nan() { f64::INFINITY } else { err })
+        Ok((
+            if err.is_nan() { f64::INFINITY } else { err },
+            embedded_iterations,
+        ))
     }
 
     /// The second-order DG step from `before` (at `t`) by `h`, started from the increment the
-    /// step just taken made; its increment is left in `self.x`. `Ok(false)` if Newton did
-    /// not converge, `Err` on a stop request. Nothing else changes.
+    /// step just taken made; its increment is left in `self.x`. `Ok(Some(iterations))` if
+    /// Newton converged, `Ok(None)` if not, `Err` on a stop request. Nothing else changes.
     fn embedded_second_order(
         &mut self,
         before: &State<D>,
         t: f64,
         h: f64,
-    ) -> Result<bool, StepError> {
+    ) -> Result<Option<usize>, StepError> {
         let t_mid = t + 0.5 * h;
         self.sum_loads(t_mid);
         for (x, (a, b)) in self.x.iter_mut().zip(self.state.r.iter().zip(&before.r)) {
@@ -832,12 +832,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.params.newton,
             self.stop.as_deref(),
         ) {
-            Ok(stats) => {
-                self.embedded_iterations = stats.iterations;
-                Ok(true)
-            }
+            Ok(stats) => Ok(Some(stats.iterations)),
             Err(NewtonError::Interrupted(_)) => Err(StepError::Interrupted { step: self.step, t }),
-            Err(_) => Ok(false),
+            Err(_) => Ok(None),
         }
     }
 
@@ -882,31 +879,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             })?;
         // M a = −res on the free components; identity rows and columns elsewhere.
         let mut m = crate::linear::mass_blocks(&self.sys);
-        for i in 0..n {
-            let fi = self.sys.free[i];
-            for k in 0..D {
-                if !fi[k] {
-                    for j in 0..D {
-                        m.diag[i][(k, j)] = 0.0;
-                        m.diag[i][(j, k)] = 0.0;
-                    }
-                    m.diag[i][(k, k)] = 1.0;
-                }
-            }
-        }
-        for (e, &[a, b]) in self.sys.mesh.elements().iter().enumerate() {
-            let (fa, fb) = (self.sys.free[a], self.sys.free[b]);
-            for k in 0..D {
-                for j in 0..D {
-                    if !fa[k] || !fb[j] {
-                        m.off[e][0][(k, j)] = 0.0;
-                    }
-                    if !fb[k] || !fa[j] {
-                        m.off[e][1][(k, j)] = 0.0;
-                    }
-                }
-            }
-        }
+        crate::statics::mask_fixed(&self.sys, &mut m);
         for (r, free) in res.iter_mut().zip(&self.sys.free) {
             *r = Vector::from_fn(|k, _| if free[k] { -r[k] } else { 0.0 });
         }

@@ -318,7 +318,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
 }
 
 /// Zeroes the rows and columns of fixed components and puts 1 on their diagonal.
-fn mask_fixed<const D: usize, M>(sys: &PhSystem<D, M>, j: &mut BlockJacobian<D>) {
+pub(crate) fn mask_fixed<const D: usize, M>(sys: &PhSystem<D, M>, j: &mut BlockJacobian<D>) {
     let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
         for k in 0..D {
             for m in 0..D {
