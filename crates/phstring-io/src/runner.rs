@@ -397,10 +397,7 @@ fn run_dim<const D: usize>(
         }
     };
     let detail = match &failure {
-        Some(StepError::NonFinite {
-            what: "load" | "prescribed position" | "feedback force",
-            ..
-        }) => load_error
+        Some(e) if e.is_input_failure() => load_error
             .lock()
             .ok()
             .and_then(|m| m.clone())

@@ -189,16 +189,25 @@ pub enum LinearSolveError {
 }
 
 impl StepError {
-    /// Whether a smaller step size may succeed (all failures of the solve; not a non-finite
-    /// load, which does not depend on `h`).
+    /// Whether a smaller step size may succeed (all failures of the solve; not a failing
+    /// input, which does not depend on `h`).
     pub fn is_recoverable(&self) -> bool {
-        !matches!(
+        !(self.is_input_failure()
+            || matches!(
+                self,
+                StepError::StepSizeTooSmall { .. } | StepError::Interrupted { .. }
+            ))
+    }
+
+    /// Whether a port input (a load, a prescribed position or a feedback force) was not
+    /// finite: a user's signal failed, not the solve.
+    pub fn is_input_failure(&self) -> bool {
+        matches!(
             self,
             StepError::NonFinite {
                 what: "load" | "prescribed position" | "feedback force",
                 ..
-            } | StepError::StepSizeTooSmall { .. }
-                | StepError::Interrupted { .. }
+            }
         )
     }
 }
