@@ -50,6 +50,25 @@ pub fn mass_blocks<const D: usize, M: StoredEnergy>(sys: &PhSystem<D, M>) -> Blo
     j
 }
 
+/// The triplets of `R_v` on the free DOFs `dof` (`n` of them) at positions `r` [m], placed
+/// at rows and columns `n …` (the velocity block of both the reduced and the full model).
+fn damping_triplets<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+    dof: &[Option<usize>],
+    n: usize,
+) -> Vec<Triplet<usize, usize, f64>> {
+    let mut tr = Vec::new();
+    triplets(
+        &restrict(&sys.mesh, &damping_blocks(sys, r), dof, n),
+        n,
+        n,
+        1.0,
+        &mut tr,
+    );
+    tr
+}
+
 /// The damping matrix `R_v` [N·s/m] in node-block form at positions `r` [m]: the derivative
 /// of the dissipative forces by the velocities at rest (docs/method.md §18). Kelvin–Voigt adds
 /// `(2η/l) r' r'ᵀ`, drag `c` times the mass pattern, a dashpot `c I`, to the diagonal blocks
@@ -412,14 +431,7 @@ pub fn reduced_model<const D: usize, M: StoredEnergy>(
     let mut tq = Vec::new();
     triplets(&k, 0, 0, 1.0, &mut tq);
     identity_triplets(n, n, n, 1.0, &mut tq);
-    let mut tr = Vec::new();
-    triplets(
-        &restrict(&sys.mesh, &damping_blocks(sys, r), &dof, n),
-        n,
-        n,
-        1.0,
-        &mut tr,
-    );
+    let tr = damping_triplets(sys, r, &dof, n);
     let names = free_names(sys, &dof);
     let states = names
         .iter()
@@ -512,14 +524,7 @@ pub fn full_model<const D: usize, M: StoredEnergy>(
             .enumerate()
             .map(|(e, &w)| Triplet::new(2 * n + e, 2 * n + e, w)),
     );
-    let mut tr = Vec::new();
-    triplets(
-        &restrict(&sys.mesh, &damping_blocks(sys, r), &dof, n),
-        n,
-        n,
-        1.0,
-        &mut tr,
-    );
+    let tr = damping_triplets(sys, r, &dof, n);
     let names = free_names(sys, &dof);
     let states = names
         .iter()
