@@ -361,19 +361,34 @@ fn x_dim<const D: usize>(_: &[phstring::Vector<D>]) -> usize {
     D
 }
 
-/// Runs `scenario` to its end time in-process and returns a dict of NumPy arrays, one entry
-/// per step from `t = 0`: `t` [s], `kinetic`, `potential`, `hamiltonian`, `supplied`,
-/// `dissipated`, `balance_error` [J], `h` [s], `newton_iterations`. The values are those of
-/// `phstring run`'s `energy.csv`, bit for bit.
-#[pyfunction]
-#[pyo3(signature = (scenario, progress=false))]
-fn run<'py>(py: Python<'py>, scenario: &Scenario, progress: bool) -> PyResult<Bound<'py, PyDict>> {
-    let mut bar = Bar::new(progress);
-    let sim = Simulation::new(scenario)?;
-    let e0 = each!(&*sim.lock(), s => s.energies());
-    let mut cols: [Vec<f64>; 8] = Default::default();
-    let mut its = vec![0usize];
-    for (c, v) in cols.iter_mut().zip([
+/// The columns of an in-process run: energies etc. per step, Newton iterations, the
+/// positions every `stride` steps (flattened) and their times.
+struct Columns {
+    cols: [Vec<f64>; 8],
+    its: Vec<usize>,
+    positions: Vec<f64>,
+    t_positions: Vec<f64>,
+    /// Nodes and dimension of a frame.
+    shape: [usize; 2],
+}
+
+/// Steps `s` to `t_end` (under one lock), recording what `run` returns.
+fn run_loop<const D: usize>(
+    py: Python<'_>,
+    s: &mut Sim<D, Material>,
+    t_end: f64,
+    stride: usize,
+    bar: &mut Bar,
+) -> PyResult<Columns> {
+    let e0 = s.energies();
+    let mut out = Columns {
+        cols: Default::default(),
+        its: vec![0],
+        positions: flat(&s.state().r),
+        t_positions: vec![0.0],
+        shape: [s.state().r.len(), D],
+    };
+    for (c, v) in out.cols.iter_mut().zip([
         0.0,
         e0.kinetic,
         e0.potential(),
@@ -385,43 +400,49 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario, progress: bool) -> PyResult<Bo
     ]) {
         c.push(v);
     }
-    let t_end = sim.t_end;
-    let stride = sim.stride;
-    let (mut positions, mut t_positions) = (Vec::new(), Vec::new());
-    let (n, dim) = each!(&*sim.lock(), s => (s.state().r.len(), x_dim(&s.state().r[..])));
-    let mut record = |sim: &Simulation, t: f64| {
-        each!(&*sim.lock(), s => positions.extend(s.state().r.iter().flat_map(|x| x.iter().copied())));
-        t_positions.push(t);
-    };
-    record(&sim, 0.0);
+    let at_end = |s: &Sim<D, Material>| s.time() >= t_end - 1e-9 * s.step_size();
     let mut steps = 0;
-    while sim.time() < t_end - 1e-9 * each!(&*sim.lock(), s => s.step_size()) {
+    while !at_end(s) {
         // Ctrl-C: KeyboardInterrupt after the current step.
         py.check_signals()?;
-        let (r, sup, dis) = each!(&mut *sim.lock(), s => {
-            let r = s.step_until(t_end).map_err(|e| StepError::new_err(e.to_string()))?;
-            (r, s.supplied_energy(), s.dissipated_energy())
-        });
-        for (c, v) in cols.iter_mut().zip([
+        let r = s
+            .step_until(t_end)
+            .map_err(|e| StepError::new_err(e.to_string()))?;
+        for (c, v) in out.cols.iter_mut().zip([
             r.t,
             r.after.kinetic,
             r.after.potential(),
             r.after.hamiltonian(),
-            sup,
-            dis,
+            s.supplied_energy(),
+            s.dissipated_energy(),
             r.balance_error,
             r.h,
         ]) {
             c.push(v);
         }
-        its.push(r.newton_iterations);
+        out.its.push(r.newton_iterations);
         bar.show(r.t, t_end);
         steps += 1;
-        let done = sim.time() >= t_end - 1e-9 * each!(&*sim.lock(), s => s.step_size());
-        if steps % stride == 0 || done {
-            record(&sim, r.t);
+        if steps % stride == 0 || at_end(s) {
+            out.positions
+                .extend(s.state().r.iter().flat_map(|x| x.iter().copied()));
+            out.t_positions.push(r.t);
         }
     }
+    Ok(out)
+}
+
+/// Runs `scenario` to its end time in-process and returns a dict of NumPy arrays, one entry
+/// per step from `t = 0`: `t` [s], `kinetic`, `potential`, `hamiltonian`, `supplied`,
+/// `dissipated`, `balance_error` [J], `h` [s], `newton_iterations`. The values are those of
+/// `phstring run`'s `energy.csv`, bit for bit.
+#[pyfunction]
+#[pyo3(signature = (scenario, progress=false))]
+fn run<'py>(py: Python<'py>, scenario: &Scenario, progress: bool) -> PyResult<Bound<'py, PyDict>> {
+    let mut bar = Bar::new(progress);
+    let sim = Simulation::new(scenario)?;
+    let (t_end, stride) = (sim.t_end, sim.stride);
+    let out = each!(&mut *sim.lock(), s => run_loop(py, s, t_end, stride, &mut bar))?;
     let d = PyDict::new(py);
     let names = [
         "t",
@@ -433,16 +454,17 @@ fn run<'py>(py: Python<'py>, scenario: &Scenario, progress: bool) -> PyResult<Bo
         "balance_error",
         "h",
     ];
-    for (name, c) in names.iter().zip(cols) {
+    for (name, c) in names.iter().zip(out.cols) {
         d.set_item(*name, PyArray1::from_vec(py, c))?;
     }
-    d.set_item("newton_iterations", PyArray1::from_vec(py, its))?;
+    d.set_item("newton_iterations", PyArray1::from_vec(py, out.its))?;
     bar.done();
-    let frames = t_positions.len();
-    d.set_item("t_positions", PyArray1::from_vec(py, t_positions))?;
+    let frames = out.t_positions.len();
+    let [n, dim] = out.shape;
+    d.set_item("t_positions", PyArray1::from_vec(py, out.t_positions))?;
     d.set_item(
         "positions",
-        PyArray1::from_vec(py, positions).reshape([frames, n, dim])?,
+        PyArray1::from_vec(py, out.positions).reshape([frames, n, dim])?,
     )?;
     Ok(d)
 }
