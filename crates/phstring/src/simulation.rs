@@ -1294,21 +1294,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         settle: Settle,
         observer: &mut dyn Observer<D, M>,
     ) -> Result<(RunSummary, Option<Settled>), StepError> {
-        observer.on_start(self);
-        let mut summary = RunSummary::default();
         let mut watch = SettleWatch::new(settle);
         watch.update(self.time(), self.energies.kinetic);
         let mut settled = None;
-        while self.time() < t_end - 1e-9 * self.h_cur {
-            let report = self.step_until(t_end)?;
-            summary.record(&report);
-            observer.on_step(self, &report);
-            settled = watch.check(self, &report);
-            if settled.is_some() {
-                break;
-            }
-        }
-        observer.on_end(self);
+        let summary = self.run_loop(t_end, observer, |sim, report| {
+            settled = watch.check(sim, report);
+            settled.is_some()
+        })?;
         Ok((summary, settled))
     }
 
@@ -1319,12 +1311,26 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         t_end: f64,
         observer: &mut dyn Observer<D, M>,
     ) -> Result<RunSummary, StepError> {
+        self.run_loop(t_end, observer, |_, _| false)
+    }
+
+    /// Steps until `t_end` [s] or until `done` says so after a step, calling the observer
+    /// at the start, after every step and at the end.
+    fn run_loop(
+        &mut self,
+        t_end: f64,
+        observer: &mut dyn Observer<D, M>,
+        mut done: impl FnMut(&Self, &StepReport) -> bool,
+    ) -> Result<RunSummary, StepError> {
         observer.on_start(self);
         let mut summary = RunSummary::default();
         while self.time() < t_end - 1e-9 * self.h_cur {
             let report = self.step_until(t_end)?;
             summary.record(&report);
             observer.on_step(self, &report);
+            if done(self, &report) {
+                break;
+            }
         }
         observer.on_end(self);
         Ok(summary)
