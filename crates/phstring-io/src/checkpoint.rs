@@ -183,6 +183,10 @@ pub struct Counters {
     pub total_newton_iterations: usize,
     /// Largest balance error [J].
     pub max_balance_error: f64,
+    /// Largest balance error relative to its step's energy scale (0 in checkpoints
+    /// written before it was recorded).
+    #[serde(default)]
+    pub max_relative_balance_error: f64,
     /// Largest Newton residual [N].
     pub max_newton_residual: f64,
     /// Rejected attempts.
@@ -391,6 +395,10 @@ impl CheckpointFile {
             ("sim.dissipated_total", s.dissipated_total),
             ("sim.err_prev", s.err_prev),
             ("counters.max_balance_error", c.max_balance_error),
+            (
+                "counters.max_relative_balance_error",
+                c.max_relative_balance_error,
+            ),
             ("counters.max_newton_residual", c.max_newton_residual),
             ("counters.local_newton_work", c.local_newton_work),
             ("counters.time_loop_s", c.time_loop_s),
@@ -654,6 +662,11 @@ impl CheckpointFile {
             ("sim.dissipated_total", s.dissipated_total, false),
             ("counters.hamiltonian_initial", c.hamiltonian_initial, false),
             ("counters.max_balance_error", c.max_balance_error, true),
+            (
+                "counters.max_relative_balance_error",
+                c.max_relative_balance_error,
+                true,
+            ),
             ("counters.max_newton_residual", c.max_newton_residual, true),
             ("counters.local_newton_work", c.local_newton_work, true),
             ("counters.time_loop_s", c.time_loop_s, true),

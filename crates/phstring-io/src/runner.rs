@@ -220,6 +220,12 @@ pub struct RunInfo {
     pub steps_at_roundoff: usize,
     /// Largest `|Ĥ_{n+1} − Ĥ_n − h û·ŷ|` [J].
     pub max_balance_error: f64,
+    /// Largest balance error of a step relative to that step's energy scale (the magnitudes
+    /// of its energy terms, docs/method.md eq. (9.6)). An accepted step of `dg` or `dg4` stays
+    /// within `balance_bound`; `mp` is not exact and reports what it gives.
+    pub max_relative_balance_error: f64,
+    /// The bound on the relative balance error of every accepted step of an exact scheme.
+    pub balance_bound: f64,
     /// Largest Newton residual at convergence [N].
     pub max_newton_residual: f64,
     /// `Ĥ(0)` [J].
@@ -484,6 +490,8 @@ fn new_info<const D: usize>(
         newton_rtol: settings.step.newton.rtol,
         steps_at_roundoff: 0,
         max_balance_error: 0.0,
+        max_relative_balance_error: 0.0,
+        balance_bound: phstring::simulation::BALANCE_RTOL,
         max_newton_residual: 0.0,
         hamiltonian_initial: sim.energies().hamiltonian(),
         hamiltonian_final: sim.energies().hamiltonian(),
@@ -544,6 +552,7 @@ fn resume_writers<const D: usize>(
     info.steps = c.steps;
     info.total_newton_iterations = c.total_newton_iterations;
     info.max_balance_error = c.max_balance_error;
+    info.max_relative_balance_error = c.max_relative_balance_error;
     info.max_newton_residual = c.max_newton_residual;
     info.rejected_steps = c.rejected_steps;
     info.line_search_backtracks = c.line_search_backtracks;
@@ -584,6 +593,7 @@ fn write_checkpoint<const D: usize>(
             steps: info.steps,
             total_newton_iterations: info.total_newton_iterations,
             max_balance_error: info.max_balance_error,
+            max_relative_balance_error: info.max_relative_balance_error,
             max_newton_residual: info.max_newton_residual,
             rejected_steps: info.rejected_steps,
             line_search_backtracks: info.line_search_backtracks,
@@ -650,6 +660,10 @@ fn step_loop<const D: usize>(
                         / sim.system().mesh().n_nodes() as f64;
                 info.max_balance_error =
                     nan_max(info.max_balance_error, report.balance_error.abs());
+                info.max_relative_balance_error = nan_max(
+                    info.max_relative_balance_error,
+                    report.relative_balance_error(),
+                );
                 info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
                 info.steps_at_roundoff += usize::from(report.at_roundoff);
                 writers.step(sim, &report)?;

@@ -247,7 +247,11 @@ fn network_outputs_describe_every_element_node_and_port() {
         let v: Vec<f64> = row[4..].iter().map(|x| x.parse().unwrap()).collect();
         let power = v[0] * v[2] + v[1] * v[3];
         let scale = (v[0] * v[2]).abs() + (v[1] * v[3]).abs();
-        assert!((v[4] - power).abs() <= 1e-14 * scale, "{row:?}");
+        // The moving support's power also carries the kinetic energy its held velocity
+        // imposes beyond the work of its impulse (docs/method.md eq. (14.5)): second order in
+        // h for a smooth motion.
+        let held = if k == 2 { 1e-6 } else { 0.0 };
+        assert!((v[4] - power).abs() <= (1e-14 + held) * scale, "{row:?}");
     }
     // The moving support takes in work; the fixed ones none.
     let last_step = &ports[ports.len() - 4..];

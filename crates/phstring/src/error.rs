@@ -169,6 +169,24 @@ pub enum SetupError {
         /// Node index.
         node: usize,
     },
+    /// A feedback law's gain is beyond what double precision resolves against the
+    /// structure's stiffness (docs/method.md §18).
+    #[error(
+        "the feedback port at node {node} has a {what} of {} N/m, beyond {} N/m = (the structure's stiffness {} N/m: the stiffest element's EA/l or a point mass's 2m/h²) / ε: a change of one unit of rounding in a coordinate would change the control force by more than the structure's own forces, so no step could be solved to round-off. Lower the gain",
+        Num(*gain), Num(*limit), Num(*stiffness)
+    )]
+    UnresolvableGain {
+        /// The port's node.
+        node: usize,
+        /// Which gain: position or velocity.
+        what: &'static str,
+        /// The gain [N/m] (a velocity gain divided by `h`).
+        gain: f64,
+        /// The structure's stiffness scale [N/m].
+        stiffness: f64,
+        /// The largest gain accepted [N/m].
+        limit: f64,
+    },
     /// The requested linear solver cannot handle this mesh.
     #[error("the block-tridiagonal solver needs a chain mesh (element e = [e, e+1])")]
     NotAChain,
@@ -205,7 +223,7 @@ impl StepError {
         matches!(
             self,
             StepError::NonFinite {
-                what: "load" | "prescribed position" | "feedback force",
+                what: "load" | "prescribed position" | "prescribed velocity" | "feedback force",
                 ..
             }
         )
@@ -318,6 +336,32 @@ pub enum StepError {
         what: &'static str,
         /// Node index.
         node: usize,
+    },
+    /// The step equations were solved to Newton's tolerance, but the step's energy balance
+    /// misses its bound (an exact scheme only, docs/method.md eq. (9.6)): the equations cannot be
+    /// solved to round-off at this step size, typically because a gain, a load or a velocity
+    /// dwarfs the structure's own forces.
+    #[error(
+        "step {step} (t = {t0} s → {t1} s): the energy balance of the step is off by {error:.3e} J, beyond its bound {bound:.3e} J (round-off of the step's energy scale {energy_scale:.3e} J); Newton stopped at residual {residual:.3e} N (force scale {force_scale:.3e} N). The step equations cannot be resolved in double precision here: look for a control gain, load or initial velocity far beyond the structure's own forces",
+        t0 = Num(*t), t1 = Num(*t_next)
+    )]
+    BalanceNotResolved {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// End time of the step [s].
+        t_next: f64,
+        /// The balance error `Ĥ_{n+1} − Ĥ_n − supplied + dissipated` [J].
+        error: f64,
+        /// The bound it missed [J].
+        bound: f64,
+        /// The step's energy scale [J].
+        energy_scale: f64,
+        /// Newton's final residual [N].
+        residual: f64,
+        /// Newton's force scale of the step [N].
+        force_scale: f64,
     },
     /// The linear solve failed.
     #[error("step {step} (t = {t0} s): {cause}", t0 = Num(*t))]

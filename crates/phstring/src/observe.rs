@@ -45,6 +45,22 @@ pub struct StepReport {
     pub dissipated: f64,
     /// Energy-balance error `Ĥ_{n+1} − Ĥ_n − h û·ŷ + D_n` [J].
     pub balance_error: f64,
+    /// The step's energy scale [J]: the magnitudes of the energy terms at both ends of the
+    /// step ([`crate::system::Energies::magnitude`]) plus `|h P|` of each port and `D_n`
+    /// (for `dg4`, the sum over its sub-steps). The balance error of an exact step is
+    /// rounding of order `ε` times this; see [`crate::simulation::BALANCE_RTOL`].
+    pub energy_scale: f64,
+}
+
+impl StepReport {
+    /// `|balance_error| / energy_scale` (0 for a step with no energy at all).
+    pub fn relative_balance_error(&self) -> f64 {
+        if self.energy_scale > 0.0 {
+            self.balance_error.abs() / self.energy_scale
+        } else {
+            self.balance_error.abs()
+        }
+    }
 }
 
 /// Totals over a run.
@@ -56,6 +72,9 @@ pub struct RunSummary {
     pub newton_iterations: usize,
     /// Largest `|balance_error|` [J].
     pub max_balance_error: f64,
+    /// Largest balance error relative to its step's energy scale
+    /// ([`StepReport::relative_balance_error`]).
+    pub max_relative_balance_error: f64,
     /// Largest Newton residual at convergence [N].
     pub max_residual: f64,
     /// Rejected step attempts.
@@ -80,6 +99,8 @@ impl RunSummary {
         self.steps += 1;
         self.newton_iterations += r.newton_iterations;
         self.max_balance_error = nan_max(self.max_balance_error, r.balance_error.abs());
+        self.max_relative_balance_error =
+            nan_max(self.max_relative_balance_error, r.relative_balance_error());
         self.max_residual = nan_max(self.max_residual, r.residual);
         self.rejected += r.rejected;
         self.at_roundoff += usize::from(r.at_roundoff);

@@ -229,6 +229,144 @@ pub struct Simulation<const D: usize, M> {
     err_prev: f64,
     /// `dg4`: the ports' sums over the sub-steps (a buffer reused from step to step).
     port_sums: Vec<(Vector<D>, Vector<D>, f64)>,
+    /// The port samples before the current step, put back if the step fails after the
+    /// ports were formed (a buffer reused from step to step).
+    ports_prev: Vec<PortSample<D>>,
+    /// Prescribed motions: where the velocity state is held at the motion's own velocity.
+    held: HeldVelocities,
+}
+
+/// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
+/// step the velocity of a moving support's component is set to the motion's velocity
+/// [`crate::boundary::Motion::velocity`] at the step's end, and the change of kinetic energy
+/// this makes is energy supplied through that support's port.
+#[derive(Debug, Clone, Default)]
+struct HeldVelocities {
+    /// Per node: whether a component of it is prescribed.
+    moving: Vec<bool>,
+    /// The velocity [m/s] each motion holds its component at, at the end of the current step.
+    velocity: Vec<f64>,
+    /// The mass matrix's entries `(port, i, j, M_ij)` [kg] of the rows `i` of moving nodes,
+    /// with the index of node `i`'s port.
+    mass: Vec<(usize, usize, usize, f64)>,
+}
+
+/// Bound on the energy-balance error of a step of an exact scheme (`dg`, `dg4`), relative to
+/// the step's energy scale [`StepReport::energy_scale`]: a step whose balance misses it is
+/// treated like a failed Newton solve (docs/method.md eq. (9.6)). Accepted steps of the test suite
+/// and the examples stay below 1e-13 of the scale.
+pub const BALANCE_RTOL: f64 = 1e-11;
+
+/// Refuses a feedback law whose gains no double-precision step can resolve against the
+/// structure: a stiffness `‖∂u/∂r‖` or `‖∂u/∂y‖/h` [N/m] (at `t = 0` and the initial state)
+/// beyond `K/ε`, with `K` the stiffest element's `EA/l` (`EA = 4 W''` at `C = 1` or just
+/// above) or a point mass's `2m/h²`. Beyond it the control force changes by more than the
+/// structure's own forces when a coordinate changes by one unit of rounding.
+fn check_gains<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    state: &State<D>,
+    h: f64,
+) -> Result<(), SetupError> {
+    if sys.boundary.feedback.is_empty() {
+        return Ok(());
+    }
+    let mut stiffness = 0.0f64;
+    for (g, _, _, l) in sys.each_element() {
+        if let crate::system::Law::String(m) = &g.law {
+            let ea = 4.0 * m.d2w(1.0).abs().max(m.d2w(1.01).abs());
+            stiffness = stiffness.max(ea / l);
+        }
+    }
+    for &(_, m) in &sys.point_mass {
+        stiffness = stiffness.max(2.0 * m / (h * h));
+    }
+    let limit = stiffness / f64::EPSILON;
+    for fb in &sys.boundary.feedback {
+        let i = fb.node;
+        let (dr, dy) = fb.law.jacobian(0.0, &state.r[i], &state.v[i]);
+        for (what, gain) in [
+            ("position gain |du/dr|", dr.amax()),
+            ("velocity gain |du/dy| / h", dy.amax() / h),
+        ] {
+            // A NaN gain is refused too.
+            if gain.is_nan() || gain > limit {
+                return Err(SetupError::UnresolvableGain {
+                    node: i,
+                    what,
+                    gain,
+                    stiffness,
+                    limit,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+impl HeldVelocities {
+    /// Sets the velocity of each prescribed component of `state` to its motion's velocity at
+    /// `t = 0` and gathers the mass-matrix rows of the moving nodes.
+    fn new<const D: usize, M: StoredEnergy>(
+        sys: &PhSystem<D, M>,
+        state: &mut State<D>,
+    ) -> Result<Self, SetupError> {
+        let motions = &sys.boundary.motions;
+        let n = sys.mesh.n_nodes();
+        let mut moving = vec![false; n];
+        for (k, m) in motions.iter().enumerate() {
+            let v = m.velocity(0.0);
+            if !v.is_finite() {
+                return Err(SetupError::NotFinite {
+                    what: "velocity at t = 0 of prescribed motion",
+                    index: k,
+                    value: v,
+                });
+            }
+            state.v[m.node][m.component] = v;
+            moving[m.node] = true;
+        }
+        // The moving nodes' ports: after the load and feedback ports, in `constrained` order.
+        let first = sys.boundary.loads.len() + sys.boundary.feedback.len();
+        let port = |i: usize| first + sys.constrained.iter().position(|&c| c == i).unwrap_or(0);
+        let mut mass = Vec::new();
+        for (g, _, [a, b], l) in sys.each_element() {
+            let (md, mo) = crate::system::element_mass(g.mass, g.rho_a, l);
+            for (i, j) in [(a, b), (b, a)] {
+                if moving[i] {
+                    mass.extend([(port(i), i, i, md), (port(i), i, j, mo)]);
+                }
+            }
+        }
+        for &(i, m) in &sys.point_mass {
+            if moving[i] {
+                mass.push((port(i), i, i, m));
+            }
+        }
+        mass.retain(|e| e.3 != 0.0);
+        Ok(Self {
+            moving,
+            velocity: vec![0.0; motions.len()],
+            mass,
+        })
+    }
+
+    /// The velocity `v` [m/s] of node `i` with its prescribed components set to the held
+    /// velocities.
+    fn apply<const D: usize>(
+        &self,
+        i: usize,
+        mut v: Vector<D>,
+        motions: &[crate::boundary::Motion],
+    ) -> Vector<D> {
+        if self.moving[i] {
+            for (m, &u) in motions.iter().zip(&self.velocity) {
+                if m.node == i {
+                    v[m.component] = u;
+                }
+            }
+        }
+        v
+    }
 }
 
 /// What a step changes, saved to put it back (a failed `dg4` sub-step, a step rejected by
@@ -316,6 +454,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             output: Vector::zeros(),
             mean_power: 0.0,
         }));
+        check_gains(&sys, &state, params.h)?;
+        let mut state = state;
+        let held = HeldVelocities::new(&sys, &mut state)?;
         let energies = sys.energies(&state);
         Ok(Self {
             newton_ws: NewtonWorkspace::new(&sys.mesh),
@@ -346,6 +487,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             acc_history: Default::default(),
             err_prev: 1.0,
             port_sums: Vec::new(),
+            ports_prev: Vec::new(),
+            held,
         })
     }
 
@@ -964,6 +1107,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             after: r.after,
                             supplied: a.supplied + r.supplied,
                             dissipated: a.dissipated + r.dissipated,
+                            energy_scale: a.energy_scale + r.energy_scale,
                             ..a
                         },
                     });
@@ -1178,12 +1322,29 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.c_next[e] = self.state.c[e] + dc;
         }
         let inv_h = 1.0 / h;
+        // The velocities the prescribed motions hold at the step's end.
+        for (k, m) in self.sys.boundary.motions.iter().enumerate() {
+            let v = m.velocity(t_next);
+            if !v.is_finite() {
+                return Err(StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "prescribed velocity",
+                    node: m.node,
+                });
+            }
+            self.held.velocity[k] = v;
+        }
         // The energies of the new state, with r and v formed as the update below forms them
         // (bit-identical to `energies` of the updated state).
         let after = {
             let (r0, v0, c, x) = (&self.state.r, &self.state.v, &self.c_next, &self.x);
-            self.sys
-                .energies_with(|i| r0[i] + x[i], |i| x[i] * (2.0 * inv_h) - v0[i], |e| c[e])
+            let (held, motions) = (&self.held, &self.sys.boundary.motions);
+            self.sys.energies_with(
+                |i| r0[i] + x[i],
+                |i| held.apply(i, x[i] * (2.0 * inv_h) - v0[i], motions),
+                |e| c[e],
+            )
         };
         if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
         {
@@ -1195,16 +1356,34 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
-        // Feedback inputs: the law at the converged step, formed as the residual forms it
-        // (from r_n, before the update).
-        let n_loads = self.sys.boundary.loads.len();
-        for (port, fb) in self.ports[n_loads..]
-            .iter_mut()
-            .zip(&self.sys.boundary.feedback)
-        {
-            let i = fb.node;
-            let (r_mid, y) = (self.state.r[i] + self.x[i] * 0.5, self.x[i] * inv_h);
-            port.input = fb.law.force(t_mid, &r_mid, &y);
+        self.ports_prev.clone_from(&self.ports);
+        let supplied = self.form_ports(t_mid, h);
+        let before = self.energies;
+        let balance_error = after.hamiltonian() - before.hamiltonian() - supplied + dissipated;
+        let supplied_magnitude = h.abs() * self.ports.iter().map(|p| p.power().abs()).sum::<f64>();
+        // The work the strain-rounding floor of Newton's test may leave undone, as a scale
+        // (its rounding is ε times this, docs/method.md eq. (9.6)).
+        let strain_work = newton::ROUNDOFF_STRAIN * stats.strain_scale * newton::norm(&self.x);
+        let energy_scale = before.magnitude
+            + after.magnitude
+            + supplied_magnitude
+            + dissipated.abs()
+            + strain_work;
+        let bound = BALANCE_RTOL * energy_scale;
+        // A NaN balance misses the bound too.
+        let missed = balance_error.is_nan() || balance_error.abs() > bound;
+        if self.params.scheme != Scheme::Midpoint && missed {
+            std::mem::swap(&mut self.ports, &mut self.ports_prev);
+            return Err(StepError::BalanceNotResolved {
+                step: step_no,
+                t,
+                t_next,
+                error: balance_error,
+                bound,
+                energy_scale,
+                residual: stats.residual,
+                force_scale: stats.force_scale,
+            });
         }
         std::mem::swap(&mut self.state.c, &mut self.c_next);
         for ((((r, v), a), vm), x) in self
@@ -1222,31 +1401,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             *a = (v_new - *v) * inv_h;
             *v = v_new;
         }
-        // Port outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces (feedback inputs
-        // were set above).
-        let n_force = n_loads + self.sys.boundary.feedback.len();
-        for (i, port) in self.ports.iter_mut().enumerate() {
-            let v_mid = self.x[port.node] * inv_h;
-            if i < n_force {
-                port.output = v_mid;
-            } else {
-                let free = &self.sys.free[port.node];
-                for k in 0..D {
-                    let fixed = !free[k];
-                    port.input[k] = if fixed { v_mid[k] } else { 0.0 };
-                    port.output[k] = if fixed {
-                        self.reaction[port.node][k]
-                    } else {
-                        0.0
-                    };
-                }
-            }
+        for (m, &v) in self.sys.boundary.motions.iter().zip(&self.held.velocity) {
+            self.state.v[m.node][m.component] = v;
         }
-        for p in &mut self.ports {
-            p.mean_power = p.input.dot(&p.output);
-        }
-        let supplied = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
-        let before = self.energies;
         debug_assert_eq!(after, self.sys.energies(&self.state));
         self.energies = after;
         self.supplied_total += supplied;
@@ -1270,8 +1427,66 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             after,
             supplied,
             dissipated,
-            balance_error: after.hamiltonian() - before.hamiltonian() - supplied + dissipated,
+            balance_error,
+            energy_scale,
         })
+    }
+
+    /// Forms the port samples of the step just solved (before the state is updated: the
+    /// feedback laws are evaluated at the mid-step from `r_n` and `Δ`): feedback inputs,
+    /// velocities at `t_{n+½}`, reactions, each port's mean power including the kinetic
+    /// energy its held velocity imposes; returns the energy supplied `h Σ P` [J].
+    fn form_ports(&mut self, t_mid: f64, h: f64) -> f64 {
+        let inv_h = 1.0 / h;
+        // Feedback inputs: the law at the converged step, formed as the residual forms it.
+        let n_loads = self.sys.boundary.loads.len();
+        for (port, fb) in self.ports[n_loads..]
+            .iter_mut()
+            .zip(&self.sys.boundary.feedback)
+        {
+            let i = fb.node;
+            let (r_mid, y) = (self.state.r[i] + self.x[i] * 0.5, self.x[i] * inv_h);
+            port.input = fb.law.force(t_mid, &r_mid, &y);
+        }
+        // Outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces.
+        let n_force = n_loads + self.sys.boundary.feedback.len();
+        for (i, port) in self.ports.iter_mut().enumerate() {
+            let v_mid = self.x[port.node] * inv_h;
+            if i < n_force {
+                port.output = v_mid;
+            } else {
+                let free = &self.sys.free[port.node];
+                for k in 0..D {
+                    let fixed = !free[k];
+                    port.input[k] = if fixed { v_mid[k] } else { 0.0 };
+                    port.output[k] = if fixed {
+                        self.reaction[port.node][k]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+        // Held velocities (docs/method.md eq. (14.5)): the impulse `M δv` that sets a moving
+        // node's velocity is part of its reaction (so that the reactions carry the whole
+        // momentum balance), and the kinetic energy it imposes beyond that impulse's work
+        // over `Δ` is part of its port's power (so that the energy balance stays exact).
+        let (held, motions) = (&self.held, &self.sys.boundary.motions);
+        let (x, v0) = (&self.x, &self.state.v);
+        let raw = |j: usize| x[j] * (2.0 * inv_h) - v0[j];
+        let dv = |j: usize| held.apply(j, raw(j), motions) - raw(j);
+        for &(port, i, _, m) in &held.mass {
+            self.ports[port].output += dv(i) * (m * inv_h);
+        }
+        for p in &mut self.ports {
+            p.mean_power = p.input.dot(&p.output);
+        }
+        for &(port, i, j, m) in &held.mass {
+            let (dvi, dvj) = (dv(i), dv(j));
+            let beyond = m * dvi.dot(&(raw(j) + dvj * 0.5 - x[i] * inv_h));
+            self.ports[port].mean_power += beyond * inv_h;
+        }
+        h * self.ports.iter().map(|p| p.power()).sum::<f64>()
     }
 
     /// The first node of the first element whose stored energy at the new strains of the

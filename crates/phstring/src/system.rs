@@ -111,6 +111,11 @@ pub struct Energies {
     pub internal: f64,
     /// External potential `−r̂ᵀ F_b`.
     pub external: f64,
+    /// The sum of the magnitudes of the terms summed into the three energies [J]: per element
+    /// its kinetic energy and `l_e |W(C_e)|`, per point mass its kinetic energy, per node
+    /// `|r̂_i·F_b,i|`. The rounding of the energies is of order `ε` times this, wherever the
+    /// origin lies (a potential near zero by cancellation has large terms).
+    pub magnitude: f64,
 }
 
 impl Energies {
@@ -785,25 +790,34 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     ) -> Energies {
         let mut kinetic = 0.0;
         let mut internal = 0.0;
+        let mut magnitude = 0.0;
         for (g, e, [a, b], l) in self.each_element() {
             let (va, vb) = (v(a), v(b));
             let (md, mo) = element_mass(g.mass, g.rho_a, l);
-            kinetic += 0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(&vb);
-            internal += l * g.law.w(c(e));
+            let (t, w) = (
+                0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(&vb),
+                l * g.law.w(c(e)),
+            );
+            kinetic += t;
+            internal += w;
+            magnitude += t.abs() + w.abs();
         }
         for &(i, m) in &self.point_mass {
-            kinetic += 0.5 * m * v(i).norm_squared();
+            let t = 0.5 * m * v(i).norm_squared();
+            kinetic += t;
+            magnitude += t;
         }
-        let external = -self
-            .f_body
-            .iter()
-            .enumerate()
-            .map(|(i, f)| r(i).dot(f))
-            .sum::<f64>();
+        let mut external = 0.0;
+        for (i, f) in self.f_body.iter().enumerate() {
+            let p = r(i).dot(f);
+            external -= p;
+            magnitude += p.abs();
+        }
         Energies {
             kinetic,
             internal,
             external,
+            magnitude,
         }
     }
 

@@ -1,6 +1,7 @@
 //! End-to-end tests of the `phstring` binary (issue 3).
 
 mod accuracy;
+mod balance;
 mod broken;
 mod control;
 mod examples;
@@ -41,6 +42,11 @@ pub fn run_with(scenario: &str, out: &Path, sets: &[&str], extra: &[&str]) -> Ou
     }
     args.extend_from_slice(extra);
     phstring(&args)
+}
+
+/// The `summary.json` of the run in `dir`.
+pub fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
 
 /// The workspace root (where `examples/` is).
