@@ -17,7 +17,8 @@ The FMU keeps its own energy balance exactly (balance_error). The coupling itsel
 explicit: the buoy used the line force of the step before, so the work it did on the line,
 sum of R_old * dz, differs from what the line received (the FMU's `supplied`, which with one
 internal step per communication step, as here, is the sum of R_new * dz over the same
-steps). The script prints that defect: +86 J of the 1.2 kJ exchanged over 30 s at
+steps, up to the small impact energies of the fairlead's held velocity where the ramps
+change slope). The script prints that defect: +86 J of the 1.2 kJ exchanged over 30 s at
 H = 0.01 s; at H = 0.02 s it is -7.6 kJ, the coupling error growing with the step.
 
     cargo build -p phstring-cli
