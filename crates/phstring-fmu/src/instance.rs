@@ -731,7 +731,7 @@ impl Instance {
         }
         if t + comm_h == t {
             return Err(format!(
-                "{step}: the communication step H = {comm_h:e} s is below the resolution of t = {t} s (there t + H == t in double precision): the FMU cannot advance"
+                "{step}: the communication step H = {comm_h:e} s is below the resolution of t = {t:e} s (there t + H == t in double precision): the FMU cannot advance"
             ));
         }
         let tol = self.landing_tol(t, comm_h);
