@@ -1,6 +1,8 @@
 //! The FMI 2.0 Co-Simulation C interface: the 34 functions of `fmi2Functions.h`, each a thin
 //! conversion of C arguments to a call on [`Instance`]. Every function catches panics and
-//! checks its pointers; a null instance or array is an `fmi2Error`, never a crash.
+//! checks its pointers; a null array, or an instance or state handle that is null, freed or
+//! never given out (the handles are registered, not addresses: see `handles`), is an
+//! `fmi2Error`, never a crash. Calls on one instance are serialized by its lock.
 
 use std::ffi::{CStr, CString, c_char, c_int, c_uint, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
