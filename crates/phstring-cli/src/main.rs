@@ -199,6 +199,9 @@ enum Command {
         /// FMI version: 2 (2.0, the version most tools import) or 3 (3.0).
         #[arg(long = "fmi-version", value_name = "2|3", default_value = "2", value_parser = ["2", "3"])]
         fmi_version: String,
+        /// Replace an existing file NAME.fmu.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -370,13 +373,14 @@ fn dispatch(cli: Cli) -> Result<()> {
             sets,
             library,
             fmi_version,
+            force,
         } => {
             let version = if fmi_version == "3" {
                 phstring_fmu::package::FmiVersion::V3
             } else {
                 phstring_fmu::package::FmiVersion::V2
             };
-            fmu(&scenario, &out, &sets, library, version)
+            fmu(&scenario, &out, &sets, library, version, force)
         }
         Command::Modes {
             scenario,
@@ -691,13 +695,15 @@ fn sweep(
     Ok(())
 }
 
-/// `phstring fmu`: the FMI 2.0 Co-Simulation FMU of a scenario.
+/// `phstring fmu`: the FMI 2.0 (or 3.0) Co-Simulation FMU of a scenario; an existing file
+/// `out` is replaced only with `force`.
 fn fmu(
     path: &Path,
     out: &Path,
     sets: &[String],
     library: Option<PathBuf>,
     version: phstring_fmu::package::FmiVersion,
+    force: bool,
 ) -> Result<()> {
     use phstring_fmu::{model::ModelSpec, package};
     if out.extension().and_then(|e| e.to_str()) != Some("fmu") {
@@ -708,6 +714,13 @@ fn fmu(
     }
     if out.is_dir() {
         bail!("-o {}: is a folder, not a file name", out.display());
+    }
+    // Anything at the name, a dangling symbolic link included.
+    if !force && std::fs::symlink_metadata(out).is_ok() {
+        bail!(
+            "-o {}: the file exists; give --force to replace it",
+            out.display()
+        );
     }
     let stem = out
         .file_stem()

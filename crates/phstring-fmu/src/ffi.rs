@@ -1,12 +1,15 @@
 //! The FMI 2.0 Co-Simulation C interface: the 34 functions of `fmi2Functions.h`, each a thin
 //! conversion of C arguments to a call on [`Instance`]. Every function catches panics and
-//! checks its pointers; a null instance or array is an `fmi2Error`, never a crash.
+//! checks its pointers; a null array, or an instance or state handle that is null, freed or
+//! never given out (the handles are registered, not addresses: see `handles`), is an
+//! `fmi2Error`, never a crash. Calls on one instance are serialized by its lock.
 
 use std::ffi::{CStr, CString, c_char, c_int, c_uint, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 
-use crate::instance::{Instance, Logger, Saved, Status};
+use crate::handles;
+use crate::instance::{Instance, Logger, Saved, Status, lock};
 
 /// `fmi2Status` as the C `int` it is.
 pub type Fmi2Status = c_int;
@@ -99,18 +102,22 @@ pub(crate) unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
     unsafe { CStr::from_ptr(p) }.to_str().ok()
 }
 
-/// Runs `f` on the instance `c` (of either FMI version); a null instance or a panic is an
-/// error.
+/// Runs `f` on the instance `c` (of either FMI version), under its lock: calls on one
+/// instance from several threads run one at a time. A handle that is null, freed or never
+/// given out, a call from within the master's logger during a call on the same instance,
+/// and a panic are errors.
 pub(crate) fn with<F>(c: Fmi2Component, f: F) -> Fmi2Status
 where
     F: FnOnce(&mut Instance) -> Status,
 {
-    if c.is_null() {
+    let Some(cell) = handles::instance(c as usize) else {
         return ERROR;
-    }
-    // SAFETY: `c` was returned by `fmi2Instantiate` or `fmi3InstantiateCoSimulation` and
-    // not freed (the FMI contract), and the master makes one call at a time on it.
-    let inst = unsafe { &mut *(c as *mut Instance) };
+    };
+    let Some(_entered) = handles::Entered::new(c as usize) else {
+        return ERROR;
+    };
+    let mut guard = lock(&cell);
+    let inst = &mut *guard;
     match catch_unwind(AssertUnwindSafe(|| f(inst))) {
         Ok(s) => s as c_int,
         Err(_) => {
@@ -268,7 +275,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
         match Instance::new(name, guid, text, path, Box::new(|_, _, _| {}), false) {
             Ok(mut inst) => {
                 inst.set_log(log, logging_on != 0);
-                Box::into_raw(Box::new(inst)) as Fmi2Component
+                handles::add_instance(inst) as Fmi2Component
             }
             Err(m) => fail(&log, m),
         }
@@ -276,16 +283,11 @@ pub unsafe extern "C" fn fmi2Instantiate(
     result.unwrap_or(std::ptr::null_mut())
 }
 
-/// `fmi2FreeInstance`.
-///
-/// # Safety
-/// `c` is null or an instance from `fmi2Instantiate`, not used after this call.
+/// `fmi2FreeInstance`: frees the instance and the FMU states it saved. A handle that is
+/// null, already freed or never given out is ignored (a second call does nothing).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2FreeInstance(c: Fmi2Component) {
-    if !c.is_null() {
-        // SAFETY: FMI contract: `c` came from Box::into_raw and is freed once.
-        let _ = catch_unwind(|| drop(unsafe { Box::from_raw(c as *mut Instance) }));
-    }
+pub extern "C" fn fmi2FreeInstance(c: Fmi2Component) {
+    let _ = catch_unwind(|| handles::remove_instance(c as usize));
 }
 
 /// `fmi2SetDebugLogging`: turns informational messages on or off (errors are always
@@ -386,10 +388,10 @@ pub unsafe extern "C" fn fmi2SetReal(
 /// A variable type the FMU does not declare: nothing to do for zero variables, an error for
 /// any other (`hint` names the type the FMU has and its calls).
 pub(crate) fn no_such(c: Fmi2Component, what: &str, n: usize, hint: &str) -> Fmi2Status {
-    if n == 0 && !c.is_null() {
-        return OK;
-    }
     with(c, |i| {
+        if n == 0 {
+            return Status::Ok;
+        }
         i.refused(&format!("{what}: this FMU has only {hint}"))
     })
 }
@@ -463,83 +465,97 @@ pub extern "C" fn fmi2SetString(
     no_such(c, "fmi2SetString", n, REAL)
 }
 
-/// `GetFMUstate` of either version (`call` names it in messages): a new saved state, or the
-/// given one overwritten.
+/// `GetFMUstate` of either version (`call` names it in messages) on instance `owner` (its
+/// handle): a new saved state, or the given one overwritten.
 ///
 /// # Safety
-/// `state` is null or points to null or to a state of ours not yet freed.
-pub(crate) unsafe fn get_state(i: &mut Instance, call: &str, state: *mut *mut c_void) -> Status {
+/// `state` is null or points to a writable state handle (null or one of ours).
+pub(crate) unsafe fn get_state(
+    i: &mut Instance,
+    owner: usize,
+    call: &str,
+    state: *mut *mut c_void,
+) -> Status {
     if state.is_null() {
         return i.refused(&format!("{call}: null FMU state pointer"));
     }
     match i.save() {
         // SAFETY: by the caller's contract.
-        Ok(saved) => unsafe { put_state(state, saved) },
-        Err(m) => return i.refused(&format!("{call}: {m}")),
+        Ok(saved) => match unsafe { put_state(state, owner, saved) } {
+            Ok(()) => Status::Ok,
+            Err(m) => i.refused(&format!("{call}: {m}")),
+        },
+        Err(m) => i.refused(&format!("{call}: {m}")),
     }
+}
+
+/// The message for a state handle that is not registered.
+const NOT_A_STATE: &str = "not an FMU state of this FMU (already freed, or never given out by it)";
+
+/// Stores `saved` (saved by instance `owner`) at `*state`: a new state, or the existing one
+/// overwritten (FMI: a non-null `*state` is a state of ours, to be reused).
+///
+/// # Safety
+/// `state` is valid for reading and writing a pointer.
+unsafe fn put_state(state: *mut *mut c_void, owner: usize, saved: Saved) -> Result<(), String> {
+    // SAFETY: by the caller's contract.
+    let current = unsafe { *state };
+    if current.is_null() {
+        // SAFETY: by the caller's contract.
+        unsafe { *state = handles::add_state(owner, saved) as *mut c_void };
+        Ok(())
+    } else if handles::replace_state(current as usize, saved) {
+        Ok(())
+    } else {
+        Err(NOT_A_STATE.into())
+    }
+}
+
+/// `SetFMUstate` of either version: refused for a handle that is not a live state.
+pub(crate) fn set_state(i: &mut Instance, call: &str, state: *mut c_void) -> Status {
+    match handles::state(state as usize) {
+        Some(saved) => i.restore(&saved),
+        None if state.is_null() => i.refused(&format!("{call}: null FMU state")),
+        None => i.refused(&format!("{call}: {NOT_A_STATE}")),
+    }
+}
+
+/// `FreeFMUstate` of either version: frees `*state` and sets it to null (a null pointer or
+/// null state is nothing to free).
+///
+/// # Safety
+/// `state` is null or valid for reading and writing a pointer.
+pub(crate) unsafe fn free_state(i: &mut Instance, call: &str, state: *mut *mut c_void) -> Status {
+    if state.is_null() {
+        return Status::Ok;
+    }
+    // SAFETY: by the caller's contract.
+    let current = unsafe { *state };
+    if current.is_null() {
+        return Status::Ok;
+    }
+    if !handles::remove_state(current as usize) {
+        return i.refused(&format!("{call}: {NOT_A_STATE}"));
+    }
+    // SAFETY: by the caller's contract.
+    unsafe { *state = std::ptr::null_mut() };
     Status::Ok
 }
 
-/// Stores `saved` at `*state`: a new allocation, or the existing state overwritten (FMI:
-/// a non-null `*state` is a state of ours, to be reused).
-///
-/// # Safety
-/// `state` is valid; `*state` is null or a state of ours not yet freed.
-unsafe fn put_state(state: *mut *mut c_void, saved: Saved) {
-    // SAFETY: by the caller's contract.
-    unsafe {
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(saved)) as *mut c_void;
-        } else {
-            *(*state as *mut Saved) = saved;
-        }
-    }
-}
-
-/// `SetFMUstate` of either version.
-///
-/// # Safety
-/// `state` is null or a state of ours, not freed.
-pub(crate) unsafe fn set_state(i: &mut Instance, call: &str, state: *mut c_void) -> Status {
-    if state.is_null() {
-        return i.refused(&format!("{call}: null FMU state"));
-    }
-    // SAFETY: by the caller's contract.
-    i.restore(unsafe { &*(state as *const Saved) })
-}
-
-/// `FreeFMUstate` of either version: frees `*state` and sets it to null.
-///
-/// # Safety
-/// `state` is null or points to null or to a state of ours not yet freed.
-pub(crate) unsafe fn free_state(state: *mut *mut c_void) -> Status {
-    // SAFETY: by the caller's contract.
-    unsafe {
-        if !state.is_null() && !(*state).is_null() {
-            drop(Box::from_raw(*state as *mut Saved));
-            *state = std::ptr::null_mut();
-        }
-    }
-    Status::Ok
-}
-
-/// The serialized form of a saved state: JSON (floats in round-trip form).
-///
-/// # Safety
-/// `state` is a state of ours, not freed.
-unsafe fn serialize(i: &Instance, call: &str, state: *mut c_void) -> Result<Vec<u8>, Status> {
-    if state.is_null() {
-        return Err(i.refused(&format!("{call}: null FMU state")));
-    }
-    // SAFETY: by the caller's contract.
-    serde_json::to_vec(unsafe { &*(state as *const Saved) })
+/// The serialized form of saved state `state` ([`Saved::to_bytes`]).
+fn serialize(i: &mut Instance, call: &str, state: *mut c_void) -> Result<Vec<u8>, Status> {
+    let Some(saved) = handles::state(state as usize) else {
+        return Err(i.refused(&format!("{call}: {NOT_A_STATE}")));
+    };
+    saved
+        .to_bytes()
         .map_err(|e| i.refused(&format!("{call}: {e}")))
 }
 
 /// `SerializedFMUstateSize` of either version.
 ///
 /// # Safety
-/// `state` is null or a state of ours; `size` is null or valid.
+/// `size` is null or valid for writing.
 pub(crate) unsafe fn state_size(
     i: &mut Instance,
     call: &str,
@@ -549,9 +565,8 @@ pub(crate) unsafe fn state_size(
     if size.is_null() {
         return i.refused(&format!("{call}: null size pointer"));
     }
-    // SAFETY: by the caller's contract.
-    match unsafe { serialize(i, call, state) } {
-        // SAFETY: checked for null above.
+    match serialize(i, call, state) {
+        // SAFETY: checked for null above; valid by the caller's contract.
         Ok(data) => unsafe { *size = data.len() },
         Err(s) => return s,
     }
@@ -561,7 +576,7 @@ pub(crate) unsafe fn state_size(
 /// `SerializeFMUstate` of either version (`size_call` names the size function).
 ///
 /// # Safety
-/// `state` is null or a state of ours; `bytes` is null or has room for `size` bytes.
+/// `bytes` is null or has room for `size` bytes.
 pub(crate) unsafe fn serialize_state(
     i: &mut Instance,
     call: &str,
@@ -570,8 +585,7 @@ pub(crate) unsafe fn serialize_state(
     bytes: *mut u8,
     size: usize,
 ) -> Status {
-    // SAFETY: by the caller's contract.
-    let data = match unsafe { serialize(i, call, state) } {
+    let data = match serialize(i, call, state) {
         Ok(d) => d,
         Err(s) => return s,
     };
@@ -590,13 +604,14 @@ pub(crate) unsafe fn serialize_state(
     Status::Ok
 }
 
-/// `DeSerializeFMUstate` of either version.
+/// `DeSerializeFMUstate` of either version, on instance `owner` (its handle).
 ///
 /// # Safety
-/// `bytes` is null or holds `size` bytes; `state` is null or valid, pointing to null or to
-/// a state of ours.
+/// `bytes` is null or holds `size` bytes; `state` is null or valid for reading and writing
+/// a pointer.
 pub(crate) unsafe fn deserialize_state(
     i: &mut Instance,
+    owner: usize,
     call: &str,
     bytes: *const u8,
     size: usize,
@@ -609,53 +624,52 @@ pub(crate) unsafe fn deserialize_state(
     if state.is_null() {
         return i.refused(&format!("{call}: null FMU state pointer"));
     }
-    match serde_json::from_slice::<Saved>(data) {
-        Ok(saved) => {
-            // SAFETY: by the caller's contract.
-            unsafe { put_state(state, saved) };
-            Status::Ok
-        }
-        Err(e) => i.refused(&format!("{call}: not a state of this FMU: {e}")),
+    let put = Saved::from_bytes(data).and_then(|saved| {
+        // SAFETY: by the caller's contract.
+        unsafe { put_state(state, owner, saved) }
+    });
+    match put {
+        Ok(()) => Status::Ok,
+        Err(e) => i.refused(&format!("{call}: {e}")),
     }
 }
 
 /// `fmi2GetFMUstate`: a new saved state, or the given one overwritten.
 ///
 /// # Safety
-/// `state` points to null or to a state from this function not yet freed.
+/// `state` is valid for reading and writing a pointer (to null or to a state of this FMU).
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: Fmi2Component, state: *mut Fmi2FmuState) -> Fmi2Status {
     // SAFETY: FMI contract.
-    with(c, |i| unsafe { get_state(i, "fmi2GetFMUstate", state) })
+    with(c, |i| unsafe {
+        get_state(i, c as usize, "fmi2GetFMUstate", state)
+    })
 }
 
-/// `fmi2SetFMUstate`.
-///
-/// # Safety
-/// `state` is a state from `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate`, not freed.
+/// `fmi2SetFMUstate`: a state from `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate` (a freed
+/// or unknown handle is refused).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: Fmi2Component, state: Fmi2FmuState) -> Fmi2Status {
-    // SAFETY: FMI contract.
-    with(c, |i| unsafe { set_state(i, "fmi2SetFMUstate", state) })
+pub extern "C" fn fmi2SetFMUstate(c: Fmi2Component, state: Fmi2FmuState) -> Fmi2Status {
+    with(c, |i| set_state(i, "fmi2SetFMUstate", state))
 }
 
 /// `fmi2FreeFMUstate`.
 ///
 /// # Safety
-/// `state` points to null or to a state not yet freed.
+/// `state` is null or valid for reading and writing a pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: Fmi2Component,
     state: *mut Fmi2FmuState,
 ) -> Fmi2Status {
     // SAFETY: FMI contract.
-    with(c, |_| unsafe { free_state(state) })
+    with(c, |i| unsafe { free_state(i, "fmi2FreeFMUstate", state) })
 }
 
 /// `fmi2SerializedFMUstateSize`.
 ///
 /// # Safety
-/// `state` is a valid saved state, `size` a valid pointer.
+/// `size` is a valid pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: Fmi2Component,
@@ -668,10 +682,10 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     })
 }
 
-/// `fmi2SerializeFMUstate`: JSON, floats in round-trip form.
+/// `fmi2SerializeFMUstate`: JSON with a checksum, floats in round-trip form.
 ///
 /// # Safety
-/// `state` is a valid saved state; `bytes` has room for `size` bytes.
+/// `bytes` has room for `size` bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: Fmi2Component,
@@ -707,6 +721,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     with(c, |i| unsafe {
         deserialize_state(
             i,
+            c as usize,
             "fmi2DeSerializeFMUstate",
             bytes as *const u8,
             size,

@@ -11,6 +11,7 @@ use crate::ffi::{
     c_string, deserialize_state, free_state, get_state, no_such, serialize_state, set_state, slice,
     slice_mut, state_size, str_arg, with,
 };
+use crate::handles;
 use crate::instance::{Api, Instance, Logger, Mode, Status};
 
 /// `fmi3Status`.
@@ -116,7 +117,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             Ok(mut inst) => {
                 inst.set_log(log, logging_on);
                 inst.set_api(Api::Fmi3);
-                Box::into_raw(Box::new(inst)) as Fmi3Instance
+                handles::add_instance(inst) as Fmi3Instance
             }
             Err(m) => fail(&log, m),
         }
@@ -124,16 +125,11 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     result.unwrap_or(std::ptr::null_mut())
 }
 
-/// `fmi3FreeInstance`.
-///
-/// # Safety
-/// `c` is null or an instance from `fmi3InstantiateCoSimulation`, not used after this call.
+/// `fmi3FreeInstance`: frees the instance and the FMU states it saved. A handle that is
+/// null, already freed or never given out is ignored (a second call does nothing).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
-    if !c.is_null() {
-        // SAFETY: FMI contract: `c` came from Box::into_raw and is freed once.
-        let _ = catch_unwind(|| drop(unsafe { Box::from_raw(c as *mut Instance) }));
-    }
+pub extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
+    let _ = catch_unwind(|| handles::remove_instance(c as usize));
 }
 
 /// `fmi3SetDebugLogging`: informational messages on or off (errors are always logged).
@@ -190,7 +186,7 @@ pub extern "C" fn fmi3Reset(c: Fmi3Instance) -> Fmi3Status {
 
 /// Refuses a `Float64` call whose value count differs from its variable count (all the
 /// FMU's variables are scalars).
-fn count_mismatch(i: &Instance, call: &str, n_vr: usize, n_values: usize) -> Option<Status> {
+fn count_mismatch(i: &mut Instance, call: &str, n_vr: usize, n_values: usize) -> Option<Status> {
     (n_values != n_vr).then(|| {
         i.refused(&format!(
             "{call}: {n_values} values for {n_vr} scalar variables"
@@ -304,37 +300,35 @@ pub unsafe extern "C" fn fmi3DoStep(
 /// `fmi3GetFMUState`: a new saved state, or the given one overwritten.
 ///
 /// # Safety
-/// `state` points to null or to a state from this function not yet freed.
+/// `state` is valid for reading and writing a pointer (to null or to a state of this FMU).
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetFMUState(c: Fmi3Instance, state: *mut Fmi3FmuState) -> Fmi3Status {
     // SAFETY: FMI contract.
-    with(c, |i| unsafe { get_state(i, "fmi3GetFMUState", state) })
+    with(c, |i| unsafe {
+        get_state(i, c as usize, "fmi3GetFMUState", state)
+    })
 }
 
-/// `fmi3SetFMUState`.
-///
-/// # Safety
-/// `state` is a state of this FMU, not freed.
+/// `fmi3SetFMUState`: a state of this FMU (a freed or unknown handle is refused).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, state: Fmi3FmuState) -> Fmi3Status {
-    // SAFETY: FMI contract.
-    with(c, |i| unsafe { set_state(i, "fmi3SetFMUState", state) })
+pub extern "C" fn fmi3SetFMUState(c: Fmi3Instance, state: Fmi3FmuState) -> Fmi3Status {
+    with(c, |i| set_state(i, "fmi3SetFMUState", state))
 }
 
 /// `fmi3FreeFMUState`.
 ///
 /// # Safety
-/// `state` points to null or to a state not yet freed.
+/// `state` is null or valid for reading and writing a pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3FreeFMUState(c: Fmi3Instance, state: *mut Fmi3FmuState) -> Fmi3Status {
     // SAFETY: FMI contract.
-    with(c, |_| unsafe { free_state(state) })
+    with(c, |i| unsafe { free_state(i, "fmi3FreeFMUState", state) })
 }
 
 /// `fmi3SerializedFMUStateSize`.
 ///
 /// # Safety
-/// `state` is a valid saved state, `size` a valid pointer.
+/// `size` is a valid pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     c: Fmi3Instance,
@@ -347,10 +341,10 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     })
 }
 
-/// `fmi3SerializeFMUState`: JSON, floats in round-trip form.
+/// `fmi3SerializeFMUState`: JSON with a checksum, floats in round-trip form.
 ///
 /// # Safety
-/// `state` is a valid saved state; `bytes` has room for `size` bytes.
+/// `bytes` has room for `size` bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SerializeFMUState(
     c: Fmi3Instance,
@@ -384,7 +378,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
 ) -> Fmi3Status {
     // SAFETY: FMI contract.
     with(c, |i| unsafe {
-        deserialize_state(i, "fmi3DeserializeFMUState", bytes, size, state)
+        deserialize_state(i, c as usize, "fmi3DeserializeFMUState", bytes, size, state)
     })
 }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use phstring::{Material, Simulation, StepError, Vector};
-use phstring_io::checkpoint::SimState;
+use phstring_io::checkpoint::{SimState, fnv1a64_hex};
 use phstring_io::scenario::{ScenarioFile, Validated};
 use serde::{Deserialize, Serialize};
 
@@ -20,8 +20,9 @@ pub enum Status {
     Warning = 1,
     /// `fmi2Discard`: the step failed; the FMU stays at the last internal step it completed.
     Discard = 2,
-    /// `fmi2Error`: the call failed; the instance can only be reset or freed (or, after a
-    /// refused value, the call is simply not carried out, see the method's doc).
+    /// `fmi2Error`: the call failed and was not carried out; from here on the instance only
+    /// accepts getters, a restore of a saved state (`fmi2SetFMUstate`), reset and free (the
+    /// FMI state machine's error state, [`Mode::Error`]).
     Error = 3,
     /// `fmi2Fatal`.
     Fatal = 4,
@@ -40,7 +41,8 @@ pub enum Mode {
     StepFailed,
     /// After `fmi2Terminate`.
     Terminated,
-    /// After an error that ends the run.
+    /// After a call that returned `Error` (or `Fatal`): only getters, a restore of a saved
+    /// state, reset and free are accepted.
     Error,
 }
 
@@ -178,6 +180,61 @@ pub struct Saved {
     h0: Option<f64>,
 }
 
+/// Format name of a serialized FMU state.
+const STATE_FORMAT: &str = "phstring-fmu-state";
+
+/// A serialized [`Saved`] as written: the state with its checksum beside it.
+#[derive(Serialize)]
+struct SealedRef<'a> {
+    format: &'a str,
+    checksum: &'a str,
+    state: &'a Saved,
+}
+
+/// A serialized [`Saved`] as read.
+#[derive(Deserialize)]
+struct Sealed {
+    format: String,
+    checksum: String,
+    state: Saved,
+}
+
+impl Saved {
+    /// The serialized form (`fmi2SerializeFMUstate`): JSON `{"format", "checksum",
+    /// "state"}`, floats in round-trip form; the checksum is FNV-1a (64 bit, hex, as in
+    /// `checkpoint.json`) over the state's JSON, so any edited value is detected on reading.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
+        let state = serde_json::to_vec(self).map_err(|e| e.to_string())?;
+        serde_json::to_vec(&SealedRef {
+            format: STATE_FORMAT,
+            checksum: &fnv1a64_hex(&state),
+            state: self,
+        })
+        .map_err(|e| e.to_string())
+    }
+
+    /// A state from its serialized form ([`Self::to_bytes`]); an error says what is wrong
+    /// (not a state of phstring's FMU, or edited or damaged since it was serialized).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
+        let sealed: Sealed = serde_json::from_slice(bytes)
+            .map_err(|e| format!("not a serialized state of a phstring FMU ({e})"))?;
+        if sealed.format != STATE_FORMAT {
+            return Err(format!(
+                "not a serialized state of a phstring FMU (format {:?})",
+                sealed.format.chars().take(40).collect::<String>()
+            ));
+        }
+        let state = serde_json::to_vec(&sealed.state).map_err(|e| e.to_string())?;
+        if fnv1a64_hex(&state) != sealed.checksum {
+            return Err(
+                "checksum mismatch: the serialized state was edited or damaged after it was written"
+                    .into(),
+            );
+        }
+        Ok(sealed.state)
+    }
+}
+
 /// One FMU instance.
 pub struct Instance {
     name: String,
@@ -306,9 +363,9 @@ impl Instance {
         self.logging_on = logging_on;
     }
 
-    /// Logs `message` as an error and returns `Error`, leaving the instance as it was (a
-    /// call that is refused).
-    pub fn refused(&self, message: &str) -> Status {
+    /// Logs `message` as an error and returns `Error`: the call is not carried out, and the
+    /// instance goes to the error state ([`Mode::Error`]) with its simulation as it was.
+    pub fn refused(&mut self, message: &str) -> Status {
         self.refuse(message.to_string())
     }
 
@@ -338,9 +395,17 @@ impl Instance {
         status
     }
 
-    /// A refused call that leaves the instance as it was (bad arguments, wrong mode).
-    fn refuse(&self, message: String) -> Status {
+    /// A refused call (bad arguments, wrong mode): nothing of it is carried out, and the
+    /// instance goes to the error state, as FMI prescribes after `fmi2Error` (a master that
+    /// ignores the status must not get a run that silently differs from what it asked for).
+    /// The simulation stays as it was, so a restore of a saved state continues from there.
+    fn refuse(&mut self, message: String) -> Status {
+        let message = format!(
+            "{message}; the instance is in the error state: restore a saved FMU state with {}, or reset it",
+            self.call("SetFMUstate")
+        );
         self.log(Status::Error, "logStatusError", &message);
+        self.mode = Mode::Error;
         Status::Error
     }
 
@@ -391,6 +456,18 @@ impl Instance {
                 self.call("ExitInitializationMode"),
                 self.mode
             ));
+        }
+        if let Some(stop) = self.stop_time {
+            let (h, span) = (self.step_size(&self.values), stop - self.start_time);
+            if h > span + time_tol(span, stop) {
+                return self.fail((
+                    Status::Error,
+                    format!(
+                        "the parameter h = {h} s (the internal step) is longer than the experiment, {span} s from startTime = {} s to stopTime = {stop} s: set h to at most {span} s",
+                        self.start_time
+                    ),
+                ));
+            }
         }
         if let Err(e) = self.ensure_live() {
             return self.fail(e);
@@ -522,17 +599,9 @@ impl Instance {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         if matches!(self.mode, Mode::StepFailed | Mode::Terminated | Mode::Error) {
             return self.refuse(format!(
-                "{} is not allowed now (the instance is {:?}{})",
+                "{} is not allowed now (the instance is {:?})",
                 self.call("SetReal"),
                 self.mode,
-                if self.mode == Mode::StepFailed {
-                    format!(
-                        ": restore a saved FMU state with {}, or terminate",
-                        self.call("SetFMUstate")
-                    )
-                } else {
-                    String::new()
-                }
             ));
         }
         for (&vr, &x) in vrs.iter().zip(values) {
@@ -598,8 +667,8 @@ impl Instance {
                 }
                 Mode::Error | Mode::Terminated => {}
                 _ => {
-                    // A parameter that does not fit is refused here, and the master can still
-                    // correct it before initialization ends.
+                    // A parameter that does not fit is refused here (FMI's error state
+                    // follows: the master resets the instance and sets another value).
                     if let Err((_, m)) = self.ensure_live() {
                         return self.refuse(m);
                     }
@@ -631,110 +700,97 @@ impl Instance {
     }
 
     /// The time the FMU is at, on the master's clock [s]: the end of the last communication
-    /// step, or after a discarded step the last internal step completed.
+    /// step, or after a step that failed the last internal step completed.
     pub fn time(&self) -> f64 {
-        match (&self.live, self.mode) {
-            (Some(l), Mode::StepFailed | Mode::Error) => self.start_time + l.stepper.time(),
-            _ => self.time,
-        }
+        self.time
     }
 
-    /// `fmi2DoStep(t, H)`: internal steps of at most the parameter `h` to reach `t + H`,
-    /// with the inputs held at the values set before the call. `Discard` if a step fails
-    /// (the FMU stays at the last internal step it completed), `Error` for calls that do not
-    /// fit (wrong `t`, `H ≤ 0`, past the stop time) and for failing scenario expressions.
-    pub fn do_step(&mut self, t: f64, comm_h: f64) -> Status {
+    /// The landing tolerance of `fmi2DoStep(t, H)` [s]: how far the FMU's time may be from
+    /// the master's `t` (and the end of the step from `stopTime`) by rounding. It scales with
+    /// the step actually asked for, `min(h, H)`, so that a huge parameter `h` cannot make a
+    /// whole communication step look like rounding.
+    fn landing_tol(&self, t: f64, comm_h: f64) -> f64 {
+        let h = self.step_size(&self.values).min(comm_h);
+        // Times are compared on the master's clock, rounding included (start time and all).
+        time_tol(h, t.abs().max(self.start_time.abs()) + comm_h)
+    }
+
+    /// Why `fmi2DoStep(t, comm_h)` cannot be carried out, if it cannot.
+    fn check_step(&self, t: f64, comm_h: f64) -> Result<(), String> {
+        let step = self.call("DoStep");
         if self.mode != Mode::StepComplete {
-            return self.refuse(format!(
-                "{} is allowed only after initialization and a completed step (the instance is {:?})",
-                self.call("DoStep"),
+            return Err(format!(
+                "{step} is allowed only after initialization and a completed step (the instance is {:?})",
                 self.mode
             ));
         }
         if !(comm_h > 0.0 && comm_h.is_finite()) {
-            return self.refuse(format!(
+            return Err(format!(
                 "the communication step size must be positive and finite, got {comm_h}"
             ));
         }
-        let h = self.step_size(&self.values);
-        // Times are compared on the master's clock, rounding included (start time and all).
-        let scale = t.abs().max(self.start_time.abs()) + comm_h;
+        if t + comm_h == t {
+            return Err(format!(
+                "{step}: the communication step H = {comm_h:e} s is below the resolution of t = {t:e} s (there t + H == t in double precision): the FMU cannot advance"
+            ));
+        }
+        let tol = self.landing_tol(t, comm_h);
         let off = (t - self.time).abs();
-        if off.is_nan() || off > time_tol(h, scale) {
-            return self.refuse(format!(
-                "{} at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
-                self.call("DoStep"),
+        if off.is_nan() || off > tol {
+            return Err(format!(
+                "{step} at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
                 self.time
             ));
         }
         if let Some(stop) = self.stop_time
-            && t + comm_h > stop + time_tol(h, stop)
+            && t + comm_h > stop + tol
         {
-            return self.refuse(format!(
-                "{} to t = {} s passes stopTime = {stop} s",
-                self.call("DoStep"),
+            return Err(format!(
+                "{step} to t = {} s passes stopTime = {stop} s",
                 t + comm_h
             ));
         }
+        Ok(())
+    }
+
+    /// `fmi2DoStep(t, H)`: internal steps of at most the parameter `h` to reach `t + H`,
+    /// with the inputs held at the values set before the call. `Ok` only when the simulation
+    /// reached `t + H` (up to the landing tolerance); `Discard` if a step fails (the FMU stays
+    /// at the last internal step it completed); `Error` for calls that do not fit (wrong `t`,
+    /// `H ≤ 0`, past the stop time, `H` below the resolution of `t`, so that the simulation
+    /// would not move) and for failing scenario expressions.
+    pub fn do_step(&mut self, t: f64, comm_h: f64) -> Status {
+        if let Err(m) = self.check_step(t, comm_h) {
+            return self.refuse(m);
+        }
+        let tol = self.landing_tol(t, comm_h);
+        let target = t - self.start_time + comm_h;
+        let (api, start_time) = (self.api, self.start_time);
         let Some(live) = self.live.as_mut() else {
             return self.fail((Status::Error, "the simulation is not set up".into()));
         };
-        // The inputs, held over this communication step.
-        let target = t - self.start_time + comm_h;
-        let start = live.stepper.time();
-        for (vr, var) in self.spec.variables.iter().enumerate() {
-            match var.quantity {
-                Quantity::LoadForce { load, component } => {
-                    if let Some(held) = &live.loads[load] {
-                        lock(held)[component] = self.values[vr];
-                    }
+        if live.stepper.time() >= target - tol {
+            let step = self.call("DoStep");
+            return self.refuse(format!(
+                "{step}: the communication step H = {comm_h:e} s from t = {t} s is below the resolution of the FMU's time there ({tol:.1e} s): the simulation would not move"
+            ));
+        }
+        hold_inputs(&self.spec, &self.values, live, target);
+        let failure = step_to(live, target, tol, api, start_time);
+        match failure {
+            None => {
+                self.time = t + comm_h;
+                Status::Ok
+            }
+            Some(f) => {
+                // The FMU is where its last internal step ended.
+                self.time = start_time + live.stepper.time();
+                if f.0 == Status::Discard {
+                    self.mode = Mode::StepFailed;
                 }
-                Quantity::MotionPosition { motion } => {
-                    if let Some(ramp) = &live.motions[motion] {
-                        let mut r = lock(ramp);
-                        let here = r.position(start);
-                        *r = Ramp {
-                            t0: start,
-                            t1: target,
-                            from: here,
-                            to: self.values[vr],
-                        };
-                    }
-                }
-                _ => {}
+                self.fail(f)
             }
         }
-        // A communication step shorter than the landing tolerance moves only the clock.
-        while live.stepper.time() < target - time_tol(h, scale) {
-            match live.stepper.step_until(target) {
-                Ok(()) => live.ports_saved = None,
-                Err(e) => {
-                    let expression = lock(&live.expression_error).take();
-                    let at = self.start_time + live.stepper.time();
-                    let last = match self.api {
-                        Api::Fmi2 => "fmi2GetRealStatus(fmi2LastSuccessfulTime)",
-                        Api::Fmi3 => "lastSuccessfulTime of fmi3DoStep",
-                    };
-                    return match expression {
-                        Some(why) => self.fail((
-                            Status::Error,
-                            format!("{e}; a scenario expression failed: {why}"),
-                        )),
-                        None => {
-                            self.mode = Mode::StepFailed;
-                            self.fail((
-                                Status::Discard,
-                                format!(
-                                    "{e}; the FMU stays at t = {at} s, the last internal step it completed ({last})"
-                                ),
-                            ))
-                        }
-                    };
-                }
-            }
-        }
-        self.time = t + comm_h;
-        Status::Ok
     }
 
     /// `fmi2Terminate`.
@@ -772,8 +828,12 @@ impl Instance {
         self.mode = Mode::Error;
     }
 
-    /// `fmi2GetFMUstate`: everything needed to continue from here (bit for bit).
+    /// `fmi2GetFMUstate`: everything needed to continue from here (bit for bit). Refused in
+    /// the error state (FMI restores only states saved outside it).
     pub fn save(&self) -> Result<Saved, String> {
+        if self.mode == Mode::Error {
+            return Err("a state can be saved only outside the error state".into());
+        }
         let ports = self
             .spec
             .variables
@@ -880,8 +940,78 @@ impl Instance {
     }
 }
 
+/// Holds the inputs of `spec` (values `values`, by value reference) over the communication
+/// step from the simulation's time to `target` [s]: load forces at their values, motions on
+/// a ramp to their values.
+fn hold_inputs(spec: &ModelSpec, values: &[f64], live: &Live, target: f64) {
+    let start = live.stepper.time();
+    for (vr, var) in spec.variables.iter().enumerate() {
+        match var.quantity {
+            Quantity::LoadForce { load, component } => {
+                if let Some(held) = &live.loads[load] {
+                    lock(held)[component] = values[vr];
+                }
+            }
+            Quantity::MotionPosition { motion } => {
+                if let Some(ramp) = &live.motions[motion] {
+                    let mut r = lock(ramp);
+                    let here = r.position(start);
+                    *r = Ramp {
+                        t0: start,
+                        t1: target,
+                        from: here,
+                        to: values[vr],
+                    };
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Steps `live` until it is within `tol` [s] of `target` [s] (simulation time); the failure,
+/// if a step fails or does not advance (messages in the times of the master, whose clock
+/// starts at `start_time` [s]).
+fn step_to(live: &mut Live, target: f64, tol: f64, api: Api, start_time: f64) -> Option<Fail> {
+    while live.stepper.time() < target - tol {
+        let before = live.stepper.time();
+        match live.stepper.step_until(target) {
+            Ok(()) if live.stepper.time() > before => live.ports_saved = None,
+            Ok(()) => {
+                return Some((
+                    Status::Error,
+                    format!(
+                        "the internal step from t = {} s did not advance the simulation (below the resolution of its time)",
+                        start_time + before
+                    ),
+                ));
+            }
+            Err(e) => {
+                if let Some(why) = lock(&live.expression_error).take() {
+                    return Some((
+                        Status::Error,
+                        format!("{e}; a scenario expression failed: {why}"),
+                    ));
+                }
+                let last = match api {
+                    Api::Fmi2 => "fmi2GetRealStatus(fmi2LastSuccessfulTime)",
+                    Api::Fmi3 => "lastSuccessfulTime of fmi3DoStep",
+                };
+                return Some((
+                    Status::Discard,
+                    format!(
+                        "{e}; the FMU stays at t = {} s, the last internal step it completed ({last})",
+                        start_time + live.stepper.time()
+                    ),
+                ));
+            }
+        }
+    }
+    None
+}
+
 /// Locks `m`; a poisoned lock is still usable (a panicking step leaves nothing half-set
 /// that the next call reads).
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+pub(crate) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }

@@ -11,6 +11,7 @@
 pub mod ffi;
 #[allow(unsafe_code)]
 pub mod ffi3;
+mod handles;
 pub mod instance;
 pub mod model;
 pub mod package;

@@ -80,8 +80,74 @@ pub fn library_candidates(exe: &Path) -> Vec<PathBuf> {
         .unwrap_or_default()
 }
 
+/// The keywords of C (C89 to C23): not usable as identifiers.
+const C_KEYWORDS: &[&str] = &[
+    "alignas",
+    "alignof",
+    "auto",
+    "bool",
+    "break",
+    "case",
+    "char",
+    "const",
+    "constexpr",
+    "continue",
+    "default",
+    "do",
+    "double",
+    "else",
+    "enum",
+    "extern",
+    "false",
+    "float",
+    "for",
+    "goto",
+    "if",
+    "inline",
+    "int",
+    "long",
+    "nullptr",
+    "register",
+    "restrict",
+    "return",
+    "short",
+    "signed",
+    "sizeof",
+    "static",
+    "static_assert",
+    "struct",
+    "switch",
+    "thread_local",
+    "true",
+    "typedef",
+    "typeof",
+    "typeof_unqual",
+    "union",
+    "unsigned",
+    "void",
+    "volatile",
+    "while",
+    "_Alignas",
+    "_Alignof",
+    "_Atomic",
+    "_BitInt",
+    "_Bool",
+    "_Complex",
+    "_Decimal128",
+    "_Decimal32",
+    "_Decimal64",
+    "_Generic",
+    "_Imaginary",
+    "_Noreturn",
+    "_Static_assert",
+    "_Thread_local",
+];
+
 /// The model identifier for an FMU file named `stem` (`crane.fmu` → `crane`): a C
-/// identifier, since FMI tools use it in file and function names.
+/// identifier, since FMI tools use it in file and function names (a source-code or
+/// statically linked FMU prefixes its functions with it). Refused as well: C keywords,
+/// names in FMI's own namespace (`fmi2…`, `fmi3…`: the functions, types and macros of the
+/// FMI headers) and names C reserves (`_` followed by a capital or another `_`).
 pub fn model_identifier(stem: &str) -> Result<String, String> {
     let ok = stem
         .chars()
@@ -92,7 +158,114 @@ pub fn model_identifier(stem: &str) -> Result<String, String> {
             "the FMU's file name {stem:?} must be a C identifier (letters, digits and _, not starting with a digit): FMI tools name the model's shared library after it"
         ));
     }
-    Ok(stem.to_string())
+    let why = if C_KEYWORDS.contains(&stem) {
+        Some("is a C keyword")
+    } else if stem.starts_with("fmi2") || stem.starts_with("fmi3") {
+        Some("is in FMI's namespace (fmi2…, fmi3…: the names of the FMI functions and types)")
+    } else if stem.starts_with("__")
+        || (stem.starts_with('_') && stem[1..].starts_with(|c: char| c.is_ascii_uppercase()))
+    {
+        Some("is reserved in C (a leading _ followed by a capital or _)")
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(format!(
+            "the FMU's file name {stem:?} {why}: as the model identifier it would break FMUs compiled from source or linked statically; choose another name"
+        )),
+        None => Ok(stem.to_string()),
+    }
+}
+
+/// The FMI function whose export marks a shared library as an FMU library of `version`.
+fn entry_point(version: FmiVersion) -> &'static str {
+    match version {
+        FmiVersion::V2 => "fmi2Instantiate",
+        FmiVersion::V3 => "fmi3InstantiateCoSimulation",
+    }
+}
+
+/// Checks that `bytes` (the file `path`) is a shared library that the binaries folder
+/// `folder` of this build's platform can hold: the platform's format (ELF on Linux, Mach-O
+/// on macOS, PE on Windows), a shared object (not an executable or object file), this
+/// build's architecture (x86_64 for `linux64` and `x86_64-linux`), and exporting the FMI
+/// entry point of `version` (`fmi2Instantiate`, `fmi3InstantiateCoSimulation`). The error
+/// names the file and what is wrong.
+pub fn check_library(
+    bytes: &[u8],
+    path: &Path,
+    folder: &str,
+    version: FmiVersion,
+) -> Result<(), PackageError> {
+    use object::{Architecture, BinaryFormat, Object as _, ObjectKind};
+    let bad = |what: String| PackageError(format!("the FMU library {} {what}", path.display()));
+    let expected_format = if cfg!(target_os = "macos") {
+        BinaryFormat::MachO
+    } else if cfg!(target_os = "windows") {
+        BinaryFormat::Pe
+    } else {
+        BinaryFormat::Elf
+    };
+    let name = |f: BinaryFormat| match f {
+        BinaryFormat::Elf => "ELF".to_string(),
+        BinaryFormat::MachO => "Mach-O".to_string(),
+        BinaryFormat::Pe => "PE".to_string(),
+        other => format!("{other:?}"),
+    };
+    let file = object::File::parse(bytes).map_err(|e| {
+        bad(format!(
+            "is not a shared library (expected format {}: {e})",
+            name(expected_format)
+        ))
+    })?;
+    if file.format() != expected_format {
+        return Err(bad(format!(
+            "is in the {} format, binaries/{folder} needs a shared library in the {} format",
+            name(file.format()),
+            name(expected_format)
+        )));
+    }
+    if file.kind() != ObjectKind::Dynamic {
+        return Err(bad(format!(
+            "is not a shared library but a file of kind {:?}",
+            file.kind()
+        )));
+    }
+    let arch = match std::env::consts::ARCH {
+        "x86_64" => Architecture::X86_64,
+        "aarch64" => Architecture::Aarch64,
+        "x86" => Architecture::I386,
+        _ => Architecture::Unknown,
+    };
+    if arch != Architecture::Unknown && file.architecture() != arch {
+        return Err(bad(format!(
+            "is built for {:?}, binaries/{folder} needs {arch:?}",
+            file.architecture()
+        )));
+    }
+    let entry = entry_point(version);
+    let mut exported = file
+        .exports()
+        .map_err(|e| bad(format!("has no readable table of exported functions ({e})")))?;
+    // Mach-O prefixes C names with `_`.
+    let found = exported.any(|e| {
+        e.is_ok_and(|e| {
+            e.name().name().is_some_and(|name| {
+                name == entry.as_bytes() || name.strip_prefix(b"_") == Some(entry.as_bytes())
+            })
+        })
+    });
+    if !found {
+        return Err(bad(format!(
+            "does not export {entry}: it is not an FMU library of FMI {}",
+            if version == FmiVersion::V2 {
+                "2.0"
+            } else {
+                "3.0"
+            }
+        )));
+    }
+    Ok(())
 }
 
 /// A failure to write the archive.
@@ -139,6 +312,7 @@ pub fn write_fmu(
             library.display()
         ))
     })?;
+    check_library(&lib, library, folder, version)?;
     let description = match version {
         FmiVersion::V2 => spec.model_description(identifier),
         FmiVersion::V3 => spec.model_description_fmi3(identifier),
@@ -153,18 +327,23 @@ pub fn write_fmu(
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
         std::process::id()
     ));
-    let result = write_archive(
-        &tmp,
-        &[
-            ("modelDescription.xml".to_string(), description.as_bytes()),
-            (format!("binaries/{folder}/{identifier}.{ext}"), &lib),
-            (
-                "resources/scenario.toml".to_string(),
-                file.text().as_bytes(),
-            ),
-        ],
-    )
-    .and_then(|()| std::fs::rename(&tmp, out));
+    let archive = archive(&[
+        ("modelDescription.xml".to_string(), description.as_bytes()),
+        (format!("binaries/{folder}/{identifier}.{ext}"), &lib),
+        (
+            "resources/scenario.toml".to_string(),
+            file.text().as_bytes(),
+        ),
+    ])
+    .map_err(|e| {
+        PackageError(format!(
+            "cannot build the archive of {}: {e}",
+            out.display()
+        ))
+    })?;
+    let result = std::fs::File::create(&tmp)
+        .and_then(|mut f| write_synced(&mut f, &archive, |f| f.sync_all()))
+        .and_then(|()| std::fs::rename(&tmp, out));
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
         return Err(PackageError(format!("cannot write {}: {e}", out.display())));
@@ -172,10 +351,11 @@ pub fn write_fmu(
     Ok(())
 }
 
-/// A zip archive at `path` with `entries` (name, bytes), deflated.
-fn write_archive(path: &Path, entries: &[(String, &[u8])]) -> std::io::Result<()> {
-    let f = std::fs::File::create(path)?;
-    let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(f));
+/// The zip archive of `entries` (name, bytes), deflated, in memory: so that a failing disk
+/// fails a plain write of its bytes (whose error names the cause, "No space left on
+/// device"), never the zip writer's finalization.
+fn archive(entries: &[(String, &[u8])]) -> std::io::Result<Vec<u8>> {
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated)
         .unix_permissions(0o644);
@@ -184,9 +364,18 @@ fn write_archive(path: &Path, entries: &[(String, &[u8])]) -> std::io::Result<()
             .map_err(std::io::Error::other)?;
         zip.write_all(bytes)?;
     }
-    let mut w = zip.finish().map_err(std::io::Error::other)?;
+    Ok(zip.finish().map_err(std::io::Error::other)?.into_inner())
+}
+
+/// Writes `bytes` to `w`, then `sync` (the file's `sync_all`), each error as it is.
+fn write_synced<W: std::io::Write>(
+    w: &mut W,
+    bytes: &[u8],
+    sync: impl FnOnce(&mut W) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    w.write_all(bytes)?;
     w.flush()?;
-    w.into_inner().map_err(|e| e.into_error())?.sync_all()
+    sync(w)
 }
 
 #[cfg(test)]
@@ -199,5 +388,87 @@ mod tests {
         for bad in ["", "2d", "my-crane", "a b", "kran\u{e4}"] {
             assert!(model_identifier(bad).is_err(), "{bad:?}");
         }
+    }
+
+    #[test]
+    fn c_keywords_and_fmi_names_are_refused_as_model_identifiers() {
+        for (bad, why) in [
+            ("int", "C keyword"),
+            ("while", "C keyword"),
+            ("_Bool", "C keyword"),
+            ("fmi2Instantiate", "FMI's namespace"),
+            ("fmi3DoStep", "FMI's namespace"),
+            ("fmi2", "FMI's namespace"),
+            ("_Crane", "reserved"),
+            ("__crane", "reserved"),
+        ] {
+            let e = model_identifier(bad)
+                .err()
+                .unwrap_or_else(|| panic!("{bad} accepted"));
+            assert!(e.contains(why) && e.contains(bad), "{bad}: {e}");
+        }
+        for good in ["integer", "fmi", "fmi_crane", "my_fmi2", "_crane", "Int"] {
+            assert_eq!(model_identifier(good).unwrap(), good);
+        }
+    }
+
+    /// A writer whose device is full.
+    struct Full;
+
+    impl std::io::Write for Full {
+        fn write(&mut self, _: &[u8]) -> std::io::Result<usize> {
+            Err(std::io::Error::from_raw_os_error(28))
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_full_disk_is_named_as_the_cause() {
+        let zip = archive(&[("a.txt".to_string(), b"x".repeat(100_000).as_slice())]).unwrap();
+        // The archive is complete in memory (readable, the entry whole).
+        let mut read = zip::ZipArchive::new(std::io::Cursor::new(&zip)).unwrap();
+        assert_eq!(read.by_name("a.txt").unwrap().size(), 100_000);
+        let e = write_synced(&mut Full, &zip, |_| Ok(())).unwrap_err();
+        let said = e.to_string();
+        assert!(said.contains("No space left on device"), "{said}");
+        assert!(!said.contains("Zip"), "{said}");
+    }
+
+    /// This build's platform folder.
+    fn folder() -> &'static str {
+        platform().unwrap().0
+    }
+
+    #[test]
+    fn a_file_that_is_not_an_fmu_library_is_refused() {
+        let path = Path::new("/x/passwd");
+        let e = check_library(
+            b"root:x:0:0:root:/root:/bin/sh\n",
+            path,
+            folder(),
+            FmiVersion::V2,
+        )
+        .unwrap_err()
+        .0;
+        assert!(
+            e.contains("/x/passwd") && e.contains("not a shared library"),
+            "{e}"
+        );
+        // An executable (this test) is not a shared library, or does not export the entry.
+        let exe = std::env::current_exe().unwrap();
+        let e = check_library(
+            &std::fs::read(&exe).unwrap(),
+            &exe,
+            folder(),
+            FmiVersion::V2,
+        )
+        .unwrap_err()
+        .0;
+        assert!(
+            e.contains("not a shared library") || e.contains("does not export fmi2Instantiate"),
+            "{e}"
+        );
     }
 }

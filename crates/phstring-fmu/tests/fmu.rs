@@ -256,23 +256,29 @@ fn a_position_input_is_reached_at_the_end_of_the_communication_step() {
 #[test]
 fn bad_values_are_refused_with_their_name() {
     let (mut inst, log) = instance(&pendulum_text());
-    assert_eq!(set(&mut inst, "EA", -1.0), Status::Error);
-    assert!(
-        last_message(&log).contains("EA = -1"),
-        "{}",
-        last_message(&log)
-    );
-    assert_eq!(
-        inst.mode(),
-        Mode::Instantiated,
-        "a refused value changes nothing"
-    );
-    assert_eq!(set(&mut inst, "load0.F.x", f64::NAN), Status::Error);
-    assert!(last_message(&log).contains("load0.F.x"));
-    assert_eq!(set(&mut inst, "H", 1.0), Status::Error);
-    assert!(last_message(&log).contains("output"));
+    // Each refused value is named and not taken; FMI's error state follows (no further
+    // set), and reset starts over.
+    for (name, x, needle) in [
+        ("EA", -1.0, "EA = -1"),
+        ("load0.F.x", f64::NAN, "load0.F.x"),
+        ("H", 1.0, "output"),
+    ] {
+        assert_eq!(set(&mut inst, name, x), Status::Error, "{name}");
+        let m = last_message(&log);
+        assert!(m.contains(needle) && m.contains("error state"), "{m}");
+        assert_eq!(inst.mode(), Mode::Error);
+        assert_eq!(
+            set(&mut inst, "EA", 30.0),
+            Status::Error,
+            "no set after an error"
+        );
+        assert_eq!(inst.reset(), Status::Ok);
+        assert_eq!(get(&mut inst, "EA"), 20.0);
+        assert_eq!(get(&mut inst, "load0.F.x"), 0.0);
+    }
     assert_eq!(inst.set_real(&[999], &[1.0]), Status::Error);
     assert!(last_message(&log).contains("999"));
+    assert_eq!(inst.reset(), Status::Ok);
     // A value that is positive but does not fit the scenario: refused when the simulation
     // is set up, with the scenario's message.
     assert_eq!(set(&mut inst, "h", 1e-300), Status::Ok);
@@ -303,21 +309,32 @@ fn calls_out_of_order_are_refused() {
     let (mut inst, log) = instance(&pendulum_text());
     assert_eq!(inst.do_step(0.0, 0.01), Status::Error);
     assert!(last_message(&log).contains("fmi2DoStep"));
+    assert_eq!(inst.mode(), Mode::Error);
+    assert_eq!(inst.reset(), Status::Ok);
     assert_eq!(inst.setup_experiment(0.0, Some(0.05)), Status::Ok);
     assert_eq!(inst.enter_initialization(), Status::Ok);
     assert_eq!(inst.exit_initialization(), Status::Ok);
-    assert_eq!(inst.do_step(0.5, 0.01), Status::Error);
-    assert!(last_message(&log).contains("the FMU is at t = 0 s"));
-    assert_eq!(inst.do_step(0.0, -0.01), Status::Error);
-    assert_eq!(inst.do_step(0.0, 0.06), Status::Error);
-    assert!(last_message(&log).contains("stopTime"));
+    let saved = inst.save().unwrap();
+    for (t, comm_h, needle) in [
+        (0.5, 0.01, "the FMU is at t = 0 s"),
+        (0.0, -0.01, "positive and finite"),
+        (0.0, f64::NAN, "positive and finite"),
+        (f64::NAN, 0.01, "currentCommunicationPoint = NaN"),
+        (0.0, 0.06, "stopTime"),
+    ] {
+        assert_eq!(inst.do_step(t, comm_h), Status::Error, "{t}, {comm_h}");
+        assert!(
+            last_message(&log).contains(needle),
+            "{}",
+            last_message(&log)
+        );
+        // FMI's error state: no step until a saved state is restored.
+        assert_eq!(inst.do_step(0.0, 0.01), Status::Error);
+        assert_eq!(inst.restore(&saved), Status::Ok);
+    }
     // None of these changed anything.
     assert_eq!(inst.do_step(0.0, 0.04), Status::Ok);
     assert_eq!(inst.time(), 0.04);
-    // A communication step far below the landing tolerance moves only the clock.
-    assert_eq!(inst.do_step(0.04, 1e-15), Status::Ok);
-    assert_eq!(inst.time(), 0.04 + 1e-15);
-    assert_eq!(inst.do_step(0.04 + 1e-15, 0.01 - 1e-15), Status::Ok);
     assert_eq!(inst.terminate(), Status::Ok);
     assert_eq!(inst.terminate(), Status::Error);
     assert_eq!(inst.do_step(0.05, 0.01), Status::Error);
@@ -490,14 +507,14 @@ mod c_functions {
             let mut t = 0.0;
             assert_eq!(fmi2GetRealStatus(c, 2, &mut t), 0);
             assert_eq!(t, 0.05);
-            // Null arrays and other types are errors, not crashes.
+            assert_eq!(fmi2Terminate(c), 0);
+            // Null arrays and other types are errors (FMI's error state follows), not crashes.
             assert_eq!(fmi2GetReal(c, std::ptr::null(), 1, &mut h_back), 3);
             assert_eq!(fmi2GetInteger(c, &h_vr, 1, std::ptr::null_mut()), 3);
             assert_eq!(fmi2DoStep(std::ptr::null_mut(), 0.0, 0.1, 1), 3);
             assert_eq!(fmi2FreeFMUstate(c, &mut state), 0);
             assert_eq!(fmi2FreeFMUstate(c, &mut copy), 0);
             assert!(state.is_null() && copy.is_null());
-            assert_eq!(fmi2Terminate(c), 0);
             fmi2FreeInstance(c);
         }
     }
@@ -638,8 +655,11 @@ fn restored_states_report_their_own_port_outputs_and_a_failed_restore_changes_no
     );
     assert_eq!((a.time(), get(&mut a, "H")), (t, h));
     assert_eq!(get(&mut a, "h"), 0.01);
-    assert_eq!(a.mode(), Mode::StepComplete);
-    assert_eq!(a.do_step(t, 0.01), Status::Ok);
+    // A refused restore is an fmi2Error: the error state, left by restoring a good state.
+    assert_eq!(a.mode(), Mode::Error);
+    assert_eq!(a.do_step(t, 0.01), Status::Error);
+    assert_eq!(a.restore(&saved), Status::Ok);
+    assert_eq!(a.do_step(0.05, 0.01), Status::Ok);
 }
 
 /// With `initial.equilibrium`, the start is the equilibrium under the load inputs set in
@@ -726,11 +746,6 @@ mod fmi3_functions {
             );
             assert_eq!(fmi3ExitInitializationMode(c), 0);
             assert_eq!(fmi3SetFloat64(c, &fx_vr, 1, &0.3, 1), 0);
-            assert_eq!(
-                fmi3SetFloat64(c, &time_vr, 1, &0.3, 1),
-                3,
-                "time cannot be set"
-            );
             let (mut event, mut terminate, mut early, mut last) = (true, true, true, 0.0);
             assert_eq!(
                 fmi3DoStep(
@@ -796,6 +811,12 @@ mod fmi3_functions {
             );
             assert!(terminate);
             assert_eq!(last, 0.05);
+            assert_eq!(fmi3Terminate(c), 0);
+            assert_eq!(
+                fmi3SetFloat64(c, &time_vr, 1, &0.3, 1),
+                3,
+                "time cannot be set"
+            );
             // What the FMU does not declare is refused, not a crash.
             assert_eq!(fmi3EnterEventMode(c), 3);
             let mut n = 0usize;
@@ -810,7 +831,6 @@ mod fmi3_functions {
             assert_eq!(fmi3GetFloat64(c, &h_vr, 1, two.as_mut_ptr(), 2), 3);
             assert_eq!(fmi3FreeFMUState(c, &mut state), 0);
             assert_eq!(fmi3FreeFMUState(c, &mut copy), 0);
-            assert_eq!(fmi3Terminate(c), 0);
             fmi3FreeInstance(c);
             // A wrong token is refused.
             let wrong = CString::new("{x}").unwrap();
@@ -856,5 +876,368 @@ fn dg4_and_error_control_inside_the_fmu() {
             );
         }
         assert!(get(&mut inst, "balance_error").abs() <= 1e-12, "{extra:?}");
+    }
+}
+
+/// The hoist (a 10 m rope with a 200 kg payload released at 20°) from rest with the
+/// parameter `h`: every `fmi2DoStep` that returns `Ok` has moved the model to the master's
+/// time (the payload gained kinetic energy), however large `h` is.
+#[test]
+fn a_huge_internal_step_moves_the_model_or_fails_never_a_silent_ok() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fmu/hoist.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    // 20 s steps: each 0.5 s communication step is one internal step of 0.5 s.
+    for h in [1e10, 2e9, 20.0] {
+        let (mut inst, log) = instance(&text);
+        assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization(), Status::Ok);
+        assert_eq!(set(&mut inst, "h", h), Status::Ok);
+        assert_eq!(inst.exit_initialization(), Status::Ok);
+        let x0 = get(&mut inst, "node20.r.x");
+        assert_eq!(get(&mut inst, "T"), 0.0);
+        let comm = 0.5;
+        let mut t = 0.0;
+        for k in 0..3 {
+            match inst.do_step(t, comm) {
+                Status::Ok => {
+                    t += comm;
+                    // Released from rest: any step taken moves the payload.
+                    assert!(get(&mut inst, "T") > 1.0, "h = {h}, step {k}: T = 0");
+                    assert_ne!(get(&mut inst, "node20.r.x"), x0);
+                }
+                Status::Discard => {
+                    // The FMU says where it stopped: the last step it completed.
+                    assert_eq!(inst.time(), t);
+                    assert!(last_message(&log).contains(&format!("stays at t = {t} s")));
+                    break;
+                }
+                s => panic!("h = {h}, step {k}: {s:?}: {}", last_message(&log)),
+            }
+        }
+        assert!(get(&mut inst, "balance_error").abs() <= 1e-6 * get(&mut inst, "H").abs());
+    }
+}
+
+/// With a stop time, an internal step longer than the whole experiment is refused when
+/// initialization ends, naming `h`.
+#[test]
+fn an_internal_step_longer_than_the_experiment_is_refused() {
+    let (mut inst, log) = instance(&pendulum_text());
+    assert_eq!(inst.setup_experiment(0.0, Some(1.5)), Status::Ok);
+    assert_eq!(inst.enter_initialization(), Status::Ok);
+    assert_eq!(set(&mut inst, "h", 1e10), Status::Ok);
+    assert_eq!(inst.exit_initialization(), Status::Error);
+    let m = last_message(&log);
+    assert!(
+        m.contains("parameter h = 10000000000 s") && m.contains("stopTime = 1.5 s"),
+        "{m}"
+    );
+    assert_eq!(inst.mode(), Mode::Error);
+    // h equal to the experiment (rounding of stop − start included) is accepted.
+    let (mut inst, _) = instance(&pendulum_text());
+    assert_eq!(inst.setup_experiment(0.1, Some(0.3)), Status::Ok);
+    assert_eq!(inst.enter_initialization(), Status::Ok);
+    assert_eq!(set(&mut inst, "h", 0.2), Status::Ok);
+    assert_eq!(inst.exit_initialization(), Status::Ok);
+    assert_eq!(inst.do_step(0.1, 0.2), Status::Ok);
+    assert!(get(&mut inst, "T") > 0.0);
+}
+
+/// At `startTime = 1e17` the master's clock cannot advance by 0.01 s (`t + H == t`), nor
+/// meaningfully by 20 s (the doubles there are 16 s apart): `fmi2Error`, not a step that
+/// reports success without moving.
+#[test]
+fn a_step_below_the_resolution_of_t_is_an_error() {
+    for (start, comm) in [(1e17, 0.01), (1e17, 20.0), (1e300, 1.0)] {
+        let (mut inst, log) = instance(&pendulum_text());
+        assert_eq!(inst.setup_experiment(start, None), Status::Ok);
+        assert_eq!(inst.enter_initialization(), Status::Ok);
+        assert_eq!(inst.exit_initialization(), Status::Ok);
+        let x = get(&mut inst, "node30.r.x");
+        assert_eq!(inst.do_step(start, comm), Status::Error, "{start}, {comm}");
+        let m = last_message(&log);
+        assert!(m.contains("below the resolution"), "{m}");
+        assert_eq!(inst.mode(), Mode::Error);
+        assert_eq!(inst.time(), start);
+        assert_eq!(get(&mut inst, "node30.r.x"), x);
+        assert_eq!(inst.do_step(start, 1e20), Status::Error, "the error state");
+    }
+}
+
+/// A communication step far shorter than `h` is one internal step of that length (the
+/// landing tolerance scales with the step asked for): the model moves, the balance holds.
+#[test]
+fn a_communication_step_far_below_h_is_taken() {
+    let (mut inst, _) = instance(&pendulum_text());
+    initialize(&mut inst);
+    assert_eq!(inst.do_step(0.0, 0.04), Status::Ok);
+    let h_before = get(&mut inst, "H");
+    let saved = inst.save().unwrap();
+    assert_eq!(inst.do_step(0.04, 1e-15), Status::Ok);
+    assert_eq!(inst.time(), 0.04 + 1e-15);
+    assert_eq!(inst.do_step(0.04 + 1e-15, 0.01 - 1e-15), Status::Ok);
+    let after = get(&mut inst, "H");
+    assert!((after - h_before).abs() <= 1e-12, "{after} vs {h_before}");
+    assert!(get(&mut inst, "balance_error").abs() <= 1e-12);
+    // Against one step of 0.01 s from the same state: the same motion, up to the split.
+    let split = get(&mut inst, "node30.r.y");
+    assert_eq!(inst.restore(&saved), Status::Ok);
+    assert_eq!(inst.do_step(0.04, 0.01), Status::Ok);
+    let whole = get(&mut inst, "node30.r.y");
+    assert!((split - whole).abs() <= 1e-6, "{split} vs {whole}");
+}
+
+/// FMI's error state: after any `fmi2Error` only getters, a restore, reset and free are
+/// accepted; a non-finite start time is one.
+#[test]
+fn after_an_error_only_getters_restore_reset_and_free_are_accepted() {
+    let (mut inst, log) = instance(&pendulum_text());
+    assert_eq!(inst.setup_experiment(f64::NAN, None), Status::Error);
+    assert!(last_message(&log).contains("startTime"));
+    assert_eq!(inst.mode(), Mode::Error);
+    assert_eq!(inst.setup_experiment(0.0, None), Status::Error);
+    assert_eq!(inst.enter_initialization(), Status::Error);
+    assert_eq!(set(&mut inst, "EA", 30.0), Status::Error);
+    assert_eq!(get(&mut inst, "EA"), 20.0, "getters still answer");
+    assert!(inst.save().is_err(), "no state is saved in the error state");
+    assert_eq!(inst.reset(), Status::Ok);
+    initialize(&mut inst);
+    let saved = inst.save().unwrap();
+    // A refused input while stepping: the next step is refused until a restore, which
+    // brings back the input as saved.
+    assert_eq!(set(&mut inst, "load0.F.x", f64::INFINITY), Status::Error);
+    assert_eq!(inst.do_step(0.0, 0.01), Status::Error);
+    assert_eq!(inst.restore(&saved), Status::Ok);
+    assert_eq!(get(&mut inst, "load0.F.x"), 0.0);
+    assert_eq!(inst.do_step(0.0, 0.01), Status::Ok);
+}
+
+/// A serialized state carries a checksum: an edited value is refused with a clear message,
+/// the unedited bytes restore.
+#[test]
+fn an_edited_serialized_state_is_refused() {
+    use phstring_fmu::instance::Saved;
+    let (mut inst, _) = instance(&pendulum_text());
+    initialize(&mut inst);
+    assert_eq!(set(&mut inst, "load0.F.x", 0.3), Status::Ok);
+    assert_eq!(inst.do_step(0.0, 0.05), Status::Ok);
+    let bytes = inst.save().unwrap().to_bytes().unwrap();
+    let text = String::from_utf8(bytes.clone()).unwrap();
+    // Node 0's x (the fixed end, at 0.0) moved to 7.0.
+    let at = text.find("\"r\":[").expect("positions") + 5;
+    assert_eq!(&text[at..at + 4], "0.0,");
+    let edited = format!("{}7{}", &text[..at], &text[at + 1..]);
+    let err = Saved::from_bytes(edited.as_bytes()).expect_err("refused");
+    assert!(err.contains("checksum mismatch"), "{err}");
+    for bad in [&bytes[..bytes.len() / 2], b"{}", b""] {
+        let err = Saved::from_bytes(bad).expect_err("refused");
+        assert!(err.contains("not a serialized state"), "{err}");
+    }
+    let back = Saved::from_bytes(&bytes).unwrap();
+    assert_eq!(inst.do_step(0.05, 0.05), Status::Ok);
+    assert_eq!(inst.restore(&back), Status::Ok);
+    assert_eq!(inst.time(), 0.05);
+}
+
+mod handles_and_threads {
+    //! The C functions' handles: freed instances and states are refused, not dereferenced;
+    //! calls on one instance from many threads run one at a time.
+    #![allow(unsafe_code)]
+
+    use super::*;
+    use phstring_fmu::ffi::*;
+    use std::ffi::CString;
+
+    /// An instance of the pendulum through `fmi2Instantiate`, in initialization-complete
+    /// state at t = 0, with its folder (kept alive by the caller).
+    fn pendulum_instance() -> (Fmi2Component, tempfile::TempDir, ModelSpec) {
+        let text = pendulum_text();
+        let spec = spec_of(&text);
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("scenario.toml"), &text).unwrap();
+        let uri = CString::new(format!("file://{}", dir.path().display())).unwrap();
+        let (name, guid) = (
+            CString::new("t").unwrap(),
+            CString::new(spec.guid.clone()).unwrap(),
+        );
+        unsafe {
+            let c = fmi2Instantiate(
+                name.as_ptr(),
+                1,
+                guid.as_ptr(),
+                uri.as_ptr(),
+                std::ptr::null(),
+                0,
+                0,
+            );
+            assert!(!c.is_null());
+            assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), 0);
+            assert_eq!(fmi2EnterInitializationMode(c), 0);
+            assert_eq!(fmi2ExitInitializationMode(c), 0);
+            (c, dir, spec)
+        }
+    }
+
+    fn vr_of(spec: &ModelSpec, name: &str) -> u32 {
+        spec.variables.iter().position(|v| v.name == name).unwrap() as u32
+    }
+
+    #[test]
+    fn a_freed_instance_or_state_is_refused_not_a_crash() {
+        let (c, _dir, spec) = pendulum_instance();
+        let h_vr = vr_of(&spec, "H");
+        unsafe {
+            assert_eq!(fmi2DoStep(c, 0.0, 0.01, 1), 0);
+            let mut state: Fmi2FmuState = std::ptr::null_mut();
+            assert_eq!(fmi2GetFMUstate(c, &mut state), 0);
+            let stale = state;
+            assert_eq!(fmi2FreeFMUstate(c, &mut state), 0);
+            assert!(state.is_null());
+            assert_eq!(fmi2SetFMUstate(c, stale), 3, "a freed state");
+            let mut again = stale;
+            assert_eq!(fmi2FreeFMUstate(c, &mut again), 3, "freed twice");
+            assert_eq!(fmi2Reset(c), 0);
+            let mut kept: Fmi2FmuState = std::ptr::null_mut();
+            assert_eq!(fmi2GetFMUstate(c, &mut kept), 0);
+            fmi2FreeInstance(c);
+            fmi2FreeInstance(c);
+            let mut x = 0.0;
+            assert_eq!(fmi2GetReal(c, &h_vr, 1, &mut x), 3);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.01, 1), 3);
+            // An instance's states go with it.
+            let (d, _dir_d, _) = pendulum_instance();
+            assert_eq!(fmi2SetFMUstate(d, kept), 3);
+            // A pointer never given out.
+            let mut junk = [0u64; 8];
+            let wild = junk.as_mut_ptr() as Fmi2Component;
+            assert_eq!(fmi2DoStep(wild, 0.0, 0.01, 1), 3);
+            fmi2FreeInstance(wild);
+            assert_eq!(junk, [0; 8], "a wild pointer is not written");
+            fmi2FreeInstance(d);
+        }
+        // FMI 3.0 frees through the same registry.
+        let text = pendulum_text();
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("scenario.toml"), &text).unwrap();
+        let resources = CString::new(dir.path().display().to_string()).unwrap();
+        let token = CString::new(spec.guid.clone()).unwrap();
+        unsafe {
+            let c = phstring_fmu::ffi3::fmi3InstantiateCoSimulation(
+                c"t3".as_ptr(),
+                token.as_ptr(),
+                resources.as_ptr(),
+                false,
+                false,
+                false,
+                false,
+                std::ptr::null(),
+                0,
+                std::ptr::null_mut(),
+                None,
+                std::ptr::null(),
+            );
+            assert!(!c.is_null());
+            phstring_fmu::ffi3::fmi3FreeInstance(c);
+            phstring_fmu::ffi3::fmi3FreeInstance(c);
+            assert_eq!(phstring_fmu::ffi3::fmi3Reset(c), 3);
+        }
+    }
+
+    /// Sixteen threads restore one saved state and step from it, on one instance, as fast
+    /// as they can: every call is whole (the instance is locked per call), so `Ĥ` is
+    /// always either the saved one or that after the step, bit for bit, and the balance is
+    /// that of a single thread's step.
+    #[test]
+    fn calls_from_many_threads_on_one_instance_run_one_at_a_time() {
+        let (c, _dir, spec) = pendulum_instance();
+        let (h_vr, b_vr, fx_vr) = (
+            vr_of(&spec, "H"),
+            vr_of(&spec, "balance_error"),
+            vr_of(&spec, "load0.F.x"),
+        );
+        let (s0, h0, h1, b1) = unsafe {
+            assert_eq!(fmi2SetReal(c, &fx_vr, 1, &0.3), 0);
+            let mut s0: Fmi2FmuState = std::ptr::null_mut();
+            assert_eq!(fmi2GetFMUstate(c, &mut s0), 0);
+            let (mut h0, mut h1, mut b1) = (0.0, 0.0, 0.0);
+            assert_eq!(fmi2GetReal(c, &h_vr, 1, &mut h0), 0);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.05, 0), 0);
+            assert_eq!(fmi2GetReal(c, &h_vr, 1, &mut h1), 0);
+            assert_eq!(fmi2GetReal(c, &b_vr, 1, &mut b1), 0);
+            (s0 as usize, h0, h1, b1)
+        };
+        assert_ne!(h0, h1);
+        let handle = c as usize;
+        let steps: usize = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..16)
+                .map(|_| {
+                    scope.spawn(move || {
+                        let c = handle as Fmi2Component;
+                        let mut ok = 0;
+                        for _ in 0..20 {
+                            assert_eq!(fmi2SetFMUstate(c, s0 as Fmi2FmuState), 0);
+                            // Another thread may have stepped since: then t is wrong (Error).
+                            let s = fmi2DoStep(c, 0.0, 0.05, 0);
+                            assert!(s == 0 || s == 3, "status {s}");
+                            ok += usize::from(s == 0);
+                            let mut h = 0.0;
+                            // SAFETY: one valid element each.
+                            assert_eq!(unsafe { fmi2GetReal(c, &h_vr, 1, &mut h) }, 0);
+                            assert!(
+                                h.to_bits() == h0.to_bits() || h.to_bits() == h1.to_bits(),
+                                "H = {h}: neither {h0} nor {h1}"
+                            );
+                        }
+                        ok
+                    })
+                })
+                .collect();
+            workers.into_iter().map(|w| w.join().unwrap()).sum()
+        });
+        assert!(steps > 0);
+        unsafe {
+            assert_eq!(fmi2SetFMUstate(c, s0 as Fmi2FmuState), 0);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.05, 0), 0);
+            let (mut h, mut b) = (0.0, 0.0);
+            assert_eq!(fmi2GetReal(c, &h_vr, 1, &mut h), 0);
+            assert_eq!(fmi2GetReal(c, &b_vr, 1, &mut b), 0);
+            assert_eq!((h.to_bits(), b.to_bits()), (h1.to_bits(), b1.to_bits()));
+            fmi2FreeInstance(c);
+        }
+    }
+
+    /// The C functions refuse an edited serialized state (its checksum).
+    #[test]
+    fn an_edited_state_is_refused_by_deserialize() {
+        let (c, _dir, _) = pendulum_instance();
+        unsafe {
+            assert_eq!(fmi2DoStep(c, 0.0, 0.02, 1), 0);
+            let mut state: Fmi2FmuState = std::ptr::null_mut();
+            assert_eq!(fmi2GetFMUstate(c, &mut state), 0);
+            let mut size = 0usize;
+            assert_eq!(fmi2SerializedFMUstateSize(c, state, &mut size), 0);
+            let mut bytes = vec![0u8; size];
+            assert_eq!(
+                fmi2SerializeFMUstate(c, state, bytes.as_mut_ptr() as *mut std::ffi::c_char, size),
+                0
+            );
+            let mut copy: Fmi2FmuState = std::ptr::null_mut();
+            let text = String::from_utf8(bytes.clone()).unwrap();
+            let at = text.find("\"h0\":").unwrap() + 6;
+            let mut edited = bytes.clone();
+            edited[at] = if edited[at] == b'1' { b'2' } else { b'1' };
+            assert_eq!(
+                fmi2DeSerializeFMUstate(c, edited.as_ptr() as *const _, size, &mut copy),
+                3
+            );
+            assert!(copy.is_null());
+            assert_eq!(
+                fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const _, size, &mut copy),
+                0
+            );
+            assert_eq!(fmi2SetFMUstate(c, copy), 0);
+            assert_eq!(fmi2DoStep(c, 0.02, 0.01, 1), 0);
+            fmi2FreeInstance(c);
+        }
     }
 }

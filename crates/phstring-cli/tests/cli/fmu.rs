@@ -186,3 +186,169 @@ fn fmi_3_puts_the_library_under_the_platform_tuple() {
     ]);
     assert!(!o.status.success());
 }
+
+#[test]
+fn an_existing_fmu_is_replaced_only_with_force() {
+    let dir = temp_dir("fmu-force");
+    let out = dir.join("exists.fmu");
+    std::fs::write(&out, "mine").unwrap();
+    let o = fmu(&["examples/fmu/pendulum.toml", "-o", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("exists.fmu") && err.contains("--force"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "mine");
+    let o = fmu(&[
+        "examples/fmu/pendulum.toml",
+        "-o",
+        out.to_str().unwrap(),
+        "--force",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(entries(&out)[0].0, "modelDescription.xml");
+}
+
+#[test]
+fn c_keywords_and_fmi_names_are_refused_as_model_identifiers() {
+    let dir = temp_dir("fmu-identifiers");
+    for (name, why) in [
+        ("int", "C keyword"),
+        ("fmi2Instantiate", "FMI's namespace"),
+        ("fmi3DoStep", "FMI's namespace"),
+    ] {
+        let out = dir.join(format!("{name}.fmu"));
+        let o = fmu(&["examples/fmu/pendulum.toml", "-o", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name} accepted");
+        assert!(err.contains(name) && err.contains(why), "{name}: {err}");
+    }
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none());
+}
+
+/// The library built with this `phstring` (the one `phstring fmu` packages by default).
+fn built_library() -> std::path::PathBuf {
+    phstring_fmu::package::library_candidates(Path::new(env!("CARGO_BIN_EXE_phstring")))
+        .into_iter()
+        .find(|p| p.is_file())
+        .expect("the FMU library is built with the phstring binary")
+}
+
+/// Runs `phstring fmu` on the pendulum with `PHSTRING_FMU_LIBRARY` set to `library`.
+fn fmu_with_library_env(out: &Path, library: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_phstring"))
+        .args(["fmu", "examples/fmu/pendulum.toml", "-o"])
+        .arg(out)
+        .env("PHSTRING_FMU_LIBRARY", library)
+        .current_dir(workspace_root())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_library_that_is_not_an_fmu_library_is_refused() {
+    let dir = temp_dir("fmu-library");
+    let lib_dir = temp_dir("fmu-library-files");
+    let out = dir.join("crane.fmu");
+    // A text file (an account list), given by option and by environment.
+    let text = lib_dir.join("passwd");
+    std::fs::write(&text, "root:x:0:0:root:/root:/bin/sh\n").unwrap();
+    let o = fmu(&[
+        "examples/fmu/pendulum.toml",
+        "-o",
+        out.to_str().unwrap(),
+        "--library",
+        text.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains(text.to_str().unwrap()) && err.contains("not a shared library"),
+        "{err}"
+    );
+    let o = fmu_with_library_env(&out, &text);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("not a shared library"), "{err}");
+    // A shared object of the platform that is not an FMU library: a program (PIE).
+    if cfg!(target_os = "linux") && Path::new("/bin/ls").is_file() {
+        let o = fmu(&[
+            "examples/fmu/pendulum.toml",
+            "-o",
+            out.to_str().unwrap(),
+            "--library",
+            "/bin/ls",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(
+            err.contains("/bin/ls") && err.contains("does not export fmi2Instantiate"),
+            "{err}"
+        );
+    }
+    // The real library with its ELF machine changed to AArch64 (183): another platform's.
+    if cfg!(all(target_os = "linux", target_arch = "x86_64")) {
+        let mut bytes = std::fs::read(built_library()).unwrap();
+        bytes[18..20].copy_from_slice(&183u16.to_le_bytes());
+        let arm = lib_dir.join("libarm.so");
+        std::fs::write(&arm, &bytes).unwrap();
+        let o = fmu_with_library_env(&out, &arm);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(
+            err.contains("libarm.so") && err.contains("Aarch64") && err.contains("X86_64"),
+            "{err}"
+        );
+    }
+    assert!(
+        std::fs::read_dir(&dir).unwrap().next().is_none(),
+        "nothing is written"
+    );
+    // The library itself passes for both versions.
+    for v in ["2", "3"] {
+        let lib = built_library();
+        let o = fmu(&[
+            "examples/fmu/pendulum.toml",
+            "-o",
+            out.to_str().unwrap(),
+            "--library",
+            lib.to_str().unwrap(),
+            "--fmi-version",
+            v,
+            "--force",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+}
+
+/// A write that fails (here the file-size limit, as a full disk would) names the cause,
+/// without the zip crate's internals, and leaves no partial file.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_failing_write_names_the_cause_and_leaves_nothing() {
+    let dir = temp_dir("fmu-full");
+    let out = dir.join("crane.fmu");
+    // `ulimit -f 64`: files up to 32 kB (the library alone is far larger); SIGXFSZ ignored
+    // so that the write fails with EFBIG instead of killing the process.
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 64; exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_phstring"))
+        .args(["fmu", "examples/fmu/pendulum.toml", "-o"])
+        .arg(&out)
+        .current_dir(workspace_root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("cannot write") && err.contains("File too large"),
+        "{err}"
+    );
+    assert!(!err.contains("ZipWriter") && !err.contains("Os {"), "{err}");
+    assert!(
+        std::fs::read_dir(&dir).unwrap().next().is_none(),
+        "a partial file is left"
+    );
+}
