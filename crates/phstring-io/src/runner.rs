@@ -491,7 +491,7 @@ fn new_info<const D: usize>(
         steps_at_roundoff: 0,
         max_balance_error: 0.0,
         max_relative_balance_error: 0.0,
-        balance_bound: phstring::simulation::BALANCE_RTOL,
+        balance_bound: phstring::observe::BALANCE_RTOL,
         max_newton_residual: 0.0,
         hamiltonian_initial: sim.energies().hamiltonian(),
         hamiltonian_final: sim.energies().hamiltonian(),

@@ -10,7 +10,9 @@ use crate::integrator::{Scheme, StepEquations, element_step};
 use crate::linsolve::{LinearSolver, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonWorkspace};
-use crate::observe::{Observer, RunSummary, Settle, SettleWatch, Settled, StepReport};
+use crate::observe::{
+    BALANCE_RTOL, Observer, RunSummary, Settle, SettleWatch, Settled, StepReport,
+};
 
 use crate::system::{Energies, Network, PhSystem, State, Vector};
 
@@ -250,12 +252,6 @@ struct HeldVelocities {
     /// with the index of node `i`'s port.
     mass: Vec<(usize, usize, usize, f64)>,
 }
-
-/// Bound on the energy-balance error of a step of an exact scheme (`dg`, `dg4`), relative to
-/// the step's energy scale [`StepReport::energy_scale`]: a step whose balance misses it is
-/// treated like a failed Newton solve (docs/method.md eq. (9.6)). Accepted steps of the test suite
-/// and the examples stay below 1e-13 of the scale.
-pub const BALANCE_RTOL: f64 = 1e-11;
 
 /// Refuses a feedback law whose gains no double-precision step can resolve against the
 /// structure: a stiffness `‖∂u/∂r‖` or `‖∂u/∂y‖/h` [N/m] (at `t = 0` and the initial state)
