@@ -4,8 +4,8 @@ use crate::system::Energies;
 
 /// Bound on the energy-balance error of a step of an exact scheme (`dg`, `dg4`), relative to
 /// the step's energy scale [`StepReport::energy_scale`]: a step whose balance misses it is
-/// treated like a failed Newton solve (docs/method.md eq. (9.6)). Accepted steps of the test suite
-/// and the examples stay below 1e-13 of the scale.
+/// treated like a failed Newton solve (docs/method.md eq. (9.6)). The examples' steps stay
+/// below 1e-15 of the scale.
 pub const BALANCE_RTOL: f64 = 1e-11;
 
 /// What one step did.
