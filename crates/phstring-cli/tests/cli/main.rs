@@ -8,6 +8,7 @@ mod fmu;
 mod hardening_cli;
 mod hardening_io;
 mod network;
+mod out_folder;
 mod reliability;
 mod statics;
 
