@@ -35,6 +35,8 @@ pub const RUN_FILES: &[&str] = &[
     crate::output::ELEMENTS_FILE,
     crate::output::POINT_MASSES_FILE,
     crate::animation::ANIMATION_FILE,
+    crate::runner::COMPONENTS_FILE,
+    crate::runner::SCENARIO_FILE,
 ];
 
 /// The ParaView sub-folder of a run.

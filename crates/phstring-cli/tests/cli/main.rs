@@ -5,6 +5,7 @@ mod broken;
 mod control;
 mod examples;
 mod fmu;
+mod full_disk;
 mod hardening_cli;
 mod hardening_io;
 mod network;

@@ -48,10 +48,16 @@ fn assert_refused_untouched(args: &[&str], case: &Path, input: &Path) {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
     assert!(
-        err.contains(&format!("output folder {} holds the input file", case.display())),
+        err.contains(&format!(
+            "output folder {} holds the input file",
+            case.display()
+        )),
         "{args:?}: {err}"
     );
-    assert!(err.contains(&input.display().to_string()), "{args:?}: {err}");
+    assert!(
+        err.contains(&input.display().to_string()),
+        "{args:?}: {err}"
+    );
     assert_eq!(snapshot(case), before, "{args:?} changed the folder");
 }
 
@@ -64,7 +70,11 @@ fn run_refuses_out_folder_holding_its_scenario() {
     let parent = case.parent().unwrap();
     let o = phstring(&["run", s, "--out", parent.to_str().unwrap(), "--force", "-q"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("holds the input file"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("holds the input file"),
+        "{}",
+        stderr(&o)
+    );
     assert!(scenario.exists());
     // Next to the scenario, not above it: runs.
     let out = parent.join("out");
@@ -206,8 +216,7 @@ fn linearize_refuses_out_folder_holding_its_checkpoint() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let manifest: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(lin.join("manifest.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(lin.join("manifest.json")).unwrap()).unwrap();
     let t = manifest["time"].as_f64().unwrap();
     assert!((t - 0.4).abs() < 1e-12, "{manifest}");
 }

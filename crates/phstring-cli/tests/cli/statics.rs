@@ -335,8 +335,7 @@ fn more_modes_than_exist_are_named_not_silently_dropped() {
     let note = "--modes 100000: the model has 60 free position components, so only 60 modes exist; 60 are given";
     assert!(err.contains(&format!("warning: {note}")), "{err}");
     let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
     assert_eq!(m["requested_modes"], 100_000);
     assert_eq!(m["warnings"], serde_json::json!([note]));
     // The modal form's state: 60 modal coordinates and their 60 rates.
