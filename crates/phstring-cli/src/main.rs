@@ -308,7 +308,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                             .map_or("run".into(), |s| s.to_string_lossy().into_owned());
                         Path::new("out").join(stem)
                     });
-                    let lock = prepare_out(&out, force)?;
+                    let lock = prepare_out_for(&out, force, &[&scenario])?;
                     (file, out, None, lock)
                 }
                 (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
@@ -394,8 +394,11 @@ fn dispatch(cli: Cli) -> Result<()> {
             check_budget(&file)?;
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_modes"));
-            let _lock = prepare_out(&out, force)?;
+            let _lock = prepare_out_for(&out, force, &[&scenario])?;
             let info = phstring_io::modes_run::modes(&file, count, &out, Some(&stop))?;
+            for w in &info.warnings {
+                tell!("warning: {w}");
+            }
             for (k, m) in info.modes.iter().enumerate() {
                 say!(
                     "mode {:>3}: {:.6e} Hz  {:.6e} rad/s  {}",
@@ -426,10 +429,21 @@ fn dispatch(cli: Cli) -> Result<()> {
             let file = scenario::load(&scenario, &sets)?;
             check_budget(&file)?;
             file.check()?;
+            // The checkpoint is read and checked before the folder is touched.
+            let at_file = match &at {
+                Some(path) => phstring_io::export::checkpoint_at(&file, path)?,
+                None => LinearizeAt::Equilibrium,
+            };
             let out = out.unwrap_or_else(|| default_out(&scenario, "_linear"));
-            let _lock = prepare_out(&out, force)?;
-            let at = at.map_or(LinearizeAt::Equilibrium, LinearizeAt::Checkpoint);
+            let inputs: Vec<&Path> = std::iter::once(scenario.as_path())
+                .chain(at.as_deref())
+                .collect();
+            let _lock = prepare_out_for(&out, force, &inputs)?;
+            let at = at_file;
             let m = phstring_io::export::linearize(&file, &at, modes, &out, Some(&stop))?;
+            for w in &m.warnings {
+                tell!("warning: {w}");
+            }
             for (name, form) in &m.forms {
                 say!(
                     "{name}: {} states, {} inputs, {} outputs",
@@ -458,7 +472,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             check_budget(&file)?;
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_statics"));
-            let _lock = prepare_out(&out, force)?;
+            let _lock = prepare_out_for(&out, force, &[&scenario])?;
             let info = phstring_io::statics_run::statics(&file, &out, Some(&stop))?;
             say!(
                 "equilibrium by {} ({} steps, {} Newton iterations, {:.3} s): residual {:.3e} N (tolerance {:.3e} N){}, tension {} … {} N, internal energy {} J",
@@ -491,9 +505,6 @@ fn dispatch(cli: Cli) -> Result<()> {
     }
 }
 
-/// Prepares and locks an output folder ([`outdir::prepare`]): refuses a non-empty folder
-/// unless `force`, a folder another run is using, and symbolic links among phstring's
-/// output names; with `force`, removes exactly the outputs of an earlier run.
 /// `out/<scenario file stem><suffix>`.
 fn default_out(scenario: &Path, suffix: &str) -> PathBuf {
     let stem = scenario
@@ -502,8 +513,19 @@ fn default_out(scenario: &Path, suffix: &str) -> PathBuf {
     Path::new("out").join(format!("{stem}{suffix}"))
 }
 
+/// Prepares and locks an output folder ([`outdir::prepare`]): refuses a non-empty folder
+/// unless `force`, a folder another run is using, and symbolic links among phstring's
+/// output names; with `force`, removes exactly the outputs of an earlier run.
 fn prepare_out(out: &Path, force: bool) -> Result<OutLock> {
     Ok(outdir::prepare(out, force)?)
+}
+
+/// [`prepare_out`] for a command that reads `inputs` (its scenario, a checkpoint), all read
+/// and checked before: an `out` that holds one of them is refused
+/// ([`outdir::refuse_inputs_inside`]), so that `--force` cannot remove what it reads.
+fn prepare_out_for(out: &Path, force: bool, inputs: &[&Path]) -> Result<OutLock> {
+    outdir::refuse_inputs_inside(out, inputs)?;
+    prepare_out(out, force)
 }
 
 /// An energy for the terminal: 9 decimals, or scientific notation for very large or small
@@ -664,7 +686,7 @@ fn sweep(
         check_budget_of(file, concurrent).map_err(|e| format!("run {index} of the sweep: {e:#}"))
     })?;
     let n = plan.len();
-    let _lock = prepare_out(out, force)?;
+    let _lock = prepare_out_for(out, force, &[path])?;
     let bar = progress_bar(quiet, "sweep");
     if let Some(b) = &bar.bar {
         b.set_length(n as u64);

@@ -11,7 +11,7 @@
 
 use std::fmt::Write as _;
 use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use faer::sparse::SparseColMat;
@@ -52,8 +52,36 @@ pub enum ExportError {
 pub enum LinearizeAt {
     /// The static equilibrium of the scenario.
     Equilibrium,
-    /// The positions of a checkpoint (written by `phstring run`).
-    Checkpoint(PathBuf),
+    /// The positions of a checkpoint (written by `phstring run`), read (and checked against
+    /// the scenario) by [`checkpoint_at`] before the output folder is touched.
+    Checkpoint(Box<CheckpointFile>),
+}
+
+/// Reads the checkpoint at `path` and checks that its positions fit the mesh of `file`
+/// (node count × dimension), so that `linearize --at` fails on a bad checkpoint before its
+/// output folder is prepared.
+pub fn checkpoint_at(file: &ScenarioFile, path: &Path) -> Result<LinearizeAt, ExportError> {
+    let cp = CheckpointFile::read(path)?;
+    let (d, nodes) = match file.dimension()? {
+        1 => (1, file.validate::<1>()?.problem.mesh.n_nodes()),
+        2 => (2, file.validate::<2>()?.problem.mesh.n_nodes()),
+        _ => (3, file.validate::<3>()?.problem.mesh.n_nodes()),
+    };
+    check_positions(&cp, nodes, d)?;
+    Ok(LinearizeAt::Checkpoint(Box::new(cp)))
+}
+
+/// Refuses a checkpoint whose positions are not `nodes` nodes in `d` dimensions.
+fn check_positions(cp: &CheckpointFile, nodes: usize, d: usize) -> Result<(), ExportError> {
+    if cp.sim.r.len() == nodes * d {
+        return Ok(());
+    }
+    Err(ExportError::Mismatch(format!(
+        "{} holds {} position values, but the scenario has {nodes} nodes in {d}D ({} values)",
+        cp.path.display(),
+        cp.sim.r.len(),
+        nodes * d
+    )))
 }
 
 /// One input or output of the model.
@@ -125,6 +153,11 @@ pub struct Manifest {
     pub stable: bool,
     /// The positions linearized at (node, x, y, z), relative to the output folder.
     pub positions: &'static str,
+    /// With `--modes K`: the modes asked for (the modal form may have fewer, see `warnings`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub requested_modes: Option<usize>,
+    /// What the caller should know: fewer modes exist than `--modes` asked for.
+    pub warnings: Vec<String>,
     /// The forms written.
     pub forms: std::collections::BTreeMap<&'static str, FormEntry>,
 }
@@ -165,18 +198,9 @@ fn linearize_dim<const D: usize>(
             let (sys, eq) = crate::statics_run::solve_validated(&v, true, stop)?;
             (sys, eq.state.r, 0.0, "equilibrium".to_string())
         }
-        LinearizeAt::Checkpoint(path) => {
-            let cp = CheckpointFile::read(path)?;
+        LinearizeAt::Checkpoint(cp) => {
             let (sys, _) = PhSystem::new(v.problem.clone()).map_err(StaticsError::from)?;
-            let n = sys.mesh().n_nodes();
-            if cp.sim.r.len() != n * D {
-                return Err(ExportError::Mismatch(format!(
-                    "{} holds {} position values, but the scenario has {n} nodes in {D}D ({} values)",
-                    path.display(),
-                    cp.sim.r.len(),
-                    n * D
-                )));
-            }
+            check_positions(cp, sys.mesh().n_nodes(), D)?;
             let r: Vec<Vector<D>> = cp
                 .sim
                 .r
@@ -184,7 +208,7 @@ fn linearize_dim<const D: usize>(
                 .map(Vector::<D>::from_column_slice)
                 .collect();
             let t = cp.sim.t_base + cp.sim.k as f64 * cp.sim.h_cur;
-            (sys, r, t, path.display().to_string())
+            (sys, r, t, cp.path.display().to_string())
         }
     };
     let (res, _) = phstring::statics::static_residual(&sys, &r).map_err(|e| {
@@ -207,8 +231,16 @@ fn linearize_dim<const D: usize>(
     ] {
         forms.insert(name, write_form(out, name, &model, eqs)?);
     }
+    let mut warnings = Vec::new();
     if let Some(k) = modal {
         let found = phstring::modes::modes(&sys, &r, k, v.settings.step.solver)?;
+        let (_, free) = phstring::linear::free_dofs(&sys);
+        warnings.extend(crate::modes_run::fewer_modes(
+            "--modes",
+            k,
+            free,
+            found.modes.len(),
+        ));
         let model = phstring::linear::modal_model(&sys, &r, &found.modes, &ports);
         forms.insert("modal", write_form(out, "modal", &model, MODAL_EQUATIONS)?);
     }
@@ -238,6 +270,8 @@ fn linearize_dim<const D: usize>(
         static_residual,
         stable,
         positions: "at.csv",
+        requested_modes: modal,
+        warnings,
         forms,
     };
     let json = serde_json::to_string_pretty(&manifest).expect("plain data serializes");

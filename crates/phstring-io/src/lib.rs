@@ -4,6 +4,7 @@
 
 pub mod animation;
 pub mod checkpoint;
+mod csvfile;
 pub mod export;
 pub mod modes_run;
 pub mod outdir;

@@ -8,7 +8,8 @@
 //!   `shape_z` (the unscaled `M`-normalized shape);
 //! * `modes.png` / `.svg`: the equilibrium and up to four scaled mode shapes (the snapshot
 //!   labelled `t = k s` is mode `k`; the x–y plane in 3D);
-//! * `summary.json`: method, solves, frequencies, the equilibrium path and the scale.
+//! * `summary.json`: method, solves, frequencies, the equilibrium path and the scale, the
+//!   count asked for and a warning if fewer modes exist.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -62,8 +63,22 @@ pub struct ModesInfo {
     pub equilibrium_path: &'static str,
     /// Scale of the shapes in the ParaView frames and the plot [m per unit of φ].
     pub shape_scale: f64,
+    /// Modes asked for (`--count`).
+    pub requested: usize,
+    /// What the caller should know: fewer modes exist than were asked for.
+    pub warnings: Vec<String>,
     /// The modes, ascending.
     pub modes: Vec<ModeInfo>,
+}
+
+/// The warning when `asked` modes were asked for with `option` but only `given` were
+/// computed, because the model has `free` free position components (one mode each).
+pub fn fewer_modes(option: &str, asked: usize, free: usize, given: usize) -> Option<String> {
+    (given < asked).then(|| {
+        format!(
+            "{option} {asked}: the model has {free} free position components, so only {free} modes exist; {given} are given"
+        )
+    })
 }
 
 /// Solves the equilibrium of `file`, then its `count` lowest modes, and writes the outputs
@@ -96,6 +111,10 @@ fn modes_dim<const D: usize>(
     let (sys, eq) = crate::statics_run::solve_validated(&v, true, stop)?;
     let r = &eq.state.r;
     let found = modes::modes(&sys, r, count, v.settings.step.solver)?;
+    let (_, free) = phstring::linear::free_dofs(&sys);
+    let warnings = fewer_modes("--count", count, free, found.modes.len())
+        .into_iter()
+        .collect();
     // The shapes are drawn with their largest nodal amplitude at 5 % of the largest extent.
     let extent = (0..D)
         .map(|k| {
@@ -200,6 +219,8 @@ fn modes_dim<const D: usize>(
         solves: found.solves,
         equilibrium_path: eq.path.name(),
         shape_scale,
+        requested: count,
+        warnings,
         modes: infos,
     };
     let json = serde_json::to_string_pretty(&info).expect("plain data serializes");

@@ -35,6 +35,8 @@ pub const RUN_FILES: &[&str] = &[
     crate::output::ELEMENTS_FILE,
     crate::output::POINT_MASSES_FILE,
     crate::animation::ANIMATION_FILE,
+    crate::runner::COMPONENTS_FILE,
+    crate::runner::SCENARIO_FILE,
 ];
 
 /// The ParaView sub-folder of a run.
@@ -170,6 +172,19 @@ pub enum OutDirError {
         .0.display()
     )]
     Symlink(PathBuf),
+    /// The output folder holds one of the command's input files (the scenario, a
+    /// checkpoint it reads), which preparing the folder could remove or overwrite.
+    #[error(
+        "output folder {} holds the input file {}, which preparing the folder could remove or overwrite; choose another folder with --out",
+        out.display(),
+        input.display()
+    )]
+    HoldsInput {
+        /// The output folder, as given.
+        out: PathBuf,
+        /// The input file, as given.
+        input: PathBuf,
+    },
     /// A file operation failed.
     #[error("cannot {action} {}: {cause}", path.display())]
     Io {
@@ -267,6 +282,27 @@ pub fn prepare(dir: &Path, force: bool) -> Result<OutLock, OutDirError> {
     }
     refuse_symlinks(dir)?;
     Ok(lock)
+}
+
+/// Refuses an output folder `out` that holds, at any depth, one of the command's `inputs`
+/// (the scenario file, a checkpoint it reads): preparing the folder (with `--force`) could
+/// remove them before or while they are used, and a run would write over the run it reads.
+/// Paths are compared after resolving links and `..`; an `out` that does not exist yet
+/// holds nothing, and an input that cannot be resolved (a pipe such as `/dev/stdin`) is
+/// not a file in a folder.
+pub fn refuse_inputs_inside(out: &Path, inputs: &[&Path]) -> Result<(), OutDirError> {
+    let Ok(dir) = std::fs::canonicalize(out) else {
+        return Ok(());
+    };
+    for &input in inputs {
+        if std::fs::canonicalize(input).is_ok_and(|p| p.starts_with(&dir)) {
+            return Err(OutDirError::HoldsInput {
+                out: out.to_path_buf(),
+                input: input.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Prepares the folder of a run to be resumed: locks it (refusing one that another run
@@ -385,5 +421,38 @@ mod tests {
         );
         assert_eq!(classify(Folder::Figures, "fig9.png"), None);
         assert_eq!(classify(Folder::Top, LOCK_FILE), None);
+    }
+
+    #[test]
+    fn out_folder_holding_an_input_is_refused() {
+        let dir = crate::test_util::temp_dir("outdir", "inputs");
+        let run = dir.join("run");
+        std::fs::create_dir_all(run.join("sub")).unwrap();
+        let cp = run.join("sub").join("checkpoint.json");
+        std::fs::write(&cp, "{}").unwrap();
+        let outside = dir.join("scenario.toml");
+        std::fs::write(&outside, "").unwrap();
+        // Deep inside, and named through `..`.
+        let e = refuse_inputs_inside(&run, &[&outside, &cp]).unwrap_err();
+        assert!(matches!(e, OutDirError::HoldsInput { .. }), "{e}");
+        let text = e.to_string();
+        assert!(text.contains(&run.display().to_string()), "{text}");
+        assert!(text.contains(&cp.display().to_string()), "{text}");
+        let dotted = dir.join("run/sub/../sub/checkpoint.json");
+        assert!(refuse_inputs_inside(&dir.join("run/sub/.."), &[&dotted]).is_err());
+        // The folder the input is in, through a link to it.
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(&run, dir.join("link")).unwrap();
+            assert!(refuse_inputs_inside(&dir.join("link"), &[&cp]).is_err());
+        }
+        // A sibling folder, a folder not created yet, a name that only shares a prefix.
+        std::fs::create_dir_all(run.join("sub2")).unwrap();
+        assert!(refuse_inputs_inside(&run.join("sub2"), &[&cp]).is_ok());
+        assert!(refuse_inputs_inside(&dir.join("new"), &[&cp, &outside]).is_ok());
+        std::fs::create_dir_all(dir.join("ru")).unwrap();
+        assert!(refuse_inputs_inside(&dir.join("ru"), &[&cp]).is_ok());
+        assert!(refuse_inputs_inside(&run, &[&outside]).is_ok());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

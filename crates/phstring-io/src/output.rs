@@ -13,13 +13,14 @@
 use crate::outdir::{PARAVIEW_DIR, PVD_FILE, frame_name};
 use std::fs::File;
 use std::hash::Hasher;
-use std::io::{BufRead, BufWriter, Write};
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use phstring::{Law, Material, PortKind, Simulation, StepReport};
 
+use crate::csvfile::{Csv, PendingCsv};
 use crate::plot::{self, GroupDrawing, PlotError, Series, Topology};
 use crate::vtk::{self, FrameData, PvdWriter, VtkError};
 
@@ -73,6 +74,35 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let res = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
+    }
+    res
+}
+
+/// Writes `bytes` over the regular file at `path` in place, padded with spaces (and a final
+/// line break) to the file's length, if the file is at least one byte longer than `bytes`
+/// (JSON allows trailing white space). On a full disk, where [`atomic_write`] finds no room
+/// for its temporary file, the file's own space takes the new text. A write that fails
+/// midway removes the file rather than leave it half old, half new.
+pub fn overwrite_in_place(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let meta = std::fs::symlink_metadata(path)?;
+    let len = usize::try_from(meta.len()).unwrap_or(usize::MAX);
+    if !meta.is_file() || len <= bytes.len() {
+        return Err(std::io::Error::other(format!(
+            "no room in place: the file has {len} bytes, {} are needed",
+            bytes.len() + 1
+        )));
+    }
+    let mut padded = Vec::with_capacity(len);
+    padded.extend_from_slice(bytes);
+    padded.resize(len - 1, b' ');
+    padded.push(b'\n');
+    let res = std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .and_then(|mut f| f.write_all(&padded));
+    if res.is_err() {
+        let _ = std::fs::remove_file(path);
     }
     res
 }
@@ -170,7 +200,7 @@ fn write_topology<const D: usize>(
         for e in group.elements.clone() {
             let [a, b] = sys.mesh().elements()[e];
             let l = sys.mesh().lengths()[e];
-            csv.line(&format!("{e},{a},{b},{g},{kind},{},{name}", num(l)))?;
+            csv.row(&format!("{e},{a},{b},{g},{kind},{},{name}", num(l)))?;
         }
     }
     csv.flush()?;
@@ -184,7 +214,7 @@ fn write_topology<const D: usize>(
     let mut csv = Csv::create(path, "node,mass")?;
     for &(node, m) in sys.point_masses() {
         check_finite(&csv.path, "point mass", 0.0, &[m])?;
-        csv.line(&format!("{node},{}", num(m)))?;
+        csv.row(&format!("{node},{}", num(m)))?;
     }
     csv.flush()
 }
@@ -373,118 +403,17 @@ fn check_finite(path: &Path, what: &str, t: f64, values: &[f64]) -> Result<(), O
     }
 }
 
+/// `path` relative to `dir` (for reports), or as it is if it is not in `dir`.
+fn relative(dir: &Path, path: &Path) -> String {
+    path.strip_prefix(dir).unwrap_or(path).display().to_string()
+}
+
 /// Formats `x` with 17 significant digits (round-trip exact).
 pub fn num(x: f64) -> String {
     if x == 0.0 {
         "0".to_string()
     } else {
         format!("{x:.16e}")
-    }
-}
-
-struct Csv {
-    path: PathBuf,
-    w: BufWriter<File>,
-}
-
-/// A CSV file checked for a resume at `len` bytes and not changed yet: all files of a resume
-/// are checked before any is cut back, so a refused resume leaves the folder as it was.
-struct PendingCsv {
-    path: PathBuf,
-    f: File,
-    len: u64,
-}
-
-impl PendingCsv {
-    /// Cuts the file back to the checked length and appends from there.
-    fn commit(self) -> Result<Csv, OutputError> {
-        use std::io::{Seek, SeekFrom};
-        let Self { path, mut f, len } = self;
-        let io = |source| OutputError::Io {
-            path: path.clone(),
-            cause: source,
-        };
-        f.set_len(len).map_err(io)?;
-        f.seek(SeekFrom::End(0)).map_err(io)?;
-        Ok(Csv {
-            path,
-            w: BufWriter::new(f),
-        })
-    }
-}
-
-impl Csv {
-    fn create(path: PathBuf, header: &str) -> Result<Self, OutputError> {
-        let f = File::create(&path).map_err(|source| OutputError::Io {
-            path: path.clone(),
-            cause: source,
-        })?;
-        let mut c = Self {
-            path,
-            w: BufWriter::new(f),
-        };
-        c.line(header)?;
-        Ok(c)
-    }
-    fn line(&mut self, s: &str) -> Result<(), OutputError> {
-        writeln!(self.w, "{s}").map_err(|source| OutputError::Io {
-            path: self.path.clone(),
-            cause: source,
-        })
-    }
-    fn flush(&mut self) -> Result<(), OutputError> {
-        self.w.flush().map_err(|source| OutputError::Io {
-            path: self.path.clone(),
-            cause: source,
-        })
-    }
-    /// Opens an existing file for appending at `len` bytes (cut back by
-    /// [`PendingCsv::commit`]). The file must be at least `len` bytes long and byte `len − 1`
-    /// must end a row.
-    fn reopen(path: PathBuf, len: u64) -> Result<PendingCsv, OutputError> {
-        use std::io::{Read, Seek, SeekFrom};
-        let io = |source| OutputError::Io {
-            path: path.clone(),
-            cause: source,
-        };
-        let mut f = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(&path)
-            .map_err(io)?;
-        let actual = f.metadata().map_err(io)?.len();
-        if actual < len {
-            return Err(OutputError::Mismatch {
-                path: path.clone(),
-                reason: format!(
-                    "it has {actual} bytes, fewer than the {len} bytes the checkpoint recorded"
-                ),
-            });
-        }
-        if len > 0 {
-            let mut last = [0u8];
-            f.seek(SeekFrom::Start(len - 1)).map_err(io)?;
-            f.read_exact(&mut last).map_err(io)?;
-            if last[0] != b'\n' {
-                return Err(OutputError::Mismatch {
-                    path: path.clone(),
-                    reason: format!("the checkpoint's length {len} does not end a row of the file"),
-                });
-            }
-        }
-        Ok(PendingCsv { path, f, len })
-    }
-    /// Bytes written so far (after a flush).
-    fn len(&mut self) -> Result<u64, OutputError> {
-        self.flush()?;
-        self.w
-            .get_ref()
-            .metadata()
-            .map(|m| m.len())
-            .map_err(|source| OutputError::Io {
-                path: self.path.clone(),
-                cause: source,
-            })
     }
 }
 
@@ -863,7 +792,8 @@ pub struct Writers {
     positions: Option<Csv>,
     ports: Csv,
     pvd: Option<PvdWriter>,
-    /// The collection file lacks frames added since it was last written.
+    /// The collection file must be written again before it is whole (a resume continues
+    /// it after the checkpoint's frames); frames are listed as they are written.
     pvd_dirty: bool,
     stride: usize,
     snapshot_times: Vec<f64>,
@@ -873,6 +803,9 @@ pub struct Writers {
     frames_hash: u64,
     last_flush: Instant,
     flush_every: Duration,
+    /// A ParaView frame or the collection could not be written (the collection lists the
+    /// frames written before).
+    paraview_failed: bool,
 }
 
 impl Writers {
@@ -926,11 +859,12 @@ impl Writers {
             frames_hash: frames_hash_start(),
             last_flush: Instant::now(),
             flush_every: FLUSH_EVERY,
+            paraview_failed: false,
         };
         let e = sim.energies();
         let values = [e.kinetic, e.potential(), e.hamiltonian()];
         check_finite(&w.energy.path, "initial energy", 0.0, &values)?;
-        w.energy.line(&format!(
+        w.energy.row(&format!(
             "{},{},{},{},0,0,0,0,0,0",
             num(0.0),
             num(values[0]),
@@ -994,6 +928,7 @@ impl Writers {
                 let comps: Vec<String> = r.iter().map(|x| num(*x)).collect();
                 p.line(&format!("{},{i},{}", num(t), comps.join(",")))?;
             }
+            p.end_record()?;
         }
         if let Some(pvd) = &mut self.pvd {
             let pad = |v: &phstring::Vector<D>| {
@@ -1027,8 +962,9 @@ impl Writers {
             let point_data: Vec<(&str, &[f64])> =
                 mass.iter().map(|m| ("mass", m.as_slice())).collect();
             let name = frame_name(sim.steps());
+            let path = self.dir.join(PARAVIEW_DIR).join(&name);
             vtk::write_vtp_frame(
-                &self.dir.join(PARAVIEW_DIR).join(&name),
+                &path,
                 &FrameData {
                     points: &points,
                     segments: sys.mesh().elements(),
@@ -1037,9 +973,18 @@ impl Writers {
                     cell_ints: &[("string", &group)],
                     point_data: &point_data,
                 },
-            )?;
+            )
+            .inspect_err(|_| self.paraview_failed = true)?;
             pvd.add(t, &name);
-            self.pvd_dirty = true;
+            // The collection lists the frame at once. A frame it cannot list (a full disk)
+            // is removed: the collection always lists exactly the frames on disk.
+            if let Err(e) = pvd.write() {
+                pvd.discard_pending();
+                self.paraview_failed = true;
+                let _ = std::fs::remove_file(&path);
+                return Err(e.into());
+            }
+            self.pvd_dirty = false;
             self.frames += 1;
             self.frames_hash = frames_hash_add(self.frames_hash, t, &name);
         }
@@ -1071,7 +1016,7 @@ impl Writers {
             check_finite(&self.ports.path, "port output", t_mid, p.output.as_slice())?;
             check_finite(&self.ports.path, "port power", t_mid, &[p.power()])?;
         }
-        self.energy.line(&format!(
+        self.energy.row(&format!(
             "{},{},{},{},{},{},{},{},{},{}",
             num(values[0]),
             num(values[1]),
@@ -1100,6 +1045,7 @@ impl Writers {
                 num(p.power())
             ))?;
         }
+        self.ports.end_record()?;
         self.record(sim);
         self.frame(sim)?;
         if self.last_flush.elapsed() >= self.flush_every {
@@ -1144,10 +1090,10 @@ impl Writers {
             None
         };
         // Check every file before any is cut back.
-        let energy = Csv::reopen(dir.join("energy.csv"), state.energy_bytes)?;
-        let ports = Csv::reopen(dir.join("ports.csv"), state.ports_bytes)?;
+        let energy = PendingCsv::open(dir.join("energy.csv"), state.energy_bytes)?;
+        let ports = PendingCsv::open(dir.join("ports.csv"), state.ports_bytes)?;
         let positions = match state.positions_bytes {
-            Some(n) => Some(Csv::reopen(dir.join("positions.csv"), n)?),
+            Some(n) => Some(PendingCsv::open(dir.join("positions.csv"), n)?),
             None => None,
         };
         let positions = positions.map(PendingCsv::commit).transpose()?;
@@ -1166,6 +1112,7 @@ impl Writers {
             frames_hash: state.frames_hash,
             last_flush: Instant::now(),
             flush_every: FLUSH_EVERY,
+            paraview_failed: false,
         })
     }
 
@@ -1206,7 +1153,8 @@ impl Writers {
         self.flush()
     }
 
-    /// Flushes all CSV files and rewrites the ParaView collection if frames were added.
+    /// Flushes all CSV files and writes the ParaView collection if a resume left it to be
+    /// written.
     pub fn flush(&mut self) -> Result<(), OutputError> {
         self.energy.flush()?;
         self.ports.flush()?;
@@ -1216,11 +1164,50 @@ impl Writers {
         if let Some(pvd) = &mut self.pvd
             && self.pvd_dirty
         {
-            pvd.write()?;
+            pvd.write().inspect_err(|_| self.paraview_failed = true)?;
             self.pvd_dirty = false;
         }
         self.last_flush = Instant::now();
         Ok(())
+    }
+
+    /// The outputs (relative to the run folder) that a failed write left short of the steps
+    /// the run took: CSV files cut back to their last whole record, and
+    /// `paraview/string.pvd` if a frame or the collection could not be written (it lists the
+    /// frames written before; a frame that failed is removed).
+    pub fn incomplete_files(&self) -> Vec<String> {
+        let mut files: Vec<String> = [
+            Some(&self.energy),
+            self.positions.as_ref(),
+            Some(&self.ports),
+        ]
+        .into_iter()
+        .flatten()
+        .filter(|c| c.is_incomplete())
+        .map(|c| relative(&self.dir, &c.path))
+        .collect();
+        if self.paraview_failed {
+            files.push(format!("{PARAVIEW_DIR}/{PVD_FILE}"));
+        }
+        files
+    }
+
+    /// After a failed write: writes out what every file still holds, so that all rows
+    /// written before the failure reach the disk (a file whose write fails too is cut back
+    /// to its last whole record), and returns [`Self::incomplete_files`].
+    pub fn salvage(&mut self) -> Vec<String> {
+        let _ = self.energy.flush();
+        let _ = self.ports.flush();
+        if let Some(p) = &mut self.positions {
+            let _ = p.flush();
+        }
+        if let Some(pvd) = &mut self.pvd
+            && self.pvd_dirty
+            && pvd.write().is_err()
+        {
+            self.paraview_failed = true;
+        }
+        self.incomplete_files()
     }
 }
 
@@ -1325,6 +1312,35 @@ mod tests {
         let e = c.flush().unwrap_err();
         assert!(matches!(e, OutputError::Io { .. }), "{e}");
         assert!(atomic_write(Path::new("/dev/full/x"), b"x").is_err());
+    }
+
+    #[test]
+    fn overwrite_in_place_fits_the_new_text_in_the_old_file() {
+        let dir = crate::test_util::temp_dir("output", "inplace");
+        let path = dir.join("summary.json");
+        std::fs::write(
+            &path,
+            format!("{{\"status\": \"running\"}}\n{}\n", " ".repeat(100)),
+        )
+        .unwrap();
+        let len = std::fs::metadata(&path).unwrap().len();
+        overwrite_in_place(
+            &path,
+            b"{\"status\": \"failed\", \"error\": \"disk full\"}\n",
+        )
+        .unwrap();
+        // Same length, the new text, then white space: valid JSON.
+        assert_eq!(std::fs::metadata(&path).unwrap().len(), len);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["error"], "disk full");
+        // Text longer than the file: refused, the file as it was.
+        let long = vec![b'x'; len as usize];
+        let e = overwrite_in_place(&path, &long).unwrap_err();
+        assert!(e.to_string().contains("no room in place"), "{e}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+        assert!(overwrite_in_place(&dir.join("missing.json"), b"{}").is_err());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

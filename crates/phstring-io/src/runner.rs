@@ -115,6 +115,28 @@ pub struct RunOptions {
 /// Name of the checkpoint file in the output folder.
 pub const CHECKPOINT: &str = "checkpoint.json";
 
+/// A large network's components, written by a run instead of listing them in
+/// `summary.json` (see [`SUMMARY_COMPONENTS`]).
+pub const COMPONENTS_FILE: &str = "components.json";
+
+/// A long scenario as run, written by a run instead of holding it in `summary.json` (see
+/// [`SUMMARY_SCENARIO_BYTES`]).
+pub const SCENARIO_FILE: &str = "scenario.json";
+
+/// Most components (named nodes, strings, springs, point masses, supports, motions, loads
+/// and controls together) that `summary.json` lists itself; a larger network has them in
+/// [`COMPONENTS_FILE`] (compact JSON), and `summary.json` counts them.
+pub const SUMMARY_COMPONENTS: usize = 1000;
+
+/// Longest scenario text [bytes] that `summary.json` holds itself (as JSON); a longer one is
+/// in [`SCENARIO_FILE`] (compact JSON).
+pub const SUMMARY_SCENARIO_BYTES: usize = 64 << 10;
+
+/// Spaces after the summary written when a run starts (`"status": "running"`): room for
+/// the final summary to be written over it in place when a full disk leaves no room for a
+/// new file ([`write_summary`]).
+pub const SUMMARY_RESERVE: usize = 4096;
+
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -130,6 +152,16 @@ pub enum RunError {
     /// Writing outputs failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// Writing an output failed during the run (a full disk): what was written stays, each
+    /// CSV file cut back to its last whole row; `note` says where the outputs are, which
+    /// are incomplete, and whether `summary.json` records the failure.
+    #[error("{cause}; {note}")]
+    Incomplete {
+        /// The write that failed.
+        cause: Box<RunError>,
+        /// Where the outputs are and what became of them.
+        note: String,
+    },
     /// Reading or writing a checkpoint failed.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
@@ -163,7 +195,8 @@ pub struct RunInfo {
     pub program: &'static str,
     /// Program version.
     pub version: &'static str,
-    /// `completed`, `failed` or `interrupted`.
+    /// `completed`, `failed` or `interrupted`; `running` in the summary written when the
+    /// run starts (a summary that still says so belongs to a run that was killed).
     pub status: String,
     /// The reason for a failure.
     pub error: Option<String>,
@@ -173,9 +206,11 @@ pub struct RunInfo {
     pub dimension: usize,
     /// Number of elements.
     pub elements: usize,
-    /// The components (strings, springs, point masses, supports, motions, loads, named
-    /// nodes) with their mesh nodes and elements.
-    pub components: Components,
+    /// The components (strings, springs, point masses, supports, motions, loads, controls,
+    /// named nodes) with their mesh nodes and elements; for a network of more than
+    /// [`SUMMARY_COMPONENTS`] entries, their counts and the file that lists them
+    /// ([`COMPONENTS_FILE`]).
+    pub components: serde_json::Value,
     /// Scheme (`dg` or `mp`).
     pub scheme: &'static str,
     /// Linear solver used.
@@ -260,7 +295,11 @@ pub struct RunInfo {
     pub plots_skipped: Vec<String>,
     /// Problems that did not fail the run (e.g. a plot that could not be drawn).
     pub warnings: Vec<String>,
-    /// The scenario as run (after `--set` overrides).
+    /// Outputs (relative to the run folder) that a failed write left short of the steps the
+    /// run took (see [`Writers::incomplete_files`]); empty unless a write failed.
+    pub incomplete_files: Vec<String>,
+    /// The scenario as run (after `--set` overrides); for a scenario text longer than
+    /// [`SUMMARY_SCENARIO_BYTES`], the file that holds it ([`SCENARIO_FILE`]).
     pub scenario: serde_json::Value,
     /// Energies read back from `energy.csv` after the run, decimated to at most
     /// [`output::PLOT_POINTS`] points per curve, and the configuration snapshots (not
@@ -372,18 +411,20 @@ fn run_dim<const D: usize>(
         checkpoint_path: out.join(CHECKPOINT),
         settings,
     };
-    let mut info = new_info(&ctx, &sim, components, resume.is_some());
+    let mut info = new_info(&ctx, &sim, &components, resume.is_some());
     info.initial_equilibrium = initial_equilibrium;
     let fresh = resume.is_none();
     let writers = match resume {
         Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
-        None => start_writers(&ctx, &sim).map_err(RunError::from),
+        None => start_writers(&ctx, &sim, &components).map_err(RunError::from),
     };
-    let mut writers = match writers {
+    drop(components);
+    let mut writers = match writers.and_then(|w| write_running_summary(out, &mut info).map(|()| w))
+    {
         Ok(w) => w,
         Err(e) => {
             if fresh {
-                record_failure(out, &mut info, &e);
+                let _ = record_failure(out, &mut info, &e);
             }
             return Err(e);
         }
@@ -397,10 +438,7 @@ fn run_dim<const D: usize>(
     info.dissipated_energy = sim.dissipated_energy();
     let (failure, interrupted) = match looped {
         Ok(outcome) => outcome,
-        Err(e) => {
-            record_failure(out, &mut info, &e);
-            return Err(e);
-        }
+        Err(e) => return Err(fail_writing(out, &mut info, &mut writers, e, sim.time())),
     };
     let detail = match &failure {
         Some(e) if e.is_input_failure() => load_error
@@ -457,7 +495,7 @@ fn run_dim<const D: usize>(
 fn new_info<const D: usize>(
     ctx: &RunContext,
     sim: &Simulation<D, Material>,
-    components: Components,
+    components: &Components,
     resumed: bool,
 ) -> RunInfo {
     let settings = &ctx.settings;
@@ -469,7 +507,7 @@ fn new_info<const D: usize>(
         title: ctx.file.scenario.title.clone(),
         dimension: D,
         elements: sim.system().mesh().n_elements(),
-        components,
+        components: components_entry(components),
         scheme: settings.step.scheme.name(),
         solver: sim.solver_name(),
         h: settings.step.h,
@@ -505,9 +543,86 @@ fn new_info<const D: usize>(
         plots: Vec::new(),
         plots_skipped: Vec::new(),
         warnings: Vec::new(),
-        scenario: serde_json::to_value(&ctx.file.scenario).unwrap_or(serde_json::Value::Null),
+        incomplete_files: Vec::new(),
+        scenario: scenario_entry(ctx.file),
         history: History::default(),
     }
+}
+
+/// Number of entries of `c` (named nodes, strings, springs, point masses, supports,
+/// motions, loads, controls).
+fn component_count(c: &Components) -> usize {
+    c.nodes.len()
+        + c.strings.len()
+        + c.springs.len()
+        + c.point_masses.len()
+        + c.supports.len()
+        + c.motions.len()
+        + c.loads.len()
+        + c.controls.len()
+}
+
+/// The `components` of `summary.json`: the components themselves, or for more than
+/// [`SUMMARY_COMPONENTS`] entries the file that lists them and their counts per kind.
+fn components_entry(c: &Components) -> serde_json::Value {
+    if component_count(c) <= SUMMARY_COMPONENTS {
+        return serde_json::to_value(c).unwrap_or(serde_json::Value::Null);
+    }
+    serde_json::json!({
+        "file": COMPONENTS_FILE,
+        "nodes": c.nodes.len(),
+        "strings": c.strings.len(),
+        "springs": c.springs.len(),
+        "point_masses": c.point_masses.len(),
+        "supports": c.supports.len(),
+        "motions": c.motions.len(),
+        "loads": c.loads.len(),
+        "controls": c.controls.len(),
+    })
+}
+
+/// The `scenario` of `summary.json`: the scenario as run, or for a text longer than
+/// [`SUMMARY_SCENARIO_BYTES`] the file that holds it.
+fn scenario_entry(file: &ScenarioFile) -> serde_json::Value {
+    if file.text().len() <= SUMMARY_SCENARIO_BYTES {
+        return serde_json::to_value(&file.scenario).unwrap_or(serde_json::Value::Null);
+    }
+    serde_json::json!({ "file": SCENARIO_FILE })
+}
+
+/// Writes [`COMPONENTS_FILE`] and [`SCENARIO_FILE`] (compact JSON) into `out` when
+/// `summary.json` refers to them, and removes stale ones of an earlier run when it does not.
+fn write_large_parts(
+    out: &Path,
+    file: &ScenarioFile,
+    components: &Components,
+) -> Result<(), OutputError> {
+    let parts: [(&str, bool, &dyn Fn() -> serde_json::Result<Vec<u8>>); 2] = [
+        (
+            COMPONENTS_FILE,
+            component_count(components) > SUMMARY_COMPONENTS,
+            &|| serde_json::to_vec(components),
+        ),
+        (
+            SCENARIO_FILE,
+            file.text().len() > SUMMARY_SCENARIO_BYTES,
+            &|| serde_json::to_vec(&file.scenario),
+        ),
+    ];
+    for (name, large, json) in parts {
+        let path = out.join(name);
+        if large {
+            let mut bytes = json().map_err(|e| OutputError::Io {
+                path: path.clone(),
+                cause: std::io::Error::other(e),
+            })?;
+            bytes.push(b'\n');
+            output::atomic_write(&path, &bytes).map_err(|cause| OutputError::Io { path, cause })?;
+        } else if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+    Ok(())
 }
 
 /// The times of the configuration snapshots: `t_end · k / (SNAPSHOTS − 1)`.
@@ -517,10 +632,12 @@ fn snapshot_times(t_end: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Creates the outputs of a fresh run (and the folder's run id).
+/// Creates the outputs of a fresh run (and the folder's run id, and the files of a large
+/// network's components and scenario).
 fn start_writers<const D: usize>(
     ctx: &RunContext,
     sim: &Simulation<D, Material>,
+    components: &Components,
 ) -> Result<Writers, OutputError> {
     let s = &ctx.settings;
     let w = Writers::start(
@@ -534,6 +651,7 @@ fn start_writers<const D: usize>(
     let path = ctx.out.join(RUN_ID_FILE);
     std::fs::write(&path, format!("{}\n", ctx.run_id))
         .map_err(|cause| OutputError::Io { path, cause })?;
+    write_large_parts(ctx.out, ctx.file, components)?;
     Ok(w)
 }
 
@@ -768,24 +886,83 @@ fn draw(
     Ok(())
 }
 
-/// Marks `info` failed with `e` and tries to write `summary.json` (an error writing it is
-/// ignored: `e` is what is reported).
-fn record_failure(out: &Path, info: &mut RunInfo, e: &RunError) {
+/// Marks `info` failed with `e` and tries to write `summary.json`; returns the error of
+/// that write, if it failed (the caller reports `e` either way).
+fn record_failure(out: &Path, info: &mut RunInfo, e: &RunError) -> Result<(), OutputError> {
     info.status = "failed".into();
     info.error = Some(e.to_string());
-    let _ = write_summary(out, info);
+    write_summary(out, info)
+}
+
+/// A write failed during the run (`e`, at simulated time `t`; a full disk): writes out what
+/// the other files still hold, records the failure and the incomplete files in
+/// `summary.json`, and returns the error to report, which says where the outputs are, which
+/// are incomplete, and — if even `summary.json` could not be written — that the run failed
+/// and how far it got.
+fn fail_writing(
+    out: &Path,
+    info: &mut RunInfo,
+    writers: &mut Writers,
+    e: RunError,
+    t: f64,
+) -> RunError {
+    info.incomplete_files = writers.salvage();
+    let summary = record_failure(out, info, &e);
+    let mut note = format!(
+        "the outputs written up to the failure are in {}",
+        out.display()
+    );
+    if !info.incomplete_files.is_empty() {
+        note += &format!(
+            " (incomplete, each ending on a whole row: {})",
+            info.incomplete_files.join(", ")
+        );
+    }
+    match summary {
+        Ok(()) => note += "; summary.json records the failure",
+        Err(se) => {
+            note += &format!(
+                "; summary.json could not be written either ({se}): the run failed at t = {} s after {} steps",
+                phstring::Num(t),
+                info.steps
+            );
+        }
+    }
+    RunError::Incomplete {
+        cause: Box::new(e),
+        note,
+    }
+}
+
+/// `summary.json` of `info` as text: pretty-printed (large parts are in files of their own,
+/// see [`SUMMARY_COMPONENTS`] and [`SUMMARY_SCENARIO_BYTES`]), ending in a line break.
+fn summary_text(info: &RunInfo) -> String {
+    serde_json::to_string_pretty(info).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}")) + "\n"
 }
 
 /// Writes `summary.json` atomically (a temporary file in `out`, then renamed), so that it
-/// is never half-written and never left stale by a failed write.
+/// is never half-written and never left stale by a failed write. When that fails (a full
+/// disk has no room for the temporary file), it is written in place over the summary the
+/// run wrote when it started, if it fits in that file's reserve ([`SUMMARY_RESERVE`]).
 pub fn write_summary(out: &Path, info: &RunInfo) -> Result<(), OutputError> {
     let path = out.join("summary.json");
-    let text =
-        serde_json::to_string_pretty(info).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-    output::atomic_write(&path, (text + "\n").as_bytes()).map_err(|source| OutputError::Io {
-        path,
-        cause: source,
+    let text = summary_text(info);
+    output::atomic_write(&path, text.as_bytes()).or_else(|cause| {
+        output::overwrite_in_place(&path, text.as_bytes())
+            .map_err(|_| OutputError::Io { path, cause })
     })
+}
+
+/// Writes the summary of a run that starts (`"status": "running"`), followed by
+/// [`SUMMARY_RESERVE`] spaces, so that the final summary finds room in its place on a full
+/// disk; `info` keeps its status.
+fn write_running_summary(out: &Path, info: &mut RunInfo) -> Result<(), RunError> {
+    let status = std::mem::replace(&mut info.status, "running".into());
+    let text = summary_text(info) + &" ".repeat(SUMMARY_RESERVE) + "\n";
+    info.status = status;
+    let path = out.join("summary.json");
+    output::atomic_write(&path, text.as_bytes())
+        .map_err(|cause| RunError::Output(OutputError::Io { path, cause }))
 }
 
 #[cfg(test)]

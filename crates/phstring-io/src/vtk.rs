@@ -210,9 +210,21 @@ pub fn write_vtp_frame(path: &Path, data: &FrameData<'_>) -> Result<(), VtkError
         data: DataSet::inline(piece),
         file_path: None,
     };
-    vtk.export(path).map_err(|e| VtkError::Vtk {
+    // Formatted in memory, then written: an I/O error (a full disk) is reported as such,
+    // not as the formatter's error, and a failed write leaves no partial file.
+    let mut bytes = Vec::new();
+    vtk.write_xml(&mut bytes).map_err(|e| VtkError::Vtk {
         path: path.to_path_buf(),
         message: e.to_string(),
+    })?;
+    std::fs::write(path, &bytes).map_err(|cause| {
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(path);
+        }
+        VtkError::Io {
+            path: path.to_path_buf(),
+            cause,
+        }
     })
 }
 
@@ -271,6 +283,12 @@ impl PvdWriter {
     /// Records the data file for time `time` (in s), given relative to the `.pvd` file's folder.
     pub fn add(&mut self, time: f64, file_name_relative: &str) {
         self.pending.push((time, file_name_relative.to_string()));
+    }
+
+    /// Forgets the data sets added since the last write (their files could not be listed,
+    /// e.g. on a full disk, and were removed).
+    pub fn discard_pending(&mut self) {
+        self.pending.clear();
     }
 
     /// Continues the collection file written by [`Self::write`] after its first `frames` data
@@ -365,11 +383,26 @@ impl PvdWriter {
             .truncate(false)
             .open(&self.path)
             .map_err(io)?;
-        f.seek(SeekFrom::Start(self.body_end)).map_err(io)?;
-        f.write_all(body.as_bytes()).map_err(io)?;
-        f.write_all(PVD_FOOTER.as_bytes()).map_err(io)?;
         let end = self.body_end + (body.len() + PVD_FOOTER.len()) as u64;
-        f.set_len(end).map_err(io)?;
+        let written = f
+            .seek(SeekFrom::Start(self.body_end))
+            .and_then(|_| f.write_all(body.as_bytes()))
+            .and_then(|()| f.write_all(PVD_FOOTER.as_bytes()))
+            .and_then(|()| f.set_len(end));
+        if let Err(cause) = written {
+            // Back to the collection as it was (a full disk): its data sets and closing tags;
+            // a first write leaves no file. The pending data sets stay pending.
+            if self.body_end == 0 {
+                drop(f);
+                let _ = std::fs::remove_file(&self.path);
+            } else {
+                let _ = f
+                    .set_len(self.body_end)
+                    .and_then(|()| f.seek(SeekFrom::Start(self.body_end)))
+                    .and_then(|_| f.write_all(PVD_FOOTER.as_bytes()));
+            }
+            return Err(io(cause));
+        }
         self.body_end += body.len() as u64;
         self.written += self.pending.len();
         self.pending.clear();

@@ -6,9 +6,11 @@ mod broken;
 mod control;
 mod examples;
 mod fmu;
+mod full_disk;
 mod hardening_cli;
 mod hardening_io;
 mod network;
+mod out_folder;
 mod reliability;
 mod statics;
 

@@ -280,3 +280,64 @@ fn modes_of_the_taut_string_example_match_the_closed_form() {
         assert!(out.join(f).exists(), "{f}");
     }
 }
+
+/// `modes --count` and `linearize --modes` above the number of modes the model has (one
+/// per free position component) give all of them, and say so on stderr and in the output
+/// summary instead of silently giving fewer.
+#[test]
+fn more_modes_than_exist_are_named_not_silently_dropped() {
+    let tmp = temp_dir("modes-count");
+    // The taut string: 40 elements, both ends fixed, 2D: 39 × 2 = 78 free components.
+    let out = tmp.join("modes");
+    let o = phstring(&[
+        "modes",
+        "examples/taut_string.toml",
+        "--count",
+        "1000000",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let note = "--count 1000000: the model has 78 free position components, so only 78 modes exist; 78 are given";
+    assert!(err.contains(&format!("warning: {note}")), "{err}");
+    let s = summary(&out);
+    assert_eq!(s["requested"], 1_000_000);
+    assert_eq!(s["warnings"], serde_json::json!([note]));
+    assert_eq!(s["modes"].as_array().unwrap().len(), 78);
+    assert_eq!(csv_rows(&out.join("modes.csv")).len(), 78);
+    // As many as exist: no warning.
+    let out = tmp.join("modes78");
+    let o = phstring(&[
+        "modes",
+        "examples/taut_string.toml",
+        "--count",
+        "78",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    assert_eq!(summary(&out)["warnings"], serde_json::json!([]));
+
+    // The paper's pendulum: 30 elements, node 0 fixed, 2D: 60 free components.
+    let out = tmp.join("linear");
+    let o = phstring(&[
+        "linearize",
+        "examples/paper_pendulum.toml",
+        "--modes",
+        "100000",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let note = "--modes 100000: the model has 60 free position components, so only 60 modes exist; 60 are given";
+    assert!(err.contains(&format!("warning: {note}")), "{err}");
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(m["requested_modes"], 100_000);
+    assert_eq!(m["warnings"], serde_json::json!([note]));
+    // The modal form's state: 60 modal coordinates and their 60 rates.
+    assert_eq!(m["forms"]["modal"]["states"].as_array().unwrap().len(), 120);
+}
