@@ -3,6 +3,7 @@
 mod accuracy;
 mod broken;
 mod control;
+mod estimates;
 mod examples;
 mod fmu;
 mod full_disk;
