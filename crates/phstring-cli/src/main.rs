@@ -6,7 +6,10 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+mod budget;
+
 use anyhow::{Context as _, Result, anyhow, bail};
+use budget::{budget, check_budget, check_budget_of};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
@@ -298,10 +301,16 @@ fn dispatch(cli: Cli) -> Result<()> {
                     (file, dir, Some(cp), lock)
                 }
                 (Some(scenario), None) => {
-                    let file = scenario::load(&scenario, &sets)?;
+                    let file = budget::load(&scenario, &sets)?;
                     // Before validation, which itself holds the whole mesh.
-                    check_budget(&file)?;
+                    let b = budget(&file)?;
+                    if let Some(e) = b.memory_error(1) {
+                        bail!("{e}");
+                    }
                     file.check()?;
+                    if let Some(w) = b.output_warning() {
+                        tell!("warning: {w}");
+                    }
                     let out = out.unwrap_or_else(|| {
                         let stem = scenario
                             .file_stem()
@@ -390,7 +399,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             force,
         } => {
             let stop = stop_flag();
-            let file = scenario::load(&scenario, &sets)?;
+            let file = budget::load(&scenario, &sets)?;
             check_budget(&file)?;
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_modes"));
@@ -426,7 +435,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             force,
         } => {
             let stop = stop_flag();
-            let file = scenario::load(&scenario, &sets)?;
+            let file = budget::load(&scenario, &sets)?;
             check_budget(&file)?;
             file.check()?;
             // The checkpoint is read and checked before the folder is touched.
@@ -468,7 +477,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             force,
         } => {
             let stop = stop_flag();
-            let file = scenario::load(&scenario, &sets)?;
+            let file = budget::load(&scenario, &sets)?;
             check_budget(&file)?;
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_statics"));
@@ -682,6 +691,7 @@ fn sweep(
     // Every combination is checked against the memory budget (before validation allocates
     // its mesh) and validated before the output folder is touched.
     let concurrent = jobs.min(phstring_io::sweep::run_count(&vary)?);
+    budget::check_file_size(path)?;
     let plan = Sweep::new_with(path, sets, vary, |index, file| {
         check_budget_of(file, concurrent).map_err(|e| format!("run {index} of the sweep: {e:#}"))
     })?;
@@ -811,7 +821,7 @@ fn fmu(
 }
 
 fn check(path: &Path, sets: &[String]) -> Result<()> {
-    let file = scenario::load(path, sets)?;
+    let file = budget::load(path, sets)?;
     // The system the scenario sets up must be valid too (finite initial energies and
     // forces); set it up only where it fits in memory (otherwise the warning below says so).
     if budget(&file)?.memory_error(1).is_none() {
@@ -830,193 +840,6 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
         tell!("warning: {w}");
     }
     Ok(())
-}
-
-/// Most planned steps before `check` warns.
-const WARN_STEPS: f64 = 1e9;
-
-/// What a run will take, roughly: planned steps, memory and time per step.
-struct Budget {
-    dimension: usize,
-    elements: usize,
-    steps: f64,
-    /// Bytes the run needs (the library's estimate), if known.
-    memory: Option<f64>,
-    /// Bytes of memory available on this machine, if known.
-    available: Option<f64>,
-    /// Seconds per step (rough, see [`budget`]).
-    step_seconds: f64,
-}
-
-/// Newton iterations per step assumed by the time estimate (3–6 are usual).
-const ITERATIONS_PER_STEP: f64 = 4.0;
-
-/// Memory of a run beyond [`phstring::estimated_memory_bytes`], per element [bytes], by
-/// dimension 1, 2, 3: (validation and the step's other work space, positions and plots,
-/// ParaView frames). Measured as the growth of the peak resident memory of `phstring run`
-/// (release, one step) from 3e4 to 3e5 elements, minus the library's estimate, rounded up.
-const RUN_BYTES_PER_ELEMENT: [(f64, f64, f64); 3] = [
-    (16.0, 8.0, 488.0),
-    (208.0, 192.0, 224.0),
-    (208.0, 192.0, 240.0),
-];
-
-/// The budget of a validated scenario: memory from [`phstring::estimated_memory_bytes`]
-/// plus [`RUN_BYTES_PER_ELEMENT`] for the outputs switched on; time per step from
-/// [`phstring::estimated_seconds_per_iteration`] (a release build) at
-/// [`ITERATIONS_PER_STEP`] iterations.
-fn budget(file: &ScenarioFile) -> Result<Budget> {
-    let s = &file.scenario;
-    let dimension = file.dimension()?;
-    let elements = file.element_count();
-    let steps = (*s.time.end.get_ref() / *s.time.h.get_ref()).round();
-    let (base, plots, vtk) = RUN_BYTES_PER_ELEMENT[dimension.clamp(1, 3) - 1];
-    let o = &s.output;
-    let per_element =
-        base + if o.positions || o.plots { plots } else { 0.0 } + if o.vtk { vtk } else { 0.0 };
-    Ok(Budget {
-        dimension,
-        elements,
-        steps,
-        memory: Some(
-            phstring::estimated_memory_bytes(dimension, elements) as f64
-                + per_element * elements as f64,
-        ),
-        available: mem_available()?,
-        step_seconds: ITERATIONS_PER_STEP
-            * phstring::estimated_seconds_per_iteration(dimension, elements),
-    })
-}
-
-impl Budget {
-    fn describe(&self) -> String {
-        let memory = self.memory.map_or_else(
-            || "memory unknown".to_string(),
-            |m| format!("{} of memory", bytes(m)),
-        );
-        format!(
-            "{memory}, ~{} per step, ~{} for {:.0} steps (rough: release build, {ITERATIONS_PER_STEP} Newton iterations per step)",
-            duration(self.step_seconds),
-            duration(self.step_seconds * self.steps),
-            self.steps
-        )
-    }
-
-    /// Problems of `concurrent` such runs at once on this machine.
-    fn warnings(&self, concurrent: usize) -> Vec<String> {
-        let mut w = Vec::new();
-        if self.steps > WARN_STEPS {
-            w.push(format!(
-                "{:.2e} planned steps (about {} in all); a larger time.h or a shorter time.end may be meant",
-                self.steps,
-                duration(self.step_seconds * self.steps)
-            ));
-        }
-        if let Some(e) = self.memory_error(concurrent) {
-            w.push(e);
-        }
-        w
-    }
-
-    /// Why `concurrent` such runs do not fit in the available memory, if they do not.
-    fn memory_error(&self, concurrent: usize) -> Option<String> {
-        let need = self.memory? * concurrent as f64;
-        let available = self.available?;
-        (need > available).then(|| {
-            format!(
-                "{} elements in {}D need about {} of memory{}, but only {} is available on this machine; use fewer elements",
-                self.elements,
-                self.dimension,
-                bytes(need),
-                if concurrent > 1 {
-                    format!(" ({concurrent} runs at once; fewer --jobs also help)")
-                } else {
-                    String::new()
-                },
-                bytes(available)
-            )
-        })
-    }
-}
-
-/// Refuses a run that cannot fit in this machine's available memory.
-fn check_budget(file: &ScenarioFile) -> Result<()> {
-    check_budget_of(file, 1)
-}
-
-/// Refuses `concurrent` runs of `file` at once that cannot fit in this machine's available
-/// memory.
-fn check_budget_of(file: &ScenarioFile, concurrent: usize) -> Result<()> {
-    if let Some(e) = budget(file)?.memory_error(concurrent) {
-        bail!("{e}");
-    }
-    Ok(())
-}
-
-/// Environment variable with the memory [bytes] runs may use, instead of `MemAvailable` (in
-/// a container, `/proc/meminfo` may show the host's memory rather than the container's
-/// limit).
-const MEMORY_ENV: &str = "PHSTRING_MEMORY_AVAILABLE";
-
-/// The memory runs may use [bytes]: [`MEMORY_ENV`] if set, else `MemAvailable` of
-/// `/proc/meminfo` if readable.
-fn mem_available() -> Result<Option<f64>> {
-    if let Some(v) = std::env::var_os(MEMORY_ENV) {
-        let text = v.to_string_lossy();
-        return match text.trim().parse::<f64>() {
-            Ok(b) if b >= 0.0 && b.is_finite() => Ok(Some(b)),
-            _ => bail!(
-                "{MEMORY_ENV}={}: expected a number of bytes, e.g. 8e9",
-                clip(&text)
-            ),
-        };
-    }
-    Ok(meminfo_available())
-}
-
-/// `MemAvailable` of `/proc/meminfo` [bytes], if readable.
-fn meminfo_available() -> Option<f64> {
-    use std::io::Read as _;
-    let mut text = String::new();
-    std::fs::File::open("/proc/meminfo")
-        .ok()?
-        .take(64 << 10)
-        .read_to_string(&mut text)
-        .ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: f64 = line
-        .trim_start_matches("MemAvailable:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kib * 1024.0)
-}
-
-/// Bytes for people: `3.2 GB`.
-fn bytes(b: f64) -> String {
-    match b {
-        b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
-        b if b >= 1e6 => format!("{:.0} MB", b / 1e6),
-        b => format!("{:.0} kB", (b / 1e3).max(1.0)),
-    }
-}
-
-/// Seconds for people: `0.3 ms`, `12 s`, `3.5 h`, `41 days`, `2.1e6 years`.
-fn duration(s: f64) -> String {
-    const DAY: f64 = 86_400.0;
-    const YEAR: f64 = 365.25 * DAY;
-    match s {
-        s if s < 1e-3 => format!("{:.2} ms", s * 1e3),
-        s if s < 1.0 => format!("{:.0} ms", s * 1e3),
-        s if s < 120.0 => format!("{s:.1} s"),
-        s if s < 7200.0 => format!("{:.0} min", s / 60.0),
-        s if s < 2.0 * DAY => format!("{:.1} h", s / 3600.0),
-        s if s < YEAR => format!("{:.0} days", s / DAY),
-        s if s < 1e4 * YEAR => format!("{:.0} years", s / YEAR),
-        s => format!("{:.1e} years", s / YEAR),
-    }
 }
 
 /// Most entries of one kind (strings, springs, fixed nodes, …) that `check` lists.
@@ -1331,11 +1154,7 @@ mod tests {
     }
 
     #[test]
-    fn sizes_and_durations_for_people() {
-        assert_eq!(bytes(9.94e8), "994 MB");
-        assert_eq!(bytes(2.01e10), "20.1 GB");
-        assert_eq!(duration(12.5), "12.5 s");
-        assert_eq!(duration(3.0 * 3600.0), "3.0 h");
+    fn energies_for_people() {
         assert_eq!(energy(-3.468358762), "-3.468358762");
         assert_eq!(energy(1e300), "1.000000000e300");
     }

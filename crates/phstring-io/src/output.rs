@@ -38,9 +38,11 @@ pub const SNAPSHOTS: usize = 6;
 /// Names of the temporary files phstring writes next to a file it replaces atomically
 /// (left behind only by a kill; removed or replaced by the next write, and not counted as
 /// user files when an output folder is checked for being empty).
-pub const TEMP_FILES: [&str; 6] = [
+pub const TEMP_FILES: [&str; 8] = [
     ".checkpoint.json.tmp",
     ".summary.json.tmp",
+    ".components.json.tmp",
+    ".scenario.json.tmp",
     ".string.pvd.tmp",
     "checkpoint.json.tmp",
     "string.pvd.tmp",
@@ -406,6 +408,109 @@ fn check_finite(path: &Path, what: &str, t: f64, values: &[f64]) -> Result<(), O
 /// `path` relative to `dir` (for reports), or as it is if it is not in `dir`.
 fn relative(dir: &Path, path: &Path) -> String {
     path.strip_prefix(dir).unwrap_or(path).display().to_string()
+}
+
+/// What a run will write, for [`estimated_output`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputPlan {
+    /// Spatial dimension (1, 2 or 3).
+    pub dimension: usize,
+    /// Mesh nodes.
+    pub nodes: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Ports (rows of `ports.csv` per step).
+    pub ports: usize,
+    /// Steps.
+    pub steps: f64,
+    /// `output.stride`.
+    pub stride: usize,
+    /// `output.positions`.
+    pub positions: bool,
+    /// `output.vtk`.
+    pub vtk: bool,
+}
+
+/// The size of a run's outputs, estimated before it runs ([`estimated_output`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputEstimate {
+    /// All files [bytes].
+    pub bytes: f64,
+    /// Number of files.
+    pub files: f64,
+    /// `energy.csv` and `ports.csv` [bytes].
+    pub rows: f64,
+    /// `positions.csv` [bytes].
+    pub positions: f64,
+    /// ParaView frames written.
+    pub frames: f64,
+    /// `paraview/` [bytes].
+    pub paraview: f64,
+}
+
+/// Bytes of one number as [`num`] writes it, with its comma (`-3.4565972519949129e0,`).
+const NUM_BYTES: f64 = 22.0;
+/// Bytes of a row of `energy.csv`: 8 numbers, the iteration count and the dissipated
+/// energy (`0` without damping): 182 in the paper's pendulum, 201 at most.
+const ENERGY_ROW_BYTES: f64 = 190.0;
+/// Bytes of a port value in `ports.csv` on average: a number, or `0` for the velocity and
+/// power of a fixed support (a force port's row has 142 bytes in 2D, a fixed support's 85).
+const PORT_VALUE_BYTES: f64 = 16.0;
+/// Bytes of a ParaView frame besides its arrays (XML header, array tags, the base64
+/// headers).
+const FRAME_BYTES: f64 = 1500.0;
+/// Bytes of a ParaView frame per node: points and velocity (2 × 3 Float64), base64.
+const FRAME_BYTES_PER_NODE: f64 = 48.0 * 4.0 / 3.0;
+/// Bytes of a ParaView frame per element: connectivity and offsets (3 UInt64), `C`, `S`,
+/// `tension` (3 Float64) and `string` (Int32), base64.
+const FRAME_BYTES_PER_ELEMENT: f64 = 52.0 * 4.0 / 3.0;
+/// Files of a run besides `positions.csv` and the frames: `energy.csv`, `ports.csv`,
+/// `elements.csv`, `summary.json`, the run id, `string.pvd`, six plots, `animation.gif`
+/// (not the lock file).
+const FIXED_FILES: f64 = 13.0;
+
+/// The size and number of files a run writes, from the layout of the writers: a row of
+/// `energy.csv` per step ([`ENERGY_ROW_BYTES`]), a row per port and step in `ports.csv`
+/// (`t`, `2d` port values, the power, index, node and kind), a row per node
+/// and frame in `positions.csv` (`t`, the node, `d` coordinates), a ParaView frame per
+/// frame ([`FRAME_BYTES`] plus the base64 arrays) and its line in `string.pvd`, at steps
+/// 0, stride, 2·stride, … and the last; plots, `animation.gif`, `elements.csv` and
+/// `summary.json` are bounded and not counted in the bytes. Within 10 % of what the examples
+/// write (see the test below).
+pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
+    let d = p.dimension as f64;
+    let steps = p.steps.max(0.0);
+    let stride = p.stride.max(1) as f64;
+    let on_stride = (steps / stride).floor();
+    // Step 0, every stride-th step, and the last if it is not on the stride.
+    let frames = on_stride + 1.0 + if on_stride * stride < steps { 1.0 } else { 0.0 };
+    let digits = |n: f64| n.max(1.0).log10().floor() + 2.0;
+    let nodes = p.nodes as f64;
+    let rows = (steps + 1.0) * ENERGY_ROW_BYTES
+        + steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0);
+    let positions = if p.positions {
+        // The first frame's time is written `0`.
+        nodes * (frames * ((1.0 + d) * NUM_BYTES + digits(nodes)) - (NUM_BYTES - 2.0))
+    } else {
+        0.0
+    };
+    let paraview = if p.vtk {
+        frames
+            * (FRAME_BYTES
+                + 70.0
+                + FRAME_BYTES_PER_NODE * nodes
+                + FRAME_BYTES_PER_ELEMENT * p.elements as f64)
+    } else {
+        0.0
+    };
+    OutputEstimate {
+        bytes: rows + positions + paraview,
+        files: FIXED_FILES + if p.positions { 1.0 } else { 0.0 } + if p.vtk { frames } else { 0.0 },
+        rows,
+        positions,
+        frames: if p.vtk { frames } else { 0.0 },
+        paraview,
+    }
 }
 
 /// Formats `x` with 17 significant digits (round-trip exact).
@@ -1312,6 +1417,58 @@ mod tests {
         let e = c.flush().unwrap_err();
         assert!(matches!(e, OutputError::Io { .. }), "{e}");
         assert!(atomic_write(Path::new("/dev/full/x"), b"x").is_err());
+    }
+
+    /// Bytes of the files under `dir` whose names pass `keep`.
+    fn bytes_of(dir: &Path, keep: &dyn Fn(&str) -> bool) -> f64 {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .filter(|e| keep(&e.file_name().to_string_lossy()))
+            .map(|e| e.metadata().unwrap().len() as f64)
+            .sum()
+    }
+
+    #[test]
+    fn output_estimate_matches_what_the_writers_write() {
+        for (stride, steps) in [(1, 40), (7, 40), (40, 40)] {
+            let dir = crate::test_util::temp_dir("output", "estimate");
+            let mut s = sim();
+            let mut w = Writers::start(&dir, &s, stride, true, true, vec![]).unwrap();
+            for _ in 0..steps {
+                let r = s.step().unwrap();
+                w.step(&s, &r).unwrap();
+            }
+            w.finish(&s).unwrap();
+            let e = estimated_output(&OutputPlan {
+                dimension: 2,
+                nodes: 11,
+                elements: 10,
+                ports: s.ports().len(),
+                steps: steps as f64,
+                stride,
+                positions: true,
+                vtk: true,
+            });
+            let pv = dir.join(PARAVIEW_DIR);
+            let frames = std::fs::read_dir(&pv).unwrap().count() as f64 - 1.0;
+            assert_eq!(e.frames, frames, "stride {stride}");
+            let rows = bytes_of(&dir, &|n| n == "energy.csv" || n == "ports.csv");
+            let positions = bytes_of(&dir, &|n| n == "positions.csv");
+            let paraview = bytes_of(&pv, &|_| true);
+            for (what, estimate, actual) in [
+                ("rows", e.rows, rows),
+                ("positions", e.positions, positions),
+                ("paraview", e.paraview, paraview),
+            ] {
+                let ratio = estimate / actual;
+                assert!(
+                    (0.9..=1.1).contains(&ratio),
+                    "stride {stride}, {what}: estimate {estimate}, written {actual}"
+                );
+            }
+            let _ = std::fs::remove_dir_all(&dir);
+        }
     }
 
     #[test]

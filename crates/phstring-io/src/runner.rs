@@ -597,29 +597,29 @@ fn write_large_parts(
     file: &ScenarioFile,
     components: &Components,
 ) -> Result<(), OutputError> {
-    let parts: [(&str, bool, &dyn Fn() -> serde_json::Result<Vec<u8>>); 2] = [
-        (
-            COMPONENTS_FILE,
-            component_count(components) > SUMMARY_COMPONENTS,
-            &|| serde_json::to_vec(components),
-        ),
-        (
-            SCENARIO_FILE,
-            file.text().len() > SUMMARY_SCENARIO_BYTES,
-            &|| serde_json::to_vec(&file.scenario),
-        ),
-    ];
-    for (name, large, json) in parts {
+    let components_json =
+        (component_count(components) > SUMMARY_COMPONENTS).then(|| serde_json::to_vec(components));
+    let scenario_json =
+        (file.text().len() > SUMMARY_SCENARIO_BYTES).then(|| serde_json::to_vec(&file.scenario));
+    for (name, json) in [
+        (COMPONENTS_FILE, components_json),
+        (SCENARIO_FILE, scenario_json),
+    ] {
         let path = out.join(name);
-        if large {
-            let mut bytes = json().map_err(|e| OutputError::Io {
-                path: path.clone(),
-                cause: std::io::Error::other(e),
-            })?;
-            bytes.push(b'\n');
-            output::atomic_write(&path, &bytes).map_err(|cause| OutputError::Io { path, cause })?;
-        } else if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
-            let _ = std::fs::remove_file(&path);
+        match json {
+            Some(json) => {
+                let mut bytes = json.map_err(|e| OutputError::Io {
+                    path: path.clone(),
+                    cause: std::io::Error::other(e),
+                })?;
+                bytes.push(b'\n');
+                output::atomic_write(&path, &bytes)
+                    .map_err(|cause| OutputError::Io { path, cause })?;
+            }
+            None if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) => {
+                let _ = std::fs::remove_file(&path);
+            }
+            None => {}
         }
     }
     Ok(())

@@ -99,7 +99,7 @@ pub use observe::{
 };
 pub use simulation::{
     Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
-    estimated_seconds_per_iteration,
+    estimated_seconds_per_iteration, estimated_seconds_per_step,
 };
 pub use system::{
     Damping, ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State,

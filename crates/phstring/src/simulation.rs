@@ -73,17 +73,39 @@ pub fn estimated_memory_bytes(dimension: usize, n_elements: usize) -> u64 {
         .saturating_add((n_elements as u64).saturating_mul(per_element))
 }
 
+/// Cost of a time step on a chain with the block-tridiagonal solver [s per element], by
+/// dimension 1, 2, 3: (every step, whatever its iterations; each Newton iteration). A step
+/// of `k` iterations costs `n_el (c_step + k c_iter)`. `c_iter` is the linear solve
+/// (`block_thomas`) with the residual and Jacobian evaluations (`evaluate_nodes`) and the
+/// line search of one iteration; `c_step` is what a step evaluates besides its counted
+/// iterations (the predictor, the energies and balance of the accepted state, the
+/// bookkeeping). Calibration: CPU time (`perf stat -e task-clock`, release build, one core
+/// of a shared 2-core machine) of `phstring run` at 25 minus 5 steps (10 and 110 at 1e4
+/// elements) with outputs off, `time.adaptive = false`, and 1, 2 or 3 iterations per step
+/// (`newton.rtol` 1e-8, default, 1e-14): a 1000 m hanging steel rope (EA = 1e8 N, 2 t at
+/// its end, from its equilibrium, h = 0.01 s) in 3D and 2D, and `examples/axial_rod_1d.toml`
+/// (h = 1e-3 s). Measured per element-step at 1e5 elements: 3D 278, 435, 631 ns (1, 2, 3
+/// iterations), 2D 164, 249, 384 ns, 1D 90 ns (1.1 iterations), 120 ns (2); at 1e4 about
+/// 10 % less, at 1e6 (3D, 2 iterations) 429 ns. Fitted and rounded up.
+const STEP_SECONDS_PER_ELEMENT: [(f64, f64); 3] =
+    [(60e-9, 35e-9), (60e-9, 110e-9), (100e-9, 180e-9)];
+
 /// Estimated wall time of one Newton iteration [s] on a chain of `n_elements` elements in
-/// `dimension` dimensions: the block-tridiagonal path runs at about 1.6e7 (d = 2) and 1e7
-/// (d = 3) element-iterations per second on one core of the reference machine (release
-/// build; `cargo bench -p phstring --bench throughput`). A step takes 3–6 iterations.
+/// `dimension` dimensions (1, 2 or 3), on one otherwise idle core (release build): `c_iter`
+/// of [`STEP_SECONDS_PER_ELEMENT`]. A step costs more than its iterations: see
+/// [`estimated_seconds_per_step`].
 pub fn estimated_seconds_per_iteration(dimension: usize, n_elements: usize) -> f64 {
-    let rate = match dimension {
-        1 => 2.0e7,
-        2 => 1.6e7,
-        _ => 1.0e7,
-    };
-    n_elements as f64 / rate
+    STEP_SECONDS_PER_ELEMENT[dimension.clamp(1, 3) - 1].1 * n_elements as f64
+}
+
+/// Estimated wall time of one time step of `iterations` Newton iterations [s] on a chain of
+/// `n_elements` elements in `dimension` dimensions (1, 2 or 3), on one otherwise idle core
+/// (release build): `n_el (c_step + iterations · c_iter)` with [`STEP_SECONDS_PER_ELEMENT`],
+/// so that what a step evaluates besides its counted iterations is included. Steps usually
+/// take 2–6 iterations; a shortened or rejected step costs its attempts on top.
+pub fn estimated_seconds_per_step(dimension: usize, n_elements: usize, iterations: f64) -> f64 {
+    let (step, iteration) = STEP_SECONDS_PER_ELEMENT[dimension.clamp(1, 3) - 1];
+    (step + iterations.max(0.0) * iteration) * n_elements as f64
 }
 
 /// Newton's starting guess for `Δ = r_{n+1} − r_n`.

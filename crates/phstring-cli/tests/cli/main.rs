@@ -4,6 +4,7 @@ mod accuracy;
 mod balance;
 mod broken;
 mod control;
+mod estimates;
 mod examples;
 mod fmu;
 mod full_disk;
