@@ -49,9 +49,13 @@ pub struct NewtonParams {
     /// Tolerance relative to the step's force scale `F` (dimensionless); 0 for a purely
     /// absolute test.
     pub rtol: f64,
-    /// Largest number of iterations (linear solves) per step; a solve that still reduces its
-    /// residual by at least 10 % per iteration may go on to four times this.
+    /// Largest number of iterations (linear solves) per step for a solve that stalls; one
+    /// that still cuts its residual by at least 10 % per iteration may go on to
+    /// `progress_extension` times this.
     pub max_iter: usize,
+    /// How many times `max_iter` a steadily progressing solve may take (1: `max_iter` is a
+    /// hard limit). Default 4.
+    pub progress_extension: usize,
     /// Globalize with a backtracking line search on the merit function `½‖R‖²` (Armijo
     /// condition). An iterate whose strain leaves the material's domain or whose residual is
     /// not finite counts as too long a step. When `false`, plain Newton (full steps).
@@ -78,10 +82,8 @@ pub const ROUNDOFF_STRAIN: f64 = 16.0;
 /// A Newton step that leaves more than this fraction of the residual has stagnated.
 const STAGNATION_RATIO: f64 = 0.5;
 /// Beyond `max_iter`, a solve goes on while each iteration leaves at most this fraction of
-/// the residual ...
+/// the residual (up to [`NewtonParams::progress_extension`] times `max_iter`).
 const PROGRESS_RATIO: f64 = 0.9;
-/// ... up to this many times `max_iter` iterations in all.
-const PROGRESS_EXTENSION: usize = 4;
 
 impl Default for NewtonParams {
     fn default() -> Self {
@@ -89,6 +91,7 @@ impl Default for NewtonParams {
             tol: DEFAULT_ATOL,
             rtol: DEFAULT_RTOL,
             max_iter: 25,
+            progress_extension: 4,
             line_search: true,
             elimination: true,
         }
@@ -337,12 +340,13 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
             return Ok(());
         }
         // At the iteration limit, a solve that still cuts its residual steadily goes on (up
-        // to PROGRESS_EXTENSION times the limit): Newton converges only linearly while a
+        // to `progress_extension` times the limit): Newton converges only linearly while a
         // tension-only element's strain crosses C = 1 within the step by a small difference,
         // because the discrete gradient then bends over that difference (docs/method.md §10).
         let progressing = stats.residual <= PROGRESS_RATIO * previous;
         if stats.iterations >= params.max_iter
-            && (!progressing || stats.iterations >= PROGRESS_EXTENSION * params.max_iter)
+            && (!progressing
+                || stats.iterations >= params.progress_extension.max(1) * params.max_iter)
         {
             return Err(NewtonError::MaxIterations(*stats));
         }

@@ -750,6 +750,8 @@ fn solve_rescaled<const D: usize, M: StoredEnergy>(
         let round = NewtonParams {
             tol: params.tol.max(floor),
             max_iter: ROUND_ITER.min(params.max_iter.saturating_sub(done)).max(1),
+            // Rounds count their iterations against the statics' own limit.
+            progress_extension: 1,
             ..*params
         };
         let add = |mut st: newton::NewtonStats| {
@@ -829,10 +831,12 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
     let loose = NewtonParams {
         rtol: PSEUDO_RTOL,
         max_iter: 15,
+        progress_extension: 1,
         ..params.newton
     };
     let polish = NewtonParams {
         max_iter: 15,
+        progress_extension: 1,
         ..params.newton
     };
     let mut mu = mu0;

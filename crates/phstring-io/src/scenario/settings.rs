@@ -215,6 +215,7 @@ impl ScenarioFile {
                 tol,
                 rtol,
                 max_iter: max_iter as usize,
+                progress_extension: NewtonParams::default().progress_extension,
                 line_search: s.line_search,
                 elimination: s.elimination,
             },

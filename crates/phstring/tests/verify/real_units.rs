@@ -260,6 +260,7 @@ fn step_size_floor_is_absolute() {
         h: 0.005,
         newton: phstring::NewtonParams {
             max_iter: 1,
+            progress_extension: 1,
             ..Default::default()
         },
         control: StepControl {
