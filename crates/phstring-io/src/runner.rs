@@ -150,6 +150,19 @@ pub enum RunError {
     },
 }
 
+impl RunError {
+    /// Whether a stop request (Ctrl-C, `--stop-after-steps`) ended the run: in its time loop
+    /// ([`RunError::Interrupted`], resumable) or in the starting equilibrium
+    /// (`initial.equilibrium`, before anything is written).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(
+            self,
+            RunError::Interrupted { .. }
+                | RunError::Statics(phstring::statics::StaticsError::Interrupted)
+        )
+    }
+}
+
 impl From<phstring::SetupError> for RunError {
     fn from(e: phstring::SetupError) -> Self {
         RunError::Setup(e)

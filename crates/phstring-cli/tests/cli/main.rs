@@ -7,6 +7,7 @@ mod examples;
 mod fmu;
 mod hardening_cli;
 mod hardening_io;
+mod interrupt;
 mod network;
 mod reliability;
 mod statics;
