@@ -254,6 +254,15 @@ where
     }
 }
 
+/// Validates `file` and prints its warnings to stderr; returns them.
+fn check_and_warn(file: &ScenarioFile) -> Result<Vec<String>> {
+    let warnings = file.check_with_warnings()?;
+    for w in &warnings {
+        tell!("warning: {w}");
+    }
+    Ok(warnings)
+}
+
 /// The messages of a `statics`, `modes`, `linearize` or a run's starting equilibrium
 /// interrupted by a stop request; the output folder follows.
 const STOPPED_STATICS: &str =
@@ -320,7 +329,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             // From here on, Ctrl-C or SIGTERM asks the run to stop, and a second one exits.
             let stop = stop_flag();
             // The lock on the output folder is held until the run ends (or the process dies).
-            let (file, out, resume, _lock) = match (scenario, resume) {
+            let (file, out, resume, early, _lock) = match (scenario, resume) {
                 (_, Some(cp_path)) => {
                     let cp = CheckpointFile::read(&cp_path)?;
                     let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
@@ -332,13 +341,14 @@ fn dispatch(cli: Cli) -> Result<()> {
                     });
                     check_budget(&file)?;
                     let lock = outdir::prepare_resume(&dir)?;
-                    (file, dir, Some(cp), lock)
+                    (file, dir, Some(cp), Vec::new(), lock)
                 }
                 (Some(scenario), None) => {
                     let file = scenario::load(&scenario, &sets)?;
                     // Before validation, which itself holds the whole mesh.
                     check_budget(&file)?;
-                    file.check()?;
+                    // Printed now: a run that fails at its first step may be why.
+                    let early = check_and_warn(&file)?;
                     let out = out.unwrap_or_else(|| {
                         let stem = scenario
                             .file_stem()
@@ -346,7 +356,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                         Path::new("out").join(stem)
                     });
                     let lock = prepare_out(&out, force)?;
-                    (file, out, None, lock)
+                    (file, out, None, early, lock)
                 }
                 (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
             };
@@ -364,6 +374,10 @@ fn dispatch(cli: Cli) -> Result<()> {
             let ran = runner::run(&file, &out, &mut bar, opts);
             let statics = |e: &RunError| matches!(e, RunError::Statics(_)) && e.is_interrupted();
             let info = interrupted_as(ran, statics, STOPPED_EQUILIBRIUM, &out)?;
+            // The scenario's warnings (also in summary.json) were printed before the run.
+            for w in info.warnings.iter().filter(|w| !early.contains(w)) {
+                tell!("warning: {w}");
+            }
             say!(
                 "{}: {} steps, Ĥ(0) = {} J, Ĥ(T) = {} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
                 info.status,
@@ -850,9 +864,11 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
     let file = scenario::load(path, sets)?;
     // The system the scenario sets up must be valid too (finite initial energies and
     // forces); set it up only where it fits in memory (otherwise the warning below says so).
-    if budget(&file)?.memory_error(1).is_none() {
-        file.check()?;
-    }
+    let warnings = if budget(&file)?.memory_error(1).is_none() {
+        file.check_with_warnings()?
+    } else {
+        Vec::new()
+    };
     let d = file.dimension()?;
     let text = match d {
         1 => describe::<1>(&file)?,
@@ -862,7 +878,7 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
     say!("{} is valid:\n{text}", path.display());
     let b = budget(&file)?;
     say!("  estimate:  {}", b.describe());
-    for w in b.warnings(1) {
+    for w in warnings.iter().chain(&b.warnings(1)) {
         tell!("warning: {w}");
     }
     Ok(())

@@ -363,6 +363,7 @@ fn run_dim<const D: usize>(
     };
     let settings = v.settings.clone();
     let load_error = v.load_error.clone();
+    let scenario_warnings = std::mem::take(&mut v.warnings);
     let components = v.components;
     let mut sim: Simulation<D, Material> = Simulation::new(v.problem, settings.step)?;
     sim.set_stop_flag(opts.stop.clone());
@@ -381,6 +382,7 @@ fn run_dim<const D: usize>(
     };
     let mut info = new_info(&ctx, &sim, components, resume.is_some());
     info.initial_equilibrium = initial_equilibrium;
+    info.warnings = scenario_warnings;
     let fresh = resume.is_none();
     let writers = match resume {
         Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
