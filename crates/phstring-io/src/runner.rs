@@ -231,6 +231,9 @@ pub struct RunInfo {
     /// Steps whose Newton solve ended at the round-off floor of the residual (docs/method.md
     /// §9) instead of below the tolerance.
     pub steps_at_roundoff: usize,
+    /// Error control (`time.rtol`, `time.atol`): steps accepted at the smallest step size
+    /// although their error estimate exceeded the tolerance (a warning says so).
+    pub steps_over_tolerance: usize,
     /// Largest `|Ĥ_{n+1} − Ĥ_n − h û·ŷ|` [J].
     pub max_balance_error: f64,
     /// Largest Newton residual at convergence [N].
@@ -404,6 +407,9 @@ fn run_dim<const D: usize>(
     info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = sim.energies().hamiltonian();
     info.dissipated_energy = sim.dissipated_energy();
+    if let Some(w) = over_tolerance_warning(&info, &ctx.settings) {
+        info.warnings.push(w);
+    }
     let (failure, interrupted) = match looped {
         Ok(outcome) => outcome,
         Err(e) => {
@@ -462,6 +468,24 @@ fn run_dim<const D: usize>(
     Ok(info)
 }
 
+/// The warning for steps that error control accepted at its step-size floor although their
+/// error estimate exceeded the tolerance (docs/method.md §19: such a step is accepted
+/// whatever its error), or `None` if there were none.
+fn over_tolerance_warning(info: &RunInfo, settings: &RunSettings) -> Option<String> {
+    let n = info.steps_over_tolerance;
+    if n == 0 {
+        return None;
+    }
+    let c = &settings.step.control;
+    Some(format!(
+        "{n} of {} steps missed the error tolerance (time.rtol = {}, time.atol = {}): error control accepted them at its smallest step size time.h/2^time.max_halvings = {} s whatever their error estimate; loosen the tolerance, or allow smaller steps with time.max_halvings",
+        info.steps,
+        phstring::Num(c.rtol),
+        phstring::Num(c.atol),
+        phstring::Num(info.h / 2f64.powi(settings.step.control.max_halvings as i32))
+    ))
+}
+
 /// The summary of a run that has not taken a step yet.
 fn new_info<const D: usize>(
     ctx: &RunContext,
@@ -498,6 +522,7 @@ fn new_info<const D: usize>(
         newton_tol: settings.step.newton.tol,
         newton_rtol: settings.step.newton.rtol,
         steps_at_roundoff: 0,
+        steps_over_tolerance: 0,
         max_balance_error: 0.0,
         max_newton_residual: 0.0,
         hamiltonian_initial: sim.energies().hamiltonian(),
@@ -566,6 +591,7 @@ fn resume_writers<const D: usize>(
     info.local_newton_iterations = c.local_newton_iterations;
     info.local_newton_work = c.local_newton_work;
     info.steps_at_roundoff = c.steps_at_roundoff;
+    info.steps_over_tolerance = c.steps_over_tolerance;
     info.time_loop_s = c.time_loop_s;
     info.hamiltonian_initial = c.hamiltonian_initial;
     info.settle_progress = (c.settle_armed, c.settle_since);
@@ -606,6 +632,7 @@ fn write_checkpoint<const D: usize>(
             local_newton_iterations: info.local_newton_iterations,
             local_newton_work: info.local_newton_work,
             steps_at_roundoff: info.steps_at_roundoff,
+            steps_over_tolerance: info.steps_over_tolerance,
             time_loop_s: info.time_loop_s,
             hamiltonian_initial: info.hamiltonian_initial,
             settle_armed: info.settle_progress.0,
@@ -650,6 +677,7 @@ fn step_loop<const D: usize>(
             break;
         }
         let t0 = Instant::now();
+        let over = sim.steps_over_tolerance();
         let res = sim.step_until(t_end);
         info.time_loop_s += t0.elapsed().as_secs_f64();
         match res {
@@ -667,6 +695,7 @@ fn step_loop<const D: usize>(
                     nan_max(info.max_balance_error, report.balance_error.abs());
                 info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
                 info.steps_at_roundoff += usize::from(report.at_roundoff);
+                info.steps_over_tolerance += sim.steps_over_tolerance() - over;
                 writers.step(sim, &report)?;
                 progress.step(report.step, report.t);
                 let at_rest = watch.as_mut().and_then(|w| w.check(sim, &report));
