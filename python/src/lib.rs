@@ -617,7 +617,7 @@ fn modes_dim<'py, const D: usize>(
     let v = file.validate::<D>().map_err(scenario_err)?;
     let (sys, eq) =
         phstring_io::statics_run::solve_validated(&v, true, None).map_err(statics_err)?;
-    let found = phstring::modes::modes(&sys, &eq.state.r, count, v.settings.step.solver)
+    let found = phstring::modes::modes(&sys, &eq.state.r, count, v.settings.step.solver, None)
         .map_err(|e| StepError::new_err(format!("modes: {e}")))?;
     let k = found.modes.len();
     let n = eq.state.r.len();

@@ -13,11 +13,13 @@ use budget::{budget, check_budget, check_budget_of};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
-use phstring_io::export::LinearizeAt;
+use phstring_io::export::{ExportError, LinearizeAt};
+use phstring_io::modes_run::ModesRunError;
 use phstring_io::outdir::{self, OutLock};
 use phstring_io::plot::{self, Series};
 use phstring_io::runner::{self, Progress, RunError, RunInfo, RunOptions};
 use phstring_io::scenario::{self, ScenarioFile};
+use phstring_io::statics_run::StaticsRunError;
 use phstring_io::sweep::{Sweep, Vary};
 use phstring_io::text::{clip, num, nums, printable};
 
@@ -56,6 +58,11 @@ struct Cli {
     /// No progress bar.
     #[arg(long, short, global = true)]
     quiet: bool,
+    /// For tests: send SIGINT to this process N ms after the command installs its Ctrl-C
+    /// handler (`run`, `statics`, `modes`, `linearize`, `sweep`, `paper`), and wait until the
+    /// handler has seen it; for phases without steps.
+    #[arg(long, value_name = "N", global = true, hide = true)]
+    signal_self_after_ms: Option<u64>,
     #[command(subcommand)]
     command: Command,
 }
@@ -222,21 +229,63 @@ fn at_least_one(text: &str) -> Result<usize, String> {
     }
 }
 
-/// `phstring paper` was interrupted (exit code 130 like an interrupted run; its message
-/// says how to redo it, since a `--resume` would complete only one of its runs).
+/// A command other than `run` was interrupted (exit code 130 like an interrupted run); the
+/// message says what was written and how to redo it (`paper`, `statics`, `modes`,
+/// `linearize`, `sweep`, and `run` in its starting equilibrium).
 #[derive(Debug)]
-struct PaperInterrupted(String);
+struct Interrupted(String);
 
-impl std::fmt::Display for PaperInterrupted {
+impl std::fmt::Display for Interrupted {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.0)
     }
 }
 
-impl std::error::Error for PaperInterrupted {}
+impl std::error::Error for Interrupted {}
+
+/// `result`, with an error that `stopped` recognizes as caused by a stop request replaced by
+/// [`Interrupted`] with the message `"{text} {out}"` (exit code 130).
+fn interrupted_as<T, E>(
+    result: Result<T, E>,
+    stopped: impl FnOnce(&E) -> bool,
+    text: &str,
+    out: &Path,
+) -> Result<T>
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    match result {
+        Err(e) if stopped(&e) => Err(Interrupted(format!("{text} {}", out.display())).into()),
+        r => Ok(r?),
+    }
+}
+
+/// Validates `file` and prints its warnings to stderr; returns them.
+fn check_and_warn(file: &ScenarioFile) -> Result<Vec<String>> {
+    let warnings = file.check_with_warnings()?;
+    for w in &warnings {
+        tell!("warning: {w}");
+    }
+    Ok(warnings)
+}
+
+/// The messages of a `statics`, `modes`, `linearize` or a run's starting equilibrium
+/// interrupted by a stop request; the output folder follows.
+const STOPPED_STATICS: &str =
+    "interrupted before the equilibrium was found; nothing was written to";
+const STOPPED_MODES: &str =
+    "interrupted before the modes were written; no modes.csv or summary.json was written to";
+const STOPPED_LINEARIZE: &str = "interrupted before the model was written; nothing was written to";
+const STOPPED_EQUILIBRIUM: &str = "interrupted while finding the starting equilibrium (initial.equilibrium); no step was run and nothing was written to";
+
+/// `--signal-self-after-ms`, for [`stop_flag`].
+static SIGNAL_AFTER_MS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(ms) = cli.signal_self_after_ms {
+        let _ = SIGNAL_AFTER_MS.set(ms);
+    }
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -245,7 +294,7 @@ fn main() -> ExitCode {
             if matches!(
                 e.downcast_ref::<RunError>(),
                 Some(RunError::Interrupted { .. })
-            ) || e.is::<PaperInterrupted>()
+            ) || e.is::<Interrupted>()
             {
                 ExitCode::from(130)
             } else {
@@ -286,7 +335,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             // From here on, Ctrl-C or SIGTERM asks the run to stop, and a second one exits.
             let stop = stop_flag();
             // The lock on the output folder is held until the run ends (or the process dies).
-            let (file, out, resume, _lock) = match (scenario, resume) {
+            let (file, out, resume, early, _lock) = match (scenario, resume) {
                 (_, Some(cp_path)) => {
                     let cp = CheckpointFile::read(&cp_path)?;
                     let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
@@ -298,7 +347,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                     });
                     check_budget(&file)?;
                     let lock = outdir::prepare_resume(&dir)?;
-                    (file, dir, Some(cp), lock)
+                    (file, dir, Some(cp), Vec::new(), lock)
                 }
                 (Some(scenario), None) => {
                     let file = budget::load(&scenario, &sets)?;
@@ -307,7 +356,8 @@ fn dispatch(cli: Cli) -> Result<()> {
                     if let Some(e) = b.memory_error(1) {
                         bail!("{e}");
                     }
-                    file.check()?;
+                    // Printed now: a run that fails at its first step may be why.
+                    let early = check_and_warn(&file)?;
                     if let Some(w) = b.output_warning() {
                         tell!("warning: {w}");
                     }
@@ -318,7 +368,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                         Path::new("out").join(stem)
                     });
                     let lock = prepare_out_for(&out, force, &[&scenario])?;
-                    (file, out, None, lock)
+                    (file, out, None, early, lock)
                 }
                 (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
             };
@@ -332,7 +382,14 @@ fn dispatch(cli: Cli) -> Result<()> {
             };
             let mut bar = progress_bar(cli.quiet, &run_label(&file));
             bar.signal = signal;
-            let info = runner::run(&file, &out, &mut bar, opts)?;
+            // An interrupted time loop keeps its own message (with `--resume`).
+            let ran = runner::run(&file, &out, &mut bar, opts);
+            let statics = |e: &RunError| matches!(e, RunError::Statics(_)) && e.is_interrupted();
+            let info = interrupted_as(ran, statics, STOPPED_EQUILIBRIUM, &out)?;
+            // The scenario's warnings (also in summary.json) were printed before the run.
+            for w in info.warnings.iter().filter(|w| !early.contains(w)) {
+                tell!("warning: {w}");
+            }
             say!(
                 "{}: {} steps, Ĥ(0) = {} J, Ĥ(T) = {} J, max balance error {:.2e} J, {} Newton iterations, time loop {:.3} s",
                 info.status,
@@ -404,7 +461,8 @@ fn dispatch(cli: Cli) -> Result<()> {
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_modes"));
             let _lock = prepare_out_for(&out, force, &[&scenario])?;
-            let info = phstring_io::modes_run::modes(&file, count, &out, Some(&stop))?;
+            let found = phstring_io::modes_run::modes(&file, count, &out, Some(&stop));
+            let info = interrupted_as(found, ModesRunError::is_interrupted, STOPPED_MODES, &out)?;
             for w in &info.warnings {
                 tell!("warning: {w}");
             }
@@ -449,7 +507,8 @@ fn dispatch(cli: Cli) -> Result<()> {
                 .collect();
             let _lock = prepare_out_for(&out, force, &inputs)?;
             let at = at_file;
-            let m = phstring_io::export::linearize(&file, &at, modes, &out, Some(&stop))?;
+            let model = phstring_io::export::linearize(&file, &at, modes, &out, Some(&stop));
+            let m = interrupted_as(model, ExportError::is_interrupted, STOPPED_LINEARIZE, &out)?;
             for w in &m.warnings {
                 tell!("warning: {w}");
             }
@@ -482,7 +541,13 @@ fn dispatch(cli: Cli) -> Result<()> {
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_statics"));
             let _lock = prepare_out_for(&out, force, &[&scenario])?;
-            let info = phstring_io::statics_run::statics(&file, &out, Some(&stop))?;
+            let found = phstring_io::statics_run::statics(&file, &out, Some(&stop));
+            let info = interrupted_as(
+                found,
+                StaticsRunError::is_interrupted,
+                STOPPED_STATICS,
+                &out,
+            )?;
             say!(
                 "equilibrium by {} ({} steps, {} Newton iterations, {:.3} s): residual {:.3e} N (tolerance {:.3e} N){}, tension {} … {} N, internal energy {} J",
                 info.path,
@@ -643,9 +708,10 @@ fn run_one(file: &ScenarioFile, out: &Path, quiet: bool, opts: RunOptions) -> Re
 /// between two Newton iterations (the state stays at the last good step) with their outputs
 /// flushed and a checkpoint written; the plot phase skips the plots it has not drawn yet. A second
 /// Ctrl-C or SIGTERM exits at once with code 130, whatever the program is doing (what is on
-/// disk stays; the checkpoint of an interrupted run may then be missing). `run` and `paper`
-/// install it first thing; `check` and `sweep` keep the default effect of a signal (they
-/// end at once).
+/// disk stays; the checkpoint of an interrupted run may then be missing). `run`, `paper`,
+/// `statics`, `modes`, `linearize` and `sweep` install it first thing; `check` and `fmu`
+/// keep the default effect of a signal (they end at once). With `--signal-self-after-ms`,
+/// a thread sends the signal that long after the handler is installed.
 fn stop_flag() -> std::sync::Arc<AtomicBool> {
     static STOP: std::sync::OnceLock<std::sync::Arc<AtomicBool>> = std::sync::OnceLock::new();
     STOP.get_or_init(|| {
@@ -659,6 +725,13 @@ fn stop_flag() -> std::sync::Arc<AtomicBool> {
             }
             tell!("stopping at the end of the current step (press Ctrl-C again to exit at once)");
         });
+        if let Some(&ms) = SIGNAL_AFTER_MS.get() {
+            let seen = flag.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(ms));
+                signal_self(&seen);
+            });
+        }
         flag
     })
     .clone()
@@ -676,6 +749,9 @@ fn sweep(
     force: bool,
     quiet: bool,
 ) -> Result<()> {
+    // Ctrl-C or SIGTERM stops the runs under way (each with a checkpoint) and starts no
+    // further one; a second one exits at once.
+    let stop = stop_flag();
     let vary: Vec<Vary> = vary
         .iter()
         .map(|v| Vary::parse(v))
@@ -705,14 +781,23 @@ fn sweep(
     let done = |r: &phstring_io::sweep::SweepRun| {
         if let Some(b) = &bar.bar {
             b.inc(1);
-            if let Err(e) = &r.result {
+            if let (Err(e), false) = (&r.result, r.interrupted) {
                 b.println(printable(&format!("run {} failed: {e}", r.index), true));
             }
         }
     };
-    let runs = plan.run(out, jobs, &done)?;
+    let runs = plan.run(out, jobs, &done, Some(stop))?;
     if let Some(b) = &bar.bar {
         b.finish_and_clear();
+    }
+    let stopped = runs.iter().filter(|r| r.interrupted).count();
+    if stopped > 0 {
+        let completed = runs.iter().filter(|r| r.result.is_ok()).count();
+        bail!(Interrupted(format!(
+            "interrupted: {completed} of {} runs completed, {stopped} interrupted or not started (status `interrupted` in {}; an interrupted run continues with `phstring run --resume RUN_FOLDER/checkpoint.json`)",
+            runs.len(),
+            out.join("sweep.csv").display()
+        )));
     }
     let failed = runs.iter().filter(|r| r.result.is_err()).count();
     say!(
@@ -824,9 +909,11 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
     let file = budget::load(path, sets)?;
     // The system the scenario sets up must be valid too (finite initial energies and
     // forces); set it up only where it fits in memory (otherwise the warning below says so).
-    if budget(&file)?.memory_error(1).is_none() {
-        file.check()?;
-    }
+    let warnings = if budget(&file)?.memory_error(1).is_none() {
+        file.check_with_warnings()?
+    } else {
+        Vec::new()
+    };
     let d = file.dimension()?;
     let text = match d {
         1 => describe::<1>(&file)?,
@@ -836,7 +923,7 @@ fn check(path: &Path, sets: &[String]) -> Result<()> {
     say!("{} is valid:\n{text}", path.display());
     let b = budget(&file)?;
     say!("  estimate:  {}", b.describe());
-    for w in b.warnings(1) {
+    for w in warnings.iter().chain(&b.warnings(1)) {
         tell!("warning: {w}");
     }
     Ok(())
@@ -991,8 +1078,8 @@ fn newton_test(n: &phstring::NewtonParams) -> String {
 /// The error of an interrupted `phstring paper`. A `--resume` of the run's checkpoint
 /// would complete that one run only (not the other scheme, nor the figures), and the whole
 /// benchmark takes about a second: the honest advice is to run it again.
-fn paper_interrupted(scheme: &str, out: &Path) -> PaperInterrupted {
-    PaperInterrupted(format!(
+fn paper_interrupted(scheme: &str, out: &Path) -> Interrupted {
+    Interrupted(format!(
         "interrupted during the {scheme} run; the outputs so far are in {}; the benchmark takes about a second: run `phstring paper --force --out {}` again for all of it",
         out.display(),
         out.display()
@@ -1130,7 +1217,7 @@ mod tests {
         );
         assert!(e.contains("during the dg run"), "{e}");
         let any: anyhow::Error = paper_interrupted("mp", Path::new("x")).into();
-        assert!(any.is::<PaperInterrupted>());
+        assert!(any.is::<Interrupted>());
     }
 
     #[test]

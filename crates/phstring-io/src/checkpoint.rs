@@ -205,6 +205,9 @@ pub struct Counters {
     /// Steps whose Newton solve ended at the round-off floor.
     #[serde(default)]
     pub steps_at_roundoff: usize,
+    /// Steps accepted at the step-size floor over the error tolerance.
+    #[serde(default)]
+    pub steps_over_tolerance: usize,
     /// Wall time of the time loop so far [s].
     pub time_loop_s: f64,
     /// `Ĥ(0)` [J].
@@ -648,6 +651,11 @@ impl CheckpointFile {
                 max_iterations.saturating_mul(1024),
             ),
             ("counters.steps_at_roundoff", c.steps_at_roundoff, s.steps),
+            (
+                "counters.steps_over_tolerance",
+                c.steps_over_tolerance,
+                s.steps,
+            ),
         ] {
             if value > limit {
                 return Err(bad(format!(

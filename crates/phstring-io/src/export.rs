@@ -12,7 +12,7 @@
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use faer::sparse::SparseColMat;
 use phstring::linear::{ForcePort, LinearPh, force_ports, full_model, reduced_model};
@@ -45,6 +45,18 @@ pub enum ExportError {
     /// Writing failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+}
+
+impl ExportError {
+    /// Whether a stop request (Ctrl-C) ended it, in the equilibrium solve or the modes of
+    /// the modal form (nothing is written then).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(
+            self,
+            ExportError::Statics(StaticsError::Interrupted)
+                | ExportError::Modes(phstring::modes::ModesError::Interrupted)
+        )
+    }
 }
 
 /// Where the model is linearized.
@@ -171,6 +183,9 @@ const REDUCED_EQUATIONS: &str = "x = (q, v) on the free position components: E =
 ///
 /// With `modal = Some(k)`, a third form `modal` is written: the structure-preserving modal
 /// truncation to the `k` lowest natural modes (docs/method.md §17).
+///
+/// `stop`, when set, ends it between Newton iterations or Lanczos steps, before anything is
+/// written ([`ExportError::is_interrupted`]).
 pub fn linearize(
     file: &ScenarioFile,
     at: &LinearizeAt,
@@ -220,29 +235,42 @@ fn linearize_dim<const D: usize>(
     let stable =
         phstring::linear::positive_definite(&sys, &phstring::linear::tangent_blocks(&sys, &r));
     let ports = force_ports(&sys);
+    // Everything is computed before the first file is written: a stop request leaves the
+    // folder as it was.
+    let mut warnings = Vec::new();
+    let modal_model = match modal {
+        Some(k) => {
+            let found = phstring::modes::modes(&sys, &r, k, v.settings.step.solver, stop)?;
+            let (_, free) = phstring::linear::free_dofs(&sys);
+            warnings.extend(crate::modes_run::fewer_modes(
+                "--modes",
+                k,
+                free,
+                found.modes.len(),
+            ));
+            Some(phstring::linear::modal_model(
+                &sys,
+                &r,
+                &found.modes,
+                &ports,
+            ))
+        }
+        None => None,
+    };
+    let full = full_model(&sys, &r, &ports);
+    let reduced = reduced_model(&sys, &r, &ports);
+    if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+        return Err(StaticsError::Interrupted.into());
+    }
     let mut forms = std::collections::BTreeMap::new();
     for (name, model, eqs) in [
-        ("full", full_model(&sys, &r, &ports), FULL_EQUATIONS),
-        (
-            "reduced",
-            reduced_model(&sys, &r, &ports),
-            REDUCED_EQUATIONS,
-        ),
+        ("full", Some(full), FULL_EQUATIONS),
+        ("reduced", Some(reduced), REDUCED_EQUATIONS),
+        ("modal", modal_model, MODAL_EQUATIONS),
     ] {
-        forms.insert(name, write_form(out, name, &model, eqs)?);
-    }
-    let mut warnings = Vec::new();
-    if let Some(k) = modal {
-        let found = phstring::modes::modes(&sys, &r, k, v.settings.step.solver)?;
-        let (_, free) = phstring::linear::free_dofs(&sys);
-        warnings.extend(crate::modes_run::fewer_modes(
-            "--modes",
-            k,
-            free,
-            found.modes.len(),
-        ));
-        let model = phstring::linear::modal_model(&sys, &r, &found.modes, &ports);
-        forms.insert("modal", write_form(out, "modal", &model, MODAL_EQUATIONS)?);
+        if let Some(model) = model {
+            forms.insert(name, write_form(out, name, &model, eqs)?);
+        }
     }
     let mut pos = String::from("node,x,y,z\n");
     for (i, p) in r.iter().enumerate() {

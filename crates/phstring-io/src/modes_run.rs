@@ -13,7 +13,7 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use phstring::modes::{self, ModesError};
 use phstring::statics::StaticsError;
@@ -39,6 +39,18 @@ pub enum ModesRunError {
     /// Writing failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+}
+
+impl ModesRunError {
+    /// Whether a stop request (Ctrl-C) ended it: in the equilibrium solve, the eigensolver
+    /// or between the ParaView frames (before `modes.csv` and `summary.json` are written).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(
+            self,
+            ModesRunError::Statics(StaticsError::Interrupted)
+                | ModesRunError::Modes(ModesError::Interrupted)
+        )
+    }
 }
 
 /// One mode in `summary.json`.
@@ -82,7 +94,9 @@ pub fn fewer_modes(option: &str, asked: usize, free: usize, given: usize) -> Opt
 }
 
 /// Solves the equilibrium of `file`, then its `count` lowest modes, and writes the outputs
-/// into `out` (which must exist).
+/// into `out` (which must exist). `stop`, when set, ends it between Newton iterations,
+/// Lanczos steps or ParaView frames ([`ModesRunError::is_interrupted`]); `modes.csv`,
+/// `modes.pvd` and `summary.json` are then not written.
 pub fn modes(
     file: &ScenarioFile,
     count: usize,
@@ -110,7 +124,7 @@ fn modes_dim<const D: usize>(
     let v = file.validate::<D>()?;
     let (sys, eq) = crate::statics_run::solve_validated(&v, true, stop)?;
     let r = &eq.state.r;
-    let found = modes::modes(&sys, r, count, v.settings.step.solver)?;
+    let found = modes::modes(&sys, r, count, v.settings.step.solver, stop)?;
     let (_, free) = phstring::linear::free_dofs(&sys);
     let warnings = fewer_modes("--count", count, free, found.modes.len())
         .into_iter()
@@ -149,7 +163,6 @@ fn modes_dim<const D: usize>(
             character: m.character.name(),
         });
     }
-    write(out, "modes.csv", csv.as_bytes())?;
     let amax = |m: &modes::Mode<D>| m.shape.iter().map(|p| p.norm()).fold(0.0, f64::max);
     let scale_of = |m: &modes::Mode<D>| {
         let a = amax(m);
@@ -164,6 +177,9 @@ fn modes_dim<const D: usize>(
     let names = ["shape_x", "shape_y", "shape_z"];
     let mut snapshots = vec![(0.0, r.iter().map(plane).collect::<Vec<_>>())];
     for (i, m) in found.modes.iter().enumerate() {
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Err(ModesError::Interrupted.into());
+        }
         let s = scale_of(m);
         let points: Vec<[f64; 3]> = r
             .iter()
@@ -203,6 +219,7 @@ fn modes_dim<const D: usize>(
         }
     }
     pvd.write().map_err(OutputError::from)?;
+    write(out, "modes.csv", csv.as_bytes())?;
     let shape_scale = found.modes.first().map_or(0.0, scale_of);
     if D >= 2 {
         let topology = crate::output::system_topology(&sys);

@@ -182,6 +182,19 @@ pub enum RunError {
     },
 }
 
+impl RunError {
+    /// Whether a stop request (Ctrl-C, `--stop-after-steps`) ended the run: in its time loop
+    /// ([`RunError::Interrupted`], resumable) or in the starting equilibrium
+    /// (`initial.equilibrium`, before anything is written).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(
+            self,
+            RunError::Interrupted { .. }
+                | RunError::Statics(phstring::statics::StaticsError::Interrupted)
+        )
+    }
+}
+
 impl From<phstring::SetupError> for RunError {
     fn from(e: phstring::SetupError) -> Self {
         RunError::Setup(e)
@@ -253,6 +266,9 @@ pub struct RunInfo {
     /// Steps whose Newton solve ended at the round-off floor of the residual (docs/method.md
     /// §9) instead of below the tolerance.
     pub steps_at_roundoff: usize,
+    /// Error control (`time.rtol`, `time.atol`): steps accepted at the smallest step size
+    /// although their error estimate exceeded the tolerance (a warning says so).
+    pub steps_over_tolerance: usize,
     /// Largest `|Ĥ_{n+1} − Ĥ_n − h û·ŷ|` [J].
     pub max_balance_error: f64,
     /// Largest balance error of a step relative to that step's energy scale (the magnitudes
@@ -395,6 +411,7 @@ fn run_dim<const D: usize>(
     };
     let settings = v.settings.clone();
     let load_error = v.load_error.clone();
+    let scenario_warnings = std::mem::take(&mut v.warnings);
     let components = v.components;
     let mut sim: Simulation<D, Material> = Simulation::new(v.problem, settings.step)?;
     sim.set_stop_flag(opts.stop.clone());
@@ -413,6 +430,7 @@ fn run_dim<const D: usize>(
     };
     let mut info = new_info(&ctx, &sim, &components, resume.is_some());
     info.initial_equilibrium = initial_equilibrium;
+    info.warnings = scenario_warnings;
     let fresh = resume.is_none();
     let writers = match resume {
         Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
@@ -436,6 +454,9 @@ fn run_dim<const D: usize>(
     info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = sim.energies().hamiltonian();
     info.dissipated_energy = sim.dissipated_energy();
+    if let Some(w) = over_tolerance_warning(&info, &ctx.settings) {
+        info.warnings.push(w);
+    }
     let (failure, interrupted) = match looped {
         Ok(outcome) => outcome,
         Err(e) => return Err(fail_writing(out, &mut info, &mut writers, e, sim.time())),
@@ -491,6 +512,24 @@ fn run_dim<const D: usize>(
     Ok(info)
 }
 
+/// The warning for steps that error control accepted at its step-size floor although their
+/// error estimate exceeded the tolerance (docs/method.md §19: such a step is accepted
+/// whatever its error), or `None` if there were none.
+fn over_tolerance_warning(info: &RunInfo, settings: &RunSettings) -> Option<String> {
+    let n = info.steps_over_tolerance;
+    if n == 0 {
+        return None;
+    }
+    let c = &settings.step.control;
+    Some(format!(
+        "{n} of {} steps missed the error tolerance (time.rtol = {}, time.atol = {}): error control accepted them at its smallest step size time.h/2^time.max_halvings = {} s whatever their error estimate; loosen the tolerance, or allow smaller steps with time.max_halvings",
+        info.steps,
+        phstring::Num(c.rtol),
+        phstring::Num(c.atol),
+        phstring::Num(info.h / 2f64.powi(settings.step.control.max_halvings as i32))
+    ))
+}
+
 /// The summary of a run that has not taken a step yet.
 fn new_info<const D: usize>(
     ctx: &RunContext,
@@ -527,6 +566,7 @@ fn new_info<const D: usize>(
         newton_tol: settings.step.newton.tol,
         newton_rtol: settings.step.newton.rtol,
         steps_at_roundoff: 0,
+        steps_over_tolerance: 0,
         max_balance_error: 0.0,
         max_relative_balance_error: 0.0,
         balance_bound: phstring::observe::BALANCE_RTOL,
@@ -678,6 +718,7 @@ fn resume_writers<const D: usize>(
     info.local_newton_iterations = c.local_newton_iterations;
     info.local_newton_work = c.local_newton_work;
     info.steps_at_roundoff = c.steps_at_roundoff;
+    info.steps_over_tolerance = c.steps_over_tolerance;
     info.time_loop_s = c.time_loop_s;
     info.hamiltonian_initial = c.hamiltonian_initial;
     info.settle_progress = (c.settle_armed, c.settle_since);
@@ -719,6 +760,7 @@ fn write_checkpoint<const D: usize>(
             local_newton_iterations: info.local_newton_iterations,
             local_newton_work: info.local_newton_work,
             steps_at_roundoff: info.steps_at_roundoff,
+            steps_over_tolerance: info.steps_over_tolerance,
             time_loop_s: info.time_loop_s,
             hamiltonian_initial: info.hamiltonian_initial,
             settle_armed: info.settle_progress.0,
@@ -763,6 +805,7 @@ fn step_loop<const D: usize>(
             break;
         }
         let t0 = Instant::now();
+        let over = sim.steps_over_tolerance();
         let res = sim.step_until(t_end);
         info.time_loop_s += t0.elapsed().as_secs_f64();
         match res {
@@ -784,6 +827,7 @@ fn step_loop<const D: usize>(
                 );
                 info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
                 info.steps_at_roundoff += usize::from(report.at_roundoff);
+                info.steps_over_tolerance += sim.steps_over_tolerance() - over;
                 writers.step(sim, &report)?;
                 progress.step(report.step, report.t);
                 let at_rest = watch.as_mut().and_then(|w| w.check(sim, &report));

@@ -39,6 +39,13 @@ pub enum StaticsRunError {
     Output(#[from] OutputError),
 }
 
+impl StaticsRunError {
+    /// Whether a stop request (Ctrl-C) ended the equilibrium solve (nothing is written then).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(self, StaticsRunError::Statics(StaticsError::Interrupted))
+    }
+}
+
 /// What `summary.json` of a statics run holds.
 #[derive(Debug, Clone, Serialize)]
 pub struct StaticsInfo {

@@ -5,6 +5,8 @@
 //! threads.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
@@ -111,6 +113,9 @@ pub struct SweepRun {
     pub values: Vec<(String, String)>,
     /// The outcome (without the energy history, which only plots need).
     pub result: Result<RunInfo, String>,
+    /// A stop request ended the run (it can be resumed from its checkpoint) or kept it from
+    /// starting; `result` is then the error that says which.
+    pub interrupted: bool,
 }
 
 /// Most runs in one sweep.
@@ -291,12 +296,15 @@ impl Sweep {
     }
 
     /// Runs every combination with `jobs` threads into `out/run_NNN/` (`out` must exist), and
-    /// writes `out/sweep.csv`.
+    /// writes `out/sweep.csv`. `stop`, when set, stops the runs under way as Ctrl-C stops a
+    /// run (with a checkpoint) and starts no further run; those are marked
+    /// [`SweepRun::interrupted`] and have the status `interrupted` in the table.
     pub fn run(
         &self,
         out: &Path,
         jobs: usize,
         on_done: &(dyn Fn(&SweepRun) + Sync),
+        stop: Option<Arc<AtomicBool>>,
     ) -> Result<Vec<SweepRun>, SweepError> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs.max(1))
@@ -310,24 +318,13 @@ impl Sweep {
                 .into_par_iter()
                 .map(|index| {
                     let dir = out.join(run_dir_name(index));
-                    let result = self
-                        .file(index)
-                        .map_err(|e| e.to_string())
-                        .and_then(|file| {
-                            std::fs::create_dir_all(&dir)
-                                .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-                            runner::run(&file, &dir, &mut (), runner::RunOptions::default())
-                                .map_err(|e| e.to_string())
-                        })
-                        .map(|mut info| {
-                            info.history = Default::default();
-                            info
-                        });
+                    let (result, interrupted) = self.run_one(index, &dir, stop.as_ref());
                     let run = SweepRun {
                         index,
                         dir,
                         values: combination(&self.vary, index),
                         result,
+                        interrupted,
                     };
                     on_done(&run);
                     run
@@ -339,6 +336,40 @@ impl Sweep {
             cause,
         })?;
         Ok(runs)
+    }
+
+    /// Run `index` into `dir` (created), unless `stop` is set; whether a stop request ended
+    /// it or kept it from starting.
+    fn run_one(
+        &self,
+        index: usize,
+        dir: &Path,
+        stop: Option<&Arc<AtomicBool>>,
+    ) -> (Result<RunInfo, String>, bool) {
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return (
+                Err("not started: the sweep was interrupted".to_string()),
+                true,
+            );
+        }
+        let file = match self.file(index) {
+            Ok(f) => f,
+            Err(e) => return (Err(e.to_string()), false),
+        };
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            return (Err(format!("cannot create {}: {e}", dir.display())), false);
+        }
+        let opts = runner::RunOptions {
+            stop: stop.cloned(),
+            ..Default::default()
+        };
+        match runner::run(&file, dir, &mut (), opts) {
+            Ok(mut info) => {
+                info.history = Default::default();
+                (Ok(info), false)
+            }
+            Err(e) => (Err(e.to_string()), e.is_interrupted()),
+        }
     }
 }
 
@@ -380,7 +411,15 @@ fn write_table(out: &Path, vary: &[Vary], runs: &[SweepRun]) -> std::io::Result<
                 num(i.max_balance_error),
                 num(i.time_loop_s)
             )),
-            Err(e) => text.push_str(&format!(",failed,,,,,,,,\"{}\"\n", e.replace('"', "'"))),
+            Err(e) => text.push_str(&format!(
+                ",{},,,,,,,,\"{}\"\n",
+                if r.interrupted {
+                    "interrupted"
+                } else {
+                    "failed"
+                },
+                e.replace('"', "'")
+            )),
         }
     }
     std::fs::write(out.join(SWEEP_TABLE), text)

@@ -262,6 +262,19 @@ fn point_masses_are_validated_with_their_weight() {
             "`point_mass.0.node` = 31 is out of range",
         ),
         ("point_mass.0.kg=1e308", "`point_mass.0.kg`"),
+        // A weight whose square overflows the force residual: named, not NaN or infinite.
+        (
+            "point_mass.0.kg=1e300",
+            "`point_mass.0.kg` = 1e300: its weight under body_force.gravity at node 30 is 9.810000000000001e300 N, above 1e150 N",
+        ),
+        (
+            "material.drag=1e300",
+            "`material.drag` = 1e300 N·s/m² gives the elements of the string, of reference length up to 0.033333333333333375 m, the drag coefficient 3.3333333333333377e298 N·s/m each, above 1e150 N·s/m",
+        ),
+        (
+            "material.rho_a=1e300",
+            "`material.rho_a` = 1e300 gives the elements of the string the weight 3.2700000000000042e299 N each",
+        ),
     ] {
         let err = scenario::parse(&text, Path::new("pm.toml"), &[set.to_string()])
             .and_then(|f| f.check())
@@ -619,6 +632,27 @@ fn network_errors_name_the_key_and_position() {
         ),
         (
             r#"path = ["s0:2", "c"]"#,
+            r#"path = ["s0:+2", "c"]"#,
+            r#""s0:+2""#,
+            "string.1.path.0",
+            r#"= "s0:+2": after the ':' comes a node index along the string, e.g. "s0:3" or "s0:-1" (digits with an optional leading '-', no blanks or '+')"#,
+        ),
+        (
+            r#"path = ["s0:2", "c"]"#,
+            r#"path = ["s0: 2", "c"]"#,
+            r#""s0: 2""#,
+            "string.1.path.0",
+            r#"= "s0: 2": after the ':' comes a node index along the string"#,
+        ),
+        (
+            "[[point_mass]]\nnode = \"c\"",
+            "[[point_mass]]\nnode = \"s1:+1\"",
+            r#""s1:+1""#,
+            "point_mass.0.node",
+            r#"= "s1:+1": after the ':' comes a node index along the string"#,
+        ),
+        (
+            r#"path = ["s0:2", "c"]"#,
             r#"path = [9, "c"]"#,
             "9, ",
             "string.1.path.0",
@@ -814,6 +848,55 @@ between"#,
             "ea = |-1.0e5",
             "materials.steel.ea",
             "must be positive and finite",
+        ),
+        (
+            r#"position = ["1 + 0.1*t", ""]"#,
+            r#"position = ["", " "]"#,
+            r#"["", " "]"#,
+            "boundary.1.position",
+            r#"prescribes nothing: every expression is "" (free); give the position of at least one component"#,
+        ),
+        (
+            r#"position = ["1 + 0.1*t", ""]"#,
+            "position = []",
+            "position = |[]",
+            "boundary.1.position",
+            r#"must have 2 expressions (dimension = 2; "" for a free component), got 0"#,
+        ),
+        (
+            "prestretch = 1.01",
+            "prestretch = 1e-300",
+            "prestretch = |1e-300",
+            "string.1.prestretch",
+            r#"= 1e-300 gives the elements of string "s1" (string.1) the weight 3.6559711432121563e300 N each: the body force 9.81 N/m (materials.steel.rho_a = 1 kg/m times body_force.gravity, plus body_force.per_length) times the reference element length 3.7267799624996496e299 m (span 1 of its path / elements / prestretch), above 1e150 N: nodal forces this large overflow the force residual, which squares them"#,
+        ),
+        (
+            "rho_a = 1.0",
+            "rho_a = 1e300",
+            "rho_a = |1e300",
+            "materials.steel.rho_a",
+            r#"= 1e300 gives the elements of string "s0" (string.0) the weight 2.4525000000000003e300 N each: the body force 9.810000000000001e300 N/m (materials.steel.rho_a = 1e300 kg/m times body_force.gravity, plus body_force.per_length) times the reference element length 0.25 m (span 1 of its path / elements / prestretch), above 1e150 N"#,
+        ),
+        (
+            "rho_a = 1.0",
+            "rho_a = 1.0\ndrag = 1e300",
+            "drag = |1e300",
+            "materials.steel.drag",
+            r#"= 1e300 N·s/m² gives the elements of string "s0" (string.0), of reference length up to 0.25 m, the drag coefficient 2.5e299 N·s/m each, above 1e150 N·s/m"#,
+        ),
+        (
+            "kg = 2.0",
+            "kg = 1e300",
+            "kg = |1e300",
+            "point_mass.0.kg",
+            r#"= 1e300: its weight under body_force.gravity at "c" (node 2) is 9.810000000000001e300 N, above 1e150 N"#,
+        ),
+        (
+            "position = [1.0, -1.0]",
+            "position = [0.5, 1e-300]",
+            r#""c"]"#,
+            "string.1.path.1",
+            r#"is "c" (node 2), 1e-300 m from the path's previous node: the span's elements (3 of 3.3333333333333334e-301 m) are too short for floating point, their squared length (in the strain C) underflows below 2.2e-308 m²; elements must be longer than 1.5e-154 m"#,
         ),
     ];
     for (from, to, value, key, message) in cases {
@@ -1092,4 +1175,34 @@ fn springs_to_points_make_fixed_nodes() {
         .expect_err("index of a fixed point")
         .to_string();
     assert!(err.contains("spring.1.between.0"), "{err}");
+}
+
+/// A string whose elements are far shorter than the rounding of their coordinates allows
+/// (3.3e-13 m at 0.5 m from the origin, which holds positions to 1.1e-16 m) is valid, but
+/// warned about; the same string 1e-5 m long is not, nor is the network as written.
+#[test]
+fn elements_below_the_rounding_of_their_coordinates_are_warned_about() {
+    let warnings = |text: &str| {
+        scenario::parse(text, Path::new("net.toml"), &[])
+            .unwrap()
+            .check_with_warnings()
+            .unwrap()
+    };
+    assert_eq!(warnings(NET), Vec::<String>::new());
+    let at = |y: &str| {
+        NET.replacen(
+            "position = [1.0, -1.0]",
+            &format!("position = [0.5, {y}]"),
+            1,
+        )
+    };
+    assert_eq!(warnings(&at("1e-5")), Vec::<String>::new());
+    let w = warnings(&at("1e-12"));
+    assert_eq!(w.len(), 1, "{w:?}");
+    let expected = "string \"s1\": 3 of its 3 elements are shorter than 1e8 times the rounding of their coordinates; element ";
+    assert!(w[0].starts_with(expected), "{w:?}");
+    assert!(
+        w[0].contains("at coordinates of 0.5 m, which floating point holds to about 1.1102230246251565e-16 m, so its strain carries a relative rounding error of about 0.000666133814775094 and Newton may fail at the first step"),
+        "{w:?}"
+    );
 }

@@ -51,7 +51,7 @@ fn run<const D: usize>(n: usize) {
     let mut last = None;
     for _ in 0..5 {
         let t0 = Instant::now();
-        let m = modes::modes(&sys, &st.r, 10, SolverKind::Auto).unwrap();
+        let m = modes::modes(&sys, &st.r, 10, SolverKind::Auto, None).unwrap();
         times.push(t0.elapsed().as_secs_f64());
         last = Some(m);
     }

@@ -10,6 +10,8 @@
 //! eigenvectors are `M`-orthonormal (`Φᵀ M Φ = I`), so they carry units of `M^(-1/2)`; their
 //! sign is arbitrary.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use crate::error::Num;
 use faer::linalg::solvers::LltError;
 use faer::{Mat, Side};
@@ -118,6 +120,12 @@ pub enum EigenError {
         worst_residual: f64,
         /// The tolerance.
         tol: f64,
+    },
+    /// The stop flag was set; the iteration ended between two Lanczos steps.
+    #[error("interrupted after {iterations} Lanczos solves")]
+    Interrupted {
+        /// Solves performed before the stop.
+        iterations: usize,
     },
     /// Fewer eigenvalues lie above the shift than were requested.
     #[error(
@@ -297,12 +305,17 @@ pub struct EigenPairs {
 /// `λ`, with `M`-orthonormal eigenvectors. Eigenvalues below `σ` are never returned. The
 /// start vectors are pseudo-random from `params.seed`, so results are reproducible.
 ///
+/// `stop`, when given and set, ends the iteration between two Lanczos steps (before the
+/// next solve, and before a Ritz decomposition of the tridiagonal matrix) with
+/// [`EigenError::Interrupted`].
+///
 /// # Errors
 /// [`EigenError::InvalidCount`] unless `1 ≤ count ≤ n`; [`EigenError::InvalidParameter`]
 /// for a non-finite `σ`, a `tol` outside `(0, 1)` or a `max_basis` below `count`;
 /// [`EigenError::Solve`]; [`EigenError::MassNotPositive`]; [`EigenError::NotConverged`]
 /// (with the number converged and the worst residual) when `max_basis` is reached;
-/// [`EigenError::TooFewAboveShift`] when fewer than `count` eigenvalues lie above `σ`.
+/// [`EigenError::TooFewAboveShift`] when fewer than `count` eigenvalues lie above `σ`;
+/// [`EigenError::Interrupted`].
 ///
 /// # Example
 /// The taut string fixed at both ends, 3 elements (`T/l = 1`, `ρA l = 6`): `K = [[2, −1],
@@ -319,7 +332,7 @@ pub struct EigenPairs {
 ///     out[0] = 4.0 * x[0] + x[1];
 ///     out[1] = x[0] + 4.0 * x[1];
 /// };
-/// let pairs = lanczos_shift_invert(2, solve, m_mul, &LanczosParams::new(2, 0.0))?;
+/// let pairs = lanczos_shift_invert(2, solve, m_mul, &LanczosParams::new(2, 0.0), None)?;
 /// assert!((pairs.values[0] - 0.2).abs() < 1e-14 && (pairs.values[1] - 1.0).abs() < 1e-14);
 /// # Ok::<(), phstring::eigen::EigenError>(())
 /// ```
@@ -328,6 +341,7 @@ pub fn lanczos_shift_invert<E: std::fmt::Display>(
     mut solve: impl FnMut(&mut [f64]) -> Result<(), E>,
     mut m_mul: impl FnMut(&[f64], &mut [f64]),
     params: &LanczosParams,
+    stop: Option<&AtomicBool>,
 ) -> Result<EigenPairs, EigenError> {
     let count = params.count;
     if count == 0 || count > n {
@@ -368,6 +382,7 @@ pub fn lanczos_shift_invert<E: std::fmt::Display>(
         iterations: 0,
         solve: |x: &mut [f64]| solve(x).map_err(|e| EigenError::Solve(e.to_string())),
         m_mul: &mut m_mul,
+        stop,
     };
     let mut runs = 0;
     loop {
@@ -427,6 +442,7 @@ struct Lanczos<'m, S, MM> {
     iterations: usize,
     solve: S,
     m_mul: &'m mut MM,
+    stop: Option<&'m AtomicBool>,
 }
 
 impl<S, MM> Lanczos<'_, S, MM>
@@ -462,6 +478,7 @@ where
         chain.push(q);
         let mut next_check = 1;
         loop {
+            self.check_stop()?;
             let j = chain.len();
             let mut w = mq.clone();
             (self.solve)(&mut w)?;
@@ -491,6 +508,8 @@ where
             let exhausted = next.is_none() || self.locked.len() + j >= n;
             let at_cap = self.locked.len() + j >= self.max_basis;
             if exhausted || at_cap || restarted || j >= next_check {
+                // The decomposition costs O(j³): not after a stop request.
+                self.check_stop()?;
                 let ritz = ritz(&alpha, &beta)?;
                 let est = |i: usize| {
                     if exhausted {
@@ -540,6 +559,16 @@ where
             mq = m;
             beta.push(if restarted { 0.0 } else { beta_j });
         }
+    }
+
+    /// [`EigenError::Interrupted`] if the stop flag is set.
+    fn check_stop(&self) -> Result<(), EigenError> {
+        if self.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Err(EigenError::Interrupted {
+                iterations: self.iterations,
+            });
+        }
+        Ok(())
     }
 
     /// Which Ritz values of the current run are done: the leading ones (largest `θ`, at most
@@ -852,7 +881,7 @@ mod tests {
             lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(x, n, 1));
             Ok(())
         };
-        lanczos_shift_invert(n, solve, |x, o| mat_vec(m, x, o), params)
+        lanczos_shift_invert(n, solve, |x, o| mat_vec(m, x, o), params, None)
     }
 
     /// Thomas algorithm for a constant symmetric tridiagonal `(d, o)`, in place.
@@ -995,7 +1024,8 @@ mod tests {
             let shifted = (kb.0 - sigma * mb.0, kb.1 - sigma * mb.1);
             let params = LanczosParams::new(10, sigma);
             let pairs =
-                lanczos_shift_invert(n, thomas(n, shifted), tridiagonal_mul(mb), &params).unwrap();
+                lanczos_shift_invert(n, thomas(n, shifted), tridiagonal_mul(mb), &params, None)
+                    .unwrap();
             let err = (0..10)
                 .map(|i| rel_err(pairs.values[i], exact[i]))
                 .fold(0.0, f64::max);
@@ -1016,9 +1046,56 @@ mod tests {
             );
             // Reproducible: same seed, same bits.
             let again =
-                lanczos_shift_invert(n, thomas(n, shifted), tridiagonal_mul(mb), &params).unwrap();
+                lanczos_shift_invert(n, thomas(n, shifted), tridiagonal_mul(mb), &params, None)
+                    .unwrap();
             assert_eq!(again, pairs);
         }
+    }
+
+    /// A stop request (here raised by the 5th solve, as a Ctrl-C during it would) ends the
+    /// iteration before the next solve: no solve is made after it, and the error counts the
+    /// five. The same problem without the flag needs many more solves.
+    #[test]
+    fn lanczos_stops_between_steps_when_the_flag_is_set() {
+        let n_el = 2000;
+        let n = n_el - 1;
+        let (kb, mb) = string_bands(n_el);
+        let params = LanczosParams::new(10, 0.0);
+        let stop = AtomicBool::new(false);
+        let mut solves = 0;
+        let mut inner = thomas(n, kb);
+        let solve = |x: &mut [f64]| {
+            solves += 1;
+            if solves == 5 {
+                stop.store(true, Ordering::Relaxed);
+            }
+            inner(x)
+        };
+        let e =
+            lanczos_shift_invert(n, solve, tridiagonal_mul(mb), &params, Some(&stop)).unwrap_err();
+        assert_eq!(e, EigenError::Interrupted { iterations: 5 });
+        assert_eq!(solves, 5);
+        assert_eq!(e.to_string(), "interrupted after 5 Lanczos solves");
+        // A flag set before the start: not a single solve.
+        let e = lanczos_shift_invert(
+            n,
+            |_: &mut [f64]| -> Result<(), String> { panic!("no solve after a stop request") },
+            tridiagonal_mul(mb),
+            &params,
+            Some(&stop),
+        )
+        .unwrap_err();
+        assert_eq!(e, EigenError::Interrupted { iterations: 0 });
+        let unstopped = AtomicBool::new(false);
+        let pairs = lanczos_shift_invert(
+            n,
+            thomas(n, kb),
+            tridiagonal_mul(mb),
+            &params,
+            Some(&unstopped),
+        )
+        .unwrap();
+        assert!(pairs.iterations > 20, "{}", pairs.iterations);
     }
 
     /// Repeated eigenvalues: two identical decoupled strings (like the two transverse
@@ -1184,6 +1261,7 @@ mod tests {
             |_: &mut [f64]| Err("factor is stale"),
             |x, o| mat_vec(&m, x, o),
             &LanczosParams::new(2, 0.0),
+            None,
         )
         .unwrap_err();
         assert_eq!(e, EigenError::Solve("factor is stale".into()));
@@ -1195,8 +1273,14 @@ mod tests {
             max_basis: Some(12),
             ..LanczosParams::new(10, 0.0)
         };
-        let e = lanczos_shift_invert(n_el - 1, thomas(n_el - 1, kb), tridiagonal_mul(mb), &params)
-            .unwrap_err();
+        let e = lanczos_shift_invert(
+            n_el - 1,
+            thomas(n_el - 1, kb),
+            tridiagonal_mul(mb),
+            &params,
+            None,
+        )
+        .unwrap_err();
         eprintln!("{e}");
         match e {
             EigenError::NotConverged {

@@ -6,6 +6,7 @@
 //! O(N) linear solvers.
 
 use std::f64::consts::PI;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use faer::Mat;
 use thiserror::Error;
@@ -90,16 +91,25 @@ pub enum ModesError {
     /// The eigensolver failed.
     #[error(transparent)]
     Eigen(#[from] EigenError),
+    /// The stop flag was set.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// The `count` lowest natural modes about the rest state at positions `r` [m] (at most the
 /// number of free components). `solver` is used by Lanczos for large problems.
+///
+/// `stop`, when given and set, ends the computation with [`ModesError::Interrupted`]:
+/// Lanczos between two of its steps; the dense decomposition (at most [`DENSE_LIMIT`] free
+/// components, about a second) before and after it.
 pub fn modes<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r: &[Vector<D>],
     count: usize,
     solver: SolverKind,
+    stop: Option<&AtomicBool>,
 ) -> Result<Modes<D>, ModesError> {
+    let stopped = || stop.is_some_and(|s| s.load(Ordering::Relaxed));
     let kb = tangent_blocks(sys, r);
     if !positive_definite(sys, &kb) {
         return Err(ModesError::NotStable);
@@ -119,9 +129,15 @@ pub fn modes<const D: usize, M: StoredEnergy>(
     // a dense decomposition only to ε times the stiffest (axial) one. So dense is for
     // small problems that want most of their modes.
     let (values, vectors, method, solves) = if n <= DENSE_LIMIT && (n <= 12 || 2 * count > n) {
+        if stopped() {
+            return Err(ModesError::Interrupted);
+        }
         let k: Mat<f64> = restrict(&sys.mesh, &kb, &dof, n).as_ref().to_dense();
         let m: Mat<f64> = restrict(&sys.mesh, &mb, &dof, n).as_ref().to_dense();
         let (vals, vecs) = eigen::dense_generalized(&k, &m)?;
+        if stopped() {
+            return Err(ModesError::Interrupted);
+        }
         let vectors = (0..count)
             .map(|c| (0..n).map(|i| vecs[(i, c)]).collect::<Vec<f64>>())
             .collect();
@@ -158,7 +174,11 @@ pub fn modes<const D: usize, M: StoredEnergy>(
                 }
             }
         };
-        let pairs = eigen::lanczos_shift_invert(n, solve, m_mul, &LanczosParams::new(count, 0.0))?;
+        let params = LanczosParams::new(count, 0.0);
+        let pairs = match eigen::lanczos_shift_invert(n, solve, m_mul, &params, stop) {
+            Err(EigenError::Interrupted { .. }) => return Err(ModesError::Interrupted),
+            found => found?,
+        };
         (pairs.values, pairs.vectors, "lanczos", pairs.iterations)
     };
     let tangents = node_tangents(sys, r);

@@ -253,6 +253,9 @@ pub struct Simulation<const D: usize, M> {
     err_prev: f64,
     /// `dg4`: the ports' sums over the sub-steps (a buffer reused from step to step).
     port_sums: Vec<(Vector<D>, Vector<D>, f64)>,
+    /// Error control: steps accepted at the step-size floor although their error estimate
+    /// exceeded the tolerance.
+    over_tolerance: usize,
     /// The port samples before the current step, put back if the step fails after the
     /// ports were formed (a buffer reused from step to step).
     ports_prev: Vec<PortSample<D>>,
@@ -505,6 +508,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             acc_history: Default::default(),
             err_prev: 1.0,
             port_sums: Vec::new(),
+            over_tolerance: 0,
             ports_prev: Vec::new(),
             held,
         })
@@ -555,6 +559,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Steps rejected (and retried with a smaller step) so far.
     pub fn rejected_steps(&self) -> usize {
         self.rejected
+    }
+    /// Error control: steps this simulation accepted at the step-size floor although their
+    /// error estimate exceeded the tolerance (`time.rtol`, `time.atol`), so far (not counted
+    /// across a [`Self::restore`]: it starts at 0 with each `Simulation`).
+    pub fn steps_over_tolerance(&self) -> usize {
+        self.over_tolerance
     }
 
     /// The complete dynamic state, for [`Self::restore`].
@@ -779,6 +789,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             self.set_step_size((h * cut).max(floor));
                             continue;
                         }
+                        self.over_tolerance += usize::from(err > 1.0); // at the floor
                         let tau = t + 0.5 * h;
                         if !composed {
                             self.acc_history.push(tau, &self.acc);

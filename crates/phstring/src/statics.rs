@@ -580,6 +580,10 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
     let mut failed_step = 0;
     let mut attempts = 0;
     while attempts < params.max_load_steps {
+        // Newton checks it too, but not when a step fails at once (a strain off its domain).
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Err(StaticsError::Interrupted);
+        }
         attempts += 1;
         let target = (lambda + dl).min(1.0);
         eq.lambda = target;

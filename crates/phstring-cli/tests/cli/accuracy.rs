@@ -91,3 +91,58 @@ fn bad_accuracy_keys_name_the_key() {
         assert!(err.contains(key), "{set}: {err}");
     }
 }
+
+/// A tolerance no step can meet (`time.rtol = time.atol = 1e-300`): every step is accepted
+/// at the step-size floor `time.h/2^time.max_halvings`, and the run says so, in
+/// `summary.json` (`steps_over_tolerance`, a warning) and on stderr; the count survives an
+/// interruption and resume. A tolerance the steps meet gives neither.
+#[test]
+fn steps_accepted_over_the_tolerance_are_reported() {
+    let dir = temp_dir("tol-floor");
+    // 0.1 s at h = 0.01 s / 2^3: 80 steps, each at the floor.
+    let sets = [
+        "time.rtol=1e-300",
+        "time.atol=1e-300",
+        "time.max_halvings=3",
+        "time.end=0.1",
+    ];
+    let whole = dir.join("whole");
+    let o = run(&whole, &sets, &[]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    let s = summary(&whole);
+    assert_eq!(s["steps"], 80, "{s}");
+    assert_eq!(s["steps_over_tolerance"], 80, "{s}");
+    let warning = "80 of 80 steps missed the error tolerance (time.rtol = 1e-300, time.atol = 1e-300): error control accepted them at its smallest step size time.h/2^time.max_halvings = 0.00125 s whatever their error estimate";
+    let warnings = s["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().starts_with(warning)),
+        "{s}"
+    );
+    assert!(err.contains(&format!("warning: {warning}")), "{err}");
+    // Interrupted after 30 steps and resumed: the same count.
+    let parts = dir.join("parts");
+    let first = run(&parts, &sets, &["--stop-after-steps", "30"]);
+    assert_eq!(first.status.code(), Some(130));
+    assert_eq!(summary(&parts)["steps_over_tolerance"], 30);
+    let cp = parts.join("checkpoint.json");
+    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(second.status.success());
+    assert_eq!(summary(&parts)["steps_over_tolerance"], 80);
+    // A tolerance the steps meet: no step over it, no warning.
+    let met = dir.join("met");
+    let o = run(
+        &met,
+        &["time.rtol=1e-3", "time.atol=1e-3", "time.end=0.1"],
+        &[],
+    );
+    assert!(o.status.success());
+    let s = summary(&met);
+    assert_eq!(s["steps_over_tolerance"], 0, "{s}");
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("missed the error tolerance"),
+        "{s}"
+    );
+}

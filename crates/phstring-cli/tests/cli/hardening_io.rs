@@ -451,7 +451,7 @@ fn non_finite_derived_quantities_are_refused_by_check_and_run() {
         ),
         (
             &["--set", "body_force.per_length=[1e308, 1e308]"],
-            "squared nodal body forces is not finite",
+            "`body_force.per_length` gives the elements of the string the weight 4.714045207910323e306 N each",
         ),
         (&["--set", "geometry.length=1e-154"], "not finite"),
     ];

@@ -10,6 +10,7 @@ mod fmu;
 mod full_disk;
 mod hardening_cli;
 mod hardening_io;
+mod interrupt;
 mod network;
 mod out_folder;
 mod reliability;

@@ -363,3 +363,46 @@ fn network_runs_resume_bit_identically_and_sweep() {
     assert_eq!(s["components"]["strings"][0]["ea"], 1e8);
     assert_eq!(s["components"]["point_masses"][0]["kg"], 2000.0);
 }
+
+/// A string 1e-12 m long 1 m from the origin (elements of 2.5e-14 m, which coordinates of
+/// 1 m hold to 2.2e-16 m): `check` accepts it with a warning, and `run` prints the warning
+/// once, before stepping, and keeps it in `summary.json`.
+#[test]
+fn elements_below_the_rounding_of_their_coordinates_are_warned_about() {
+    let sets = [
+        "--set",
+        "geometry.start=[1.0, 0.0]",
+        "--set",
+        "geometry.end=[1.000000000001, 0.0]",
+        "--set",
+        "time.end=0.02",
+    ];
+    let warning = "warning: the string: 40 of its 40 elements are shorter than 1e8 times the rounding of their coordinates; element ";
+    let mut args = vec!["check", "examples/taut_string.toml"];
+    args.extend(sets);
+    let o = phstring(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stderr(&o).matches(warning).count(), 1, "{}", stderr(&o));
+    let out = temp_dir("short-elements").join("out");
+    let mut args = vec![
+        "run",
+        "examples/taut_string.toml",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(sets);
+    let o = phstring(&args);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches(warning).count(), 1, "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    let warnings = summary["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 1, "{summary}");
+    let kept = warnings[0].as_str().unwrap();
+    assert!(err.contains(&format!("warning: {kept}\n")), "{kept}\n{err}");
+    // The example as it is: no warning.
+    let o = phstring(&["check", "examples/taut_string.toml"]);
+    assert!(!stderr(&o).contains("rounding"), "{}", stderr(&o));
+}

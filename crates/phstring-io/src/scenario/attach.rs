@@ -137,6 +137,20 @@ impl ScenarioFile {
                     ),
                 ));
             }
+            let w = super::rounding::length(&weight);
+            if w > super::material::MAX_NODAL_FORCE {
+                return Err(self.invalid(
+                    &key("kg"),
+                    pm.kg.span(),
+                    format!(
+                        "= {}: its weight under body_force.gravity at {} is {} N, above {:.0e} N: nodal forces this large overflow the force residual, which squares them",
+                        num(kg),
+                        label(pm.node.get_ref(), node),
+                        num(w),
+                        super::material::MAX_NODAL_FORCE
+                    ),
+                ));
+            }
             masses.push(PointMass {
                 node,
                 mass: kg,
@@ -149,6 +163,22 @@ impl ScenarioFile {
             });
         }
         Ok((masses, report))
+    }
+
+    /// Refuses a `position` (at `key`) whose every expression is `""`: it prescribes nothing.
+    fn prescribes_a_component(
+        &self,
+        key: &str,
+        p: &toml::Spanned<Vec<toml::Spanned<String>>>,
+    ) -> Result<(), ScenarioError> {
+        if p.get_ref().iter().all(|t| t.get_ref().trim().is_empty()) {
+            return Err(self.invalid(
+                key,
+                p.span(),
+                "prescribes nothing: every expression is \"\" (free); give the position of at least one component (\"\" for the free ones), or remove the key",
+            ));
+        }
+        Ok(())
     }
 
     /// `boundary.{k}` on its own: node, `position` (each expression valid and starting at
@@ -184,6 +214,7 @@ impl ScenarioFile {
                     ),
                 ));
             }
+            self.prescribes_a_component(&key("position"), p)?;
             let start = sk.position(node);
             for (i, txt) in texts.iter().enumerate() {
                 if txt.get_ref().trim().is_empty() {

@@ -1,11 +1,32 @@
 //! Validation of a cross-section: `[material]` of a single string, or one
 //! `[materials.NAME]` of a network (same keys).
 
+use std::ops::Range;
+
 use phstring::{Damping, MassMatrix, Material};
 
+use super::settings::BodyForce;
 use super::spec::MaterialSpec;
 use super::{ScenarioError, ScenarioFile};
-use crate::text::clip;
+use crate::text::{clip, num};
+
+/// Largest weight of one string element (`|b| ℓ`) or point mass [N], and largest drag
+/// coefficient of one element (`c ℓ`) [N·s/m]: the Newton residual's force scale sums
+/// squared nodal forces, which overflow near 1e154 (to a message about infinite or NaN
+/// forces, without a key, at setup or at the first step).
+pub const MAX_NODAL_FORCE: f64 = 1e150;
+
+/// The longest element of a string, for [`ScenarioFile::element_scales`].
+pub(super) struct Longest {
+    /// The string in messages: `string "s0" (string.0)` or `the string`.
+    pub owner: String,
+    /// Its reference length ℓ [m].
+    pub l: f64,
+    /// What sets ℓ, in words (e.g. `span 1 of its path / elements / prestretch`).
+    pub from: String,
+    /// The key blamed when ℓ is the large factor: key, span and `"= value "` (or empty).
+    pub key: (String, Range<usize>, String),
+}
 
 /// A validated cross-section: law, `ρA` and mass matrix.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,5 +93,71 @@ impl ScenarioFile {
             mass,
             damping,
         })
+    }
+}
+
+impl ScenarioFile {
+    /// Refuses a string whose longest element has a weight `|b| ℓ` or a drag coefficient
+    /// `c ℓ` above [`MAX_NODAL_FORCE`], naming the key that makes it so large: the
+    /// material's (`mat_key`, its table `mat_spec`) `rho_a` or `drag`,
+    /// `body_force.per_length`, or what sets ℓ.
+    pub(super) fn element_scales<const D: usize>(
+        &self,
+        mat_key: &str,
+        mat_spec: Option<&MaterialSpec>,
+        cs: &CrossSection,
+        body: &BodyForce<D>,
+        longest: Longest,
+    ) -> Result<(), ScenarioError> {
+        let (owner, l) = (&longest.owner, longest.l);
+        let why = "nodal forces this large overflow the force residual, which squares them";
+        let (gravity, per_length) = (
+            cs.rho_a * super::rounding::length(&body.g()),
+            body.per_length.map_or(0.0, |p| super::rounding::length(&p)),
+        );
+        let weight = gravity + per_length;
+        // NaN is refused too.
+        if (weight * l).is_nan() || weight * l > MAX_NODAL_FORCE {
+            let (key, at, value) = if l >= weight {
+                longest.key.clone()
+            } else if per_length > gravity {
+                let given = self.scenario.body_force.per_length.as_ref();
+                let span = given.map_or(0..0, |p| p.span());
+                ("body_force.per_length".to_string(), span, String::new())
+            } else {
+                let span = mat_spec.map_or(0..0, |m| m.rho_a.span());
+                let value = format!("= {} ", num(cs.rho_a));
+                (format!("{mat_key}.rho_a"), span, value)
+            };
+            return Err(self.invalid(
+                &key,
+                at,
+                format!(
+                    "{value}gives the elements of {owner} the weight {} N each: the body force {} N/m ({mat_key}.rho_a = {} kg/m times body_force.gravity, plus body_force.per_length) times the reference element length {} m ({}), above {MAX_NODAL_FORCE:.0e} N: {why}",
+                    num(weight * l),
+                    num(weight),
+                    num(cs.rho_a),
+                    num(l),
+                    longest.from
+                ),
+            ));
+        }
+        let drag = cs.damping.drag;
+        if (drag * l).is_nan() || drag * l > MAX_NODAL_FORCE {
+            let span = mat_spec
+                .and_then(|m| m.drag.as_ref())
+                .map_or(0..0, |d| d.span());
+            return Err(self.invalid(
+                &format!("{mat_key}.drag"),
+                span,
+                format!(
+                    "= {} N·s/m² gives the elements of {owner}, of reference length up to {} m, the drag coefficient {} N·s/m each, above {MAX_NODAL_FORCE:.0e} N·s/m: {why}",
+                    num(drag),
+                    num(l),
+                    num(drag * l)
+                ),
+            ));
+        }
+        Ok(())
     }
 }

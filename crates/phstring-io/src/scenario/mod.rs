@@ -20,6 +20,7 @@ mod material;
 mod network;
 mod overrides;
 mod refs;
+mod rounding;
 mod settings;
 mod single;
 mod spec;
@@ -43,6 +44,7 @@ pub use initial::InitialConditions;
 pub use network::{MAX_NAME_BYTES, MAX_NAMED_NODES, MAX_PATH, MAX_SPRINGS, MAX_STRINGS};
 pub use overrides::{MAX_BRACES, MAX_KEY_BYTES, MAX_KEY_SEGMENTS};
 pub use refs::NodeRef;
+pub use rounding::ROUNDING_FACTOR;
 pub use settings::MAX_STEPS;
 pub use single::MAX_ELEMENTS;
 pub use spec::{
@@ -303,6 +305,10 @@ pub struct Validated<const D: usize> {
     pub load_error: Arc<std::sync::Mutex<Option<String>>>,
     /// `[fmu] nodes`: the mesh nodes whose positions an FMU reports, in file order.
     pub fmu_nodes: Vec<usize>,
+    /// What is valid but likely to fail or mislead (e.g. elements too short for the
+    /// rounding of their coordinates); `check` prints them, a run adds them to
+    /// `summary.json`'s warnings.
+    pub warnings: Vec<String>,
 }
 
 /// What the strings and springs of a scenario assemble to, before boundary conditions and
@@ -407,6 +413,11 @@ impl ScenarioFile {
     /// system it sets up (quantities derived from several keys, such as the initial
     /// energies, must be finite).
     pub fn check(&self) -> Result<(), ScenarioError> {
+        self.check_with_warnings().map(|_| ())
+    }
+
+    /// [`Self::check`], returning the warnings of a valid scenario ([`Validated::warnings`]).
+    pub fn check_with_warnings(&self) -> Result<Vec<String>, ScenarioError> {
         match self.dimension()? {
             1 => self.check_setup::<1>(),
             2 => self.check_setup::<2>(),
@@ -414,10 +425,10 @@ impl ScenarioFile {
         }
     }
 
-    fn check_setup<const D: usize>(&self) -> Result<(), ScenarioError> {
+    fn check_setup<const D: usize>(&self) -> Result<Vec<String>, ScenarioError> {
         let v = self.validate::<D>()?;
         phstring::PhSystem::new(v.problem)
-            .map(|_| ())
+            .map(|_| v.warnings)
             .map_err(|cause| ScenarioError::Setup {
                 path: self.path.clone(),
                 with_sets: !self.overrides.is_empty(),
@@ -598,6 +609,7 @@ impl ScenarioFile {
                 .iter()
                 .sum();
         }
+        let warnings = rounding::short_element_warnings(&problem, layout == Layout::Single);
         components.point_masses = mass_report;
         components.supports = supports(&problem.boundary);
         components.motions = parts.motions;
@@ -624,6 +636,7 @@ impl ScenarioFile {
                 .collect(),
             load_error: parts.load_error,
             fmu_nodes,
+            warnings,
         })
     }
 

@@ -10,7 +10,7 @@ use phstring::{Material, NetworkBuilder, StoredEnergy, StringSpec, Vector};
 use toml::Spanned;
 
 use super::components::{Components, NamedNode, SpringComponent, StringComponent};
-use super::material::{CrossSection, mass_name};
+use super::material::{CrossSection, Longest, mass_name};
 use super::overrides::line_col;
 use super::refs::{Along, Nodes, known, label};
 use super::settings::BodyForce;
@@ -239,6 +239,7 @@ impl ScenarioFile {
             }
             let first_interior = b.n_nodes();
             let body_force = body.on_string(cs.rho_a);
+            self.string_scales(k, spec, &path, b, &cs, body)?;
             let first_element = total;
             let g = b
                 .string(
@@ -316,9 +317,10 @@ impl ScenarioFile {
                     b.position(prev).unwrap_or_else(Vector::zeros),
                     b.position(node).unwrap_or_else(Vector::zeros),
                 );
-                let length = (rb - ra).norm();
-                let l = length / per_span as f64 / prestretch;
-                let problem = if length == 0.0 {
+                let length = super::rounding::length(&(rb - ra));
+                let element = length / per_span as f64;
+                let l = element / prestretch;
+                let problem = if ra == rb {
                     Some(format!(
                         "is {here}, at the same position {} m as the path's previous node: the span between them has zero length",
                         nums(rb.as_slice())
@@ -326,6 +328,14 @@ impl ScenarioFile {
                 } else if !length.is_finite() {
                     Some(format!(
                         "is {here}: the length of the span to it overflows (the coordinates are too large)"
+                    ))
+                } else if element * element < f64::MIN_POSITIVE {
+                    Some(format!(
+                        "is {here}, {} m from the path's previous node: the span's elements ({per_span} of {} m) are too short for floating point, their squared length (in the strain C) underflows below {:.1e} m²; elements must be longer than {:.1e} m",
+                        num(length),
+                        num(element),
+                        f64::MIN_POSITIVE,
+                        f64::MIN_POSITIVE.sqrt()
                     ))
                 } else if !(l > 0.0 && l.is_finite()) {
                     Some(format!(
@@ -343,6 +353,54 @@ impl ScenarioFile {
             path.push(node);
         }
         Ok(path)
+    }
+
+    /// Refuses a string whose longest element is too heavy or has too much drag
+    /// ([`ScenarioFile::element_scales`]).
+    fn string_scales<const D: usize>(
+        &self,
+        k: usize,
+        spec: &super::spec::StringPathSpec,
+        path: &[usize],
+        b: &NetworkBuilder<D, Material>,
+        cs: &CrossSection,
+        body: &BodyForce<D>,
+    ) -> Result<(), ScenarioError> {
+        let per_span = *spec.elements.get_ref() as f64;
+        let prestretch = spec.prestretch.as_ref().map_or(1.0, |p| *p.get_ref());
+        // The longest span: (its index in the path, the reference element length).
+        let (span, l) = path
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| {
+                let at = |n| b.position(n).unwrap_or_else(Vector::zeros);
+                let d = super::rounding::length(&(at(w[1]) - at(w[0])));
+                (i + 1, d / per_span / prestretch)
+            })
+            .fold((1, 0.0), |m, x| if x.1 > m.1 { x } else { m });
+        let material = spec.material.get_ref();
+        // What sets ℓ: the prestretch if it lengthens the elements, else the span.
+        let key = match &spec.prestretch {
+            Some(p) if prestretch < 1.0 => (
+                format!("string.{k}.prestretch"),
+                p.span(),
+                format!("= {} ", num(prestretch)),
+            ),
+            _ => (
+                format!("string.{k}.path.{span}"),
+                spec.path.get_ref()[span].span(),
+                String::new(),
+            ),
+        };
+        let longest = Longest {
+            owner: format!("string \"{}\" (string.{k})", clip(spec.name.get_ref())),
+            l,
+            from: format!("span {span} of its path / elements / prestretch"),
+            key,
+        };
+        let mat_spec = self.scenario.materials.get(material).map(|m| m.get_ref());
+        let mat_key = format!("materials.{}", clip(material));
+        self.element_scales(&mat_key, mat_spec, cs, body, longest)
     }
 
     /// `[[spring]]`: between two different nodes, or from one node to a fixed point

@@ -159,6 +159,17 @@ pub(super) fn resolve_index(raw: i64, n_nodes: usize) -> Option<usize> {
     usize::try_from(node).ok().filter(|&n| n < n_nodes)
 }
 
+/// The INDEX of `"STRING:INDEX"`: ASCII digits with an optional leading `-`, nothing else
+/// (no blanks, no `+`: `"s1:+1"` or `"s1: 1"` may be a typo for another reference, and a
+/// node reference has one spelling).
+fn along_index(text: &str) -> Option<i64> {
+    let digits = text.strip_prefix('-').unwrap_or(text);
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    text.parse().ok()
+}
+
 /// Most names listed in a message about an unknown name.
 const LISTED: usize = 8;
 
@@ -247,9 +258,9 @@ impl ScenarioFile {
                     })
                 }),
                 Some((string, index)) => {
-                    let Ok(k) = index.trim().parse::<i64>() else {
+                    let Some(k) = along_index(index) else {
                         return Err(err(format!(
-                            "= \"{}\": after the ':' comes a node index along the string, e.g. \"{}:3\" or \"{}:-1\"",
+                            "= \"{}\": after the ':' comes a node index along the string, e.g. \"{}:3\" or \"{}:-1\" (digits with an optional leading '-', no blanks or '+')",
                             clip(name),
                             clip(string),
                             clip(string)
@@ -304,6 +315,20 @@ mod tests {
         assert_eq!(resolve_index(-8, 7), None);
         assert_eq!(resolve_index(i64::MIN, 7), None);
         assert_eq!(resolve_index(7, 7), None);
+    }
+
+    /// A node index along a string has one spelling: `"s1:+1"`, `"s1: 1"`, `"s1:1 "` and
+    /// `"s1:--1"` are refused, `"s1:1"`, `"s1:-1"` and `"s1:007"` are read.
+    #[test]
+    fn along_index_is_digits_with_an_optional_minus() {
+        assert_eq!(along_index("1"), Some(1));
+        assert_eq!(along_index("-1"), Some(-1));
+        assert_eq!(along_index("007"), Some(7));
+        for bad in ["+1", " 1", "1 ", "--1", "-", "", "1e2", "0x1", "١"] {
+            assert_eq!(along_index(bad), None, "{bad:?}");
+        }
+        // Too many digits for an i64: refused, not wrapped.
+        assert_eq!(along_index("99999999999999999999"), None);
     }
 
     #[test]

@@ -6,7 +6,7 @@
 use phstring::{Mesh, Problem, State, Vector};
 
 use super::components::{Components, StringComponent};
-use super::material::mass_name;
+use super::material::{Longest, mass_name};
 use super::refs::Nodes;
 use super::settings::BodyForce;
 use super::spec::{Geometry, MeshSpec};
@@ -99,27 +99,7 @@ impl ScenarioFile {
                 ),
             ));
         }
-        let seg: Vec<f64> = positions.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
-        if let Some(i) = seg.iter().position(|&l| !l.is_finite()) {
-            return Err(self.invalid(
-                "geometry",
-                geometry_span,
-                format!(
-                    "the length of element {i} (nodes {i} to {}) overflows: the coordinates are too large",
-                    i + 1
-                ),
-            ));
-        }
-        if let Some(i) = seg.iter().position(|&l| l <= 0.0) {
-            return Err(self.invalid(
-                "geometry",
-                geometry_span,
-                format!(
-                    "element {i} has zero initial length (nodes {i} and {} coincide)",
-                    i + 1
-                ),
-            ));
-        }
+        let seg = self.element_lengths(&positions, geometry_span.clone())?;
         let total: f64 = seg.iter().sum();
         if !total.is_finite() {
             return Err(self.invalid(
@@ -178,6 +158,53 @@ impl ScenarioFile {
         Ok((mesh, initial))
     }
 
+    /// The initial lengths [m] of the elements between consecutive `positions`, each finite,
+    /// nonzero and with a square that does not underflow; errors name `geometry` at `span`.
+    fn element_lengths<const D: usize>(
+        &self,
+        positions: &[Vector<D>],
+        span: std::ops::Range<usize>,
+    ) -> Result<Vec<f64>, ScenarioError> {
+        let seg: Vec<f64> = positions
+            .windows(2)
+            .map(|w| super::rounding::length(&(w[1] - w[0])))
+            .collect();
+        if let Some(i) = seg.iter().position(|&l| !l.is_finite()) {
+            return Err(self.invalid(
+                "geometry",
+                span.clone(),
+                format!(
+                    "the length of element {i} (nodes {i} to {}) overflows: the coordinates are too large",
+                    i + 1
+                ),
+            ));
+        }
+        if let Some(i) = seg.iter().position(|&l| l <= 0.0) {
+            return Err(self.invalid(
+                "geometry",
+                span.clone(),
+                format!(
+                    "element {i} has zero initial length (nodes {i} and {} coincide)",
+                    i + 1
+                ),
+            ));
+        }
+        if let Some(i) = seg.iter().position(|&l| l * l < f64::MIN_POSITIVE) {
+            return Err(self.invalid(
+                "geometry",
+                span.clone(),
+                format!(
+                    "element {i} (nodes {i} to {}) is {} m long, too short for floating point: its squared length (in the strain C) underflows below {:.1e} m²; elements must be longer than {:.1e} m",
+                    i + 1,
+                    num(seg[i]),
+                    f64::MIN_POSITIVE,
+                    f64::MIN_POSITIVE.sqrt()
+                ),
+            ));
+        }
+        Ok(seg)
+    }
+
     /// A single string: `[material]`, then `[geometry]` and `[mesh]`, with the body force
     /// `body`. Boundary conditions and point masses are added later.
     pub(super) fn single_string<'s, const D: usize>(
@@ -201,6 +228,28 @@ impl ScenarioFile {
         let (mesh, initial) =
             self.single_geometry::<D>(geometry.get_ref(), mesh_spec, &cs.material)?;
         let body_force = body.on_string(cs.rho_a);
+        let l = mesh.lengths().iter().copied().fold(0.0, f64::max);
+        let key = match &geometry.get_ref().length {
+            Some(len) => (
+                "geometry.length".to_string(),
+                len.span(),
+                format!("= {} ", num(*len.get_ref())),
+            ),
+            None => ("geometry".to_string(), geometry.span(), String::new()),
+        };
+        let longest = Longest {
+            owner: "the string".into(),
+            l,
+            from: "the geometry over mesh.elements".into(),
+            key,
+        };
+        self.element_scales(
+            "material",
+            Some(material_spec.get_ref()),
+            &cs,
+            body,
+            longest,
+        )?;
         let n_el = mesh.n_elements();
         let n_nodes = mesh.n_nodes();
         let components = Components {

@@ -51,7 +51,7 @@ fn taut_string_matches_the_discrete_spectrum() {
     for (n, count) in [(40usize, 79usize), (4000, 12)] {
         let (p, s, ea) = taut(n);
         let (sys, st) = PhSystem::new(p).unwrap();
-        let m = modes::modes(&sys, &st.r, count, SolverKind::Auto).unwrap();
+        let m = modes::modes(&sys, &st.r, count, SolverKind::Auto, None).unwrap();
         assert_eq!(m.method, if n == 40 { "dense" } else { "lanczos" });
         let l = 100.0 / n as f64;
         let mut want: Vec<(f64, Character)> = (1..n)
@@ -79,7 +79,7 @@ fn taut_string_converges_to_the_continuum() {
         .map(|&n| {
             let (p, s, _) = taut(n);
             let (sys, st) = PhSystem::new(p).unwrap();
-            let m = modes::modes(&sys, &st.r, 3, SolverKind::Auto).unwrap();
+            let m = modes::modes(&sys, &st.r, 3, SolverKind::Auto, None).unwrap();
             let exact = 3.0 * PI / 100.0 * (s / 1.2).sqrt();
             let third = m
                 .modes
@@ -125,7 +125,7 @@ fn hanging_chain_tends_to_the_bessel_limit() {
         };
         let eq = statics::solve(p.clone(), &StaticsParams::default(), None).unwrap();
         let (sys, _) = PhSystem::new(p).unwrap();
-        let m = modes::modes(&sys, &eq.state.r, 3, SolverKind::Auto).unwrap();
+        let m = modes::modes(&sys, &eq.state.r, 3, SolverKind::Auto, None).unwrap();
         let err: Vec<f64> = m
             .modes
             .iter()
@@ -162,7 +162,7 @@ fn a_run_from_a_mode_shape_oscillates_at_its_frequency() {
     let n = 20;
     let (p, _, _) = taut(n);
     let (sys, st) = PhSystem::new(p.clone()).unwrap();
-    let m = modes::modes(&sys, &st.r, 1, SolverKind::Auto).unwrap();
+    let m = modes::modes(&sys, &st.r, 1, SolverKind::Auto, None).unwrap();
     let mode = &m.modes[0];
     assert_eq!(mode.character, Character::Transverse);
     let w = mode.omega;
@@ -210,6 +210,6 @@ fn unstable_state_is_refused() {
     let (mut p, _, _) = taut(10);
     p.initial = State::straight(&p.mesh, Vector::<2>::zeros(), Vector::<2>::new(90.0, 0.0));
     let (sys, st) = PhSystem::new(p).unwrap();
-    let e = modes::modes(&sys, &st.r, 3, SolverKind::Auto).unwrap_err();
+    let e = modes::modes(&sys, &st.r, 3, SolverKind::Auto, None).unwrap_err();
     assert!(e.to_string().contains("not positive definite"), "{e}");
 }

@@ -88,7 +88,7 @@ struct Pulse {
 
 fn pulse(net: Network<2, Material>) -> Pulse {
     let (sys, st) = PhSystem::new(net).unwrap();
-    let modes = modes::modes(&sys, &st.r, usize::MAX, SolverKind::Auto)
+    let modes = modes::modes(&sys, &st.r, usize::MAX, SolverKind::Auto, None)
         .unwrap()
         .modes;
     let w1 = modes[0].omega;

@@ -381,3 +381,105 @@ fn failure_names_the_continuation_step() {
     }
     assert!(msg.contains("load step 1"), "{msg}");
 }
+
+/// A law that raises a stop flag at its `at`-th evaluation, as a Ctrl-C in the middle of a
+/// solve would, and counts the evaluations made after it.
+#[derive(Debug)]
+struct Tripwire {
+    law: Material,
+    calls: std::sync::atomic::AtomicUsize,
+    at: usize,
+    flag: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Tripwire {
+    fn tick(&self) {
+        use std::sync::atomic::Ordering;
+        if self.calls.fetch_add(1, Ordering::Relaxed) + 1 == self.at {
+            self.flag.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+impl phstring::StoredEnergy for Tripwire {
+    fn w(&self, c: f64) -> f64 {
+        self.tick();
+        self.law.w(c)
+    }
+    fn dw(&self, c: f64) -> f64 {
+        self.tick();
+        self.law.dw(c)
+    }
+    fn d2w(&self, c: f64) -> f64 {
+        self.tick();
+        self.law.d2w(c)
+    }
+    fn admissible(&self, c: f64) -> bool {
+        self.law.admissible(c)
+    }
+}
+
+/// A stop request in the middle of the equilibrium solve of a slack start (Newton at the
+/// full load fails, the load continuation fails, the pseudo-transient continuation finds
+/// it) ends the solve with `Interrupted` within a small part of the work, wherever it lands.
+#[test]
+fn stop_request_ends_the_continuation_promptly() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let (n, len, rho_a) = (40, 100.0, 1.0);
+    let problem = |at: usize, flag: &Arc<AtomicBool>| {
+        let p = hanging(
+            n,
+            len,
+            Material::tension_only_linear(1e8),
+            rho_a,
+            500.0,
+            Vector::<2>::new(1.0, 0.0),
+        );
+        Problem {
+            mesh: p.mesh,
+            initial: p.initial,
+            material: Tripwire {
+                law: p.material,
+                calls: AtomicUsize::new(0),
+                at,
+                flag: flag.clone(),
+            },
+            rho_a: p.rho_a,
+            body_force: p.body_force,
+            mass: p.mass,
+            boundary: p.boundary,
+            point_masses: p.point_masses,
+        }
+    };
+    // Without a stop: the law's evaluations of the whole solve.
+    let flag = Arc::new(AtomicBool::new(false));
+    let (sys, initial) = phstring::PhSystem::new(problem(usize::MAX, &flag)).unwrap();
+    let eq =
+        statics::solve_system(&sys, &initial.r, &StaticsParams::default(), Some(&flag)).unwrap();
+    assert!(
+        matches!(eq.path, StaticsPath::PseudoTransient { .. }),
+        "{:?}",
+        eq.path
+    );
+    let law = |sys: &phstring::PhSystem<2, Tripwire>| match &sys.groups()[0].law {
+        phstring::Law::String(m) => m.calls.load(Ordering::Relaxed),
+        phstring::Law::Spring(_) => unreachable!("a string"),
+    };
+    let total = law(&sys);
+    assert!(total > 10_000, "{total}");
+    for part in [0.05, 0.3, 0.6, 0.9] {
+        let at = (part * total as f64) as usize;
+        let flag = Arc::new(AtomicBool::new(false));
+        let (sys, initial) = phstring::PhSystem::new(problem(at, &flag)).unwrap();
+        let e = statics::solve_system(&sys, &initial.r, &StaticsParams::default(), Some(&flag))
+            .unwrap_err();
+        assert_eq!(e, StaticsError::Interrupted, "stop at {part} of the work");
+        let after = law(&sys) - at;
+        eprintln!("stop at {at} of {total} law evaluations: {after} after it");
+        assert!(
+            after < total / 500,
+            "stop at {part} of the work: {after} evaluations after it (of {total})"
+        );
+    }
+}
