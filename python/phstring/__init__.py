@@ -4,15 +4,18 @@ Units are SI (m, s, kg, N, J). `Scenario`, `Simulation` (stepping, inputs, ports
 checkpoints), `run`, `statics`, `modes` and `linearize` (scipy.sparse matrices).
 """
 
-from __future__ import annotations
+# Helpers are imported under private names: the package's namespace (`dir(phstring)`) is
+# its API and nothing else.
+import json as _json
+import os as _os
+from typing import Any as _Any
+from typing import Dict as _Dict
+from typing import Optional as _Optional
 
-import json
-import os
-from typing import Any, Dict, Optional
-
-import numpy as np
+import numpy as _np
 
 from ._phstring import Checkpoint, Scenario, ScenarioError, Simulation, StepError
+from ._phstring import __version__
 from ._phstring import linearize_raw as _linearize_raw
 from ._phstring import modes, statics
 from ._phstring import run as _run_in_process
@@ -29,6 +32,7 @@ __all__ = [
     "modes",
     "run",
     "statics",
+    "__version__",
 ]
 
 _ENERGY = {
@@ -51,7 +55,7 @@ class Result:
     `t_positions` [s] (every `output.stride` steps and the last); `summary`: `summary.json`
     as a dict when the run wrote a folder, else None."""
 
-    def __init__(self, arrays: Dict[str, Any], summary: Optional[dict]):
+    def __init__(self, arrays: _Dict[str, _Any], summary: _Optional[dict]):
         for key, value in arrays.items():
             setattr(self, key, value)
         self.summary = summary
@@ -60,7 +64,7 @@ class Result:
         return f"Result(steps={len(self.t) - 1}, t_end={self.t[-1]})"
 
 
-def run(scenario: Scenario, out: Optional[str] = None, progress: bool = False) -> Result:
+def run(scenario: Scenario, out: _Optional[str] = None, progress: bool = False) -> Result:
     """Runs `scenario` to its end time and returns a `Result`. With `out`, it runs exactly as
     `phstring run` into that folder (all outputs, plots, ParaView) and reads the arrays back
     from it; without, in-process, writing nothing. Either way the values are those of the
@@ -69,13 +73,13 @@ def run(scenario: Scenario, out: Optional[str] = None, progress: bool = False) -
     one-line progress display on standard error."""
     if out is None:
         return Result(_run_in_process(scenario, progress), None)
-    summary = json.loads(_run_to_folder(scenario, os.fspath(out), progress))
-    energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
-    arrays: Dict[str, Any] = {key: np.asarray(energy[col]) for key, col in _ENERGY.items()}
-    arrays["newton_iterations"] = arrays["newton_iterations"].astype(np.int64)
-    pos_file = os.path.join(out, "positions.csv")
-    if os.path.exists(pos_file):
-        pos = np.loadtxt(pos_file, delimiter=",", skiprows=1, ndmin=2)
+    summary = _json.loads(_run_to_folder(scenario, _os.fspath(out), progress))
+    energy = _np.genfromtxt(_os.path.join(out, "energy.csv"), delimiter=",", names=True)
+    arrays: _Dict[str, _Any] = {key: _np.asarray(energy[col]) for key, col in _ENERGY.items()}
+    arrays["newton_iterations"] = arrays["newton_iterations"].astype(_np.int64)
+    pos_file = _os.path.join(out, "positions.csv")
+    if _os.path.exists(pos_file):
+        pos = _np.loadtxt(pos_file, delimiter=",", skiprows=1, ndmin=2)
         nodes = int(pos[:, 1].max()) + 1
         frames = pos.shape[0] // nodes
         arrays["t_positions"] = pos[::nodes, 0]
@@ -83,7 +87,7 @@ def run(scenario: Scenario, out: Optional[str] = None, progress: bool = False) -
     return Result(arrays, summary)
 
 
-def linearize(scenario: Scenario, form: str = "reduced") -> Dict[str, Any]:
+def linearize(scenario: Scenario, form: str = "reduced") -> _Dict[str, _Any]:
     """The linear port-Hamiltonian model `E x' = (J - R) Q x + B u`, `y = B^T Q x` about the
     static equilibrium (docs/method.md §16), form "reduced" (x = (q, v)) or "full"
     (x = (r, v, C)): a dict with `E`, `J`, `R`, `Q`, `B` as scipy.sparse CSC matrices,
@@ -92,7 +96,7 @@ def linearize(scenario: Scenario, form: str = "reduced") -> Dict[str, Any]:
     import scipy.sparse
 
     raw = _linearize_raw(scenario, form)
-    out: Dict[str, Any] = {"states": raw["states"], "inputs": raw["inputs"]}
+    out: _Dict[str, _Any] = {"states": raw["states"], "inputs": raw["inputs"]}
     for name in "EJRQB":
         m = raw[name]
         out[name] = scipy.sparse.csc_matrix((m["data"], m["indices"], m["indptr"]), shape=m["shape"])

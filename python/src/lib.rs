@@ -739,5 +739,7 @@ fn _phstring(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Checkpoint>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioError>())?;
     m.add("StepError", m.py().get_type::<StepError>())?;
+    // The package version (python/Cargo.toml, the same as pyproject.toml's).
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -274,3 +274,19 @@ def test_simulation_starts_at_the_equilibrium_when_asked():
     assert sim.energies["kinetic"] == 0.0
     # The straight line between anchor and fairlead would be 134 m; the line sags.
     assert sim.r[:, 1].min() < -1.0
+
+
+def test_version_and_a_namespace_of_the_api_only():
+    """`phstring.__version__` is the package's version (pyproject.toml), and the package's
+    public names are exactly `__all__`: no helper modules (`os`, `json`, `np`) or typing
+    names leak into `dir(phstring)`."""
+    import re
+
+    text = (ROOT / "python" / "pyproject.toml").read_text()
+    declared = re.search(r'^version\s*=\s*"([^"]+)"', text, re.M).group(1)
+    assert phstring.__version__ == declared
+    names = set(dir(phstring))
+    for helper in ["os", "json", "np", "numpy", "Any", "Dict", "Optional", "annotations"]:
+        assert helper not in names, helper
+    public = {n for n in names if not n.startswith("_")}
+    assert public == set(phstring.__all__) - {"__version__"}
