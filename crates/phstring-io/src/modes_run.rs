@@ -43,7 +43,8 @@ pub enum ModesRunError {
 
 impl ModesRunError {
     /// Whether a stop request (Ctrl-C) ended it: in the equilibrium solve, the eigensolver
-    /// or between the ParaView frames (before `modes.csv` and `summary.json` are written).
+    /// or between the ParaView frames (then `modes.csv` is removed again, and `modes.pvd` and
+    /// `summary.json` are not written).
     pub fn is_interrupted(&self) -> bool {
         matches!(
             self,
@@ -96,7 +97,8 @@ pub fn fewer_modes(option: &str, asked: usize, free: usize, given: usize) -> Opt
 /// Solves the equilibrium of `file`, then its `count` lowest modes, and writes the outputs
 /// into `out` (which must exist). `stop`, when set, ends it between Newton iterations,
 /// Lanczos steps or ParaView frames ([`ModesRunError::is_interrupted`]); `modes.csv`,
-/// `modes.pvd` and `summary.json` are then not written.
+/// `modes.pvd` and `summary.json` are then not left behind (`modes.csv`, written before the
+/// frames so that a full disk keeps it, is removed again).
 pub fn modes(
     file: &ScenarioFile,
     count: usize,
@@ -172,12 +174,16 @@ fn modes_dim<const D: usize>(
             0.0
         }
     };
+    // The table first: on a full disk the frequencies are kept even when the frames fail.
+    write(out, "modes.csv", csv.as_bytes())?;
     let mut pvd = PvdWriter::new(&out.join("modes.pvd"));
     let zero = vec![[0.0; 3]; r.len()];
     let names = ["shape_x", "shape_y", "shape_z"];
     let mut snapshots = vec![(0.0, r.iter().map(plane).collect::<Vec<_>>())];
     for (i, m) in found.modes.iter().enumerate() {
         if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            // An interrupted run leaves no table that looks complete.
+            let _ = std::fs::remove_file(out.join("modes.csv"));
             return Err(ModesError::Interrupted.into());
         }
         let s = scale_of(m);
@@ -219,7 +225,6 @@ fn modes_dim<const D: usize>(
         }
     }
     pvd.write().map_err(OutputError::from)?;
-    write(out, "modes.csv", csv.as_bytes())?;
     let shape_scale = found.modes.first().map_or(0.0, scale_of);
     if D >= 2 {
         let topology = crate::output::system_topology(&sys);
