@@ -852,7 +852,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     let at_floor = if tolerant {
                         h <= floor * (1.0 + 1e-12)
                     } else {
-                        0.5 * self.h_cur < floor * (1.0 - 1e-12)
+                        // A floor that underflows to 0 is reached once h/2 does.
+                        0.5 * self.h_cur < floor * (1.0 - 1e-12) || 0.5 * self.h_cur == 0.0
                     };
                     if at_floor {
                         return Err(StepError::StepSizeTooSmall {

@@ -777,8 +777,9 @@ fn overflowing_length_is_not_reported_as_coinciding_nodes() {
     std::fs::write(&file, text).unwrap();
     let o = phstring(&["check", s(&file)]);
     let err = stderr(&o);
+    // Element 0 is 1.7e308 m long (its squared length overflows, but it is measured without
+    // squaring); element 1 spans 3.4e308 m, which overflows.
     assert!(
-        // Element 0 is 1.7e308 m long (finite); element 1, 3.4e308 m, overflows.
         err.contains("the length of element 1 (nodes 1 to 2) overflows"),
         "{err}"
     );

@@ -297,6 +297,35 @@ fn step_size_floor_is_absolute() {
     assert!(msg.contains("2^5"), "{msg}");
 }
 
+/// A `time.h` so small that its floor `h/2^max_halvings` underflows to 0 (5e-324 s, found by
+/// fuzzing networks): a failed step halved `h` to 0 and never reached the floor, so the step
+/// retried forever. It now ends with the step-size error.
+#[test]
+fn step_size_floor_that_underflows_ends_the_step() {
+    let rope = ROPES[6];
+    let params = StepParams {
+        h: 5e-324,
+        control: StepControl {
+            max_halvings: 4,
+            ..Default::default()
+        },
+        ..StepParams::default()
+    };
+    let mut sim =
+        Simulation::new(hanging(rope, Material::hyperelastic(rope.ea), 20), params).unwrap();
+    assert_eq!(sim.step_size_floor(), 0.0);
+    // In a thread, so that a regression fails the test instead of hanging it.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(sim.step().map(|r| r.h).map_err(|e| e.to_string()));
+    });
+    let result = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("the step did not end within 60 s");
+    let msg = result.expect_err("a step of 5e-324 s cannot converge");
+    assert!(msg.contains("step-size floor"), "{msg}");
+}
+
 /// Found while measuring memory (issue 10): a stiff rope lying straight at rest, with no load,
 /// has stresses of round-off size (`C = 1 ± ε`), and a stress can only change in steps of
 /// `EA/2 · ulp(C)`. The residual then cannot fall below about `EA · ε` per element, far above
