@@ -479,6 +479,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut state = state;
         let held = HeldVelocities::new(&sys, &mut state)?;
         let energies = sys.energies(&state);
+        if !energies.hamiltonian().is_finite() {
+            return Err(SetupError::DerivedNotFinite {
+                what: "initial energy with the prescribed motions' velocities at t = 0".into(),
+                value: energies.hamiltonian(),
+            });
+        }
         Ok(Self {
             newton_ws: NewtonWorkspace::new(&sys.mesh),
             sys,
@@ -1390,6 +1396,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let supplied = self.form_ports(t_mid, h);
         let before = self.energies;
         let balance_error = after.hamiltonian() - before.hamiltonian() - supplied + dissipated;
+        // Finite terms whose sum overflows (Ĥ or the supply beyond 1.8e308 J) end the step
+        // for every scheme, `mp` included.
+        if !balance_error.is_finite() {
+            std::mem::swap(&mut self.ports, &mut self.ports_prev);
+            return Err(StepError::NonFinite {
+                step: step_no,
+                t,
+                what: "energy",
+                node: self.non_finite_energy_node(),
+            });
+        }
         let supplied_magnitude = h.abs() * self.ports.iter().map(|p| p.power().abs()).sum::<f64>();
         // The work the strain-rounding floor of Newton's test may leave undone, as a scale
         // (its rounding is ε times this, docs/method.md eq. (9.6)).

@@ -250,3 +250,37 @@ fn a_heaved_support_reports_a_reaction_without_an_alternating_mode() {
     assert!(d2 < 0.5 * d1, "no convergence: {d1} N, then {d2} N");
     assert!(d2 < 1e-3 * scale, "R(h/2) − R(h/4) = {d2} N of {scale} N");
 }
+
+/// A motion far beyond floating point (found by fuzzing networks: a fairlead moving at
+/// 1e154 m/s under `mp`, which has no balance test): the setup refuses an initial energy that
+/// overflows, and no step is accepted with an energy or a supply that overflows.
+#[test]
+fn a_motion_whose_energy_overflows_is_refused_not_accepted() {
+    for (speed, scheme) in [
+        (1e154, phstring::Scheme::Midpoint),
+        (3e153, phstring::Scheme::Midpoint),
+        (3e153, phstring::Scheme::DiscreteGradient),
+    ] {
+        let mut problem = crane(10, 0.0);
+        problem.boundary.motions = vec![Motion::new(0, 0, move |t| speed * t)];
+        let params = StepParams {
+            h: 1e-3,
+            scheme,
+            ..StepParams::default()
+        };
+        match Simulation::new(problem, params) {
+            Err(e) => assert!(e.to_string().contains("initial energy"), "{e}"),
+            Ok(mut sim) => {
+                assert!(sim.energies().hamiltonian().is_finite());
+                for _ in 0..3 {
+                    match sim.step() {
+                        Ok(r) => {
+                            assert!(r.after.hamiltonian().is_finite() && r.supplied.is_finite())
+                        }
+                        Err(_) => break,
+                    }
+                }
+            }
+        }
+    }
+}
