@@ -273,7 +273,9 @@ def test_a_moving_support_from_the_master_follows_its_inputs_with_an_exact_balan
     speed, so the two agree as the same physics, not bit for bit (the FMU is the library
     driven by the same ramps bit for bit: crates/phstring-fmu/tests/fmu.rs)."""
     h = 0.005  # s: at 0.01 s the run halves a step, and a half step samples the heave's sine
-    sets = ["boundary.1.external=true", f"time.h={h}", "time.end=0.5", "fmu.nodes=[160]"]
+    # The heave without the example's build-up, so that it moves from the start.
+    sine = 'boundary.1.position=["120", "60 + 1.0 * sin(2*pi*t/10)"]'
+    sets = ["boundary.1.external=true", sine, f"time.h={h}", "time.end=0.5", "fmu.nodes=[160]"]
     fmu = build(tmp_path, ROOT / "examples" / "mooring_line.toml", "mooring", *sets)
     out = tmp_path / "run"
     args = [BIN, "run", str(ROOT / "examples" / "mooring_line.toml"), "--out", str(out), "--quiet",
