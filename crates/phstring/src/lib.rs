@@ -64,6 +64,7 @@
 //! ```
 
 pub mod accuracy;
+pub mod assembly;
 pub mod benchmarks;
 pub mod boundary;
 pub mod eigen;

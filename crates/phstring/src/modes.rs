@@ -11,9 +11,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use faer::Mat;
 use thiserror::Error;
 
+use crate::assembly::{free_dofs, mass_blocks, positive_definite, restrict, tangent_blocks};
 use crate::eigen::{self, EigenError, LanczosParams};
 use crate::error::{LinearSolveError, SetupError};
-use crate::linear::{free_dofs, mass_blocks, positive_definite, restrict, tangent_blocks};
 use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::system::{PhSystem, Vector};

@@ -1057,8 +1057,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 c: s.c,
             })?;
         // M a = −res on the free components; identity rows and columns elsewhere.
-        let mut m = crate::linear::mass_blocks(&self.sys);
-        crate::statics::mask_fixed(&self.sys, &mut m);
+        let mut m = crate::assembly::mass_blocks(&self.sys);
+        crate::assembly::mask_fixed(&self.sys, &mut m);
         for (r, free) in res.iter_mut().zip(&self.sys.free) {
             *r = Vector::from_fn(|k, _| if free[k] { -r[k] } else { 0.0 });
         }

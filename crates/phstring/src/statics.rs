@@ -26,8 +26,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nalgebra::SMatrix;
 use thiserror::Error;
 
+use crate::assembly::{element_tangent, mask_fixed, positive_definite, tangent_blocks};
 use crate::error::SetupError;
-use crate::linear::{positive_definite, tangent_blocks};
 use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonProblem, NewtonWorkspace};
@@ -317,52 +317,8 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
     }
 }
 
-/// Zeroes the rows and columns of fixed components and puts 1 on their diagonal.
-pub(crate) fn mask_fixed<const D: usize, M>(sys: &PhSystem<D, M>, j: &mut BlockJacobian<D>) {
-    let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
-        for k in 0..D {
-            for m in 0..D {
-                if !row[k] || !col[m] {
-                    blk[(k, m)] = 0.0;
-                }
-            }
-        }
-    };
-    for &i in &sys.constrained {
-        let fi = &sys.free[i];
-        mask(&mut j.diag[i], fi, fi);
-        for k in 0..D {
-            if !fi[k] {
-                j.diag[i][(k, k)] = 1.0;
-            }
-        }
-    }
-    for &e in &sys.constrained_elements {
-        let [a, b] = sys.mesh.elements()[e];
-        let (fa, fb) = (&sys.free[a], &sys.free[b]);
-        mask(&mut j.off[e][0], fa, fb);
-        mask(&mut j.off[e][1], fb, fa);
-    }
-}
-
 fn sq_sum<const D: usize>(v: &[Vector<D>]) -> f64 {
     v.iter().map(|f| f.norm_squared()).sum()
-}
-
-/// The tangent stiffness of one element, `∂(S r')/∂r_b = (S I + 4 W'' r' r'ᵀ)/l` [N/m], and
-/// its internal force `S r'` [N], at the positions `ra`, `rb`.
-#[inline]
-pub(crate) fn element_tangent<const D: usize, L: StoredEnergy>(
-    law: &L,
-    ra: &Vector<D>,
-    rb: &Vector<D>,
-    l: f64,
-) -> (f64, Vector<D>, SMatrix<f64, D, D>) {
-    let rp = (rb - ra) / l;
-    let c = rp.norm_squared();
-    let s = 2.0 * law.dw(c);
-    let g = (SMatrix::<f64, D, D>::identity() * s + rp * rp.transpose() * (4.0 * law.d2w(c))) / l;
-    (c, rp * s, g)
 }
 
 impl<const D: usize, M: StoredEnergy> StaticEquations<'_, D, M> {
