@@ -328,6 +328,360 @@ pub(crate) fn element_mass(mass: MassMatrix, rho_a: f64, l: f64) -> (f64, f64) {
     }
 }
 
+/// Checks that the groups cover the elements in order, each once, and each group's
+/// parameters (law, mass, damping, body force).
+fn check_groups<const D: usize, M: StoredEnergy>(
+    mesh: &Mesh,
+    groups: &[ElementGroup<D, M>],
+) -> Result<(), SetupError> {
+    let n_el = mesh.n_elements();
+    let mut next = 0;
+    for (g, grp) in groups.iter().enumerate() {
+        let (start, end) = (grp.elements.start, grp.elements.end);
+        if start != next || end <= start || end > n_el {
+            return Err(SetupError::GroupCoverage {
+                group: g,
+                start,
+                end,
+                expected: next,
+                n_elements: n_el,
+            });
+        }
+        next = end;
+        check_group(g, grp, groups.len())?;
+    }
+    if next != n_el {
+        return Err(SetupError::GroupCoverage {
+            group: groups.len(),
+            start: n_el,
+            end: n_el,
+            expected: next,
+            n_elements: n_el,
+        });
+    }
+    Ok(())
+}
+
+/// Checks the parameters of group `g` (of `n_groups`): its law's constants, its mass, its
+/// damping (and that the damping suits the law) and its body force.
+fn check_group<const D: usize, M: StoredEnergy>(
+    g: usize,
+    grp: &ElementGroup<D, M>,
+    n_groups: usize,
+) -> Result<(), SetupError> {
+    match grp.law {
+        Law::String(_) => {
+            if !(grp.rho_a > 0.0 && grp.rho_a.is_finite()) {
+                return Err(SetupError::NonPositive {
+                    what: "rho_a",
+                    index: (n_groups > 1).then_some(g),
+                    value: grp.rho_a,
+                });
+            }
+        }
+        Law::Spring(sp) => {
+            if grp.rho_a != 0.0 || grp.body_force.iter().any(|&x| x != 0.0) {
+                return Err(SetupError::MassiveSpring {
+                    group: g,
+                    name: grp.name.clone(),
+                });
+            }
+            // A spring of stiffness 0 and rest length 0 is allowed as the carrier of a
+            // dashpot (a rest length would restrict its strain to C > 0 for nothing).
+            let pure_dashpot = sp.k == 0.0 && sp.rest == 0.0 && grp.damping.dashpot > 0.0;
+            if !(pure_dashpot || sp.k > 0.0 && sp.k.is_finite()) {
+                return Err(SetupError::NonPositive {
+                    what: "spring stiffness k [N/m] of group",
+                    index: Some(g),
+                    value: sp.k,
+                });
+            }
+            if !(sp.rest >= 0.0 && sp.rest.is_finite()) {
+                return Err(SetupError::OutOfRange {
+                    what: "spring rest length [m]",
+                    value: sp.rest,
+                    range: "0 <= rest < infinity",
+                });
+            }
+        }
+    }
+    let d = &grp.damping;
+    for (what, value) in [
+        ("Kelvin-Voigt viscosity eta [N s]", d.kelvin_voigt),
+        ("drag coefficient [N s/m^2]", d.drag),
+        ("dashpot coefficient [N s/m]", d.dashpot),
+    ] {
+        if !(value >= 0.0 && value.is_finite()) {
+            return Err(SetupError::OutOfRange {
+                what,
+                value,
+                range: "0 <= value < infinity",
+            });
+        }
+    }
+    let is_string = matches!(grp.law, Law::String(_));
+    let misplaced = if is_string {
+        (d.dashpot != 0.0).then_some("dashpot (springs only; strings take kelvin_voigt or drag)")
+    } else if d.kelvin_voigt != 0.0 {
+        Some("Kelvin-Voigt viscosity (strings only; springs take a dashpot)")
+    } else {
+        (d.drag != 0.0).then_some("drag (strings only; springs take a dashpot)")
+    };
+    if let Some(what) = misplaced {
+        return Err(SetupError::MisplacedDamping {
+            group: g,
+            name: grp.name.clone(),
+            what,
+        });
+    }
+    for (i, x) in grp.body_force.iter().enumerate() {
+        if !x.is_finite() {
+            return Err(SetupError::NotFinite {
+                what: "body force component",
+                index: i,
+                value: *x,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Checks the initial state's sizes against the mesh, that its positions and velocities are
+/// finite and that every element's strain is in its law's domain.
+fn check_initial<const D: usize, M: StoredEnergy>(
+    mesh: &Mesh,
+    groups: &[ElementGroup<D, M>],
+    initial: &State<D>,
+) -> Result<(), SetupError> {
+    let n = mesh.n_nodes();
+    for (what, got) in [
+        ("positions", initial.r.len()),
+        ("velocities", initial.v.len()),
+    ] {
+        if got != n {
+            return Err(SetupError::StateSize {
+                what,
+                got,
+                expected: n,
+            });
+        }
+    }
+    if initial.c.len() != mesh.n_elements() {
+        return Err(SetupError::StateSize {
+            what: "strains",
+            got: initial.c.len(),
+            expected: mesh.n_elements(),
+        });
+    }
+    for (i, (r, v)) in initial.r.iter().zip(&initial.v).enumerate() {
+        if let Some(x) = r.iter().chain(v.iter()).find(|x| !x.is_finite()) {
+            return Err(SetupError::NotFinite {
+                what: "initial position/velocity of node",
+                index: i,
+                value: *x,
+            });
+        }
+    }
+    for grp in groups {
+        for e in grp.elements.clone() {
+            let c = initial.c[e];
+            if !grp.law.admissible(c) {
+                return Err(SetupError::InadmissibleStrain { element: e, c });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The free components per node of `n`: all but the fixed and the prescribed ones. Checks the
+/// node references of fixed conditions and motions and that each motion starts at the
+/// initial position.
+fn free_components<const D: usize>(
+    boundary: &Boundary<D>,
+    initial: &State<D>,
+    n: usize,
+) -> Result<Vec<[bool; D]>, SetupError> {
+    let mut free = vec![[true; D]; n];
+    for fx in &boundary.fixed {
+        if fx.node >= n {
+            return Err(SetupError::NodeOutOfRange {
+                what: "fixed condition",
+                node: fx.node,
+                n_nodes: n,
+            });
+        }
+        for k in 0..D {
+            free[fx.node][k] &= !fx.components[k];
+        }
+    }
+    for (k, m) in boundary.motions.iter().enumerate() {
+        if m.node >= n {
+            return Err(SetupError::NodeOutOfRange {
+                what: "prescribed motion",
+                node: m.node,
+                n_nodes: n,
+            });
+        }
+        if m.component >= D {
+            return Err(SetupError::NodeOutOfRange {
+                what: "prescribed motion (component)",
+                node: m.component,
+                n_nodes: D,
+            });
+        }
+        let (at_zero, initial) = ((m.position)(0.0), initial.r[m.node][m.component]);
+        // NaN (a signal undefined at 0) fails too.
+        let starts_there = (at_zero - initial).abs() <= 1e-9 * initial.abs().max(1.0);
+        if !starts_there {
+            return Err(SetupError::MotionStart {
+                index: k,
+                node: m.node,
+                component: m.component,
+                at_zero,
+                initial,
+            });
+        }
+        free[m.node][m.component] = false;
+    }
+    Ok(free)
+}
+
+/// Checks the node references of the loads and feedback ports (`n` nodes).
+fn check_port_nodes<const D: usize>(boundary: &Boundary<D>, n: usize) -> Result<(), SetupError> {
+    for load in &boundary.loads {
+        if load.node >= n {
+            return Err(SetupError::NodeOutOfRange {
+                what: "load",
+                node: load.node,
+                n_nodes: n,
+            });
+        }
+    }
+    for fb in &boundary.feedback {
+        if fb.node >= n {
+            return Err(SetupError::NodeOutOfRange {
+                what: "feedback port",
+                node: fb.node,
+                n_nodes: n,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The nodes with a fixed or prescribed component, and the elements touching them.
+fn constrained_sets<const D: usize>(mesh: &Mesh, free: &[[bool; D]]) -> (Vec<usize>, Vec<usize>) {
+    let is_constrained = |i: usize| free[i].iter().any(|f| !f);
+    let constrained: Vec<usize> = (0..free.len()).filter(|&i| is_constrained(i)).collect();
+    let constrained_elements: Vec<usize> = mesh
+        .elements()
+        .iter()
+        .enumerate()
+        .filter(|(_, [a, b])| is_constrained(*a) || is_constrained(*b))
+        .map(|(e, _)| e)
+        .collect();
+    (constrained, constrained_elements)
+}
+
+/// The strings' body forces lumped to the nodes, `F_b` [N] per node, and the lumped mass
+/// [kg] per node (to find free nodes without inertia).
+fn distributed_loads<const D: usize, M>(
+    mesh: &Mesh,
+    groups: &[ElementGroup<D, M>],
+) -> (Vec<Vector<D>>, Vec<f64>) {
+    let n = mesh.n_nodes();
+    let mut f_body = vec![Vector::<D>::zeros(); n];
+    // Lumped mass per node, to find free nodes without inertia.
+    let mut node_mass = vec![0.0; n];
+    for grp in groups {
+        let els = grp.elements.clone();
+        for (&[a, b], &l) in mesh.elements()[els.clone()]
+            .iter()
+            .zip(&mesh.lengths()[els])
+        {
+            f_body[a] += grp.body_force * (0.5 * l);
+            f_body[b] += grp.body_force * (0.5 * l);
+            node_mass[a] += grp.rho_a * l;
+            node_mass[b] += grp.rho_a * l;
+        }
+    }
+    (f_body, node_mass)
+}
+
+/// Checks the point masses, adds their weights to `f_body` and their masses to `node_mass`,
+/// and returns them as `(node, mass [kg])` sorted by node, several at one node added up.
+fn add_point_masses<const D: usize>(
+    point_masses: &[PointMass<D>],
+    f_body: &mut [Vector<D>],
+    node_mass: &mut [f64],
+) -> Result<Vec<(usize, f64)>, SetupError> {
+    let n = f_body.len();
+    let mut point_mass = Vec::with_capacity(point_masses.len());
+    for (k, pm) in point_masses.iter().enumerate() {
+        if pm.node >= n {
+            return Err(SetupError::NodeOutOfRange {
+                what: "point mass",
+                node: pm.node,
+                n_nodes: n,
+            });
+        }
+        if !(pm.mass > 0.0 && pm.mass.is_finite()) {
+            return Err(SetupError::NonPositive {
+                what: "point mass [kg]",
+                index: Some(k),
+                value: pm.mass,
+            });
+        }
+        if let Some(x) = pm.weight.iter().find(|x| !x.is_finite()) {
+            return Err(SetupError::NotFinite {
+                what: "weight of point mass",
+                index: k,
+                value: *x,
+            });
+        }
+        f_body[pm.node] += pm.weight;
+        node_mass[pm.node] += pm.mass;
+        point_mass.push((pm.node, pm.mass));
+    }
+    // Several masses at one node add up.
+    point_mass.sort_by_key(|&(node, _)| node);
+    point_mass.dedup_by(|later, first| {
+        let same = later.0 == first.0;
+        if same {
+            first.1 += later.1;
+        }
+        same
+    });
+    Ok(point_mass)
+}
+
+/// Refuses nodal body forces that are not finite or whose squares overflow.
+fn check_body_forces<const D: usize>(f_body: &[Vector<D>]) -> Result<(), SetupError> {
+    if let Some((i, f)) = f_body
+        .iter()
+        .enumerate()
+        .find(|(_, f)| !f.iter().all(|x| x.is_finite()))
+    {
+        return Err(SetupError::DerivedNotFinite {
+            what: format!("body force at node {i}"),
+            value: f
+                .iter()
+                .copied()
+                .find(|x| !x.is_finite())
+                .unwrap_or(f64::NAN),
+        });
+    }
+    // The residual's force scale squares the forces: they must stay below about 1e154 N.
+    let f2: f64 = f_body.iter().map(|f| f.norm_squared()).sum();
+    if !f2.is_finite() {
+        return Err(SetupError::DerivedNotFinite {
+            what: "sum of the squared nodal body forces".into(),
+            value: f2,
+        });
+    }
+    Ok(())
+}
+
 impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// Validates `problem` (a single [`Problem`] or a [`Network`]) and precomputes `F_b`.
     /// Returns the system and the initial state.
@@ -339,211 +693,12 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             point_masses,
             initial,
         } = problem.into();
-        let n_el = mesh.n_elements();
-        let mut next = 0;
-        for (g, grp) in groups.iter().enumerate() {
-            let (start, end) = (grp.elements.start, grp.elements.end);
-            if start != next || end <= start || end > n_el {
-                return Err(SetupError::GroupCoverage {
-                    group: g,
-                    start,
-                    end,
-                    expected: next,
-                    n_elements: n_el,
-                });
-            }
-            next = end;
-            match grp.law {
-                Law::String(_) => {
-                    if !(grp.rho_a > 0.0 && grp.rho_a.is_finite()) {
-                        return Err(SetupError::NonPositive {
-                            what: "rho_a",
-                            index: (groups.len() > 1).then_some(g),
-                            value: grp.rho_a,
-                        });
-                    }
-                }
-                Law::Spring(sp) => {
-                    if grp.rho_a != 0.0 || grp.body_force.iter().any(|&x| x != 0.0) {
-                        return Err(SetupError::MassiveSpring {
-                            group: g,
-                            name: grp.name.clone(),
-                        });
-                    }
-                    // A spring of stiffness 0 and rest length 0 is allowed as the carrier of a
-                    // dashpot (a rest length would restrict its strain to C > 0 for nothing).
-                    let pure_dashpot = sp.k == 0.0 && sp.rest == 0.0 && grp.damping.dashpot > 0.0;
-                    if !(pure_dashpot || sp.k > 0.0 && sp.k.is_finite()) {
-                        return Err(SetupError::NonPositive {
-                            what: "spring stiffness k [N/m] of group",
-                            index: Some(g),
-                            value: sp.k,
-                        });
-                    }
-                    if !(sp.rest >= 0.0 && sp.rest.is_finite()) {
-                        return Err(SetupError::OutOfRange {
-                            what: "spring rest length [m]",
-                            value: sp.rest,
-                            range: "0 <= rest < infinity",
-                        });
-                    }
-                }
-            }
-            let d = &grp.damping;
-            for (what, value) in [
-                ("Kelvin-Voigt viscosity eta [N s]", d.kelvin_voigt),
-                ("drag coefficient [N s/m^2]", d.drag),
-                ("dashpot coefficient [N s/m]", d.dashpot),
-            ] {
-                if !(value >= 0.0 && value.is_finite()) {
-                    return Err(SetupError::OutOfRange {
-                        what,
-                        value,
-                        range: "0 <= value < infinity",
-                    });
-                }
-            }
-            let is_string = matches!(grp.law, Law::String(_));
-            let misplaced = if is_string {
-                (d.dashpot != 0.0)
-                    .then_some("dashpot (springs only; strings take kelvin_voigt or drag)")
-            } else if d.kelvin_voigt != 0.0 {
-                Some("Kelvin-Voigt viscosity (strings only; springs take a dashpot)")
-            } else {
-                (d.drag != 0.0).then_some("drag (strings only; springs take a dashpot)")
-            };
-            if let Some(what) = misplaced {
-                return Err(SetupError::MisplacedDamping {
-                    group: g,
-                    name: grp.name.clone(),
-                    what,
-                });
-            }
-            for (i, x) in grp.body_force.iter().enumerate() {
-                if !x.is_finite() {
-                    return Err(SetupError::NotFinite {
-                        what: "body force component",
-                        index: i,
-                        value: *x,
-                    });
-                }
-            }
-        }
-        if next != n_el {
-            return Err(SetupError::GroupCoverage {
-                group: groups.len(),
-                start: n_el,
-                end: n_el,
-                expected: next,
-                n_elements: n_el,
-            });
-        }
+        check_groups(&mesh, &groups)?;
+        check_initial(&mesh, &groups, &initial)?;
         let n = mesh.n_nodes();
-        for (what, got) in [
-            ("positions", initial.r.len()),
-            ("velocities", initial.v.len()),
-        ] {
-            if got != n {
-                return Err(SetupError::StateSize {
-                    what,
-                    got,
-                    expected: n,
-                });
-            }
-        }
-        if initial.c.len() != mesh.n_elements() {
-            return Err(SetupError::StateSize {
-                what: "strains",
-                got: initial.c.len(),
-                expected: mesh.n_elements(),
-            });
-        }
-        for (i, (r, v)) in initial.r.iter().zip(&initial.v).enumerate() {
-            if let Some(x) = r.iter().chain(v.iter()).find(|x| !x.is_finite()) {
-                return Err(SetupError::NotFinite {
-                    what: "initial position/velocity of node",
-                    index: i,
-                    value: *x,
-                });
-            }
-        }
-        for grp in &groups {
-            for e in grp.elements.clone() {
-                let c = initial.c[e];
-                if !grp.law.admissible(c) {
-                    return Err(SetupError::InadmissibleStrain { element: e, c });
-                }
-            }
-        }
-        let mut free = vec![[true; D]; n];
-        for fx in &boundary.fixed {
-            if fx.node >= n {
-                return Err(SetupError::NodeOutOfRange {
-                    what: "fixed condition",
-                    node: fx.node,
-                    n_nodes: n,
-                });
-            }
-            for k in 0..D {
-                free[fx.node][k] &= !fx.components[k];
-            }
-        }
-        for (k, m) in boundary.motions.iter().enumerate() {
-            if m.node >= n {
-                return Err(SetupError::NodeOutOfRange {
-                    what: "prescribed motion",
-                    node: m.node,
-                    n_nodes: n,
-                });
-            }
-            if m.component >= D {
-                return Err(SetupError::NodeOutOfRange {
-                    what: "prescribed motion (component)",
-                    node: m.component,
-                    n_nodes: D,
-                });
-            }
-            let (at_zero, initial) = ((m.position)(0.0), initial.r[m.node][m.component]);
-            // NaN (a signal undefined at 0) fails too.
-            let starts_there = (at_zero - initial).abs() <= 1e-9 * initial.abs().max(1.0);
-            if !starts_there {
-                return Err(SetupError::MotionStart {
-                    index: k,
-                    node: m.node,
-                    component: m.component,
-                    at_zero,
-                    initial,
-                });
-            }
-            free[m.node][m.component] = false;
-        }
-        for load in &boundary.loads {
-            if load.node >= n {
-                return Err(SetupError::NodeOutOfRange {
-                    what: "load",
-                    node: load.node,
-                    n_nodes: n,
-                });
-            }
-        }
-        for fb in &boundary.feedback {
-            if fb.node >= n {
-                return Err(SetupError::NodeOutOfRange {
-                    what: "feedback port",
-                    node: fb.node,
-                    n_nodes: n,
-                });
-            }
-        }
-        let is_constrained = |i: usize| free[i].iter().any(|f| !f);
-        let constrained = (0..n).filter(|&i| is_constrained(i)).collect();
-        let constrained_elements = mesh
-            .elements()
-            .iter()
-            .enumerate()
-            .filter(|(_, [a, b])| is_constrained(*a) || is_constrained(*b))
-            .map(|(e, _)| e)
-            .collect();
+        let free = free_components(&boundary, &initial, n)?;
+        check_port_nodes(&boundary, n)?;
+        let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
         for (e, &l) in mesh.lengths().iter().enumerate() {
             if !l.is_finite() {
                 return Err(SetupError::DerivedNotFinite {
@@ -552,79 +707,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 });
             }
         }
-        let mut f_body = vec![Vector::<D>::zeros(); n];
-        // Lumped mass per node, to find free nodes without inertia.
-        let mut node_mass = vec![0.0; n];
-        for grp in &groups {
-            let els = grp.elements.clone();
-            for (&[a, b], &l) in mesh.elements()[els.clone()]
-                .iter()
-                .zip(&mesh.lengths()[els])
-            {
-                f_body[a] += grp.body_force * (0.5 * l);
-                f_body[b] += grp.body_force * (0.5 * l);
-                node_mass[a] += grp.rho_a * l;
-                node_mass[b] += grp.rho_a * l;
-            }
-        }
-        let mut point_mass = Vec::with_capacity(point_masses.len());
-        for (k, pm) in point_masses.iter().enumerate() {
-            if pm.node >= n {
-                return Err(SetupError::NodeOutOfRange {
-                    what: "point mass",
-                    node: pm.node,
-                    n_nodes: n,
-                });
-            }
-            if !(pm.mass > 0.0 && pm.mass.is_finite()) {
-                return Err(SetupError::NonPositive {
-                    what: "point mass [kg]",
-                    index: Some(k),
-                    value: pm.mass,
-                });
-            }
-            if let Some(x) = pm.weight.iter().find(|x| !x.is_finite()) {
-                return Err(SetupError::NotFinite {
-                    what: "weight of point mass",
-                    index: k,
-                    value: *x,
-                });
-            }
-            f_body[pm.node] += pm.weight;
-            node_mass[pm.node] += pm.mass;
-            point_mass.push((pm.node, pm.mass));
-        }
-        // Several masses at one node add up.
-        point_mass.sort_by_key(|&(node, _)| node);
-        point_mass.dedup_by(|later, first| {
-            let same = later.0 == first.0;
-            if same {
-                first.1 += later.1;
-            }
-            same
-        });
-        if let Some((i, f)) = f_body
-            .iter()
-            .enumerate()
-            .find(|(_, f)| !f.iter().all(|x| x.is_finite()))
-        {
-            return Err(SetupError::DerivedNotFinite {
-                what: format!("body force at node {i}"),
-                value: f
-                    .iter()
-                    .copied()
-                    .find(|x| !x.is_finite())
-                    .unwrap_or(f64::NAN),
-            });
-        }
-        // The residual's force scale squares the forces: they must stay below about 1e154 N.
-        let f2: f64 = f_body.iter().map(|f| f.norm_squared()).sum();
-        if !f2.is_finite() {
-            return Err(SetupError::DerivedNotFinite {
-                what: "sum of the squared nodal body forces".into(),
-                value: f2,
-            });
-        }
+        let (mut f_body, mut node_mass) = distributed_loads(&mesh, &groups);
+        let point_mass = add_point_masses(&point_masses, &mut f_body, &mut node_mass)?;
+        check_body_forces(&f_body)?;
         if let Some(node) = (0..n).find(|&i| free[i].iter().any(|&f| f) && node_mass[i] <= 0.0) {
             return Err(SetupError::MasslessNode { node });
         }
@@ -638,7 +723,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             constrained_elements,
             point_mass,
         };
-        let en = sys.energies(&initial);
+        sys.check_initial_energies(&initial)?;
+        Ok((sys, initial))
+    }
+
+    /// Refuses an initial state whose energies are not finite.
+    fn check_initial_energies(&self, initial: &State<D>) -> Result<(), SetupError> {
+        let en = self.energies(initial);
         for (what, value) in [
             ("initial kinetic energy", en.kinetic),
             ("initial internal energy", en.internal),
@@ -652,7 +743,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 });
             }
         }
-        Ok((sys, initial))
+        Ok(())
     }
 
     /// The mesh.
