@@ -6,10 +6,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::boundary::{PortKind, PortSample};
 use crate::error::{SetupError, StepError};
-use crate::integrator::{Scheme, StepEquations, element_step};
+use crate::integrator::{Scheme, StepEquations, StrainError, element_step};
 use crate::linsolve::{LinearSolver, SolverKind, make_solver};
 use crate::material::StoredEnergy;
-use crate::newton::{self, NewtonError, NewtonParams, NewtonWorkspace};
+use crate::newton::{self, NewtonError, NewtonParams, NewtonStats, NewtonWorkspace};
 use crate::observe::{
     BALANCE_RTOL, Observer, RunSummary, Settle, SettleWatch, Settled, StepReport,
 };
@@ -1183,9 +1183,53 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         t_next: f64,
         step_no: usize,
     ) -> Result<StepReport, StepError> {
+        let at = StepAt {
+            step: step_no,
+            t,
+            h,
+            t_next,
+        };
         let t_mid = t + 0.5 * h;
+        self.apply_loads(&at)?;
+        self.predict(&at)?;
+        let (stats, dissipated) = self.solve_increment(&at)?;
+        self.check_new_state(&at)?;
+        let after = self.energies_after(&at)?;
+        self.ports_prev.clone_from(&self.ports);
+        let supplied = self.form_ports(t_mid, h);
+        let before = self.energies;
+        let (balance_error, energy_scale) =
+            self.check_balance(&at, &stats, before, after, supplied, dissipated)?;
+        self.commit(h, after, supplied, dissipated);
+        Ok(StepReport {
+            step: step_no,
+            t: t_next,
+            h,
+            newton_iterations: stats.iterations,
+            backtracks: stats.backtracks,
+            local_iterations: stats.local_iterations,
+            local_node_iterations: stats.local_node_iterations,
+            rejected_iterations: 0,
+            rejected_local_node_iterations: 0,
+            rejected: 0,
+            residual: stats.residual,
+            tolerance: stats.tolerance,
+            force_scale: stats.force_scale,
+            at_roundoff: stats.at_roundoff,
+            before,
+            after,
+            supplied,
+            dissipated,
+            balance_error,
+            energy_scale,
+        })
+    }
 
-        // External forces F_b + F_N(t_{n+½}); load ports get their inputs here.
+    /// External forces `F_b + F_N(t_{n+½})` into `f_ext`, with the load ports' inputs; a load
+    /// or a feedback law that is not finite at the start of the step fails it.
+    fn apply_loads(&mut self, at: &StepAt) -> Result<(), StepError> {
+        let (step_no, t) = (at.step, at.t);
+        let t_mid = t + 0.5 * at.h;
         self.f_ext.copy_from_slice(&self.sys.f_body);
         for (port, load) in self.ports.iter_mut().zip(&self.sys.boundary.loads) {
             let f = (load.force)(t_mid);
@@ -1214,7 +1258,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 });
             }
         }
-        // Predictor on free components.
+        Ok(())
+    }
+
+    /// The predictor of the increment `Δ` on the free components, and the known increments
+    /// of the prescribed motions (Newton holds them: their rows are the reactions).
+    fn predict(&mut self, at: &StepAt) -> Result<(), StepError> {
+        let (step_no, t, h, t_next) = (at.step, at.t, at.h, at.t_next);
         let (acc_w, mid) = match self.params.predictor {
             Predictor::Velocity => (0.0, false),
             Predictor::Acceleration => (0.5 * h * h, false),
@@ -1249,6 +1299,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
             self.x[m.node][m.component] = target - self.state.r[m.node][m.component];
         }
+        Ok(())
+    }
+
+    /// Newton on the step's residual from the predicted increment; returns its statistics
+    /// and the energy dissipated over the step [J].
+    fn solve_increment(&mut self, at: &StepAt) -> Result<(NewtonStats, f64), StepError> {
+        let (h, t_mid) = (at.h, at.t + 0.5 * at.h);
         let mut eqs = StepEquations::new(
             &self.sys,
             self.params.scheme,
@@ -1271,13 +1328,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         } else {
             0.0
         };
+        let stats = result.map_err(|e| self.newton_failure(e, at))?;
+        Ok((stats, dissipated))
+    }
+
+    /// The step error of a failed Newton solve.
+    fn newton_failure(&self, e: NewtonError<StrainError>, at: &StepAt) -> StepError {
+        let (step_no, t, t_next) = (at.step, at.t, at.t_next);
         let worst_node = || {
             let res = self.newton_ws.residual();
             (0..res.len())
                 .max_by(|&i, &j| res[i].norm_squared().total_cmp(&res[j].norm_squared()))
                 .unwrap_or(0)
         };
-        let stats = result.map_err(|e| match e {
+        match e {
             NewtonError::Eval(s) => StepError::InvalidStrain {
                 step: step_no,
                 t,
@@ -1320,8 +1384,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 force_scale: s.force_scale,
                 iterations: s.iterations,
             },
-        })?;
+        }
+    }
 
+    /// Checks that the solved step's state is finite, forms its strains into `c_next` and
+    /// the velocities the prescribed motions hold at its end, before anything is overwritten
+    /// (a failed step leaves the state untouched).
+    fn check_new_state(&mut self, at: &StepAt) -> Result<(), StepError> {
+        let (step_no, t, h, t_next) = (at.step, at.t, at.h, at.t_next);
         // The new state must be finite before anything is overwritten, so that a failed step
         // leaves the state untouched.
         let two_over_h = 2.0 / h;
@@ -1357,7 +1427,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             );
             self.c_next[e] = self.state.c[e] + dc;
         }
-        let inv_h = 1.0 / h;
         // The velocities the prescribed motions hold at the step's end.
         for (k, m) in self.sys.boundary.motions.iter().enumerate() {
             let v = m.velocity(t_next);
@@ -1371,8 +1440,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
             self.held.velocity[k] = v;
         }
-        // The energies of the new state, with r and v formed as the update below forms them
-        // (bit-identical to `energies` of the updated state).
+        Ok(())
+    }
+
+    /// The energies of the new state, with `r` and `v` formed as the update forms them
+    /// (bit-identical to `energies` of the updated state); fails where one is not finite.
+    fn energies_after(&self, at: &StepAt) -> Result<Energies, StepError> {
+        let (step_no, t) = (at.step, at.t);
+        let inv_h = 1.0 / at.h;
         let after = {
             let (r0, v0, c, x) = (&self.state.r, &self.state.v, &self.c_next, &self.x);
             let (held, motions) = (&self.held, &self.sys.boundary.motions);
@@ -1392,9 +1467,22 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
-        self.ports_prev.clone_from(&self.ports);
-        let supplied = self.form_ports(t_mid, h);
-        let before = self.energies;
+        Ok(after)
+    }
+
+    /// The step's balance error and energy scale [J]; an exact scheme's step that misses the
+    /// bound (docs/method.md eq. (9.6)), or any step whose balance overflows, fails, with the
+    /// ports put back.
+    fn check_balance(
+        &mut self,
+        at: &StepAt,
+        stats: &NewtonStats,
+        before: Energies,
+        after: Energies,
+        supplied: f64,
+        dissipated: f64,
+    ) -> Result<(f64, f64), StepError> {
+        let (step_no, t, h, t_next) = (at.step, at.t, at.h, at.t_next);
         let balance_error = after.hamiltonian() - before.hamiltonian() - supplied + dissipated;
         // Finite terms whose sum overflows (Ĥ or the supply beyond 1.8e308 J) end the step
         // for every scheme, `mp` included.
@@ -1432,6 +1520,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 force_scale: stats.force_scale,
             });
         }
+        Ok((balance_error, energy_scale))
+    }
+
+    /// Commits the solved step: strains, positions, velocities (the prescribed ones held),
+    /// the predictor's history, energies and energy totals.
+    fn commit(&mut self, h: f64, after: Energies, supplied: f64, dissipated: f64) {
+        let inv_h = 1.0 / h;
         std::mem::swap(&mut self.state.c, &mut self.c_next);
         for ((((r, v), a), vm), x) in self
             .state
@@ -1455,28 +1550,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.energies = after;
         self.supplied_total += supplied;
         self.dissipated_total += dissipated;
-        Ok(StepReport {
-            step: step_no,
-            t: t_next,
-            h,
-            newton_iterations: stats.iterations,
-            backtracks: stats.backtracks,
-            local_iterations: stats.local_iterations,
-            local_node_iterations: stats.local_node_iterations,
-            rejected_iterations: 0,
-            rejected_local_node_iterations: 0,
-            rejected: 0,
-            residual: stats.residual,
-            tolerance: stats.tolerance,
-            force_scale: stats.force_scale,
-            at_roundoff: stats.at_roundoff,
-            before,
-            after,
-            supplied,
-            dissipated,
-            balance_error,
-            energy_scale,
-        })
     }
 
     /// Forms the port samples of the step just solved (before the state is updated: the
@@ -1597,4 +1670,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         observer.on_end(self);
         Ok(summary)
     }
+}
+
+/// Where a step is: its number, start time [s], size [s] (negative for the backward
+/// sub-step of `dg4`) and end time [s].
+struct StepAt {
+    step: usize,
+    t: f64,
+    h: f64,
+    t_next: f64,
 }
