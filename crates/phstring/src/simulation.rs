@@ -736,10 +736,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
 
     /// Like [`Self::step`], but shortens the step so as not to pass `t_end` [s].
     pub fn step_until(&mut self, t_end: f64) -> Result<StepReport, StepError> {
-        let mut halvings = 0;
-        let mut rejected_here = 0;
-        let (mut rejected_its, mut rejected_local) = (0, 0);
-        let floor = self.step_size_floor();
+        let mut tries = Retries::default();
         let tolerant = self.params.control.error_control();
         let composed = self.params.scheme == Scheme::DiscreteGradient4;
         if tolerant && !composed && self.acc_history.points.is_empty() {
@@ -767,126 +764,164 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 self.backup = Some(b);
             }
             match self.try_step(h, t_next) {
-                Ok(mut report) => {
-                    if tolerant {
-                        let (err, embedded_iterations) = match self.step_error(t, h) {
-                            Ok(e) => e,
-                            Err(e) => {
-                                // A stop request during the embedded solve: the step is
-                                // undone, nothing is counted.
-                                self.undo_step(&report);
-                                return Err(e);
-                            }
-                        };
-                        // The embedded solve is part of the step's work.
-                        report.newton_iterations += embedded_iterations;
-                        self.total_newton += embedded_iterations;
-                        // The local error is O(h³), the error per unit step O(h²).
-                        let p = 1;
-                        // step_error maps NaN to infinity.
-                        if err > 1.0 && h > floor * (1.0 + 1e-12) {
-                            // Rejected for accuracy: back to the state before the step.
-                            self.undo_step(&report);
-                            rejected_its += report.newton_iterations;
-                            rejected_local += report.local_node_iterations;
-                            rejected_here += 1;
-                            self.rejected += 1;
-                            let cut = crate::accuracy::reject_factor(err, p);
-                            self.set_step_size((h * cut).max(floor));
-                            continue;
-                        }
-                        self.over_tolerance += usize::from(err > 1.0); // at the floor
-                        let tau = t + 0.5 * h;
-                        if !composed {
-                            self.acc_history.push(tau, &self.acc);
-                        }
-                        let grow = crate::accuracy::accept_factor(err, self.err_prev, p);
-                        // Finite, also for a step accepted at the floor with err = ∞.
-                        self.err_prev = err.clamp(1e-10, 1e4);
-                        report.rejected = rejected_here;
-                        report.rejected_iterations = rejected_its;
-                        report.rejected_local_node_iterations = rejected_local;
-                        self.h_min_used = self.h_min_used.min(h);
-                        // After a rejection in this step, no growth (Hairer–Wanner's facmax = 1);
-                        // a step clipped to t_end does not grow the unclipped size.
-                        let grow = if rejected_here > 0 {
-                            grow.min(1.0)
-                        } else {
-                            grow
-                        };
-                        let next = if t_next.is_some() {
-                            self.h_cur * grow.min(1.0)
-                        } else {
-                            h * grow
-                        };
-                        let next = next.min(self.params.h).max(floor);
-                        self.t_base = report.t;
-                        self.k = 0;
-                        self.h_cur = next;
+                Ok(report) if tolerant => {
+                    if let Some(report) = self.judge_accuracy(report, t, h, t_next, &mut tries)? {
                         return Ok(report);
                     }
-                    report.rejected = rejected_here;
-                    report.rejected_iterations = rejected_its;
-                    report.rejected_local_node_iterations = rejected_local;
-                    if t_next.is_some() {
-                        self.t_base = t_end;
-                        self.k = 0;
-                    } else {
-                        self.k += 1;
-                    }
-                    self.h_min_used = self.h_min_used.min(h);
-                    let c = self.params.control;
-                    // dg4 makes three solves per step.
-                    let solves = if composed { 3 } else { 1 };
-                    let easy = report.newton_iterations <= c.easy_iterations * solves
-                        && report.backtracks == 0;
-                    self.easy_streak = if easy { self.easy_streak + 1 } else { 0 };
-                    if c.adaptive && self.easy_streak >= c.grow_after && self.h_cur < self.params.h
-                    {
-                        self.set_step_size((2.0 * self.h_cur).min(self.params.h));
-                        self.easy_streak = 0;
-                    }
-                    return Ok(report);
                 }
-                Err(e) => {
-                    let c = self.params.control;
-                    if !c.adaptive || !e.is_recoverable() {
-                        return Err(e);
-                    }
-                    // The floor is absolute: without error control h_cur is always
-                    // time.h / 2^k; with it, the step tried is halved down to the floor.
-                    let at_floor = if tolerant {
-                        h <= floor * (1.0 + 1e-12)
-                    } else {
-                        // A floor that underflows to 0 is reached once h/2 does.
-                        0.5 * self.h_cur < floor * (1.0 - 1e-12) || 0.5 * self.h_cur == 0.0
-                    };
-                    if at_floor {
-                        return Err(StepError::StepSizeTooSmall {
-                            step: self.step + 1,
-                            t,
-                            h,
-                            floor,
-                            max_halvings: c.max_halvings,
-                            halvings,
-                            last: Box::new(e),
-                        });
-                    }
-                    let spent = self.newton_ws.last_stats();
-                    rejected_its += spent.iterations;
-                    rejected_local += spent.local_node_iterations;
-                    halvings += 1;
-                    rejected_here += 1;
-                    self.rejected += 1;
-                    self.easy_streak = 0;
-                    if tolerant {
-                        self.set_step_size((0.5 * h).max(floor));
-                    } else {
-                        self.set_step_size(0.5 * self.h_cur);
-                    }
+                Ok(mut report) => {
+                    tries.mark(&mut report);
+                    return Ok(self.accept_fixed(report, h, t_next, t_end));
                 }
+                Err(e) => self.after_failure(e, t, h, &mut tries)?,
             }
         }
+    }
+
+    /// With error control: accepts the step of `report` (from `t` by `h`, clipped to
+    /// `t_next`) and sets the next step size, or undoes it and shrinks the step when its
+    /// error estimate exceeds the tolerance (`None`).
+    fn judge_accuracy(
+        &mut self,
+        mut report: StepReport,
+        t: f64,
+        h: f64,
+        t_next: Option<f64>,
+        tries: &mut Retries,
+    ) -> Result<Option<StepReport>, StepError> {
+        let floor = self.step_size_floor();
+        let composed = self.params.scheme == Scheme::DiscreteGradient4;
+        let (err, embedded_iterations) = match self.step_error(t, h) {
+            Ok(e) => e,
+            Err(e) => {
+                // A stop request during the embedded solve: the step is
+                // undone, nothing is counted.
+                self.undo_step(&report);
+                return Err(e);
+            }
+        };
+        // The embedded solve is part of the step's work.
+        report.newton_iterations += embedded_iterations;
+        self.total_newton += embedded_iterations;
+        // The local error is O(h³), the error per unit step O(h²).
+        let p = 1;
+        // step_error maps NaN to infinity.
+        if err > 1.0 && h > floor * (1.0 + 1e-12) {
+            // Rejected for accuracy: back to the state before the step.
+            self.undo_step(&report);
+            tries.iterations += report.newton_iterations;
+            tries.local += report.local_node_iterations;
+            tries.rejected += 1;
+            self.rejected += 1;
+            let cut = crate::accuracy::reject_factor(err, p);
+            self.set_step_size((h * cut).max(floor));
+            return Ok(None);
+        }
+        self.over_tolerance += usize::from(err > 1.0); // at the floor
+        let tau = t + 0.5 * h;
+        if !composed {
+            self.acc_history.push(tau, &self.acc);
+        }
+        let grow = crate::accuracy::accept_factor(err, self.err_prev, p);
+        // Finite, also for a step accepted at the floor with err = ∞.
+        self.err_prev = err.clamp(1e-10, 1e4);
+        tries.mark(&mut report);
+        self.h_min_used = self.h_min_used.min(h);
+        // After a rejection in this step, no growth (Hairer–Wanner's facmax = 1);
+        // a step clipped to t_end does not grow the unclipped size.
+        let grow = if tries.rejected > 0 {
+            grow.min(1.0)
+        } else {
+            grow
+        };
+        let next = if t_next.is_some() {
+            self.h_cur * grow.min(1.0)
+        } else {
+            h * grow
+        };
+        let next = next.min(self.params.h).max(floor);
+        self.t_base = report.t;
+        self.k = 0;
+        self.h_cur = next;
+        Ok(Some(report))
+    }
+
+    /// Without error control: accepts the step of `report` (by `h`, clipped to `t_next`
+    /// at `t_end`), advances the time base and grows the step after easy steps.
+    fn accept_fixed(
+        &mut self,
+        report: StepReport,
+        h: f64,
+        t_next: Option<f64>,
+        t_end: f64,
+    ) -> StepReport {
+        let composed = self.params.scheme == Scheme::DiscreteGradient4;
+        if t_next.is_some() {
+            self.t_base = t_end;
+            self.k = 0;
+        } else {
+            self.k += 1;
+        }
+        self.h_min_used = self.h_min_used.min(h);
+        let c = self.params.control;
+        // dg4 makes three solves per step.
+        let solves = if composed { 3 } else { 1 };
+        let easy = report.newton_iterations <= c.easy_iterations * solves && report.backtracks == 0;
+        self.easy_streak = if easy { self.easy_streak + 1 } else { 0 };
+        if c.adaptive && self.easy_streak >= c.grow_after && self.h_cur < self.params.h {
+            self.set_step_size((2.0 * self.h_cur).min(self.params.h));
+            self.easy_streak = 0;
+        }
+        report
+    }
+
+    /// After a failed try from `t` by `h`: halves the step (counting the work spent) when
+    /// the failure is recoverable and the floor is not reached, or returns the failure.
+    fn after_failure(
+        &mut self,
+        e: StepError,
+        t: f64,
+        h: f64,
+        tries: &mut Retries,
+    ) -> Result<(), StepError> {
+        let floor = self.step_size_floor();
+        let tolerant = self.params.control.error_control();
+        let c = self.params.control;
+        if !c.adaptive || !e.is_recoverable() {
+            return Err(e);
+        }
+        // The floor is absolute: without error control h_cur is always
+        // time.h / 2^k; with it, the step tried is halved down to the floor.
+        let at_floor = if tolerant {
+            h <= floor * (1.0 + 1e-12)
+        } else {
+            // A floor that underflows to 0 is reached once h/2 does.
+            0.5 * self.h_cur < floor * (1.0 - 1e-12) || 0.5 * self.h_cur == 0.0
+        };
+        if at_floor {
+            return Err(StepError::StepSizeTooSmall {
+                step: self.step + 1,
+                t,
+                h,
+                floor,
+                max_halvings: c.max_halvings,
+                halvings: tries.halvings,
+                last: Box::new(e),
+            });
+        }
+        let spent = self.newton_ws.last_stats();
+        tries.iterations += spent.iterations;
+        tries.local += spent.local_node_iterations;
+        tries.halvings += 1;
+        tries.rejected += 1;
+        self.rejected += 1;
+        self.easy_streak = 0;
+        if tolerant {
+            self.set_step_size((0.5 * h).max(floor));
+        } else {
+            self.set_step_size(0.5 * self.h_cur);
+        }
+        Ok(())
     }
 
     /// Puts back the state before the step of `report` (in the backup) and undoes its
@@ -1679,4 +1714,23 @@ struct StepAt {
     t: f64,
     h: f64,
     t_next: f64,
+}
+
+/// The retries of one step so far: halvings after failures, rejections (failures and
+/// accuracy rejections) and the Newton work they spent.
+#[derive(Default)]
+struct Retries {
+    halvings: u32,
+    rejected: usize,
+    iterations: usize,
+    local: usize,
+}
+
+impl Retries {
+    /// Records the retries in the accepted step's report.
+    fn mark(&self, report: &mut StepReport) {
+        report.rejected = self.rejected;
+        report.rejected_iterations = self.iterations;
+        report.rejected_local_node_iterations = self.local;
+    }
 }
