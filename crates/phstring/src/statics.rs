@@ -475,9 +475,9 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         }
     }
     let n = sys.mesh.n_nodes();
-    let mut solver = make_solver::<D>(params.solver, &sys.mesh)?;
-    let mut ws = NewtonWorkspace::<D>::new(&sys.mesh);
-    let mut eq = StaticEquations {
+    let solver = make_solver::<D>(params.solver, &sys.mesh)?;
+    let ws = NewtonWorkspace::<D>::new(&sys.mesh);
+    let eq = StaticEquations {
         sys,
         r0: r_start,
         f_ext: &f,
@@ -491,168 +491,28 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         scale: 0.0,
         strain_scale: 0.0,
     };
-    let mut iterations = 0;
-    let mut u = vec![Vector::<D>::zeros(); n];
-
-    // Path 1: Newton at the full load.
-    let newton_msg = match solve_rescaled(
-        &mut eq,
-        &mut u,
-        &mut ws,
-        solver.as_mut(),
-        &params.newton,
+    let mut s = Search {
+        eq,
+        u: vec![Vector::<D>::zeros(); n],
+        ws,
+        solver,
+        params,
         stop,
-    ) {
-        Ok(st) => {
-            iterations += st.iterations;
-            let found = finish(
-                sys,
-                r_start,
-                &u,
-                &mut eq,
-                st,
-                StaticsPath::Newton,
-                iterations,
-            );
-            if found.stable {
-                return Ok(found);
-            }
-            UNSTABLE.to_string()
-        }
-        Err(e) => {
-            iterations += ws.last_stats().iterations;
-            if matches!(e, NewtonError::Interrupted(_)) {
-                return Err(StaticsError::Interrupted);
-            }
-            describe(&e)
-        }
+        iterations: 0,
     };
-
-    // Path 2: load continuation.
-    let (mut lambda, mut dl, mut steps) = (0.0f64, 0.25f64, 0usize);
-    let mut u_ok = vec![Vector::<D>::zeros(); n];
-    u.iter_mut().for_each(|x| *x = Vector::zeros());
-    let mut cont_msg = String::new();
-    let mut failed_step = 0;
-    let mut attempts = 0;
-    while attempts < params.max_load_steps {
-        // Newton checks it too, but not when a step fails at once (a strain off its domain).
-        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            return Err(StaticsError::Interrupted);
-        }
-        attempts += 1;
-        let target = (lambda + dl).min(1.0);
-        eq.lambda = target;
-        match solve_rescaled(
-            &mut eq,
-            &mut u,
-            &mut ws,
-            solver.as_mut(),
-            &params.newton,
-            stop,
-        ) {
-            Ok(st) => {
-                iterations += st.iterations;
-                steps += 1;
-                lambda = target;
-                cont_msg.clear();
-                u_ok.copy_from_slice(&u);
-                if lambda >= 1.0 {
-                    let path = StaticsPath::LoadContinuation { steps };
-                    let found = finish(sys, r_start, &u, &mut eq, st, path, iterations);
-                    if found.stable {
-                        return Ok(found);
-                    }
-                    cont_msg = UNSTABLE.to_string();
-                    failed_step = steps;
-                    break;
-                }
-                if st.iterations <= 4 {
-                    dl *= 2.0;
-                }
-            }
-            Err(e) => {
-                iterations += ws.last_stats().iterations;
-                if matches!(e, NewtonError::Interrupted(_)) {
-                    return Err(StaticsError::Interrupted);
-                }
-                cont_msg = describe(&e);
-                failed_step = steps + 1;
-                u.copy_from_slice(&u_ok);
-                dl *= 0.25;
-                if dl < 1e-6 {
-                    break;
-                }
-            }
-        }
-    }
-    if cont_msg.is_empty() {
-        cont_msg = format!("{} load steps were not enough", params.max_load_steps);
-        failed_step = steps + 1;
-    }
-
-    // Path 3: pseudo-transient continuation at the full load from the start, first with
-    // the strings' compression released (slack instead: a string whose start is longer than
-    // its hanging shape falls into it instead of snapping through), then with the law as is.
-    eq.lambda = 1.0;
-    eq.jac_shift = 0.0;
-    let mu0 = initial_shift(sys, r_start, &f);
-    let mut pseudo_steps = 0;
-    let mut pseudo_msg = String::new();
-    for release in [true, false] {
-        u.iter_mut().for_each(|x| *x = Vector::zeros());
-        eq.release = release;
-        let end = pseudo_transient(
-            &mut eq,
-            &mut u,
-            (&mut ws, solver.as_mut()),
-            params,
-            mu0,
-            stop,
-            &mut iterations,
-        );
-        eq.release = false;
-        let (steps, st) = match end {
-            Ok(x) => x,
-            Err(PseudoEnd::Interrupted) => return Err(StaticsError::Interrupted),
-            Err(PseudoEnd::Failed(steps, msg)) => {
-                pseudo_steps += steps;
-                pseudo_msg = msg;
-                continue;
-            }
-        };
-        pseudo_steps += steps;
-        let path = StaticsPath::PseudoTransient {
-            steps: pseudo_steps,
-        };
-        if !release {
-            return Ok(finish(sys, r_start, &u, &mut eq, st, path, iterations));
-        }
-        // The slack equilibrium; now Newton with the law as is from there.
-        let solved = solve_rescaled(
-            &mut eq,
-            &mut u,
-            &mut ws,
-            solver.as_mut(),
-            &params.newton,
-            stop,
-        );
-        iterations += match &solved {
-            Ok(st) => st.iterations,
-            Err(_) => ws.last_stats().iterations,
-        };
-        match solved {
-            Ok(st2) => {
-                let found = finish(sys, r_start, &u, &mut eq, st2, path, iterations);
-                if found.stable {
-                    return Ok(found);
-                }
-                pseudo_msg = UNSTABLE.into();
-            }
-            Err(NewtonError::Interrupted(_)) => return Err(StaticsError::Interrupted),
-            Err(e) => pseudo_msg = describe(&e),
-        }
-    }
+    let newton_msg = match newton_path(&mut s)? {
+        Ok(found) => return Ok(found),
+        Err(msg) => msg,
+    };
+    let (lambda, failed_step, cont_msg) = match continuation_path(&mut s)? {
+        Ok(found) => return Ok(found),
+        Err(end) => end,
+    };
+    let (pseudo_steps, pseudo_msg) = match pseudo_transient_path(&mut s, &f)? {
+        Ok(found) => return Ok(found),
+        Err(end) => end,
+    };
+    let u = s.u;
     let (element, c_max) = largest_strain(sys, r_start, &u);
     let hint = if free_motions.is_empty() {
         String::new()
@@ -677,6 +537,215 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         element,
         hint,
     })))
+}
+
+/// The workspace the three paths of [`solve_without_feedback`] share: the equations, the
+/// displacement `u` [m] from the start, Newton's workspace and solver, the parameters, the
+/// stop request and the Newton iterations spent so far.
+struct Search<'a, 's, const D: usize, M> {
+    eq: StaticEquations<'a, D, M>,
+    u: Vec<Vector<D>>,
+    ws: NewtonWorkspace<D>,
+    solver: Box<dyn crate::linsolve::LinearSolver<D>>,
+    params: &'a StaticsParams,
+    stop: Option<&'s AtomicBool>,
+    iterations: usize,
+}
+
+/// The end of a search path: the equilibrium found, or what the path leaves for the message
+/// and the next path (`T`); an interruption is the error.
+type PathEnd<const D: usize, T> = Result<Result<Equilibrium<D>, T>, StaticsError>;
+
+/// Path 1: Newton at the full load from the start. Fails with its message.
+fn newton_path<const D: usize, M: StoredEnergy>(
+    s: &mut Search<'_, '_, D, M>,
+) -> PathEnd<D, String> {
+    let (sys, r_start) = (s.eq.sys, s.eq.r0);
+    let msg = match solve_rescaled(
+        &mut s.eq,
+        &mut s.u,
+        &mut s.ws,
+        s.solver.as_mut(),
+        &s.params.newton,
+        s.stop,
+    ) {
+        Ok(st) => {
+            s.iterations += st.iterations;
+            let found = finish(
+                sys,
+                r_start,
+                &s.u,
+                &mut s.eq,
+                st,
+                StaticsPath::Newton,
+                s.iterations,
+            );
+            if found.stable {
+                return Ok(Ok(found));
+            }
+            UNSTABLE.to_string()
+        }
+        Err(e) => {
+            s.iterations += s.ws.last_stats().iterations;
+            if matches!(e, NewtonError::Interrupted(_)) {
+                return Err(StaticsError::Interrupted);
+            }
+            describe(&e)
+        }
+    };
+    Ok(Err(msg))
+}
+
+/// Path 2: load continuation from the start, the load factor stepped from 0 to 1. Fails
+/// with the last load factor reached, the load step that failed and its message.
+fn continuation_path<const D: usize, M: StoredEnergy>(
+    s: &mut Search<'_, '_, D, M>,
+) -> PathEnd<D, (f64, usize, String)> {
+    let (sys, r_start) = (s.eq.sys, s.eq.r0);
+    let n = s.u.len();
+    let (mut lambda, mut dl, mut steps) = (0.0f64, 0.25f64, 0usize);
+    let mut u_ok = vec![Vector::<D>::zeros(); n];
+    s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+    let mut cont_msg = String::new();
+    let mut failed_step = 0;
+    let mut attempts = 0;
+    while attempts < s.params.max_load_steps {
+        // Newton checks it too, but not when a step fails at once (a strain off its domain).
+        if s.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Err(StaticsError::Interrupted);
+        }
+        attempts += 1;
+        let target = (lambda + dl).min(1.0);
+        s.eq.lambda = target;
+        match solve_rescaled(
+            &mut s.eq,
+            &mut s.u,
+            &mut s.ws,
+            s.solver.as_mut(),
+            &s.params.newton,
+            s.stop,
+        ) {
+            Ok(st) => {
+                s.iterations += st.iterations;
+                steps += 1;
+                lambda = target;
+                cont_msg.clear();
+                u_ok.copy_from_slice(&s.u);
+                if lambda >= 1.0 {
+                    let path = StaticsPath::LoadContinuation { steps };
+                    let found = finish(sys, r_start, &s.u, &mut s.eq, st, path, s.iterations);
+                    if found.stable {
+                        return Ok(Ok(found));
+                    }
+                    cont_msg = UNSTABLE.to_string();
+                    failed_step = steps;
+                    break;
+                }
+                if st.iterations <= 4 {
+                    dl *= 2.0;
+                }
+            }
+            Err(e) => {
+                s.iterations += s.ws.last_stats().iterations;
+                if matches!(e, NewtonError::Interrupted(_)) {
+                    return Err(StaticsError::Interrupted);
+                }
+                cont_msg = describe(&e);
+                failed_step = steps + 1;
+                s.u.copy_from_slice(&u_ok);
+                dl *= 0.25;
+                if dl < 1e-6 {
+                    break;
+                }
+            }
+        }
+    }
+    if cont_msg.is_empty() {
+        cont_msg = format!("{} load steps were not enough", s.params.max_load_steps);
+        failed_step = steps + 1;
+    }
+
+    Ok(Err((lambda, failed_step, cont_msg)))
+}
+
+/// Path 3: pseudo-transient continuation at the full load `f` [N] from the start, first with
+/// compression released, then with the law as is. Fails with its steps and message.
+fn pseudo_transient_path<const D: usize, M: StoredEnergy>(
+    s: &mut Search<'_, '_, D, M>,
+    f: &[Vector<D>],
+) -> PathEnd<D, (usize, String)> {
+    let (sys, r_start) = (s.eq.sys, s.eq.r0);
+    // Path 3: pseudo-transient continuation at the full load from the start, first with
+    // the strings' compression released (slack instead: a string whose start is longer than
+    // its hanging shape falls into it instead of snapping through), then with the law as is.
+    s.eq.lambda = 1.0;
+    s.eq.jac_shift = 0.0;
+    let mu0 = initial_shift(sys, r_start, f);
+    let mut pseudo_steps = 0;
+    let mut pseudo_msg = String::new();
+    for release in [true, false] {
+        s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+        s.eq.release = release;
+        let end = pseudo_transient(
+            &mut s.eq,
+            &mut s.u,
+            (&mut s.ws, s.solver.as_mut()),
+            s.params,
+            mu0,
+            s.stop,
+            &mut s.iterations,
+        );
+        s.eq.release = false;
+        let (steps, st) = match end {
+            Ok(x) => x,
+            Err(PseudoEnd::Interrupted) => return Err(StaticsError::Interrupted),
+            Err(PseudoEnd::Failed(steps, msg)) => {
+                pseudo_steps += steps;
+                pseudo_msg = msg;
+                continue;
+            }
+        };
+        pseudo_steps += steps;
+        let path = StaticsPath::PseudoTransient {
+            steps: pseudo_steps,
+        };
+        if !release {
+            return Ok(Ok(finish(
+                sys,
+                r_start,
+                &s.u,
+                &mut s.eq,
+                st,
+                path,
+                s.iterations,
+            )));
+        }
+        // The slack equilibrium; now Newton with the law as is from there.
+        let solved = solve_rescaled(
+            &mut s.eq,
+            &mut s.u,
+            &mut s.ws,
+            s.solver.as_mut(),
+            &s.params.newton,
+            s.stop,
+        );
+        s.iterations += match &solved {
+            Ok(st) => st.iterations,
+            Err(_) => s.ws.last_stats().iterations,
+        };
+        match solved {
+            Ok(st2) => {
+                let found = finish(sys, r_start, &s.u, &mut s.eq, st2, path, s.iterations);
+                if found.stable {
+                    return Ok(Ok(found));
+                }
+                pseudo_msg = UNSTABLE.into();
+            }
+            Err(NewtonError::Interrupted(_)) => return Err(StaticsError::Interrupted),
+            Err(e) => pseudo_msg = describe(&e),
+        }
+    }
+    Ok(Err((pseudo_steps, pseudo_msg)))
 }
 
 /// Newton's method on the static equations, in rounds of at most [`ROUND_ITER`] iterations
