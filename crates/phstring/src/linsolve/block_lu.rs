@@ -462,6 +462,132 @@ fn factor_dense<const D: usize>(
     factor_dense(a, ld, off + w1 * D * (ld + 1), p2).map_err(|k| k + w1)
 }
 
+/// The supernodes of the column structures `col_ptr`/`row_idx` of `n` block columns (a
+/// column continues the supernode of the one before if `struct(j − 1) = {j} ∪ struct(j)`),
+/// the supernode of each column, the supernodes' rows below their columns, and the length of
+/// the factor's storage.
+fn supernodes<const D: usize>(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> (Vec<Supernode>, Vec<usize>, Vec<usize>, usize) {
+    let count = |j: usize| col_ptr[j + 1] - col_ptr[j];
+    let mut supernodes: Vec<Supernode> = Vec::new();
+    let mut supernode_of = vec![0; n];
+    for j in 0..n {
+        let continues =
+            j > 0 && count(j - 1) == count(j) + 1 && row_idx.get(col_ptr[j - 1]) == Some(&j);
+        match supernodes.last_mut() {
+            Some(sn) if continues => sn.width += 1,
+            _ => supernodes.push(Supernode {
+                first: j,
+                width: 1,
+                rows: 0,
+                height: 0,
+                fac: 0,
+                update: 0,
+                children: [0, 0],
+                rel: 0,
+                k: 0,
+                segs: [0, 0],
+            }),
+        }
+        supernode_of[j] = supernodes.len() - 1;
+    }
+    let mut rows = Vec::new();
+    let mut fac_len = 0;
+    for sn in &mut supernodes {
+        let last = sn.first + sn.width - 1;
+        sn.rows = rows.len();
+        rows.extend_from_slice(&row_idx[col_ptr[last]..col_ptr[last + 1]]);
+        sn.height = rows.len() - sn.rows;
+        sn.fac = fac_len;
+        fac_len += sn.len::<D>();
+    }
+    (supernodes, supernode_of, rows, fac_len)
+}
+
+/// The supernodal elimination tree (the parent holds the first row below): each supernode's
+/// children as `children[child_ptr[s]..child_ptr[s + 1]]`.
+fn elimination_tree(
+    supernodes: &[Supernode],
+    supernode_of: &[usize],
+    rows: &[usize],
+) -> (Vec<usize>, Vec<usize>) {
+    let ns = supernodes.len();
+    let parent = |sn: &Supernode| (sn.height > 0).then(|| supernode_of[rows[sn.rows]]);
+    let mut child_ptr = vec![0usize; ns + 1];
+    for sn in supernodes {
+        if let Some(p) = parent(sn) {
+            child_ptr[p + 1] += 1;
+        }
+    }
+    for s in 0..ns {
+        child_ptr[s + 1] += child_ptr[s];
+    }
+    let mut fill = child_ptr.clone();
+    let mut children = vec![0; child_ptr[ns]];
+    for (s, sn) in supernodes.iter().enumerate() {
+        if let Some(p) = parent(sn) {
+            children[fill[p]] = s;
+            fill[p] += 1;
+        }
+    }
+    (child_ptr, children)
+}
+
+/// The positions of each supernode's rows below among its parent's rows (`rel`), in runs
+/// (`segments`); records each supernode's children, offsets and the count of its rows that
+/// fall in the parent's columns.
+fn relative_rows(
+    supernodes: &mut [Supernode],
+    supernode_of: &[usize],
+    rows: &[usize],
+    child_ptr: &[usize],
+    n: usize,
+) -> (Vec<usize>, Vec<Segment>) {
+    let ns = supernodes.len();
+    let parent = |sn: &Supernode| (sn.height > 0).then(|| supernode_of[rows[sn.rows]]);
+    let mut position = vec![usize::MAX; n];
+    let mut rel = Vec::new();
+    let mut segments: Vec<Segment> = Vec::new();
+    for s in 0..ns {
+        supernodes[s].children = [child_ptr[s], child_ptr[s + 1]];
+        let sn = supernodes[s];
+        let Some(p) = parent(&sn) else { continue };
+        let t = supernodes[p];
+        let t_rows =
+            (t.first..t.first + t.width).chain(rows[t.rows..t.rows + t.height].iter().copied());
+        for (q, i) in t_rows.clone().enumerate() {
+            position[i] = q;
+        }
+        let seg0 = segments.len();
+        let rel0 = rel.len();
+        for (r, &i) in rows[sn.rows..sn.rows + sn.height].iter().enumerate() {
+            let q = position[i];
+            assert!(q != usize::MAX, "update outside the symbolic pattern");
+            rel.push(q);
+            match segments[seg0..].last_mut() {
+                Some(g) if g.p0 + (r - g.r0) == q && q != t.width => g.r1 = r + 1,
+                _ => segments.push(Segment {
+                    r0: r,
+                    r1: r + 1,
+                    p0: q,
+                }),
+            }
+        }
+        for i in t_rows {
+            position[i] = usize::MAX;
+        }
+        let k = rel[rel0..].iter().take_while(|&&q| q < t.width).count();
+        let sn = &mut supernodes[s];
+        sn.rel = rel0;
+        sn.k = k;
+        sn.segs = [seg0, segments.len()];
+    }
+    (rel, segments)
+}
+
 impl<const D: usize> BlockLu<D> {
     /// Analyses the pattern of `n` diagonal blocks and the blocks `(a, b)` and `(b, a)` of
     /// every pair in `pairs` (pairs with `a == b` add nothing).
@@ -474,101 +600,13 @@ impl<const D: usize> BlockLu<D> {
         }
         let (col_ptr, row_idx) = column_structures(&aptr, &aidx, &perm, &inv_perm);
         let count = |j: usize| col_ptr[j + 1] - col_ptr[j];
-        // Column j continues the supernode of j − 1 if struct(j − 1) = {j} ∪ struct(j).
-        let mut supernodes: Vec<Supernode> = Vec::new();
-        let mut supernode_of = vec![0; n];
-        for j in 0..n {
-            let continues =
-                j > 0 && count(j - 1) == count(j) + 1 && row_idx.get(col_ptr[j - 1]) == Some(&j);
-            match supernodes.last_mut() {
-                Some(sn) if continues => sn.width += 1,
-                _ => supernodes.push(Supernode {
-                    first: j,
-                    width: 1,
-                    rows: 0,
-                    height: 0,
-                    fac: 0,
-                    update: 0,
-                    children: [0, 0],
-                    rel: 0,
-                    k: 0,
-                    segs: [0, 0],
-                }),
-            }
-            supernode_of[j] = supernodes.len() - 1;
-        }
-        let mut rows = Vec::new();
-        let mut fac_len = 0;
-        for sn in &mut supernodes {
-            let last = sn.first + sn.width - 1;
-            sn.rows = rows.len();
-            rows.extend_from_slice(&row_idx[col_ptr[last]..col_ptr[last + 1]]);
-            sn.height = rows.len() - sn.rows;
-            sn.fac = fac_len;
-            fac_len += sn.len::<D>();
-        }
-        let ns = supernodes.len();
+        let (mut supernodes, supernode_of, rows, fac_len) = supernodes::<D>(n, &col_ptr, &row_idx);
         let max_height = supernodes.iter().map(|s| s.height).max().unwrap_or(0);
-        // Supernodal elimination tree: the parent holds the first row below.
-        let parent = |sn: &Supernode| (sn.height > 0).then(|| supernode_of[rows[sn.rows]]);
-        let mut child_ptr = vec![0usize; ns + 1];
-        for sn in &supernodes {
-            if let Some(p) = parent(sn) {
-                child_ptr[p + 1] += 1;
-            }
-        }
-        for s in 0..ns {
-            child_ptr[s + 1] += child_ptr[s];
-        }
-        let mut fill = child_ptr.clone();
-        let mut children = vec![0; child_ptr[ns]];
-        for (s, sn) in supernodes.iter().enumerate() {
-            if let Some(p) = parent(sn) {
-                children[fill[p]] = s;
-                fill[p] += 1;
-            }
-        }
-        // Positions of each supernode's rows below among its parent's rows, in runs.
-        let mut position = vec![usize::MAX; n];
-        let mut rel = Vec::new();
-        let mut segments: Vec<Segment> = Vec::new();
-        for s in 0..ns {
-            supernodes[s].children = [child_ptr[s], child_ptr[s + 1]];
-            let sn = supernodes[s];
-            let Some(p) = parent(&sn) else { continue };
-            let t = supernodes[p];
-            let t_rows =
-                (t.first..t.first + t.width).chain(rows[t.rows..t.rows + t.height].iter().copied());
-            for (q, i) in t_rows.clone().enumerate() {
-                position[i] = q;
-            }
-            let seg0 = segments.len();
-            let rel0 = rel.len();
-            for (r, &i) in rows[sn.rows..sn.rows + sn.height].iter().enumerate() {
-                let q = position[i];
-                assert!(q != usize::MAX, "update outside the symbolic pattern");
-                rel.push(q);
-                match segments[seg0..].last_mut() {
-                    Some(g) if g.p0 + (r - g.r0) == q && q != t.width => g.r1 = r + 1,
-                    _ => segments.push(Segment {
-                        r0: r,
-                        r1: r + 1,
-                        p0: q,
-                    }),
-                }
-            }
-            for i in t_rows {
-                position[i] = usize::MAX;
-            }
-            let k = rel[rel0..].iter().take_while(|&&q| q < t.width).count();
-            let sn = &mut supernodes[s];
-            sn.rel = rel0;
-            sn.k = k;
-            sn.segs = [seg0, segments.len()];
-        }
+        let (child_ptr, children) = elimination_tree(&supernodes, &supernode_of, &rows);
+        let (rel, segments) = relative_rows(&mut supernodes, &supernode_of, &rows, &child_ptr, n);
         // Update matrices live from their supernode's factorization to their parent's.
         let mut plan = ArenaPlan::default();
-        for s in 0..ns {
+        for s in 0..supernodes.len() {
             let h = supernodes[s].height;
             supernodes[s].update = plan.alloc(h * h * D * D);
             for c in child_ptr[s]..child_ptr[s + 1] {
@@ -599,7 +637,22 @@ impl<const D: usize> BlockLu<D> {
             nnz_l: row_idx.len(),
             n_products,
         };
-        // The blocks of the pattern, grouped by the supernode whose panels hold them.
+        lu.lay_out_values(pairs);
+        // A warm-up factorization of the identity lets faer's dense kernels size their
+        // (thread-local) work space here rather than in the first solve.
+        for a in 0..n {
+            lu.add_diag(a, &Block::identity());
+        }
+        lu.factor().expect("the identity has invertible pivots");
+        lu.clear();
+        lu
+    }
+
+    /// The slots of the pattern's blocks (`n` diagonal blocks and both orders of every pair
+    /// in `pairs` with `a ≠ b`), grouped by the supernode whose panels hold them.
+    fn lay_out_values(&mut self, pairs: &[[usize; 2]]) {
+        let lu = self;
+        let n = lu.inv_perm.len();
         let owner = |[i, j]: [usize; 2]| lu.supernode_of[i.min(j)];
         let mut blocks: Vec<[usize; 2]> = (0..n).map(|j| [j, j]).collect();
         for &[a, b] in pairs.iter().filter(|[a, b]| a != b) {
@@ -622,14 +675,6 @@ impl<const D: usize> BlockLu<D> {
         lu.diag_slots = (0..n)
             .map(|a| lu.block_slot(lu.inv_perm[a], lu.inv_perm[a]))
             .collect();
-        // A warm-up factorization of the identity lets faer's dense kernels size their
-        // (thread-local) work space here rather than in the first solve.
-        for a in 0..n {
-            lu.add_diag(a, &Block::identity());
-        }
-        lu.factor().expect("the identity has invertible pivots");
-        lu.clear();
-        lu
     }
 
     /// Position of block row `i` among the rows of supernode `t` (its columns first).
