@@ -10,15 +10,12 @@
 //! default, faer's scalar sparse LU on request), and the interior nodes are recovered by
 //! back substitution.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
-use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par};
+use faer::sparse::linalg::lu::LuSymbolicParams;
 use nalgebra::SVector;
 
 use super::block_lu::{BlockLu, Slot};
-use super::sparse_lu::{add_block, block_pattern};
+use super::sparse_lu::FaerBlockLu;
 use super::{Block, BlockJacobian, LinearSolver};
 use crate::error::LinearSolveError;
 use crate::mesh::Mesh;
@@ -75,18 +72,12 @@ enum Reduced<const D: usize> {
     Faer(FaerReduced),
 }
 
-/// The reduced junction system as a scalar CSC matrix for faer's sparse LU.
+/// The reduced junction system as a scalar CSC matrix for faer's sparse LU: `D²` slots per
+/// junction diagonal block, then `2·D²` per non-loop segment (blocks `(start, end)` and
+/// `(end, start)`).
 struct FaerReduced {
-    mat: SparseColMat<usize, f64>,
-    symbolic: SymbolicLu<usize>,
-    numeric: NumericLu<usize, f64>,
-    factor_buf: MemBuffer,
-    solve_buf: MemBuffer,
-    rhs: Vec<f64>,
+    lu: FaerBlockLu,
     n_junctions: usize,
-    /// CSC value slots: `D²` per junction diagonal block (row-major within a block), then
-    /// `2·D²` per non-loop segment (blocks `(start, end)` and `(end, start)`).
-    slots: Vec<usize>,
 }
 
 impl<const D: usize> Reduced<D> {
@@ -94,7 +85,7 @@ impl<const D: usize> Reduced<D> {
     fn clear(&mut self) {
         match self {
             Reduced::Block { lu, .. } => lu.clear(),
-            Reduced::Faer(red) => red.mat.val_mut().fill(0.0),
+            Reduced::Faer(red) => red.lu.clear(),
         }
     }
 
@@ -110,10 +101,8 @@ impl<const D: usize> Reduced<D> {
             }
             Reduced::Faer(red) => {
                 let dd = D * D;
-                let vals = red.mat.val_mut();
                 for (h, blk) in blocks.iter().enumerate() {
-                    let base = (red.n_junctions + 2 * coupling + h) * dd;
-                    add_block(vals, &red.slots, base, blk);
+                    red.lu.add((red.n_junctions + 2 * coupling + h) * dd, blk);
                 }
             }
         }
@@ -121,50 +110,16 @@ impl<const D: usize> Reduced<D> {
 }
 
 impl FaerReduced {
-    /// The scalar CSC pattern of `nj` junction blocks and the coupling blocks of `pairs`,
-    /// and its symbolic simplicial LU.
+    /// The reduced system of `nj` junction blocks and the coupling blocks of `pairs`, with
+    /// its symbolic simplicial LU.
     fn new<const D: usize>(nj: usize, pairs: &[[usize; 2]]) -> Self {
-        let n = nj * D;
-        let (col_ptr, row_idx, slots) = block_pattern::<D>(nj, pairs);
-        // Diagonally dominant values on the pattern, for a warm-up factorization that
-        // sizes faer's numeric storage here rather than in the first solve.
-        let mut warm = vec![1.0; row_idx.len()];
-        for r in 0..nj {
-            for k in 0..D {
-                let j = r * D + k;
-                warm[slots[r * D * D + k * D + k]] = (col_ptr[j + 1] - col_ptr[j]) as f64 + 1.0;
-            }
-        }
-        let symbolic_mat = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let params = LuSymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
             ..Default::default()
         };
-        let symbolic = factorize_symbolic_lu(symbolic_mat.as_ref(), params)
-            .expect("symbolic LU of a valid square pattern");
-        let mut factor_buf = MemBuffer::new(
-            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        let mat = SparseColMat::new(symbolic_mat, warm);
-        let mut numeric = NumericLu::new();
-        // A failure here only means that the first solve sizes the storage instead.
-        let _ = symbolic.factorize_numeric_lu(
-            &mut numeric,
-            mat.as_ref(),
-            Par::Seq,
-            MemStack::new(&mut factor_buf),
-            Default::default(),
-        );
         Self {
-            mat,
-            symbolic,
-            numeric,
-            factor_buf,
-            solve_buf,
-            rhs: vec![0.0; n],
+            lu: FaerBlockLu::new::<D>(nj, pairs, params, true),
             n_junctions: nj,
-            slots,
         }
     }
 }
@@ -589,31 +544,14 @@ impl<const D: usize> NetworkSolver<D> {
                 lu.solve_indexed(rhs, &self.junctions);
             }
             Reduced::Faer(red) => {
-                let vals = red.mat.val_mut();
                 let dd = D * D;
                 for (r, (blk, &j)) in self.jdiag.iter().zip(&self.junctions).enumerate() {
-                    add_block(vals, &red.slots, r * dd, blk);
-                    red.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
+                    red.lu.add(r * dd, blk);
+                    red.lu.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
                 }
-                let lu = red
-                    .symbolic
-                    .factorize_numeric_lu(
-                        &mut red.numeric,
-                        red.mat.as_ref(),
-                        Par::Seq,
-                        MemStack::new(&mut red.factor_buf),
-                        Default::default(),
-                    )
-                    .map_err(|e| LinearSolveError::Sparse(format!("{e:?}")))?;
-                let n = red.rhs.len();
-                lu.solve_in_place_with_conj(
-                    Conj::No,
-                    MatMut::from_column_major_slice_mut(&mut red.rhs, n, 1),
-                    Par::Seq,
-                    MemStack::new(&mut red.solve_buf),
-                );
+                red.lu.factor_and_solve()?;
                 for (r, &j) in self.junctions.iter().enumerate() {
-                    rhs[j].copy_from_slice(&red.rhs[r * D..(r + 1) * D]);
+                    rhs[j].copy_from_slice(&red.lu.rhs[r * D..(r + 1) * D]);
                 }
             }
         }

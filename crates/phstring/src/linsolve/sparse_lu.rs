@@ -1,7 +1,7 @@
 //! General sparse LU (faer) for any mesh; symbolic analysis once, numeric refactor per call.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::lu::{NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par};
 use nalgebra::SVector;
@@ -10,23 +10,120 @@ use super::{Block, BlockJacobian, LinearSolver};
 use crate::error::LinearSolveError;
 use crate::mesh::Mesh;
 
-/// Sparse LU solver (faer) for the Newton matrix of any mesh.
-pub struct SparseLu<const D: usize> {
+/// A matrix of `D×D` blocks on a fixed pattern as a scalar CSC matrix, with faer's symbolic
+/// sparse LU done once and a numeric factorization and solve per call: the block slots, the
+/// values, the right-hand side and the work buffers.
+pub(crate) struct FaerBlockLu {
     mat: SparseColMat<usize, f64>,
     symbolic: SymbolicLu<usize>,
     numeric: NumericLu<usize, f64>,
     factor_buf: MemBuffer,
     solve_buf: MemBuffer,
-    rhs: Vec<f64>,
+    /// The right-hand side, overwritten by the solution.
+    pub(crate) rhs: Vec<f64>,
     /// CSC value slots of the blocks, as [`block_pattern`] numbers them (diagonal blocks, then
-    /// the element blocks `[a→b, b→a]`).
+    /// the pair blocks `[a→b, b→a]`).
     slots: Vec<usize>,
+}
+
+impl FaerBlockLu {
+    /// Analyses the pattern of `n` diagonal blocks and both coupling blocks of every pair in
+    /// `pairs` with faer's symbolic LU under `params`. With `warm_up`, a numeric
+    /// factorization of diagonally dominant values on the pattern sizes faer's numeric
+    /// storage here rather than in the first solve.
+    pub(crate) fn new<const D: usize>(
+        n: usize,
+        pairs: &[[usize; 2]],
+        params: LuSymbolicParams<'_>,
+        warm_up: bool,
+    ) -> Self {
+        let (col_ptr, row_idx, slots) = block_pattern::<D>(n, pairs);
+        let mut values = vec![0.0; row_idx.len()];
+        if warm_up {
+            values.fill(1.0);
+            for r in 0..n {
+                for k in 0..D {
+                    let j = r * D + k;
+                    values[slots[r * D * D + k * D + k]] =
+                        (col_ptr[j + 1] - col_ptr[j]) as f64 + 1.0;
+                }
+            }
+        }
+        let m = n * D;
+        let symbolic_mat = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
+        let symbolic = factorize_symbolic_lu(symbolic_mat.as_ref(), params)
+            .expect("symbolic LU of a valid square pattern");
+        let mut factor_buf = MemBuffer::new(
+            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+        );
+        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let mat = SparseColMat::new(symbolic_mat, values);
+        let mut numeric = NumericLu::new();
+        if warm_up {
+            // A failure here only means that the first solve sizes the storage instead.
+            let _ = symbolic.factorize_numeric_lu(
+                &mut numeric,
+                mat.as_ref(),
+                Par::Seq,
+                MemStack::new(&mut factor_buf),
+                Default::default(),
+            );
+        }
+        Self {
+            mat,
+            symbolic,
+            numeric,
+            factor_buf,
+            solve_buf,
+            rhs: vec![0.0; m],
+            slots,
+        }
+    }
+
+    /// Sets every value to zero.
+    pub(crate) fn clear(&mut self) {
+        self.mat.val_mut().fill(0.0);
+    }
+
+    /// Adds `blk` to the block whose slots start at `base` (block `i`'s at `i·D²`, pair `p`'s
+    /// blocks at `(n + 2p + s)·D²`).
+    #[inline]
+    pub(crate) fn add<const D: usize>(&mut self, base: usize, blk: &Block<D>) {
+        add_block(self.mat.val_mut(), &self.slots, base, blk);
+    }
+
+    /// Factors the matrix and overwrites `rhs` with the solution.
+    pub(crate) fn factor_and_solve(&mut self) -> Result<(), LinearSolveError> {
+        let lu = self
+            .symbolic
+            .factorize_numeric_lu(
+                &mut self.numeric,
+                self.mat.as_ref(),
+                Par::Seq,
+                MemStack::new(&mut self.factor_buf),
+                Default::default(),
+            )
+            .map_err(|e| LinearSolveError::Sparse(format!("{e:?}")))?;
+        let n = self.rhs.len();
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.solve_buf),
+        );
+        Ok(())
+    }
+}
+
+/// Sparse LU solver (faer) for the Newton matrix of any mesh.
+pub struct SparseLu<const D: usize> {
+    lu: FaerBlockLu,
 }
 
 impl<const D: usize> std::fmt::Debug for SparseLu<D> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SparseLu")
-            .field("n", &self.rhs.len())
+            .field("n", &self.lu.rhs.len())
             .finish_non_exhaustive()
     }
 }
@@ -34,24 +131,8 @@ impl<const D: usize> std::fmt::Debug for SparseLu<D> {
 impl<const D: usize> SparseLu<D> {
     /// Analyses the sparsity pattern of `mesh`'s Newton matrix.
     pub fn new(mesh: &Mesh) -> Self {
-        let n = mesh.n_nodes() * D;
-        let (col_ptr, row_idx, slots) = block_pattern::<D>(mesh.n_nodes(), mesh.elements());
-        let nnz = row_idx.len();
-        let symbolic_mat = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let symbolic = factorize_symbolic_lu(symbolic_mat.as_ref(), Default::default())
-            .expect("symbolic LU of a valid square pattern");
-        let factor_buf = MemBuffer::new(
-            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         Self {
-            mat: SparseColMat::new(symbolic_mat, vec![0.0; nnz]),
-            symbolic,
-            numeric: NumericLu::new(),
-            factor_buf,
-            solve_buf,
-            rhs: vec![0.0; n],
-            slots,
+            lu: FaerBlockLu::new::<D>(mesh.n_nodes(), mesh.elements(), Default::default(), false),
         }
     }
 }
@@ -106,7 +187,7 @@ pub(crate) fn block_pattern<const D: usize>(
 
 /// Adds `blk` to the CSC values `vals` at its slots `slots[base..base + D²]` (row-major).
 #[inline]
-pub(crate) fn add_block<const D: usize>(
+fn add_block<const D: usize>(
     vals: &mut [f64],
     slots: &[usize],
     base: usize,
@@ -125,40 +206,23 @@ impl<const D: usize> LinearSolver<D> for SparseLu<D> {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError> {
-        let vals = self.mat.val_mut();
-        vals.fill(0.0);
+        self.lu.clear();
         let dd = D * D;
         for (i, blk) in jac.diag.iter().enumerate() {
-            add_block(vals, &self.slots, i * dd, blk);
+            self.lu.add(i * dd, blk);
         }
         let n_nodes = jac.diag.len();
         for (e, blks) in jac.off.iter().enumerate() {
             for (s, blk) in blks.iter().enumerate() {
-                add_block(vals, &self.slots, (n_nodes + 2 * e + s) * dd, blk);
+                self.lu.add((n_nodes + 2 * e + s) * dd, blk);
             }
         }
         for (i, x) in rhs.iter().enumerate() {
-            self.rhs[i * D..(i + 1) * D].copy_from_slice(x.as_slice());
+            self.lu.rhs[i * D..(i + 1) * D].copy_from_slice(x.as_slice());
         }
-        let lu = self
-            .symbolic
-            .factorize_numeric_lu(
-                &mut self.numeric,
-                self.mat.as_ref(),
-                Par::Seq,
-                MemStack::new(&mut self.factor_buf),
-                Default::default(),
-            )
-            .map_err(|e| LinearSolveError::Sparse(format!("{e:?}")))?;
-        let n = self.rhs.len();
-        lu.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.solve_buf),
-        );
+        self.lu.factor_and_solve()?;
         for (i, x) in rhs.iter_mut().enumerate() {
-            x.copy_from_slice(&self.rhs[i * D..(i + 1) * D]);
+            x.copy_from_slice(&self.lu.rhs[i * D..(i + 1) * D]);
             if !x.iter().all(|v| v.is_finite()) {
                 return Err(LinearSolveError::Singular { block: i });
             }
