@@ -20,10 +20,29 @@ use crate::system::Vector;
 
 /// Mean accelerations of the last accepted steps at their mid times, newest first, for the
 /// second-order estimate (at most two kept).
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct AccelerationHistory<const D: usize> {
     /// `(τ, ā)`: mid time [s] and mean acceleration per node [m/s²], newest first.
     pub points: Vec<(f64, Vec<Vector<D>>)>,
+}
+
+impl<const D: usize> Clone for AccelerationHistory<D> {
+    fn clone(&self) -> Self {
+        Self {
+            points: self.points.clone(),
+        }
+    }
+
+    /// Reuses the buffers of the points already held.
+    fn clone_from(&mut self, source: &Self) {
+        self.points.truncate(source.points.len());
+        for (p, q) in self.points.iter_mut().zip(&source.points) {
+            p.0 = q.0;
+            p.1.clone_from(&q.1);
+        }
+        let n = self.points.len();
+        self.points.extend_from_slice(&source.points[n..]);
+    }
 }
 
 impl<const D: usize> AccelerationHistory<D> {

@@ -175,9 +175,11 @@ impl Default for StepControl {
     }
 }
 
-/// The complete dynamic state of a [`Simulation`]: restoring it into a simulation of the same
-/// problem and parameters continues the run bit for bit as if it had not stopped.
-#[derive(Debug, Clone, PartialEq)]
+/// The complete dynamic state of a [`Simulation`]: its state and the progress of its run.
+/// The simulation keeps it as one record, which a checkpoint copies, a restore puts back and
+/// a failed or rejected step is undone to; restoring it into a simulation of the same problem
+/// and parameters continues the run bit for bit as if it had not stopped.
+#[derive(Debug, PartialEq)]
 pub struct Checkpoint<const D: usize> {
     /// State `(r, v, C)`.
     pub state: State<D>,
@@ -211,26 +213,73 @@ pub struct Checkpoint<const D: usize> {
     pub err_prev: f64,
 }
 
+impl<const D: usize> Clone for Checkpoint<D> {
+    fn clone(&self) -> Self {
+        let mut c = Self {
+            state: self.state.clone(),
+            t_base: 0.0,
+            k: 0,
+            h_cur: 0.0,
+            steps: 0,
+            rejected: 0,
+            easy_streak: 0,
+            h_min_used: 0.0,
+            acc: Vec::new(),
+            v_mid: Vec::new(),
+            supplied_total: 0.0,
+            dissipated_total: 0.0,
+            total_newton: 0,
+            acc_history: Default::default(),
+            err_prev: 0.0,
+        };
+        c.clone_from(self);
+        c
+    }
+
+    /// Field by field, reusing the buffers (a step saves the record this way).
+    fn clone_from(&mut self, source: &Self) {
+        let Self {
+            state,
+            t_base,
+            k,
+            h_cur,
+            steps,
+            rejected,
+            easy_streak,
+            h_min_used,
+            acc,
+            v_mid,
+            supplied_total,
+            dissipated_total,
+            total_newton,
+            acc_history,
+            err_prev,
+        } = self;
+        state.clone_from(&source.state);
+        *t_base = source.t_base;
+        *k = source.k;
+        *h_cur = source.h_cur;
+        *steps = source.steps;
+        *rejected = source.rejected;
+        *easy_streak = source.easy_streak;
+        *h_min_used = source.h_min_used;
+        acc.clone_from(&source.acc);
+        v_mid.clone_from(&source.v_mid);
+        *supplied_total = source.supplied_total;
+        *dissipated_total = source.dissipated_total;
+        *total_newton = source.total_newton;
+        acc_history.clone_from(&source.acc_history);
+        *err_prev = source.err_prev;
+    }
+}
+
 /// A running simulation: system, state, time and all workspaces.
 pub struct Simulation<const D: usize, M> {
     sys: PhSystem<D, M>,
     params: StepParams,
-    state: State<D>,
-    /// Time bookkeeping: `t = t_base + k h_cur` (exact multiples of `h` in a fixed-step run).
-    t_base: f64,
-    k: usize,
-    h_cur: f64,
-    step: usize,
-    rejected: usize,
-    easy_streak: usize,
-    h_min_used: f64,
-    /// `a_n` estimate for the acceleration predictor.
-    acc: Vec<Vector<D>>,
-    /// `v_{n−½}` of the last step, for the mid-step velocity predictor.
-    v_mid: Vec<Vector<D>>,
+    /// The run's state and progress: what a checkpoint saves and a restore puts back.
+    run: Checkpoint<D>,
     energies: Energies,
-    supplied_total: f64,
-    dissipated_total: f64,
     // Workspaces (allocated once).
     x: Vec<Vector<D>>,
     f_ext: Vec<Vector<D>>,
@@ -241,16 +290,11 @@ pub struct Simulation<const D: usize, M> {
     ports: Vec<PortSample<D>>,
     newton_ws: NewtonWorkspace<D>,
     solver: Box<dyn LinearSolver<D>>,
-    total_newton: usize,
     /// Set from outside (Ctrl-C) to end the current step between Newton iterations.
     stop: Option<Arc<AtomicBool>>,
     /// The state before the current step, for `dg4` and error control (allocated on first
     /// use, reused after).
     backup: Option<Backup<D>>,
-    /// Error control: mean accelerations of the last accepted steps.
-    acc_history: crate::accuracy::AccelerationHistory<D>,
-    /// Error control: the last accepted step's error (1 before the first).
-    err_prev: f64,
     /// `dg4`: the ports' sums over the sub-steps (a buffer reused from step to step).
     port_sums: Vec<(Vector<D>, Vector<D>, f64)>,
     /// Error control: steps accepted at the step-size floor although their error estimate
@@ -394,12 +438,8 @@ impl HeldVelocities {
 /// error control). Buffers are reused from step to step.
 #[derive(Debug, Clone, Default)]
 struct Backup<const D: usize> {
-    state: Option<State<D>>,
-    acc: Vec<Vector<D>>,
-    v_mid: Vec<Vector<D>>,
+    run: Option<Checkpoint<D>>,
     energies: Energies,
-    supplied_total: f64,
-    dissipated_total: f64,
     ports: Vec<PortSample<D>>,
 }
 
@@ -489,30 +529,32 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             newton_ws: NewtonWorkspace::new(&sys.mesh),
             sys,
             params,
-            state,
-            t_base: 0.0,
-            k: 0,
-            h_cur: params.h,
-            step: 0,
-            rejected: 0,
-            easy_streak: 0,
-            h_min_used: params.h,
-            acc: vec![Vector::zeros(); n],
-            v_mid: vec![Vector::zeros(); n],
+            run: Checkpoint {
+                state,
+                t_base: 0.0,
+                k: 0,
+                h_cur: params.h,
+                steps: 0,
+                rejected: 0,
+                easy_streak: 0,
+                h_min_used: params.h,
+                acc: vec![Vector::zeros(); n],
+                v_mid: vec![Vector::zeros(); n],
+                supplied_total: 0.0,
+                dissipated_total: 0.0,
+                total_newton: 0,
+                acc_history: Default::default(),
+                err_prev: 1.0,
+            },
             energies,
-            supplied_total: 0.0,
-            dissipated_total: 0.0,
             x: vec![Vector::zeros(); n],
             f_ext: vec![Vector::zeros(); n],
             reaction: vec![Vector::zeros(); n],
             c_next: vec![0.0; n_el],
             ports,
             solver,
-            total_newton: 0,
             stop: None,
             backup: None,
-            acc_history: Default::default(),
-            err_prev: 1.0,
             port_sums: Vec::new(),
             over_tolerance: 0,
             ports_prev: Vec::new(),
@@ -544,7 +586,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     }
     /// The current state.
     pub fn state(&self) -> &State<D> {
-        &self.state
+        &self.run.state
     }
     /// Step parameters.
     pub fn params(&self) -> &StepParams {
@@ -552,19 +594,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     }
     /// Current time `t_n` [s] (`n h` in a fixed-step run).
     pub fn time(&self) -> f64 {
-        self.t_base + self.k as f64 * self.h_cur
+        self.run.t_base + self.run.k as f64 * self.run.h_cur
     }
     /// Step size the next step will try [s].
     pub fn step_size(&self) -> f64 {
-        self.h_cur
+        self.run.h_cur
     }
     /// Smallest step size accepted so far [s].
     pub fn smallest_step_size(&self) -> f64 {
-        self.h_min_used
+        self.run.h_min_used
     }
     /// Steps rejected (and retried with a smaller step) so far.
     pub fn rejected_steps(&self) -> usize {
-        self.rejected
+        self.run.rejected
     }
     /// Error control: steps this simulation accepted at the step-size floor although their
     /// error estimate exceeded the tolerance (`time.rtol`, `time.atol`), so far (not counted
@@ -575,28 +617,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
 
     /// The complete dynamic state, for [`Self::restore`].
     pub fn checkpoint(&self) -> Checkpoint<D> {
-        Checkpoint {
-            state: self.state.clone(),
-            t_base: self.t_base,
-            k: self.k,
-            h_cur: self.h_cur,
-            steps: self.step,
-            rejected: self.rejected,
-            easy_streak: self.easy_streak,
-            h_min_used: self.h_min_used,
-            acc: self.acc.clone(),
-            v_mid: self.v_mid.clone(),
-            supplied_total: self.supplied_total,
-            dissipated_total: self.dissipated_total,
-            total_newton: self.total_newton,
-            acc_history: self.acc_history.clone(),
-            err_prev: self.err_prev,
-        }
+        self.run.clone()
     }
 
     /// Continues from `cp`, taken from a simulation of the same problem and parameters.
     pub fn restore(&mut self, cp: Checkpoint<D>) -> Result<(), SetupError> {
-        let (n, n_el) = (self.state.r.len(), self.state.c.len());
+        let (n, n_el) = (self.run.state.r.len(), self.run.state.c.len());
         for (what, got, expected) in [
             ("positions", cp.state.r.len(), n),
             ("velocities", cp.state.v.len(), n),
@@ -647,59 +673,37 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             });
         }
         self.energies = self.sys.energies(&cp.state);
-        self.state = cp.state;
-        self.t_base = cp.t_base;
-        self.k = cp.k;
-        self.h_cur = cp.h_cur;
-        self.step = cp.steps;
-        self.rejected = cp.rejected;
-        self.easy_streak = cp.easy_streak;
-        self.h_min_used = cp.h_min_used;
-        self.acc = cp.acc;
-        self.v_mid = cp.v_mid;
-        self.supplied_total = cp.supplied_total;
-        self.dissipated_total = cp.dissipated_total;
-        self.acc_history = cp.acc_history;
-        self.err_prev = cp.err_prev;
-        self.total_newton = cp.total_newton;
+        self.run = cp;
         Ok(())
     }
 
     /// Saves what a step changes into `b`.
     fn save(&self, b: &mut Backup<D>) {
-        match &mut b.state {
-            Some(s) => s.clone_from(&self.state),
-            None => b.state = Some(self.state.clone()),
+        match &mut b.run {
+            Some(run) => run.clone_from(&self.run),
+            None => b.run = Some(self.run.clone()),
         }
-        b.acc.clone_from(&self.acc);
-        b.v_mid.clone_from(&self.v_mid);
         b.energies = self.energies;
-        b.supplied_total = self.supplied_total;
-        b.dissipated_total = self.dissipated_total;
         b.ports.clone_from(&self.ports);
     }
 
     /// Puts back what [`Self::save`] saved.
     fn restore_from(&mut self, b: &Backup<D>) {
-        if let Some(s) = &b.state {
-            self.state.clone_from(s);
+        if let Some(run) = &b.run {
+            self.run.clone_from(run);
         }
-        self.acc.clone_from(&b.acc);
-        self.v_mid.clone_from(&b.v_mid);
         self.energies = b.energies;
-        self.supplied_total = b.supplied_total;
-        self.dissipated_total = b.dissipated_total;
         self.ports.clone_from(&b.ports);
     }
 
     fn set_step_size(&mut self, h: f64) {
-        self.t_base = self.time();
-        self.k = 0;
-        self.h_cur = h;
+        self.run.t_base = self.time();
+        self.run.k = 0;
+        self.run.h_cur = h;
     }
     /// Number of steps taken.
     pub fn steps(&self) -> usize {
-        self.step
+        self.run.steps
     }
     /// Energies of the current state [J].
     pub fn energies(&self) -> Energies {
@@ -707,15 +711,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     }
     /// Cumulative supplied energy `Σ h û·ŷ` [J].
     pub fn supplied_energy(&self) -> f64 {
-        self.supplied_total
+        self.run.supplied_total
     }
     /// Cumulative dissipated energy `Σ D_n` [J] (docs/method.md §18).
     pub fn dissipated_energy(&self) -> f64 {
-        self.dissipated_total
+        self.run.dissipated_total
     }
     /// Total Newton iterations so far.
     pub fn total_newton_iterations(&self) -> usize {
-        self.total_newton
+        self.run.total_newton
     }
     /// Name of the linear solver in use.
     pub fn solver_name(&self) -> &'static str {
@@ -739,23 +743,23 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut tries = Retries::default();
         let tolerant = self.params.control.error_control();
         let composed = self.params.scheme == Scheme::DiscreteGradient4;
-        if tolerant && !composed && self.acc_history.points.is_empty() {
+        if tolerant && !composed && self.run.acc_history.points.is_empty() {
             let a0 = self.initial_acceleration()?;
-            self.acc_history.push(self.time(), &a0);
+            self.run.acc_history.push(self.time(), &a0);
         }
         loop {
             let t = self.time();
             if self.stop_requested() {
                 return Err(StepError::Interrupted {
-                    step: self.step + 1,
+                    step: self.run.steps + 1,
                     t,
                 });
             }
             // Clip only a real overshoot: a step that lands on t_end up to rounding keeps h.
-            let (h, t_next) = if t + self.h_cur > t_end + 1e-9 * self.h_cur {
+            let (h, t_next) = if t + self.run.h_cur > t_end + 1e-9 * self.run.h_cur {
                 (t_end - t, Some(t_end))
             } else {
-                (self.h_cur, None)
+                (self.run.h_cur, None)
             };
             // Error control needs the state before the step (dg4 saves it itself).
             if tolerant && !composed {
@@ -796,23 +800,23 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             Err(e) => {
                 // A stop request during the embedded solve: the step is
                 // undone, nothing is counted.
-                self.undo_step(&report);
+                self.undo_step();
                 return Err(e);
             }
         };
         // The embedded solve is part of the step's work.
         report.newton_iterations += embedded_iterations;
-        self.total_newton += embedded_iterations;
+        self.run.total_newton += embedded_iterations;
         // The local error is O(h³), the error per unit step O(h²).
         let p = 1;
         // step_error maps NaN to infinity.
         if err > 1.0 && h > floor * (1.0 + 1e-12) {
             // Rejected for accuracy: back to the state before the step.
-            self.undo_step(&report);
+            self.undo_step();
             tries.iterations += report.newton_iterations;
             tries.local += report.local_node_iterations;
             tries.rejected += 1;
-            self.rejected += 1;
+            self.run.rejected += 1;
             let cut = crate::accuracy::reject_factor(err, p);
             self.set_step_size((h * cut).max(floor));
             return Ok(None);
@@ -820,13 +824,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.over_tolerance += usize::from(err > 1.0); // at the floor
         let tau = t + 0.5 * h;
         if !composed {
-            self.acc_history.push(tau, &self.acc);
+            self.run.acc_history.push(tau, &self.run.acc);
         }
-        let grow = crate::accuracy::accept_factor(err, self.err_prev, p);
+        let grow = crate::accuracy::accept_factor(err, self.run.err_prev, p);
         // Finite, also for a step accepted at the floor with err = ∞.
-        self.err_prev = err.clamp(1e-10, 1e4);
+        self.run.err_prev = err.clamp(1e-10, 1e4);
         tries.mark(&mut report);
-        self.h_min_used = self.h_min_used.min(h);
+        self.run.h_min_used = self.run.h_min_used.min(h);
         // After a rejection in this step, no growth (Hairer–Wanner's facmax = 1);
         // a step clipped to t_end does not grow the unclipped size.
         let grow = if tries.rejected > 0 {
@@ -835,14 +839,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             grow
         };
         let next = if t_next.is_some() {
-            self.h_cur * grow.min(1.0)
+            self.run.h_cur * grow.min(1.0)
         } else {
             h * grow
         };
         let next = next.min(self.params.h).max(floor);
-        self.t_base = report.t;
-        self.k = 0;
-        self.h_cur = next;
+        self.run.t_base = report.t;
+        self.run.k = 0;
+        self.run.h_cur = next;
         Ok(Some(report))
     }
 
@@ -857,20 +861,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) -> StepReport {
         let composed = self.params.scheme == Scheme::DiscreteGradient4;
         if t_next.is_some() {
-            self.t_base = t_end;
-            self.k = 0;
+            self.run.t_base = t_end;
+            self.run.k = 0;
         } else {
-            self.k += 1;
+            self.run.k += 1;
         }
-        self.h_min_used = self.h_min_used.min(h);
+        self.run.h_min_used = self.run.h_min_used.min(h);
         let c = self.params.control;
         // dg4 makes three solves per step.
         let solves = if composed { 3 } else { 1 };
         let easy = report.newton_iterations <= c.easy_iterations * solves && report.backtracks == 0;
-        self.easy_streak = if easy { self.easy_streak + 1 } else { 0 };
-        if c.adaptive && self.easy_streak >= c.grow_after && self.h_cur < self.params.h {
-            self.set_step_size((2.0 * self.h_cur).min(self.params.h));
-            self.easy_streak = 0;
+        self.run.easy_streak = if easy { self.run.easy_streak + 1 } else { 0 };
+        if c.adaptive && self.run.easy_streak >= c.grow_after && self.run.h_cur < self.params.h {
+            self.set_step_size((2.0 * self.run.h_cur).min(self.params.h));
+            self.run.easy_streak = 0;
         }
         report
     }
@@ -896,11 +900,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             h <= floor * (1.0 + 1e-12)
         } else {
             // A floor that underflows to 0 is reached once h/2 does.
-            0.5 * self.h_cur < floor * (1.0 - 1e-12) || 0.5 * self.h_cur == 0.0
+            0.5 * self.run.h_cur < floor * (1.0 - 1e-12) || 0.5 * self.run.h_cur == 0.0
         };
         if at_floor {
             return Err(StepError::StepSizeTooSmall {
-                step: self.step + 1,
+                step: self.run.steps + 1,
                 t,
                 h,
                 floor,
@@ -914,24 +918,22 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         tries.local += spent.local_node_iterations;
         tries.halvings += 1;
         tries.rejected += 1;
-        self.rejected += 1;
-        self.easy_streak = 0;
+        self.run.rejected += 1;
+        self.run.easy_streak = 0;
         if tolerant {
             self.set_step_size((0.5 * h).max(floor));
         } else {
-            self.set_step_size(0.5 * self.h_cur);
+            self.set_step_size(0.5 * self.run.h_cur);
         }
         Ok(())
     }
 
-    /// Puts back the state before the step of `report` (in the backup) and undoes its
-    /// counters.
-    fn undo_step(&mut self, report: &StepReport) {
+    /// Puts back the state and progress before the step just taken (in the backup): its
+    /// step count and Newton iterations are undone with it.
+    fn undo_step(&mut self) {
         let b = self.backup.take().expect("saved before the step");
         self.restore_from(&b);
         self.backup = Some(b);
-        self.step -= 1;
-        self.total_newton -= report.newton_iterations;
     }
 
     /// The error of the step just taken from `t` by `h` (docs/method.md §19), relative to the
@@ -942,7 +944,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let c = self.params.control;
         let (rtol, atol, atol_v) = (c.rtol, c.atol, c.atol / self.params.h);
         let b = self.backup.take().expect("saved before the step");
-        let before = b.state.as_ref().expect("saved before the step");
+        let before = &b.run.as_ref().expect("saved before the step").state;
         let mut err: f64 = 0.0;
         let mut embedded_iterations = 0;
         // The larger of the two, NaN kept.
@@ -960,7 +962,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     embedded_iterations = iterations;
                     // self.x holds the second-order increment.
                     let inv_h = 1.0 / h;
-                    for i in 0..self.state.r.len() {
+                    for i in 0..self.run.state.r.len() {
                         if !self.sys.free[i].iter().any(|&f| f) {
                             continue;
                         }
@@ -971,10 +973,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         };
                         let r2 = before.r[i] + self.x[i];
                         let v2 = self.x[i] * (2.0 * inv_h) - before.v[i];
-                        let e_r = mask(r2 - self.state.r[i]).norm();
-                        let e_v = mask(v2 - self.state.v[i]).norm();
-                        let r_mag = before.r[i].norm().max(self.state.r[i].norm());
-                        let v_mag = before.v[i].norm().max(self.state.v[i].norm());
+                        let e_r = mask(r2 - self.run.state.r[i]).norm();
+                        let e_v = mask(v2 - self.run.state.v[i]).norm();
+                        let r_mag = before.r[i].norm().max(self.run.state.r[i].norm());
+                        let v_mag = before.v[i].norm().max(self.run.state.v[i].norm());
                         err = worse(
                             err,
                             crate::accuracy::ratio(e_r, e_v, r_mag, v_mag, rtol, atol, atol_v),
@@ -985,20 +987,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
         } else {
             let tau = t + 0.5 * h;
-            for i in 0..self.state.r.len() {
+            for i in 0..self.run.state.r.len() {
                 if !self.sys.free[i].iter().any(|&f| f) {
                     continue;
                 }
                 let (e_r, e_v) = crate::accuracy::second_order_estimate(
                     h,
                     tau,
-                    &self.acc,
-                    &self.acc_history,
+                    &self.run.acc,
+                    &self.run.acc_history,
                     i,
                     &self.sys.free[i],
                 );
-                let r_mag = before.r[i].norm().max(self.state.r[i].norm());
-                let v_mag = before.v[i].norm().max(self.state.v[i].norm());
+                let r_mag = before.r[i].norm().max(self.run.state.r[i].norm());
+                let v_mag = before.v[i].norm().max(self.run.state.v[i].norm());
                 err = worse(
                     err,
                     crate::accuracy::ratio(e_r, e_v, r_mag, v_mag, rtol, atol, atol_v),
@@ -1026,7 +1028,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) -> Result<Option<usize>, StepError> {
         let t_mid = t + 0.5 * h;
         self.sum_loads(t_mid);
-        for (x, (a, b)) in self.x.iter_mut().zip(self.state.r.iter().zip(&before.r)) {
+        for (x, (a, b)) in self
+            .x
+            .iter_mut()
+            .zip(self.run.state.r.iter().zip(&before.r))
+        {
             *x = a - b;
         }
         let mut eqs = StepEquations::new(
@@ -1047,7 +1053,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.stop.as_deref(),
         ) {
             Ok(stats) => Ok(Some(stats.iterations)),
-            Err(NewtonError::Interrupted(_)) => Err(StepError::Interrupted { step: self.step, t }),
+            Err(NewtonError::Interrupted(_)) => Err(StepError::Interrupted {
+                step: self.run.steps,
+                t,
+            }),
             Err(_) => Ok(None),
         }
     }
@@ -1069,7 +1078,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let eps = 1e-9 * self.params.h;
         self.sum_loads(t + 0.5 * eps);
         // Every component, prescribed ones too, so that no inertia term appears anywhere.
-        for (x, v) in self.x.iter_mut().zip(&self.state.v) {
+        for (x, v) in self.x.iter_mut().zip(&self.run.state.v) {
             *x = v * eps;
         }
         let n = self.x.len();
@@ -1078,7 +1087,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.sys,
             Scheme::DiscreteGradient,
             eps,
-            &self.state,
+            &self.run.state,
             t + 0.5 * eps,
             &self.f_ext,
             &mut self.reaction,
@@ -1086,7 +1095,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         use crate::newton::NewtonProblem;
         eqs.evaluate(&self.x, &mut res, None)
             .map_err(|s| StepError::InvalidStrain {
-                step: self.step + 1,
+                step: self.run.steps + 1,
                 t,
                 element: s.element,
                 c: s.c,
@@ -1100,13 +1109,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.solver
             .solve(&m, &mut res)
             .map_err(|cause| StepError::Linear {
-                step: self.step + 1,
+                step: self.run.steps + 1,
                 t,
                 cause,
             })?;
         if let Some(node) = res.iter().position(|a| !a.iter().all(|x| x.is_finite())) {
             return Err(StepError::NonFinite {
-                step: self.step + 1,
+                step: self.run.steps + 1,
                 t,
                 what: "initial acceleration",
                 node,
@@ -1120,15 +1129,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// on failure.
     fn try_step(&mut self, h: f64, t_next: Option<f64>) -> Result<StepReport, StepError> {
         let t = self.time();
-        let t_next = t_next.unwrap_or(self.t_base + (self.k + 1) as f64 * self.h_cur);
-        let step_no = self.step + 1;
+        let t_next = t_next.unwrap_or(self.run.t_base + (self.run.k + 1) as f64 * self.run.h_cur);
+        let step_no = self.run.steps + 1;
         let report = if self.params.scheme == Scheme::DiscreteGradient4 {
             self.try_composed(t, h, t_next, step_no)?
         } else {
             self.try_single(t, h, t_next, step_no)?
         };
-        self.step += 1;
-        self.total_newton += report.newton_iterations;
+        self.run.steps += 1;
+        self.run.total_newton += report.newton_iterations;
         Ok(report)
     }
 
@@ -1283,7 +1292,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // expression) fails the step at once, like a load, rather than through Newton.
         for fb in &self.sys.boundary.feedback {
             let i = fb.node;
-            let f = fb.law.force(t_mid, &self.state.r[i], &self.state.v[i]);
+            let f = fb
+                .law
+                .force(t_mid, &self.run.state.r[i], &self.run.state.v[i]);
             if !f.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite {
                     step: step_no,
@@ -1303,14 +1314,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let (acc_w, mid) = match self.params.predictor {
             Predictor::Velocity => (0.0, false),
             Predictor::Acceleration => (0.5 * h * h, false),
-            Predictor::MidpointVelocity => (0.0, self.step > 0),
+            Predictor::MidpointVelocity => (0.0, self.run.steps > 0),
         };
         for ((((x, v), a), vm), free) in self
             .x
             .iter_mut()
-            .zip(&self.state.v)
-            .zip(&self.acc)
-            .zip(&self.v_mid)
+            .zip(&self.run.state.v)
+            .zip(&self.run.acc)
+            .zip(&self.run.v_mid)
             .zip(&self.sys.free)
         {
             *x = if mid { vm * h } else { v * h + a * acc_w };
@@ -1332,7 +1343,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     node: m.node,
                 });
             }
-            self.x[m.node][m.component] = target - self.state.r[m.node][m.component];
+            self.x[m.node][m.component] = target - self.run.state.r[m.node][m.component];
         }
         Ok(())
     }
@@ -1345,7 +1356,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.sys,
             self.params.scheme,
             h,
-            &self.state,
+            &self.run.state,
             t_mid,
             &self.f_ext,
             &mut self.reaction,
@@ -1433,8 +1444,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         if let Some(node) = self
             .x
             .iter()
-            .zip(&self.state.v)
-            .zip(&self.state.r)
+            .zip(&self.run.state.v)
+            .zip(&self.run.state.r)
             .position(|((x, v), r)| {
                 !(x.iter().all(|c| c.is_finite())
                     && (x * two_over_h - v).iter().all(|c| c.is_finite())
@@ -1454,13 +1465,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mesh = &self.sys.mesh;
         for (e, (&[a, b], &l)) in mesh.elements().iter().zip(mesh.lengths()).enumerate() {
             let (_, _, dc) = element_step(
-                &self.state.r[a],
-                &self.state.r[b],
+                &self.run.state.r[a],
+                &self.run.state.r[b],
                 &self.x[a],
                 &self.x[b],
                 l,
             );
-            self.c_next[e] = self.state.c[e] + dc;
+            self.c_next[e] = self.run.state.c[e] + dc;
         }
         // The velocities the prescribed motions hold at the step's end.
         for (k, m) in self.sys.boundary.motions.iter().enumerate() {
@@ -1484,7 +1495,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let (step_no, t) = (at.step, at.t);
         let inv_h = 1.0 / at.h;
         let after = {
-            let (r0, v0, c, x) = (&self.state.r, &self.state.v, &self.c_next, &self.x);
+            let (r0, v0, c, x) = (&self.run.state.r, &self.run.state.v, &self.c_next, &self.x);
             let (held, motions) = (&self.held, &self.sys.boundary.motions);
             self.sys.energies_with(
                 |i| r0[i] + x[i],
@@ -1562,14 +1573,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// the predictor's history, energies and energy totals.
     fn commit(&mut self, h: f64, after: Energies, supplied: f64, dissipated: f64) {
         let inv_h = 1.0 / h;
-        std::mem::swap(&mut self.state.c, &mut self.c_next);
+        std::mem::swap(&mut self.run.state.c, &mut self.c_next);
         for ((((r, v), a), vm), x) in self
+            .run
             .state
             .r
             .iter_mut()
-            .zip(&mut self.state.v)
-            .zip(&mut self.acc)
-            .zip(&mut self.v_mid)
+            .zip(&mut self.run.state.v)
+            .zip(&mut self.run.acc)
+            .zip(&mut self.run.v_mid)
             .zip(&self.x)
         {
             *r += x;
@@ -1579,12 +1591,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             *v = v_new;
         }
         for (m, &v) in self.sys.boundary.motions.iter().zip(&self.held.velocity) {
-            self.state.v[m.node][m.component] = v;
+            self.run.state.v[m.node][m.component] = v;
         }
-        debug_assert_eq!(after, self.sys.energies(&self.state));
+        debug_assert_eq!(after, self.sys.energies(&self.run.state));
         self.energies = after;
-        self.supplied_total += supplied;
-        self.dissipated_total += dissipated;
+        self.run.supplied_total += supplied;
+        self.run.dissipated_total += dissipated;
     }
 
     /// Forms the port samples of the step just solved (before the state is updated: the
@@ -1600,7 +1612,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             .zip(&self.sys.boundary.feedback)
         {
             let i = fb.node;
-            let (r_mid, y) = (self.state.r[i] + self.x[i] * 0.5, self.x[i] * inv_h);
+            let (r_mid, y) = (self.run.state.r[i] + self.x[i] * 0.5, self.x[i] * inv_h);
             port.input = fb.law.force(t_mid, &r_mid, &y);
         }
         // Outputs at t_{n+½}: velocity v_{n+½} = Δ/h, reaction forces.
@@ -1627,7 +1639,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // momentum balance), and the kinetic energy it imposes beyond that impulse's work
         // over `Δ` is part of its port's power (so that the energy balance stays exact).
         let (held, motions) = (&self.held, &self.sys.boundary.motions);
-        let (x, v0) = (&self.x, &self.state.v);
+        let (x, v0) = (&self.x, &self.run.state.v);
         let raw = |j: usize| x[j] * (2.0 * inv_h) - v0[j];
         let dv = |j: usize| held.apply(j, raw(j), motions) - raw(j);
         for &(port, i, _, m) in &held.mass {
@@ -1694,7 +1706,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) -> Result<RunSummary, StepError> {
         observer.on_start(self);
         let mut summary = RunSummary::default();
-        while self.time() < t_end - 1e-9 * self.h_cur {
+        while self.time() < t_end - 1e-9 * self.run.h_cur {
             let report = self.step_until(t_end)?;
             summary.record(&report);
             observer.on_step(self, &report);

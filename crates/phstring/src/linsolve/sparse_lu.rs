@@ -187,12 +187,7 @@ pub(crate) fn block_pattern<const D: usize>(
 
 /// Adds `blk` to the CSC values `vals` at its slots `slots[base..base + D²]` (row-major).
 #[inline]
-fn add_block<const D: usize>(
-    vals: &mut [f64],
-    slots: &[usize],
-    base: usize,
-    blk: &Block<D>,
-) {
+fn add_block<const D: usize>(vals: &mut [f64], slots: &[usize], base: usize, blk: &Block<D>) {
     for k in 0..D {
         for l in 0..D {
             vals[slots[base + k * D + l]] += blk[(k, l)];
