@@ -1696,6 +1696,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.run_loop(t_end, observer, |_, _| false)
     }
 
+    /// Whether the run has reached `t_end` [s]: its time is within `1e-9` of a step of it
+    /// (a step that would land on `t_end` up to rounding is not taken). The end-of-run test
+    /// of every loop that drives a simulation to a time.
+    pub fn reached(&self, t_end: f64) -> bool {
+        self.time() >= t_end - 1e-9 * self.run.h_cur
+    }
+
     /// Steps until `t_end` [s] or until `done` says so after a step, calling the observer
     /// at the start, after every step and at the end.
     fn run_loop(
@@ -1706,7 +1713,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) -> Result<RunSummary, StepError> {
         observer.on_start(self);
         let mut summary = RunSummary::default();
-        while self.time() < t_end - 1e-9 * self.run.h_cur {
+        while !self.reached(t_end) {
             let report = self.step_until(t_end)?;
             summary.record(&report);
             observer.on_step(self, &report);
