@@ -440,7 +440,7 @@ mod tests {
         assert!(Vary::parse("k=1,,2").is_err());
     }
 
-    /// Issue 10: `\"` inside a quoted value does not end it, `'…'` quotes too, and an
+    /// `\"` inside a quoted value does not end it, `'…'` quotes too, and an
     /// unbalanced quote or bracket is an error naming its position.
     #[test]
     fn vary_splitter_handles_escapes_and_unbalanced_quotes() {
@@ -468,7 +468,7 @@ mod tests {
         );
     }
 
-    /// Issue 10: a sweep of 6.6e12 combinations is refused with its count, without making
+    /// A sweep of 6.6e12 combinations is refused with its count, without making
     /// the combinations.
     #[test]
     fn sweep_run_count_is_capped() {

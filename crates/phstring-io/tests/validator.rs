@@ -1,4 +1,4 @@
-//! Property tests of the scenario validator (issue 5): for any values of the keys, validation
+//! Property tests of the scenario validator: for any values of the keys, validation
 //! returns a problem or an error that names a key with its position — never a panic; and
 //! every physically valid choice is accepted.
 
@@ -103,7 +103,7 @@ fn paper_text() -> String {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
-    /// Issue 10: any `--set` option (keys of any depth, values with line breaks, quotes,
+    /// Any `--set` option (keys of any depth, values with line breaks, quotes,
     /// brackets) gives a scenario or an error that names the option, clipped to a bounded
     /// length, and never a panic.
     #[test]
@@ -143,7 +143,7 @@ proptest! {
         }
     }
 
-    /// Issue 10 (`--vary` splitting): values joined by commas split back into the same
+    /// `--vary` splitting: values joined by commas split back into the same
     /// values, whatever quotes, escapes and brackets they hold.
     #[test]
     fn vary_values_split_back(values in proptest::collection::vec(vary_value(), 1..5)) {
@@ -174,7 +174,7 @@ fn vary_value() -> impl Strategy<Value = String> {
     ]
 }
 
-/// Issue 10 (unbounded inputs): a key of 4,000 segments is refused at once by its length;
+/// Bounded inputs: a `--set` key of 4,000 segments is refused at once by its length;
 /// 32 segments are the most.
 #[test]
 fn deep_set_keys_are_capped() {
@@ -201,7 +201,8 @@ fn deep_set_keys_are_capped() {
     assert!(e.contains("unknown field `a`"), "{e}");
 }
 
-/// Issue 10 (`--set` silently drops the text after a newline).
+/// A `--set` value with a line break is refused when the break would end it (the text after
+/// it is never silently dropped), and accepted as one value inside brackets.
 #[test]
 fn set_with_a_line_break_is_one_value_or_refused() {
     let e = scenario::parse(
@@ -232,7 +233,8 @@ fn set_with_a_line_break_is_one_value_or_refused() {
     );
 }
 
-/// Issue 10 (unbounded inputs): a scenario file is read up to 16 MiB.
+/// Bounded inputs: a scenario file is read up to 16 MiB; an endless one is refused as too
+/// large.
 #[test]
 fn scenario_file_size_is_capped() {
     let e = scenario::load(Path::new("/dev/zero"), &[]).unwrap_err();
@@ -328,8 +330,8 @@ fn prescribed_positions_are_validated() {
     }
 }
 
-/// Found by `set_options_never_panic_and_errors_are_bounded` in a fresh clone (issue 10,
-/// unbounded inputs): malformed inline tables make the TOML parser recurse once per `{`, and a
+/// Found by `set_options_never_panic_and_errors_are_bounded` in a fresh clone (bounded
+/// inputs): malformed inline tables make the TOML parser recurse once per `{`, and a
 /// 1 MB scenario file (or a long `--set` value) overflowed the stack and aborted. Texts with
 /// more than `MAX_BRACES` `{` are refused before parsing.
 #[test]
@@ -1052,7 +1054,7 @@ fn any_ref() -> impl Strategy<Value = String> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
-    /// Issue 5 for networks: any values and references give a network or an error that
+    /// Networks: any values and references give a network or an error that
     /// names a key (or, for what only the assembled system shows, the setup), never a
     /// panic.
     #[test]

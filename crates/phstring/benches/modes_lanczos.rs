@@ -1,4 +1,4 @@
-//! The 10 lowest natural modes of a 1e5-element taut string (issue target: ≤ 2 s).
+//! The 10 lowest natural modes of a 1e5-element taut string (target: ≤ 2 s).
 //!
 //! `cargo bench -p phstring --bench modes_lanczos [-- ELEMENTS]`: a 1000 m steel wire
 //! (linear elastic, EA = 1e8 N, ρA = 1 kg/m) stretched 0.1 % between two supports, in 2D and

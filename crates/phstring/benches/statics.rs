@@ -1,4 +1,4 @@
-//! Static equilibrium of a 1e6-element hanging steel rope (issue target: ≤ 1 s).
+//! Static equilibrium of a 1e6-element hanging steel rope (target: ≤ 1 s).
 //!
 //! `cargo bench -p phstring --bench statics [-- ELEMENTS]`: a 1000 m rope (EA = 1e8 N,
 //! ρA = 1 kg/m) with a 2000 kg payload hangs from node 0; it starts straight down and

@@ -823,7 +823,7 @@ mod tests {
         }
     }
 
-    /// Issue 10: a stop request is honoured between Newton iterations, not only between
+    /// A stop request is honoured between Newton iterations, not only between
     /// steps (a step on a huge mesh can take minutes).
     #[test]
     fn stop_flag_ends_the_solve_between_iterations() {
@@ -862,7 +862,7 @@ mod tests {
         );
     }
 
-    /// Review of issue 10: forces whose squares overflow give an infinite force scale, which
+    /// Forces whose squares overflow give an infinite force scale, which
     /// must not make every residual acceptable.
     #[test]
     fn overflowing_scale_falls_back_to_the_absolute_tolerance() {

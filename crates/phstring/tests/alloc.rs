@@ -1,9 +1,9 @@
-//! The step loop does not allocate (issue 2): a counting global allocator around 50 steps of
+//! The step loop does not allocate: a counting global allocator around 50 steps of
 //! the paper's benchmark, after one warm-up step, for both linear solvers.
 //!
-//! Allocations are counted per thread (issue 10: a global counter also counted the test
-//! harness's allocations on other threads and failed on a busy machine), so only the
-//! allocations of the thread that runs the steps are measured.
+//! Allocations are counted per thread (a global counter would also count the test harness's
+//! allocations on other threads and fail on a busy machine), so only the allocations of the
+//! thread that runs the steps are measured.
 #![allow(unsafe_code)] // a global allocator needs `unsafe impl`
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -74,8 +74,7 @@ fn allocation_counter_ignores_other_threads() {
     drop(v);
 }
 
-/// Issue 10: `check` refuses runs that cannot fit in memory, from
-/// `phstring::estimated_memory_bytes`. The estimate must be what a simulation really holds:
+/// `check` refuses runs that cannot fit in memory, from `phstring::estimated_memory_bytes`. The estimate must be what a simulation really holds:
 /// the heap bytes of a set-up simulation (with its problem's state moved in) and after ten
 /// steps, against the estimate, in 1D, 2D and 3D.
 #[test]

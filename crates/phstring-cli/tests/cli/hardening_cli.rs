@@ -1,6 +1,6 @@
-//! Issue 10, findings of hostile-user testing on the command line: output folders (`--force`,
+//! Hostile input on the command line: output folders (`--force`,
 //! symbolic links, locks), signals, unbounded inputs, memory and step budgets, and messages.
-//! Each test is named after its finding. No test depends on timing: waits are for outcomes,
+//! Each test is named after what it guards. No test depends on timing: waits are for outcomes,
 //! with generous limits only as guards against a hang.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! Issue 10, output layer: plots with extreme data, damaged and foreign checkpoints,
+//! Hostile input at the output layer: plots with extreme data, damaged and foreign checkpoints,
 //! non-finite values, bounded checkpoints, flushing and stop requests, failed writes,
 //! stale temporary files, control characters.
 
@@ -89,9 +89,8 @@ fn assert_no_non_finite(dir: &Path) {
     }
 }
 
-/// Finding "plot hang": the issue's geometry at x = 1e308 made the configuration plot loop
-/// forever. Now the run either is refused at validation or ends with a summary, the
-/// degenerate plot skipped with a warning.
+/// Plot hang: a string at x = 1e308, whose configuration plot would loop forever, is either
+/// refused at validation or ends with a summary, the degenerate plot skipped with a warning.
 #[test]
 fn plot_hang_extreme_geometry_ends_with_a_summary() {
     let out = temp_dir("hang").join("o");
@@ -391,9 +390,9 @@ fn resume_into_another_run_folder_is_refused() {
     assert!(resume(&cp).status.success());
 }
 
-/// Finding "non-finite values are written and reported as completed": with the issue's
-/// inputs no NaN or infinity reaches a file, and no run with a non-finite energy ends
-/// `completed`.
+/// Non-finite values are neither written nor reported as completed: with a string at
+/// x = 1e308 under gravity, a strain that overflows, or an overflowing gravity, no NaN or
+/// infinity reaches a file, and no run with a non-finite energy ends `completed`.
 #[test]
 fn non_finite_values_never_reach_outputs() {
     let tmp = temp_dir("nonfinite");
@@ -479,7 +478,7 @@ fn non_finite_derived_quantities_are_refused_by_check_and_run() {
     }
 }
 
-/// Review of issue 10: a resume that is refused because one output file does not match its
+/// A resume that is refused because one output file does not match its
 /// checkpoint must leave every file as it was (it used to cut `positions.csv` back before
 /// finding that `ports.csv` was short).
 #[test]

@@ -1,4 +1,4 @@
-//! Networks (issue 11, items 1, 4, 10): several strings joined at shared nodes, springs, point
+//! Networks: several strings joined at shared nodes, springs, point
 //! masses and a moving support in one system. Checks: the discrete energy balance of the
 //! whole network on every step, momentum and angular momentum of a free network, and the
 //! momentum balance through the support ports.

@@ -1,4 +1,4 @@
-//! Point masses at nodes (issue 11, item 2): a payload on a light rope against the closed-form
+//! Point masses at nodes: a payload on a light rope against the closed-form
 //! spring–mass oscillation, and the exact discrete balances with masses attached.
 
 use std::f64::consts::PI;
