@@ -92,6 +92,7 @@ fn check_axis(name: &str, lo: f64, hi: f64, log: bool) -> Result<(), String> {
 
 /// Error while writing a figure.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlotError {
     /// The bundled font could not be registered with the plotting library.
     #[error("cannot register the bundled DejaVu Sans font for plotting")]

@@ -139,6 +139,7 @@ pub const SUMMARY_RESERVE: usize = 4096;
 
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RunError {
     /// The scenario is invalid.
     #[error(transparent)]

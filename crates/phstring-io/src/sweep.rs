@@ -123,6 +123,7 @@ pub const MAX_RUNS: usize = 100_000;
 
 /// Errors of a sweep as a whole (a failed run is recorded in its [`SweepRun`]).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SweepError {
     /// A `--vary` or `--set` option, or a combination of values, is invalid.
     #[error(transparent)]

@@ -12,6 +12,7 @@ use vtkio::model::{
 
 /// Error while writing or validating VTK output.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum VtkError {
     /// The arrays passed in are inconsistent (lengths, indices, names, times).
     #[error("cannot write {path}: {message}")]

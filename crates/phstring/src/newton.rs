@@ -216,6 +216,7 @@ pub trait NewtonProblem<const D: usize> {
 
 /// Why a Newton solve failed.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum NewtonError<E> {
     /// The evaluation failed.
     Eval(E),
