@@ -520,51 +520,15 @@ fn single_string_examples_stay_chains() {
     assert!(seen >= 6);
 }
 
-/// The platform example is the network of the library's verification test, built with
-/// `NetworkBuilder` by hand: the same mesh, groups, conditions and initial state.
+/// The platform example is the network of the library's verification test
+/// (`phstring::testing::platform`, built with `NetworkBuilder` by hand): the same mesh,
+/// groups, conditions and initial state.
 #[test]
 fn platform_example_is_the_hand_built_network() {
-    use phstring::{Material, NetworkBuilder, StringSpec, Vector};
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/platform_3d.toml");
     let file = scenario::load(&path, &[]).unwrap();
     let v = file.validate::<3>().unwrap();
-    let g = Vector::<3>::new(0.0, 0.0, -9.81);
-    let mut b = NetworkBuilder::<3, Material>::new();
-    let p = b.node(Vector::<3>::new(0.3, -0.2, 0.0));
-    let corners: Vec<usize> = [(-5.0, -4.0), (5.0, -4.0), (5.0, 4.0), (-5.0, 4.0)]
-        .iter()
-        .map(|&(x, y)| b.node(Vector::<3>::new(x, y, 10.0)))
-        .collect();
-    let cables: Vec<usize> = corners
-        .iter()
-        .enumerate()
-        .map(|(k, &c)| {
-            let spec = StringSpec {
-                name: format!("cable{k}"),
-                material: Material::tension_only_linear(5e7),
-                rho_a: 2.0,
-                mass: phstring::MassMatrix::Consistent,
-                body_force: g * 2.0,
-                prestretch: 1.0,
-            };
-            b.string(spec, &[c, p], 12).unwrap()
-        })
-        .collect();
-    let mid = |b: &NetworkBuilder<3, Material>, g: usize| b.group_nodes(g).unwrap()[6];
-    let (m0, m1) = (mid(&b, cables[0]), mid(&b, cables[1]));
-    b.spring("link", m0, m1, 2e4, 5.0).unwrap();
-    b.spring_to_point("tie", p, Vector::<3>::new(0.8, -0.2, 0.0), 5e3, 0.5)
-        .unwrap();
-    let net = b
-        .build(
-            phstring::Boundary::default(),
-            vec![phstring::PointMass {
-                node: p,
-                mass: 1500.0,
-                weight: g * 1500.0,
-            }],
-        )
-        .unwrap();
+    let (net, _) = phstring::testing::platform();
     let s = &v.problem;
     assert_eq!(s.mesh, net.mesh);
     assert_eq!(s.groups, net.groups);
