@@ -31,9 +31,10 @@ fn allocation_counter_ignores_other_threads() {
     drop(v);
 }
 
-/// `check` refuses runs that cannot fit in memory, from `phstring::estimated_memory_bytes`. The estimate must be what a simulation really holds:
-/// the heap bytes of a set-up simulation (with its problem's state moved in) and after ten
-/// steps, against the estimate, in 1D, 2D and 3D.
+/// `check` refuses runs that cannot fit in memory, from `phstring::estimated_memory_bytes`.
+/// The estimate must be what a simulation really holds: the heap bytes of a set-up
+/// simulation (with its problem's state moved in) and after ten steps, against the estimate,
+/// in 1D, 2D and 3D.
 #[test]
 fn memory_estimate_matches_the_allocator() {
     fn measure<const D: usize>(n_el: usize) -> (isize, isize) {
