@@ -106,7 +106,7 @@ fn kill(sig: &str, child: &Child) {
     assert!(ok.success());
 }
 
-// ---- Medium: output folders -------------------------------------------------------------
+// ---- Output folders ---------------------------------------------------------------------
 
 /// `--force` keeps the user's files: only the exact names phstring writes go
 /// (`figure1.png`, `run_1/`, `run_/`, `notes.txt` stay), and the outputs of the earlier run
@@ -298,7 +298,7 @@ fn lock_of_a_killed_run_does_not_block() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-// ---- Medium: signals --------------------------------------------------------------------
+// ---- Signals ----------------------------------------------------------------------------
 
 /// Kills the child when dropped (a failed test leaves no process behind).
 struct Guard(Option<Child>);
@@ -390,7 +390,7 @@ fn sigterm_stops_a_run_cleanly() {
     assert!(out.join("checkpoint.json").exists());
 }
 
-// ---- Medium: unbounded inputs -----------------------------------------------------------
+// ---- Unbounded inputs -------------------------------------------------------------------
 
 /// `phstring check /dev/zero` is refused as larger than 16 MiB instead of read forever.
 #[test]
@@ -470,7 +470,7 @@ fn jobs_are_capped() {
     assert!(!out.exists());
 }
 
-// ---- Medium: memory and steps -----------------------------------------------------------
+// ---- Memory and steps -------------------------------------------------------------------
 
 /// A run that does not fit in memory is refused: `check` shows the
 /// estimate and warns, `run` refuses before it allocates anything; a sweep counts its
@@ -558,7 +558,7 @@ fn runs_of_too_many_steps_are_warned_about_and_refused() {
     );
 }
 
-// ---- Low --------------------------------------------------------------------------------
+// ---- Messages and options ---------------------------------------------------------------
 
 /// A full stderr or stdout (`2>/dev/full`) does not make phstring panic (`eprintln!` would,
 /// with exit code 101): the exit code stays the command's own.
