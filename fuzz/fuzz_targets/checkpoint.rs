@@ -1,5 +1,5 @@
 //! Fuzz target: reading and restoring checkpoints must never panic, hang or produce
-//! non-finite energies, whatever the bytes (issue 10: a checkpoint with a number removed made
+//! non-finite energies, whatever the bytes (a checkpoint with a number removed once made
 //! `--resume` panic inside nalgebra).
 //!
 //! Each input is tried twice: as raw bytes (format, size and checksum checks), and, if it

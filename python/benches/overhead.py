@@ -1,4 +1,4 @@
-"""Overheads of the Python package (issue 15), printed as a table:
+"""Overheads of the Python package, printed as a table:
 1. the paper benchmark run from Python (`phstring.run`, in-process) against the CLI's time
    loop (`time_loop_s` of `phstring run`, the stepping alone), best of 5;
 2. the per-step overhead of `Simulation.step()` from Python: a Python loop over `step()`

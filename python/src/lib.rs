@@ -1,5 +1,6 @@
-//! Python bindings of phstring (work in progress, issue 15): scenarios, the stepper and a
-//! run that returns NumPy arrays. Units as in the library: SI (m, s, kg, N, J).
+//! Python bindings of phstring: scenarios, the stepper (with port inputs and checkpoints), a
+//! run that returns NumPy arrays or writes the CLI's output folder, static equilibrium,
+//! natural modes and the linearized system. Units as in the library: SI (m, s, kg, N, J).
 
 use std::path::Path;
 use std::sync::{Arc, Mutex};

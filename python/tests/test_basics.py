@@ -1,4 +1,4 @@
-"""The Python package against the command line (issue 15, first part): the paper's run from
+"""The Python package against the command line: the paper's run from
 Python is the CLI's, bit for bit; errors map to ScenarioError and StepError."""
 
 import csv

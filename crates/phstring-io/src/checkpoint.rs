@@ -254,6 +254,7 @@ pub struct CheckpointFile {
 
 /// Errors reading or writing checkpoints.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CheckpointError {
     /// I/O.
     #[error("checkpoint {}: {cause}", path.display())]

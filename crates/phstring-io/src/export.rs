@@ -26,6 +26,7 @@ use crate::scenario::{ScenarioError, ScenarioFile};
 
 /// Why `phstring linearize` failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ExportError {
     /// The scenario is invalid.
     #[error(transparent)]

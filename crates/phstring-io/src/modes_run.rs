@@ -26,6 +26,7 @@ use crate::vtk::{FrameData, PvdWriter, write_vtp_frame};
 
 /// Why `phstring modes` failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ModesRunError {
     /// The scenario is invalid.
     #[error(transparent)]

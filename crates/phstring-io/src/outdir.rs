@@ -149,6 +149,7 @@ pub fn is_bookkeeping(name: &str) -> bool {
 
 /// Errors preparing an output folder.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum OutDirError {
     /// The path exists and is not a folder.
     #[error("output path {} exists and is not a folder", .0.display())]

@@ -344,6 +344,7 @@ pub fn frames_hash_start() -> u64 {
 
 /// Errors while writing outputs.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum OutputError {
     /// A file could not be written.
     #[error("cannot write {}: {cause}", path.display())]

@@ -92,6 +92,7 @@ fn check_axis(name: &str, lo: f64, hi: f64, log: bool) -> Result<(), String> {
 
 /// Error while writing a figure.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlotError {
     /// The bundled font could not be registered with the plotting library.
     #[error("cannot register the bundled DejaVu Sans font for plotting")]
@@ -1715,8 +1716,8 @@ mod tests {
         cleanup(&dir);
     }
 
-    /// Issue 10, plot hang: plotters' tick computation loops forever on ranges that are not
-    /// finite or too narrow for their magnitude; such data is refused before drawing.
+    /// Plotters' tick computation loops forever on ranges that are not finite or too narrow
+    /// for their magnitude; such data is refused before drawing, so a plot never hangs.
     #[test]
     fn plot_hang_degenerate_and_extreme_ranges_are_refused() {
         let dir = temp_dir("extreme");
@@ -1724,7 +1725,7 @@ mod tests {
             let e = r.unwrap_err();
             assert!(matches!(e, PlotError::Range { .. }), "{e}");
         };
-        // The issue's geometry: x = 1e308 for all nodes.
+        // Every node at x = 1e308.
         let far = vec![(0.0, vec![[1e308, 0.0], [1e308, -1.0]])];
         range_err(configuration_plot(&dir.join("c1"), "far", &far));
         // A span of 1e-10 m at 1e10 m (relative 1e-20) and a huge magnitude.
@@ -1784,8 +1785,8 @@ mod tests {
         cleanup(&dir);
     }
 
-    /// Issue 10: control characters in titles reached the terminal, and NUL made the SVG
-    /// invalid.
+    /// Control characters are stripped from titles (they would reach a terminal, and NUL would
+    /// make the SVG invalid), and long titles are clipped.
     #[test]
     fn control_characters_in_titles_are_stripped() {
         assert_eq!(sanitize_text("a\0b\x1b[31mc\r\n\u{85}d", 100), "ab[31mcd");

@@ -139,6 +139,7 @@ pub const SUMMARY_RESERVE: usize = 4096;
 
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RunError {
     /// The scenario is invalid.
     #[error(transparent)]
@@ -1024,8 +1025,8 @@ mod tests {
         text
     }
 
-    /// Issue 10 ("error causes are printed twice"), at the cause: no error type both writes
-    /// its cause into its message and chains it as a source.
+    /// An error's cause is printed once along the whole chain: no error type both writes its
+    /// cause into its message and chains it as a source.
     #[test]
     fn error_causes_are_printed_once() {
         let io = || std::io::Error::other("disk full");
@@ -1067,7 +1068,8 @@ mod tests {
         assert_eq!(text.matches("singular").count(), 1, "{text}");
     }
 
-    /// Issue 10: `f64::max` dropped a NaN, so a broken run reported `max_balance_error: 0`.
+    /// The running maximum keeps a NaN (`f64::max` would drop it), so a broken run cannot
+    /// report `max_balance_error: 0`.
     #[test]
     fn non_finite_maximum_propagates_nan() {
         assert!(nan_max(0.0, f64::NAN).is_nan());

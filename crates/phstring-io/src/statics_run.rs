@@ -27,6 +27,7 @@ use crate::vtk::{FrameData, write_vtp_frame};
 
 /// Why `phstring statics` failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum StaticsRunError {
     /// The scenario is invalid.
     #[error(transparent)]

@@ -123,6 +123,7 @@ pub const MAX_RUNS: usize = 100_000;
 
 /// Errors of a sweep as a whole (a failed run is recorded in its [`SweepRun`]).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SweepError {
     /// A `--vary` or `--set` option, or a combination of values, is invalid.
     #[error(transparent)]
@@ -440,7 +441,7 @@ mod tests {
         assert!(Vary::parse("k=1,,2").is_err());
     }
 
-    /// Issue 10: `\"` inside a quoted value does not end it, `'…'` quotes too, and an
+    /// `\"` inside a quoted value does not end it, `'…'` quotes too, and an
     /// unbalanced quote or bracket is an error naming its position.
     #[test]
     fn vary_splitter_handles_escapes_and_unbalanced_quotes() {
@@ -468,7 +469,7 @@ mod tests {
         );
     }
 
-    /// Issue 10: a sweep of 6.6e12 combinations is refused with its count, without making
+    /// A sweep of 6.6e12 combinations is refused with its count, without making
     /// the combinations.
     #[test]
     fn sweep_run_count_is_capped() {

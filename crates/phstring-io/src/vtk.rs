@@ -12,6 +12,7 @@ use vtkio::model::{
 
 /// Error while writing or validating VTK output.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum VtkError {
     /// The arrays passed in are inconsistent (lengths, indices, names, times).
     #[error("cannot write {path}: {message}")]
@@ -630,7 +631,8 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
-    /// Issue 10: control characters must not make the XML invalid.
+    /// Control characters are dropped (tab, line feed and carriage return escaped), so that a
+    /// title cannot make the XML invalid; escaping and unescaping round-trip.
     #[test]
     fn xml_escape_strips_control_characters() {
         assert_eq!(xml_escape("a\0b\x1bc\u{7f}d\u{FFFF}"), "abcd");
@@ -697,7 +699,8 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
-    /// Issue 10: no NaN or infinity ever reaches an output file.
+    /// A NaN or infinite position, velocity or element field is refused and no `.vtp` file is
+    /// written.
     #[test]
     fn non_finite_values_are_refused_in_vtp() {
         let dir = temp_dir("vtpnan");

@@ -1,4 +1,4 @@
-//! The physics of the example scenarios (issue 11, item 9), run in-process from the files in
+//! The physics of the example scenarios, run in-process from the files in
 //! `examples/`: what each example claims in its header comment is checked here.
 
 use std::path::Path;

@@ -1,4 +1,4 @@
-//! Outputs of a network run (issue 11, item 8): `elements.csv` and `point_masses.csv` match
+//! Outputs of a network run: `elements.csv` and `point_masses.csv` match
 //! the mesh, `positions.csv` lists every node, the ParaView frames carry the group index and
 //! the axial force of every element and the point masses, `ports.csv` has one row per port
 //! and step, and the configuration plot and the animation draw the network.

@@ -1,4 +1,4 @@
-//! Property tests of the scenario validator (issue 5): for any values of the keys, validation
+//! Property tests of the scenario validator: for any values of the keys, validation
 //! returns a problem or an error that names a key with its position — never a panic; and
 //! every physically valid choice is accepted.
 
@@ -103,7 +103,7 @@ fn paper_text() -> String {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
-    /// Issue 10: any `--set` option (keys of any depth, values with line breaks, quotes,
+    /// Any `--set` option (keys of any depth, values with line breaks, quotes,
     /// brackets) gives a scenario or an error that names the option, clipped to a bounded
     /// length, and never a panic.
     #[test]
@@ -143,7 +143,7 @@ proptest! {
         }
     }
 
-    /// Issue 10 (`--vary` splitting): values joined by commas split back into the same
+    /// `--vary` splitting: values joined by commas split back into the same
     /// values, whatever quotes, escapes and brackets they hold.
     #[test]
     fn vary_values_split_back(values in proptest::collection::vec(vary_value(), 1..5)) {
@@ -174,7 +174,7 @@ fn vary_value() -> impl Strategy<Value = String> {
     ]
 }
 
-/// Issue 10 (unbounded inputs): a key of 4,000 segments is refused at once by its length;
+/// Bounded inputs: a `--set` key of 4,000 segments is refused at once by its length;
 /// 32 segments are the most.
 #[test]
 fn deep_set_keys_are_capped() {
@@ -201,7 +201,8 @@ fn deep_set_keys_are_capped() {
     assert!(e.contains("unknown field `a`"), "{e}");
 }
 
-/// Issue 10 (`--set` silently drops the text after a newline).
+/// A `--set` value with a line break is refused when the break would end it (the text after
+/// it is never silently dropped), and accepted as one value inside brackets.
 #[test]
 fn set_with_a_line_break_is_one_value_or_refused() {
     let e = scenario::parse(
@@ -232,7 +233,8 @@ fn set_with_a_line_break_is_one_value_or_refused() {
     );
 }
 
-/// Issue 10 (unbounded inputs): a scenario file is read up to 16 MiB.
+/// Bounded inputs: a scenario file is read up to 16 MiB; an endless one is refused as too
+/// large.
 #[test]
 fn scenario_file_size_is_capped() {
     let e = scenario::load(Path::new("/dev/zero"), &[]).unwrap_err();
@@ -328,8 +330,8 @@ fn prescribed_positions_are_validated() {
     }
 }
 
-/// Found by `set_options_never_panic_and_errors_are_bounded` in a fresh clone (issue 10,
-/// unbounded inputs): malformed inline tables make the TOML parser recurse once per `{`, and a
+/// Found by `set_options_never_panic_and_errors_are_bounded` in a fresh clone (bounded
+/// inputs): malformed inline tables make the TOML parser recurse once per `{`, and a
 /// 1 MB scenario file (or a long `--set` value) overflowed the stack and aborted. Texts with
 /// more than `MAX_BRACES` `{` are refused before parsing.
 #[test]
@@ -518,51 +520,15 @@ fn single_string_examples_stay_chains() {
     assert!(seen >= 6);
 }
 
-/// The platform example is the network of the library's verification test, built with
-/// `NetworkBuilder` by hand: the same mesh, groups, conditions and initial state.
+/// The platform example is the network of the library's verification test
+/// (`phstring::testing::platform`, built with `NetworkBuilder` by hand): the same mesh,
+/// groups, conditions and initial state.
 #[test]
 fn platform_example_is_the_hand_built_network() {
-    use phstring::{Material, NetworkBuilder, StringSpec, Vector};
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/platform_3d.toml");
     let file = scenario::load(&path, &[]).unwrap();
     let v = file.validate::<3>().unwrap();
-    let g = Vector::<3>::new(0.0, 0.0, -9.81);
-    let mut b = NetworkBuilder::<3, Material>::new();
-    let p = b.node(Vector::<3>::new(0.3, -0.2, 0.0));
-    let corners: Vec<usize> = [(-5.0, -4.0), (5.0, -4.0), (5.0, 4.0), (-5.0, 4.0)]
-        .iter()
-        .map(|&(x, y)| b.node(Vector::<3>::new(x, y, 10.0)))
-        .collect();
-    let cables: Vec<usize> = corners
-        .iter()
-        .enumerate()
-        .map(|(k, &c)| {
-            let spec = StringSpec {
-                name: format!("cable{k}"),
-                material: Material::tension_only_linear(5e7),
-                rho_a: 2.0,
-                mass: phstring::MassMatrix::Consistent,
-                body_force: g * 2.0,
-                prestretch: 1.0,
-            };
-            b.string(spec, &[c, p], 12).unwrap()
-        })
-        .collect();
-    let mid = |b: &NetworkBuilder<3, Material>, g: usize| b.group_nodes(g).unwrap()[6];
-    let (m0, m1) = (mid(&b, cables[0]), mid(&b, cables[1]));
-    b.spring("link", m0, m1, 2e4, 5.0).unwrap();
-    b.spring_to_point("tie", p, Vector::<3>::new(0.8, -0.2, 0.0), 5e3, 0.5)
-        .unwrap();
-    let net = b
-        .build(
-            phstring::Boundary::default(),
-            vec![phstring::PointMass {
-                node: p,
-                mass: 1500.0,
-                weight: g * 1500.0,
-            }],
-        )
-        .unwrap();
+    let (net, _) = phstring::testing::platform();
     let s = &v.problem;
     assert_eq!(s.mesh, net.mesh);
     assert_eq!(s.groups, net.groups);
@@ -1052,7 +1018,7 @@ fn any_ref() -> impl Strategy<Value = String> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
-    /// Issue 5 for networks: any values and references give a network or an error that
+    /// Networks: any values and references give a network or an error that
     /// names a key (or, for what only the assembled system shows, the setup), never a
     /// panic.
     #[test]

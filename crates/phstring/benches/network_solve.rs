@@ -24,10 +24,7 @@
 //! allocations of the first solve after construction (`1st`) and of the timed solves
 //! (`allocs`, summed over the repetitions); the bench fails if the network solver (with the
 //! block LU or faer's simplicial LU) allocates in a solve.
-#![allow(unsafe_code)] // a global allocator needs `unsafe impl`
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -39,35 +36,11 @@ use nalgebra::SVector;
 use phstring::linsolve::{
     Block, BlockJacobian, BlockTridiagonal, JunctionLu, LinearSolver, NetworkSolver, SparseLu,
 };
+use phstring::testing::{CountingAllocator, allocations, grid_net};
 use phstring::{LinearSolveError, Mesh};
 
-struct Counting;
-
-thread_local! {
-    /// Allocations made by this thread.
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCS.with(Cell::get)
-}
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 /// Timed repetitions per design (the median and the minimum are reported).
 const REPS: usize = 7;
@@ -84,38 +57,6 @@ impl Rng {
         z ^= z >> 31;
         (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
     }
-}
-
-/// `nh` horizontal and `nv` vertical strings crossing at shared nodes every `spacing`
-/// elements, with free tails of `tail` elements. Crossings are nodes `0 … nh·nv − 1`, the
-/// other nodes are numbered string by string.
-fn grid_net(nh: usize, nv: usize, spacing: usize, tail: usize) -> Mesh {
-    let mut els = Vec::new();
-    let mut next = nh * nv;
-    let mut string = |n_cross: usize, crossing: &dyn Fn(usize) -> usize| {
-        let len = 2 * tail + spacing * (n_cross - 1);
-        let mut prev = None;
-        for pos in 0..=len {
-            let node = if pos >= tail && (pos - tail).is_multiple_of(spacing) {
-                crossing((pos - tail) / spacing)
-            } else {
-                next += 1;
-                next - 1
-            };
-            if let Some(p) = prev {
-                els.push([p, node]);
-            }
-            prev = Some(node);
-        }
-    };
-    for h in 0..nh {
-        string(nv, &|v| h * nv + v);
-    }
-    for v in 0..nv {
-        string(nh, &|h| h * nv + v);
-    }
-    let n = els.len();
-    Mesh::new(next, els, vec![1.0; n]).expect("valid net")
 }
 
 fn random_jac<const D: usize>(mesh: &Mesh, rng: &mut Rng) -> BlockJacobian<D> {

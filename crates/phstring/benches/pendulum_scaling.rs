@@ -1,4 +1,4 @@
-//! The paper's pendulum on fine meshes (issue 4): largest fixed step that converges with
+//! The paper's pendulum on fine meshes: largest fixed step that converges with
 //! plain Newton, with the line search, and with line search plus nonlinear elimination; and
 //! adaptive runs at N = 3000 for each law, with their step sizes and Newton work.
 //!
@@ -6,7 +6,7 @@
 //! best of three runs; the runs are deterministic, so only the wall time varies. With
 //! `-- full` the fixed-step table runs N = 30000 to T = 1 s as well (about 45 minutes; without
 //! it, to T = 0.05 s), and `-- table` prints only that table. `-- damping` prints only the
-//! table of adaptive runs with Kelvin–Voigt damping (issue 13): does a physically small
+//! table of adaptive runs with Kelvin–Voigt damping: does a physically small
 //! viscosity remove the crumpling of the compressed free end and let the steps stay large?
 
 use std::collections::BTreeMap;

@@ -1,4 +1,4 @@
-//! Throughput of the time stepper: element-Newton-iterations per second (issue 4).
+//! Throughput of the time stepper: element-Newton-iterations per second.
 //!
 //! `cargo bench -p phstring --bench throughput [-- max_n]` prints one row per mesh size,
 //! dimension and linear solver. The problem is a taut string (both ends fixed, prestretched

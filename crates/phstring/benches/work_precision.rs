@@ -1,4 +1,4 @@
-//! Work–precision (issue 14): wall time against the global time-discretization error at
+//! Work–precision: wall time against the global time-discretization error at
 //! T = 1 s, for `dg` at fixed h, `dg` with error control, `dg4` at fixed h and `dg4` with error
 //! control, and an explicit RK4 on the same semi-discretization (lumped mass; phstring runs
 //! with lumped mass too, so that all solve one ODE). The error is the tip's (pendulum) or the

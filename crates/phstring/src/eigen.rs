@@ -19,6 +19,7 @@ use thiserror::Error;
 
 /// Why an eigenproblem could not be solved.
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum EigenError {
     /// A matrix or vector has the wrong size.
     #[error("size mismatch: {what} is {got}, expected {expected}")]

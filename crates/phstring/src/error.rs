@@ -20,6 +20,7 @@ impl std::fmt::Display for Num {
 
 /// An invalid problem definition, found before any time step is taken.
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum SetupError {
     /// The mesh has no elements.
     #[error("the mesh has no elements (need at least 1)")]
@@ -194,6 +195,7 @@ pub enum SetupError {
 
 /// A failure of the linear solve inside a Newton iteration.
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum LinearSolveError {
     /// A pivot block was singular (or a pivot was zero/NaN).
     #[error("singular Newton matrix at block {block}")]
@@ -232,6 +234,7 @@ impl StepError {
 
 /// A failure of one time step.
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum StepError {
     /// Newton's method did not reach the tolerance within the iteration limit.
     #[error(

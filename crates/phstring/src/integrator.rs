@@ -491,7 +491,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
 
 #[cfg(test)]
 mod tests {
-    //! Acceptance 4: `W'`, `W''`, `∂q/∂C₁` and the assembled Newton Jacobian against central
+    //! `W'`, `W''`, `∂q/∂C₁` and the assembled Newton Jacobian against central
     //! finite differences, on random states, d = 1, 2, 3, all laws, both schemes.
 
     use super::*;

@@ -81,6 +81,8 @@ pub mod observe;
 pub mod simulation;
 pub mod statics;
 pub mod system;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,

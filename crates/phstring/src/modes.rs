@@ -76,6 +76,7 @@ pub struct Modes<const D: usize> {
 
 /// Why no modes were computed.
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum ModesError {
     /// The problem is invalid.
     #[error(transparent)]

@@ -216,6 +216,7 @@ pub trait NewtonProblem<const D: usize> {
 
 /// Why a Newton solve failed.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum NewtonError<E> {
     /// The evaluation failed.
     Eval(E),
@@ -823,7 +824,7 @@ mod tests {
         }
     }
 
-    /// Issue 10: a stop request is honoured between Newton iterations, not only between
+    /// A stop request is honoured between Newton iterations, not only between
     /// steps (a step on a huge mesh can take minutes).
     #[test]
     fn stop_flag_ends_the_solve_between_iterations() {
@@ -862,7 +863,7 @@ mod tests {
         );
     }
 
-    /// Review of issue 10: forces whose squares overflow give an infinite force scale, which
+    /// Forces whose squares overflow give an infinite force scale, which
     /// must not make every residual acceptable.
     #[test]
     fn overflowing_scale_falls_back_to_the_absolute_tolerance() {

@@ -134,6 +134,7 @@ pub struct Equilibrium<const D: usize> {
 
 /// Why no equilibrium was found.
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum StaticsError {
     /// The problem definition is invalid.
     #[error(transparent)]

@@ -1,59 +1,16 @@
-//! The step loop does not allocate (issue 2): a counting global allocator around 50 steps of
+//! The step loop does not allocate: a counting global allocator around 50 steps of
 //! the paper's benchmark, after one warm-up step, for both linear solvers.
 //!
-//! Allocations are counted per thread (issue 10: a global counter also counted the test
-//! harness's allocations on other threads and failed on a busy machine), so only the
-//! allocations of the thread that runs the steps are measured.
-#![allow(unsafe_code)] // a global allocator needs `unsafe impl`
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+//! Allocations are counted per thread (a global counter would also count the test harness's
+//! allocations on other threads and fail on a busy machine), so only the allocations of the
+//! thread that runs the steps are measured.
 
 use phstring::benchmarks::{paper_params, paper_pendulum};
+use phstring::testing::{CountingAllocator, allocations, live_bytes};
 use phstring::{Scheme, Simulation, SolverKind, StepParams};
 
-struct Counting;
-
-thread_local! {
-    /// Allocations made by this thread (const-initialized: reading it never allocates).
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-    /// Bytes allocated minus bytes freed by this thread.
-    static LIVE: Cell<isize> = const { Cell::new(0) };
-}
-
-fn count(grow: isize) {
-    // `try_with` fails only while the thread is being torn down; nothing to count then.
-    let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
-    let _ = LIVE.try_with(|c| c.set(c.get() + grow));
-}
-
-/// Bytes allocated and not freed so far by the calling thread.
-fn live_bytes() -> isize {
-    LIVE.with(Cell::get)
-}
-
-/// Allocations made so far by the calling thread.
-fn allocations() -> usize {
-    ALLOCS.with(Cell::get)
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count(layout.size() as isize);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        let _ = LIVE.try_with(|c| c.set(c.get() - layout.size() as isize));
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count(new_size as isize - layout.size() as isize);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 /// The counting allocator sees allocations of the calling thread only, so another thread
 /// allocating at the same time (as the test harness does on a busy machine) is not counted.
@@ -74,10 +31,10 @@ fn allocation_counter_ignores_other_threads() {
     drop(v);
 }
 
-/// Issue 10: `check` refuses runs that cannot fit in memory, from
-/// `phstring::estimated_memory_bytes`. The estimate must be what a simulation really holds:
-/// the heap bytes of a set-up simulation (with its problem's state moved in) and after ten
-/// steps, against the estimate, in 1D, 2D and 3D.
+/// `check` refuses runs that cannot fit in memory, from `phstring::estimated_memory_bytes`.
+/// The estimate must be what a simulation really holds: the heap bytes of a set-up
+/// simulation (with its problem's state moved in) and after ten steps, against the estimate,
+/// in 1D, 2D and 3D.
 #[test]
 fn memory_estimate_matches_the_allocator() {
     fn measure<const D: usize>(n_el: usize) -> (isize, isize) {

@@ -1,5 +1,5 @@
-//! `time.scheme = "dg4"` and error control (`time.rtol`, `time.atol`) from the command line
-//! (issue 14): they run with exact balance, resume bit for bit, and bad values name the key.
+//! `time.scheme = "dg4"` and error control (`time.rtol`, `time.atol`) from the command line:
+//! they run with exact balance, resume bit for bit, and bad values name the key.
 
 use std::path::Path;
 

@@ -1,4 +1,4 @@
-//! Dissipation and feedback control from the command line (issue 13): the examples
+//! Dissipation and feedback control from the command line: the examples
 //! `damped_pendulum`, `damping_injection` and `pd_tip_tracking` run, and what each claims in
 //! its header comment is checked on its output files; bad damping and control keys are
 //! refused with the key and its line.

@@ -1,4 +1,4 @@
-//! `phstring fmu` (issue 16): the archive's layout and model description, networks'
+//! `phstring fmu`: the archive's layout and model description, networks'
 //! parameters, and refusals that name what is wrong and leave no file behind.
 
 use std::io::Read as _;

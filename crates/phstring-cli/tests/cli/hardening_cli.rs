@@ -1,6 +1,6 @@
-//! Issue 10, findings of hostile-user testing on the command line: output folders (`--force`,
+//! Hostile input on the command line: output folders (`--force`,
 //! symbolic links, locks), signals, unbounded inputs, memory and step budgets, and messages.
-//! Each test is named after its finding. No test depends on timing: waits are for outcomes,
+//! Each test is named after what it guards. No test depends on timing: waits are for outcomes,
 //! with generous limits only as guards against a hang.
 
 use std::path::{Path, PathBuf};
@@ -106,9 +106,9 @@ fn kill(sig: &str, child: &Child) {
     assert!(ok.success());
 }
 
-// ---- Medium: output folders -------------------------------------------------------------
+// ---- Output folders ---------------------------------------------------------------------
 
-/// Finding "`--force` deletes user files": only the exact names phstring writes go
+/// `--force` keeps the user's files: only the exact names phstring writes go
 /// (`figure1.png`, `run_1/`, `run_/`, `notes.txt` stay), and the outputs of the earlier run
 /// are replaced.
 #[test]
@@ -154,8 +154,8 @@ fn force_deletes_only_exact_output_names() {
     assert!(!out.join("paraview/frame_000005.vtp").exists());
 }
 
-/// Finding "`--force` follows a symlinked `paraview/` out of the folder": the link itself is
-/// removed, its target is neither cleared nor written to.
+/// `--force` does not follow a symlinked `paraview/` (or `energy.csv`) out of the folder: the
+/// link itself is removed, its target is neither cleared nor written to.
 #[test]
 fn force_does_not_follow_a_symlinked_paraview() {
     let tmp = temp_dir("force-symlink");
@@ -183,7 +183,7 @@ fn force_does_not_follow_a_symlinked_paraview() {
     assert_eq!(energy_rows(&out), 4);
 }
 
-/// Same finding, without `--force`: a resume refuses to write through a link among the
+/// Without `--force` either: a resume refuses to write through a link among the
 /// run's outputs.
 #[test]
 fn resume_refuses_to_write_through_a_symlink() {
@@ -201,7 +201,8 @@ fn resume_refuses_to_write_through_a_symlink() {
     assert_eq!(std::fs::read_dir(&target).unwrap().count(), 0);
 }
 
-/// Finding "`sweep --force` deletes the previous sweep before validating the new values".
+/// `sweep --force` validates the new values before it deletes anything: a bad value is
+/// refused and the previous sweep stays as it was.
 #[test]
 fn sweep_force_validates_before_deleting() {
     let out = temp_dir("sweep-validate").join("o");
@@ -238,7 +239,7 @@ fn sweep_force_validates_before_deleting() {
     assert!(out.join("run_001/energy.csv").exists());
 }
 
-/// Finding "concurrent runs into one folder corrupt each other": a folder whose lock is
+/// Concurrent runs cannot write into one folder: a folder whose lock is
 /// held (here by the test itself) is refused with a message naming it, and nothing is
 /// written; once the lock is free, the leftover lock file blocks nothing.
 #[test]
@@ -279,7 +280,7 @@ fn concurrent_runs_into_one_folder_are_refused() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-/// Same finding: the lock dies with the process, so a killed run does not block the next.
+/// The lock dies with the process, so a killed run does not block the next.
 #[test]
 fn lock_of_a_killed_run_does_not_block() {
     let out = temp_dir("lock-kill").join("o");
@@ -297,7 +298,7 @@ fn lock_of_a_killed_run_does_not_block() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-// ---- Medium: signals --------------------------------------------------------------------
+// ---- Signals ----------------------------------------------------------------------------
 
 /// Kills the child when dropped (a failed test leaves no process behind).
 struct Guard(Option<Child>);
@@ -317,7 +318,7 @@ impl Drop for Guard {
     }
 }
 
-/// Finding "signals: a second Ctrl-C does not force an exit": the first SIGTERM asks the
+/// A second signal forces an exit: the first SIGTERM asks the
 /// run to stop (here it is blocked reading its scenario from a FIFO, so it cannot), the
 /// second exits at once with code 130.
 #[test]
@@ -373,7 +374,7 @@ fn second_signal_exits_at_once() {
     assert!(seen.contains("second interrupt: exiting at once"), "{seen}");
 }
 
-/// Finding "signals: SIGTERM": it stops a run like Ctrl-C, with a checkpoint and code 130.
+/// SIGTERM stops a run like Ctrl-C, with a checkpoint and code 130.
 #[test]
 fn sigterm_stops_a_run_cleanly() {
     let out = temp_dir("sigterm").join("o");
@@ -389,9 +390,9 @@ fn sigterm_stops_a_run_cleanly() {
     assert!(out.join("checkpoint.json").exists());
 }
 
-// ---- Medium: unbounded inputs -----------------------------------------------------------
+// ---- Unbounded inputs -------------------------------------------------------------------
 
-/// Finding "`phstring check /dev/zero` reads forever".
+/// `phstring check /dev/zero` is refused as larger than 16 MiB instead of read forever.
 #[test]
 fn scenario_from_dev_zero_is_refused() {
     let child = command(&["check", "/dev/zero"])
@@ -408,7 +409,9 @@ fn scenario_from_dev_zero_is_refused() {
     );
 }
 
-/// Finding "deep `--set` keys cost quadratic time and memory".
+/// Deep `--set` keys cannot cost quadratic time and memory: a key of 4000 segments is
+/// refused by its length (clipped in the message), one of 40 by its depth (at most 32), and
+/// within the caps a new nested table costs one header line.
 #[test]
 fn deep_set_key_is_refused() {
     let key = vec!["a"; 4000].join(".");
@@ -427,7 +430,8 @@ fn deep_set_key_is_refused() {
     assert!(err.contains("unknown field `a`"), "{err}");
 }
 
-/// Finding "a sweep materializes all combinations first (6.6e12 aborts on allocation)".
+/// A sweep of 6.55e12 runs is refused with its count, before any combination is made (making
+/// them all first would abort on allocation).
 #[test]
 fn huge_sweep_is_refused_with_its_count() {
     let values = (0..40).map(|i| i.to_string()).collect::<Vec<_>>().join(",");
@@ -446,7 +450,7 @@ fn huge_sweep_is_refused_with_its_count() {
     );
 }
 
-/// Finding "`--jobs 100000` spawns threads until the machine stalls".
+/// `--jobs` is capped, so that `--jobs 100000` cannot spawn threads until the machine stalls.
 #[test]
 fn jobs_are_capped() {
     let out = temp_dir("jobs").join("o");
@@ -466,9 +470,9 @@ fn jobs_are_capped() {
     assert!(!out.exists());
 }
 
-// ---- Medium: memory and steps -----------------------------------------------------------
+// ---- Memory and steps -------------------------------------------------------------------
 
-/// Finding "the documented `mesh.elements` ≤ 5e7 does not fit in memory": `check` shows the
+/// A run that does not fit in memory is refused: `check` shows the
 /// estimate and warns, `run` refuses before it allocates anything; a sweep counts its
 /// parallel runs. The machine's memory is set with PHSTRING_MEMORY_AVAILABLE.
 #[test]
@@ -531,7 +535,7 @@ fn run_that_does_not_fit_in_memory_is_refused() {
     assert!(!out.exists());
 }
 
-/// Finding "check does not warn about runs of 1e12 steps": `check` warns above 1e9 planned
+/// Runs of too many steps: `check` warns above 1e9 planned
 /// steps, and validation (so `run` and `check`) refuses more than 1e10.
 #[test]
 fn runs_of_too_many_steps_are_warned_about_and_refused() {
@@ -554,9 +558,10 @@ fn runs_of_too_many_steps_are_warned_about_and_refused() {
     );
 }
 
-// ---- Low --------------------------------------------------------------------------------
+// ---- Messages and options ---------------------------------------------------------------
 
-/// Finding "`eprintln!` panics when stderr is full (`2>/dev/full`): exit 101".
+/// A full stderr or stdout (`2>/dev/full`) does not make phstring panic (`eprintln!` would,
+/// with exit code 101): the exit code stays the command's own.
 #[test]
 fn full_stderr_does_not_panic() {
     let full = || {
@@ -585,7 +590,8 @@ fn full_stderr_does_not_panic() {
     assert_eq!(o.status.code(), Some(0));
 }
 
-/// Finding "error causes are printed twice".
+/// An error's cause is printed once, also for a missing checkpoint and an output folder that
+/// cannot be made.
 #[test]
 fn error_causes_are_printed_once() {
     let o = phstring(&["check", "missing.toml"]);
@@ -602,7 +608,7 @@ fn error_causes_are_printed_once() {
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 }
 
-/// Finding "floats are printed with `{}` and show 300-digit decimals".
+/// Floats in messages are short (never printed with `{}`, which shows 300-digit decimals).
 #[test]
 fn floats_in_messages_are_short() {
     for set in ["time.h=5e-324", "material.ea=-5e-324", "time.end=1e300"] {
@@ -618,7 +624,7 @@ fn floats_in_messages_are_short() {
     assert!(text.lines().all(|l| l.len() < 300), "{text}");
 }
 
-/// Finding "error messages echo 10 MB expressions": user text in messages is cut at about
+/// Error messages do not echo 10 MB expressions: user text in messages is cut at about
 /// 200 bytes with its length.
 #[test]
 fn long_user_text_is_clipped_in_messages() {
@@ -646,7 +652,8 @@ fn long_user_text_is_clipped_in_messages() {
     assert!(err.len() < 2000, "{} bytes of error", err.len());
 }
 
-/// Finding "`--set` silently drops the text after a newline".
+/// A `--set` value with a line break that would end it is refused (the text after it is never
+/// silently dropped); one TOML value over several lines is accepted.
 #[test]
 fn set_value_with_a_newline_is_refused() {
     let o = phstring(&["check", PAPER, "--set", "time.h=0.01\ntime.end=5"]);
@@ -667,8 +674,8 @@ fn set_value_with_a_newline_is_refused() {
     assert!(stdout(&o).contains("body force: [0, -1.62] N/m"));
 }
 
-/// Finding "`--vary` mishandles `\"` and unbalanced quotes; the same key twice gives
-/// duplicate columns".
+/// `--vary` keeps `\"` inside quoted values, refuses an unbalanced quote with its position,
+/// and refuses a key varied twice or also given with `--set` (no duplicate columns).
 #[test]
 fn vary_quotes_escapes_and_duplicate_keys() {
     let out = temp_dir("vary").join("o");
@@ -716,7 +723,7 @@ fn vary_quotes_escapes_and_duplicate_keys() {
     assert!(stderr(&o).contains("also given with --set mesh.elements=30"));
 }
 
-/// Finding "control characters in titles reach the terminal".
+/// Control characters in titles are escaped on the terminal.
 #[test]
 fn control_characters_in_titles_are_escaped_on_the_terminal() {
     let tmp = temp_dir("control");
@@ -745,7 +752,7 @@ fn control_characters_in_titles_are_escaped_on_the_terminal() {
     assert!(!err.contains('\u{1b}'), "{err:?}");
 }
 
-/// Finding "misleading messages: an overflowing length is reported as nodes coincide".
+/// An overflowing length is reported as such, not as coinciding nodes.
 #[test]
 fn overflowing_length_is_not_reported_as_coinciding_nodes() {
     let o = phstring(&[
@@ -785,8 +792,8 @@ fn overflowing_length_is_not_reported_as_coinciding_nodes() {
     );
 }
 
-/// Finding "misleading messages: `boundary.-1.node` is reported as `boundary` is not a
-/// table": negative indices count from the end, and a non-index says how entries are named.
+/// Boundary entries are addressed by index in `--set`: negative indices count from the end,
+/// and a non-index says how entries are named (not that `boundary` is not a table).
 #[test]
 fn boundary_entries_are_addressed_by_index() {
     let o = phstring(&["check", PAPER, "--set", "boundary.-1.node=5"]);
@@ -809,7 +816,8 @@ fn boundary_entries_are_addressed_by_index() {
     assert!(stderr(&o).contains("index -3 out of range (2 entries)"));
 }
 
-/// Finding "no-op options are accepted silently".
+/// Options that would do nothing (`--checkpoint-every 0`, `--jobs 0`, `--resume` with
+/// `--force`) are refused, not accepted silently.
 #[test]
 fn no_op_options_are_refused() {
     for args in [

@@ -1,4 +1,4 @@
-//! Issue 10, output layer: plots with extreme data, damaged and foreign checkpoints,
+//! Hostile input at the output layer: plots with extreme data, damaged and foreign checkpoints,
 //! non-finite values, bounded checkpoints, flushing and stop requests, failed writes,
 //! stale temporary files, control characters.
 
@@ -89,9 +89,8 @@ fn assert_no_non_finite(dir: &Path) {
     }
 }
 
-/// Finding "plot hang": the issue's geometry at x = 1e308 made the configuration plot loop
-/// forever. Now the run either is refused at validation or ends with a summary, the
-/// degenerate plot skipped with a warning.
+/// Plot hang: a string at x = 1e308, whose configuration plot would loop forever, is either
+/// refused at validation or ends with a summary, the degenerate plot skipped with a warning.
 #[test]
 fn plot_hang_extreme_geometry_ends_with_a_summary() {
     let out = temp_dir("hang").join("o");
@@ -140,8 +139,9 @@ fn edit_valid(cp: &Path, to: &Path, edit: impl Fn(&mut CheckpointFile)) {
     c.write(to).unwrap();
 }
 
-/// Finding "panic on a damaged checkpoint": one number removed from `sim.r`, `sim.v` or
-/// `sim.acc` made the resume panic inside nalgebra.
+/// A damaged checkpoint is refused, not a panic: with one number removed from `sim.r`,
+/// `sim.v`, `sim.acc`, `sim.v_mid` or `sim.c`, the resume is refused by the checksum, and with
+/// a right checksum by the lengths checked against the scenario.
 #[test]
 fn damaged_checkpoint_is_refused_not_panicking() {
     let out = temp_dir("damaged").join("o");
@@ -181,9 +181,9 @@ fn damaged_checkpoint_is_refused_not_panicking() {
     assert_eq!(summary(&out)["status"], "completed");
 }
 
-/// Finding "edited numbers are accepted silently": `h_cur = 1e300`, a negative `t_base`,
-/// huge `steps`, `energy_bytes = 0`, an edited `scenario_text` are refused, both as a text
-/// edit (checksum) and as a valid file with wrong content (range checks).
+/// Edited checkpoint numbers are not accepted silently: `h_cur = 1e300`, a negative
+/// `t_base`, huge `steps`, `energy_bytes = 0`, an edited `scenario_text` are refused, both as
+/// a text edit (checksum) and as a valid file with wrong content (range checks).
 #[test]
 fn edited_checkpoint_numbers_are_refused() {
     let out = temp_dir("edited").join("o");
@@ -305,8 +305,8 @@ fn edited_checkpoint_numbers_are_refused() {
     );
 }
 
-/// Finding "unbounded inputs": `--resume /dev/zero` read forever; a huge file is refused
-/// before it is read.
+/// Bounded inputs: `--resume /dev/zero` is refused instead of read forever, and a huge file
+/// or a folder is refused before it is read.
 #[test]
 fn resume_from_dev_zero_or_a_huge_file_is_refused() {
     if Path::new("/dev/zero").exists() {
@@ -331,7 +331,7 @@ fn resume_from_dev_zero_or_a_huge_file_is_refused() {
     );
 }
 
-/// Finding "`--resume A/checkpoint.json --out B` overwrites another run": refused, naming
+/// `--resume A/checkpoint.json --out B` would overwrite another run: it is refused, naming
 /// both folders, and B is left as it was.
 #[test]
 fn resume_into_another_run_folder_is_refused() {
@@ -391,9 +391,9 @@ fn resume_into_another_run_folder_is_refused() {
     assert!(resume(&cp).status.success());
 }
 
-/// Finding "non-finite values are written and reported as completed": with the issue's
-/// inputs no NaN or infinity reaches a file, and no run with a non-finite energy ends
-/// `completed`.
+/// Non-finite values are neither written nor reported as completed: with a string at
+/// x = 1e308 under gravity, a strain that overflows, or an overflowing gravity, no NaN or
+/// infinity reaches a file, and no run with a non-finite energy ends `completed`.
 #[test]
 fn non_finite_values_never_reach_outputs() {
     let tmp = temp_dir("nonfinite");
@@ -431,7 +431,7 @@ fn non_finite_values_never_reach_outputs() {
     }
 }
 
-/// Finding "non-finite values are written and reported as completed", at validation: `check`
+/// Non-finite values, at validation: `check`
 /// and `run` refuse a scenario whose derived quantities overflow, name the quantity, and a
 /// refused run creates no output folder.
 #[test]
@@ -479,7 +479,7 @@ fn non_finite_derived_quantities_are_refused_by_check_and_run() {
     }
 }
 
-/// Review of issue 10: a resume that is refused because one output file does not match its
+/// A resume that is refused because one output file does not match its
 /// checkpoint must leave every file as it was (it used to cut `positions.csv` back before
 /// finding that `ports.csv` was short).
 #[test]
@@ -511,9 +511,9 @@ fn leaves(v: &serde_json::Value) -> usize {
     }
 }
 
-/// Finding "memory grows without bound on long runs": the energy history went into every
-/// checkpoint. A checkpoint after 100 and after 1900 steps has the same values (and about
-/// the same size: numbers differ in digits only).
+/// Memory does not grow with the length of a run: no history goes into a checkpoint, so a
+/// checkpoint after 100 and after 1900 steps has the same values (and about the same size:
+/// numbers differ in digits only).
 #[test]
 fn checkpoint_size_does_not_grow_with_steps() {
     let tmp = temp_dir("cpsize");
@@ -564,7 +564,7 @@ fn taut() -> scenario::ScenarioFile {
     scenario::load(&workspace_root().join("examples/taut_string.toml"), &[]).unwrap()
 }
 
-/// Finding "signals are not honoured in long phases" (output side): the stop flag is passed
+/// A stop request is honoured within a step: the stop flag is passed
 /// to the simulation, a stop inside a step ends the run `interrupted` with a checkpoint, and
 /// the resumed run equals an uninterrupted one.
 #[test]
@@ -609,7 +609,7 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
     assert_eq!(info.history.increments().0.len(), rows - 1);
 }
 
-/// Finding "signals are not honoured in long phases": a stop during the plot phase skips
+/// A stop request is honoured in the plot phase: a stop there skips
 /// the remaining plots, lists them in summary.json, and the completed run stays completed.
 #[test]
 fn stop_during_plots_skips_them_and_lists_them() {
@@ -639,8 +639,9 @@ fn stop_during_plots_skips_them_and_lists_them() {
     assert!(!out.join("energy.svg").exists());
 }
 
-/// Finding "on I/O errors summary.json may be missing, or stale": a run that cannot write
-/// an output replaces a stale summary with `"status": "failed"` and the I/O error.
+/// On an I/O error summary.json is neither missing nor stale: a run that cannot write an
+/// output (a folder in the way, a full disk) replaces a stale summary with
+/// `"status": "failed"` and the I/O error.
 #[test]
 fn failed_write_leaves_a_fresh_failed_summary() {
     let tmp = temp_dir("iofail");
@@ -666,9 +667,9 @@ fn failed_write_leaves_a_fresh_failed_summary() {
     }
 }
 
-/// Finding "`checkpoint.json.tmp` is left behind after a kill, and then blocks a run
-/// without `--force`": phstring's own temporary files do not make a folder non-empty, and
-/// the next run removes them.
+/// Temporary files left behind by a killed run (`checkpoint.json.tmp` and the like) do not
+/// block a run without `--force`: phstring's own temporary files do not make a folder
+/// non-empty, and the next run removes them.
 #[test]
 fn stale_checkpoint_tmp_does_not_block_a_run() {
     let out = temp_dir("staletmp").join("o");
@@ -710,7 +711,8 @@ fn stale_checkpoint_tmp_does_not_block_a_run() {
     );
 }
 
-/// Finding "control characters in titles reach the terminal, and NUL makes invalid SVG".
+/// Control characters in a title reach neither the plots (NUL would make the SVG invalid)
+/// nor the ParaView index.
 #[test]
 fn control_characters_in_titles_do_not_reach_plots() {
     let out = temp_dir("ctrltitle").join("o");

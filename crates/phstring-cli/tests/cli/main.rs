@@ -1,4 +1,4 @@
-//! End-to-end tests of the `phstring` binary (issue 3).
+//! End-to-end tests of the `phstring` binary.
 
 mod accuracy;
 mod balance;

@@ -1,4 +1,4 @@
-//! Network scenarios (issue 11, item 7): the examples run, `summary.json` lists their
+//! Network scenarios: the examples run, `summary.json` lists their
 //! components, the energy balance stays at round-off, `check` prints the components, and
 //! invalid network files are refused with the key and its `line:column`.
 

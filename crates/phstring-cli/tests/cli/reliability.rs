@@ -1,4 +1,4 @@
-//! Issue 5: runtime failures stop with a precise reason and intact outputs; checkpoints,
+//! Runtime failures stop with a precise reason and intact outputs; checkpoints,
 //! resume and interrupts; determinism; output safety.
 
 use std::path::{Path, PathBuf};
@@ -247,8 +247,8 @@ fn checkpoint_resume_is_bit_identical() {
 ///
 /// The run signals itself after step 40 (hidden `--signal-self-after-step`, which sends a
 /// real SIGINT with `kill` and waits until the handler has seen it), so the interruption
-/// lands at a known step however fast or busy the machine is (issue 10: no test may depend on
-/// wall-clock time).
+/// lands at a known step however fast or busy the machine is (no test depends on wall-clock
+/// time).
 #[test]
 fn interrupt_stops_cleanly_and_resumes() {
     let tmp = temp_dir("sigint");
@@ -351,8 +351,8 @@ fn nothing_is_written_outside_out() {
     assert_eq!(entries, vec!["inside".to_string()]);
 }
 
-/// Regression (review of issue 5): `--force` must remove an earlier run's checkpoint, or a
-/// later `--resume` would mix two runs.
+/// `--force` removes an earlier run's checkpoint, so that a later `--resume` cannot mix two
+/// runs.
 #[test]
 fn force_removes_a_stale_checkpoint() {
     let out = temp_dir("stale-cp").join("o");

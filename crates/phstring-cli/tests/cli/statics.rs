@@ -1,5 +1,5 @@
 //! `phstring statics` and `phstring linearize`, and a run that starts from the equilibrium
-//! (issue 12), on the mooring-line example.
+//! (`initial.equilibrium = true`), on the mooring-line example.
 
 use super::{phstring, temp_dir};
 

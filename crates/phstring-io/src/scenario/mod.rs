@@ -102,6 +102,7 @@ impl std::fmt::Display for Origin {
 
 /// Errors while reading or validating a scenario.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ScenarioError {
     /// The file could not be read.
     #[error("cannot read scenario file {}: {cause}", path.display())]

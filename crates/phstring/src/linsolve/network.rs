@@ -576,6 +576,7 @@ mod tests {
 
     use super::*;
     use crate::linsolve::{SolverKind, SparseLu, make_solver};
+    use crate::testing::grid_net;
 
     use crate::linsolve::test_rng::Rng;
 
@@ -605,36 +606,6 @@ mod tests {
 
     fn ring(n: usize) -> Mesh {
         mesh(n, (0..n).map(|i| [i, (i + 1) % n]).collect())
-    }
-
-    /// `nh` horizontal and `nv` vertical strings crossing at shared nodes every `spacing`
-    /// elements, with free tails of `tail` elements beyond the outermost crossings.
-    fn grid_net(nh: usize, nv: usize, spacing: usize, tail: usize) -> Mesh {
-        let mut els = Vec::new();
-        let mut next = nh * nv;
-        let mut string = |n_cross: usize, crossing: &dyn Fn(usize) -> usize| {
-            let len = 2 * tail + spacing * (n_cross - 1);
-            let mut prev = None;
-            for pos in 0..=len {
-                let node = if pos >= tail && (pos - tail).is_multiple_of(spacing) {
-                    crossing((pos - tail) / spacing)
-                } else {
-                    next += 1;
-                    next - 1
-                };
-                if let Some(p) = prev {
-                    els.push([p, node]);
-                }
-                prev = Some(node);
-            }
-        };
-        for h in 0..nh {
-            string(nv, &|v| h * nv + v);
-        }
-        for v in 0..nv {
-            string(nh, &|h| h * nv + v);
-        }
-        mesh(next, els)
     }
 
     /// Two chains of 20 elements (nodes 0–20 and 21–41), a second element parallel to

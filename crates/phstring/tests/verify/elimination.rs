@@ -1,4 +1,4 @@
-//! Nonlinear elimination (issue 4): it changes Newton's path, not the converged step, and
+//! Nonlinear elimination: it changes Newton's path, not the converged step, and
 //! every accepted step keeps the exact discrete energy balance.
 
 use phstring::benchmarks::paper_pendulum;
@@ -79,7 +79,8 @@ fn energy_balance_is_exact_on_a_fine_mesh_with_elimination() {
 /// The paper's pendulum (paper's law) on 300 elements with the paper's step h = 0.01 s, fixed,
 /// to T = 1 s: with elimination every step converges and keeps the energy balance to 1e-11 J,
 /// although the free end crumples into compression; with the line search alone the same run
-/// fails (its largest fixed step is 2.5e-3 s, issue 4's table).
+/// fails (its largest fixed step is 2.5e-3 s, in the table of the
+/// `pendulum_scaling` bench).
 #[test]
 fn paper_step_size_on_a_fine_mesh_needs_elimination() {
     let run = |elimination: bool| {

@@ -1,5 +1,5 @@
 //! Verification of the method against theorems, closed forms and the paper (docs/method.md §13).
-//! Issue 2's acceptance list, one module each.
+//! One module per property or part of the model.
 
 mod accuracy;
 mod common;

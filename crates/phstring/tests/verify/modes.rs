@@ -4,9 +4,9 @@
 
 use phstring::modes::{self, Character};
 use phstring::statics::{self, StaticsParams};
+use phstring::testing::{between_supports, hanging_chain};
 use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, PhSystem, Problem, Scheme, Simulation, SolverKind,
-    State, StepParams, Vector,
+    Material, PhSystem, Problem, Scheme, Simulation, SolverKind, State, StepParams, Vector,
 };
 use std::f64::consts::PI;
 
@@ -14,25 +14,14 @@ use std::f64::consts::PI;
 /// elements, in 2D.
 fn taut(n: usize) -> (Problem<2, Material>, f64, f64) {
     let (len, stretch, ea, rho_a) = (100.0, 1.005, 1e7, 1.2);
-    let mesh = Mesh::uniform_chain(n, len).unwrap();
-    let initial = State::straight(
-        &mesh,
-        Vector::<2>::zeros(),
+    let p = between_supports(
+        n,
+        len,
         Vector::<2>::new(len * stretch, 0.0),
-    );
-    let p = Problem {
-        mesh,
-        initial,
-        material: Material::linear_elastic(ea),
+        Material::linear_elastic(ea),
         rho_a,
-        body_force: Vector::<2>::zeros(),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            fixed: vec![Fixed::node(0), Fixed::node(n)],
-            ..Default::default()
-        },
-        point_masses: vec![],
-    };
+        Vector::<2>::zeros(),
+    );
     // S = 2W'(C) = EA (1 − 1/λ); the longitudinal stiffness S + 4W''C = EA.
     (p, ea * (1.0 - 1.0 / stretch), ea)
 }
@@ -108,21 +97,14 @@ fn hanging_chain_tends_to_the_bessel_limit() {
     let (len, g) = (10.0, 9.81);
     let mut errs = Vec::new();
     for n in [25, 50, 100, 200] {
-        let mesh = Mesh::uniform_chain(n, len).unwrap();
-        let initial = State::straight(&mesh, Vector::<2>::zeros(), Vector::<2>::new(0.0, -len));
-        let p = Problem {
-            mesh,
-            initial,
-            material: Material::hyperelastic(1e9),
-            rho_a: 1.0,
-            body_force: Vector::<2>::new(0.0, -g),
-            mass: MassMatrix::Consistent,
-            boundary: Boundary {
-                fixed: vec![Fixed::node(0)],
-                ..Default::default()
-            },
-            point_masses: vec![],
-        };
+        let p = hanging_chain(
+            n,
+            len,
+            Material::hyperelastic(1e9),
+            1.0,
+            0.0,
+            Vector::<2>::new(0.0, -1.0),
+        );
         let eq = statics::solve(p.clone(), &StaticsParams::default(), None).unwrap();
         let (sys, _) = PhSystem::new(p).unwrap();
         let m = modes::modes(&sys, &eq.state.r, 3, SolverKind::Auto, None).unwrap();

@@ -1,4 +1,4 @@
-//! Acceptance 3: momentum maps of a free–free string (docs/method.md §5, eq. (5.9)).
+//! Momentum maps of a free–free string (docs/method.md §5, eq. (5.9)).
 
 use phstring::{
     Boundary, MassMatrix, Material, Mesh, NewtonParams, Problem, Scheme, Simulation, State,

@@ -1,4 +1,4 @@
-//! Prescribed motion of a support (issue 11, item 3; paper Remarks 3–4): velocity in, reaction
+//! Prescribed motion of a support (paper Remarks 3–4): velocity in, reaction
 //! force out. A crane trolley drags the top of a hanging rope with a payload sideways.
 
 use crate::common::energy_scale;

@@ -1,80 +1,14 @@
-//! Networks (issue 11, items 1, 4, 10): several strings joined at shared nodes, springs, point
+//! Networks: several strings joined at shared nodes, springs, point
 //! masses and a moving support in one system. Checks: the discrete energy balance of the
 //! whole network on every step, momentum and angular momentum of a free network, and the
 //! momentum balance through the support ports.
 
 use crate::common::energy_scale;
+use phstring::testing::platform;
 use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Motion, Network, NetworkBuilder, PointMass, SetupError,
-    Simulation, StepParams, StringSpec, Vector,
+    Boundary, Fixed, MassMatrix, Material, NetworkBuilder, PointMass, SetupError, Simulation,
+    StepParams, StringSpec, Vector,
 };
-
-const G: f64 = 9.81;
-
-fn steel(name: &str, ea: f64, rho_a: f64, gravity: Vector<3>) -> StringSpec<3, Material> {
-    StringSpec {
-        name: name.into(),
-        material: Material::tension_only_linear(ea),
-        rho_a,
-        mass: MassMatrix::Consistent,
-        body_force: gravity * rho_a,
-        prestretch: 1.0,
-    }
-}
-
-/// The fairlead heave of corner 0 [m]: up to 0.3 m, 5 s period, starting at rest.
-fn heave(t: f64) -> f64 {
-    10.0 + 0.15 * (1.0 - (2.0 * std::f64::consts::PI * t / 5.0).cos())
-}
-
-/// A 1.5 t platform hanging from four steel cables (EA = 5e7 N, 2 kg/m) from the corners of
-/// a 10 m × 8 m frame 10 m above it, released stress-free (so it drops and bounces). One corner
-/// heaves (prescribed z), a spring of 0.5 m rest length ties the platform sideways to a fixed
-/// point, and a spring links the middles of two cables (both springs start relaxed).
-fn platform() -> (Network<3, Material>, usize) {
-    let g = Vector::<3>::new(0.0, 0.0, -G);
-    let mut b = NetworkBuilder::<3, Material>::new();
-    let p = b.node(Vector::<3>::new(0.3, -0.2, 0.0));
-    let corners: Vec<usize> = [(-5.0, -4.0), (5.0, -4.0), (5.0, 4.0), (-5.0, 4.0)]
-        .iter()
-        .map(|&(x, y)| b.node(Vector::<3>::new(x, y, 10.0)))
-        .collect();
-    let cables: Vec<usize> = corners
-        .iter()
-        .enumerate()
-        .map(|(k, &c)| {
-            b.string(steel(&format!("cable{k}"), 5e7, 2.0, g), &[c, p], 12)
-                .unwrap()
-        })
-        .collect();
-    let mid = |b: &NetworkBuilder<3, Material>, g: usize| b.group_nodes(g).unwrap()[6];
-    let (m0, m1) = (mid(&b, cables[0]), mid(&b, cables[1]));
-    let gap = (b.position(m1).unwrap() - b.position(m0).unwrap()).norm();
-    b.spring("link", m0, m1, 2e4, gap).unwrap();
-    b.spring_to_point("tie", p, Vector::<3>::new(0.8, -0.2, 0.0), 5e3, 0.5)
-        .unwrap();
-    let mut fixed: Vec<Fixed<3>> = corners[1..].iter().map(|&c| Fixed::node(c)).collect();
-    fixed.push(Fixed {
-        node: corners[0],
-        components: [true, true, false],
-    });
-    let net = b
-        .build(
-            Boundary {
-                fixed,
-                loads: vec![],
-                motions: vec![Motion::new(corners[0], 2, heave)],
-                feedback: vec![],
-            },
-            vec![PointMass {
-                node: p,
-                mass: 1500.0,
-                weight: g * 1500.0,
-            }],
-        )
-        .unwrap();
-    (net, p)
-}
 
 /// Energy balance of every step to round-off of the energy scale; momentum change equals the
 /// impulse of gravity and of the support reactions to the Newton tolerance.

@@ -1,4 +1,4 @@
-//! Acceptance 6: second order in time for both schemes (docs/method.md §5, "Accuracy").
+//! Second order in time for both schemes (docs/method.md §5, "Accuracy").
 //!
 //! A taut string (8 elements, both ends fixed, prestretched to C = 1.44) released at rest
 //! from a sinusoidal transverse displacement of amplitude 0.1 m; largest nodal position

@@ -1,4 +1,4 @@
-//! Acceptance 1, 2 and 7: the paper's benchmark (docs/method.md §12).
+//! The paper's benchmark (docs/method.md §12).
 
 use phstring::benchmarks::{PAPER_H0, PAPER_H1_DG, PAPER_H1_MP, paper_params, paper_pendulum};
 use phstring::{Scheme, Simulation, SolverKind, StepParams};

@@ -1,12 +1,13 @@
-//! Point masses at nodes (issue 11, item 2): a payload on a light rope against the closed-form
+//! Point masses at nodes: a payload on a light rope against the closed-form
 //! spring–mass oscillation, and the exact discrete balances with masses attached.
 
 use std::f64::consts::PI;
 
 use crate::common::energy_scale;
+use phstring::testing::hanging_chain;
 use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, PointMass, Problem, Simulation, State,
-    StepControl, StepParams, Vector,
+    Boundary, MassMatrix, Material, Mesh, PointMass, Problem, Simulation, State, StepControl,
+    StepParams, Vector,
 };
 
 const G: f64 = 9.81;
@@ -20,27 +21,14 @@ const G: f64 = 9.81;
 fn payload_on_a_light_rope_bounces_like_a_spring_mass() {
     let (length, ea, rho_a, payload) = (10.0, 1e6, 0.01, 1000.0);
     let n_el = 10;
-    let mesh = Mesh::uniform_chain(n_el, length).unwrap();
-    let initial = State::straight(&mesh, Vector::zeros(), Vector::<2>::new(0.0, -length));
-    let problem = Problem {
-        initial,
-        mesh,
-        material: Material::linear_elastic(ea),
+    let problem = hanging_chain(
+        n_el,
+        length,
+        Material::linear_elastic(ea),
         rho_a,
-        body_force: Vector::<2>::new(0.0, -G * rho_a),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            motions: vec![],
-            feedback: vec![],
-            fixed: vec![Fixed::node(0)],
-            loads: vec![],
-        },
-        point_masses: vec![PointMass {
-            node: n_el,
-            mass: payload,
-            weight: Vector::<2>::new(0.0, -payload * G),
-        }],
-    };
+        payload,
+        Vector::<2>::new(0.0, -1.0),
+    );
     let omega = (ea / (length * payload)).sqrt();
     let delta = payload * G * length / ea;
     let period = 2.0 * PI / omega;

@@ -1,4 +1,4 @@
-//! Acceptance 5: the discrete-gradient quotient is exact to a few ulps (docs/method.md §6).
+//! The discrete-gradient quotient is exact to a few ulps (docs/method.md §6).
 //!
 //! Reference: the exact quotient `(W(C₁) − W(C₀)) / (C₁ − C₀)` of the two doubles `C₀`,
 //! `C₁`, evaluated with 512-bit arithmetic (astro-float). Since `C₁ − C₀` is exact here

@@ -1,4 +1,4 @@
-//! Issue 10, §1: strings and cables in real SI units run with the default Newton settings.
+//! Strings and cables in real SI units run with the default Newton settings.
 //!
 //! A vertical rope hangs from a fixed top node with a payload's weight at its bottom node and
 //! starts unstretched at rest, so it bounces axially. Axial stiffness from a rubber thread
@@ -54,7 +54,7 @@ const ROPES: [Rope; 8] = [
         length: 20.0,
     },
     Rope {
-        name: "issue case",
+        name: "hanging string",
         ea: 9.81e5,
         rho_a: 1.0,
         payload: 100.0,
@@ -147,7 +147,7 @@ fn run(problem: Problem<2, Material>, h: f64, t_end: f64) -> (usize, usize, f64,
     run_with(problem, params, t_end)
 }
 
-/// The finding of issue 10: EA from 1 to 1e9 N with realistic ρA and payloads runs with the
+/// EA from 1 to 1e9 N with realistic ρA and payloads runs with the
 /// default settings in the planned number of steps (no rejected step), and the energy
 /// balance holds to round-off relative to the energy scale.
 #[test]
@@ -169,8 +169,8 @@ fn stiff_real_unit_ropes_converge_with_default_tolerance() {
             // The tension-only law starts at its kink (C = 1) and some elements go slack in
             // the first steps; a few of those steps are halved for the nonlinearity: their
             // line search fails with residuals of the order of the forces (1e4 N for the
-            // steel rope), not at round-off. Before the relative tolerance, the issue's case
-            // took 18,483 steps for 2.
+            // steel rope), not at round-off. Before the relative tolerance, the hanging
+            // string (EA = 9.81e5 N) took 18,483 steps for 2.
             let (most_steps, most_rejected) = match material {
                 Material::Hyperelastic(_) => (planned, 0),
                 _ => (2 * planned, planned / 2),
@@ -189,11 +189,11 @@ fn stiff_real_unit_ropes_converge_with_default_tolerance() {
     }
 }
 
-/// The finding of issue 10: the issue's hanging string (EA = 9.81e5 N, N = 100, h = 5 ms)
-/// took 18,483 steps for 2 planned with the absolute tolerance; it now takes the planned
-/// steps to T = 1 s.
+/// A hanging string (EA = 9.81e5 N, N = 100, h = 5 ms), which took 18,483 steps for 2
+/// planned with an absolute tolerance, takes the planned 200 steps to T = 1 s without a
+/// rejected step.
 #[test]
-fn issue_hanging_string_runs_in_planned_steps() {
+fn hanging_string_runs_in_planned_steps() {
     let rope = ROPES[4];
     let (steps, rejected, rel, _) = run(
         hanging(rope, Material::hyperelastic(rope.ea), 100),
@@ -204,9 +204,9 @@ fn issue_hanging_string_runs_in_planned_steps() {
     assert!(rel < 1e-12, "balance error {rel:.2e} of the energy scale");
 }
 
-/// The finding of issue 10: a fixed-step run with an absolute tolerance below the residual's
-/// round-off floor stopped with "line search failed … could not be reduced". Such iterates
-/// are now recognised as converged at the round-off floor.
+/// A fixed-step run with an absolute tolerance below the residual's round-off floor does not
+/// stop with "line search failed … could not be reduced": such iterates are recognised as
+/// converged at the round-off floor, and the energy balance still holds.
 #[test]
 fn absolute_tolerance_below_roundoff_converges_at_the_floor() {
     let rope = ROPES[6]; // steel rope, forces of 2e4 N: round-off about 1e-12 N
@@ -249,8 +249,8 @@ fn absolute_tolerance_below_roundoff_converges_at_the_floor() {
     );
 }
 
-/// The finding of issue 10: halvings were counted from the already reduced step size, so `h`
-/// fell far below `time.h / 2^max_halvings`. The floor is now absolute: a step that cannot
+/// The step-size floor is absolute (halvings counted from the already reduced step size let
+/// `h` fall far below `time.h / 2^max_halvings`): a step that cannot
 /// converge ends the run at `h = time.h / 2^max_halvings`, and the message says so.
 #[test]
 fn step_size_floor_is_absolute() {
@@ -326,7 +326,7 @@ fn step_size_floor_that_underflows_ends_the_step() {
     assert!(msg.contains("step-size floor"), "{msg}");
 }
 
-/// Found while measuring memory (issue 10): a stiff rope lying straight at rest, with no load,
+/// Found while measuring memory: a stiff rope lying straight at rest, with no load,
 /// has stresses of round-off size (`C = 1 ± ε`), and a stress can only change in steps of
 /// `EA/2 · ulp(C)`. The residual then cannot fall below about `EA · ε` per element, far above
 /// `rtol · F` of such tiny forces, and every step was halved down to the floor. The strain
@@ -366,9 +366,9 @@ fn stiff_rope_at_rest_stays_at_rest() {
     assert!(v_max < 1e-7, "the rope at rest moves at {v_max:e} m/s");
 }
 
-/// The finding of issue 10: a string at 1e308 m with gravity, or one whose strain overflows
-/// (reference length 1e-154 m stretched to 1 m), ran to "completed" with `Ĥ = inf` and NaN
-/// in the outputs. The setup now refuses non-finite derived quantities and names them.
+/// A string at 1e308 m with gravity, or one whose strain overflows (reference length
+/// 1e-154 m stretched to 1 m), is refused at setup with the non-finite derived quantity
+/// named, instead of running to "completed" with `Ĥ = inf` and NaN in the outputs.
 #[test]
 fn non_finite_derived_quantities_are_refused_at_setup() {
     let build = |start: Vector<2>, end: Vector<2>, length: f64, gravity: f64| {

@@ -5,9 +5,10 @@
 use nalgebra::{DMatrix, DVector};
 use phstring::linear::{ForcePort, LinearPh, modal_model, reduced_model};
 use phstring::modes;
+use phstring::testing::between_supports;
 use phstring::{
-    Boundary, Damping, Fixed, MassMatrix, Material, Mesh, Network, NodalLoad, PhSystem, PortKind,
-    Problem, Simulation, SolverKind, State, StepParams, Vector,
+    Damping, Material, Network, NodalLoad, PhSystem, PortKind, Problem, Simulation, SolverKind,
+    State, StepParams, Vector,
 };
 use std::f64::consts::PI;
 
@@ -17,26 +18,19 @@ const NODE: usize = 7;
 /// The taut 100 m steel wire of `modes.rs` with a transverse force pulse `a sin²(πt/τ)` [N]
 /// (t < τ) at node 7.
 fn problem(a: f64, tau: f64) -> Problem<2, Material> {
-    let mesh = Mesh::uniform_chain(N, 100.0).unwrap();
-    let initial = State::straight(&mesh, Vector::<2>::zeros(), Vector::<2>::new(100.5, 0.0));
-    Problem {
-        mesh,
-        initial,
-        material: Material::linear_elastic(1e7),
-        rho_a: 1.2,
-        body_force: Vector::<2>::zeros(),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            fixed: vec![Fixed::node(0), Fixed::node(N)],
-            loads: vec![NodalLoad::new(NODE, move |t: f64| {
-                let s = if t < tau { (PI * t / tau).sin() } else { 0.0 };
-                Vector::<2>::new(0.0, a * s * s)
-            })],
-            motions: vec![],
-            feedback: vec![],
-        },
-        point_masses: vec![],
-    }
+    let mut p = between_supports(
+        N,
+        100.0,
+        Vector::<2>::new(100.5, 0.0),
+        Material::linear_elastic(1e7),
+        1.2,
+        Vector::<2>::zeros(),
+    );
+    p.boundary.loads = vec![NodalLoad::new(NODE, move |t: f64| {
+        let s = if t < tau { (PI * t / tau).sin() } else { 0.0 };
+        Vector::<2>::new(0.0, a * s * s)
+    })];
+    p
 }
 
 fn dense(m: &faer::sparse::SparseColMat<usize, f64>) -> DMatrix<f64> {

@@ -1,4 +1,4 @@
-//! Acceptance 7: the two linear solvers agree on random well-posed block-tridiagonal systems,
+//! The two linear solvers agree on random well-posed block-tridiagonal systems,
 //! and the sparse LU solves non-chain meshes.
 
 use nalgebra::{SMatrix, SVector};

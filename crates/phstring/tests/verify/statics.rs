@@ -2,47 +2,10 @@
 //! (exact), the continuum hanging length and the elastic catenary (O(h²)).
 
 use phstring::statics::{self, StaticsError, StaticsParams, StaticsPath};
-use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, PointMass, Problem, Simulation, State, StepParams,
-    Vector,
-};
+use phstring::testing::{between_supports, hanging_chain};
+use phstring::{Material, Problem, Simulation, StepParams, Vector};
 
 const G: f64 = 9.81;
-
-/// A chain of `n` elements and reference length `len` [m], hanging from node 0 at the
-/// origin, starting along `dir`, with a tip mass `tip` [kg] at the last node.
-fn hanging(
-    n: usize,
-    len: f64,
-    material: Material,
-    rho_a: f64,
-    tip: f64,
-    dir: Vector<2>,
-) -> Problem<2, Material> {
-    let mesh = Mesh::uniform_chain(n, len).unwrap();
-    let initial = State::straight(&mesh, Vector::zeros(), dir * len);
-    Problem {
-        mesh,
-        initial,
-        material,
-        rho_a,
-        body_force: Vector::<2>::new(0.0, -G * rho_a),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            fixed: vec![Fixed::node(0)],
-            ..Default::default()
-        },
-        point_masses: if tip > 0.0 {
-            vec![PointMass {
-                node: n,
-                mass: tip,
-                weight: Vector::<2>::new(0.0, -G * tip),
-            }]
-        } else {
-            vec![]
-        },
-    }
-}
 
 /// Stretch `λ = |r'|` at which the law carries the tension `t = S λ` [N].
 fn stretch(material: &Material, t: f64) -> f64 {
@@ -117,7 +80,7 @@ fn hanging_chain_matches_the_discrete_closed_form() {
     for ea in [1e8, 1e5] {
         for material in laws(ea) {
             let (n, len, rho_a, tip) = (50, 100.0, 1.0, 500.0);
-            let p = hanging(n, len, material, rho_a, tip, Vector::<2>::new(0.0, -1.0));
+            let p = hanging_chain(n, len, material, rho_a, tip, Vector::<2>::new(0.0, -1.0));
             let eq = statics::solve(p, &StaticsParams::default(), None).unwrap();
             let exact = discrete_tip(&material, n, len, rho_a, tip);
             let got = -eq.state.r[n][1];
@@ -158,7 +121,7 @@ fn slack_start_reaches_the_hanging_equilibrium() {
         Material::tension_only_linear(1e8),
         Material::tension_only_hyperelastic(1e8),
     ] {
-        let p = hanging(n, len, material, rho_a, tip, Vector::<2>::new(1.0, 0.0));
+        let p = hanging_chain(n, len, material, rho_a, tip, Vector::<2>::new(1.0, 0.0));
         let eq = statics::solve(p, &StaticsParams::default(), None).unwrap();
         let smooth = match material {
             Material::TensionOnlyLinear(_) => Material::linear_elastic(1e8),
@@ -193,7 +156,7 @@ fn hanging_length_converges_at_second_order() {
         let errs: Vec<f64> = [10, 20, 40]
             .iter()
             .map(|&n| {
-                let p = hanging(n, len, material, rho_a, tip, Vector::<2>::new(0.0, -1.0));
+                let p = hanging_chain(n, len, material, rho_a, tip, Vector::<2>::new(0.0, -1.0));
                 let eq = statics::solve(p, &StaticsParams::default(), None).unwrap();
                 (-eq.state.r[n][1] - exact).abs()
             })
@@ -209,7 +172,7 @@ fn hanging_length_converges_at_second_order() {
     }
     let lin = Material::linear_elastic(1e4);
     let exact = len + rho_a * G * len * len / (2.0 * 1e4);
-    let p = hanging(7, len, lin, rho_a, 0.0, Vector::<2>::new(0.0, -1.0));
+    let p = hanging_chain(7, len, lin, rho_a, 0.0, Vector::<2>::new(0.0, -1.0));
     let eq = statics::solve(p, &StaticsParams::default(), None).unwrap();
     assert!((-eq.state.r[7][1] - exact).abs() <= 1e-12 * exact);
 }
@@ -251,21 +214,14 @@ fn irvine_point(ea: f64, w: f64, h: f64, v: f64, s: f64) -> (f64, f64) {
 /// supports 100 m apart, `dh` higher at the right, started straight (compressed) between them.
 fn catenary(n: usize, dh: f64) -> Problem<2, Material> {
     let (l0, span, rho_a) = (120.0, 100.0, 2.0);
-    let mesh = Mesh::uniform_chain(n, l0).unwrap();
-    let initial = State::straight(&mesh, Vector::zeros(), Vector::<2>::new(span, dh));
-    Problem {
-        mesh,
-        initial,
-        material: Material::linear_elastic(1e6),
+    between_supports(
+        n,
+        l0,
+        Vector::<2>::new(span, dh),
+        Material::linear_elastic(1e6),
         rho_a,
-        body_force: Vector::<2>::new(0.0, -G * rho_a),
-        mass: MassMatrix::Consistent,
-        boundary: Boundary {
-            fixed: vec![Fixed::node(0), Fixed::node(n)],
-            ..Default::default()
-        },
-        point_masses: vec![],
-    }
+        Vector::<2>::new(0.0, -G * rho_a),
+    )
 }
 
 /// Support reactions and the mid-span point (sag) against the elastic catenary, at equal and
@@ -299,7 +255,7 @@ fn elastic_catenary_converges_at_second_order() {
 /// A dynamic run started at the equilibrium stays there: drift ≤ 1e-12 m over 1000 steps.
 #[test]
 fn a_run_started_at_equilibrium_stays_at_rest() {
-    let p = hanging(
+    let p = hanging_chain(
         40,
         100.0,
         Material::hyperelastic(1e8),
@@ -335,7 +291,7 @@ fn a_run_started_at_equilibrium_stays_at_rest() {
 /// A free string under gravity has no equilibrium: the error names the free translation.
 #[test]
 fn under_constrained_structure_is_named() {
-    let mut p = hanging(
+    let mut p = hanging_chain(
         10,
         10.0,
         Material::hyperelastic(1e6),
@@ -356,7 +312,7 @@ fn under_constrained_structure_is_named() {
 /// the load step where the continuation failed and the pseudo-transient count.
 #[test]
 fn failure_names_the_continuation_step() {
-    let p = hanging(
+    let p = hanging_chain(
         20,
         100.0,
         Material::tension_only_linear(1e8),
@@ -428,7 +384,7 @@ fn stop_request_ends_the_continuation_promptly() {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     let (n, len, rho_a) = (40, 100.0, 1.0);
     let problem = |at: usize, flag: &Arc<AtomicBool>| {
-        let p = hanging(
+        let p = hanging_chain(
             n,
             len,
             Material::tension_only_linear(1e8),
