@@ -68,6 +68,7 @@ pub mod benchmarks;
 pub mod boundary;
 pub mod eigen;
 pub mod error;
+pub mod inputs;
 pub mod integrator;
 pub mod linear;
 pub mod linsolve;
@@ -86,6 +87,7 @@ pub use boundary::{
     PortSample, PositionFn,
 };
 pub use error::{LinearSolveError, Num, SetupError, StepError};
+pub use inputs::{InputError, PositionRamp};
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};
 pub use material::{
