@@ -1,10 +1,11 @@
 //! One FMU instance: the FMI 2.0 Co-Simulation state machine over a `phstring::Simulation`,
 //! in safe Rust (the C functions in `ffi` only convert arguments).
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use phstring::{Material, Simulation, StepError, Vector};
+use phstring::{InputError, Material, PositionRamp, Simulation, StepError, Vector};
 use phstring_io::checkpoint::{SimState, fnv1a64_hex};
 use phstring_io::scenario::{ScenarioFile, Validated};
 use serde::{Deserialize, Serialize};
@@ -49,11 +50,9 @@ pub enum Mode {
 /// Receives the instance's log messages: status, category, message.
 pub type Logger = Box<dyn Fn(Status, &str, &str) + Send>;
 
-/// A load's force while it is an FMU input [N] (zero-order hold).
-type Held = Arc<Mutex<[f64; 3]>>;
-
-/// The path of a prescribed-motion input over the current communication step: from `from`
-/// at `t0` to `to` at `t1` at constant speed [s, m].
+/// The path of a prescribed-motion input over the current communication step, as saved in
+/// an FMU state: a [`PositionRamp`] from `from` at `t0` to `to` at `t1` at constant speed
+/// [s, m].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Ramp {
     t0: f64,
@@ -62,25 +61,24 @@ pub struct Ramp {
     to: f64,
 }
 
-impl Ramp {
-    /// Resting at `x` [m].
-    fn at(x: f64) -> Self {
+impl From<PositionRamp> for Ramp {
+    fn from(r: PositionRamp) -> Self {
         Self {
-            t0: 0.0,
-            t1: 0.0,
-            from: x,
-            to: x,
+            t0: r.t0,
+            t1: r.t1,
+            from: r.from,
+            to: r.to,
         }
     }
-    /// Position at time `t` [s]; a step that ends within `1e-9` of the communication step
-    /// of its end (rounding of the step's end time) ends at `to` exactly.
-    fn position(&self, t: f64) -> f64 {
-        if t >= self.t1 - 1e-9 * (self.t1 - self.t0) {
-            self.to
-        } else if t <= self.t0 {
-            self.from
-        } else {
-            self.from + (self.to - self.from) * ((t - self.t0) / (self.t1 - self.t0))
+}
+
+impl From<Ramp> for PositionRamp {
+    fn from(r: Ramp) -> Self {
+        Self {
+            t0: r.t0,
+            t1: r.t1,
+            from: r.from,
+            to: r.to,
         }
     }
 }
@@ -92,6 +90,19 @@ trait Stepper: Send {
     fn value(&self, q: Quantity) -> f64;
     fn save(&self) -> SimState;
     fn load(&mut self, s: &SimState) -> Result<(), String>;
+    /// Holds load `load`'s force at `force` [N] (its first `D` components).
+    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError>;
+    /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
+    fn set_motion_target(
+        &mut self,
+        motion: usize,
+        target: f64,
+        t_target: f64,
+    ) -> Result<(), InputError>;
+    /// Makes motion `motion` follow `ramp`.
+    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError>;
+    /// Per motion: the ramp it follows, if it is an input.
+    fn motion_ramps(&self) -> Vec<Option<PositionRamp>>;
 }
 
 impl<const D: usize> Stepper for Simulation<D, Material> {
@@ -127,17 +138,33 @@ impl<const D: usize> Stepper for Simulation<D, Material> {
         self.restore(s.to_checkpoint::<D>())
             .map_err(|e| e.to_string())
     }
+    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
+        Simulation::set_load_force(self, load, Vector::<D>::from_fn(|i, _| force[i]))
+    }
+    fn set_motion_target(
+        &mut self,
+        motion: usize,
+        target: f64,
+        t_target: f64,
+    ) -> Result<(), InputError> {
+        Simulation::set_motion_target(self, motion, target, t_target).map(|_| ())
+    }
+    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError> {
+        Simulation::set_motion_ramp(self, motion, ramp)
+    }
+    fn motion_ramps(&self) -> Vec<Option<PositionRamp>> {
+        (0..self.system().boundary().motions.len())
+            .map(|k| self.motion_ramp(k))
+            .collect()
+    }
 }
 
-/// The simulation with the handles through which the inputs reach it.
+/// The simulation with what the instance keeps beside it.
 struct Live {
+    /// The simulation; it holds the inputs (`phstring::inputs`).
     stepper: Box<dyn Stepper>,
     /// `Ĥ(0)` [J], the reference of `balance_error`.
     h0: f64,
-    /// Per load: its held force, if it is an input.
-    loads: Vec<Option<Held>>,
-    /// Per motion: its ramp, if it is an input.
-    motions: Vec<Option<Arc<Mutex<Ramp>>>>,
     /// The first failure of a scenario expression during the run.
     expression_error: Arc<Mutex<Option<String>>>,
     /// After `fmi2SetFMUstate`: the port variables' values at the saved point, by value
@@ -543,37 +570,19 @@ impl Instance {
         equilibrium: bool,
     ) -> Result<Live, String> {
         let mut v: Validated<D> = file.validate::<D>().map_err(|e| e.to_string())?;
-        let mut loads: Vec<Option<Held>> = vec![None; v.problem.boundary.loads.len()];
-        let mut motions: Vec<Option<Arc<Mutex<Ramp>>>> =
-            vec![None; v.problem.boundary.motions.len()];
-        for (vr, var) in self.spec.variables.iter().enumerate() {
-            match var.quantity {
-                Quantity::LoadForce { load, component } => {
-                    let held = loads[load].get_or_insert_with(Held::default);
-                    lock(held)[component] = values[vr];
-                }
-                Quantity::MotionPosition { motion } => {
-                    // Until the first step, the support rests where the scenario starts it.
-                    let x0 = (v.problem.boundary.motions[motion].position)(0.0);
-                    motions[motion] = Some(Arc::new(Mutex::new(Ramp::at(x0))));
-                }
-                _ => {}
-            }
+        // The inputs are held on the problem already: the starting equilibrium and the
+        // supports' velocities at `t = 0` are those under the inputs.
+        let forces = input_forces(&self.spec, values);
+        for (&load, u) in &forces {
+            v.problem.boundary.loads[load].hold(Vector::<D>::from_fn(|i, _| u[i]));
         }
-        for (load, held) in v.problem.boundary.loads.iter_mut().zip(&loads) {
-            if let Some(held) = held {
-                let held = held.clone();
-                load.force = Arc::new(move |_t| {
-                    let u = *lock(&held);
-                    Vector::<D>::from_fn(|i, _| u[i])
-                });
-            }
-        }
-        for (m, ramp) in v.problem.boundary.motions.iter_mut().zip(&motions) {
-            if let Some(ramp) = ramp {
-                let ramp = ramp.clone();
-                m.position = Arc::new(move |t| lock(&ramp).position(t));
-            }
+        // Until the first step, the support rests where the scenario starts it.
+        let mut rests = Vec::new();
+        for (motion, _) in input_positions(&self.spec, values) {
+            let m = &mut v.problem.boundary.motions[motion];
+            let rest = PositionRamp::at((m.position)(0.0));
+            m.hold(rest);
+            rests.push((motion, rest));
         }
         // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
         // supports at their scenario positions).
@@ -581,13 +590,19 @@ impl Instance {
             phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
         }
         let expression_error = v.load_error.clone();
-        let sim: Simulation<D, Material> =
+        let mut sim: Simulation<D, Material> =
             Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
+        // The simulation holds the same inputs from here on (its signals do not change).
+        for (&load, u) in &forces {
+            Stepper::set_load_force(&mut sim, load, *u).map_err(|e| e.to_string())?;
+        }
+        for (motion, rest) in rests {
+            sim.set_motion_ramp(motion, rest)
+                .map_err(|e| e.to_string())?;
+        }
         Ok(Live {
             h0: sim.energies().hamiltonian(),
             stepper: Box::new(sim),
-            loads,
-            motions,
             expression_error,
             ports_saved: None,
         })
@@ -775,8 +790,10 @@ impl Instance {
                 "{step}: the communication step H = {comm_h:e} s from t = {t} s is below the resolution of the FMU's time there ({tol:.1e} s): the simulation would not move"
             ));
         }
-        hold_inputs(&self.spec, &self.values, live, target);
-        let failure = step_to(live, target, tol, api, start_time);
+        let failure = match hold_inputs(&self.spec, &self.values, live, target) {
+            Ok(()) => step_to(live, target, tol, api, start_time),
+            Err(e) => Some((Status::Error, e.to_string())),
+        };
         match failure {
             None => {
                 self.time = t + comm_h;
@@ -855,10 +872,8 @@ impl Instance {
             stop_time: self.stop_time,
             time: self.time(),
             ramps: self.live.as_ref().map_or_else(Vec::new, |l| {
-                l.motions
-                    .iter()
-                    .map(|r| r.as_ref().map(|r| *lock(r)))
-                    .collect()
+                let ramps = l.stepper.motion_ramps();
+                ramps.into_iter().map(|r| r.map(Ramp::from)).collect()
             }),
             ports,
             sim: self.live.as_ref().map(|l| l.stepper.save()),
@@ -913,15 +928,20 @@ impl Instance {
                     None => self.live.as_mut().expect("checked above"),
                 };
                 let before = target.stepper.save();
-                if let Err(m) = target.stepper.load(state) {
+                let ramps_before = target.stepper.motion_ramps();
+                let ramps: Vec<_> = saved
+                    .ramps
+                    .iter()
+                    .map(|r| r.map(PositionRamp::from))
+                    .collect();
+                let loaded = target.stepper.load(state).and_then(|()| {
+                    set_ramps(target.stepper.as_mut(), &ramps).map_err(|e| e.to_string())
+                });
+                if let Err(m) = loaded {
                     // A failed load may have changed the running simulation: put it back.
                     let _ = target.stepper.load(&before);
+                    let _ = set_ramps(target.stepper.as_mut(), &ramps_before);
                     return self.refuse(format!("cannot restore the FMU state: {m}"));
-                }
-                for (slot, ramp) in target.motions.iter().zip(&saved.ramps) {
-                    if let (Some(slot), Some(ramp)) = (slot, ramp) {
-                        *lock(slot) = *ramp;
-                    }
                 }
                 target.ports_saved = Some(saved.ports.clone());
                 if let Some(h0) = saved.h0 {
@@ -940,33 +960,57 @@ impl Instance {
     }
 }
 
-/// Holds the inputs of `spec` (values `values`, by value reference) over the communication
-/// step from the simulation's time to `target` [s]: load forces at their values, motions on
-/// a ramp to their values.
-fn hold_inputs(spec: &ModelSpec, values: &[f64], live: &Live, target: f64) {
-    let start = live.stepper.time();
+/// Per load that is an input: the force [N] its variables in `values` (by value reference)
+/// hold it at, components that are not variables 0.
+fn input_forces(spec: &ModelSpec, values: &[f64]) -> BTreeMap<usize, [f64; 3]> {
+    let mut forces = BTreeMap::new();
     for (vr, var) in spec.variables.iter().enumerate() {
-        match var.quantity {
-            Quantity::LoadForce { load, component } => {
-                if let Some(held) = &live.loads[load] {
-                    lock(held)[component] = values[vr];
-                }
-            }
-            Quantity::MotionPosition { motion } => {
-                if let Some(ramp) = &live.motions[motion] {
-                    let mut r = lock(ramp);
-                    let here = r.position(start);
-                    *r = Ramp {
-                        t0: start,
-                        t1: target,
-                        from: here,
-                        to: values[vr],
-                    };
-                }
-            }
-            _ => {}
+        if let Quantity::LoadForce { load, component } = var.quantity {
+            forces.entry(load).or_insert([0.0; 3])[component] = values[vr];
         }
     }
+    forces
+}
+
+/// Per motion that is an input: its index and the position [m] its variable in `values`
+/// (by value reference) asks for.
+fn input_positions(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
+    let motions = spec.variables.iter().enumerate();
+    motions
+        .filter_map(|(vr, var)| match var.quantity {
+            Quantity::MotionPosition { motion } => Some((motion, values[vr])),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Holds the inputs of `spec` (values `values`, by value reference) over the communication
+/// step from the simulation's time to `target` [s]: load forces at their values, motions on
+/// a ramp from where they are to their values.
+fn hold_inputs(
+    spec: &ModelSpec,
+    values: &[f64],
+    live: &mut Live,
+    target: f64,
+) -> Result<(), InputError> {
+    for (load, u) in input_forces(spec, values) {
+        live.stepper.set_load_force(load, u)?;
+    }
+    for (motion, x) in input_positions(spec, values) {
+        live.stepper.set_motion_target(motion, x, target)?;
+    }
+    Ok(())
+}
+
+/// Puts `ramps` (per motion, as saved) back on the motions of `stepper` that follow one.
+fn set_ramps(stepper: &mut dyn Stepper, ramps: &[Option<PositionRamp>]) -> Result<(), InputError> {
+    let now = stepper.motion_ramps();
+    for (motion, (now, saved)) in now.iter().zip(ramps).enumerate() {
+        if let (Some(_), Some(ramp)) = (now, saved) {
+            stepper.set_motion_ramp(motion, *ramp)?;
+        }
+    }
+    Ok(())
 }
 
 /// Steps `live` until it is within `tol` [s] of `target` [s] (simulation time); the failure,
