@@ -23,7 +23,7 @@ use std::sync::Arc;
 
 use thiserror::Error;
 
-use crate::boundary::{ForceFn, Motion, NodalLoad, PositionFn};
+use crate::boundary::{HeldForce, HeldMotion, Motion, NodalLoad, PositionRamp};
 use crate::error::Num;
 use crate::material::StoredEnergy;
 use crate::simulation::Simulation;
@@ -90,68 +90,30 @@ fn range(count: usize) -> String {
     }
 }
 
-/// A straight path of a moving support: from `from` [m] at `t0` [s] to `to` [m] at `t1` [s]
-/// at constant speed, at rest at `from` before `t0` and at `to` from `t1` on.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PositionRamp {
-    /// Start time [s].
-    pub t0: f64,
-    /// End time [s] (`t1 ≥ t0`).
-    pub t1: f64,
-    /// Position at `t0` [m].
-    pub from: f64,
-    /// Position at `t1` [m].
-    pub to: f64,
-}
-
-impl PositionRamp {
-    /// At rest at `x` [m] (at all times).
-    pub fn at(x: f64) -> Self {
-        Self {
-            t0: 0.0,
-            t1: 0.0,
-            from: x,
-            to: x,
-        }
-    }
-
-    /// Position [m] at time `t` [s]. A time within `1e-9 (t1 − t0)` before `t1` (a step
-    /// whose end time is rounded just short of the ramp's end) is at `to` exactly.
-    pub fn position(&self, t: f64) -> f64 {
-        if t >= self.t1 - 1e-9 * (self.t1 - self.t0) {
-            self.to
-        } else if t <= self.t0 {
-            self.from
-        } else {
-            self.from + (self.to - self.from) * ((t - self.t0) / (self.t1 - self.t0))
-        }
-    }
-
-    /// Why the ramp cannot be followed by motion `motion`, if it cannot.
-    fn check(&self, motion: usize) -> Result<(), InputError> {
-        for (what, value) in [
-            ("ramp start time", self.t0),
-            ("ramp end time", self.t1),
-            ("ramp start position", self.from),
-            ("position target", self.to),
-        ] {
-            if !value.is_finite() {
-                return Err(InputError::MotionNotFinite {
-                    motion,
-                    what,
-                    value,
-                });
-            }
-        }
-        if self.t1 < self.t0 {
-            return Err(InputError::RampBackwards {
+/// Why `ramp` cannot be followed by motion `motion`, if it cannot.
+fn check_ramp(ramp: &PositionRamp, motion: usize) -> Result<(), InputError> {
+    for (what, value) in [
+        ("ramp start time", ramp.t0),
+        ("ramp end time", ramp.t1),
+        ("ramp start position", ramp.from),
+        ("position target", ramp.to),
+    ] {
+        if !value.is_finite() {
+            return Err(InputError::MotionNotFinite {
                 motion,
-                t0: self.t0,
-                t1: self.t1,
+                what,
+                value,
             });
         }
-        Ok(())
     }
+    if ramp.t1 < ramp.t0 {
+        return Err(InputError::RampBackwards {
+            motion,
+            t0: ramp.t0,
+            t1: ramp.t1,
+        });
+    }
+    Ok(())
 }
 
 impl<const D: usize> NodalLoad<D> {
@@ -165,50 +127,6 @@ impl Motion {
     /// Makes the motion follow `ramp`: its position signal becomes [`PositionRamp::position`].
     pub fn hold(&mut self, ramp: PositionRamp) {
         self.position = Arc::new(move |t| ramp.position(t));
-    }
-}
-
-/// A load's force held by [`Simulation::set_load_force`].
-#[derive(Clone)]
-struct HeldForce<const D: usize> {
-    /// The force [N].
-    force: Vector<D>,
-    /// The load's signal before it was held, put back by [`Simulation::release_load_force`].
-    signal: ForceFn<D>,
-}
-
-/// A motion's ramp set by [`Simulation::set_motion_target`] or [`Simulation::set_motion_ramp`].
-#[derive(Clone)]
-struct HeldMotion {
-    ramp: PositionRamp,
-    /// The motion's signal before it was held, put back by [`Simulation::release_motion`].
-    signal: PositionFn,
-}
-
-/// The inputs held on a running [`Simulation`], per load and per motion (`None`: the
-/// problem's own signal).
-#[derive(Clone, Default)]
-pub(crate) struct HeldInputs<const D: usize> {
-    loads: Vec<Option<HeldForce<D>>>,
-    motions: Vec<Option<HeldMotion>>,
-}
-
-impl<const D: usize> std::fmt::Debug for HeldInputs<D> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let forces: Vec<_> = self
-            .loads
-            .iter()
-            .map(|h| h.as_ref().map(|h| h.force))
-            .collect();
-        let ramps: Vec<_> = self
-            .motions
-            .iter()
-            .map(|h| h.as_ref().map(|h| h.ramp))
-            .collect();
-        f.debug_struct("HeldInputs")
-            .field("loads", &forces)
-            .field("motions", &ramps)
-            .finish()
     }
 }
 
@@ -310,7 +228,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// ramp or one that ends before it starts.
     pub fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError> {
         let motion = self.motion_index(motion)?;
-        ramp.check(motion)?;
+        check_ramp(&ramp, motion)?;
         let (inputs, boundary) = self.inputs_and_boundary();
         let m = &mut boundary.motions[motion];
         let slots = grow(&mut inputs.motions, motion);

@@ -84,10 +84,10 @@ pub mod system;
 
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
-    PortSample, PositionFn,
+    PortSample, PositionFn, PositionRamp,
 };
 pub use error::{LinearSolveError, Num, SetupError, StepError};
-pub use inputs::{InputError, PositionRamp};
+pub use inputs::InputError;
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};
 pub use material::{

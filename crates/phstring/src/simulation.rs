@@ -261,8 +261,8 @@ pub struct Simulation<const D: usize, M> {
     ports_prev: Vec<PortSample<D>>,
     /// Prescribed motions: where the velocity state is held at the motion's own velocity.
     held: HeldVelocities,
-    /// Inputs set from outside the run (`crate::inputs`).
-    inputs: crate::inputs::HeldInputs<D>,
+    /// Inputs set from outside the run (held forces, ramps of moving supports).
+    inputs: crate::boundary::HeldInputs<D>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -545,15 +545,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn system(&self) -> &PhSystem<D, M> {
         &self.sys
     }
-    /// The inputs held from outside the run (`crate::inputs`).
-    pub(crate) fn held_inputs(&self) -> &crate::inputs::HeldInputs<D> {
+    /// The inputs held from outside the run.
+    pub(crate) fn held_inputs(&self) -> &crate::boundary::HeldInputs<D> {
         &self.inputs
     }
     /// The held inputs and the boundary conditions they act on, to set an input.
     pub(crate) fn inputs_and_boundary(
         &mut self,
     ) -> (
-        &mut crate::inputs::HeldInputs<D>,
+        &mut crate::boundary::HeldInputs<D>,
         &mut crate::boundary::Boundary<D>,
     ) {
         (&mut self.inputs, &mut self.sys.boundary)
