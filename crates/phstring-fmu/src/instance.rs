@@ -5,11 +5,12 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use phstring::{InputError, Material, PositionRamp, Simulation, StepError, Vector};
+use phstring::{InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector};
 use phstring_io::checkpoint::{SimState, fnv1a64_hex};
 use phstring_io::scenario::{ScenarioFile, Validated};
 use serde::{Deserialize, Serialize};
 
+use crate::error::FmuError;
 use crate::model::{Causality, ModelSpec, Quantity};
 
 /// FMI status of a call (`fmi2Status`).
@@ -89,7 +90,7 @@ trait Stepper: Send {
     fn step_until(&mut self, t_end: f64) -> Result<(), StepError>;
     fn value(&self, q: Quantity) -> f64;
     fn save(&self) -> SimState;
-    fn load(&mut self, s: &SimState) -> Result<(), String>;
+    fn load(&mut self, s: &SimState) -> Result<(), SetupError>;
     /// Holds load `load`'s force at `force` [N] (its first `D` components).
     fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError>;
     /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
@@ -134,9 +135,8 @@ impl<const D: usize> Stepper for Simulation<D, Material> {
     fn save(&self) -> SimState {
         SimState::from_checkpoint(&self.checkpoint())
     }
-    fn load(&mut self, s: &SimState) -> Result<(), String> {
+    fn load(&mut self, s: &SimState) -> Result<(), SetupError> {
         self.restore(s.to_checkpoint::<D>())
-            .map_err(|e| e.to_string())
     }
     fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
         Simulation::set_load_force(self, load, Vector::<D>::from_fn(|i, _| force[i]))
@@ -230,33 +230,28 @@ impl Saved {
     /// The serialized form (`fmi2SerializeFMUstate`): JSON `{"format", "checksum",
     /// "state"}`, floats in round-trip form; the checksum is FNV-1a (64 bit, hex, as in
     /// `checkpoint.json`) over the state's JSON, so any edited value is detected on reading.
-    pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
-        let state = serde_json::to_vec(self).map_err(|e| e.to_string())?;
+    pub fn to_bytes(&self) -> Result<Vec<u8>, FmuError> {
+        let state = serde_json::to_vec(self).map_err(FmuError::StateJson)?;
         serde_json::to_vec(&SealedRef {
             format: STATE_FORMAT,
             checksum: &fnv1a64_hex(&state),
             state: self,
         })
-        .map_err(|e| e.to_string())
+        .map_err(FmuError::StateJson)
     }
 
     /// A state from its serialized form ([`Self::to_bytes`]); an error says what is wrong
     /// (not a state of phstring's FMU, or edited or damaged since it was serialized).
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
-        let sealed: Sealed = serde_json::from_slice(bytes)
-            .map_err(|e| format!("not a serialized state of a phstring FMU ({e})"))?;
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, FmuError> {
+        let sealed: Sealed = serde_json::from_slice(bytes).map_err(FmuError::NotSerializedState)?;
         if sealed.format != STATE_FORMAT {
-            return Err(format!(
-                "not a serialized state of a phstring FMU (format {:?})",
-                sealed.format.chars().take(40).collect::<String>()
+            return Err(FmuError::StateFormat(
+                sealed.format.chars().take(40).collect(),
             ));
         }
-        let state = serde_json::to_vec(&sealed.state).map_err(|e| e.to_string())?;
+        let state = serde_json::to_vec(&sealed.state).map_err(FmuError::StateJson)?;
         if fnv1a64_hex(&state) != sealed.checksum {
-            return Err(
-                "checksum mismatch: the serialized state was edited or damaged after it was written"
-                    .into(),
-            );
+            return Err(FmuError::StateChecksum);
         }
         Ok(sealed.state)
     }
@@ -319,14 +314,14 @@ impl Instance {
         path: PathBuf,
         log: Logger,
         logging_on: bool,
-    ) -> Result<Self, String> {
-        let file = phstring_io::scenario::parse(&text, &path, &[]).map_err(|e| e.to_string())?;
-        let spec = ModelSpec::new(&file).map_err(|e| e.to_string())?;
+    ) -> Result<Self, FmuError> {
+        let file = phstring_io::scenario::parse(&text, &path, &[])?;
+        let spec = ModelSpec::new(&file)?;
         if spec.guid != guid {
-            return Err(format!(
-                "GUID {guid} does not match this FMU's scenario ({}): modelDescription.xml and resources/scenario.toml are from different builds",
-                spec.guid
-            ));
+            return Err(FmuError::GuidMismatch {
+                given: guid.into(),
+                expected: spec.guid,
+            });
         }
         let values = spec
             .variables
@@ -542,19 +537,19 @@ impl Instance {
             let n = (self.spec.t_end / h).round().max(1.0);
             sets.push(format!("time.end={:?}", n * h));
         }
-        let error = |e: String| {
+        let error = |e: FmuError| {
             let e = if sets.is_empty() {
                 e
             } else {
-                format!(
-                    "the parameters ({}) do not fit the scenario: {e}",
-                    sets.join(", ")
-                )
+                FmuError::ParametersDoNotFit {
+                    sets: sets.join(", "),
+                    cause: Box::new(e),
+                }
             };
-            (Status::Error, e)
+            (Status::Error, e.to_string())
         };
         let file = phstring_io::scenario::parse(&self.text, &self.path, &sets)
-            .map_err(|e| error(e.to_string()))?;
+            .map_err(|e| error(e.into()))?;
         match self.spec.dimension {
             1 => self.live_dim::<1>(&file, values, equilibrium),
             2 => self.live_dim::<2>(&file, values, equilibrium),
@@ -568,8 +563,8 @@ impl Instance {
         file: &ScenarioFile,
         values: &[f64],
         equilibrium: bool,
-    ) -> Result<Live, String> {
-        let mut v: Validated<D> = file.validate::<D>().map_err(|e| e.to_string())?;
+    ) -> Result<Live, FmuError> {
+        let mut v: Validated<D> = file.validate::<D>()?;
         // The inputs are held on the problem already: the starting equilibrium and the
         // supports' velocities at `t = 0` are those under the inputs.
         let forces = input_forces(&self.spec, values);
@@ -587,18 +582,17 @@ impl Instance {
         // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
         // supports at their scenario positions).
         if equilibrium {
-            phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
+            phstring_io::runner::start_at_equilibrium(&mut v, None)
+                .map_err(|e| FmuError::Equilibrium { cause: Box::new(e) })?;
         }
         let expression_error = v.load_error.clone();
-        let mut sim: Simulation<D, Material> =
-            Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
+        let mut sim: Simulation<D, Material> = Simulation::new(v.problem, v.settings.step)?;
         // The simulation holds the same inputs from here on (its signals do not change).
         for (&load, u) in &forces {
-            Stepper::set_load_force(&mut sim, load, *u).map_err(|e| e.to_string())?;
+            Stepper::set_load_force(&mut sim, load, *u)?;
         }
         for (motion, rest) in rests {
-            sim.set_motion_ramp(motion, rest)
-                .map_err(|e| e.to_string())?;
+            sim.set_motion_ramp(motion, rest)?;
         }
         Ok(Live {
             h0: sim.energies().hamiltonian(),
@@ -731,39 +725,41 @@ impl Instance {
     }
 
     /// Why `fmi2DoStep(t, comm_h)` cannot be carried out, if it cannot.
-    fn check_step(&self, t: f64, comm_h: f64) -> Result<(), String> {
-        let step = self.call("DoStep");
+    fn check_step(&self, t: f64, comm_h: f64) -> Result<(), FmuError> {
+        let call = || self.call("DoStep");
         if self.mode != Mode::StepComplete {
-            return Err(format!(
-                "{step} is allowed only after initialization and a completed step (the instance is {:?})",
-                self.mode
-            ));
+            return Err(FmuError::StepNotAllowed {
+                call: call(),
+                mode: format!("{:?}", self.mode),
+            });
         }
         if !(comm_h > 0.0 && comm_h.is_finite()) {
-            return Err(format!(
-                "the communication step size must be positive and finite, got {comm_h}"
-            ));
+            return Err(FmuError::StepSize { h: comm_h });
         }
         if t + comm_h == t {
-            return Err(format!(
-                "{step}: the communication step H = {comm_h:e} s is below the resolution of t = {t:e} s (there t + H == t in double precision): the FMU cannot advance"
-            ));
+            return Err(FmuError::StepBelowResolution {
+                call: call(),
+                h: comm_h,
+                t,
+            });
         }
         let tol = self.landing_tol(t, comm_h);
         let off = (t - self.time).abs();
         if off.is_nan() || off > tol {
-            return Err(format!(
-                "{step} at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
-                self.time
-            ));
+            return Err(FmuError::WrongTime {
+                call: call(),
+                t,
+                at: self.time,
+            });
         }
         if let Some(stop) = self.stop_time
             && t + comm_h > stop + tol
         {
-            return Err(format!(
-                "{step} to t = {} s passes stopTime = {stop} s",
-                t + comm_h
-            ));
+            return Err(FmuError::PastStopTime {
+                call: call(),
+                end: t + comm_h,
+                stop,
+            });
         }
         Ok(())
     }
@@ -775,8 +771,8 @@ impl Instance {
     /// `H ≤ 0`, past the stop time, `H` below the resolution of `t`, so that the simulation
     /// would not move) and for failing scenario expressions.
     pub fn do_step(&mut self, t: f64, comm_h: f64) -> Status {
-        if let Err(m) = self.check_step(t, comm_h) {
-            return self.refuse(m);
+        if let Err(e) = self.check_step(t, comm_h) {
+            return self.refuse(e.to_string());
         }
         let tol = self.landing_tol(t, comm_h);
         let target = t - self.start_time + comm_h;
@@ -792,7 +788,7 @@ impl Instance {
         }
         let failure = match hold_inputs(&self.spec, &self.values, live, target) {
             Ok(()) => step_to(live, target, tol, api, start_time),
-            Err(e) => Some((Status::Error, e.to_string())),
+            Err(e) => Some((Status::Error, FmuError::from(e).to_string())),
         };
         match failure {
             None => {
@@ -847,9 +843,9 @@ impl Instance {
 
     /// `fmi2GetFMUstate`: everything needed to continue from here (bit for bit). Refused in
     /// the error state (FMI restores only states saved outside it).
-    pub fn save(&self) -> Result<Saved, String> {
+    pub fn save(&self) -> Result<Saved, FmuError> {
         if self.mode == Mode::Error {
-            return Err("a state can be saved only outside the error state".into());
+            return Err(FmuError::SaveInErrorState);
         }
         let ports = self
             .spec
@@ -934,9 +930,10 @@ impl Instance {
                     .iter()
                     .map(|r| r.map(PositionRamp::from))
                     .collect();
-                let loaded = target.stepper.load(state).and_then(|()| {
-                    set_ramps(target.stepper.as_mut(), &ramps).map_err(|e| e.to_string())
-                });
+                let loaded = match target.stepper.load(state) {
+                    Ok(()) => set_ramps(target.stepper.as_mut(), &ramps).map_err(FmuError::from),
+                    Err(e) => Err(e.into()),
+                };
                 if let Err(m) = loaded {
                     // A failed load may have changed the running simulation: put it back.
                     let _ = target.stepper.load(&before);
