@@ -3,7 +3,7 @@
 //! natural modes and the linearized system. Units as in the library: SI (m, s, kg, N, J).
 
 use std::path::Path;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use numpy::{PyArray1, PyArrayMethods};
 use phstring::{Material, Simulation as Sim, StepReport};
@@ -102,33 +102,14 @@ macro_rules! each {
 /// One port of the last step: node, force port?, input, output, power [W].
 type PortRow = (usize, bool, Vec<f64>, Vec<f64>, f64);
 
-/// A force port's input set from Python: `None` follows the scenario's expression.
-type InputSlot = Arc<Mutex<Option<[f64; 3]>>>;
-
-fn new_sim<const D: usize>(
-    file: &ScenarioFile,
-) -> PyResult<(Sim<D, Material>, f64, Vec<InputSlot>, usize)> {
+fn new_sim<const D: usize>(file: &ScenarioFile) -> PyResult<(Sim<D, Material>, f64, usize)> {
     let mut v = file.validate::<D>().map_err(scenario_err)?;
     // `initial.equilibrium`: start from the static equilibrium, as `phstring run` does.
     phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(scenario_err)?;
     let t_end = v.settings.t_end;
     let stride = v.settings.stride.max(1);
-    // Every load reads its slot first: `set_input` holds a value there.
-    let mut slots = Vec::new();
-    for load in &mut v.problem.boundary.loads {
-        let slot: InputSlot = Arc::default();
-        let (scenario_force, held) = (load.force.clone(), slot.clone());
-        load.force = Arc::new(move |t| {
-            let value = *held.lock().unwrap_or_else(|p| p.into_inner());
-            match value {
-                Some(u) => phstring::Vector::<D>::from_fn(|i, _| u[i]),
-                None => scenario_force(t),
-            }
-        });
-        slots.push(slot);
-    }
     let sim = Sim::new(v.problem, v.settings.step).map_err(scenario_err)?;
-    Ok((sim, t_end, slots, stride))
+    Ok((sim, t_end, stride))
 }
 
 fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
@@ -152,8 +133,6 @@ struct Simulation {
     /// Behind a mutex: Python objects may be shared between threads.
     sim: std::sync::Mutex<Any>,
     t_end: f64,
-    /// The inputs of the loads (force ports), in port order.
-    inputs: Vec<InputSlot>,
     /// The scenario's `output.stride`.
     stride: usize,
 }
@@ -172,15 +151,14 @@ impl Simulation {
     #[new]
     fn new(scenario: &Scenario) -> PyResult<Self> {
         let file = &scenario.file;
-        let (sim, t_end, inputs, stride) = match file.dimension().map_err(scenario_err)? {
-            1 => new_sim::<1>(file).map(|(s, t, i, k)| (Any::D1(s), t, i, k))?,
-            2 => new_sim::<2>(file).map(|(s, t, i, k)| (Any::D2(s), t, i, k))?,
-            _ => new_sim::<3>(file).map(|(s, t, i, k)| (Any::D3(s), t, i, k))?,
+        let (sim, t_end, stride) = match file.dimension().map_err(scenario_err)? {
+            1 => new_sim::<1>(file).map(|(s, t, k)| (Any::D1(s), t, k))?,
+            2 => new_sim::<2>(file).map(|(s, t, k)| (Any::D2(s), t, k))?,
+            _ => new_sim::<3>(file).map(|(s, t, k)| (Any::D3(s), t, k))?,
         };
         Ok(Self {
             sim: std::sync::Mutex::new(sim),
             t_end,
-            inputs,
             stride,
         })
     }
@@ -201,16 +179,17 @@ impl Simulation {
     /// controller written in Python closes its loop this way, one step at a time.
     #[pyo3(signature = (port, value))]
     fn set_input(&self, port: usize, value: Option<Vec<f64>>) -> PyResult<()> {
-        let d = each!(&*self.lock(), s => x_dim(&s.state().r[..]));
-        let slot = self.inputs.get(port).ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "port {port} is not a load: the scenario has {} force ports (0 … {})",
-                self.inputs.len(),
-                self.inputs.len().saturating_sub(1)
-            ))
-        })?;
+        let mut guard = self.lock();
+        let d = each!(&*guard, s => x_dim(&s.state().r[..]));
+        let loads = each!(&*guard, s => s.system().boundary().loads.len());
+        if port >= loads {
+            return Err(PyValueError::new_err(format!(
+                "port {port} is not a load: the scenario has {loads} force ports (0 … {})",
+                loads.saturating_sub(1)
+            )));
+        }
         let held = match value {
-            None => None,
+            None => each!(&mut *guard, s => s.release_load_force(port)),
             Some(v) => {
                 if v.len() != d {
                     return Err(PyValueError::new_err(format!(
@@ -223,13 +202,10 @@ impl Simulation {
                         "the input of port {port} must be finite, got {x}"
                     )));
                 }
-                let mut u = [0.0; 3];
-                u[..d].copy_from_slice(&v);
-                Some(u)
+                each!(&mut *guard, s => s.set_load_force(port, phstring::Vector::from_fn(|i, _| v[i])))
             }
         };
-        *slot.lock().unwrap_or_else(|p| p.into_inner()) = held;
-        Ok(())
+        held.map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
     /// The ports of the last step as a list of dicts: `node`, `kind` (`force` or

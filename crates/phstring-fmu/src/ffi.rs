@@ -8,6 +8,7 @@ use std::ffi::{CStr, CString, c_char, c_int, c_uint, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 
+use crate::error::FmuError;
 use crate::handles;
 use crate::instance::{Instance, Logger, Saved, Status, lock};
 
@@ -167,12 +168,12 @@ pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]
 
 /// The folder of a `file:` URI (`file:///path`, `file:/path`, `file://localhost/path`),
 /// percent-decoded.
-pub fn resource_dir(uri: &str) -> Result<PathBuf, String> {
+pub fn resource_dir(uri: &str) -> Result<PathBuf, FmuError> {
     let rest = uri
         .strip_prefix("file://localhost")
         .or_else(|| uri.strip_prefix("file://"))
         .or_else(|| uri.strip_prefix("file:"))
-        .ok_or_else(|| format!("fmuResourceLocation {uri:?} is not a file: URI"))?;
+        .ok_or_else(|| FmuError::NotAFileUri { uri: uri.into() })?;
     let bytes = rest.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
@@ -188,8 +189,7 @@ pub fn resource_dir(uri: &str) -> Result<PathBuf, String> {
         out.push(bytes[i]);
         i += 1;
     }
-    let path = String::from_utf8(out)
-        .map_err(|_| format!("fmuResourceLocation {uri:?} is not UTF-8 once decoded"))?;
+    let path = String::from_utf8(out).map_err(|_| FmuError::UriNotUtf8 { uri: uri.into() })?;
     // `file:///C:/x` on Windows: drop the slash before the drive letter.
     let path = match path.as_bytes() {
         [b'/', d, b':', ..] if cfg!(windows) && d.is_ascii_alphabetic() => path[1..].to_string(),
@@ -265,19 +265,19 @@ pub unsafe extern "C" fn fmi2Instantiate(
         };
         let dir = match resource_dir(uri) {
             Ok(d) => d,
-            Err(m) => return fail(&log, m),
+            Err(e) => return fail(&log, e.to_string()),
         };
         let path = dir.join("scenario.toml");
         let text = match std::fs::read_to_string(&path) {
             Ok(t) => t,
-            Err(e) => return fail(&log, format!("cannot read {}: {e}", path.display())),
+            Err(cause) => return fail(&log, FmuError::ReadScenario { path, cause }.to_string()),
         };
         match Instance::new(name, guid, text, path, Box::new(|_, _, _| {}), false) {
             Ok(mut inst) => {
                 inst.set_log(log, logging_on != 0);
                 handles::add_instance(inst) as Fmi2Component
             }
-            Err(m) => fail(&log, m),
+            Err(e) => fail(&log, e.to_string()),
         }
     });
     result.unwrap_or(std::ptr::null_mut())
@@ -489,15 +489,12 @@ pub(crate) unsafe fn get_state(
     }
 }
 
-/// The message for a state handle that is not registered.
-const NOT_A_STATE: &str = "not an FMU state of this FMU (already freed, or never given out by it)";
-
 /// Stores `saved` (saved by instance `owner`) at `*state`: a new state, or the existing one
 /// overwritten (FMI: a non-null `*state` is a state of ours, to be reused).
 ///
 /// # Safety
 /// `state` is valid for reading and writing a pointer.
-unsafe fn put_state(state: *mut *mut c_void, owner: usize, saved: Saved) -> Result<(), String> {
+unsafe fn put_state(state: *mut *mut c_void, owner: usize, saved: Saved) -> Result<(), FmuError> {
     // SAFETY: by the caller's contract.
     let current = unsafe { *state };
     if current.is_null() {
@@ -507,7 +504,7 @@ unsafe fn put_state(state: *mut *mut c_void, owner: usize, saved: Saved) -> Resu
     } else if handles::replace_state(current as usize, saved) {
         Ok(())
     } else {
-        Err(NOT_A_STATE.into())
+        Err(FmuError::NotAState)
     }
 }
 
@@ -516,7 +513,7 @@ pub(crate) fn set_state(i: &mut Instance, call: &str, state: *mut c_void) -> Sta
     match handles::state(state as usize) {
         Some(saved) => i.restore(&saved),
         None if state.is_null() => i.refused(&format!("{call}: null FMU state")),
-        None => i.refused(&format!("{call}: {NOT_A_STATE}")),
+        None => i.refused(&format!("{call}: {}", FmuError::NotAState)),
     }
 }
 
@@ -535,7 +532,7 @@ pub(crate) unsafe fn free_state(i: &mut Instance, call: &str, state: *mut *mut c
         return Status::Ok;
     }
     if !handles::remove_state(current as usize) {
-        return i.refused(&format!("{call}: {NOT_A_STATE}"));
+        return i.refused(&format!("{call}: {}", FmuError::NotAState));
     }
     // SAFETY: by the caller's contract.
     unsafe { *state = std::ptr::null_mut() };
@@ -545,7 +542,7 @@ pub(crate) unsafe fn free_state(i: &mut Instance, call: &str, state: *mut *mut c
 /// The serialized form of saved state `state` ([`Saved::to_bytes`]).
 fn serialize(i: &mut Instance, call: &str, state: *mut c_void) -> Result<Vec<u8>, Status> {
     let Some(saved) = handles::state(state as usize) else {
-        return Err(i.refused(&format!("{call}: {NOT_A_STATE}")));
+        return Err(i.refused(&format!("{call}: {}", FmuError::NotAState)));
     };
     saved
         .to_bytes()

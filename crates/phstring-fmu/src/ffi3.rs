@@ -7,6 +7,7 @@ use std::ffi::{c_char, c_int, c_void};
 use std::panic::catch_unwind;
 use std::path::PathBuf;
 
+use crate::error::FmuError;
 use crate::ffi::{
     c_string, deserialize_state, free_state, get_state, no_such, serialize_state, set_state, slice,
     slice_mut, state_size, str_arg, with,
@@ -111,7 +112,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
         let path = PathBuf::from(dir).join("scenario.toml");
         let text = match std::fs::read_to_string(&path) {
             Ok(t) => t,
-            Err(e) => return fail(&log, format!("cannot read {}: {e}", path.display())),
+            Err(cause) => return fail(&log, FmuError::ReadScenario { path, cause }.to_string()),
         };
         match Instance::new(name, token, text, path, Box::new(|_, _, _| {}), false) {
             Ok(mut inst) => {
@@ -119,7 +120,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
                 inst.set_api(Api::Fmi3);
                 handles::add_instance(inst) as Fmi3Instance
             }
-            Err(m) => fail(&log, m),
+            Err(e) => fail(&log, e.to_string()),
         }
     });
     result.unwrap_or(std::ptr::null_mut())

@@ -1,14 +1,16 @@
 //! One FMU instance: the FMI 2.0 Co-Simulation state machine over a `phstring::Simulation`,
 //! in safe Rust (the C functions in `ffi` only convert arguments).
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use phstring::{Material, Simulation, StepError, Vector};
+use phstring::{InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector};
 use phstring_io::checkpoint::{SimState, fnv1a64_hex};
 use phstring_io::scenario::{ScenarioFile, Validated};
 use serde::{Deserialize, Serialize};
 
+use crate::error::FmuError;
 use crate::model::{Causality, ModelSpec, Quantity};
 
 /// FMI status of a call (`fmi2Status`).
@@ -49,11 +51,9 @@ pub enum Mode {
 /// Receives the instance's log messages: status, category, message.
 pub type Logger = Box<dyn Fn(Status, &str, &str) + Send>;
 
-/// A load's force while it is an FMU input [N] (zero-order hold).
-type Held = Arc<Mutex<[f64; 3]>>;
-
-/// The path of a prescribed-motion input over the current communication step: from `from`
-/// at `t0` to `to` at `t1` at constant speed [s, m].
+/// The path of a prescribed-motion input over the current communication step, as saved in
+/// an FMU state: a [`PositionRamp`] from `from` at `t0` to `to` at `t1` at constant speed
+/// [s, m].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Ramp {
     t0: f64,
@@ -62,25 +62,24 @@ pub struct Ramp {
     to: f64,
 }
 
-impl Ramp {
-    /// Resting at `x` [m].
-    fn at(x: f64) -> Self {
+impl From<PositionRamp> for Ramp {
+    fn from(r: PositionRamp) -> Self {
         Self {
-            t0: 0.0,
-            t1: 0.0,
-            from: x,
-            to: x,
+            t0: r.t0,
+            t1: r.t1,
+            from: r.from,
+            to: r.to,
         }
     }
-    /// Position at time `t` [s]; a step that ends within `1e-9` of the communication step
-    /// of its end (rounding of the step's end time) ends at `to` exactly.
-    fn position(&self, t: f64) -> f64 {
-        if t >= self.t1 - 1e-9 * (self.t1 - self.t0) {
-            self.to
-        } else if t <= self.t0 {
-            self.from
-        } else {
-            self.from + (self.to - self.from) * ((t - self.t0) / (self.t1 - self.t0))
+}
+
+impl From<Ramp> for PositionRamp {
+    fn from(r: Ramp) -> Self {
+        Self {
+            t0: r.t0,
+            t1: r.t1,
+            from: r.from,
+            to: r.to,
         }
     }
 }
@@ -91,7 +90,20 @@ trait Stepper: Send {
     fn step_until(&mut self, t_end: f64) -> Result<(), StepError>;
     fn value(&self, q: Quantity) -> f64;
     fn save(&self) -> SimState;
-    fn load(&mut self, s: &SimState) -> Result<(), String>;
+    fn load(&mut self, s: &SimState) -> Result<(), SetupError>;
+    /// Holds load `load`'s force at `force` [N] (its first `D` components).
+    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError>;
+    /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
+    fn set_motion_target(
+        &mut self,
+        motion: usize,
+        target: f64,
+        t_target: f64,
+    ) -> Result<(), InputError>;
+    /// Makes motion `motion` follow `ramp`.
+    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError>;
+    /// Per motion: the ramp it follows, if it is an input.
+    fn motion_ramps(&self) -> Vec<Option<PositionRamp>>;
 }
 
 impl<const D: usize> Stepper for Simulation<D, Material> {
@@ -123,21 +135,36 @@ impl<const D: usize> Stepper for Simulation<D, Material> {
     fn save(&self) -> SimState {
         SimState::from_checkpoint(&self.checkpoint())
     }
-    fn load(&mut self, s: &SimState) -> Result<(), String> {
+    fn load(&mut self, s: &SimState) -> Result<(), SetupError> {
         self.restore(s.to_checkpoint::<D>())
-            .map_err(|e| e.to_string())
+    }
+    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
+        Simulation::set_load_force(self, load, Vector::<D>::from_fn(|i, _| force[i]))
+    }
+    fn set_motion_target(
+        &mut self,
+        motion: usize,
+        target: f64,
+        t_target: f64,
+    ) -> Result<(), InputError> {
+        Simulation::set_motion_target(self, motion, target, t_target).map(|_| ())
+    }
+    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError> {
+        Simulation::set_motion_ramp(self, motion, ramp)
+    }
+    fn motion_ramps(&self) -> Vec<Option<PositionRamp>> {
+        (0..self.system().boundary().motions.len())
+            .map(|k| self.motion_ramp(k))
+            .collect()
     }
 }
 
-/// The simulation with the handles through which the inputs reach it.
+/// The simulation with what the instance keeps beside it.
 struct Live {
+    /// The simulation; it holds the inputs (`phstring::inputs`).
     stepper: Box<dyn Stepper>,
     /// `Ĥ(0)` [J], the reference of `balance_error`.
     h0: f64,
-    /// Per load: its held force, if it is an input.
-    loads: Vec<Option<Held>>,
-    /// Per motion: its ramp, if it is an input.
-    motions: Vec<Option<Arc<Mutex<Ramp>>>>,
     /// The first failure of a scenario expression during the run.
     expression_error: Arc<Mutex<Option<String>>>,
     /// After `fmi2SetFMUstate`: the port variables' values at the saved point, by value
@@ -203,33 +230,28 @@ impl Saved {
     /// The serialized form (`fmi2SerializeFMUstate`): JSON `{"format", "checksum",
     /// "state"}`, floats in round-trip form; the checksum is FNV-1a (64 bit, hex, as in
     /// `checkpoint.json`) over the state's JSON, so any edited value is detected on reading.
-    pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
-        let state = serde_json::to_vec(self).map_err(|e| e.to_string())?;
+    pub fn to_bytes(&self) -> Result<Vec<u8>, FmuError> {
+        let state = serde_json::to_vec(self).map_err(FmuError::StateJson)?;
         serde_json::to_vec(&SealedRef {
             format: STATE_FORMAT,
             checksum: &fnv1a64_hex(&state),
             state: self,
         })
-        .map_err(|e| e.to_string())
+        .map_err(FmuError::StateJson)
     }
 
     /// A state from its serialized form ([`Self::to_bytes`]); an error says what is wrong
     /// (not a state of phstring's FMU, or edited or damaged since it was serialized).
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
-        let sealed: Sealed = serde_json::from_slice(bytes)
-            .map_err(|e| format!("not a serialized state of a phstring FMU ({e})"))?;
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, FmuError> {
+        let sealed: Sealed = serde_json::from_slice(bytes).map_err(FmuError::NotSerializedState)?;
         if sealed.format != STATE_FORMAT {
-            return Err(format!(
-                "not a serialized state of a phstring FMU (format {:?})",
-                sealed.format.chars().take(40).collect::<String>()
+            return Err(FmuError::StateFormat(
+                sealed.format.chars().take(40).collect(),
             ));
         }
-        let state = serde_json::to_vec(&sealed.state).map_err(|e| e.to_string())?;
+        let state = serde_json::to_vec(&sealed.state).map_err(FmuError::StateJson)?;
         if fnv1a64_hex(&state) != sealed.checksum {
-            return Err(
-                "checksum mismatch: the serialized state was edited or damaged after it was written"
-                    .into(),
-            );
+            return Err(FmuError::StateChecksum);
         }
         Ok(sealed.state)
     }
@@ -292,14 +314,14 @@ impl Instance {
         path: PathBuf,
         log: Logger,
         logging_on: bool,
-    ) -> Result<Self, String> {
-        let file = phstring_io::scenario::parse(&text, &path, &[]).map_err(|e| e.to_string())?;
-        let spec = ModelSpec::new(&file).map_err(|e| e.to_string())?;
+    ) -> Result<Self, FmuError> {
+        let file = phstring_io::scenario::parse(&text, &path, &[])?;
+        let spec = ModelSpec::new(&file)?;
         if spec.guid != guid {
-            return Err(format!(
-                "GUID {guid} does not match this FMU's scenario ({}): modelDescription.xml and resources/scenario.toml are from different builds",
-                spec.guid
-            ));
+            return Err(FmuError::GuidMismatch {
+                given: guid.into(),
+                expected: spec.guid,
+            });
         }
         let values = spec
             .variables
@@ -515,19 +537,19 @@ impl Instance {
             let n = (self.spec.t_end / h).round().max(1.0);
             sets.push(format!("time.end={:?}", n * h));
         }
-        let error = |e: String| {
+        let error = |e: FmuError| {
             let e = if sets.is_empty() {
                 e
             } else {
-                format!(
-                    "the parameters ({}) do not fit the scenario: {e}",
-                    sets.join(", ")
-                )
+                FmuError::ParametersDoNotFit {
+                    sets: sets.join(", "),
+                    cause: Box::new(e),
+                }
             };
-            (Status::Error, e)
+            (Status::Error, e.to_string())
         };
         let file = phstring_io::scenario::parse(&self.text, &self.path, &sets)
-            .map_err(|e| error(e.to_string()))?;
+            .map_err(|e| error(e.into()))?;
         match self.spec.dimension {
             1 => self.live_dim::<1>(&file, values, equilibrium),
             2 => self.live_dim::<2>(&file, values, equilibrium),
@@ -541,53 +563,40 @@ impl Instance {
         file: &ScenarioFile,
         values: &[f64],
         equilibrium: bool,
-    ) -> Result<Live, String> {
-        let mut v: Validated<D> = file.validate::<D>().map_err(|e| e.to_string())?;
-        let mut loads: Vec<Option<Held>> = vec![None; v.problem.boundary.loads.len()];
-        let mut motions: Vec<Option<Arc<Mutex<Ramp>>>> =
-            vec![None; v.problem.boundary.motions.len()];
-        for (vr, var) in self.spec.variables.iter().enumerate() {
-            match var.quantity {
-                Quantity::LoadForce { load, component } => {
-                    let held = loads[load].get_or_insert_with(Held::default);
-                    lock(held)[component] = values[vr];
-                }
-                Quantity::MotionPosition { motion } => {
-                    // Until the first step, the support rests where the scenario starts it.
-                    let x0 = (v.problem.boundary.motions[motion].position)(0.0);
-                    motions[motion] = Some(Arc::new(Mutex::new(Ramp::at(x0))));
-                }
-                _ => {}
-            }
+    ) -> Result<Live, FmuError> {
+        let mut v: Validated<D> = file.validate::<D>()?;
+        // The inputs are held on the problem already: the starting equilibrium and the
+        // supports' velocities at `t = 0` are those under the inputs.
+        let forces = input_forces(&self.spec, values);
+        for (&load, u) in &forces {
+            v.problem.boundary.loads[load].hold(Vector::<D>::from_fn(|i, _| u[i]));
         }
-        for (load, held) in v.problem.boundary.loads.iter_mut().zip(&loads) {
-            if let Some(held) = held {
-                let held = held.clone();
-                load.force = Arc::new(move |_t| {
-                    let u = *lock(&held);
-                    Vector::<D>::from_fn(|i, _| u[i])
-                });
-            }
-        }
-        for (m, ramp) in v.problem.boundary.motions.iter_mut().zip(&motions) {
-            if let Some(ramp) = ramp {
-                let ramp = ramp.clone();
-                m.position = Arc::new(move |t| lock(&ramp).position(t));
-            }
+        // Until the first step, the support rests where the scenario starts it.
+        let mut rests = Vec::new();
+        for (motion, _) in input_positions(&self.spec, values) {
+            let m = &mut v.problem.boundary.motions[motion];
+            let rest = PositionRamp::at((m.position)(0.0));
+            m.hold(rest);
+            rests.push((motion, rest));
         }
         // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
         // supports at their scenario positions).
         if equilibrium {
-            phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
+            phstring_io::runner::start_at_equilibrium(&mut v, None)
+                .map_err(|e| FmuError::Equilibrium { cause: Box::new(e) })?;
         }
         let expression_error = v.load_error.clone();
-        let sim: Simulation<D, Material> =
-            Simulation::new(v.problem, v.settings.step).map_err(|e| e.to_string())?;
+        let mut sim: Simulation<D, Material> = Simulation::new(v.problem, v.settings.step)?;
+        // The simulation holds the same inputs from here on (its signals do not change).
+        for (&load, u) in &forces {
+            Stepper::set_load_force(&mut sim, load, *u)?;
+        }
+        for (motion, rest) in rests {
+            sim.set_motion_ramp(motion, rest)?;
+        }
         Ok(Live {
             h0: sim.energies().hamiltonian(),
             stepper: Box::new(sim),
-            loads,
-            motions,
             expression_error,
             ports_saved: None,
         })
@@ -716,39 +725,41 @@ impl Instance {
     }
 
     /// Why `fmi2DoStep(t, comm_h)` cannot be carried out, if it cannot.
-    fn check_step(&self, t: f64, comm_h: f64) -> Result<(), String> {
-        let step = self.call("DoStep");
+    fn check_step(&self, t: f64, comm_h: f64) -> Result<(), FmuError> {
+        let call = || self.call("DoStep");
         if self.mode != Mode::StepComplete {
-            return Err(format!(
-                "{step} is allowed only after initialization and a completed step (the instance is {:?})",
-                self.mode
-            ));
+            return Err(FmuError::StepNotAllowed {
+                call: call(),
+                mode: format!("{:?}", self.mode),
+            });
         }
         if !(comm_h > 0.0 && comm_h.is_finite()) {
-            return Err(format!(
-                "the communication step size must be positive and finite, got {comm_h}"
-            ));
+            return Err(FmuError::StepSize { h: comm_h });
         }
         if t + comm_h == t {
-            return Err(format!(
-                "{step}: the communication step H = {comm_h:e} s is below the resolution of t = {t:e} s (there t + H == t in double precision): the FMU cannot advance"
-            ));
+            return Err(FmuError::StepBelowResolution {
+                call: call(),
+                h: comm_h,
+                t,
+            });
         }
         let tol = self.landing_tol(t, comm_h);
         let off = (t - self.time).abs();
         if off.is_nan() || off > tol {
-            return Err(format!(
-                "{step} at currentCommunicationPoint = {t} s, but the FMU is at t = {} s",
-                self.time
-            ));
+            return Err(FmuError::WrongTime {
+                call: call(),
+                t,
+                at: self.time,
+            });
         }
         if let Some(stop) = self.stop_time
             && t + comm_h > stop + tol
         {
-            return Err(format!(
-                "{step} to t = {} s passes stopTime = {stop} s",
-                t + comm_h
-            ));
+            return Err(FmuError::PastStopTime {
+                call: call(),
+                end: t + comm_h,
+                stop,
+            });
         }
         Ok(())
     }
@@ -760,8 +771,8 @@ impl Instance {
     /// `H ≤ 0`, past the stop time, `H` below the resolution of `t`, so that the simulation
     /// would not move) and for failing scenario expressions.
     pub fn do_step(&mut self, t: f64, comm_h: f64) -> Status {
-        if let Err(m) = self.check_step(t, comm_h) {
-            return self.refuse(m);
+        if let Err(e) = self.check_step(t, comm_h) {
+            return self.refuse(e.to_string());
         }
         let tol = self.landing_tol(t, comm_h);
         let target = t - self.start_time + comm_h;
@@ -775,8 +786,10 @@ impl Instance {
                 "{step}: the communication step H = {comm_h:e} s from t = {t} s is below the resolution of the FMU's time there ({tol:.1e} s): the simulation would not move"
             ));
         }
-        hold_inputs(&self.spec, &self.values, live, target);
-        let failure = step_to(live, target, tol, api, start_time);
+        let failure = match hold_inputs(&self.spec, &self.values, live, target) {
+            Ok(()) => step_to(live, target, tol, api, start_time),
+            Err(e) => Some((Status::Error, FmuError::from(e).to_string())),
+        };
         match failure {
             None => {
                 self.time = t + comm_h;
@@ -830,9 +843,9 @@ impl Instance {
 
     /// `fmi2GetFMUstate`: everything needed to continue from here (bit for bit). Refused in
     /// the error state (FMI restores only states saved outside it).
-    pub fn save(&self) -> Result<Saved, String> {
+    pub fn save(&self) -> Result<Saved, FmuError> {
         if self.mode == Mode::Error {
-            return Err("a state can be saved only outside the error state".into());
+            return Err(FmuError::SaveInErrorState);
         }
         let ports = self
             .spec
@@ -855,10 +868,8 @@ impl Instance {
             stop_time: self.stop_time,
             time: self.time(),
             ramps: self.live.as_ref().map_or_else(Vec::new, |l| {
-                l.motions
-                    .iter()
-                    .map(|r| r.as_ref().map(|r| *lock(r)))
-                    .collect()
+                let ramps = l.stepper.motion_ramps();
+                ramps.into_iter().map(|r| r.map(Ramp::from)).collect()
             }),
             ports,
             sim: self.live.as_ref().map(|l| l.stepper.save()),
@@ -913,15 +924,21 @@ impl Instance {
                     None => self.live.as_mut().expect("checked above"),
                 };
                 let before = target.stepper.save();
-                if let Err(m) = target.stepper.load(state) {
+                let ramps_before = target.stepper.motion_ramps();
+                let ramps: Vec<_> = saved
+                    .ramps
+                    .iter()
+                    .map(|r| r.map(PositionRamp::from))
+                    .collect();
+                let loaded = match target.stepper.load(state) {
+                    Ok(()) => set_ramps(target.stepper.as_mut(), &ramps).map_err(FmuError::from),
+                    Err(e) => Err(e.into()),
+                };
+                if let Err(m) = loaded {
                     // A failed load may have changed the running simulation: put it back.
                     let _ = target.stepper.load(&before);
+                    let _ = set_ramps(target.stepper.as_mut(), &ramps_before);
                     return self.refuse(format!("cannot restore the FMU state: {m}"));
-                }
-                for (slot, ramp) in target.motions.iter().zip(&saved.ramps) {
-                    if let (Some(slot), Some(ramp)) = (slot, ramp) {
-                        *lock(slot) = *ramp;
-                    }
                 }
                 target.ports_saved = Some(saved.ports.clone());
                 if let Some(h0) = saved.h0 {
@@ -940,33 +957,57 @@ impl Instance {
     }
 }
 
-/// Holds the inputs of `spec` (values `values`, by value reference) over the communication
-/// step from the simulation's time to `target` [s]: load forces at their values, motions on
-/// a ramp to their values.
-fn hold_inputs(spec: &ModelSpec, values: &[f64], live: &Live, target: f64) {
-    let start = live.stepper.time();
+/// Per load that is an input: the force [N] its variables in `values` (by value reference)
+/// hold it at, components that are not variables 0.
+fn input_forces(spec: &ModelSpec, values: &[f64]) -> BTreeMap<usize, [f64; 3]> {
+    let mut forces = BTreeMap::new();
     for (vr, var) in spec.variables.iter().enumerate() {
-        match var.quantity {
-            Quantity::LoadForce { load, component } => {
-                if let Some(held) = &live.loads[load] {
-                    lock(held)[component] = values[vr];
-                }
-            }
-            Quantity::MotionPosition { motion } => {
-                if let Some(ramp) = &live.motions[motion] {
-                    let mut r = lock(ramp);
-                    let here = r.position(start);
-                    *r = Ramp {
-                        t0: start,
-                        t1: target,
-                        from: here,
-                        to: values[vr],
-                    };
-                }
-            }
-            _ => {}
+        if let Quantity::LoadForce { load, component } = var.quantity {
+            forces.entry(load).or_insert([0.0; 3])[component] = values[vr];
         }
     }
+    forces
+}
+
+/// Per motion that is an input: its index and the position [m] its variable in `values`
+/// (by value reference) asks for.
+fn input_positions(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
+    let motions = spec.variables.iter().enumerate();
+    motions
+        .filter_map(|(vr, var)| match var.quantity {
+            Quantity::MotionPosition { motion } => Some((motion, values[vr])),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Holds the inputs of `spec` (values `values`, by value reference) over the communication
+/// step from the simulation's time to `target` [s]: load forces at their values, motions on
+/// a ramp from where they are to their values.
+fn hold_inputs(
+    spec: &ModelSpec,
+    values: &[f64],
+    live: &mut Live,
+    target: f64,
+) -> Result<(), InputError> {
+    for (load, u) in input_forces(spec, values) {
+        live.stepper.set_load_force(load, u)?;
+    }
+    for (motion, x) in input_positions(spec, values) {
+        live.stepper.set_motion_target(motion, x, target)?;
+    }
+    Ok(())
+}
+
+/// Puts `ramps` (per motion, as saved) back on the motions of `stepper` that follow one.
+fn set_ramps(stepper: &mut dyn Stepper, ramps: &[Option<PositionRamp>]) -> Result<(), InputError> {
+    let now = stepper.motion_ramps();
+    for (motion, (now, saved)) in now.iter().zip(ramps).enumerate() {
+        if let (Some(_), Some(ramp)) = (now, saved) {
+            stepper.set_motion_ramp(motion, *ramp)?;
+        }
+    }
+    Ok(())
 }
 
 /// Steps `live` until it is within `tol` [s] of `target` [s] (simulation time); the failure,

@@ -7,6 +7,7 @@
 //! (`ffi3`), both in the one shared library, run the same `phstring::Simulation` as
 //! `phstring run` on the packaged scenario.
 
+pub mod error;
 #[allow(unsafe_code)]
 pub mod ffi;
 #[allow(unsafe_code)]

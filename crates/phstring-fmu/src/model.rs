@@ -7,7 +7,7 @@
 
 use phstring::{Material, PortKind, Simulation};
 use phstring_io::checkpoint::fnv1a64_hex;
-use phstring_io::scenario::{ScenarioError, ScenarioFile, Validated};
+use phstring_io::scenario::{Components, Scenario, ScenarioError, ScenarioFile, Validated};
 
 /// FMI causality of a variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -136,264 +136,38 @@ impl ModelSpec {
         }
     }
 
+    /// The variables of the FMU of `file` in `D` dimensions: parameters, inputs, outputs.
     fn of<const D: usize>(file: &ScenarioFile) -> Result<Self, ScenarioError> {
         let v: Validated<D> = file.validate::<D>()?;
-        let s = &file.scenario;
-        let mut vars = Vec::new();
-        let mut parameters = Vec::new();
-        let mut param = |vars: &mut Vec<Variable>, name: String, key: String, value: f64| {
-            let (unit, what) = match key.rsplit('.').next() {
-                Some("ea") => ("N", "axial stiffness EA"),
-                Some("rho_a") => ("kg/m", "mass per unit length ρA"),
-                _ => ("s", "internal step size h (largest)"),
-            };
-            vars.push(Variable {
-                name,
-                causality: Causality::Parameter,
-                unit,
-                description: format!("{what} (scenario key {key})"),
-                start: Some(value),
-                quantity: Quantity::Parameter(parameters.len()),
-            });
-            parameters.push(Parameter { key, value });
-        };
-        if let Some(m) = &s.material {
-            let m = m.get_ref();
-            param(
-                &mut vars,
-                "EA".into(),
-                "material.ea".into(),
-                *m.ea.get_ref(),
-            );
-            param(
-                &mut vars,
-                "rhoA".into(),
-                "material.rho_a".into(),
-                *m.rho_a.get_ref(),
-            );
-        }
-        for (name, m) in &s.materials {
-            let m = m.get_ref();
-            param(
-                &mut vars,
-                format!("EA.{name}"),
-                format!("materials.{name}.ea"),
-                *m.ea.get_ref(),
-            );
-            param(
-                &mut vars,
-                format!("rhoA.{name}"),
-                format!("materials.{name}.rho_a"),
-                *m.rho_a.get_ref(),
-            );
-        }
-        param(&mut vars, "h".into(), "time.h".into(), *s.time.h.get_ref());
-
-        let c = &v.components;
-        let node_label = |node: usize| match c.node_name(node) {
-            Some(name) => format!("node {node} (\"{name}\")"),
-            None => format!("node {node}"),
-        };
+        let (mut vars, parameters) = parameter_variables(&file.scenario);
         // Inputs: external loads, then external motions.
-        for (k, load) in v.problem.boundary.loads.iter().enumerate() {
-            if !c.loads[k].external {
-                continue;
-            }
-            let at_zero = (load.force)(0.0);
-            if let Some(i) = (0..D).find(|&i| !at_zero[i].is_finite()) {
-                // The k-th table with a `force` is load k.
-                let (j, spec) = s
-                    .boundary
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, b)| b.force.is_some())
-                    .nth(k)
-                    .expect("one table per load");
-                let key = format!("boundary.{j}.force");
-                let span = spec.force.as_ref().map_or(0..0, |f| f.span());
-                return Err(ScenarioError::Invalid {
-                    origin: file.origin(&key, span),
-                    key,
-                    reason: format!(
-                        "component {} is {} at t = 0, the start value of the FMU input load{k}.F.{}: an input starts at a finite force",
-                        AXES[i], at_zero[i], AXES[i]
-                    ),
-                });
-            }
-            for i in 0..D {
-                vars.push(Variable {
-                    name: format!("load{k}.F.{}", AXES[i]),
-                    causality: Causality::Input,
-                    unit: "N",
-                    description: format!(
-                        "force on {} in {} (held over each communication step)",
-                        node_label(load.node),
-                        AXES[i]
-                    ),
-                    start: Some(at_zero[i]),
-                    quantity: Quantity::LoadForce {
-                        load: k,
-                        component: i,
-                    },
-                });
-            }
-        }
-        for (m, motion) in v.problem.boundary.motions.iter().enumerate() {
-            if !c.motions[m].external {
-                continue;
-            }
-            vars.push(Variable {
-                name: format!("motion{m}.{}", AXES[motion.component]),
-                causality: Causality::Input,
-                unit: "m",
-                description: format!(
-                    "position in {} that {} reaches at the end of each communication step (moving there at constant speed)",
-                    AXES[motion.component],
-                    node_label(motion.node)
-                ),
-                start: Some((motion.position)(0.0)),
-                quantity: Quantity::MotionPosition { motion: m },
-            });
-        }
+        vars.extend(load_inputs(file, &v)?);
+        vars.extend(motion_inputs(&v));
         // Outputs: the ports (one simulation is set up to learn them), energies, nodes.
-        let fmu_nodes = v.fmu_nodes.clone();
-        let loads = v.problem.boundary.loads.len();
-        let feedback = v.problem.boundary.feedback.len();
-        let held = |node: usize| -> Vec<usize> {
-            let mut comps: Vec<usize> = c
-                .supports
-                .iter()
-                .filter(|sc| sc.node == node)
-                .flat_map(|sc| sc.fixed.iter())
-                .filter_map(|a| AXES.iter().position(|x| x == a))
-                .collect();
-            comps.extend(
-                c.motions
-                    .iter()
-                    .filter(|mc| mc.node == node)
-                    .filter_map(|mc| AXES.iter().position(|x| *x == mc.component)),
-            );
-            comps.sort_unstable();
-            comps.dedup();
-            comps
-        };
-        let (t_end, h) = (v.settings.t_end, v.settings.step.h);
-        let model_name = s
-            .title
-            .clone()
-            .unwrap_or_else(|| file.path.display().to_string());
+        let Validated {
+            problem,
+            settings,
+            components,
+            fmu_nodes,
+            ..
+        } = v;
+        let (loads, feedback) = (
+            problem.boundary.loads.len(),
+            problem.boundary.feedback.len(),
+        );
+        let (t_end, h) = (settings.t_end, settings.step.h);
         let sim: Simulation<D, Material> =
-            Simulation::new(v.problem, v.settings.step).map_err(|cause| ScenarioError::Setup {
+            Simulation::new(problem, settings.step).map_err(|cause| ScenarioError::Setup {
                 path: file.path.clone(),
                 with_sets: false,
                 cause,
             })?;
-        for (p, port) in sim.ports().iter().enumerate() {
-            let control = (loads..loads + feedback).contains(&p);
-            let (prefix, comps) = if p < loads {
-                (format!("load{p}"), (0..D).collect::<Vec<_>>())
-            } else if p < loads + feedback {
-                (format!("control{}", p - loads), (0..D).collect())
-            } else {
-                (format!("support{}", port.node), held(port.node))
-            };
-            for &i in &comps {
-                let (name, unit, what) = match port.kind {
-                    PortKind::Force => (
-                        format!("{prefix}.v.{}", AXES[i]),
-                        "m/s",
-                        "mid-step velocity",
-                    ),
-                    PortKind::Velocity => (
-                        format!("{prefix}.R.{}", AXES[i]),
-                        "N",
-                        "force the support exerts on the string",
-                    ),
-                };
-                vars.push(Variable {
-                    name,
-                    causality: Causality::Output,
-                    unit,
-                    description: format!(
-                        "{what} of {} in {} over the last internal step",
-                        node_label(port.node),
-                        AXES[i]
-                    ),
-                    start: None,
-                    quantity: Quantity::PortOutput {
-                        port: p,
-                        component: i,
-                    },
-                });
-            }
-            if control {
-                for i in 0..D {
-                    vars.push(Variable {
-                        name: format!("{prefix}.F.{}", AXES[i]),
-                        causality: Causality::Output,
-                        unit: "N",
-                        description: format!(
-                            "force of the feedback law on {} in {} over the last internal step",
-                            node_label(port.node),
-                            AXES[i]
-                        ),
-                        start: None,
-                        quantity: Quantity::PortInput {
-                            port: p,
-                            component: i,
-                        },
-                    });
-                }
-            }
-        }
-        let energies = [
-            ("H", Quantity::Hamiltonian, "Hamiltonian Ĥ = T̂ + V̂"),
-            ("T", Quantity::Kinetic, "kinetic energy T̂"),
-            (
-                "V",
-                Quantity::Potential,
-                "potential energy V̂ (strain energy plus potential of the body force)",
-            ),
-            (
-                "supplied",
-                Quantity::Supplied,
-                "energy supplied through the ports since the start",
-            ),
-            (
-                "dissipated",
-                Quantity::Dissipated,
-                "energy dissipated since the start",
-            ),
-            (
-                "balance_error",
-                Quantity::BalanceError,
-                "energy balance Ĥ(t) − Ĥ(0) − supplied + dissipated",
-            ),
-        ];
-        for (name, quantity, description) in energies {
-            vars.push(Variable {
-                name: name.into(),
-                causality: Causality::Output,
-                unit: "J",
-                description: description.into(),
-                start: None,
-                quantity,
-            });
-        }
-        for node in fmu_nodes {
-            for i in 0..D {
-                vars.push(Variable {
-                    name: format!("node{node}.r.{}", AXES[i]),
-                    causality: Causality::Output,
-                    unit: "m",
-                    description: format!("position of {} in {}", node_label(node), AXES[i]),
-                    start: None,
-                    quantity: Quantity::NodePosition { node, component: i },
-                });
-            }
-        }
+        vars.extend(port_outputs(&sim, loads, feedback, &components));
+        vars.extend(energy_outputs());
+        vars.extend(node_outputs::<D>(&fmu_nodes, &components));
+        let model_name = file.scenario.title.clone();
         let mut spec = Self {
-            model_name,
+            model_name: model_name.unwrap_or_else(|| file.path.display().to_string()),
             dimension: D,
             variables: vars,
             parameters,
@@ -557,6 +331,283 @@ impl ModelSpec {
         ));
         x
     }
+}
+
+/// `node N`, with the node's name if it has one (`node 4 ("fairlead")`).
+fn node_label(c: &Components, node: usize) -> String {
+    match c.node_name(node) {
+        Some(name) => format!("node {node} (\"{name}\")"),
+        None => format!("node {node}"),
+    }
+}
+
+/// The parameter variables of scenario `s` (material stiffness and mass per length, the
+/// step size) with their parameters, in value-reference order.
+fn parameter_variables(s: &Scenario) -> (Vec<Variable>, Vec<Parameter>) {
+    let mut vars = Vec::new();
+    let mut parameters = Vec::new();
+    let mut param = |name: String, key: String, value: f64| {
+        let (unit, what) = match key.rsplit('.').next() {
+            Some("ea") => ("N", "axial stiffness EA"),
+            Some("rho_a") => ("kg/m", "mass per unit length ρA"),
+            _ => ("s", "internal step size h (largest)"),
+        };
+        vars.push(Variable {
+            name,
+            causality: Causality::Parameter,
+            unit,
+            description: format!("{what} (scenario key {key})"),
+            start: Some(value),
+            quantity: Quantity::Parameter(parameters.len()),
+        });
+        parameters.push(Parameter { key, value });
+    };
+    if let Some(m) = &s.material {
+        let m = m.get_ref();
+        param("EA".into(), "material.ea".into(), *m.ea.get_ref());
+        param("rhoA".into(), "material.rho_a".into(), *m.rho_a.get_ref());
+    }
+    for (name, m) in &s.materials {
+        let m = m.get_ref();
+        param(
+            format!("EA.{name}"),
+            format!("materials.{name}.ea"),
+            *m.ea.get_ref(),
+        );
+        param(
+            format!("rhoA.{name}"),
+            format!("materials.{name}.rho_a"),
+            *m.rho_a.get_ref(),
+        );
+    }
+    param("h".into(), "time.h".into(), *s.time.h.get_ref());
+    (vars, parameters)
+}
+
+/// The input variables of the external loads of `v`, one per component, starting at the
+/// load's force at `t = 0` (which must be finite: an error points at the scenario's key).
+fn load_inputs<const D: usize>(
+    file: &ScenarioFile,
+    v: &Validated<D>,
+) -> Result<Vec<Variable>, ScenarioError> {
+    let (s, c) = (&file.scenario, &v.components);
+    let mut vars = Vec::new();
+    for (k, load) in v.problem.boundary.loads.iter().enumerate() {
+        if !c.loads[k].external {
+            continue;
+        }
+        let at_zero = (load.force)(0.0);
+        if let Some(i) = (0..D).find(|&i| !at_zero[i].is_finite()) {
+            // The k-th table with a `force` is load k.
+            let (j, spec) = s
+                .boundary
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| b.force.is_some())
+                .nth(k)
+                .expect("one table per load");
+            let key = format!("boundary.{j}.force");
+            let span = spec.force.as_ref().map_or(0..0, |f| f.span());
+            return Err(ScenarioError::Invalid {
+                origin: file.origin(&key, span),
+                key,
+                reason: format!(
+                    "component {} is {} at t = 0, the start value of the FMU input load{k}.F.{}: an input starts at a finite force",
+                    AXES[i], at_zero[i], AXES[i]
+                ),
+            });
+        }
+        for i in 0..D {
+            vars.push(Variable {
+                name: format!("load{k}.F.{}", AXES[i]),
+                causality: Causality::Input,
+                unit: "N",
+                description: format!(
+                    "force on {} in {} (held over each communication step)",
+                    node_label(c, load.node),
+                    AXES[i]
+                ),
+                start: Some(at_zero[i]),
+                quantity: Quantity::LoadForce {
+                    load: k,
+                    component: i,
+                },
+            });
+        }
+    }
+    Ok(vars)
+}
+
+/// The input variables of the external motions of `v`, starting at their positions at
+/// `t = 0`.
+fn motion_inputs<const D: usize>(v: &Validated<D>) -> Vec<Variable> {
+    let c = &v.components;
+    let motions = v.problem.boundary.motions.iter().enumerate();
+    motions
+        .filter(|(m, _)| c.motions[*m].external)
+        .map(|(m, motion)| Variable {
+            name: format!("motion{m}.{}", AXES[motion.component]),
+            causality: Causality::Input,
+            unit: "m",
+            description: format!(
+                "position in {} that {} reaches at the end of each communication step (moving there at constant speed)",
+                AXES[motion.component],
+                node_label(c, motion.node)
+            ),
+            start: Some((motion.position)(0.0)),
+            quantity: Quantity::MotionPosition { motion: m },
+        })
+        .collect()
+}
+
+/// The components (0 = x) of `node` that its supports and motions hold.
+fn held_components(c: &Components, node: usize) -> Vec<usize> {
+    let mut comps: Vec<usize> = c
+        .supports
+        .iter()
+        .filter(|sc| sc.node == node)
+        .flat_map(|sc| sc.fixed.iter())
+        .filter_map(|a| AXES.iter().position(|x| x == a))
+        .collect();
+    comps.extend(
+        c.motions
+            .iter()
+            .filter(|mc| mc.node == node)
+            .filter_map(|mc| AXES.iter().position(|x| *x == mc.component)),
+    );
+    comps.sort_unstable();
+    comps.dedup();
+    comps
+}
+
+/// The output variables of the ports of `sim` (`loads` load ports, then `feedback` control
+/// ports, then the supports): each port's output per component, and a control port's force.
+fn port_outputs<const D: usize>(
+    sim: &Simulation<D, Material>,
+    loads: usize,
+    feedback: usize,
+    c: &Components,
+) -> Vec<Variable> {
+    let mut vars = Vec::new();
+    for (p, port) in sim.ports().iter().enumerate() {
+        let control = (loads..loads + feedback).contains(&p);
+        let (prefix, comps) = if p < loads {
+            (format!("load{p}"), (0..D).collect::<Vec<_>>())
+        } else if p < loads + feedback {
+            (format!("control{}", p - loads), (0..D).collect())
+        } else {
+            (
+                format!("support{}", port.node),
+                held_components(c, port.node),
+            )
+        };
+        for &i in &comps {
+            let (name, unit, what) = match port.kind {
+                PortKind::Force => (
+                    format!("{prefix}.v.{}", AXES[i]),
+                    "m/s",
+                    "mid-step velocity",
+                ),
+                PortKind::Velocity => (
+                    format!("{prefix}.R.{}", AXES[i]),
+                    "N",
+                    "force the support exerts on the string",
+                ),
+            };
+            vars.push(Variable {
+                name,
+                causality: Causality::Output,
+                unit,
+                description: format!(
+                    "{what} of {} in {} over the last internal step",
+                    node_label(c, port.node),
+                    AXES[i]
+                ),
+                start: None,
+                quantity: Quantity::PortOutput {
+                    port: p,
+                    component: i,
+                },
+            });
+        }
+        if control {
+            for i in 0..D {
+                vars.push(Variable {
+                    name: format!("{prefix}.F.{}", AXES[i]),
+                    causality: Causality::Output,
+                    unit: "N",
+                    description: format!(
+                        "force of the feedback law on {} in {} over the last internal step",
+                        node_label(c, port.node),
+                        AXES[i]
+                    ),
+                    start: None,
+                    quantity: Quantity::PortInput {
+                        port: p,
+                        component: i,
+                    },
+                });
+            }
+        }
+    }
+    vars
+}
+
+/// The energy output variables [J]: `Ĥ`, `T̂`, `V̂`, supplied, dissipated, balance error.
+fn energy_outputs() -> Vec<Variable> {
+    let energies = [
+        ("H", Quantity::Hamiltonian, "Hamiltonian Ĥ = T̂ + V̂"),
+        ("T", Quantity::Kinetic, "kinetic energy T̂"),
+        (
+            "V",
+            Quantity::Potential,
+            "potential energy V̂ (strain energy plus potential of the body force)",
+        ),
+        (
+            "supplied",
+            Quantity::Supplied,
+            "energy supplied through the ports since the start",
+        ),
+        (
+            "dissipated",
+            Quantity::Dissipated,
+            "energy dissipated since the start",
+        ),
+        (
+            "balance_error",
+            Quantity::BalanceError,
+            "energy balance Ĥ(t) − Ĥ(0) − supplied + dissipated",
+        ),
+    ];
+    energies
+        .into_iter()
+        .map(|(name, quantity, description)| Variable {
+            name: name.into(),
+            causality: Causality::Output,
+            unit: "J",
+            description: description.into(),
+            start: None,
+            quantity,
+        })
+        .collect()
+}
+
+/// The output variables of the positions [m] of `nodes`, per component.
+fn node_outputs<const D: usize>(nodes: &[usize], c: &Components) -> Vec<Variable> {
+    let mut vars = Vec::new();
+    for &node in nodes {
+        for i in 0..D {
+            vars.push(Variable {
+                name: format!("node{node}.r.{}", AXES[i]),
+                causality: Causality::Output,
+                unit: "m",
+                description: format!("position of {} in {}", node_label(c, node), AXES[i]),
+                start: None,
+                quantity: Quantity::NodePosition { node, component: i },
+            });
+        }
+    }
+    vars
 }
 
 /// The units used, with their SI base-unit exponents.

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use phstring_io::scenario::ScenarioFile;
 
+pub use crate::error::PackageError;
 use crate::model::ModelSpec;
 
 /// The FMI platform folder and shared-library extension of this build's target, if FMI 2.0
@@ -148,15 +149,13 @@ const C_KEYWORDS: &[&str] = &[
 /// statically linked FMU prefixes its functions with it). Refused as well: C keywords,
 /// names in FMI's own namespace (`fmi2…`, `fmi3…`: the functions, types and macros of the
 /// FMI headers) and names C reserves (`_` followed by a capital or another `_`).
-pub fn model_identifier(stem: &str) -> Result<String, String> {
+pub fn model_identifier(stem: &str) -> Result<String, PackageError> {
     let ok = stem
         .chars()
         .enumerate()
         .all(|(i, c)| c == '_' || c.is_ascii_alphabetic() || (i > 0 && c.is_ascii_digit()));
     if stem.is_empty() || !ok {
-        return Err(format!(
-            "the FMU's file name {stem:?} must be a C identifier (letters, digits and _, not starting with a digit): FMI tools name the model's shared library after it"
-        ));
+        return Err(PackageError::NotCIdentifier { stem: stem.into() });
     }
     let why = if C_KEYWORDS.contains(&stem) {
         Some("is a C keyword")
@@ -170,9 +169,10 @@ pub fn model_identifier(stem: &str) -> Result<String, String> {
         None
     };
     match why {
-        Some(why) => Err(format!(
-            "the FMU's file name {stem:?} {why}: as the model identifier it would break FMUs compiled from source or linked statically; choose another name"
-        )),
+        Some(why) => Err(PackageError::ReservedIdentifier {
+            stem: stem.into(),
+            why,
+        }),
         None => Ok(stem.to_string()),
     }
 }
@@ -198,7 +198,10 @@ pub fn check_library(
     version: FmiVersion,
 ) -> Result<(), PackageError> {
     use object::{Architecture, BinaryFormat, Object as _, ObjectKind};
-    let bad = |what: String| PackageError(format!("the FMU library {} {what}", path.display()));
+    let bad = |what: String| PackageError::Library {
+        path: path.to_path_buf(),
+        what,
+    };
     let expected_format = if cfg!(target_os = "macos") {
         BinaryFormat::MachO
     } else if cfg!(target_os = "windows") {
@@ -268,18 +271,6 @@ pub fn check_library(
     Ok(())
 }
 
-/// A failure to write the archive.
-#[derive(Debug)]
-pub struct PackageError(pub String);
-
-impl std::fmt::Display for PackageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for PackageError {}
-
 /// Writes the FMU (FMI `version`) of `file` (variables `spec`) with the shared library
 /// `library` to `out`. The archive is written to a temporary file next to `out` and renamed
 /// into place, so `out` is either the complete FMU or untouched.
@@ -291,26 +282,21 @@ pub fn write_fmu(
     out: &Path,
     version: FmiVersion,
 ) -> Result<(), PackageError> {
-    let no_platform = || {
-        PackageError(format!(
-            "FMI {} names no binaries folder for this platform",
-            if version == FmiVersion::V2 {
-                "2.0"
-            } else {
-                "3.0"
-            }
-        ))
+    let no_platform = || PackageError::NoPlatform {
+        version: if version == FmiVersion::V2 {
+            "2.0"
+        } else {
+            "3.0"
+        },
     };
     let (folder2, ext) = platform().ok_or_else(no_platform)?;
     let folder = match version {
         FmiVersion::V2 => folder2,
         FmiVersion::V3 => platform_fmi3().ok_or_else(no_platform)?,
     };
-    let lib = std::fs::read(library).map_err(|e| {
-        PackageError(format!(
-            "cannot read the FMU library {}: {e}",
-            library.display()
-        ))
+    let lib = std::fs::read(library).map_err(|cause| PackageError::ReadLibrary {
+        path: library.to_path_buf(),
+        cause,
     })?;
     check_library(&lib, library, folder, version)?;
     let description = match version {
@@ -335,18 +321,19 @@ pub fn write_fmu(
             file.text().as_bytes(),
         ),
     ])
-    .map_err(|e| {
-        PackageError(format!(
-            "cannot build the archive of {}: {e}",
-            out.display()
-        ))
+    .map_err(|cause| PackageError::Archive {
+        out: out.to_path_buf(),
+        cause,
     })?;
     let result = std::fs::File::create(&tmp)
         .and_then(|mut f| write_synced(&mut f, &archive, |f| f.sync_all()))
         .and_then(|()| std::fs::rename(&tmp, out));
-    if let Err(e) = result {
+    if let Err(cause) = result {
         let _ = std::fs::remove_file(&tmp);
-        return Err(PackageError(format!("cannot write {}: {e}", out.display())));
+        return Err(PackageError::Write {
+            out: out.to_path_buf(),
+            cause,
+        });
     }
     Ok(())
 }
@@ -404,6 +391,7 @@ mod tests {
         ] {
             let e = model_identifier(bad)
                 .err()
+                .map(|e| e.to_string())
                 .unwrap_or_else(|| panic!("{bad} accepted"));
             assert!(e.contains(why) && e.contains(bad), "{bad}: {e}");
         }
@@ -451,7 +439,7 @@ mod tests {
             FmiVersion::V2,
         )
         .unwrap_err()
-        .0;
+        .to_string();
         assert!(
             e.contains("/x/passwd") && e.contains("not a shared library"),
             "{e}"
@@ -465,7 +453,7 @@ mod tests {
             FmiVersion::V2,
         )
         .unwrap_err()
-        .0;
+        .to_string();
         assert!(
             e.contains("not a shared library") || e.contains("does not export fmi2Instantiate"),
             "{e}"

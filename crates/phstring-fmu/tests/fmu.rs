@@ -410,7 +410,8 @@ fn a_guid_of_another_scenario_is_refused() {
         false,
     )
     .err()
-    .expect("refused");
+    .expect("refused")
+    .to_string();
     assert!(err.contains("GUID"), "{err}");
 }
 
@@ -1029,10 +1030,12 @@ fn an_edited_serialized_state_is_refused() {
     let at = text.find("\"r\":[").expect("positions") + 5;
     assert_eq!(&text[at..at + 4], "0.0,");
     let edited = format!("{}7{}", &text[..at], &text[at + 1..]);
-    let err = Saved::from_bytes(edited.as_bytes()).expect_err("refused");
+    let err = Saved::from_bytes(edited.as_bytes())
+        .expect_err("refused")
+        .to_string();
     assert!(err.contains("checksum mismatch"), "{err}");
     for bad in [&bytes[..bytes.len() / 2], b"{}", b""] {
-        let err = Saved::from_bytes(bad).expect_err("refused");
+        let err = Saved::from_bytes(bad).expect_err("refused").to_string();
         assert!(err.contains("not a serialized state"), "{err}");
     }
     let back = Saved::from_bytes(&bytes).unwrap();

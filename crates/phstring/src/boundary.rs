@@ -9,6 +9,9 @@
 //!   output and state, `u = F(t, r, y)` ([`PortLaw`]): damping injection, PD tracking
 //!   ([`PdLaw`]). It is evaluated at the mid-step inside Newton, so its power is part of the
 //!   exact energy balance (docs/method.md §18).
+//! * A load's force or a moving support's path can be **held** from outside a run (a
+//!   controller, a co-simulation master): [`PositionRamp`] and the input API of
+//!   `Simulation` (`set_load_force`, `set_motion_target`, module `inputs`).
 
 use std::fmt;
 use std::sync::Arc;
@@ -135,6 +138,75 @@ impl fmt::Debug for Motion {
             .field("component", &self.component)
             .finish_non_exhaustive()
     }
+}
+
+/// A straight path of a moving support: from `from` [m] at `t0` [s] to `to` [m] at `t1` [s]
+/// at constant speed, at rest at `from` before `t0` and at `to` from `t1` on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PositionRamp {
+    /// Start time [s].
+    pub t0: f64,
+    /// End time [s] (`t1 ≥ t0`).
+    pub t1: f64,
+    /// Position at `t0` [m].
+    pub from: f64,
+    /// Position at `t1` [m].
+    pub to: f64,
+}
+
+impl PositionRamp {
+    /// At rest at `x` [m] (at all times).
+    pub fn at(x: f64) -> Self {
+        Self {
+            t0: 0.0,
+            t1: 0.0,
+            from: x,
+            to: x,
+        }
+    }
+
+    /// Position [m] at time `t` [s]. A time within `1e-9 (t1 − t0)` before `t1` (a step
+    /// whose end time is rounded just short of the ramp's end) is at `to` exactly.
+    pub fn position(&self, t: f64) -> f64 {
+        if t >= self.t1 - 1e-9 * (self.t1 - self.t0) {
+            self.to
+        } else if t <= self.t0 {
+            self.from
+        } else {
+            self.from + (self.to - self.from) * ((t - self.t0) / (self.t1 - self.t0))
+        }
+    }
+}
+
+/// A load's force held by [`crate::Simulation::set_load_force`].
+#[derive(Clone)]
+pub(crate) struct HeldForce<const D: usize> {
+    /// The force [N].
+    pub(crate) force: SVector<f64, D>,
+    /// The load's signal before it was held, put back by
+    /// [`crate::Simulation::release_load_force`].
+    pub(crate) signal: ForceFn<D>,
+}
+
+/// A motion's ramp set by [`crate::Simulation::set_motion_target`] or
+/// [`crate::Simulation::set_motion_ramp`].
+#[derive(Clone)]
+pub(crate) struct HeldMotion {
+    /// The ramp.
+    pub(crate) ramp: PositionRamp,
+    /// The motion's signal before it was held, put back by
+    /// [`crate::Simulation::release_motion`].
+    pub(crate) signal: PositionFn,
+}
+
+/// The inputs held on a running [`crate::Simulation`], per load and per motion (`None`: the
+/// problem's own signal).
+#[derive(Clone, Default)]
+pub(crate) struct HeldInputs<const D: usize> {
+    /// Per load (grown as loads are held).
+    pub(crate) loads: Vec<Option<HeldForce<D>>>,
+    /// Per motion (grown as motions are held).
+    pub(crate) motions: Vec<Option<HeldMotion>>,
 }
 
 /// A user port law: the force `u = F(t, r, y)` [N] on a port node as a function of the time

@@ -69,6 +69,7 @@ pub mod benchmarks;
 pub mod boundary;
 pub mod eigen;
 pub mod error;
+pub mod inputs;
 pub mod integrator;
 pub mod linear;
 pub mod linsolve;
@@ -86,9 +87,10 @@ pub mod testing;
 
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
-    PortSample, PositionFn,
+    PortSample, PositionFn, PositionRamp,
 };
 pub use error::{LinearSolveError, Num, SetupError, StepError};
+pub use inputs::InputError;
 pub use integrator::Scheme;
 pub use linsolve::{BlockJacobian, LinearSolver, SolverKind};
 pub use material::{

@@ -305,6 +305,8 @@ pub struct Simulation<const D: usize, M> {
     ports_prev: Vec<PortSample<D>>,
     /// Prescribed motions: where the velocity state is held at the motion's own velocity.
     held: HeldVelocities,
+    /// Inputs set from outside the run (held forces, ramps of moving supports).
+    inputs: crate::boundary::HeldInputs<D>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -559,6 +561,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             over_tolerance: 0,
             ports_prev: Vec::new(),
             held,
+            inputs: Default::default(),
         })
     }
 
@@ -583,6 +586,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// The system.
     pub fn system(&self) -> &PhSystem<D, M> {
         &self.sys
+    }
+    /// The inputs held from outside the run.
+    pub(crate) fn held_inputs(&self) -> &crate::boundary::HeldInputs<D> {
+        &self.inputs
+    }
+    /// The held inputs and the boundary conditions they act on, to set an input.
+    pub(crate) fn inputs_and_boundary(
+        &mut self,
+    ) -> (
+        &mut crate::boundary::HeldInputs<D>,
+        &mut crate::boundary::Boundary<D>,
+    ) {
+        (&mut self.inputs, &mut self.sys.boundary)
     }
     /// The current state.
     pub fn state(&self) -> &State<D> {
