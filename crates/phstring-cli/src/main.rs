@@ -13,14 +13,14 @@ use budget::{budget, check_budget, check_budget_of};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::checkpoint::CheckpointFile;
-use phstring_io::export::{ExportError, LinearizeAt};
-use phstring_io::modes_run::ModesRunError;
-use phstring_io::outdir::{self, OutLock};
+use phstring_io::drive::linearize::{ExportError, LinearizeAt};
+use phstring_io::drive::modes::ModesRunError;
+use phstring_io::drive::outdir::{self, OutLock};
+use phstring_io::drive::run::{self as runner, Progress, RunError, RunInfo, RunOptions};
+use phstring_io::drive::statics::StaticsRunError;
+use phstring_io::drive::sweep::{Sweep, Vary};
 use phstring_io::plot::{self, Series};
-use phstring_io::runner::{self, Progress, RunError, RunInfo, RunOptions};
 use phstring_io::scenario::{self, ScenarioFile};
-use phstring_io::statics_run::StaticsRunError;
-use phstring_io::sweep::{Sweep, Vary};
 use phstring_io::text::{clip, num, nums, printable};
 
 /// Prints a line to stdout; a closed pipe (`phstring check … | head`) or a full disk is not
@@ -461,7 +461,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_modes"));
             let _lock = prepare_out_for(&out, force, &[&scenario])?;
-            let found = phstring_io::modes_run::modes(&file, count, &out, Some(&stop));
+            let found = phstring_io::drive::modes::modes(&file, count, &out, Some(&stop));
             let info = interrupted_as(found, ModesRunError::is_interrupted, STOPPED_MODES, &out)?;
             for w in &info.warnings {
                 tell!("warning: {w}");
@@ -498,7 +498,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             file.check()?;
             // The checkpoint is read and checked before the folder is touched.
             let at_file = match &at {
-                Some(path) => phstring_io::export::checkpoint_at(&file, path)?,
+                Some(path) => phstring_io::drive::linearize::checkpoint_at(&file, path)?,
                 None => LinearizeAt::Equilibrium,
             };
             let out = out.unwrap_or_else(|| default_out(&scenario, "_linear"));
@@ -507,7 +507,8 @@ fn dispatch(cli: Cli) -> Result<()> {
                 .collect();
             let _lock = prepare_out_for(&out, force, &inputs)?;
             let at = at_file;
-            let model = phstring_io::export::linearize(&file, &at, modes, &out, Some(&stop));
+            let model =
+                phstring_io::drive::linearize::linearize(&file, &at, modes, &out, Some(&stop));
             let m = interrupted_as(model, ExportError::is_interrupted, STOPPED_LINEARIZE, &out)?;
             for w in &m.warnings {
                 tell!("warning: {w}");
@@ -541,7 +542,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             file.check()?;
             let out = out.unwrap_or_else(|| default_out(&scenario, "_statics"));
             let _lock = prepare_out_for(&out, force, &[&scenario])?;
-            let found = phstring_io::statics_run::statics(&file, &out, Some(&stop));
+            let found = phstring_io::drive::statics::statics(&file, &out, Some(&stop));
             let info = interrupted_as(
                 found,
                 StaticsRunError::is_interrupted,
@@ -766,7 +767,7 @@ fn sweep(
     }
     // Every combination is checked against the memory budget (before validation allocates
     // its mesh) and validated before the output folder is touched.
-    let concurrent = jobs.min(phstring_io::sweep::run_count(&vary)?);
+    let concurrent = jobs.min(phstring_io::drive::sweep::run_count(&vary)?);
     budget::check_file_size(path)?;
     let plan = Sweep::new_with(path, sets, vary, |index, file| {
         check_budget_of(file, concurrent).map_err(|e| format!("run {index} of the sweep: {e:#}"))
@@ -778,7 +779,7 @@ fn sweep(
         b.set_length(n as u64);
         b.set_message(format!("{n} runs on {jobs} threads"));
     }
-    let done = |r: &phstring_io::sweep::SweepRun| {
+    let done = |r: &phstring_io::drive::sweep::SweepRun| {
         if let Some(b) = &bar.bar {
             b.inc(1);
             if let (Err(e), false) = (&r.result, r.interrupted) {

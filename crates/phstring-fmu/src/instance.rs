@@ -578,7 +578,8 @@ impl Instance {
         // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
         // supports at their scenario positions).
         if equilibrium {
-            phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(|e| e.to_string())?;
+            phstring_io::scenario::start::start_at_equilibrium(&mut v, None)
+                .map_err(|e| e.to_string())?;
         }
         let expression_error = v.load_error.clone();
         let sim: Simulation<D, Material> =

@@ -27,10 +27,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use plotters::coord::CoordTranslate;
 use plotters::prelude::*;
 
+use crate::files::{ANIMATION_FILE, POSITIONS_FILE, temp_path};
 use crate::plot::{self, AxisStyle, MASS_COLOR, Topology};
 
-/// File name of the animation in a run's output folder.
-pub const ANIMATION_FILE: &str = "animation.gif";
 /// Width of the animation [px].
 pub const ANIMATION_WIDTH: u32 = 480;
 /// Height of the animation [px].
@@ -87,7 +86,7 @@ pub fn write_animation(
         return Err("an animation needs a configuration in 2D or 3D".into());
     }
     let path = dir.join(ANIMATION_FILE);
-    let tmp = crate::output::temp_path(&path);
+    let tmp = temp_path(&path);
     let res = write_to(&tmp, dir, dim, title, topology, stop).and_then(|mut report| {
         std::fs::rename(&tmp, &path)
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
@@ -180,7 +179,7 @@ fn index_frames(
     if line.trim_end() != expected {
         return Err(format!(
             "positions.csv has the header {:?}, expected {expected:?}",
-            plot::sanitize_text(line.trim_end(), 60)
+            crate::text::sanitize_text(line.trim_end(), 60)
         ));
     }
     let mut index = FrameIndex {
@@ -357,7 +356,7 @@ fn write_to(
     topology: &Topology,
     stop: Option<&AtomicBool>,
 ) -> Result<AnimationReport, String> {
-    let positions = dir.join("positions.csv");
+    let positions = dir.join(POSITIONS_FILE);
     let file = match File::open(&positions) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -407,7 +406,7 @@ fn write_to(
         let (header, body) = root.split_vertically(HEADER);
         header
             .draw_text(
-                &plot::sanitize_text(title, 48),
+                &crate::text::sanitize_text(title, 48),
                 &plot::text_style(14.0),
                 (8, 6),
             )

@@ -228,7 +228,7 @@ pub struct CheckpointFile {
     /// Program version that wrote it.
     pub version: String,
     /// Id of the run that wrote it; the output folder carries the same id in
-    /// [`RUN_ID_FILE`](crate::runner::RUN_ID_FILE), and a resume into a folder with another
+    /// [`RUN_ID_FILE`](crate::files::RUN_ID_FILE), and a resume into a folder with another
     /// id is refused.
     pub run_id: String,
     /// Scenario file name (for messages).
@@ -373,7 +373,7 @@ impl CheckpointFile {
                 path: path.to_path_buf(),
                 reason: e.to_string(),
             })?;
-        crate::output::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
+        crate::files::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
             path: path.to_path_buf(),
             cause: source,
         })
@@ -476,13 +476,13 @@ impl CheckpointFile {
         if cp.format != FORMAT {
             return Err(format_err(format!(
                 "unknown format \"{}\"",
-                crate::plot::sanitize_text(&cp.format, 80)
+                crate::text::sanitize_text(&cp.format, 80)
             )));
         }
         if cp.version != env!("CARGO_PKG_VERSION") {
             return Err(format_err(format!(
                 "written by phstring {}, this is {}: resuming would not be bit-identical",
-                crate::plot::sanitize_text(&cp.version, 80),
+                crate::text::sanitize_text(&cp.version, 80),
                 env!("CARGO_PKG_VERSION")
             )));
         }
@@ -494,7 +494,7 @@ impl CheckpointFile {
                 "checksum mismatch: the file was edited or damaged after it was written".to_string()
             }));
         }
-        if !crate::runner::is_valid_run_id(&cp.run_id) {
+        if !crate::files::is_valid_run_id(&cp.run_id) {
             return Err(format_err("invalid run id".into()));
         }
         Ok(cp)
@@ -692,7 +692,7 @@ impl CheckpointFile {
             return Err(bad("end_of_loading is not finite".into()));
         }
         let o = &self.outputs;
-        let (energy_header, positions_header, ports_header) = crate::output::headers(D);
+        let (energy_header, positions_header, ports_header) = crate::files::headers(D);
         for (name, bytes, header) in [
             ("outputs.energy_bytes", Some(o.energy_bytes), &energy_header),
             (
@@ -743,7 +743,7 @@ impl CheckpointFile {
                 s.steps
             )));
         }
-        let max_snapshots = if D >= 2 { crate::output::SNAPSHOTS } else { 0 };
+        let max_snapshots = if D >= 2 { crate::files::SNAPSHOTS } else { 0 };
         if o.snapshots.len() > max_snapshots {
             return Err(bad(format!(
                 "outputs.snapshots has {} snapshots, at most {max_snapshots} are taken",

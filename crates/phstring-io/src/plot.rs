@@ -46,19 +46,7 @@ pub const MIN_RELATIVE_SPAN: f64 = 1e-12;
 /// Longest title or label, in characters (longer ones end in `…`).
 pub const MAX_TEXT_CHARS: usize = 200;
 
-/// `text` without control characters (they would reach a terminal or make an SVG file
-/// invalid), cut to at most `max_chars` characters with a trailing `…`.
-pub fn sanitize_text(text: &str, max_chars: usize) -> String {
-    let mut out = String::new();
-    for (n, c) in text.chars().filter(|c| !c.is_control()).enumerate() {
-        if n + 1 > max_chars {
-            out.push('…');
-            break;
-        }
-        out.push(c);
-    }
-    out
-}
+use crate::text::sanitize_text;
 
 /// Checks that the axis range `lo..hi` can be drawn: finite, increasing, a span of at
 /// least [`MIN_RELATIVE_SPAN`] of the magnitude, and (linear axes) a magnitude of at most
