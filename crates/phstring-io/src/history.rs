@@ -4,6 +4,7 @@
 
 use std::fs::File;
 use std::io::BufRead;
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -105,6 +106,19 @@ fn for_each_row(
     f: File,
     mut row: impl FnMut(usize, &str) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
+    rows_until(path, f, |number, text| {
+        row(number, text).map(|()| ControlFlow::Continue(()))
+    })
+    .map(|_| ())
+}
+
+/// Calls `row(line number, text)` for the rows of the CSV file `f` after its header, until
+/// it breaks; returns whether it did.
+fn rows_until(
+    path: &Path,
+    f: File,
+    mut row: impl FnMut(usize, &str) -> Result<ControlFlow<()>, OutputError>,
+) -> Result<ControlFlow<()>, OutputError> {
     let mut reader = std::io::BufReader::new(f);
     let mut line = String::new();
     let mut number = 0;
@@ -117,11 +131,11 @@ fn for_each_row(
                 cause: source,
             })?;
         if n == 0 {
-            return Ok(());
+            return Ok(ControlFlow::Continue(()));
         }
         number += 1;
-        if number > 1 {
-            row(number, line.trim_end_matches(['\n', '\r']))?;
+        if number > 1 && row(number, line.trim_end_matches(['\n', '\r']))?.is_break() {
+            return Ok(ControlFlow::Break(()));
         }
     }
 }
@@ -283,29 +297,12 @@ pub fn read_history(
         path: path.to_path_buf(),
         cause: source,
     })?;
-    let mut reader = std::io::BufReader::new(f);
     let mut energies = Decimator::<4>::new(max_points);
     let mut increments = Decimator::<2>::new(max_points);
-    let mut line = String::new();
     let mut prev_h: Option<f64> = None;
-    let mut number = 0;
-    loop {
-        line.clear();
-        let n = reader
-            .read_line(&mut line)
-            .map_err(|source| OutputError::Io {
-                path: path.to_path_buf(),
-                cause: source,
-            })?;
-        if n == 0 {
-            break;
-        }
-        number += 1;
-        if number == 1 {
-            continue; // header
-        }
+    let flow = rows_until(path, f, |number, row| {
         if number % 4096 == 0 && stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            return Ok(None);
+            return Ok(ControlFlow::Break(()));
         }
         let bad = |message: String| OutputError::Read {
             path: path.to_path_buf(),
@@ -313,7 +310,7 @@ pub fn read_history(
             message,
         };
         let mut v = [0.0; 4];
-        let mut fields = line.trim_end().split(',');
+        let mut fields = row.trim_end().split(',');
         for (k, x) in v.iter_mut().enumerate() {
             let field = fields
                 .next()
@@ -330,6 +327,10 @@ pub fn read_history(
             increments.push([v[0], (v[3] - p).abs()]);
         }
         prev_h = Some(v[3]);
+        Ok(ControlFlow::Continue(()))
+    })?;
+    if flow.is_break() {
+        return Ok(None);
     }
     let mut h = History {
         snapshots,
