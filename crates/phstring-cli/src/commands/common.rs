@@ -223,6 +223,18 @@ pub fn stop_flag() -> std::sync::Arc<AtomicBool> {
     .clone()
 }
 
+// The `--set` overrides and `--force` of `statics`, `modes` and `linearize`, last among their
+// arguments.
+#[derive(clap::Args)]
+pub struct SetAndForce {
+    /// Override a scenario key by its dotted path.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Overwrite a non-empty output folder.
+    #[arg(long)]
+    pub force: bool,
+}
+
 /// What a command that solves one scenario into one output folder starts from
 /// ([`prepare_scenario_command`]); the folder stays locked while it lives.
 pub struct Prepared<T> {
@@ -239,22 +251,21 @@ pub struct Prepared<T> {
 }
 
 /// The preamble of `statics`, `modes` and `linearize`: installs the stop handler, loads
-/// `scenario` with the `--set` overrides `sets` within the memory budget and checks it,
-/// calls `read` for what else the command reads and checks before the folder is touched (a
-/// checkpoint: `inputs` lists such files), then prepares and locks the output folder `out`
-/// (default `out/<scenario stem><suffix>`), refusing one that holds the scenario or one of
-/// `inputs`.
+/// `scenario` with the `--set` overrides of `set_force` within the memory budget and checks
+/// it, calls `read` for what else the command reads and checks before the folder is touched
+/// (a checkpoint: `inputs` lists such files), then prepares and locks the output folder
+/// `out` (default `out/<scenario stem><suffix>`; an earlier run's outputs are replaced only
+/// with `--force`), refusing one that holds the scenario or one of `inputs`.
 pub fn prepare_scenario_command<T>(
     scenario: &Path,
-    sets: &[String],
+    set_force: &SetAndForce,
     out: Option<PathBuf>,
     suffix: &str,
-    force: bool,
     inputs: &[&Path],
     read: impl FnOnce(&ScenarioFile) -> Result<T>,
 ) -> Result<Prepared<T>> {
     let stop = stop_flag();
-    let file = budget::load(scenario, sets)?;
+    let file = budget::load(scenario, &set_force.sets)?;
     check_budget(&file)?;
     file.check()?;
     let read = read(&file)?;
@@ -262,7 +273,7 @@ pub fn prepare_scenario_command<T>(
     let inputs: Vec<&Path> = std::iter::once(scenario)
         .chain(inputs.iter().copied())
         .collect();
-    let lock = prepare_out_for(&out, force, &inputs)?;
+    let lock = prepare_out_for(&out, set_force.force, &inputs)?;
     Ok(Prepared {
         stop,
         file,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use phstring_io::drive::linearize::{ExportError, LinearizeAt};
 
-use super::common::{interrupted_as, prepare_scenario_command};
+use super::common::{SetAndForce, interrupted_as, prepare_scenario_command};
 use crate::at_least_one;
 
 /// The message of `phstring linearize` interrupted by a stop request; the output folder
@@ -28,12 +28,8 @@ pub struct LinearizeArgs {
     /// Output folder (default: out/<scenario name>_linear).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Override a scenario key by its dotted path.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub sets: Vec<String>,
-    /// Overwrite a non-empty output folder.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub set_force: SetAndForce,
 }
 
 /// `phstring linearize`: writes the linear model of the scenario of `args` and prints its
@@ -43,10 +39,9 @@ pub fn linearize(args: LinearizeArgs) -> Result<()> {
     // The checkpoint is read and checked before the folder is touched.
     let p = prepare_scenario_command(
         &args.scenario,
-        &args.sets,
+        &args.set_force,
         args.out,
         "_linear",
-        args.force,
         at.as_slice(),
         |file| match at {
             Some(path) => Ok(phstring_io::drive::linearize::checkpoint_at(file, path)?),

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use phstring_io::drive::modes::ModesRunError;
 
-use super::common::{interrupted_as, prepare_scenario_command};
+use super::common::{SetAndForce, interrupted_as, prepare_scenario_command};
 use crate::at_least_one;
 
 /// The message of `phstring modes` interrupted by a stop request; the output folder follows.
@@ -25,22 +25,17 @@ pub struct ModesArgs {
     /// Output folder (default: out/<scenario name>_modes).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Override a scenario key by its dotted path.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub sets: Vec<String>,
-    /// Overwrite a non-empty output folder.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub set_force: SetAndForce,
 }
 
 /// `phstring modes`: finds the modes of the scenario of `args`, writes them and prints them.
 pub fn modes(args: ModesArgs) -> Result<()> {
     let p = prepare_scenario_command(
         &args.scenario,
-        &args.sets,
+        &args.set_force,
         args.out,
         "_modes",
-        args.force,
         &[],
         |_| Ok(()),
     )?;

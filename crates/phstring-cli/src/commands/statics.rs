@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use phstring_io::drive::statics::StaticsRunError;
 
-use super::common::{energy, interrupted_as, prepare_scenario_command};
+use super::common::{SetAndForce, energy, interrupted_as, prepare_scenario_command};
 
 /// The message of `phstring statics` interrupted by a stop request; the output folder
 /// follows.
@@ -21,12 +21,8 @@ pub struct StaticsArgs {
     /// Output folder (default: out/<scenario name>_statics).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Override a scenario key by its dotted path.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub sets: Vec<String>,
-    /// Overwrite a non-empty output folder.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub set_force: SetAndForce,
 }
 
 /// `phstring statics`: solves the equilibrium of the scenario of `args`, writes it and
@@ -34,10 +30,9 @@ pub struct StaticsArgs {
 pub fn statics(args: StaticsArgs) -> Result<()> {
     let p = prepare_scenario_command(
         &args.scenario,
-        &args.sets,
+        &args.set_force,
         args.out,
         "_statics",
-        args.force,
         &[],
         |_| Ok(()),
     )?;
