@@ -187,7 +187,16 @@ pub const PVD_FILE: &str = "string.pvd";
 pub const PAPER_RUN_DIRS: &[&str] = &["dg", "mp"];
 /// Figure sub-folder of `phstring paper`.
 pub const FIGURES_DIR: &str = "figures";
-/// Figures of `phstring paper` in [`FIGURES_DIR`].
+/// Figures of `phstring paper` in [`FIGURES_DIR`], without their extension: Fig. 2 to 5 of
+/// the paper (configurations, energies, Hamiltonian, increments).
+pub const PAPER_FIGURE_STEMS: [&str; 4] = [
+    "fig2_configurations",
+    "fig3_energies",
+    "fig4_hamiltonian",
+    "fig5_increments",
+];
+/// Figures of `phstring paper` in [`FIGURES_DIR`]: [`PAPER_FIGURE_STEMS`] as `.svg` and
+/// `.png`.
 pub const PAPER_FIGURES: &[&str] = &[
     "fig2_configurations.svg",
     "fig2_configurations.png",
@@ -270,6 +279,15 @@ pub fn num(x: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn paper_figures_are_their_stems_as_svg_and_png() {
+        let named: Vec<String> = PAPER_FIGURE_STEMS
+            .iter()
+            .flat_map(|s| [format!("{s}.svg"), format!("{s}.png")])
+            .collect();
+        assert_eq!(named, PAPER_FIGURES);
+    }
 
     #[test]
     fn overwrite_in_place_fits_the_new_text_in_the_old_file() {

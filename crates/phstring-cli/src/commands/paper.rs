@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use phstring_io::drive::run::{RunError, RunOptions};
+use phstring_io::files::{FIGURES_DIR, PAPER_FIGURE_STEMS, PAPER_RUN_DIRS};
 use phstring_io::plot::{self, Series};
 use phstring_io::scenario;
 
@@ -45,7 +46,7 @@ pub fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
     let _lock = prepare_out(out, force)?;
     let path = Path::new("examples/paper_pendulum.toml (built in)");
     let mut infos = Vec::new();
-    for scheme in ["dg", "mp"] {
+    for &scheme in PAPER_RUN_DIRS {
         let file = scenario::parse(PAPER_SCENARIO, path, &[format!("time.scheme={scheme}")])?;
         let dir = out.join(scheme);
         std::fs::create_dir_all(&dir)?;
@@ -62,17 +63,18 @@ pub fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
         };
         infos.push(info);
     }
-    let figures = out.join("figures");
+    let figures = out.join(FIGURES_DIR);
+    let [fig2, fig3, fig4, fig5] = PAPER_FIGURE_STEMS;
     std::fs::create_dir_all(&figures)?;
     let (dg, mp) = (&infos[0].history, &infos[1].history);
     let title = "String pendulum (paper, Section 4)";
     plot::configuration_plot(
-        &figures.join("fig2_configurations"),
+        &figures.join(fig2),
         "Fig. 2: configurations (DG)",
         &dg.snapshots,
     )?;
     plot::energy_plot(
-        &figures.join("fig3_energies"),
+        &figures.join(fig3),
         "Fig. 3: energies (DG)",
         &dg.t,
         &dg.kinetic,
@@ -80,7 +82,7 @@ pub fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
         &dg.hamiltonian,
     )?;
     plot::series_plot(
-        &figures.join("fig4_hamiltonian"),
+        &figures.join(fig4),
         "Fig. 4: Hamiltonian, DG vs MP",
         "t [s]",
         "Ĥ [J]",
@@ -102,7 +104,7 @@ pub fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
     let (ti_dg, inc_dg) = dg.increments();
     let (ti_mp, inc_mp) = mp.increments();
     plot::series_plot(
-        &figures.join("fig5_increments"),
+        &figures.join(fig5),
         "Fig. 5: energy increments, DG vs MP",
         "t [s]",
         "|Ĥ(n+1) − Ĥ(n)| [J]",

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use phstring_io::drive::sweep::{Sweep, SweepRun, Vary};
+use phstring_io::files::SWEEP_TABLE;
 use phstring_io::text::printable;
 
 use super::common::{Interrupted, prepare_out_for, progress_bar, stop_flag};
@@ -97,7 +98,7 @@ pub fn sweep(args: SweepArgs, quiet: bool) -> Result<()> {
         bail!(Interrupted(format!(
             "interrupted: {completed} of {} runs completed, {stopped} interrupted or not started (status `interrupted` in {}; an interrupted run continues with `phstring run --resume RUN_FOLDER/checkpoint.json`)",
             runs.len(),
-            out.join("sweep.csv").display()
+            out.join(SWEEP_TABLE).display()
         )));
     }
     let failed = runs.iter().filter(|r| r.result.is_err()).count();
@@ -105,7 +106,7 @@ pub fn sweep(args: SweepArgs, quiet: bool) -> Result<()> {
         "{} runs ({failed} failed) in {}; table: {}",
         runs.len(),
         out.display(),
-        out.join("sweep.csv").display()
+        out.join(SWEEP_TABLE).display()
     );
     if failed > 0 {
         bail!("{failed} of {} runs failed (see sweep.csv)", runs.len());
