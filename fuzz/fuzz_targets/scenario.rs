@@ -6,7 +6,7 @@ use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
 use phstring_io::scenario::{self, Expr};
-use phstring_io::sweep::{self, Vary};
+use phstring_io::drive::sweep::{self, Vary};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {

@@ -105,7 +105,7 @@ type PortRow = (usize, bool, Vec<f64>, Vec<f64>, f64);
 fn new_sim<const D: usize>(file: &ScenarioFile) -> PyResult<(Sim<D, Material>, f64, usize)> {
     let mut v = file.validate::<D>().map_err(scenario_err)?;
     // `initial.equilibrium`: start from the static equilibrium, as `phstring run` does.
-    phstring_io::runner::start_at_equilibrium(&mut v, None).map_err(scenario_err)?;
+    phstring_io::scenario::start::start_at_equilibrium(&mut v, None).map_err(scenario_err)?;
     let t_end = v.settings.t_end;
     let stride = v.settings.stride.max(1);
     let sim = Sim::new(v.problem, v.settings.step).map_err(scenario_err)?;
@@ -481,7 +481,7 @@ struct Signals<'py> {
     t_end: f64,
 }
 
-impl phstring_io::runner::Progress for Signals<'_> {
+impl phstring_io::drive::run::Progress for Signals<'_> {
     fn start(&mut self, t_end: f64) {
         self.t_end = t_end;
     }
@@ -519,11 +519,11 @@ fn run_to_folder(
         bar: Bar::new(progress),
         t_end: 0.0,
     };
-    let opts = phstring_io::runner::RunOptions {
+    let opts = phstring_io::drive::run::RunOptions {
         stop: Some(stop),
         ..Default::default()
     };
-    let result = phstring_io::runner::run(&scenario.file, out, &mut progress, opts);
+    let result = phstring_io::drive::run::run(&scenario.file, out, &mut progress, opts);
     progress.bar.done();
     if let Some(e) = progress.interrupted {
         return Err(e);
@@ -531,7 +531,7 @@ fn run_to_folder(
     match result {
         Ok(_) => std::fs::read_to_string(out.join("summary.json"))
             .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string())),
-        Err(phstring_io::runner::RunError::Scenario(e)) => Err(scenario_err(e)),
+        Err(phstring_io::drive::run::RunError::Scenario(e)) => Err(scenario_err(e)),
         Err(e) => Err(StepError::new_err(e.to_string())),
     }
 }
@@ -560,7 +560,7 @@ fn statics_dim<'py, const D: usize>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let v = file.validate::<D>().map_err(scenario_err)?;
     let (_, eq) =
-        phstring_io::statics_run::solve_validated(&v, false, None).map_err(statics_err)?;
+        phstring_io::scenario::start::solve_validated(&v, false, None).map_err(statics_err)?;
     let d = PyDict::new(py);
     d.set_item("positions", nodal(py, &eq.state.r)?)?;
     d.set_item("reactions", nodal(py, &eq.reactions)?)?;
@@ -593,7 +593,7 @@ fn modes_dim<'py, const D: usize>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let v = file.validate::<D>().map_err(scenario_err)?;
     let (sys, eq) =
-        phstring_io::statics_run::solve_validated(&v, true, None).map_err(statics_err)?;
+        phstring_io::scenario::start::solve_validated(&v, true, None).map_err(statics_err)?;
     let found = phstring::modes::modes(&sys, &eq.state.r, count, v.settings.step.solver, None)
         .map_err(|e| StepError::new_err(format!("modes: {e}")))?;
     let k = found.modes.len();
@@ -644,7 +644,7 @@ fn csc(a: &faer::sparse::SparseColMat<usize, f64>) -> Csc {
 fn linear_dim<const D: usize>(file: &ScenarioFile, form: &str) -> PyResult<LinearParts> {
     let v = file.validate::<D>().map_err(scenario_err)?;
     let (sys, eq) =
-        phstring_io::statics_run::solve_validated(&v, true, None).map_err(statics_err)?;
+        phstring_io::scenario::start::solve_validated(&v, true, None).map_err(statics_err)?;
     let ports = phstring::linear::force_ports(&sys);
     let model = match form {
         "reduced" => phstring::linear::reduced_model(&sys, &eq.state.r, &ports),

@@ -582,7 +582,7 @@ impl Instance {
         // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
         // supports at their scenario positions).
         if equilibrium {
-            phstring_io::runner::start_at_equilibrium(&mut v, None)
+            phstring_io::scenario::start::start_at_equilibrium(&mut v, None)
                 .map_err(|e| FmuError::Equilibrium { cause: Box::new(e) })?;
         }
         let expression_error = v.load_error.clone();

@@ -542,7 +542,7 @@ fn a_moving_support_from_the_master_is_the_run_bit_for_bit() {
     let file = phstring_io::scenario::load(&path, &sets).unwrap();
     let text = file.text().to_string();
     let mut v = file.validate::<2>().unwrap();
-    phstring_io::runner::start_at_equilibrium(&mut v, None).unwrap();
+    phstring_io::scenario::start::start_at_equilibrium(&mut v, None).unwrap();
     let mut sine: Simulation<2, Material> =
         Simulation::new(v.problem.clone(), v.settings.step).unwrap();
     // The same line, its fairlead on ramps from the last target to the next over each step.

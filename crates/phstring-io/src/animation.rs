@@ -25,12 +25,12 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use plotters::coord::CoordTranslate;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
+use crate::files::{ANIMATION_FILE, POSITIONS_FILE, temp_path};
 use crate::plot::{self, AxisStyle, MASS_COLOR, Topology};
 
-/// File name of the animation in a run's output folder.
-pub const ANIMATION_FILE: &str = "animation.gif";
 /// Width of the animation [px].
 pub const ANIMATION_WIDTH: u32 = 480;
 /// Height of the animation [px].
@@ -87,7 +87,7 @@ pub fn write_animation(
         return Err("an animation needs a configuration in 2D or 3D".into());
     }
     let path = dir.join(ANIMATION_FILE);
-    let tmp = crate::output::temp_path(&path);
+    let tmp = temp_path(&path);
     let res = write_to(&tmp, dir, dim, title, topology, stop).and_then(|mut report| {
         std::fs::rename(&tmp, &path)
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
@@ -180,7 +180,7 @@ fn index_frames(
     if line.trim_end() != expected {
         return Err(format!(
             "positions.csv has the header {:?}, expected {expected:?}",
-            plot::sanitize_text(line.trim_end(), 60)
+            crate::text::sanitize_text(line.trim_end(), 60)
         ));
     }
     let mut index = FrameIndex {
@@ -348,6 +348,124 @@ impl Palette {
     }
 }
 
+/// The padded bounding box `(x0, x1, y0, y1)` [m] of the node positions of all `frames`
+/// (offsets into `positions.csv` and times), checked drawable; `xy` is the buffer frames are
+/// read into.
+fn frames_box(
+    reader: &mut BufReader<File>,
+    frames: &[(u64, f64)],
+    n_nodes: usize,
+    stop: Option<&AtomicBool>,
+    xy: &mut Vec<[f64; 2]>,
+) -> Result<(f64, f64, f64, f64), String> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &(offset, _) in frames {
+        if stopped(stop) {
+            return Err("stop requested".into());
+        }
+        read_frame(reader, offset, n_nodes, xy)?;
+        for p in xy.iter() {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    let data_box = plot::padded_box([(lo[0], lo[1]), (hi[0], hi[1])].into_iter());
+    plot::check_box(data_box)?;
+    Ok(data_box)
+}
+
+/// The background of every frame, `w × h` RGB pixels: the title, the axes of `data_box`
+/// with their grid; and the mapping from positions [m] to its pixels.
+fn draw_background(
+    title: &str,
+    data_box: (f64, f64, f64, f64),
+    (w, h): (u32, u32),
+) -> Result<(Vec<u8>, Cartesian2d<RangedCoordf64, RangedCoordf64>), String> {
+    let mut background = vec![0u8; (w * h * 3) as usize];
+    let coord = {
+        let root = BitMapBackend::with_buffer(&mut background, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot::err)?;
+        let (header, body) = root.split_vertically(HEADER);
+        header
+            .draw_text(
+                &crate::text::sanitize_text(title, 48),
+                &plot::text_style(14.0),
+                (8, 6),
+            )
+            .map_err(plot::err)?;
+        let style = AxisStyle {
+            tick: 11.0,
+            desc: 12.0,
+            margin: 8,
+            x_label_area: 36,
+            labels: 6,
+        };
+        let chart = plot::equal_aspect_chart(&body, data_box, &style)?;
+        let coord = chart.as_coord_spec().clone();
+        root.present().map_err(plot::err)?;
+        coord
+    };
+    Ok((background, coord))
+}
+
+/// How a frame of the animation is drawn over its background.
+struct Picture<'a> {
+    /// The network.
+    topology: &'a Topology,
+    /// The color of each group.
+    colors: &'a [RGBColor],
+    /// Largest point mass [kg] (sets the marker sizes).
+    m_max: f64,
+    /// Pixel of a position [m].
+    to_px: &'a dyn Fn([f64; 2]) -> (i32, i32),
+}
+
+impl Picture<'_> {
+    /// Draws the time label `t` [s], the elements (springs under strings) and the point
+    /// masses at the node positions `xy` [m] onto `rgb` (`w × h` RGB pixels, holding the
+    /// background).
+    fn draw(
+        &self,
+        rgb: &mut [u8],
+        (w, h): (u32, u32),
+        t: f64,
+        xy: &[[f64; 2]],
+    ) -> Result<(), String> {
+        let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
+        let label = format!("t = {} s", plot::format_plain(t));
+        let style = plot::text_style(14.0);
+        let (lw, _) = root.estimate_text_size(&label, &style).map_err(plot::err)?;
+        root.draw_text(&label, &style, (w as i32 - lw as i32 - 10, 6))
+            .map_err(plot::err)?;
+        for spring in [true, false] {
+            for (g, group) in self.topology.groups.iter().enumerate() {
+                if group.spring != spring {
+                    continue;
+                }
+                let line =
+                    ShapeStyle::from(&self.colors[g]).stroke_width(if spring { 1 } else { 2 });
+                for e in group.elements.clone() {
+                    let [a, b] = self.topology.elements[e];
+                    root.draw(&PathElement::new(
+                        vec![(self.to_px)(xy[a]), (self.to_px)(xy[b])],
+                        line,
+                    ))
+                    .map_err(plot::err)?;
+                }
+            }
+        }
+        for &(node, m) in &self.topology.masses {
+            let r = Topology::mass_radius(m, self.m_max, 2.0, 4.0);
+            root.draw(&Circle::new((self.to_px)(xy[node]), r, MASS_COLOR.filled()))
+                .map_err(plot::err)?;
+        }
+        root.present().map_err(plot::err)?;
+        Ok(())
+    }
+}
+
 /// Renders and encodes the animation into `tmp`.
 fn write_to(
     tmp: &Path,
@@ -357,7 +475,7 @@ fn write_to(
     topology: &Topology,
     stop: Option<&AtomicBool>,
 ) -> Result<AnimationReport, String> {
-    let positions = dir.join("positions.csv");
+    let positions = dir.join(POSITIONS_FILE);
     let file = match File::open(&positions) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -375,21 +493,7 @@ fn write_to(
 
     // Fixed axes: the bounding box of every frame drawn.
     let mut xy = Vec::with_capacity(n_nodes);
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for &(offset, _) in &frames {
-        if stopped(stop) {
-            return Err("stop requested".into());
-        }
-        read_frame(&mut reader, offset, n_nodes, &mut xy)?;
-        for p in &xy {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-    }
-    let data_box = plot::padded_box([(lo[0], lo[1]), (hi[0], hi[1])].into_iter());
-    plot::check_box(data_box)?;
+    let data_box = frames_box(&mut reader, &frames, n_nodes, stop, &mut xy)?;
     plot::ensure_font().map_err(|e| e.to_string())?;
 
     let (w, h) = (ANIMATION_WIDTH, ANIMATION_HEIGHT);
@@ -400,30 +504,7 @@ fn write_to(
     let m_max = topology.masses.iter().map(|m| m.1).fold(0.0, f64::max);
 
     // The background: title, axes, grid.
-    let mut background = vec![0u8; (w * h * 3) as usize];
-    let coord = {
-        let root = BitMapBackend::with_buffer(&mut background, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot::err)?;
-        let (header, body) = root.split_vertically(HEADER);
-        header
-            .draw_text(
-                &plot::sanitize_text(title, 48),
-                &plot::text_style(14.0),
-                (8, 6),
-            )
-            .map_err(plot::err)?;
-        let style = AxisStyle {
-            tick: 11.0,
-            desc: 12.0,
-            margin: 8,
-            x_label_area: 36,
-            labels: 6,
-        };
-        let chart = plot::equal_aspect_chart(&body, data_box, &style)?;
-        let coord = chart.as_coord_spec().clone();
-        root.present().map_err(plot::err)?;
-        coord
-    };
+    let (background, coord) = draw_background(title, data_box, (w, h))?;
     let to_px = |p: [f64; 2]| coord.translate(&(p[0], p[1]));
 
     let tmp_file = File::create(tmp).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
@@ -440,40 +521,19 @@ fn write_to(
     let mut rgb = vec![0u8; background.len()];
     let mut prev: Option<Vec<u8>> = None;
     let mut indices = vec![0u8; (w * h) as usize];
+    let picture = Picture {
+        topology,
+        colors: &colors,
+        m_max,
+        to_px: &to_px,
+    };
     for (k, &(offset, t)) in frames.iter().enumerate() {
         if stopped(stop) {
             return Err("stop requested".into());
         }
         read_frame(&mut reader, offset, n_nodes, &mut xy)?;
         rgb.copy_from_slice(&background);
-        {
-            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-            let label = format!("t = {} s", plot::format_plain(t));
-            let style = plot::text_style(14.0);
-            let (lw, _) = root.estimate_text_size(&label, &style).map_err(plot::err)?;
-            root.draw_text(&label, &style, (w as i32 - lw as i32 - 10, 6))
-                .map_err(plot::err)?;
-            for spring in [true, false] {
-                for (g, group) in topology.groups.iter().enumerate() {
-                    if group.spring != spring {
-                        continue;
-                    }
-                    let line =
-                        ShapeStyle::from(&colors[g]).stroke_width(if spring { 1 } else { 2 });
-                    for e in group.elements.clone() {
-                        let [a, b] = topology.elements[e];
-                        root.draw(&PathElement::new(vec![to_px(xy[a]), to_px(xy[b])], line))
-                            .map_err(plot::err)?;
-                    }
-                }
-            }
-            for &(node, m) in &topology.masses {
-                let r = Topology::mass_radius(m, m_max, 2.0, 4.0);
-                root.draw(&Circle::new(to_px(xy[node]), r, MASS_COLOR.filled()))
-                    .map_err(plot::err)?;
-            }
-            root.present().map_err(plot::err)?;
-        }
+        picture.draw(&mut rgb, (w, h), t, &xy)?;
         for (i, px) in rgb.chunks_exact(3).enumerate() {
             indices[i] = palette.index(px[0], px[1], px[2]);
         }

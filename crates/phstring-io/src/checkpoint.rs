@@ -228,7 +228,7 @@ pub struct CheckpointFile {
     /// Program version that wrote it.
     pub version: String,
     /// Id of the run that wrote it; the output folder carries the same id in
-    /// [`RUN_ID_FILE`](crate::runner::RUN_ID_FILE), and a resume into a folder with another
+    /// [`RUN_ID_FILE`](crate::files::RUN_ID_FILE), and a resume into a folder with another
     /// id is refused.
     pub run_id: String,
     /// Scenario file name (for messages).
@@ -330,6 +330,15 @@ impl std::io::Write for HashWriter {
     }
 }
 
+/// What [`CheckpointFile::check_against`] found of the time of a checkpoint, for its later
+/// checks.
+struct Reached {
+    /// Time reached, `t_base + k h_cur` [s].
+    t: f64,
+    /// `time.max_halvings`, capped at 1074 (below it `time.h / 2^n` is zero).
+    halvings: u32,
+}
+
 impl CheckpointFile {
     /// This checkpoint with `checksum` as its checksum, by reference.
     fn view<'a>(&'a self, checksum: &'a str) -> CheckpointView<'a> {
@@ -374,7 +383,7 @@ impl CheckpointFile {
                 path: path.to_path_buf(),
                 reason: e.to_string(),
             })?;
-        crate::output::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
+        crate::files::atomic_write(path, text.as_bytes()).map_err(|source| CheckpointError::Io {
             path: path.to_path_buf(),
             cause: source,
         })
@@ -477,13 +486,13 @@ impl CheckpointFile {
         if cp.format != FORMAT {
             return Err(format_err(format!(
                 "unknown format \"{}\"",
-                crate::plot::sanitize_text(&cp.format, 80)
+                crate::text::sanitize_text(&cp.format, 80)
             )));
         }
         if cp.version != env!("CARGO_PKG_VERSION") {
             return Err(format_err(format!(
                 "written by phstring {}, this is {}: resuming would not be bit-identical",
-                crate::plot::sanitize_text(&cp.version, 80),
+                crate::text::sanitize_text(&cp.version, 80),
                 env!("CARGO_PKG_VERSION")
             )));
         }
@@ -495,7 +504,7 @@ impl CheckpointFile {
                 "checksum mismatch: the file was edited or damaged after it was written".to_string()
             }));
         }
-        if !crate::runner::is_valid_run_id(&cp.run_id) {
+        if !crate::files::is_valid_run_id(&cp.run_id) {
             return Err(format_err("invalid run id".into()));
         }
         Ok(cp)
@@ -512,13 +521,31 @@ impl CheckpointFile {
         sim: &Simulation<D, Material>,
         settings: &crate::scenario::RunSettings,
     ) -> Result<(), CheckpointError> {
-        let bad = |reason: String| CheckpointError::Invalid {
-            path: self.path.clone(),
-            reason,
-        };
-        let s = &self.sim;
         let n = sim.system().mesh().n_nodes();
         let n_el = sim.system().mesh().n_elements();
+        let checks = || {
+            self.check_state(sim, n, n_el)?;
+            let time = self.check_time(settings)?;
+            self.check_counts(settings, &time)?;
+            self.check_totals()?;
+            self.check_outputs::<D>(settings, n, &time)
+        };
+        checks().map_err(|reason| CheckpointError::Invalid {
+            path: self.path.clone(),
+            reason,
+        })
+    }
+
+    /// The state arrays: their lengths for `n` nodes and `n_el` elements in dimension `D`,
+    /// finite values, the acceleration history, the last error estimate, and strains in the
+    /// material's domain. `Err` says what is wrong.
+    fn check_state<const D: usize>(
+        &self,
+        sim: &Simulation<D, Material>,
+        n: usize,
+        n_el: usize,
+    ) -> Result<(), String> {
+        let s = &self.sim;
         for (name, values, expected, what) in [
             ("sim.r", &s.r, D * n, "nodes"),
             ("sim.v", &s.v, D * n, "nodes"),
@@ -532,45 +559,53 @@ impl CheckpointFile {
                 } else {
                     format!("{n_el} elements")
                 };
-                return Err(bad(format!(
+                return Err(format!(
                     "{name} has {} numbers, the scenario needs {expected} ({count})",
                     values.len()
-                )));
+                ));
             }
             if let Some(i) = values.iter().position(|x| !x.is_finite()) {
-                return Err(bad(format!("{name}[{i}] is not finite")));
+                return Err(format!("{name}[{i}] is not finite"));
             }
         }
         if s.acc_history.len() > 2 {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.acc_history has {} points, at most 2",
                 s.acc_history.len()
-            )));
+            ));
         }
         for (k, (t, a)) in s.acc_history.iter().enumerate() {
             if a.len() != D * n {
-                return Err(bad(format!(
+                return Err(format!(
                     "sim.acc_history[{k}] has {} numbers, the scenario needs {} ({n} nodes × {D} components)",
                     a.len(),
                     D * n
-                )));
+                ));
             }
             if !t.is_finite() || a.iter().any(|x| !x.is_finite()) {
-                return Err(bad(format!("sim.acc_history[{k}] is not finite")));
+                return Err(format!("sim.acc_history[{k}] is not finite"));
             }
         }
         if !(s.err_prev > 0.0 && s.err_prev.is_finite()) {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.err_prev = {:e} must be positive and finite",
                 s.err_prev
-            )));
+            ));
         }
         if let Some(i) = sim.system().first_inadmissible(&s.c) {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.c[{i}] = {:e} is outside the material's domain",
                 s.c[i]
-            )));
+            ));
         }
+        Ok(())
+    }
+
+    /// The step size (between the floor `time.h / 2^max_halvings` and `time.h`), the time
+    /// (within `[0, time.end]`) and the step count a run to that time can reach; returns the
+    /// time reached.
+    fn check_time(&self, settings: &crate::scenario::RunSettings) -> Result<Reached, String> {
+        let s = &self.sim;
         let step = &settings.step;
         let h = step.h;
         let halvings = step.control.max_halvings.min(1074);
@@ -580,47 +615,59 @@ impl CheckpointFile {
             && s.h_cur >= floor * (1.0 - 1e-9)
             && s.h_cur <= h * (1.0 + 1e-12))
         {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.h_cur = {:e} s is not between the step-size floor {floor:e} s and time.h = {h:e} s",
                 s.h_cur
-            )));
+            ));
         }
         if !(s.h_min_used.is_finite() && s.h_min_used > 0.0 && s.h_min_used <= h * (1.0 + 1e-12)) {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.h_min_used = {:e} s is not in (0, time.h = {h:e} s]",
                 s.h_min_used
-            )));
+            ));
         }
         let t_end = settings.t_end;
         if !(s.t_base.is_finite() && s.t_base >= 0.0 && s.t_base <= t_end * (1.0 + 1e-9)) {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.t_base = {:e} s is not in [0, time.end = {t_end:e} s]",
                 s.t_base
-            )));
+            ));
         }
         let t = s.t_base + s.k as f64 * s.h_cur;
         if !(t.is_finite() && t <= t_end * (1.0 + 1e-9) + s.h_cur) || s.k > s.steps {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.t_base + sim.k × sim.h_cur = {t:e} s (k = {}, {} steps) is beyond time.end = {t_end:e} s",
                 s.k, s.steps
-            )));
+            ));
         }
         // Every accepted step but a last, clipped one advances at least the floor.
         // Capped far below usize::MAX, so that the counts below and those a resumed run adds
         // cannot overflow.
         let max_steps = ((t / floor).ceil() + 2.0).min(1e15);
         if s.steps as f64 > max_steps {
-            return Err(bad(format!(
+            return Err(format!(
                 "sim.steps = {} is more than a run to t = {t:e} s can take with steps of at least {floor:e} s",
                 s.steps
-            )));
+            ));
         }
+        Ok(Reached { t, halvings })
+    }
+
+    /// The step, rejection and iteration counts: at most what `sim.steps` steps can have.
+    fn check_counts(
+        &self,
+        settings: &crate::scenario::RunSettings,
+        time: &Reached,
+    ) -> Result<(), String> {
+        let s = &self.sim;
+        let step = &settings.step;
+        let halvings = time.halvings;
         let c = &self.counters;
         if c.steps != s.steps {
-            return Err(bad(format!(
+            return Err(format!(
                 "counters.steps = {} differs from sim.steps = {}",
                 c.steps, s.steps
-            )));
+            ));
         }
         let attempts_per_step = halvings as usize + 1;
         let max_rejected = s.steps.saturating_add(1).saturating_mul(attempts_per_step);
@@ -659,12 +706,19 @@ impl CheckpointFile {
             ),
         ] {
             if value > limit {
-                return Err(bad(format!(
+                return Err(format!(
                     "{name} = {value} is more than {} steps can have (at most {limit})",
                     s.steps
-                )));
+                ));
             }
         }
+        Ok(())
+    }
+
+    /// The energy totals and timings: finite, and non-negative where they must be.
+    fn check_totals(&self) -> Result<(), String> {
+        let s = &self.sim;
+        let c = &self.counters;
         for (name, value, nonneg) in [
             ("sim.supplied_total", s.supplied_total, false),
             // dg4's backward sub-step can give back dissipated energy: finite only.
@@ -681,19 +735,33 @@ impl CheckpointFile {
             ("counters.time_loop_s", c.time_loop_s, true),
         ] {
             if !value.is_finite() || (nonneg && value < 0.0) {
-                return Err(bad(format!(
+                return Err(format!(
                     "{name} = {value:e} must be finite{}",
                     if nonneg { " and ≥ 0" } else { "" }
-                )));
+                ));
             }
         }
         if let Some(e) = self.end_of_loading
             && !e.is_finite()
         {
-            return Err(bad("end_of_loading is not finite".into()));
+            return Err("end_of_loading is not finite".into());
         }
+        Ok(())
+    }
+
+    /// The output state: file lengths at least the headers (dimension `D`), the positions
+    /// file as `output.positions` says, frame and snapshot counts a run of `sim.steps` steps
+    /// writes, and snapshots of `n` finite positions at times up to the time reached.
+    fn check_outputs<const D: usize>(
+        &self,
+        settings: &crate::scenario::RunSettings,
+        n: usize,
+        time: &Reached,
+    ) -> Result<(), String> {
+        let s = &self.sim;
+        let t = time.t;
         let o = &self.outputs;
-        let (energy_header, positions_header, ports_header) = crate::output::headers(D);
+        let (energy_header, positions_header, ports_header) = crate::files::headers(D);
         for (name, bytes, header) in [
             ("outputs.energy_bytes", Some(o.energy_bytes), &energy_header),
             (
@@ -708,13 +776,13 @@ impl CheckpointFile {
             if let Some(b) = bytes
                 && b < min
             {
-                return Err(bad(format!(
+                return Err(format!(
                     "{name} = {b} is shorter than the file's header and first row ({min} bytes)"
-                )));
+                ));
             }
         }
         if o.positions_bytes.is_some() != settings.output.positions {
-            return Err(bad(format!(
+            return Err(format!(
                 "outputs.positions_bytes is {} but output.positions = {}",
                 if o.positions_bytes.is_some() {
                     "set"
@@ -722,11 +790,11 @@ impl CheckpointFile {
                     "missing"
                 },
                 settings.output.positions
-            )));
+            ));
         }
         let max_frames = s.steps / settings.stride.max(1) + 2;
         if (!settings.output.vtk && o.frames > 0) || o.frames > max_frames {
-            return Err(bad(format!(
+            return Err(format!(
                 "outputs.frames = {} is more than {} steps write with output.stride = {}{}",
                 o.frames,
                 s.steps,
@@ -736,31 +804,31 @@ impl CheckpointFile {
                 } else {
                     " and output.vtk = false"
                 }
-            )));
+            ));
         }
         if o.last_frame.is_some_and(|f| f > s.steps) {
-            return Err(bad(format!(
+            return Err(format!(
                 "outputs.last_frame is beyond the {} steps done",
                 s.steps
-            )));
+            ));
         }
-        let max_snapshots = if D >= 2 { crate::output::SNAPSHOTS } else { 0 };
+        let max_snapshots = if D >= 2 { crate::files::SNAPSHOTS } else { 0 };
         if o.snapshots.len() > max_snapshots {
-            return Err(bad(format!(
+            return Err(format!(
                 "outputs.snapshots has {} snapshots, at most {max_snapshots} are taken",
                 o.snapshots.len()
-            )));
+            ));
         }
         for (k, (ts, pts)) in o.snapshots.iter().enumerate() {
             if !(ts.is_finite() && *ts >= 0.0 && *ts <= t * (1.0 + 1e-9) + s.h_cur) {
-                return Err(bad(format!(
+                return Err(format!(
                     "outputs.snapshots[{k}] has time {ts:e} s outside [0, t = {t:e} s]"
-                )));
+                ));
             }
             if pts.len() != n || pts.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(bad(format!(
+                return Err(format!(
                     "outputs.snapshots[{k}] must have {n} finite node positions"
-                )));
+                ));
             }
         }
         Ok(())

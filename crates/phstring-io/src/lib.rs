@@ -1,19 +1,28 @@
 //! File formats and plots for phstring: scenario files (TOML) validated into problems,
-//! output writers (CSV, JSON, ParaView), plots (SVG/PNG), and the run driver used by the
-//! `phstring` command line.
+//! output writers (CSV, JSON, ParaView), plots (SVG/PNG), and the command drivers used by
+//! the `phstring` command line.
+//!
+//! The modules are floors; each uses only the floors below it:
+//!
+//! 1. [`text`] (numbers and text in messages) and [`files`] (the names and layout of the
+//!    output files, the run id, atomic writes);
+//! 2. [`plot`], [`vtk`] and [`animation`] (figure and ParaView formats), and [`scenario`]
+//!    (scenario files, validation, and starting a simulation from one);
+//! 3. [`checkpoint`] (the checkpoint file);
+//! 4. [`output`] (the writers of a run);
+//! 5. [`history`] (a run's outputs read back) and [`figures`] (the plots drawn from them);
+//! 6. [`drive`]: the command drivers (run, statics, modes, linearize, sweep, output folder
+//!    preparation); nothing below imports them.
 
 pub mod animation;
 pub mod checkpoint;
-mod csvfile;
-pub mod export;
-pub mod modes_run;
-pub mod outdir;
+pub mod drive;
+pub mod figures;
+pub mod files;
+pub mod history;
 pub mod output;
 pub mod plot;
-pub mod runner;
 pub mod scenario;
-pub mod statics_run;
-pub mod sweep;
 #[cfg(test)]
 mod test_util;
 pub mod text;

@@ -46,19 +46,7 @@ pub const MIN_RELATIVE_SPAN: f64 = 1e-12;
 /// Longest title or label, in characters (longer ones end in `…`).
 pub const MAX_TEXT_CHARS: usize = 200;
 
-/// `text` without control characters (they would reach a terminal or make an SVG file
-/// invalid), cut to at most `max_chars` characters with a trailing `…`.
-pub fn sanitize_text(text: &str, max_chars: usize) -> String {
-    let mut out = String::new();
-    for (n, c) in text.chars().filter(|c| !c.is_control()).enumerate() {
-        if n + 1 > max_chars {
-            out.push('…');
-            break;
-        }
-        out.push(c);
-    }
-    out
-}
+use crate::text::sanitize_text;
 
 /// Checks that the axis range `lo..hi` can be drawn: finite, increasing, a span of at
 /// least [`MIN_RELATIVE_SPAN`] of the magnitude, and (linear axes) a magnitude of at most
@@ -401,86 +389,140 @@ fn config_figure<'a>(
     topology: Option<&Topology>,
     snapshots: &[(f64, Vec<[f64; 2]>)],
 ) -> ConfigFigure<'a> {
-    let finite = |p: &[f64; 2]| p[0].is_finite() && p[1].is_finite();
-    let masses: &[(usize, f64)] = topology.map_or(&[], |t| &t.masses);
-    let m_max = masses.iter().map(|m| m.1).fold(0.0, f64::max);
-    let mass_dots = |nodes: &[[f64; 2]], color: RGBColor| -> Vec<Dot> {
-        masses
-            .iter()
-            .filter_map(|&(i, m)| nodes.get(i).filter(|p| finite(p)).map(|p| (p, m)))
-            .map(|(p, m)| Dot {
-                x: p[0],
-                y: p[1],
-                radius: Topology::mass_radius(m, m_max, 4.0, 5.0),
-                color,
-            })
-            .collect()
-    };
-    let mass_entry = || LegendEntry {
+    match topology {
+        Some(t) if !t.is_chain() => network_figure(title, t, snapshots),
+        _ => chain_figure(title, topology.map_or(&[], |t| &t.masses), snapshots),
+    }
+}
+
+/// Whether both coordinates of `p` are finite (others are left out of the drawing).
+fn finite(p: &[f64; 2]) -> bool {
+    p[0].is_finite() && p[1].is_finite()
+}
+
+/// The point masses `(node, kg)` at the positions `nodes`, in `color`, sized relative to the
+/// largest mass `m_max` [kg].
+fn mass_dots(masses: &[(usize, f64)], m_max: f64, nodes: &[[f64; 2]], color: RGBColor) -> Vec<Dot> {
+    masses
+        .iter()
+        .filter_map(|&(i, m)| nodes.get(i).filter(|p| finite(p)).map(|p| (p, m)))
+        .map(|(p, m)| Dot {
+            x: p[0],
+            y: p[1],
+            radius: Topology::mass_radius(m, m_max, 4.0, 5.0),
+            color,
+        })
+        .collect()
+}
+
+/// The legend entry of the point masses.
+fn mass_entry() -> LegendEntry {
+    LegendEntry {
         label: "point masses".into(),
         color: MASS_COLOR,
         dashed: false,
         marker: true,
         line: false,
-    };
-    let time_label = |t: f64| sanitize_text(&format!("t = {} s", format_plain(t)), MAX_TEXT_CHARS);
-    if topology.is_none_or(Topology::is_chain) {
-        let colors = distinct_colors(snapshots.len());
-        let curves: Vec<Curve> = snapshots
-            .iter()
-            .zip(&colors)
-            .map(|((time, nodes), &color)| Curve {
-                label: time_label(*time),
-                points: nodes
-                    .iter()
-                    .filter(|p| finite(p))
-                    .map(|p| (p[0], p[1]))
-                    .collect(),
-                color,
-                width: 2,
-                dashed: false,
-            })
-            .collect();
-        let markers = curves.iter().all(|c| c.points.len() <= MAX_MARKED_NODES);
-        let mut entries: Vec<LegendEntry> = curves
-            .iter()
-            .map(|c| LegendEntry {
-                label: c.label.clone(),
-                color: c.color,
-                dashed: false,
-                marker: markers,
-                line: true,
-            })
-            .collect();
-        let dots: Vec<Dot> = snapshots
-            .iter()
-            .zip(&colors)
-            .flat_map(|((_, nodes), &color)| mass_dots(nodes, color))
-            .collect();
-        if !dots.is_empty() {
-            entries.push(mass_entry());
-        }
-        return ConfigFigure {
-            title,
-            curves,
-            dots,
-            entries,
-            markers,
-        };
     }
-    let topology = topology.expect("checked above");
+}
+
+/// The legend label of the snapshot at time `t` [s].
+fn time_label(t: f64) -> String {
+    sanitize_text(&format!("t = {} s", format_plain(t)), MAX_TEXT_CHARS)
+}
+
+/// The configuration figure of a chain: one curve per snapshot in its own color, with the
+/// point masses `masses` `(node, kg)`.
+fn chain_figure<'a>(
+    title: &'a str,
+    masses: &[(usize, f64)],
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> ConfigFigure<'a> {
+    let m_max = masses.iter().map(|m| m.1).fold(0.0, f64::max);
+    let colors = distinct_colors(snapshots.len());
+    let curves: Vec<Curve> = snapshots
+        .iter()
+        .zip(&colors)
+        .map(|((time, nodes), &color)| Curve {
+            label: time_label(*time),
+            points: nodes
+                .iter()
+                .filter(|p| finite(p))
+                .map(|p| (p[0], p[1]))
+                .collect(),
+            color,
+            width: 2,
+            dashed: false,
+        })
+        .collect();
+    let markers = curves.iter().all(|c| c.points.len() <= MAX_MARKED_NODES);
+    let mut entries: Vec<LegendEntry> = curves
+        .iter()
+        .map(|c| LegendEntry {
+            label: c.label.clone(),
+            color: c.color,
+            dashed: false,
+            marker: markers,
+            line: true,
+        })
+        .collect();
+    let dots: Vec<Dot> = snapshots
+        .iter()
+        .zip(&colors)
+        .flat_map(|((_, nodes), &color)| mass_dots(masses, m_max, nodes, color))
+        .collect();
+    if !dots.is_empty() {
+        entries.push(mass_entry());
+    }
+    ConfigFigure {
+        title,
+        curves,
+        dots,
+        entries,
+        markers,
+    }
+}
+
+/// The shade of snapshot `k` of `n`: the earliest faded most, the last in full color.
+fn snapshot_shade(k: usize, n: usize) -> f64 {
+    if n <= 1 {
+        1.0
+    } else {
+        0.25 + 0.75 * k as f64 / (n - 1) as f64
+    }
+}
+
+/// The configuration figure of a network: per snapshot, each group in its color (springs
+/// dashed, under the strings), faded by age, with the point masses.
+fn network_figure<'a>(
+    title: &'a str,
+    topology: &Topology,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> ConfigFigure<'a> {
     let colors = group_colors(topology);
+    let (curves, dots) = network_curves(topology, &colors, snapshots);
+    let entries = network_legend(topology, &colors, !dots.is_empty(), snapshots);
+    ConfigFigure {
+        title,
+        curves,
+        dots,
+        entries,
+        markers: false,
+    }
+}
+
+/// The curves of every group and the point masses of every snapshot of a network, the groups
+/// in `colors`.
+fn network_curves(
+    topology: &Topology,
+    colors: &[RGBColor],
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> (Vec<Curve>, Vec<Dot>) {
+    let m_max = topology.masses.iter().map(|m| m.1).fold(0.0, f64::max);
     let n = snapshots.len();
-    let shade = |k: usize| {
-        if n <= 1 {
-            1.0
-        } else {
-            0.25 + 0.75 * k as f64 / (n - 1) as f64
-        }
-    };
     let (mut curves, mut dots) = (Vec::new(), Vec::new());
     for (k, (_, nodes)) in snapshots.iter().enumerate() {
-        let f = shade(k);
+        let f = snapshot_shade(k, n);
         // Springs first, under the strings.
         for spring in [true, false] {
             for (g, group) in topology.groups.iter().enumerate() {
@@ -510,8 +552,25 @@ fn config_figure<'a>(
                 }
             }
         }
-        dots.extend(mass_dots(nodes, fade(MASS_COLOR, f)));
+        dots.extend(mass_dots(
+            &topology.masses,
+            m_max,
+            nodes,
+            fade(MASS_COLOR, f),
+        ));
     }
+    (curves, dots)
+}
+
+/// The legend of a network's configuration figure: its strings (at most
+/// [`MAX_LEGEND_GROUPS`] named), its springs, the point masses if `masses` and the
+/// snapshot times.
+fn network_legend(
+    topology: &Topology,
+    colors: &[RGBColor],
+    masses: bool,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> Vec<LegendEntry> {
     let mut entries = Vec::new();
     let strings: Vec<usize> = (0..topology.groups.len())
         .filter(|&g| !topology.groups[g].spring)
@@ -548,25 +607,20 @@ fn config_figure<'a>(
             line: true,
         });
     }
-    if !dots.is_empty() {
+    if masses {
         entries.push(mass_entry());
     }
+    let n = snapshots.len();
     for (k, (t, _)) in snapshots.iter().enumerate() {
         entries.push(LegendEntry {
             label: time_label(*t),
-            color: fade(RGBColor(0, 0, 0), shade(k)),
+            color: fade(RGBColor(0, 0, 0), snapshot_shade(k, n)),
             dashed: false,
             marker: false,
             line: true,
         });
     }
-    ConfigFigure {
-        title,
-        curves,
-        dots,
-        entries,
-        markers: false,
-    }
+    entries
 }
 
 /// Plots named curves `y(x)` on a shared axis pair (paper Figs. 4 and 5).

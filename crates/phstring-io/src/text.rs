@@ -2,6 +2,7 @@
 //!
 //! * [`clip`] shortens echoed user text (a 10 MB expression is not repeated in full).
 //! * [`num`] prints a float short but exact (`5e-324`, not 300 decimals).
+//! * [`sanitize_text`] drops control characters from text written into files and figures.
 //! * [`printable`] escapes control characters, so that a title or a value cannot move the
 //!   cursor, clear the screen or ring the bell.
 
@@ -54,6 +55,21 @@ pub fn printable(text: &str, keep_newlines: bool) -> Cow<'_, str> {
         }
     }
     Cow::Owned(out)
+}
+
+/// `text` without control characters (they would reach a terminal, make an SVG file invalid
+/// or break a CSV row), cut to at most `max_chars` characters with a trailing `…`
+/// (`usize::MAX`: not cut).
+pub fn sanitize_text(text: &str, max_chars: usize) -> String {
+    let mut out = String::new();
+    for (n, c) in text.chars().filter(|c| !c.is_control()).enumerate() {
+        if n + 1 > max_chars {
+            out.push('…');
+            break;
+        }
+        out.push(c);
+    }
+    out
 }
 
 #[cfg(test)]

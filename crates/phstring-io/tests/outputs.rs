@@ -10,7 +10,10 @@ use phstring::{
     Boundary, Fixed, MassMatrix, Material, Motion, NetworkBuilder, NodalLoad, PointMass,
     Simulation, StepParams, StringSpec, Vector,
 };
-use phstring_io::output::{self, ELEMENTS_FILE, PLOT_POINTS, POINT_MASSES_FILE, Writers};
+use phstring_io::figures::{draw_animation, draw_plots};
+use phstring_io::files::{ELEMENTS_FILE, POINT_MASSES_FILE, elements_header};
+use phstring_io::history::{read_history, read_topology};
+use phstring_io::output::{self, PLOT_POINTS, Writers};
 use vtkio::model::{Attribute, DataSet, Piece, Vtk};
 
 /// A fresh, empty directory under the system temp dir.
@@ -149,7 +152,7 @@ fn network_outputs_describe_every_element_node_and_port() {
 
     // elements.csv: the mesh, element by element.
     let (header, el) = rows(&dir.join(ELEMENTS_FILE));
-    assert_eq!(header, output::elements_header());
+    assert_eq!(header, elements_header());
     assert_eq!(
         header,
         "element,node_a,node_b,group,kind,reference_length,group_name"
@@ -173,7 +176,7 @@ fn network_outputs_describe_every_element_node_and_port() {
         .map(|r| (r[0].parse().unwrap(), r[1].parse().unwrap()))
         .collect();
     assert_eq!(pm, [(j, 2.0), (p, 10.0)]);
-    let topology = output::read_topology(&dir).unwrap().unwrap();
+    let topology = read_topology(&dir).unwrap().unwrap();
     assert_eq!(topology, output::topology(&sim));
     assert!(!topology.is_chain());
 
@@ -263,10 +266,10 @@ fn network_outputs_describe_every_element_node_and_port() {
 
     // The configuration plot draws the network, the animation every frame.
     w.flush().unwrap();
-    let history = output::read_history(w.energy_path(), PLOT_POINTS, w.snapshots().to_vec(), None)
+    let history = read_history(w.energy_path(), PLOT_POINTS, w.snapshots().to_vec(), None)
         .unwrap()
         .unwrap();
-    let report = output::draw_plots(&dir, 2, "Y network", None, Ok(&history), None);
+    let report = draw_plots(&dir, 2, "Y network", None, Ok(&history), None);
     assert_eq!(
         report.written,
         ["energy", "configuration", "increments"],
@@ -283,7 +286,7 @@ fn network_outputs_describe_every_element_node_and_port() {
     ] {
         assert!(svg.contains(text), "configuration.svg lacks {text:?}");
     }
-    let report = output::draw_animation(&dir, 2, "Y network", None);
+    let report = draw_animation(&dir, 2, "Y network", None);
     assert_eq!(report.written, ["animation"], "{report:?}");
     let gif = std::fs::read(dir.join("animation.gif")).unwrap();
     assert_eq!(&gif[..6], b"GIF89a");
@@ -322,7 +325,7 @@ fn single_string_outputs_gain_elements_and_vtk_arrays_only() {
     assert_eq!(el[3][..5], ["3", "3", "4", "0", "string"]);
     assert_eq!(el[3][6], "string");
     assert!(!dir.join(POINT_MASSES_FILE).exists());
-    let topology = output::read_topology(&dir).unwrap().unwrap();
+    let topology = read_topology(&dir).unwrap().unwrap();
     assert!(topology.is_chain());
     let frame = piece(&dir.join("paraview/frame_000001.vtp"));
     let cells: Vec<&str> = frame.data.cell.iter().map(|a| a.name()).collect();

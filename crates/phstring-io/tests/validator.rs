@@ -148,14 +148,14 @@ proptest! {
     #[test]
     fn vary_values_split_back(values in proptest::collection::vec(vary_value(), 1..5)) {
         let option = format!("title={}", values.join(","));
-        let v = phstring_io::sweep::Vary::parse(&option).unwrap();
+        let v = phstring_io::drive::sweep::Vary::parse(&option).unwrap();
         prop_assert_eq!(v.values, values);
     }
 
     /// Any `--vary` text gives values or an error, never a panic.
     #[test]
     fn vary_parsing_never_panics(text in "[a-z=,\"'\\\\\\[\\]{} ]{0,40}") {
-        let _ = phstring_io::sweep::Vary::parse(&text);
+        let _ = phstring_io::drive::sweep::Vary::parse(&text);
     }
 }
 

@@ -7,7 +7,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use phstring_io::checkpoint::CheckpointFile;
-use phstring_io::runner::{self, Progress, RunError, RunOptions};
+use phstring_io::drive::run::{self, Progress, RunError, RunOptions};
+use phstring_io::files;
 use phstring_io::scenario;
 
 use crate::{phstring, temp_dir, workspace_root};
@@ -383,10 +384,10 @@ fn resume_into_another_run_folder_is_refused() {
         files(&c)
     );
     // The run id is in the folder, in summary.json and in the checkpoint.
-    let id = read(&a.join(runner::RUN_ID_FILE)).trim().to_string();
+    let id = read(&a.join(files::RUN_ID_FILE)).trim().to_string();
     assert_eq!(summary(&a)["run_id"], id.as_str());
     assert_eq!(CheckpointFile::read(&cp).unwrap().run_id, id);
-    assert_ne!(read(&b.join(runner::RUN_ID_FILE)).trim(), id);
+    assert_ne!(read(&b.join(files::RUN_ID_FILE)).trim(), id);
     // The checkpoint's own folder resumes.
     assert!(resume(&cp).status.success());
 }
@@ -572,13 +573,13 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
     let tmp = temp_dir("stopstep");
     let (a, b) = (tmp.join("a"), tmp.join("b"));
     let file = taut();
-    runner::run(&file, &a, &mut (), RunOptions::default()).unwrap();
+    run::run(&file, &a, &mut (), RunOptions::default()).unwrap();
     let flag = Arc::new(AtomicBool::new(false));
     let opts = RunOptions {
         stop: Some(flag.clone()),
         ..Default::default()
     };
-    let e = runner::run(&file, &b, &mut StopAt(flag.clone(), 30), opts).unwrap_err();
+    let e = run::run(&file, &b, &mut StopAt(flag.clone(), 30), opts).unwrap_err();
     assert!(matches!(e, RunError::Interrupted { steps: 30, .. }), "{e}");
     let s = summary(&b);
     assert_eq!(s["status"], "interrupted");
@@ -593,7 +594,7 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
         resume: Some(cp),
         ..Default::default()
     };
-    let info = runner::run(&file, &b, &mut (), opts).unwrap();
+    let info = run::run(&file, &b, &mut (), opts).unwrap();
     assert_eq!(info.status, "completed");
     for f in [
         "energy.csv",
@@ -619,7 +620,7 @@ fn stop_during_plots_skips_them_and_lists_them() {
         stop: Some(flag.clone()),
         ..Default::default()
     };
-    let info = runner::run(&taut(), &out, &mut StopAt(flag, usize::MAX), opts).unwrap();
+    let info = run::run(&taut(), &out, &mut StopAt(flag, usize::MAX), opts).unwrap();
     assert_eq!(info.status, "completed");
     let s = summary(&out);
     assert_eq!(s["status"], "completed");
@@ -649,7 +650,7 @@ fn failed_write_leaves_a_fresh_failed_summary() {
     let out = tmp.join("dir");
     std::fs::create_dir_all(out.join("ports.csv")).unwrap();
     std::fs::write(out.join("summary.json"), "{\"status\": \"completed\"}").unwrap();
-    let e = runner::run(&taut(), &out, &mut (), RunOptions::default()).unwrap_err();
+    let e = run::run(&taut(), &out, &mut (), RunOptions::default()).unwrap_err();
     assert!(matches!(e, RunError::Output(_)), "{e}");
     let s = summary(&out);
     assert_eq!(s["status"], "failed");
@@ -660,7 +661,7 @@ fn failed_write_leaves_a_fresh_failed_summary() {
         let out = tmp.join("full");
         std::fs::create_dir_all(&out).unwrap();
         std::os::unix::fs::symlink("/dev/full", out.join("energy.csv")).unwrap();
-        let e = runner::run(&taut(), &out, &mut (), RunOptions::default()).unwrap_err();
+        let e = run::run(&taut(), &out, &mut (), RunOptions::default()).unwrap_err();
         let s = summary(&out);
         assert_eq!(s["status"], "failed", "{e}");
         assert!(s["error"].as_str().unwrap().contains("energy.csv"), "{s}");

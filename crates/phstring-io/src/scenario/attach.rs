@@ -11,7 +11,7 @@ use phstring::{Boundary, FeedbackLoad, Fixed, Motion, NodalLoad, PdLaw, PointMas
 use super::components::{AXES, ControlComponent, MotionComponent, PointMassComponent};
 use super::expr::{Expr, eval_or_record, is_zero};
 use super::refs::label;
-use super::spec::{ControlSpec, FixedSpec, GainSpec};
+use super::spec::{BoundarySpec, ControlSpec, FixedSpec, GainSpec};
 use super::{ScenarioError, ScenarioFile, Skeleton};
 use crate::text::{clip, num};
 
@@ -201,6 +201,36 @@ impl ScenarioFile {
                 "has neither `fixed`, `force`, `position` nor `control`",
             ));
         }
+        let motions = self.entry_motions(k, b, sk.position(node), &label, t_check)?;
+        let fixed = self.entry_fixed::<D>(k, b)?;
+        let force = self.entry_force::<D>(k, b, t_check)?;
+        let control = match &b.control {
+            None => None,
+            Some(c) => Some(self.control::<D>(k, c.get_ref(), c.span(), t_check)?),
+        };
+        let external = self.entry_external(k, b)?;
+        Ok(Entry {
+            node,
+            label,
+            fixed,
+            motions,
+            force,
+            control,
+            external,
+        })
+    }
+
+    /// The moved components of `boundary.{k}.position` (table `b`): each expression valid and
+    /// at the node's `start` position [m] (called `label`) at `t = 0`.
+    fn entry_motions<const D: usize>(
+        &self,
+        k: usize,
+        b: &BoundarySpec,
+        start: Vector<D>,
+        label: &str,
+        t_check: f64,
+    ) -> Result<Vec<(usize, Expr, Range<usize>)>, ScenarioError> {
+        let key = |f: &str| format!("boundary.{k}.{f}");
         let mut motions = Vec::new();
         if let Some(p) = &b.position {
             let texts = p.get_ref();
@@ -215,7 +245,6 @@ impl ScenarioFile {
                 ));
             }
             self.prescribes_a_component(&key("position"), p)?;
-            let start = sk.position(node);
             for (i, txt) in texts.iter().enumerate() {
                 if txt.get_ref().trim().is_empty() {
                     continue;
@@ -244,6 +273,17 @@ impl ScenarioFile {
                 motions.push((i, e, txt.span()));
             }
         }
+        Ok(motions)
+    }
+
+    /// The fixed components of `boundary.{k}.fixed` (table `b`): all, a mask, or a list of
+    /// component names.
+    fn entry_fixed<const D: usize>(
+        &self,
+        k: usize,
+        b: &BoundarySpec,
+    ) -> Result<[bool; D], ScenarioError> {
+        let key = |f: &str| format!("boundary.{k}.{f}");
         let mut fixed = [false; D];
         if let Some(f) = &b.fixed {
             match f.get_ref() {
@@ -275,7 +315,18 @@ impl ScenarioFile {
                 }
             }
         }
-        let force = match &b.force {
+        Ok(fixed)
+    }
+
+    /// The force of `boundary.{k}.force` (table `b`), if any: `D` valid expressions [N].
+    fn entry_force<const D: usize>(
+        &self,
+        k: usize,
+        b: &BoundarySpec,
+        t_check: f64,
+    ) -> Result<Option<Force>, ScenarioError> {
+        let key = |f: &str| format!("boundary.{k}.{f}");
+        Ok(match &b.force {
             None => None,
             Some(f) => {
                 let texts = f.get_ref();
@@ -304,12 +355,14 @@ impl ScenarioFile {
                     loaded,
                 })
             }
-        };
-        let control = match &b.control {
-            None => None,
-            Some(c) => Some(self.control::<D>(k, c.get_ref(), c.span(), t_check)?),
-        };
-        let external = match &b.external {
+        })
+    }
+
+    /// Whether `boundary.{k}.external` (table `b`) marks its force or motion as an FMU input:
+    /// only for a table with exactly one of them.
+    fn entry_external(&self, k: usize, b: &BoundarySpec) -> Result<bool, ScenarioError> {
+        let key = |f: &str| format!("boundary.{k}.{f}");
+        Ok(match &b.external {
             Some(x) if *x.get_ref() => {
                 if b.force.is_none() && b.position.is_none() {
                     return Err(self.invalid(
@@ -328,15 +381,6 @@ impl ScenarioFile {
                 true
             }
             _ => false,
-        };
-        Ok(Entry {
-            node,
-            label,
-            fixed,
-            motions,
-            force,
-            control,
-            external,
         })
     }
 
@@ -497,6 +541,19 @@ impl ScenarioFile {
         let entries = (0..self.scenario.boundary.len())
             .map(|k| self.boundary_entry::<D>(k, sk, t_check))
             .collect::<Result<Vec<_>, _>>()?;
+        let held = self.holds(&entries)?;
+        self.loads_on_free_components(&entries, &held)?;
+        self.controls_on_free_components(&entries, &held)?;
+        Ok(self.boundary_parts(entries))
+    }
+
+    /// What holds each component of the nodes that have conditions: fixed by its first
+    /// table, else moved by one motion (a component both fixed and moved, or moved twice, is
+    /// refused).
+    fn holds<const D: usize>(
+        &self,
+        entries: &[Entry<D>],
+    ) -> Result<HashMap<usize, [Hold; D]>, ScenarioError> {
         // What holds each component, for the nodes that have conditions.
         let mut held: HashMap<usize, [Hold; D]> = HashMap::new();
         for (k, e) in entries.iter().enumerate() {
@@ -537,6 +594,15 @@ impl ScenarioFile {
                 }
             }
         }
+        Ok(held)
+    }
+
+    /// Refuses a force on a component that is fixed or moved (`held`).
+    fn loads_on_free_components<const D: usize>(
+        &self,
+        entries: &[Entry<D>],
+        held: &HashMap<usize, [Hold; D]>,
+    ) -> Result<(), ScenarioError> {
         for (k, e) in entries.iter().enumerate() {
             let Some(Force { span, loaded, .. }) = &e.force else {
                 continue;
@@ -564,6 +630,15 @@ impl ScenarioFile {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Refuses a control with a gain on a component that is fixed or moved (`held`).
+    fn controls_on_free_components<const D: usize>(
+        &self,
+        entries: &[Entry<D>],
+        held: &HashMap<usize, [Hold; D]>,
+    ) -> Result<(), ScenarioError> {
         for (k, e) in entries.iter().enumerate() {
             let Some(c) = &e.control else { continue };
             let h = held.get(&e.node).copied().unwrap_or([Hold::Free; D]);
@@ -586,6 +661,12 @@ impl ScenarioFile {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The boundary conditions, loads, motions and controls of the checked `entries`, with the
+    /// record of expression failures during a run that they share.
+    fn boundary_parts<const D: usize>(&self, entries: Vec<Entry<D>>) -> BoundaryParts<D> {
         let load_error: Arc<Mutex<Option<String>>> = Arc::default();
         let mut boundary = Boundary::<D>::default();
         let mut controls = Vec::new();
@@ -642,12 +723,12 @@ impl ScenarioFile {
                     .push(FeedbackLoad::new(e.node, self.pd_law(k, c, &load_error)));
             }
         }
-        Ok(BoundaryParts {
+        BoundaryParts {
             boundary,
             loads,
             load_error,
             motions,
             controls,
-        })
+        }
     }
 }

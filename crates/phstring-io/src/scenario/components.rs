@@ -4,6 +4,8 @@
 
 use serde::Serialize;
 
+use super::material::{CrossSection, mass_name};
+
 /// Everything a scenario is made of, in mesh numbering.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Components {
@@ -88,6 +90,52 @@ pub struct StringComponent {
     pub kelvin_voigt: f64,
     /// Drag per unit reference length [N·s/m²] (0: none).
     pub drag: f64,
+}
+
+/// Where a string lies in the mesh, for [`StringComponent::new`].
+pub(super) struct StringLayout {
+    /// Its elements `[first, one past the last]`.
+    pub elements: [usize; 2],
+    /// Number of nodes along the string.
+    pub nodes: usize,
+    /// Mesh nodes of its path, in order.
+    pub path_nodes: Vec<usize>,
+    /// Elements per span.
+    pub elements_per_span: usize,
+    /// Its interior nodes `[first, one past the last]`.
+    pub interior_nodes: [usize; 2],
+}
+
+impl StringComponent {
+    /// The string `name` laid out as `layout`, of cross-section `cs` made of the material
+    /// named `material`, under `body_force` [N/m] per unit reference length; its reference
+    /// length is filled in from the mesh when the network is built.
+    pub(super) fn new(
+        name: String,
+        layout: StringLayout,
+        material: String,
+        cs: &CrossSection,
+        body_force: &[f64],
+    ) -> Self {
+        Self {
+            name,
+            elements: layout.elements,
+            nodes: layout.nodes,
+            path_nodes: layout.path_nodes,
+            elements_per_span: layout.elements_per_span,
+            interior_nodes: layout.interior_nodes,
+            law: cs.material.name(),
+            material,
+            ea: cs.material.ea(),
+            rho_a: cs.rho_a,
+            mass: mass_name(cs.mass),
+            body_force: body_force.to_vec(),
+            // Filled in from the mesh when the network is built.
+            reference_length: 0.0,
+            kelvin_voigt: cs.damping.kelvin_voigt,
+            drag: cs.damping.drag,
+        }
+    }
 }
 
 /// A linear spring: a one-element group.

@@ -24,6 +24,7 @@ mod rounding;
 mod settings;
 mod single;
 mod spec;
+pub mod start;
 
 use std::collections::BTreeMap;
 use std::ops::Range;

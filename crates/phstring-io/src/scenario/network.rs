@@ -9,12 +9,13 @@ use std::ops::Range;
 use phstring::{Material, NetworkBuilder, StoredEnergy, StringSpec, Vector};
 use toml::Spanned;
 
-use super::components::{Components, NamedNode, SpringComponent, StringComponent};
-use super::material::{CrossSection, Longest, mass_name};
+use super::components::{Components, NamedNode, SpringComponent, StringComponent, StringLayout};
+use super::material::{CrossSection, Longest};
 use super::overrides::line_col;
 use super::refs::{Along, Nodes, known, label};
 use super::settings::BodyForce;
 use super::single::MAX_ELEMENTS;
+use super::spec::SpringSpec;
 use super::{Frame, ScenarioError, ScenarioFile, Skeleton};
 use crate::text::{clip, num, nums};
 
@@ -263,24 +264,20 @@ impl ScenarioFile {
                 per_span,
                 first_interior,
             };
-            components.strings.push(StringComponent {
-                name: name.to_string(),
+            let layout = StringLayout {
                 elements: [first_element, total],
                 nodes: along.len(),
                 path_nodes: along.path.clone(),
                 elements_per_span: per_span,
                 interior_nodes: [along.interior().start, along.interior().end],
-                law: cs.material.name(),
-                material: material_name.clone(),
-                ea: cs.material.ea(),
-                rho_a: cs.rho_a,
-                mass: mass_name(cs.mass),
-                body_force: body_force.as_slice().to_vec(),
-                // Filled in from the mesh when the network is built.
-                reference_length: 0.0,
-                kelvin_voigt: cs.damping.kelvin_voigt,
-                drag: cs.damping.drag,
-            });
+            };
+            components.strings.push(StringComponent::new(
+                name.to_string(),
+                layout,
+                material_name.clone(),
+                &cs,
+                body_force.as_slice(),
+            ));
             nodes.add_string(name, along);
             nodes.n_nodes = b.n_nodes();
         }
@@ -431,104 +428,8 @@ impl ScenarioFile {
             let spec = spec.get_ref();
             let key = |f: &str| format!("spring.{k}.{f}");
             let name = self.unique_name(names, &key("name"), &spec.name, "spring", k)?;
-            let damping = self.non_negative(&key("damping"), spec.damping.as_ref())?;
-            // A spring of stiffness 0 is a pure dashpot.
-            let stiffness = if damping > 0.0 {
-                self.non_negative(&key("k"), Some(&spec.k))?
-            } else {
-                let k = *spec.k.get_ref();
-                if k == 0.0 {
-                    return Err(self.invalid(
-                        &key("k"),
-                        spec.k.span(),
-                        "= 0: a spring of stiffness 0 does nothing; give `damping` [N s/m] for a pure dashpot",
-                    ));
-                }
-                self.positive(&key("k"), &spec.k)?
-            };
-            let rest = *spec.rest.get_ref();
-            if stiffness == 0.0 && rest != 0.0 {
-                return Err(self.invalid(
-                    &key("rest"),
-                    spec.rest.span(),
-                    format!(
-                        "= {}: a pure dashpot (k = 0) has no rest length; give rest = 0",
-                        num(rest)
-                    ),
-                ));
-            }
-            if !(rest >= 0.0 && rest.is_finite()) {
-                return Err(self.invalid(
-                    &key("rest"),
-                    spec.rest.span(),
-                    format!("must be at least 0 and finite, got {}", num(rest)),
-                ));
-            }
-            let between = spec.between.get_ref();
-            let mut ends = Vec::with_capacity(2);
-            for (i, r) in between.iter().enumerate().take(2) {
-                ends.push(self.resolve(&format!("spring.{k}.between.{i}"), r, nodes)?);
-            }
-            let a = ends.first().copied().unwrap_or(0);
-            let ra = b.position(a).unwrap_or_else(Vector::zeros);
-            let (other, to_point) = match (between.len(), &spec.to_point) {
-                (2, None) => {
-                    if ends[1] == a {
-                        return Err(self.invalid(
-                            &key("between.1"),
-                            between[1].span(),
-                            format!(
-                                "is the same node as between.0 ({}): a spring joins two different nodes",
-                                label(between[0].get_ref(), a)
-                            ),
-                        ));
-                    }
-                    (b.position(ends[1]).unwrap_or_else(Vector::zeros), None)
-                }
-                (2, Some(p)) => {
-                    return Err(self.invalid(
-                        &key("to_point"),
-                        p.span(),
-                        "must not be given with two nodes in `between` (a spring to a fixed point names one node)",
-                    ));
-                }
-                (1, Some(p)) => {
-                    let p = self.vector::<D>(&key("to_point"), p)?;
-                    (p, Some(p))
-                }
-                (1, None) => {
-                    return Err(self.invalid(
-                        &key("between"),
-                        spec.between.span(),
-                        "names one node: give a second one, or `to_point` for a spring to a fixed point",
-                    ));
-                }
-                (n, _) => {
-                    return Err(self.invalid(
-                        &key("between"),
-                        spec.between.span(),
-                        format!("must name two nodes (or one, with `to_point`), got {n}"),
-                    ));
-                }
-            };
-            let c = (other - ra).norm_squared();
-            if !c.is_finite() {
-                return Err(self.invalid(
-                    &key("between"),
-                    spec.between.span(),
-                    "the spring's initial length overflows (the coordinates are too large)",
-                ));
-            }
-            if c == 0.0 && rest > 0.0 {
-                return Err(self.invalid(
-                    &key("rest"),
-                    spec.rest.span(),
-                    format!(
-                        "= {} but the spring's ends start at the same point, where the direction of its force is undefined (use rest = 0 or move an end)",
-                        num(rest)
-                    ),
-                ));
-            }
+            let (stiffness, rest, damping) = self.spring_law(k, spec)?;
+            let (a, ends, to_point) = self.spring_ends::<D>(k, spec, b, nodes)?;
             let built = match to_point {
                 None => b.spring(name, a, ends[1], stiffness, rest),
                 Some(p) => b.spring_to_point(name, a, p, stiffness, rest),
@@ -561,6 +462,126 @@ impl ScenarioFile {
         // another spring can be meant to reach by `-1`); later references see every node.
         nodes.n_nodes = b.n_nodes();
         Ok(())
+    }
+
+    /// The law of `spring.{k}` (`spec`): its stiffness [N/m] (0 only for a pure dashpot),
+    /// rest length [m] and damping [N s/m].
+    fn spring_law(&self, k: usize, spec: &SpringSpec) -> Result<(f64, f64, f64), ScenarioError> {
+        let key = |f: &str| format!("spring.{k}.{f}");
+        let damping = self.non_negative(&key("damping"), spec.damping.as_ref())?;
+        // A spring of stiffness 0 is a pure dashpot.
+        let stiffness = if damping > 0.0 {
+            self.non_negative(&key("k"), Some(&spec.k))?
+        } else {
+            let k = *spec.k.get_ref();
+            if k == 0.0 {
+                return Err(self.invalid(
+                    &key("k"),
+                    spec.k.span(),
+                    "= 0: a spring of stiffness 0 does nothing; give `damping` [N s/m] for a pure dashpot",
+                ));
+            }
+            self.positive(&key("k"), &spec.k)?
+        };
+        let rest = *spec.rest.get_ref();
+        if stiffness == 0.0 && rest != 0.0 {
+            return Err(self.invalid(
+                &key("rest"),
+                spec.rest.span(),
+                format!(
+                    "= {}: a pure dashpot (k = 0) has no rest length; give rest = 0",
+                    num(rest)
+                ),
+            ));
+        }
+        if !(rest >= 0.0 && rest.is_finite()) {
+            return Err(self.invalid(
+                &key("rest"),
+                spec.rest.span(),
+                format!("must be at least 0 and finite, got {}", num(rest)),
+            ));
+        }
+        Ok((stiffness, rest, damping))
+    }
+
+    /// The ends of `spring.{k}` (`spec`): its first node, the nodes resolved from
+    /// `between`, and its fixed point [m] if it has `to_point`; refused: two equal nodes, a
+    /// wrong count, an initial length that overflows or is zero with a positive rest length.
+    fn spring_ends<const D: usize>(
+        &self,
+        k: usize,
+        spec: &SpringSpec,
+        b: &NetworkBuilder<D, Material>,
+        nodes: &Nodes<'_>,
+    ) -> Result<(usize, Vec<usize>, Option<Vector<D>>), ScenarioError> {
+        let key = |f: &str| format!("spring.{k}.{f}");
+        let rest = *spec.rest.get_ref();
+        let between = spec.between.get_ref();
+        let mut ends = Vec::with_capacity(2);
+        for (i, r) in between.iter().enumerate().take(2) {
+            ends.push(self.resolve(&format!("spring.{k}.between.{i}"), r, nodes)?);
+        }
+        let a = ends.first().copied().unwrap_or(0);
+        let ra = b.position(a).unwrap_or_else(Vector::zeros);
+        let (other, to_point) = match (between.len(), &spec.to_point) {
+            (2, None) => {
+                if ends[1] == a {
+                    return Err(self.invalid(
+                        &key("between.1"),
+                        between[1].span(),
+                        format!(
+                            "is the same node as between.0 ({}): a spring joins two different nodes",
+                            label(between[0].get_ref(), a)
+                        ),
+                    ));
+                }
+                (b.position(ends[1]).unwrap_or_else(Vector::zeros), None)
+            }
+            (2, Some(p)) => {
+                return Err(self.invalid(
+                    &key("to_point"),
+                    p.span(),
+                    "must not be given with two nodes in `between` (a spring to a fixed point names one node)",
+                ));
+            }
+            (1, Some(p)) => {
+                let p = self.vector::<D>(&key("to_point"), p)?;
+                (p, Some(p))
+            }
+            (1, None) => {
+                return Err(self.invalid(
+                    &key("between"),
+                    spec.between.span(),
+                    "names one node: give a second one, or `to_point` for a spring to a fixed point",
+                ));
+            }
+            (n, _) => {
+                return Err(self.invalid(
+                    &key("between"),
+                    spec.between.span(),
+                    format!("must name two nodes (or one, with `to_point`), got {n}"),
+                ));
+            }
+        };
+        let c = (other - ra).norm_squared();
+        if !c.is_finite() {
+            return Err(self.invalid(
+                &key("between"),
+                spec.between.span(),
+                "the spring's initial length overflows (the coordinates are too large)",
+            ));
+        }
+        if c == 0.0 && rest > 0.0 {
+            return Err(self.invalid(
+                &key("rest"),
+                spec.rest.span(),
+                format!(
+                    "= {} but the spring's ends start at the same point, where the direction of its force is undefined (use rest = 0 or move an end)",
+                    num(rest)
+                ),
+            ));
+        }
+        Ok((a, ends, to_point))
     }
 
     /// A network: `[materials.NAME]`, `[[node]]`, `[[string]]`, `[[spring]]`; every

@@ -5,8 +5,8 @@
 
 use phstring::{Mesh, Problem, State, Vector};
 
-use super::components::{Components, StringComponent};
-use super::material::{Longest, mass_name};
+use super::components::{Components, StringComponent, StringLayout};
+use super::material::Longest;
 use super::refs::Nodes;
 use super::settings::BodyForce;
 use super::spec::{Geometry, MeshSpec};
@@ -253,24 +253,19 @@ impl ScenarioFile {
         let n_el = mesh.n_elements();
         let n_nodes = mesh.n_nodes();
         let components = Components {
-            strings: vec![StringComponent {
-                name: "string".into(),
-                elements: [0, n_el],
-                nodes: n_nodes,
-                path_nodes: vec![0, n_el],
-                elements_per_span: n_el,
-                interior_nodes: [1, n_el],
-                law: cs.material.name(),
-                material: "material".into(),
-                ea: cs.material.ea(),
-                rho_a: cs.rho_a,
-                mass: mass_name(cs.mass),
-                body_force: body_force.as_slice().to_vec(),
-                // Filled in from the mesh when the network is built.
-                reference_length: 0.0,
-                kelvin_voigt: cs.damping.kelvin_voigt,
-                drag: cs.damping.drag,
-            }],
+            strings: vec![StringComponent::new(
+                "string".into(),
+                StringLayout {
+                    elements: [0, n_el],
+                    nodes: n_nodes,
+                    path_nodes: vec![0, n_el],
+                    elements_per_span: n_el,
+                    interior_nodes: [1, n_el],
+                },
+                "material".into(),
+                &cs,
+                body_force.as_slice(),
+            )],
             ..Components::default()
         };
         let problem = Problem {

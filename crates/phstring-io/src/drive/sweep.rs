@@ -10,9 +10,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
-use crate::outdir::{SWEEP_TABLE, run_dir_name};
-use crate::output::num;
-use crate::runner::{self, RunInfo};
+use super::run::{self as runner, RunInfo};
+use crate::files::num;
+use crate::files::{SWEEP_TABLE, run_dir_name};
 use crate::scenario::{self, ScenarioError, ScenarioFile};
 
 /// One varied key with its values (TOML literals as text).

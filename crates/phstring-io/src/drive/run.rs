@@ -7,59 +7,26 @@
 //! replaced atomically, written before the plots and again after them, and a run that fails
 //! on an I/O error still tries to leave a summary with `"status": "failed"`.
 
-use std::hash::Hasher;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use phstring::{Material, SettleWatch, Simulation, StepError};
 use serde::Serialize;
 
 use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimState};
-use crate::output::{self, History, OutputError, Writers};
+use crate::figures::{draw_animation, draw_plots};
+use crate::files::{
+    CHECKPOINT, COMPONENTS_FILE, RUN_ID_FILE, SCENARIO_FILE, SNAPSHOTS, SUMMARY_FILE, atomic_write,
+    new_run_id, overwrite_in_place, read_run_id,
+};
+use crate::history::{History, read_history};
+use crate::output::{self, OutputError, Writers};
+use crate::scenario::start::{StartError, start_at_equilibrium};
 use crate::scenario::{Components, RunSettings, ScenarioError, ScenarioFile};
 
 pub use phstring::nan_max;
-
-/// Name of the file in an output folder that holds the id of the run writing it.
-pub const RUN_ID_FILE: &str = ".phstring-run";
-
-/// Whether `id` can be a run id: 1 to 64 ASCII letters and digits.
-pub fn is_valid_run_id(id: &str) -> bool {
-    !id.is_empty() && id.len() <= 64 && id.chars().all(|c| c.is_ascii_alphanumeric())
-}
-
-/// A new run id: a hash of the time, the process id, a counter and the output folder.
-pub fn new_run_id(out: &Path) -> String {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos());
-    let mut h = fnv::FnvHasher::default();
-    h.write(&nanos.to_le_bytes());
-    h.write(&std::process::id().to_le_bytes());
-    h.write(&COUNTER.fetch_add(1, Ordering::Relaxed).to_le_bytes());
-    h.write(out.as_os_str().as_encoded_bytes());
-    format!("{:016x}", h.finish())
-}
-
-/// The run id recorded in output folder `dir` ([`RUN_ID_FILE`]), if any.
-pub fn read_run_id(dir: &Path) -> Option<String> {
-    let mut text = String::new();
-    std::fs::File::open(dir.join(RUN_ID_FILE))
-        .ok()?
-        .take(256)
-        .read_to_string(&mut text)
-        .ok()?;
-    let id = text.trim();
-    Some(if is_valid_run_id(id) {
-        id.to_string()
-    } else {
-        "(unreadable)".to_string()
-    })
-}
 
 /// Refuses to resume `cp` into `out` unless `out` carries the run id of the run that wrote
 /// the checkpoint.
@@ -111,17 +78,6 @@ pub struct RunOptions {
     /// Continue from this checkpoint instead of starting at `t = 0`.
     pub resume: Option<CheckpointFile>,
 }
-
-/// Name of the checkpoint file in the output folder.
-pub const CHECKPOINT: &str = "checkpoint.json";
-
-/// A large network's components, written by a run instead of listing them in
-/// `summary.json` (see [`SUMMARY_COMPONENTS`]).
-pub const COMPONENTS_FILE: &str = "components.json";
-
-/// A long scenario as run, written by a run instead of holding it in `summary.json` (see
-/// [`SUMMARY_SCENARIO_BYTES`]).
-pub const SCENARIO_FILE: &str = "scenario.json";
 
 /// Most components (named nodes, strings, springs, point masses, supports, motions, loads
 /// and controls together) that `summary.json` lists itself; a larger network has them in
@@ -193,6 +149,15 @@ impl RunError {
             RunError::Interrupted { .. }
                 | RunError::Statics(phstring::statics::StaticsError::Interrupted)
         )
+    }
+}
+
+impl From<StartError> for RunError {
+    fn from(e: StartError) -> Self {
+        match e {
+            StartError::Scenario(e) => RunError::Scenario(e),
+            StartError::Statics(e) => RunError::Statics(e),
+        }
     }
 }
 
@@ -363,29 +328,6 @@ pub fn run(
     }
 }
 
-/// With `initial.equilibrium`: solves for the starting equilibrium and sets the problem's
-/// initial state to it, with `[initial]`'s displacement and velocity applied on it; returns
-/// how it was found (for reports). Without it, does nothing and returns `None`. `stop`
-/// ends the solve early (Ctrl-C).
-pub fn start_at_equilibrium<const D: usize>(
-    v: &mut crate::scenario::Validated<D>,
-    stop: Option<&AtomicBool>,
-) -> Result<Option<String>, RunError> {
-    if !v.initial.equilibrium {
-        return Ok(None);
-    }
-    let (_, eq) = crate::statics_run::solve_validated(v, false, stop).map_err(RunError::Statics)?;
-    v.problem.initial = v.initial_state(&eq.state.r)?;
-    Ok(Some(format!(
-        "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
-        eq.path.name(),
-        eq.path.steps(),
-        eq.iterations,
-        eq.residual,
-        if eq.stable { "stable" } else { "not stable" }
-    )))
-}
-
 /// What a run needs besides the simulation and the writers, shared by its parts.
 struct RunContext<'a> {
     file: &'a ScenarioFile,
@@ -493,7 +435,7 @@ fn run_dim<const D: usize>(
     // nothing to animate. Written for failed runs too: it shows how far the run got.
     if ctx.settings.animation && ctx.settings.output.positions && info.dimension >= 2 {
         let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
-        let anim = output::draw_animation(out, info.dimension, title, opts.stop.as_deref());
+        let anim = draw_animation(out, info.dimension, title, opts.stop.as_deref());
         info.plots.extend(anim.written);
         info.plots_skipped.extend(anim.skipped);
         info.warnings.extend(anim.warnings);
@@ -654,8 +596,7 @@ fn write_large_parts(
                     cause: std::io::Error::other(e),
                 })?;
                 bytes.push(b'\n');
-                output::atomic_write(&path, &bytes)
-                    .map_err(|cause| OutputError::Io { path, cause })?;
+                atomic_write(&path, &bytes).map_err(|cause| OutputError::Io { path, cause })?;
             }
             None if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) => {
                 let _ = std::fs::remove_file(&path);
@@ -668,8 +609,8 @@ fn write_large_parts(
 
 /// The times of the configuration snapshots: `t_end · k / (SNAPSHOTS − 1)`.
 fn snapshot_times(t_end: f64) -> Vec<f64> {
-    (0..output::SNAPSHOTS)
-        .map(|k| t_end * k as f64 / (output::SNAPSHOTS - 1) as f64)
+    (0..SNAPSHOTS)
+        .map(|k| t_end * k as f64 / (SNAPSHOTS - 1) as f64)
         .collect()
 }
 
@@ -904,7 +845,7 @@ fn draw(
     info: &mut RunInfo,
     stop: Option<&AtomicBool>,
 ) -> Result<(), RunError> {
-    let history = match output::read_history(
+    let history = match read_history(
         writers.energy_path(),
         output::PLOT_POINTS,
         writers.snapshots().to_vec(),
@@ -915,7 +856,7 @@ fn draw(
         Err(e) => Err(e.to_string()),
     };
     let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
-    let report = output::draw_plots(
+    let report = draw_plots(
         ctx.out,
         info.dimension,
         title,
@@ -990,11 +931,10 @@ fn summary_text(info: &RunInfo) -> String {
 /// disk has no room for the temporary file), it is written in place over the summary the
 /// run wrote when it started, if it fits in that file's reserve ([`SUMMARY_RESERVE`]).
 pub fn write_summary(out: &Path, info: &RunInfo) -> Result<(), OutputError> {
-    let path = out.join("summary.json");
+    let path = out.join(SUMMARY_FILE);
     let text = summary_text(info);
-    output::atomic_write(&path, text.as_bytes()).or_else(|cause| {
-        output::overwrite_in_place(&path, text.as_bytes())
-            .map_err(|_| OutputError::Io { path, cause })
+    atomic_write(&path, text.as_bytes()).or_else(|cause| {
+        overwrite_in_place(&path, text.as_bytes()).map_err(|_| OutputError::Io { path, cause })
     })
 }
 
@@ -1005,8 +945,8 @@ fn write_running_summary(out: &Path, info: &mut RunInfo) -> Result<(), RunError>
     let status = std::mem::replace(&mut info.status, "running".into());
     let text = summary_text(info) + &" ".repeat(SUMMARY_RESERVE) + "\n";
     info.status = status;
-    let path = out.join("summary.json");
-    output::atomic_write(&path, text.as_bytes())
+    let path = out.join(SUMMARY_FILE);
+    atomic_write(&path, text.as_bytes())
         .map_err(|cause| RunError::Output(OutputError::Io { path, cause }))
 }
 

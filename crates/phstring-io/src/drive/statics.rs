@@ -16,12 +16,16 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use phstring::statics::{self, Equilibrium, StaticsError, StaticsParams};
+use phstring::statics::{Equilibrium, StaticsError};
 use phstring::{Material, PhSystem, Vector};
 use serde::Serialize;
 
-use crate::output::{OutputError, atomic_write, num};
+use crate::files::{
+    EQUILIBRIUM_FILE, EQUILIBRIUM_FRAME, SUMMARY_FILE, TENSION_FILE, atomic_write, num,
+};
+use crate::output::OutputError;
 use crate::plot::network_plot;
+use crate::scenario::start::solve_validated;
 use crate::scenario::{ScenarioError, ScenarioFile};
 use crate::vtk::{FrameData, write_vtp_frame};
 
@@ -105,27 +109,6 @@ pub fn statics(
     }
 }
 
-/// The equilibrium of a validated scenario with its Newton settings and linear solver; with
-/// `open_loop`, feedback laws are left out unchecked (the linear model and modes).
-pub fn solve_validated<const D: usize>(
-    v: &crate::scenario::Validated<D>,
-    open_loop: bool,
-    stop: Option<&AtomicBool>,
-) -> Result<(PhSystem<D, Material>, Equilibrium<D>), StaticsError> {
-    let (sys, initial) = PhSystem::new(v.problem.clone())?;
-    let params = StaticsParams {
-        newton: phstring::NewtonParams {
-            max_iter: StaticsParams::default().newton.max_iter,
-            ..v.settings.step.newton
-        },
-        solver: v.settings.step.solver,
-        open_loop,
-        ..Default::default()
-    };
-    let eq = statics::solve_system(&sys, &initial.r, &params, stop)?;
-    Ok((sys, eq))
-}
-
 fn statics_dim<const D: usize>(
     file: &ScenarioFile,
     out: &Path,
@@ -180,7 +163,7 @@ fn statics_dim<const D: usize>(
         solve_s,
     };
     let json = serde_json::to_string_pretty(&info).expect("plain data serializes");
-    write(out, "summary.json", json.as_bytes())?;
+    write(out, SUMMARY_FILE, json.as_bytes())?;
     plot(out, &title, &sys, &eq)?;
     Ok(info)
 }
@@ -251,7 +234,7 @@ fn write_files<const D: usize>(
         }
         csv.push('\n');
     }
-    write(out, "equilibrium.csv", csv.as_bytes())?;
+    write(out, EQUILIBRIUM_FILE, csv.as_bytes())?;
 
     let groups = group_of(sys);
     let mut csv = String::from("element,string,node_a,node_b,C,S,N,length\n");
@@ -271,7 +254,7 @@ fn write_files<const D: usize>(
             num(t.length)
         );
     }
-    write(out, "tension.csv", csv.as_bytes())?;
+    write(out, TENSION_FILE, csv.as_bytes())?;
 
     let points: Vec<[f64; 3]> = eq.state.r.iter().map(pad).collect();
     let zero = vec![[0.0; 3]; points.len()];
@@ -288,7 +271,7 @@ fn write_files<const D: usize>(
         .enumerate()
         .map(|(k, v)| (names[k], v.as_slice()))
         .collect();
-    let path = out.join("equilibrium.vtp");
+    let path = out.join(EQUILIBRIUM_FRAME);
     write_vtp_frame(
         &path,
         &FrameData {

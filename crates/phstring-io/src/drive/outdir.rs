@@ -15,63 +15,10 @@ use std::fs::File;
 use std::io;
 use std::path::{Path, PathBuf};
 
-use crate::output::is_own_temp_file;
-
-/// Files of one run, directly in its folder (and the temporary files of
-/// [`crate::output::TEMP_FILES`]).
-pub const RUN_FILES: &[&str] = &[
-    "energy.csv",
-    "positions.csv",
-    "ports.csv",
-    "summary.json",
-    "checkpoint.json",
-    crate::runner::RUN_ID_FILE,
-    "energy.svg",
-    "energy.png",
-    "configuration.svg",
-    "configuration.png",
-    "increments.svg",
-    "increments.png",
-    crate::output::ELEMENTS_FILE,
-    crate::output::POINT_MASSES_FILE,
-    crate::animation::ANIMATION_FILE,
-    crate::runner::COMPONENTS_FILE,
-    crate::runner::SCENARIO_FILE,
-];
-
-/// The ParaView sub-folder of a run.
-pub const PARAVIEW_DIR: &str = "paraview";
-/// The ParaView collection in [`PARAVIEW_DIR`] (frames are [`frame_name`]).
-pub const PVD_FILE: &str = "string.pvd";
-/// Run sub-folders of `phstring paper`.
-pub const PAPER_RUN_DIRS: &[&str] = &["dg", "mp"];
-/// Figure sub-folder of `phstring paper`.
-pub const FIGURES_DIR: &str = "figures";
-/// Figures of `phstring paper` in [`FIGURES_DIR`].
-pub const PAPER_FIGURES: &[&str] = &[
-    "fig2_configurations.svg",
-    "fig2_configurations.png",
-    "fig3_energies.svg",
-    "fig3_energies.png",
-    "fig4_hamiltonian.svg",
-    "fig4_hamiltonian.png",
-    "fig5_increments.svg",
-    "fig5_increments.png",
-];
-/// The table of `phstring sweep`.
-pub const SWEEP_TABLE: &str = "sweep.csv";
-/// The lock file (see [`OutLock`]); it is not an output and is never removed.
-pub const LOCK_FILE: &str = ".phstring.lock";
-
-/// Name of the ParaView frame of step `step`.
-pub fn frame_name(step: usize) -> String {
-    format!("frame_{step:06}.vtp")
-}
-
-/// Name of the folder of sweep run `index`.
-pub fn run_dir_name(index: usize) -> String {
-    format!("run_{index:03}")
-}
+use crate::files::{
+    FIGURES_DIR, LOCK_FILE, PAPER_FIGURES, PAPER_RUN_DIRS, PARAVIEW_DIR, PVD_FILE, RUN_FILES,
+    RUN_ID_FILE, SWEEP_TABLE, frame_name, is_own_temp_file, run_dir_name,
+};
 
 /// Whether `name` is exactly a name that [`frame_name`] gives.
 fn is_frame_name(name: &str) -> bool {
@@ -144,7 +91,7 @@ fn classify(folder: Folder, name: &str) -> Option<Entry> {
 /// Whether `name` is a file phstring keeps for itself in an output folder (the lock, the run
 /// id, a temporary file left by a kill): such files alone do not make a folder non-empty.
 pub fn is_bookkeeping(name: &str) -> bool {
-    name == LOCK_FILE || name == crate::runner::RUN_ID_FILE || is_own_temp_file(name)
+    name == LOCK_FILE || name == RUN_ID_FILE || is_own_temp_file(name)
 }
 
 /// Errors preparing an output folder.

@@ -21,7 +21,8 @@ use phstring::{PhSystem, Vector};
 use serde::Serialize;
 
 use crate::checkpoint::{CheckpointError, CheckpointFile};
-use crate::output::{OutputError, atomic_write, num};
+use crate::files::{LINEAR_AT_FILE, MANIFEST_FILE, atomic_write, num};
+use crate::output::OutputError;
 use crate::scenario::{ScenarioError, ScenarioFile};
 
 /// Why `phstring linearize` failed.
@@ -211,7 +212,7 @@ fn linearize_dim<const D: usize>(
     let v = file.validate::<D>()?;
     let (sys, r, time, source) = match at {
         LinearizeAt::Equilibrium => {
-            let (sys, eq) = crate::statics_run::solve_validated(&v, true, stop)?;
+            let (sys, eq) = crate::scenario::start::solve_validated(&v, true, stop)?;
             (sys, eq.state.r, 0.0, "equilibrium".to_string())
         }
         LinearizeAt::Checkpoint(cp) => {
@@ -243,7 +244,7 @@ fn linearize_dim<const D: usize>(
         Some(k) => {
             let found = phstring::modes::modes(&sys, &r, k, v.settings.step.solver, stop)?;
             let (_, free) = phstring::linear::free_dofs(&sys);
-            warnings.extend(crate::modes_run::fewer_modes(
+            warnings.extend(super::modes::fewer_modes(
                 "--modes",
                 k,
                 free,
@@ -278,7 +279,7 @@ fn linearize_dim<const D: usize>(
         let c = |k: usize| if k < D { num(p[k]) } else { "0".into() };
         let _ = writeln!(pos, "{i},{},{},{}", c(0), c(1), c(2));
     }
-    write(out, "at.csv", pos.as_bytes())?;
+    write(out, LINEAR_AT_FILE, pos.as_bytes())?;
     let entry = |p: &ForcePort, sym: &str, unit: &'static str| PortEntry {
         name: format!("{sym}[{}].{}", p.node, AXES[p.component]),
         node: p.node,
@@ -298,13 +299,13 @@ fn linearize_dim<const D: usize>(
         time,
         static_residual,
         stable,
-        positions: "at.csv",
+        positions: LINEAR_AT_FILE,
         requested_modes: modal,
         warnings,
         forms,
     };
     let json = serde_json::to_string_pretty(&manifest).expect("plain data serializes");
-    write(out, "manifest.json", json.as_bytes())?;
+    write(out, MANIFEST_FILE, json.as_bytes())?;
     Ok(manifest)
 }
 

@@ -19,7 +19,8 @@ use phstring::modes::{self, ModesError};
 use phstring::statics::StaticsError;
 use serde::Serialize;
 
-use crate::output::{OutputError, atomic_write, num};
+use crate::files::{MODES_FILE, MODES_PVD_FILE, SUMMARY_FILE, atomic_write, mode_frame_name, num};
+use crate::output::OutputError;
 use crate::plot::network_plot;
 use crate::scenario::{ScenarioError, ScenarioFile};
 use crate::vtk::{FrameData, PvdWriter, write_vtp_frame};
@@ -125,7 +126,7 @@ fn modes_dim<const D: usize>(
     stop: Option<&AtomicBool>,
 ) -> Result<ModesInfo, ModesRunError> {
     let v = file.validate::<D>()?;
-    let (sys, eq) = crate::statics_run::solve_validated(&v, true, stop)?;
+    let (sys, eq) = crate::scenario::start::solve_validated(&v, true, stop)?;
     let r = &eq.state.r;
     let found = modes::modes(&sys, r, count, v.settings.step.solver, stop)?;
     let (_, free) = phstring::linear::free_dofs(&sys);
@@ -176,15 +177,15 @@ fn modes_dim<const D: usize>(
         }
     };
     // The table first: on a full disk the frequencies are kept even when the frames fail.
-    write(out, "modes.csv", csv.as_bytes())?;
-    let mut pvd = PvdWriter::new(&out.join("modes.pvd"));
+    write(out, MODES_FILE, csv.as_bytes())?;
+    let mut pvd = PvdWriter::new(&out.join(MODES_PVD_FILE));
     let zero = vec![[0.0; 3]; r.len()];
     let names = ["shape_x", "shape_y", "shape_z"];
     let mut snapshots = vec![(0.0, r.iter().map(plane).collect::<Vec<_>>())];
     for (i, m) in found.modes.iter().enumerate() {
         if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
             // An interrupted run leaves no table that looks complete.
-            let _ = std::fs::remove_file(out.join("modes.csv"));
+            let _ = std::fs::remove_file(out.join(MODES_FILE));
             return Err(ModesError::Interrupted.into());
         }
         let s = scale_of(m);
@@ -201,7 +202,7 @@ fn modes_dim<const D: usize>(
             .enumerate()
             .map(|(k, c)| (names[k], c.as_slice()))
             .collect();
-        let name = format!("mode_{:03}.vtp", i + 1);
+        let name = mode_frame_name(i + 1);
         write_vtp_frame(
             &out.join(&name),
             &FrameData {
@@ -247,7 +248,7 @@ fn modes_dim<const D: usize>(
         modes: infos,
     };
     let json = serde_json::to_string_pretty(&info).expect("plain data serializes");
-    write(out, "summary.json", json.as_bytes())?;
+    write(out, SUMMARY_FILE, json.as_bytes())?;
     Ok(info)
 }
 

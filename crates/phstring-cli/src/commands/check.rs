@@ -1,0 +1,192 @@
+//! `phstring check`: validates a scenario file and prints what would run.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use phstring_io::scenario::ScenarioFile;
+use phstring_io::text::{clip, num, nums, printable};
+
+use crate::budget::{self, budget};
+
+// The arguments of `phstring check`; their help text is the doc comment of the
+// command's variant in `Command`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Override a scenario key by its dotted path.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+}
+
+/// `phstring check`: validates the scenario at `path` with the `--set` overrides `sets` and
+/// prints what would run, with the estimate of what it takes and the warnings.
+pub fn check(path: &Path, sets: &[String]) -> Result<()> {
+    let file = budget::load(path, sets)?;
+    // The system the scenario sets up must be valid too (finite initial energies and
+    // forces); set it up only where it fits in memory (otherwise the warning below says so).
+    let warnings = if budget(&file)?.memory_error(1).is_none() {
+        file.check_with_warnings()?
+    } else {
+        Vec::new()
+    };
+    let d = file.dimension()?;
+    let text = match d {
+        1 => describe::<1>(&file)?,
+        2 => describe::<2>(&file)?,
+        _ => describe::<3>(&file)?,
+    };
+    say!("{} is valid:\n{text}", path.display());
+    let b = budget(&file)?;
+    say!("  estimate:  {}", b.describe());
+    for w in warnings.iter().chain(&b.warnings(1)) {
+        tell!("warning: {w}");
+    }
+    Ok(())
+}
+
+/// Most entries of one kind (strings, springs, fixed nodes, …) that `check` lists.
+const LISTED: usize = 20;
+
+/// Lists `items` with `line`, at most [`LISTED`], then how many more there are.
+fn list<T>(out: &mut String, items: &[T], what: &str, line: impl Fn(&T) -> String) {
+    use std::fmt::Write;
+    for item in items.iter().take(LISTED) {
+        let _ = writeln!(out, "{}", line(item));
+    }
+    if items.len() > LISTED {
+        let _ = writeln!(out, "  …          and {} more {what}", items.len() - LISTED);
+    }
+}
+
+fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
+    let v = file.validate::<D>()?;
+    let p = &v.problem;
+    let c = &v.components;
+    let s = &v.settings;
+    let mut out = String::new();
+    use std::fmt::Write;
+    let _ = writeln!(
+        out,
+        "  title:     {}",
+        printable(
+            &clip(file.scenario.title.as_deref().unwrap_or("(none)")),
+            false
+        )
+    );
+    let _ = writeln!(out, "  dimension: {D}");
+    let node = |i: usize| c.node_label(i);
+    if v.network {
+        let _ = writeln!(
+            out,
+            "  mesh:      {} elements, {} nodes: {} strings, {} springs, {} named nodes",
+            p.mesh.n_elements(),
+            p.mesh.n_nodes(),
+            c.strings.len(),
+            c.springs.len(),
+            c.nodes.len()
+        );
+        list(&mut out, &c.nodes, "named nodes", |n| {
+            format!("  node:      {} at {} m", node(n.node), nums(&n.position))
+        });
+        list(&mut out, &c.strings, "strings", |st| {
+            let spans = st.path_nodes.len() - 1;
+            format!(
+                "  string:    {}: {} elements ({spans} span{} of {}), {} to {}, {} ({}), EA = {} N, rhoA = {} kg/m, {} mass, reference length {} m, body force {} N/m",
+                st.name,
+                st.elements[1] - st.elements[0],
+                if spans == 1 { "" } else { "s" },
+                st.elements_per_span,
+                node(st.path_nodes[0]),
+                node(st.path_nodes[spans]),
+                st.law,
+                st.material,
+                num(st.ea),
+                num(st.rho_a),
+                st.mass,
+                num(st.reference_length),
+                nums(&st.body_force)
+            )
+        });
+        list(&mut out, &c.springs, "springs", |sp| {
+            let to = match &sp.to_point {
+                Some(pt) => format!("the fixed point {} m", nums(pt)),
+                None => node(sp.nodes[1]),
+            };
+            format!(
+                "  spring:    {}: {} to {to}, k = {} N/m, rest length {} m",
+                sp.name,
+                node(sp.nodes[0]),
+                num(sp.k),
+                num(sp.rest)
+            )
+        });
+    } else {
+        // One string: its group carries the material.
+        let st = &c.strings[0];
+        let _ = writeln!(
+            out,
+            "  mesh:      {} elements, {} nodes, reference length {} m",
+            p.mesh.n_elements(),
+            p.mesh.n_nodes(),
+            num(p.mesh.total_length())
+        );
+        let _ = writeln!(
+            out,
+            "  material:  {}, EA = {} N, rhoA = {} kg/m, {} mass",
+            st.law,
+            num(st.ea),
+            num(st.rho_a),
+            st.mass
+        );
+        let _ = writeln!(out, "  body force: {} N/m", nums(&st.body_force));
+    }
+    list(&mut out, &c.supports, "fixed nodes", |f| {
+        format!("  fixed:     {} ({})", node(f.node), f.fixed.join(", "))
+    });
+    list(&mut out, &c.loads, "loads", |l| {
+        let exprs: Vec<String> = l.force.iter().map(|e| clip(e).into_owned()).collect();
+        format!("  force:     {}: [{}] N", node(l.node), exprs.join(", "))
+    });
+    list(&mut out, &c.motions, "motions", |m| {
+        format!(
+            "  motion:    {} {} = {} m (velocity in, reaction out)",
+            node(m.node),
+            m.component,
+            clip(&m.position)
+        )
+    });
+    list(&mut out, &c.point_masses, "point masses", |pm| {
+        format!(
+            "  mass:      {}: {} kg, weight {} N",
+            node(pm.node),
+            num(pm.kg),
+            nums(&pm.weight)
+        )
+    });
+    let steps = (s.t_end / s.step.h).round() as usize;
+    let _ = writeln!(
+        out,
+        "  time:      {} scheme, h = {} s, T = {} s, {steps} steps",
+        s.step.scheme.name(),
+        num(s.step.h),
+        num(s.t_end)
+    );
+    let _ = write!(
+        out,
+        "  newton:    {}, max {} iterations, solver {}",
+        newton_test(&s.step.newton),
+        s.step.newton.max_iter,
+        s.step.solver.name()
+    );
+    Ok(out)
+}
+
+/// The Newton convergence test in words: `‖R‖ ≤ max(tol, rtol·F)` or `‖R‖ ≤ tol`.
+fn newton_test(n: &phstring::NewtonParams) -> String {
+    if n.rtol > 0.0 {
+        format!("‖R‖ ≤ max({} N, {} × force scale)", num(n.tol), num(n.rtol))
+    } else {
+        format!("‖R‖ ≤ {} N (absolute)", num(n.tol))
+    }
+}

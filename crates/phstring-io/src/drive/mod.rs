@@ -1,0 +1,16 @@
+//! The command drivers, the top floor of the crate: each runs one `phstring` command from a
+//! scenario to the files of its output folder. Nothing else in the crate imports them.
+//!
+//! * [`run`]: a simulation (`phstring run`), with checkpoints and resume;
+//! * [`statics`]: the equilibrium (`phstring statics`);
+//! * [`modes`]: the natural modes about it (`phstring modes`);
+//! * [`linearize`]: the linear model (`phstring linearize`);
+//! * [`sweep`]: many runs over varied parameters (`phstring sweep`);
+//! * [`outdir`]: preparing and locking an output folder.
+
+pub mod linearize;
+pub mod modes;
+pub mod outdir;
+pub mod run;
+pub mod statics;
+pub mod sweep;

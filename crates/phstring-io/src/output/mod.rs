@@ -1,0 +1,869 @@
+//! Output writers of a run: `energy.csv`, `positions.csv`, `ports.csv`, ParaView frames,
+//! plots and `summary.json`, and once at the start the network's layout, `elements.csv`
+//! (and `point_masses.csv` if it has point masses), from which `positions.csv` can be drawn.
+//! Rows are written as the run goes, so everything up to the last good step is on disk when
+//! a run fails: the `t = 0` rows are flushed at once, and the files at least every
+//! [`FLUSH_EVERY`] of wall time.
+//!
+//! No NaN or infinity is ever written: a row with a non-finite value is refused with
+//! [`OutputError::NonFinite`]. Memory does not grow with the number of steps: the plots
+//! read what they need back from `energy.csv` (the `history` module, a floor above), decimated to at most
+//! [`PLOT_POINTS`] points per curve.
+
+mod csv;
+
+use std::hash::Hasher;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use phstring::{Law, Material, PortKind, Simulation, StepReport};
+
+use self::csv::{Csv, PendingCsv};
+use crate::checkpoint::OutputState;
+use crate::files::{
+    ELEMENTS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE,
+    PVD_FILE, elements_header, frame_name, headers, num, remove_stale_temp_files,
+};
+use crate::plot::{GroupDrawing, PlotError, Topology};
+use crate::text::sanitize_text;
+use crate::vtk::{self, FrameData, PvdWriter, VtkError};
+
+/// Longest wall time between two flushes of the output files during a run.
+pub const FLUSH_EVERY: Duration = Duration::from_millis(500);
+
+/// Most points per curve in the plots of a run: longer series are decimated keeping, per
+/// bucket of consecutive rows, the rows with the smallest and largest value of each curve
+/// (so that spikes survive).
+pub const PLOT_POINTS: usize = 20_000;
+
+/// The drawing of the network of `sim`: its elements, groups and point masses.
+pub fn topology<const D: usize>(sim: &Simulation<D, Material>) -> Topology {
+    system_topology(sim.system())
+}
+
+/// The drawing of the network of `sys`: its elements, groups and point masses.
+pub fn system_topology<const D: usize>(sys: &phstring::PhSystem<D, Material>) -> Topology {
+    Topology {
+        elements: sys.mesh().elements().to_vec(),
+        groups: sys
+            .groups()
+            .iter()
+            .map(|g| GroupDrawing {
+                name: g.name.clone(),
+                elements: g.elements.clone(),
+                spring: matches!(g.law, Law::Spring(_)),
+            })
+            .collect(),
+        masses: sys.point_masses().to_vec(),
+    }
+}
+
+/// A text field for a CSV row: control characters dropped, quoted (`"` doubled) if it holds
+/// a comma or a quote or starts or ends with a space.
+fn csv_text(text: &str) -> String {
+    let t = sanitize_text(text, usize::MAX);
+    if t.contains([',', '"']) || t.starts_with(' ') || t.ends_with(' ') {
+        format!("\"{}\"", t.replace('"', "\"\""))
+    } else {
+        t
+    }
+}
+
+/// Writes [`ELEMENTS_FILE`] and, if the network has point masses, [`POINT_MASSES_FILE`] into
+/// `dir` (replacing earlier ones; a run without point masses removes a stale
+/// [`POINT_MASSES_FILE`]).
+fn write_topology<const D: usize>(
+    dir: &Path,
+    sim: &Simulation<D, Material>,
+) -> Result<(), OutputError> {
+    let sys = sim.system();
+    let mut csv = Csv::create(dir.join(ELEMENTS_FILE), elements_header())?;
+    check_finite(&csv.path, "reference length", 0.0, sys.mesh().lengths())?;
+    for (g, group) in sys.groups().iter().enumerate() {
+        let kind = match group.law {
+            Law::Spring(_) => "spring",
+            Law::String(_) => "string",
+        };
+        let name = csv_text(&group.name);
+        for e in group.elements.clone() {
+            let [a, b] = sys.mesh().elements()[e];
+            let l = sys.mesh().lengths()[e];
+            csv.row(&format!("{e},{a},{b},{g},{kind},{},{name}", num(l)))?;
+        }
+    }
+    csv.flush()?;
+    let path = dir.join(POINT_MASSES_FILE);
+    if sys.point_masses().is_empty() {
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(&path);
+        }
+        return Ok(());
+    }
+    let mut csv = Csv::create(path, "node,mass")?;
+    for &(node, m) in sys.point_masses() {
+        check_finite(&csv.path, "point mass", 0.0, &[m])?;
+        csv.row(&format!("{node},{}", num(m)))?;
+    }
+    csv.flush()
+}
+
+/// FNV-1a hash of a list of ParaView frames, extended by one frame `(t, name)`; start from
+/// [`frames_hash_start`].
+pub fn frames_hash_add(hash: u64, t: f64, name: &str) -> u64 {
+    let mut h = fnv::FnvHasher::with_key(hash);
+    h.write(&t.to_bits().to_le_bytes());
+    h.write(name.as_bytes());
+    h.finish()
+}
+
+/// FNV-1a hash of an empty list of frames.
+pub fn frames_hash_start() -> u64 {
+    fnv::FnvHasher::default().finish()
+}
+
+/// Errors while writing outputs.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// A file could not be written.
+    #[error("cannot write {}: {cause}", path.display())]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// The cause, part of the message (not a chained source, so that it is printed once).
+        cause: std::io::Error,
+    },
+    /// A plot failed.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// A ParaView file failed.
+    #[error(transparent)]
+    Vtk(#[from] VtkError),
+    /// A value to be written is NaN or infinite: the row is refused (nothing of it written).
+    #[error("refusing to write a non-finite {what} ({value}) at t = {} s to {}: the simulation produced NaN or infinity", phstring::Num(*t), path.display())]
+    NonFinite {
+        /// File.
+        path: PathBuf,
+        /// The quantity.
+        what: String,
+        /// Time of the row [s].
+        t: f64,
+        /// The value.
+        value: f64,
+    },
+    /// An output file does not match the checkpoint a run resumes from.
+    #[error("cannot resume into {}: {reason}", path.display())]
+    Mismatch {
+        /// File.
+        path: PathBuf,
+        /// What does not match.
+        reason: String,
+    },
+    /// An output file could not be read back (for the plots).
+    #[error("cannot read {} line {line}: {message}", path.display())]
+    Read {
+        /// File.
+        path: PathBuf,
+        /// Line number (1-based).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Refuses non-finite `values` (named `what`, for the row at time `t`) before they reach
+/// `path`.
+fn check_finite(path: &Path, what: &str, t: f64, values: &[f64]) -> Result<(), OutputError> {
+    match values.iter().find(|x| !x.is_finite()) {
+        Some(&value) => Err(OutputError::NonFinite {
+            path: path.to_path_buf(),
+            what: what.to_string(),
+            t,
+            value,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// `path` relative to `dir` (for reports), or as it is if it is not in `dir`.
+fn relative(dir: &Path, path: &Path) -> String {
+    path.strip_prefix(dir).unwrap_or(path).display().to_string()
+}
+
+/// What a run will write, for [`estimated_output`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputPlan {
+    /// Spatial dimension (1, 2 or 3).
+    pub dimension: usize,
+    /// Mesh nodes.
+    pub nodes: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Ports (rows of `ports.csv` per step).
+    pub ports: usize,
+    /// Steps.
+    pub steps: f64,
+    /// `output.stride`.
+    pub stride: usize,
+    /// `output.positions`.
+    pub positions: bool,
+    /// `output.vtk`.
+    pub vtk: bool,
+}
+
+/// The size of a run's outputs, estimated before it runs ([`estimated_output`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputEstimate {
+    /// All files [bytes].
+    pub bytes: f64,
+    /// Number of files.
+    pub files: f64,
+    /// `energy.csv` and `ports.csv` [bytes].
+    pub rows: f64,
+    /// `positions.csv` [bytes].
+    pub positions: f64,
+    /// ParaView frames written.
+    pub frames: f64,
+    /// `paraview/` [bytes].
+    pub paraview: f64,
+}
+
+/// Bytes of one number as [`num`] writes it, with its comma (`-3.4565972519949129e0,`).
+const NUM_BYTES: f64 = 22.0;
+/// Bytes of a row of `energy.csv`: 8 numbers, the iteration count and the dissipated
+/// energy (`0` without damping): 182 in the paper's pendulum, 201 at most.
+const ENERGY_ROW_BYTES: f64 = 190.0;
+/// Bytes of a port value in `ports.csv` on average: a number, or `0` for the velocity and
+/// power of a fixed support (a force port's row has 142 bytes in 2D, a fixed support's 85).
+const PORT_VALUE_BYTES: f64 = 16.0;
+/// Bytes of a ParaView frame besides its arrays (XML header, array tags, the base64
+/// headers).
+const FRAME_BYTES: f64 = 1500.0;
+/// Bytes of a ParaView frame per node: points and velocity (2 × 3 Float64), base64.
+const FRAME_BYTES_PER_NODE: f64 = 48.0 * 4.0 / 3.0;
+/// Bytes of a ParaView frame per element: connectivity and offsets (3 UInt64), `C`, `S`,
+/// `tension` (3 Float64) and `string` (Int32), base64.
+const FRAME_BYTES_PER_ELEMENT: f64 = 52.0 * 4.0 / 3.0;
+/// Files of a run besides `positions.csv` and the frames: `energy.csv`, `ports.csv`,
+/// `elements.csv`, `summary.json`, the run id, `string.pvd`, six plots, `animation.gif`
+/// (not the lock file).
+const FIXED_FILES: f64 = 13.0;
+
+/// The size and number of files a run writes, from the layout of the writers: a row of
+/// `energy.csv` per step ([`ENERGY_ROW_BYTES`]), a row per port and step in `ports.csv`
+/// (`t`, `2d` port values, the power, index, node and kind), a row per node
+/// and frame in `positions.csv` (`t`, the node, `d` coordinates), a ParaView frame per
+/// frame ([`FRAME_BYTES`] plus the base64 arrays) and its line in `string.pvd`, at steps
+/// 0, stride, 2·stride, … and the last; plots, `animation.gif`, `elements.csv` and
+/// `summary.json` are bounded and not counted in the bytes. Within 10 % of what the examples
+/// write (see the test below).
+pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
+    let d = p.dimension as f64;
+    let steps = p.steps.max(0.0);
+    let stride = p.stride.max(1) as f64;
+    let on_stride = (steps / stride).floor();
+    // Step 0, every stride-th step, and the last if it is not on the stride.
+    let frames = on_stride + 1.0 + if on_stride * stride < steps { 1.0 } else { 0.0 };
+    let digits = |n: f64| n.max(1.0).log10().floor() + 2.0;
+    let nodes = p.nodes as f64;
+    let rows = (steps + 1.0) * ENERGY_ROW_BYTES
+        + steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0);
+    let positions = if p.positions {
+        // The first frame's time is written `0`.
+        nodes * (frames * ((1.0 + d) * NUM_BYTES + digits(nodes)) - (NUM_BYTES - 2.0))
+    } else {
+        0.0
+    };
+    let paraview = if p.vtk {
+        frames
+            * (FRAME_BYTES
+                + 70.0
+                + FRAME_BYTES_PER_NODE * nodes
+                + FRAME_BYTES_PER_ELEMENT * p.elements as f64)
+    } else {
+        0.0
+    };
+    OutputEstimate {
+        bytes: rows + positions + paraview,
+        files: FIXED_FILES + if p.positions { 1.0 } else { 0.0 } + if p.vtk { frames } else { 0.0 },
+        rows,
+        positions,
+        frames: if p.vtk { frames } else { 0.0 },
+        paraview,
+    }
+}
+
+/// Writes the standard outputs of one run into a folder. Memory does not grow with the
+/// number of steps (the configuration snapshots are bounded; the ParaView collection lists
+/// one entry per frame file written).
+pub struct Writers {
+    dir: PathBuf,
+    energy: Csv,
+    positions: Option<Csv>,
+    ports: Csv,
+    pvd: Option<PvdWriter>,
+    /// The collection file must be written again before it is whole (a resume continues
+    /// it after the checkpoint's frames); frames are listed as they are written.
+    pvd_dirty: bool,
+    stride: usize,
+    snapshot_times: Vec<f64>,
+    snapshots: Vec<(f64, Vec<[f64; 2]>)>,
+    last_frame: Option<usize>,
+    frames: usize,
+    frames_hash: u64,
+    last_flush: Instant,
+    flush_every: Duration,
+    /// A ParaView frame or the collection could not be written (the collection lists the
+    /// frames written before).
+    paraview_failed: bool,
+}
+
+impl Writers {
+    /// Creates the folder's files and writes (and flushes) the `t = 0` rows. Stale temporary
+    /// files of an earlier, killed run are removed.
+    pub fn start<const D: usize>(
+        dir: &Path,
+        sim: &Simulation<D, Material>,
+        stride: usize,
+        positions: bool,
+        vtk_frames: bool,
+        snapshot_times: Vec<f64>,
+    ) -> Result<Self, OutputError> {
+        let io = |path: &Path| {
+            let p = path.to_path_buf();
+            move |source| OutputError::Io {
+                path: p,
+                cause: source,
+            }
+        };
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        remove_stale_temp_files(dir);
+        let (energy_header, positions_header, ports_header) = headers(D);
+        let energy = Csv::create(dir.join(ENERGY_FILE), &energy_header)?;
+        let positions = if positions {
+            Some(Csv::create(dir.join(POSITIONS_FILE), &positions_header)?)
+        } else {
+            None
+        };
+        let ports = Csv::create(dir.join(PORTS_FILE), &ports_header)?;
+        write_topology(dir, sim)?;
+        let pvd = if vtk_frames {
+            let pdir = dir.join(PARAVIEW_DIR);
+            std::fs::create_dir_all(&pdir).map_err(io(&pdir))?;
+            Some(PvdWriter::new(&pdir.join(PVD_FILE)))
+        } else {
+            None
+        };
+        let mut w = Self {
+            dir: dir.to_path_buf(),
+            energy,
+            positions,
+            ports,
+            pvd,
+            pvd_dirty: false,
+            stride,
+            snapshot_times,
+            snapshots: Vec::new(),
+            last_frame: None,
+            frames: 0,
+            frames_hash: frames_hash_start(),
+            last_flush: Instant::now(),
+            flush_every: FLUSH_EVERY,
+            paraview_failed: false,
+        };
+        let e = sim.energies();
+        let values = [e.kinetic, e.potential(), e.hamiltonian()];
+        check_finite(&w.energy.path, "initial energy", 0.0, &values)?;
+        w.energy.row(&format!(
+            "{},{},{},{},0,0,0,0,0,0",
+            num(0.0),
+            num(values[0]),
+            num(values[1]),
+            num(values[2])
+        ))?;
+        w.record(sim);
+        w.frame(sim)?;
+        // The t = 0 rows are on disk at once, whatever happens next.
+        w.flush()?;
+        Ok(w)
+    }
+
+    /// Flushes at most every `every` of wall time during a run (default [`FLUSH_EVERY`];
+    /// `Duration::ZERO` flushes after every step).
+    pub fn set_flush_interval(&mut self, every: Duration) {
+        self.flush_every = every;
+    }
+
+    fn record<const D: usize>(&mut self, sim: &Simulation<D, Material>) {
+        let t = sim.time();
+        // Each snapshot time once, at the first step that reaches it.
+        let next = self.snapshots.len();
+        if D >= 2
+            && self
+                .snapshot_times
+                .get(next)
+                .is_some_and(|&s| t >= s - 1e-9 * sim.params().h)
+        {
+            let pts = sim.state().r.iter().map(|r| [r[0], r[1]]).collect();
+            self.snapshots.push((t, pts));
+        }
+    }
+
+    /// Writes positions and a ParaView frame every `stride` steps.
+    fn frame<const D: usize>(&mut self, sim: &Simulation<D, Material>) -> Result<(), OutputError> {
+        self.frame_if(sim, false)
+    }
+
+    /// Writes positions and a ParaView frame on the stride, or for the last step (`last`),
+    /// once per step.
+    fn frame_if<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        last: bool,
+    ) -> Result<(), OutputError> {
+        let wanted = last || sim.steps().is_multiple_of(self.stride);
+        if !wanted || self.last_frame == Some(sim.steps()) {
+            return Ok(());
+        }
+        let t = sim.time();
+        let st = sim.state();
+        if let Some(p) = &self.positions {
+            for r in &st.r {
+                check_finite(&p.path, "position", t, r.as_slice())?;
+            }
+        }
+        self.last_frame = Some(sim.steps());
+        if let Some(p) = &mut self.positions {
+            for (i, r) in st.r.iter().enumerate() {
+                let comps: Vec<String> = r.iter().map(|x| num(*x)).collect();
+                p.line(&format!("{},{i},{}", num(t), comps.join(",")))?;
+            }
+            p.end_record()?;
+        }
+        if let Some(pvd) = &mut self.pvd {
+            let pad = |v: &phstring::Vector<D>| {
+                let mut a = [0.0; 3];
+                a[..D].copy_from_slice(v.as_slice());
+                a
+            };
+            let sys = sim.system();
+            let points: Vec<[f64; 3]> = st.r.iter().map(pad).collect();
+            let vel: Vec<[f64; 3]> = st.v.iter().map(pad).collect();
+            let mut s = vec![0.0; st.c.len()];
+            sys.stresses(&st.c, &mut s);
+            // Axial force S √C [N]: strings and springs alike (C ≥ 0 up to round-off).
+            let tension: Vec<f64> = s
+                .iter()
+                .zip(&st.c)
+                .map(|(s, c)| s * c.max(0.0).sqrt())
+                .collect();
+            let mut group = vec![0i32; st.c.len()];
+            for (g, grp) in sys.groups().iter().enumerate() {
+                let g = i32::try_from(g).unwrap_or(i32::MAX);
+                group[grp.elements.clone()].fill(g);
+            }
+            let mass = (!sys.point_masses().is_empty()).then(|| {
+                let mut m = vec![0.0; points.len()];
+                for &(node, kg) in sys.point_masses() {
+                    m[node] += kg;
+                }
+                m
+            });
+            let point_data: Vec<(&str, &[f64])> =
+                mass.iter().map(|m| ("mass", m.as_slice())).collect();
+            let name = frame_name(sim.steps());
+            let path = self.dir.join(PARAVIEW_DIR).join(&name);
+            vtk::write_vtp_frame(
+                &path,
+                &FrameData {
+                    points: &points,
+                    segments: sys.mesh().elements(),
+                    velocity: &vel,
+                    cell_data: &[("C", &st.c), ("S", &s), ("tension", &tension)],
+                    cell_ints: &[("string", &group)],
+                    point_data: &point_data,
+                },
+            )
+            .inspect_err(|_| self.paraview_failed = true)?;
+            pvd.add(t, &name);
+            // The collection lists the frame at once. A frame it cannot list (a full disk)
+            // is removed: the collection always lists exactly the frames on disk.
+            if let Err(e) = pvd.write() {
+                pvd.discard_pending();
+                self.paraview_failed = true;
+                let _ = std::fs::remove_file(&path);
+                return Err(e.into());
+            }
+            self.pvd_dirty = false;
+            self.frames += 1;
+            self.frames_hash = frames_hash_add(self.frames_hash, t, &name);
+        }
+        Ok(())
+    }
+
+    /// Records one step: energy row, port rows, and (every `stride` steps) positions and a
+    /// ParaView frame. Refuses ([`OutputError::NonFinite`]) a row with NaN or infinity.
+    pub fn step<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        r: &StepReport,
+    ) -> Result<(), OutputError> {
+        let values = [
+            r.t,
+            r.after.kinetic,
+            r.after.potential(),
+            r.after.hamiltonian(),
+            sim.supplied_energy(),
+            r.balance_error,
+            r.residual,
+            r.h,
+            sim.dissipated_energy(),
+        ];
+        check_finite(&self.energy.path, "energy row value", r.t, &values)?;
+        let t_mid = r.t - 0.5 * r.h;
+        for p in sim.ports() {
+            check_finite(&self.ports.path, "port input", t_mid, p.input.as_slice())?;
+            check_finite(&self.ports.path, "port output", t_mid, p.output.as_slice())?;
+            check_finite(&self.ports.path, "port power", t_mid, &[p.power()])?;
+        }
+        self.energy.row(&format!(
+            "{},{},{},{},{},{},{},{},{},{}",
+            num(values[0]),
+            num(values[1]),
+            num(values[2]),
+            num(values[3]),
+            num(values[4]),
+            num(values[5]),
+            r.newton_iterations,
+            num(values[6]),
+            num(values[7]),
+            num(values[8])
+        ))?;
+        for (k, p) in sim.ports().iter().enumerate() {
+            let kind = match p.kind {
+                PortKind::Force => "force",
+                PortKind::Velocity => "velocity",
+            };
+            let u: Vec<String> = p.input.iter().map(|x| num(*x)).collect();
+            let y: Vec<String> = p.output.iter().map(|x| num(*x)).collect();
+            self.ports.line(&format!(
+                "{},{k},{},{kind},{},{},{}",
+                num(t_mid),
+                p.node,
+                u.join(","),
+                y.join(","),
+                num(p.power())
+            ))?;
+        }
+        self.ports.end_record()?;
+        self.record(sim);
+        self.frame(sim)?;
+        if self.last_flush.elapsed() >= self.flush_every {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Reopens the outputs of an interrupted run in `dir` at the state a checkpoint recorded
+    /// (files longer than recorded are cut back), to continue appending. The ParaView
+    /// collection is read back from `paraview/string.pvd` and must list the checkpoint's
+    /// frames.
+    pub fn resume(
+        dir: &Path,
+        stride: usize,
+        vtk_frames: bool,
+        snapshot_times: Vec<f64>,
+        state: OutputState,
+    ) -> Result<Self, OutputError> {
+        remove_stale_temp_files(dir);
+        let pvd = if vtk_frames {
+            let path = dir.join(PARAVIEW_DIR).join(PVD_FILE);
+            let mut hash = frames_hash_start();
+            let p = PvdWriter::resume(&path, state.frames, |t, name| {
+                hash = frames_hash_add(hash, t, name);
+            })
+            .map_err(|e| OutputError::Mismatch {
+                path: path.clone(),
+                reason: format!(
+                    "it does not list the checkpoint's {} frames ({e})",
+                    state.frames
+                ),
+            })?;
+            if hash != state.frames_hash {
+                return Err(OutputError::Mismatch {
+                    path,
+                    reason: "its frames differ from those the checkpoint recorded".into(),
+                });
+            }
+            Some(p)
+        } else {
+            None
+        };
+        // Check every file before any is cut back.
+        let energy = PendingCsv::open(dir.join(ENERGY_FILE), state.energy_bytes)?;
+        let ports = PendingCsv::open(dir.join(PORTS_FILE), state.ports_bytes)?;
+        let positions = match state.positions_bytes {
+            Some(n) => Some(PendingCsv::open(dir.join(POSITIONS_FILE), n)?),
+            None => None,
+        };
+        let positions = positions.map(PendingCsv::commit).transpose()?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            energy: energy.commit()?,
+            positions,
+            ports: ports.commit()?,
+            pvd,
+            pvd_dirty: true,
+            stride,
+            snapshot_times,
+            snapshots: state.snapshots,
+            last_frame: state.last_frame,
+            frames: state.frames,
+            frames_hash: state.frames_hash,
+            last_flush: Instant::now(),
+            flush_every: FLUSH_EVERY,
+            paraview_failed: false,
+        })
+    }
+
+    /// The output state for a checkpoint (flushes all files).
+    pub fn state(&mut self) -> Result<OutputState, OutputError> {
+        self.flush()?;
+        Ok(OutputState {
+            energy_bytes: self.energy.len()?,
+            positions_bytes: match &mut self.positions {
+                Some(p) => Some(p.len()?),
+                None => None,
+            },
+            ports_bytes: self.ports.len()?,
+            frames: self.frames,
+            frames_hash: self.frames_hash,
+            last_frame: self.last_frame,
+            snapshots: self.snapshots.clone(),
+        })
+    }
+
+    /// The configuration snapshots taken so far.
+    pub fn snapshots(&self) -> &[(f64, Vec<[f64; 2]>)] {
+        &self.snapshots
+    }
+
+    /// Path of `energy.csv`.
+    pub fn energy_path(&self) -> &Path {
+        &self.energy.path
+    }
+
+    /// Writes the final state (positions and ParaView frame) if the last step was not on
+    /// the output stride, then flushes all files.
+    pub fn finish<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+    ) -> Result<(), OutputError> {
+        self.frame_if(sim, true)?;
+        self.flush()
+    }
+
+    /// Flushes all CSV files and writes the ParaView collection if a resume left it to be
+    /// written.
+    pub fn flush(&mut self) -> Result<(), OutputError> {
+        self.energy.flush()?;
+        self.ports.flush()?;
+        if let Some(p) = &mut self.positions {
+            p.flush()?;
+        }
+        if let Some(pvd) = &mut self.pvd
+            && self.pvd_dirty
+        {
+            pvd.write().inspect_err(|_| self.paraview_failed = true)?;
+            self.pvd_dirty = false;
+        }
+        self.last_flush = Instant::now();
+        Ok(())
+    }
+
+    /// The outputs (relative to the run folder) that a failed write left short of the steps
+    /// the run took: CSV files cut back to their last whole record, and
+    /// `paraview/string.pvd` if a frame or the collection could not be written (it lists the
+    /// frames written before; a frame that failed is removed).
+    pub fn incomplete_files(&self) -> Vec<String> {
+        let mut files: Vec<String> = [
+            Some(&self.energy),
+            self.positions.as_ref(),
+            Some(&self.ports),
+        ]
+        .into_iter()
+        .flatten()
+        .filter(|c| c.is_incomplete())
+        .map(|c| relative(&self.dir, &c.path))
+        .collect();
+        if self.paraview_failed {
+            files.push(format!("{PARAVIEW_DIR}/{PVD_FILE}"));
+        }
+        files
+    }
+
+    /// After a failed write: writes out what every file still holds, so that all rows
+    /// written before the failure reach the disk (a file whose write fails too is cut back
+    /// to its last whole record), and returns [`Self::incomplete_files`].
+    pub fn salvage(&mut self) -> Vec<String> {
+        let _ = self.energy.flush();
+        let _ = self.ports.flush();
+        if let Some(p) = &mut self.positions {
+            let _ = p.flush();
+        }
+        if let Some(pvd) = &mut self.pvd
+            && self.pvd_dirty
+            && pvd.write().is_err()
+        {
+            self.paraview_failed = true;
+        }
+        self.incomplete_files()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::files::atomic_write;
+    use crate::test_util::sim;
+
+    fn lines(p: &Path) -> usize {
+        std::fs::read_to_string(p).unwrap().lines().count()
+    }
+
+    #[test]
+    fn t0_rows_are_flushed_at_start() {
+        let dir = crate::test_util::temp_dir("output", "t0");
+        let s = sim();
+        let _w = Writers::start(&dir, &s, 1, true, true, vec![0.0]).unwrap();
+        // The writers are alive (nothing dropped or flushed by the caller): the header and
+        // the t = 0 row are already on disk.
+        assert_eq!(lines(&dir.join(ENERGY_FILE)), 2);
+        assert_eq!(lines(&dir.join(POSITIONS_FILE)), 1 + 11);
+        assert!(
+            std::fs::read_to_string(dir.join("paraview/string.pvd"))
+                .unwrap()
+                .contains("frame_000000.vtp")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn flush_interval_bounds_what_a_kill_loses() {
+        let dir = crate::test_util::temp_dir("output", "flush");
+        let mut s = sim();
+        let mut w = Writers::start(&dir, &s, 1, false, false, vec![]).unwrap();
+        // A huge interval: rows stay buffered (a few hundred bytes, below the buffer size).
+        w.set_flush_interval(Duration::from_secs(3600));
+        let r = s.step().unwrap();
+        w.step(&s, &r).unwrap();
+        assert_eq!(lines(&dir.join(ENERGY_FILE)), 2);
+        // Interval zero: every step is on disk when `step` returns.
+        w.set_flush_interval(Duration::ZERO);
+        for k in 0..3 {
+            let r = s.step().unwrap();
+            w.step(&s, &r).unwrap();
+            assert_eq!(lines(&dir.join(ENERGY_FILE)), 4 + k);
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn non_finite_values_are_refused_not_written() {
+        let dir = crate::test_util::temp_dir("output", "nonfinite");
+        let mut s = sim();
+        let mut w = Writers::start(&dir, &s, 1, true, true, vec![]).unwrap();
+        let good = s.step().unwrap();
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut r = good;
+            r.balance_error = bad;
+            let e = w.step(&s, &r).unwrap_err();
+            assert!(matches!(e, OutputError::NonFinite { .. }), "{e}");
+            assert!(e.to_string().contains("non-finite"), "{e}");
+            let mut r = good;
+            r.after.kinetic = bad;
+            assert!(matches!(w.step(&s, &r), Err(OutputError::NonFinite { .. })));
+        }
+        w.step(&s, &good).unwrap();
+        w.flush().unwrap();
+        for f in [
+            "energy.csv",
+            "ports.csv",
+            "positions.csv",
+            "paraview/string.pvd",
+        ] {
+            let text = std::fs::read_to_string(dir.join(f)).unwrap().to_lowercase();
+            assert!(
+                !text.contains("nan") && !text.contains("inf"),
+                "{f}: {text}"
+            );
+        }
+        // One good row after the t = 0 row: the refused rows left nothing behind.
+        assert_eq!(lines(&dir.join(ENERGY_FILE)), 3);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn full_disk_is_an_error() {
+        // /dev/full accepts the open and fails every write with ENOSPC.
+        if !Path::new("/dev/full").exists() {
+            return;
+        }
+        let mut c = Csv::create(PathBuf::from("/dev/full"), "header").unwrap();
+        let e = c.flush().unwrap_err();
+        assert!(matches!(e, OutputError::Io { .. }), "{e}");
+        assert!(atomic_write(Path::new("/dev/full/x"), b"x").is_err());
+    }
+
+    /// Bytes of the files under `dir` whose names pass `keep`.
+    fn bytes_of(dir: &Path, keep: &dyn Fn(&str) -> bool) -> f64 {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .filter(|e| keep(&e.file_name().to_string_lossy()))
+            .map(|e| e.metadata().unwrap().len() as f64)
+            .sum()
+    }
+
+    #[test]
+    fn output_estimate_matches_what_the_writers_write() {
+        for (stride, steps) in [(1, 40), (7, 40), (40, 40)] {
+            let dir = crate::test_util::temp_dir("output", "estimate");
+            let mut s = sim();
+            let mut w = Writers::start(&dir, &s, stride, true, true, vec![]).unwrap();
+            for _ in 0..steps {
+                let r = s.step().unwrap();
+                w.step(&s, &r).unwrap();
+            }
+            w.finish(&s).unwrap();
+            let e = estimated_output(&OutputPlan {
+                dimension: 2,
+                nodes: 11,
+                elements: 10,
+                ports: s.ports().len(),
+                steps: steps as f64,
+                stride,
+                positions: true,
+                vtk: true,
+            });
+            let pv = dir.join(PARAVIEW_DIR);
+            let frames = std::fs::read_dir(&pv).unwrap().count() as f64 - 1.0;
+            assert_eq!(e.frames, frames, "stride {stride}");
+            let rows = bytes_of(&dir, &|n| n == "energy.csv" || n == "ports.csv");
+            let positions = bytes_of(&dir, &|n| n == "positions.csv");
+            let paraview = bytes_of(&pv, &|_| true);
+            for (what, estimate, actual) in [
+                ("rows", e.rows, rows),
+                ("positions", e.positions, positions),
+                ("paraview", e.paraview, paraview),
+            ] {
+                let ratio = estimate / actual;
+                assert!(
+                    (0.9..=1.1).contains(&ratio),
+                    "stride {stride}, {what}: estimate {estimate}, written {actual}"
+                );
+            }
+            let _ = std::fs::remove_dir_all(&dir);
+        }
+    }
+}
