@@ -161,8 +161,8 @@ pub fn paper(out: &Path, force: bool, quiet: bool) -> Result<()> {
 mod tests {
     use super::*;
 
-    /// Finding "`phstring paper` interrupted suggests a `--resume` that completes only
-    /// `dg/`": the message suggests re-running the whole benchmark instead.
+    /// An interrupted `phstring paper` does not suggest a `--resume` (which would complete
+    /// only `dg/`): the message suggests re-running the whole benchmark instead.
     #[test]
     fn paper_interrupted_suggests_rerunning_paper() {
         let e = paper_interrupted("dg", Path::new("out/p")).to_string();
