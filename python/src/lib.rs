@@ -377,7 +377,7 @@ fn run_loop<const D: usize>(
     ]) {
         c.push(v);
     }
-    let at_end = |s: &Sim<D, Material>| s.time() >= t_end - 1e-9 * s.step_size();
+    let at_end = |s: &Sim<D, Material>| s.reached(t_end);
     let mut steps = 0;
     while !at_end(s) {
         // Ctrl-C: KeyboardInterrupt after the current step.

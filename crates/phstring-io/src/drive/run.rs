@@ -739,7 +739,7 @@ fn step_loop<const D: usize>(
             w
         }
     });
-    while sim.time() < t_end - 1e-9 * sim.step_size() {
+    while !sim.reached(t_end) {
         // A stop request (the flag) is seen by the simulation itself, before and during
         // the step: `StepError::Interrupted` below.
         if opts.stop_after_steps.is_some_and(|n| sim.steps() >= n) {
