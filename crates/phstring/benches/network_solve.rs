@@ -27,17 +27,14 @@
 
 use std::time::Instant;
 
-use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
-use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par};
+use faer::sparse::linalg::lu::LuSymbolicParams;
 use nalgebra::SVector;
+use phstring::Mesh;
 use phstring::linsolve::{
     Block, BlockJacobian, BlockTridiagonal, JunctionLu, LinearSolver, NetworkSolver, SparseLu,
 };
 use phstring::testing::{CountingAllocator, allocations, grid_net};
-use phstring::{LinearSolveError, Mesh};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -73,120 +70,14 @@ fn random_jac<const D: usize>(mesh: &Mesh, rng: &mut Rng) -> BlockJacobian<D> {
 }
 
 /// Reference only: faer's *supernodal* sparse LU of the whole matrix (the crate's
-/// [`SparseLu`] lets faer choose, and faer chooses the simplicial LU for this net). Built
-/// like `SparseLu`, with the scalar pattern assembled per solve from a slot map.
-struct WholeSupernodal<const D: usize> {
-    mat: SparseColMat<usize, f64>,
-    symbolic: SymbolicLu<usize>,
-    numeric: NumericLu<usize, f64>,
-    factor_buf: MemBuffer,
-    solve_buf: MemBuffer,
-    rhs: Vec<f64>,
-    /// Slots of the diagonal blocks (`D²` per node), then of the element blocks.
-    slots: Vec<usize>,
-}
-
-impl<const D: usize> WholeSupernodal<D> {
-    fn new(mesh: &Mesh) -> Self {
-        let n = mesh.n_nodes() * D;
-        let mut blocks: Vec<[usize; 2]> = (0..mesh.n_nodes()).map(|i| [i, i]).collect();
-        for &[a, b] in mesh.elements() {
-            blocks.push([a, b]);
-            blocks.push([b, a]);
-        }
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for &[i, j] in &blocks {
-            for k in 0..D {
-                for l in 0..D {
-                    cols[j * D + l].push(i * D + k);
-                }
-            }
-        }
-        let mut col_ptr = vec![0];
-        let mut row_idx = Vec::new();
-        for c in &mut cols {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
-            col_ptr.push(row_idx.len());
-        }
-        let mut slots = Vec::with_capacity(blocks.len() * D * D);
-        for &[i, j] in &blocks {
-            for k in 0..D {
-                for l in 0..D {
-                    let (r, c) = (i * D + k, j * D + l);
-                    let (s, e) = (col_ptr[c], col_ptr[c + 1]);
-                    slots.push(s + row_idx[s..e].binary_search(&r).expect("in pattern"));
-                }
-            }
-        }
-        let nnz = row_idx.len();
-        let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let params = LuSymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        let symbolic = factorize_symbolic_lu(pattern.as_ref(), params).expect("symbolic LU");
-        let factor_buf = MemBuffer::new(
-            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        Self {
-            mat: SparseColMat::new(pattern, vec![0.0; nnz]),
-            symbolic,
-            numeric: NumericLu::new(),
-            factor_buf,
-            solve_buf,
-            rhs: vec![0.0; n],
-            slots,
-        }
-    }
-}
-
-impl<const D: usize> LinearSolver<D> for WholeSupernodal<D> {
-    fn solve(
-        &mut self,
-        jac: &BlockJacobian<D>,
-        rhs: &mut [SVector<f64, D>],
-    ) -> Result<(), LinearSolveError> {
-        let vals = self.mat.val_mut();
-        vals.fill(0.0);
-        let all = jac.diag.iter().chain(jac.off.iter().flatten());
-        for (blk, slots) in all.zip(self.slots.chunks_exact(D * D)) {
-            for k in 0..D {
-                for l in 0..D {
-                    vals[slots[k * D + l]] += blk[(k, l)];
-                }
-            }
-        }
-        for (i, x) in rhs.iter().enumerate() {
-            self.rhs[i * D..(i + 1) * D].copy_from_slice(x.as_slice());
-        }
-        let lu = self
-            .symbolic
-            .factorize_numeric_lu(
-                &mut self.numeric,
-                self.mat.as_ref(),
-                Par::Seq,
-                MemStack::new(&mut self.factor_buf),
-                Default::default(),
-            )
-            .map_err(|e| LinearSolveError::Sparse(format!("{e:?}")))?;
-        let n = self.rhs.len();
-        lu.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.solve_buf),
-        );
-        for (i, x) in rhs.iter_mut().enumerate() {
-            x.copy_from_slice(&self.rhs[i * D..(i + 1) * D]);
-        }
-        Ok(())
-    }
-    fn name(&self) -> &'static str {
-        "whole supernodal"
-    }
+/// [`SparseLu`] lets faer choose, and faer chooses the simplicial LU for this net): the
+/// crate's `SparseLu` with the supernodal factorization forced.
+fn whole_supernodal<const D: usize>(mesh: &Mesh) -> SparseLu<D> {
+    let params = LuSymbolicParams {
+        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    };
+    SparseLu::with_symbolic_params(mesh, params)
 }
 
 /// What one design did on one matrix.
@@ -276,7 +167,7 @@ fn run<const D: usize>(net: &Mesh, chain: &Mesh) {
     let n_el = net.n_elements();
     let lu = time(|| SparseLu::<D>::new(net), &jac, &b);
     row("sparse_lu", "net", n_el, &lu);
-    let ws = time(|| WholeSupernodal::<D>::new(net), &jac, &b);
+    let ws = time(|| whole_supernodal::<D>(net), &jac, &b);
     row("(faer supernodal)", "net", n_el, &ws);
     let nw = time(|| NetworkSolver::<D>::new(net), &jac, &b);
     row("network", "net", n_el, &nw);

@@ -129,10 +129,17 @@ impl<const D: usize> std::fmt::Debug for SparseLu<D> {
 }
 
 impl<const D: usize> SparseLu<D> {
-    /// Analyses the sparsity pattern of `mesh`'s Newton matrix.
+    /// Analyses the sparsity pattern of `mesh`'s Newton matrix (faer chooses between its
+    /// simplicial and supernodal LU).
     pub fn new(mesh: &Mesh) -> Self {
+        Self::with_symbolic_params(mesh, Default::default())
+    }
+
+    /// Like [`Self::new`], with faer's symbolic LU parameters `params` (e.g. to force the
+    /// supernodal or the simplicial factorization, for comparisons).
+    pub fn with_symbolic_params(mesh: &Mesh, params: LuSymbolicParams<'_>) -> Self {
         Self {
-            lu: FaerBlockLu::new::<D>(mesh.n_nodes(), mesh.elements(), Default::default(), false),
+            lu: FaerBlockLu::new::<D>(mesh.n_nodes(), mesh.elements(), params, false),
         }
     }
 }
