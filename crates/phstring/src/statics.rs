@@ -553,6 +553,20 @@ struct Search<'a, 's, const D: usize, M> {
     iterations: usize,
 }
 
+impl<const D: usize, M: StoredEnergy> Search<'_, '_, D, M> {
+    /// Newton in rounds ([`solve_rescaled`]) on the equations as they are set, from `u`.
+    fn newton(&mut self) -> Result<newton::NewtonStats, NewtonError<Inadmissible>> {
+        solve_rescaled(
+            &mut self.eq,
+            &mut self.u,
+            &mut self.ws,
+            self.solver.as_mut(),
+            &self.params.newton,
+            self.stop,
+        )
+    }
+}
+
 /// The end of a search path: the equilibrium found, or what the path leaves for the message
 /// and the next path (`T`); an interruption is the error.
 type PathEnd<const D: usize, T> = Result<Result<Equilibrium<D>, T>, StaticsError>;
@@ -562,14 +576,7 @@ fn newton_path<const D: usize, M: StoredEnergy>(
     s: &mut Search<'_, '_, D, M>,
 ) -> PathEnd<D, String> {
     let (sys, r_start) = (s.eq.sys, s.eq.r0);
-    let msg = match solve_rescaled(
-        &mut s.eq,
-        &mut s.u,
-        &mut s.ws,
-        s.solver.as_mut(),
-        &s.params.newton,
-        s.stop,
-    ) {
+    let msg = match s.newton() {
         Ok(st) => {
             s.iterations += st.iterations;
             let found = finish(
@@ -618,14 +625,7 @@ fn continuation_path<const D: usize, M: StoredEnergy>(
         attempts += 1;
         let target = (lambda + dl).min(1.0);
         s.eq.lambda = target;
-        match solve_rescaled(
-            &mut s.eq,
-            &mut s.u,
-            &mut s.ws,
-            s.solver.as_mut(),
-            &s.params.newton,
-            s.stop,
-        ) {
+        match s.newton() {
             Ok(st) => {
                 s.iterations += st.iterations;
                 steps += 1;
@@ -722,14 +722,7 @@ fn pseudo_transient_path<const D: usize, M: StoredEnergy>(
             )));
         }
         // The slack equilibrium; now Newton with the law as is from there.
-        let solved = solve_rescaled(
-            &mut s.eq,
-            &mut s.u,
-            &mut s.ws,
-            s.solver.as_mut(),
-            &s.params.newton,
-            s.stop,
-        );
+        let solved = s.newton();
         s.iterations += match &solved {
             Ok(st) => st.iterations,
             Err(_) => s.ws.last_stats().iterations,
