@@ -1715,8 +1715,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Whether the run has reached `t_end` [s]: its time is within `1e-9` of a step of it
     /// (a step that would land on `t_end` up to rounding is not taken). The end-of-run test
     /// of every loop that drives a simulation to a time.
+    /// An end that is not a number counts as reached, so no loop runs on without end.
     pub fn reached(&self, t_end: f64) -> bool {
-        self.time() >= t_end - 1e-9 * self.run.h_cur
+        let last = t_end - 1e-9 * self.run.h_cur;
+        !matches!(
+            self.time().partial_cmp(&last),
+            Some(std::cmp::Ordering::Less)
+        )
     }
 
     /// Steps until `t_end` [s] or until `done` says so after a step, calling the observer

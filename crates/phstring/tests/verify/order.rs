@@ -117,3 +117,17 @@ fn dg4_takes_fixed_steps_on_a_stiff_rope_released_unstretched() {
         eprintln!("h = {h} s: at most {most} Newton iterations in a step of three sub-steps");
     }
 }
+
+/// A run to an end that is not a number takes no step (it does not run on without end), and a
+/// run to T ends there: `Simulation::reached` is the loops' end-of-run test.
+#[test]
+fn a_run_to_an_undefined_end_takes_no_step() {
+    let mut sim = Simulation::new(taut_string(8), StepParams::default()).unwrap();
+    assert!(sim.reached(f64::NAN));
+    let summary = sim.run_until(f64::NAN, &mut ()).unwrap();
+    assert_eq!((summary.steps, sim.steps()), (0, 0));
+    let h = sim.step_size();
+    sim.run_until(10.0 * h, &mut ()).unwrap();
+    assert_eq!(sim.steps(), 10);
+    assert!(sim.reached(10.0 * h) && !sim.reached(11.0 * h));
+}
