@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::{phstring, temp_dir, workspace_root};
+use crate::{phstring, temp_dir, wait_or_kill, workspace_root};
 
 const PAPER: &str = "examples/paper_pendulum.toml";
 
@@ -31,21 +31,6 @@ fn command(args: &[&str]) -> Command {
         .env_remove("RUST_BACKTRACE")
         .env_remove("PHSTRING_MEMORY_AVAILABLE");
     c
-}
-
-/// Waits for `child`; kills it and fails if it has not ended after `limit` (a hang guard,
-/// far above the expected time).
-fn wait_or_kill(mut child: Child, limit: Duration, what: &str) -> Output {
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{what} did not end within {limit:?}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
 }
 
 /// Polls `cond` until it holds (guard: 120 s).

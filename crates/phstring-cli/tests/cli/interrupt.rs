@@ -13,15 +13,15 @@
 
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use crate::{temp_dir, workspace_root};
+use crate::{temp_dir, wait_or_kill, workspace_root};
 
 /// Runs the binary with `args` plus `--signal-self-after-ms 1500`; fails if it has not ended
 /// after `GUARD`.
 fn signalled(args: &[&str]) -> Output {
     const GUARD: Duration = Duration::from_secs(60);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_phstring"))
+    let child = Command::new(env!("CARGO_BIN_EXE_phstring"))
         .args(args)
         .args(["-q", "--signal-self-after-ms", "1500"])
         .current_dir(workspace_root())
@@ -30,16 +30,7 @@ fn signalled(args: &[&str]) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > GUARD {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{args:?} did not end within {GUARD:?} of a SIGINT");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
+    wait_or_kill(child, GUARD, &format!("{args:?} after a SIGINT"))
 }
 
 fn stderr(o: &Output) -> String {
@@ -57,6 +48,21 @@ fn written(dir: &Path) -> Vec<String> {
     names
 }
 
+/// `command` on `example` refined to 20000 elements, with `extra` arguments, into a fresh
+/// folder `name`/o, signalled as [`signalled`]: the output and that folder.
+fn signalled_large(
+    name: &str,
+    command: &str,
+    example: &str,
+    extra: &[&str],
+) -> (Output, std::path::PathBuf) {
+    let out = temp_dir(name).join("o");
+    let mut args = vec![command, example, "--set", "mesh.elements=20000"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    (signalled(&args), out)
+}
+
 /// The interrupted exit: code 130, the handler's note, and `message` after `error: `.
 fn assert_interrupted(o: &Output, message: &str) {
     let err = stderr(o);
@@ -70,15 +76,12 @@ fn assert_interrupted(o: &Output, message: &str) {
 
 #[test]
 fn statics_stops_at_one_signal_and_writes_nothing() {
-    let out = temp_dir("interrupt-statics").join("o");
-    let o = signalled(&[
+    let (o, out) = signalled_large(
+        "interrupt-statics",
         "statics",
         "examples/mooring_line.toml",
-        "--set",
-        "mesh.elements=20000",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        &[],
+    );
     assert_interrupted(
         &o,
         "interrupted before the equilibrium was found; nothing was written",
@@ -88,15 +91,12 @@ fn statics_stops_at_one_signal_and_writes_nothing() {
 
 #[test]
 fn run_stops_in_its_starting_equilibrium_and_writes_nothing() {
-    let out = temp_dir("interrupt-run-equilibrium").join("o");
-    let o = signalled(&[
+    let (o, out) = signalled_large(
+        "interrupt-run-equilibrium",
         "run",
         "examples/mooring_line.toml",
-        "--set",
-        "mesh.elements=20000",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        &[],
+    );
     assert_interrupted(
         &o,
         "interrupted while finding the starting equilibrium (initial.equilibrium); no step was run and nothing was written",
@@ -106,17 +106,12 @@ fn run_stops_in_its_starting_equilibrium_and_writes_nothing() {
 
 #[test]
 fn modes_stops_in_lanczos_and_writes_no_summary() {
-    let out = temp_dir("interrupt-modes").join("o");
-    let o = signalled(&[
+    let (o, out) = signalled_large(
+        "interrupt-modes",
         "modes",
         "examples/taut_string.toml",
-        "--set",
-        "mesh.elements=20000",
-        "--count",
-        "2000",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        &["--count", "2000"],
+    );
     assert_interrupted(&o, "interrupted before the modes were written; ");
     assert!(stderr(&o).contains("no modes.csv or summary.json was written to"));
     let names = written(&out);
@@ -130,17 +125,12 @@ fn modes_stops_in_lanczos_and_writes_no_summary() {
 
 #[test]
 fn linearize_stops_in_the_modal_form_and_writes_nothing() {
-    let out = temp_dir("interrupt-linearize").join("o");
-    let o = signalled(&[
+    let (o, out) = signalled_large(
+        "interrupt-linearize",
         "linearize",
         "examples/taut_string.toml",
-        "--set",
-        "mesh.elements=20000",
-        "--modes",
-        "2000",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        &["--modes", "2000"],
+    );
     assert_interrupted(
         &o,
         "interrupted before the model was written; nothing was written",
