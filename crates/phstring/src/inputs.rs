@@ -27,7 +27,7 @@ use crate::boundary::{HeldForce, HeldMotion, Motion, NodalLoad, PositionRamp};
 use crate::error::Num;
 use crate::material::StoredEnergy;
 use crate::simulation::Simulation;
-use crate::system::Vector;
+use crate::system::{PhSystem, Vector};
 
 /// A refused input: nothing was changed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -130,6 +130,48 @@ impl Motion {
     }
 }
 
+impl<const D: usize, M> PhSystem<D, M> {
+    /// Holds the force of load `load` at `force` [N] before a simulation starts (a starting
+    /// equilibrium under an input): [`NodalLoad::hold`] on the built system. A simulation
+    /// started from it registers the input with [`Simulation::set_load_force`]. Refused
+    /// (nothing changes) for an unknown load or a non-finite component.
+    pub fn hold_load_force(&mut self, load: usize, force: Vector<D>) -> Result<(), InputError> {
+        let count = self.boundary.loads.len();
+        if load >= count {
+            return Err(InputError::NoSuchLoad { load, count });
+        }
+        check_force(&force, load)?;
+        self.boundary.loads[load].hold(force);
+        Ok(())
+    }
+
+    /// Holds support `motion` on `ramp` before a simulation starts: [`Motion::hold`] on the
+    /// built system. A simulation started from it registers the ramp with
+    /// [`Simulation::set_motion_ramp`]. Refused (nothing changes) for an unknown motion, a
+    /// non-finite ramp or one that ends before it starts.
+    pub fn hold_motion(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError> {
+        let count = self.boundary.motions.len();
+        if motion >= count {
+            return Err(InputError::NoSuchMotion { motion, count });
+        }
+        check_ramp(&ramp, motion)?;
+        self.boundary.motions[motion].hold(ramp);
+        Ok(())
+    }
+}
+
+/// Refuses a force with a non-finite component (load `load`).
+fn check_force<const D: usize>(force: &Vector<D>, load: usize) -> Result<(), InputError> {
+    match force.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        Some((component, &value)) => Err(InputError::ForceNotFinite {
+            load,
+            component,
+            value,
+        }),
+        None => Ok(()),
+    }
+}
+
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Index check of load `load`.
     fn load_index(&self, load: usize) -> Result<usize, InputError> {
@@ -158,13 +200,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Refused (nothing changes) for an unknown load or a non-finite component.
     pub fn set_load_force(&mut self, load: usize, force: Vector<D>) -> Result<(), InputError> {
         let load = self.load_index(load)?;
-        if let Some((component, &value)) = force.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-            return Err(InputError::ForceNotFinite {
-                load,
-                component,
-                value,
-            });
-        }
+        check_force(&force, load)?;
         let (inputs, boundary) = self.inputs_and_boundary();
         let nodal = &mut boundary.loads[load];
         let slots = grow(&mut inputs.loads, load);

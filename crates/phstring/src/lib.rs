@@ -67,6 +67,7 @@ pub mod accuracy;
 pub mod assembly;
 pub mod benchmarks;
 pub mod boundary;
+pub mod dimension;
 pub mod eigen;
 pub mod error;
 pub mod inputs;
@@ -89,6 +90,7 @@ pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
     PortSample, PositionFn, PositionRamp,
 };
+pub use dimension::ByDim;
 pub use error::{LinearSolveError, Num, SetupError, StepError};
 pub use inputs::InputError;
 pub use integrator::Scheme;

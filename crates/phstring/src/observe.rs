@@ -1,5 +1,7 @@
 //! Step reports, run summaries and the observer interface.
 
+use std::ops::ControlFlow;
+
 use crate::system::Energies;
 
 /// Bound on the energy-balance error of a step of an exact scheme (`dg`, `dg4`), relative to
@@ -224,14 +226,24 @@ pub fn fastest_node<const D: usize>(v: &[crate::Vector<D>]) -> (usize, f64) {
     )
 }
 
-/// Receives the simulation at the start, after each step and at the end of a run.
-/// Everything that records (files, progress) is an observer; the library never prints.
+/// Receives the simulation at the start, before and after each step and at the end of a run
+/// driven by [`Simulation::run_until`](crate::Simulation::run_until): the one loop that
+/// drives a run to its end. Everything that records or watches a run (files, progress, a
+/// script's recorder, stop requests) is an observer; the library never prints. An observer
+/// that returns [`ControlFlow::Break`] ends the run there (the simulation keeps the state of
+/// its last step); one that meets an error keeps it and breaks.
 pub trait Observer<const D: usize, M> {
     /// Before the first step.
     fn on_start(&mut self, _sim: &crate::Simulation<D, M>) {}
-    /// After each successful step.
-    fn on_step(&mut self, _sim: &crate::Simulation<D, M>, _report: &StepReport) {}
-    /// After the last step.
+    /// Before each step; `Break` ends the run before it.
+    fn before_step(&mut self, _sim: &crate::Simulation<D, M>) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+    /// After each successful step; `Break` ends the run after it.
+    fn on_step(&mut self, _sim: &crate::Simulation<D, M>, _report: &StepReport) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+    /// After the last step (not after a failed one: the step's error ends the run).
     fn on_end(&mut self, _sim: &crate::Simulation<D, M>) {}
 }
 

@@ -436,6 +436,50 @@ impl HeldVelocities {
     }
 }
 
+/// Refuses step parameters out of range (step size, tolerances, step-size control).
+fn check_params(params: &StepParams) -> Result<(), SetupError> {
+    if !(params.h > 0.0 && params.h.is_finite()) {
+        return Err(SetupError::NonPositive {
+            what: "time step h",
+            index: None,
+            value: params.h,
+        });
+    }
+    let nw = &params.newton;
+    if !(nw.tol > 0.0 && nw.tol.is_finite()) {
+        return Err(SetupError::NonPositive {
+            what: "Newton tolerance (absolute floor)",
+            index: None,
+            value: nw.tol,
+        });
+    }
+    if !(nw.rtol >= 0.0 && nw.rtol < 1.0) {
+        return Err(SetupError::OutOfRange {
+            what: "relative Newton tolerance",
+            value: nw.rtol,
+            range: "0 <= rtol < 1",
+        });
+    }
+    let c = &params.control;
+    for (what, v) in [("time.rtol", c.rtol), ("time.atol [m]", c.atol)] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(SetupError::OutOfRange {
+                what,
+                value: v,
+                range: "0 <= value < infinity",
+            });
+        }
+    }
+    if params.control.max_halvings > MAX_HALVINGS {
+        return Err(SetupError::OutOfRange {
+            what: "max_halvings",
+            value: params.control.max_halvings as f64,
+            range: "at most 60 (a floor of time.h / 2^60)",
+        });
+    }
+    Ok(())
+}
+
 /// What a step changes, saved to put it back (a failed `dg4` sub-step, a step rejected by
 /// error control). Buffers are reused from step to step.
 #[derive(Debug, Clone, Default)]
@@ -448,46 +492,21 @@ struct Backup<const D: usize> {
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Validates `problem`, sets up the solver and starts at time `t = 0`.
     pub fn new(problem: impl Into<Network<D, M>>, params: StepParams) -> Result<Self, SetupError> {
-        if !(params.h > 0.0 && params.h.is_finite()) {
-            return Err(SetupError::NonPositive {
-                what: "time step h",
-                index: None,
-                value: params.h,
-            });
-        }
-        let nw = &params.newton;
-        if !(nw.tol > 0.0 && nw.tol.is_finite()) {
-            return Err(SetupError::NonPositive {
-                what: "Newton tolerance (absolute floor)",
-                index: None,
-                value: nw.tol,
-            });
-        }
-        if !(nw.rtol >= 0.0 && nw.rtol < 1.0) {
-            return Err(SetupError::OutOfRange {
-                what: "relative Newton tolerance",
-                value: nw.rtol,
-                range: "0 <= rtol < 1",
-            });
-        }
-        let c = &params.control;
-        for (what, v) in [("time.rtol", c.rtol), ("time.atol [m]", c.atol)] {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(SetupError::OutOfRange {
-                    what,
-                    value: v,
-                    range: "0 <= value < infinity",
-                });
-            }
-        }
-        if params.control.max_halvings > MAX_HALVINGS {
-            return Err(SetupError::OutOfRange {
-                what: "max_halvings",
-                value: params.control.max_halvings as f64,
-                range: "at most 60 (a floor of time.h / 2^60)",
-            });
-        }
+        check_params(&params)?;
         let (sys, state) = PhSystem::new(problem)?;
+        Self::from_system(sys, state, params)
+    }
+
+    /// Starts `sys` from `state` at time `t = 0` (a system built once, e.g. for a static
+    /// equilibrium that then starts the run). `state` is checked as [`PhSystem::new`]
+    /// checks a problem's initial state ([`PhSystem::check_state`]).
+    pub fn from_system(
+        sys: PhSystem<D, M>,
+        state: State<D>,
+        params: StepParams,
+    ) -> Result<Self, SetupError> {
+        check_params(&params)?;
+        sys.check_state(&state)?;
         let n_el = sys.mesh.n_elements();
         let n = sys.mesh.n_nodes();
         let solver = make_solver::<D>(params.solver, &sys.mesh)?;
@@ -1735,10 +1754,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         observer.on_start(self);
         let mut summary = RunSummary::default();
         while !self.reached(t_end) {
+            if observer.before_step(self).is_break() {
+                break;
+            }
             let report = self.step_until(t_end)?;
             summary.record(&report);
-            observer.on_step(self, &report);
-            if done(self, &report) {
+            if observer.on_step(self, &report).is_break() || done(self, &report) {
                 break;
             }
         }

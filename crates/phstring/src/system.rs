@@ -727,6 +727,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         Ok((sys, initial))
     }
 
+    /// Checks that `state` can start this system: its sizes, finite positions and
+    /// velocities, admissible strains, every prescribed motion at its position at `t = 0`
+    /// and finite energies (the checks [`Self::new`] makes of the problem's initial state).
+    pub fn check_state(&self, state: &State<D>) -> Result<(), SetupError> {
+        check_initial(&self.mesh, &self.groups, state)?;
+        free_components(&self.boundary, state, self.mesh.n_nodes())?;
+        self.check_initial_energies(state)
+    }
+
     /// Refuses an initial state whose energies are not finite.
     fn check_initial_energies(&self, initial: &State<D>) -> Result<(), SetupError> {
         let en = self.energies(initial);
