@@ -2,12 +2,13 @@
 //! run that returns NumPy arrays or writes the CLI's output folder, static equilibrium,
 //! natural modes and the linearized system. Units as in the library: SI (m, s, kg, N, J).
 
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::sync::Arc;
 
 use numpy::{PyArray1, PyArrayMethods};
 use phstring::{Material, Simulation as Sim, StepReport};
-use phstring_io::scenario::{self, ScenarioFile};
+use phstring_io::scenario::{self, ScenarioFile, Setup};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -83,33 +84,21 @@ impl Scenario {
 }
 
 /// A simulation of one of the three dimensions.
-enum Any {
-    D1(Sim<1, Material>),
-    D2(Sim<2, Material>),
-    D3(Sim<3, Material>),
-}
+type Any = phstring::ByDim<Sim<1, Material>, Sim<2, Material>, Sim<3, Material>>;
 
-macro_rules! each {
-    ($any:expr, $s:ident => $body:expr) => {
-        match $any {
-            Any::D1($s) => $body,
-            Any::D2($s) => $body,
-            Any::D3($s) => $body,
-        }
-    };
-}
+use phstring::by_dim as each;
 
 /// One port of the last step: node, force port?, input, output, power [W].
 type PortRow = (usize, bool, Vec<f64>, Vec<f64>, f64);
 
-fn new_sim<const D: usize>(file: &ScenarioFile) -> PyResult<(Sim<D, Material>, f64, usize)> {
-    let mut v = file.validate::<D>().map_err(scenario_err)?;
-    // `initial.equilibrium`: start from the static equilibrium, as `phstring run` does.
-    phstring_io::scenario::start::start_at_equilibrium(&mut v, None).map_err(scenario_err)?;
+/// The simulation of a scenario set up once ([`ScenarioFile::setup`]), at `t = 0` (at the
+/// equilibrium with `initial.equilibrium`, as `phstring run` starts), with its end time and
+/// output stride.
+fn new_sim<const D: usize>(setup: Setup<D>) -> PyResult<(Sim<D, Material>, f64, usize)> {
+    let (v, _) = setup.start(true, None).map_err(scenario_err)?;
     let t_end = v.settings.t_end;
     let stride = v.settings.stride.max(1);
-    let sim = Sim::new(v.problem, v.settings.step).map_err(scenario_err)?;
-    Ok((sim, t_end, stride))
+    Ok((v.problem, t_end, stride))
 }
 
 fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
@@ -150,12 +139,10 @@ impl Simulation {
     /// Sets up the scenario's simulation at `t = 0`.
     #[new]
     fn new(scenario: &Scenario) -> PyResult<Self> {
-        let file = &scenario.file;
-        let (sim, t_end, stride) = match file.dimension().map_err(scenario_err)? {
-            1 => new_sim::<1>(file).map(|(s, t, k)| (Any::D1(s), t, k))?,
-            2 => new_sim::<2>(file).map(|(s, t, k)| (Any::D2(s), t, k))?,
-            _ => new_sim::<3>(file).map(|(s, t, k)| (Any::D3(s), t, k))?,
-        };
+        let setup = scenario.file.setup().map_err(scenario_err)?;
+        let started = each!(map setup, s => new_sim(s)).transpose()?;
+        let (t_end, stride) = each!(&started, s => (s.1, s.2));
+        let sim = each!(map started, s => s.0);
         Ok(Self {
             sim: std::sync::Mutex::new(sim),
             t_end,
@@ -245,28 +232,13 @@ impl Simulation {
     /// bit as if the run had not stopped). Held inputs (`set_input`) are not part of it.
     fn checkpoint(&self) -> Checkpoint {
         Checkpoint {
-            inner: match &*self.lock() {
-                Any::D1(s) => AnyCheckpoint::D1(s.checkpoint()),
-                Any::D2(s) => AnyCheckpoint::D2(s.checkpoint()),
-                Any::D3(s) => AnyCheckpoint::D3(s.checkpoint()),
-            },
+            inner: each!(&*self.lock(), s => Box::new(s.checkpoint())),
         }
     }
 
     /// Continues from `checkpoint`, taken from a simulation of the same scenario.
     fn restore(&self, checkpoint: &Checkpoint) -> PyResult<()> {
-        let mut guard = self.lock();
-        let result = match (&mut *guard, &checkpoint.inner) {
-            (Any::D1(s), AnyCheckpoint::D1(c)) => s.restore(c.clone()),
-            (Any::D2(s), AnyCheckpoint::D2(c)) => s.restore(c.clone()),
-            (Any::D3(s), AnyCheckpoint::D3(c)) => s.restore(c.clone()),
-            _ => {
-                return Err(PyValueError::new_err(
-                    "the checkpoint is of a simulation of another dimension",
-                ));
-            }
-        };
-        result.map_err(|e| PyValueError::new_err(e.to_string()))
+        each!(&mut *self.lock(), s => restore_from(s, checkpoint.inner.as_ref()))
     }
 
     /// Current time [s].
@@ -322,16 +294,26 @@ impl Simulation {
     }
 }
 
-enum AnyCheckpoint {
-    D1(phstring::Checkpoint<1>),
-    D2(phstring::Checkpoint<2>),
-    D3(phstring::Checkpoint<3>),
-}
-
 /// A simulation's complete dynamic state ([`Simulation::checkpoint`]).
 #[pyclass(module = "phstring._phstring", frozen)]
 struct Checkpoint {
-    inner: AnyCheckpoint,
+    /// The `phstring::Checkpoint<D>` of the simulation's dimension `D`.
+    inner: Box<dyn std::any::Any + Send + Sync>,
+}
+
+/// Puts `checkpoint` back on `sim`; refused if it is not of `sim`'s dimension or does not
+/// fit it.
+fn restore_from<const D: usize>(
+    sim: &mut Sim<D, Material>,
+    checkpoint: &(dyn std::any::Any + Send + Sync),
+) -> PyResult<()> {
+    let c = checkpoint
+        .downcast_ref::<phstring::Checkpoint<D>>()
+        .ok_or_else(|| {
+            PyValueError::new_err("the checkpoint is of a simulation of another dimension")
+        })?;
+    sim.restore(c.clone())
+        .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 fn x_dim<const D: usize>(_: &[phstring::Vector<D>]) -> usize {
@@ -347,6 +329,56 @@ struct Columns {
     t_positions: Vec<f64>,
     /// Nodes and dimension of a frame.
     shape: [usize; 2],
+}
+
+/// Records what `run` returns as [`Sim::run_until`] steps (its observer); ends the run when
+/// Python has a signal pending (Ctrl-C: `KeyboardInterrupt` after the current step).
+struct Recorder<'a, 'py> {
+    py: Python<'py>,
+    out: Columns,
+    t_end: f64,
+    stride: usize,
+    bar: &'a mut Bar,
+    steps: usize,
+    /// The pending signal's exception.
+    error: Option<PyErr>,
+}
+
+impl<const D: usize> phstring::Observer<D, Material> for Recorder<'_, '_> {
+    fn before_step(&mut self, _sim: &Sim<D, Material>) -> ControlFlow<()> {
+        match self.py.check_signals() {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => {
+                self.error = Some(e);
+                ControlFlow::Break(())
+            }
+        }
+    }
+
+    fn on_step(&mut self, s: &Sim<D, Material>, r: &StepReport) -> ControlFlow<()> {
+        let out = &mut self.out;
+        for (c, v) in out.cols.iter_mut().zip([
+            r.t,
+            r.after.kinetic,
+            r.after.potential(),
+            r.after.hamiltonian(),
+            s.supplied_energy(),
+            s.dissipated_energy(),
+            r.balance_error,
+            r.h,
+        ]) {
+            c.push(v);
+        }
+        out.its.push(r.newton_iterations);
+        self.bar.show(r.t, self.t_end);
+        self.steps += 1;
+        if self.steps % self.stride == 0 || s.reached(self.t_end) {
+            out.positions
+                .extend(s.state().r.iter().flat_map(|x| x.iter().copied()));
+            out.t_positions.push(r.t);
+        }
+        ControlFlow::Continue(())
+    }
 }
 
 /// Steps `s` to `t_end` (under one lock), recording what `run` returns.
@@ -377,36 +409,21 @@ fn run_loop<const D: usize>(
     ]) {
         c.push(v);
     }
-    let at_end = |s: &Sim<D, Material>| s.reached(t_end);
-    let mut steps = 0;
-    while !at_end(s) {
-        // Ctrl-C: KeyboardInterrupt after the current step.
-        py.check_signals()?;
-        let r = s
-            .step_until(t_end)
-            .map_err(|e| StepError::new_err(e.to_string()))?;
-        for (c, v) in out.cols.iter_mut().zip([
-            r.t,
-            r.after.kinetic,
-            r.after.potential(),
-            r.after.hamiltonian(),
-            s.supplied_energy(),
-            s.dissipated_energy(),
-            r.balance_error,
-            r.h,
-        ]) {
-            c.push(v);
-        }
-        out.its.push(r.newton_iterations);
-        bar.show(r.t, t_end);
-        steps += 1;
-        if steps % stride == 0 || at_end(s) {
-            out.positions
-                .extend(s.state().r.iter().flat_map(|x| x.iter().copied()));
-            out.t_positions.push(r.t);
-        }
+    let mut recorder = Recorder {
+        py,
+        out,
+        t_end,
+        stride,
+        bar,
+        steps: 0,
+        error: None,
+    };
+    s.run_until(t_end, &mut recorder)
+        .map_err(|e| StepError::new_err(e.to_string()))?;
+    match recorder.error {
+        Some(e) => Err(e),
+        None => Ok(recorder.out),
     }
-    Ok(out)
 }
 
 /// Runs `scenario` to its end time in-process and returns a dict of NumPy arrays, one entry
@@ -554,13 +571,8 @@ fn statics_err(e: impl std::fmt::Display) -> PyErr {
     StepError::new_err(format!("statics: {e}"))
 }
 
-fn statics_dim<'py, const D: usize>(
-    py: Python<'py>,
-    file: &ScenarioFile,
-) -> PyResult<Bound<'py, PyDict>> {
-    let v = file.validate::<D>().map_err(scenario_err)?;
-    let (_, eq) =
-        phstring_io::scenario::start::solve_validated(&v, false, None).map_err(statics_err)?;
+fn statics_dim<'py, const D: usize>(py: Python<'py>, v: Setup<D>) -> PyResult<Bound<'py, PyDict>> {
+    let eq = v.equilibrium(false, None).map_err(statics_err)?;
     let d = PyDict::new(py);
     d.set_item("positions", nodal(py, &eq.state.r)?)?;
     d.set_item("reactions", nodal(py, &eq.reactions)?)?;
@@ -579,22 +591,16 @@ fn statics_dim<'py, const D: usize>(
 /// `tolerance` [N], `stable`, `path`, `iterations`, `hamiltonian` [J].
 #[pyfunction]
 fn statics<'py>(py: Python<'py>, scenario: &Scenario) -> PyResult<Bound<'py, PyDict>> {
-    match scenario.file.dimension().map_err(scenario_err)? {
-        1 => statics_dim::<1>(py, &scenario.file),
-        2 => statics_dim::<2>(py, &scenario.file),
-        _ => statics_dim::<3>(py, &scenario.file),
-    }
+    each!(scenario.file.setup().map_err(scenario_err)?, v => statics_dim(py, v))
 }
 
 fn modes_dim<'py, const D: usize>(
     py: Python<'py>,
-    file: &ScenarioFile,
+    v: Setup<D>,
     count: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let v = file.validate::<D>().map_err(scenario_err)?;
-    let (sys, eq) =
-        phstring_io::scenario::start::solve_validated(&v, true, None).map_err(statics_err)?;
-    let found = phstring::modes::modes(&sys, &eq.state.r, count, v.settings.step.solver, None)
+    let eq = v.equilibrium(true, None).map_err(statics_err)?;
+    let found = phstring::modes::modes(&v.problem.system, &eq.state.r, count, v.settings.step.solver, None)
         .map_err(|e| StepError::new_err(format!("modes: {e}")))?;
     let k = found.modes.len();
     let n = eq.state.r.len();
@@ -614,11 +620,7 @@ fn modes_dim<'py, const D: usize>(
 /// (`longitudinal`, `transverse` or `mixed`) and the equilibrium `positions` [m].
 #[pyfunction]
 fn modes<'py>(py: Python<'py>, scenario: &Scenario, count: usize) -> PyResult<Bound<'py, PyDict>> {
-    match scenario.file.dimension().map_err(scenario_err)? {
-        1 => modes_dim::<1>(py, &scenario.file, count),
-        2 => modes_dim::<2>(py, &scenario.file, count),
-        _ => modes_dim::<3>(py, &scenario.file, count),
-    }
+    each!(scenario.file.setup().map_err(scenario_err)?, v => modes_dim(py, v, count))
 }
 
 /// `(shape, indptr, indices, data)` of a CSC matrix.
@@ -641,14 +643,13 @@ fn csc(a: &faer::sparse::SparseColMat<usize, f64>) -> Csc {
     ((a.nrows(), a.ncols()), indptr, indices, data)
 }
 
-fn linear_dim<const D: usize>(file: &ScenarioFile, form: &str) -> PyResult<LinearParts> {
-    let v = file.validate::<D>().map_err(scenario_err)?;
-    let (sys, eq) =
-        phstring_io::scenario::start::solve_validated(&v, true, None).map_err(statics_err)?;
-    let ports = phstring::linear::force_ports(&sys);
+fn linear_dim<const D: usize>(v: Setup<D>, form: &str) -> PyResult<LinearParts> {
+    let eq = v.equilibrium(true, None).map_err(statics_err)?;
+    let sys = &v.problem.system;
+    let ports = phstring::linear::force_ports(sys);
     let model = match form {
-        "reduced" => phstring::linear::reduced_model(&sys, &eq.state.r, &ports),
-        "full" => phstring::linear::full_model(&sys, &eq.state.r, &ports),
+        "reduced" => phstring::linear::reduced_model(sys, &eq.state.r, &ports),
+        "full" => phstring::linear::full_model(sys, &eq.state.r, &ports),
         other => {
             return Err(PyValueError::new_err(format!(
                 "form must be \"reduced\" or \"full\", got \"{other}\""
@@ -678,11 +679,8 @@ fn linearize_raw<'py>(
     scenario: &Scenario,
     form: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (mats, states, inputs) = match scenario.file.dimension().map_err(scenario_err)? {
-        1 => linear_dim::<1>(&scenario.file, form)?,
-        2 => linear_dim::<2>(&scenario.file, form)?,
-        _ => linear_dim::<3>(&scenario.file, form)?,
-    };
+    let setup = scenario.file.setup().map_err(scenario_err)?;
+    let (mats, states, inputs) = each!(setup, v => linear_dim(v, form))?;
     let d = PyDict::new(py);
     for (name, (shape, indptr, indices, data)) in mats {
         let m = PyDict::new(py);

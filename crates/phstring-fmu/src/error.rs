@@ -64,6 +64,17 @@ pub enum FmuError {
         /// The failure of the static solve.
         cause: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// The parameters changed the scenario's dimension, which the FMU's variables are
+    /// laid out for.
+    #[error(
+        "dimension: is {got}, expected {expected} (the FMU's variables are those of {expected}D)"
+    )]
+    DimensionChanged {
+        /// The dimension of the FMU.
+        expected: usize,
+        /// The dimension of the scenario with the parameters set.
+        got: usize,
+    },
     /// An input value the simulation refused.
     #[error("{0}")]
     Input(InputError),

@@ -5,9 +5,11 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use phstring::{InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector};
+use phstring::{
+    ByDim, InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector, by_dim,
+};
 use phstring_io::checkpoint::{SimState, fnv1a64_hex};
-use phstring_io::scenario::{ScenarioFile, Validated};
+use phstring_io::scenario::{Setup, StartError};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FmuError;
@@ -84,85 +86,78 @@ impl From<Ramp> for PositionRamp {
     }
 }
 
-/// What the instance needs of a simulation of any dimension.
-trait Stepper: Send {
-    fn time(&self) -> f64;
-    fn step_until(&mut self, t_end: f64) -> Result<(), StepError>;
-    fn value(&self, q: Quantity) -> f64;
-    fn save(&self) -> SimState;
-    fn load(&mut self, s: &SimState) -> Result<(), SetupError>;
+/// The simulation of the instance, in the scenario's dimension.
+struct Stepper(AnySim);
+
+/// A simulation of any dimension.
+type AnySim = ByDim<Simulation<1, Material>, Simulation<2, Material>, Simulation<3, Material>>;
+
+impl Stepper {
+    fn time(&self) -> f64 {
+        by_dim!(&self.0, s => s.time())
+    }
+    fn step_until(&mut self, t_end: f64) -> Result<(), StepError> {
+        by_dim!(&mut self.0, s => s.step_until(t_end).map(|_| ()))
+    }
+    fn value(&self, q: Quantity) -> f64 {
+        by_dim!(&self.0, s => value(s, q))
+    }
+    fn save(&self) -> SimState {
+        by_dim!(&self.0, s => SimState::from_checkpoint(&s.checkpoint()))
+    }
+    fn load(&mut self, state: &SimState) -> Result<(), SetupError> {
+        by_dim!(&mut self.0, s => s.restore(state.to_checkpoint()))
+    }
     /// Holds load `load`'s force at `force` [N] (its first `D` components).
-    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError>;
+    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
+        by_dim!(&mut self.0, s => s.set_load_force(load, Vector::from_fn(|i, _| force[i])))
+    }
     /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
     fn set_motion_target(
         &mut self,
         motion: usize,
         target: f64,
         t_target: f64,
-    ) -> Result<(), InputError>;
+    ) -> Result<(), InputError> {
+        by_dim!(&mut self.0, s => s.set_motion_target(motion, target, t_target).map(|_| ()))
+    }
     /// Makes motion `motion` follow `ramp`.
-    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError>;
+    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError> {
+        by_dim!(&mut self.0, s => s.set_motion_ramp(motion, ramp))
+    }
     /// Per motion: the ramp it follows, if it is an input.
-    fn motion_ramps(&self) -> Vec<Option<PositionRamp>>;
+    fn motion_ramps(&self) -> Vec<Option<PositionRamp>> {
+        by_dim!(&self.0, s => (0..s.system().boundary().motions.len())
+            .map(|k| s.motion_ramp(k))
+            .collect())
+    }
 }
 
-impl<const D: usize> Stepper for Simulation<D, Material> {
-    fn time(&self) -> f64 {
-        Simulation::time(self)
-    }
-    fn step_until(&mut self, t_end: f64) -> Result<(), StepError> {
-        Simulation::step_until(self, t_end).map(|_| ())
-    }
-    fn value(&self, q: Quantity) -> f64 {
-        let e = self.energies();
-        match q {
-            Quantity::PortOutput { port, component } => self.ports()[port].output[component],
-            Quantity::PortInput { port, component } => self.ports()[port].input[component],
-            Quantity::NodePosition { node, component } => self.state().r[node][component],
-            Quantity::Hamiltonian => e.hamiltonian(),
-            Quantity::Kinetic => e.kinetic,
-            Quantity::Potential => e.potential(),
-            Quantity::Supplied => self.supplied_energy(),
-            Quantity::Dissipated => self.dissipated_energy(),
-            // The balance needs `Ĥ(0)` (the instance's), parameters and inputs are the
-            // instance's values.
-            Quantity::BalanceError
-            | Quantity::Parameter(_)
-            | Quantity::LoadForce { .. }
-            | Quantity::MotionPosition { .. } => f64::NAN,
-        }
-    }
-    fn save(&self) -> SimState {
-        SimState::from_checkpoint(&self.checkpoint())
-    }
-    fn load(&mut self, s: &SimState) -> Result<(), SetupError> {
-        self.restore(s.to_checkpoint::<D>())
-    }
-    fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
-        Simulation::set_load_force(self, load, Vector::<D>::from_fn(|i, _| force[i]))
-    }
-    fn set_motion_target(
-        &mut self,
-        motion: usize,
-        target: f64,
-        t_target: f64,
-    ) -> Result<(), InputError> {
-        Simulation::set_motion_target(self, motion, target, t_target).map(|_| ())
-    }
-    fn set_motion_ramp(&mut self, motion: usize, ramp: PositionRamp) -> Result<(), InputError> {
-        Simulation::set_motion_ramp(self, motion, ramp)
-    }
-    fn motion_ramps(&self) -> Vec<Option<PositionRamp>> {
-        (0..self.system().boundary().motions.len())
-            .map(|k| self.motion_ramp(k))
-            .collect()
+/// The value of output quantity `q` of `sim`.
+fn value<const D: usize>(sim: &Simulation<D, Material>, q: Quantity) -> f64 {
+    let e = sim.energies();
+    match q {
+        Quantity::PortOutput { port, component } => sim.ports()[port].output[component],
+        Quantity::PortInput { port, component } => sim.ports()[port].input[component],
+        Quantity::NodePosition { node, component } => sim.state().r[node][component],
+        Quantity::Hamiltonian => e.hamiltonian(),
+        Quantity::Kinetic => e.kinetic,
+        Quantity::Potential => e.potential(),
+        Quantity::Supplied => sim.supplied_energy(),
+        Quantity::Dissipated => sim.dissipated_energy(),
+        // The balance needs `Ĥ(0)` (the instance's), parameters and inputs are the
+        // instance's values.
+        Quantity::BalanceError
+        | Quantity::Parameter(_)
+        | Quantity::LoadForce { .. }
+        | Quantity::MotionPosition { .. } => f64::NAN,
     }
 }
 
 /// The simulation with what the instance keeps beside it.
 struct Live {
     /// The simulation; it holds the inputs (`phstring::inputs`).
-    stepper: Box<dyn Stepper>,
+    stepper: Stepper,
     /// `Ĥ(0)` [J], the reference of `balance_error`.
     h0: f64,
     /// The first failure of a scenario expression during the run.
@@ -550,56 +545,68 @@ impl Instance {
         };
         let file = phstring_io::scenario::parse(&self.text, &self.path, &sets)
             .map_err(|e| error(e.into()))?;
-        match self.spec.dimension {
-            1 => self.live_dim::<1>(&file, values, equilibrium),
-            2 => self.live_dim::<2>(&file, values, equilibrium),
-            _ => self.live_dim::<3>(&file, values, equilibrium),
+        let setup = file.setup().map_err(|e| error(e.into()))?;
+        if setup.dimension() != self.spec.dimension {
+            return Err(error(FmuError::DimensionChanged {
+                expected: self.spec.dimension,
+                got: setup.dimension(),
+            }));
         }
-        .map_err(&error)
+        let expression_error = by_dim!(&setup, v => v.load_error.clone());
+        let sim = by_dim!(map setup, v => self.start(v, values, equilibrium))
+            .transpose()
+            .map_err(&error)?;
+        let stepper = Stepper(sim);
+        Ok(Live {
+            h0: stepper.value(Quantity::Hamiltonian),
+            stepper,
+            expression_error,
+            ports_saved: None,
+        })
     }
 
-    fn live_dim<const D: usize>(
+    /// The simulation of `v` with the inputs `values` held, started at the equilibrium
+    /// under them if `equilibrium` (and `initial.equilibrium`).
+    fn start<const D: usize>(
         &self,
-        file: &ScenarioFile,
+        mut v: Setup<D>,
         values: &[f64],
         equilibrium: bool,
-    ) -> Result<Live, FmuError> {
-        let mut v: Validated<D> = file.validate::<D>()?;
-        // The inputs are held on the problem already: the starting equilibrium and the
+    ) -> Result<Simulation<D, Material>, FmuError> {
+        // The inputs are held on the system already: the starting equilibrium and the
         // supports' velocities at `t = 0` are those under the inputs.
+        let system = &mut v.problem.system;
         let forces = input_forces(&self.spec, values);
         for (&load, u) in &forces {
-            v.problem.boundary.loads[load].hold(Vector::<D>::from_fn(|i, _| u[i]));
+            system.hold_load_force(load, Vector::<D>::from_fn(|i, _| u[i]))?;
         }
         // Until the first step, the support rests where the scenario starts it.
         let mut rests = Vec::new();
         for (motion, _) in input_positions(&self.spec, values) {
-            let m = &mut v.problem.boundary.motions[motion];
-            let rest = PositionRamp::at((m.position)(0.0));
-            m.hold(rest);
+            let at_zero = system
+                .boundary()
+                .motions
+                .get(motion)
+                .map_or(f64::NAN, |m| (m.position)(0.0));
+            let rest = PositionRamp::at(at_zero);
+            system.hold_motion(motion, rest)?;
             rests.push((motion, rest));
         }
         // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
         // supports at their scenario positions).
-        if equilibrium {
-            phstring_io::scenario::start::start_at_equilibrium(&mut v, None)
-                .map_err(|e| FmuError::Equilibrium { cause: Box::new(e) })?;
-        }
-        let expression_error = v.load_error.clone();
-        let mut sim: Simulation<D, Material> = Simulation::new(v.problem, v.settings.step)?;
+        let (v, _) = v.start(equilibrium, None).map_err(|e| match e {
+            StartError::Setup(e) => FmuError::Setup(e),
+            e => FmuError::Equilibrium { cause: Box::new(e) },
+        })?;
+        let mut sim = v.problem;
         // The simulation holds the same inputs from here on (its signals do not change).
         for (&load, u) in &forces {
-            Stepper::set_load_force(&mut sim, load, *u)?;
+            sim.set_load_force(load, Vector::<D>::from_fn(|i, _| u[i]))?;
         }
         for (motion, rest) in rests {
             sim.set_motion_ramp(motion, rest)?;
         }
-        Ok(Live {
-            h0: sim.energies().hamiltonian(),
-            stepper: Box::new(sim),
-            expression_error,
-            ports_saved: None,
-        })
+        Ok(sim)
     }
 
     /// `fmi2SetReal`: parameters before initialization ends, inputs at any time before
@@ -931,13 +938,13 @@ impl Instance {
                     .map(|r| r.map(PositionRamp::from))
                     .collect();
                 let loaded = match target.stepper.load(state) {
-                    Ok(()) => set_ramps(target.stepper.as_mut(), &ramps).map_err(FmuError::from),
+                    Ok(()) => set_ramps(&mut target.stepper, &ramps).map_err(FmuError::from),
                     Err(e) => Err(e.into()),
                 };
                 if let Err(m) = loaded {
                     // A failed load may have changed the running simulation: put it back.
                     let _ = target.stepper.load(&before);
-                    let _ = set_ramps(target.stepper.as_mut(), &ramps_before);
+                    let _ = set_ramps(&mut target.stepper, &ramps_before);
                     return self.refuse(format!("cannot restore the FMU state: {m}"));
                 }
                 target.ports_saved = Some(saved.ports.clone());
@@ -1000,7 +1007,7 @@ fn hold_inputs(
 }
 
 /// Puts `ramps` (per motion, as saved) back on the motions of `stepper` that follow one.
-fn set_ramps(stepper: &mut dyn Stepper, ramps: &[Option<PositionRamp>]) -> Result<(), InputError> {
+fn set_ramps(stepper: &mut Stepper, ramps: &[Option<PositionRamp>]) -> Result<(), InputError> {
     let now = stepper.motion_ramps();
     for (motion, (now, saved)) in now.iter().zip(ramps).enumerate() {
         if let (Some(_), Some(ramp)) = (now, saved) {

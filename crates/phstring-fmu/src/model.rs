@@ -7,7 +7,7 @@
 
 use phstring::{Material, PortKind, Simulation};
 use phstring_io::checkpoint::fnv1a64_hex;
-use phstring_io::scenario::{Components, Scenario, ScenarioError, ScenarioFile, Validated};
+use phstring_io::scenario::{Components, Scenario, ScenarioError, ScenarioFile, Setup, Validated};
 
 /// FMI causality of a variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -129,39 +129,36 @@ impl ModelSpec {
     /// The variables of the FMU of scenario `file` (validated in full, the simulation set
     /// up once to learn its ports).
     pub fn new(file: &ScenarioFile) -> Result<Self, ScenarioError> {
-        match file.dimension()? {
-            1 => Self::of::<1>(file),
-            2 => Self::of::<2>(file),
-            _ => Self::of::<3>(file),
-        }
+        phstring::by_dim!(file.setup()?, v => Self::of(file, v))
     }
 
     /// The variables of the FMU of `file` in `D` dimensions: parameters, inputs, outputs.
-    fn of<const D: usize>(file: &ScenarioFile) -> Result<Self, ScenarioError> {
-        let v: Validated<D> = file.validate::<D>()?;
+    fn of<const D: usize>(file: &ScenarioFile, v: Setup<D>) -> Result<Self, ScenarioError> {
         let (mut vars, parameters) = parameter_variables(&file.scenario);
         // Inputs: external loads, then external motions.
         vars.extend(load_inputs(file, &v)?);
         vars.extend(motion_inputs(&v));
         // Outputs: the ports (one simulation is set up to learn them), energies, nodes.
+        let boundary = v.problem.system.boundary();
+        let (loads, feedback) = (boundary.loads.len(), boundary.feedback.len());
+        let step = v.settings.step;
+        let v = v.map_problem(|b| {
+            Simulation::<D, Material>::from_system(b.system, b.state, step).map_err(|cause| {
+                ScenarioError::Setup {
+                    path: file.path.clone(),
+                    with_sets: false,
+                    cause,
+                }
+            })
+        })?;
         let Validated {
-            problem,
+            problem: sim,
             settings,
             components,
             fmu_nodes,
             ..
         } = v;
-        let (loads, feedback) = (
-            problem.boundary.loads.len(),
-            problem.boundary.feedback.len(),
-        );
         let (t_end, h) = (settings.t_end, settings.step.h);
-        let sim: Simulation<D, Material> =
-            Simulation::new(problem, settings.step).map_err(|cause| ScenarioError::Setup {
-                path: file.path.clone(),
-                with_sets: false,
-                cause,
-            })?;
         vars.extend(port_outputs(&sim, loads, feedback, &components));
         vars.extend(energy_outputs());
         vars.extend(node_outputs::<D>(&fmu_nodes, &components));
@@ -388,11 +385,11 @@ fn parameter_variables(s: &Scenario) -> (Vec<Variable>, Vec<Parameter>) {
 /// load's force at `t = 0` (which must be finite: an error points at the scenario's key).
 fn load_inputs<const D: usize>(
     file: &ScenarioFile,
-    v: &Validated<D>,
+    v: &Setup<D>,
 ) -> Result<Vec<Variable>, ScenarioError> {
     let (s, c) = (&file.scenario, &v.components);
     let mut vars = Vec::new();
-    for (k, load) in v.problem.boundary.loads.iter().enumerate() {
+    for (k, load) in v.problem.system.boundary().loads.iter().enumerate() {
         if !c.loads[k].external {
             continue;
         }
@@ -440,9 +437,9 @@ fn load_inputs<const D: usize>(
 
 /// The input variables of the external motions of `v`, starting at their positions at
 /// `t = 0`.
-fn motion_inputs<const D: usize>(v: &Validated<D>) -> Vec<Variable> {
+fn motion_inputs<const D: usize>(v: &Setup<D>) -> Vec<Variable> {
     let c = &v.components;
-    let motions = v.problem.boundary.motions.iter().enumerate();
+    let motions = v.problem.system.boundary().motions.iter().enumerate();
     motions
         .filter(|(m, _)| c.motions[*m].external)
         .map(|(m, motion)| Variable {

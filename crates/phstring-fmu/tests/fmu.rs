@@ -542,7 +542,11 @@ fn a_moving_support_from_the_master_is_the_run_bit_for_bit() {
     let file = phstring_io::scenario::load(&path, &sets).unwrap();
     let text = file.text().to_string();
     let mut v = file.validate::<2>().unwrap();
-    phstring_io::scenario::start::start_at_equilibrium(&mut v, None).unwrap();
+    let phstring::ByDim::D2(setup) = file.setup().unwrap() else {
+        panic!("the mooring line is 2D")
+    };
+    let eq = setup.equilibrium(false, None).unwrap();
+    v.problem.initial = v.initial_state(&eq.state.r).unwrap();
     let mut sine: Simulation<2, Material> =
         Simulation::new(v.problem.clone(), v.settings.step).unwrap();
     // The same line, its fairlead on ramps from the last target to the next over each step.

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use phstring_io::scenario::ScenarioFile;
+use phstring_io::scenario::{ScenarioFile, Validated};
 use phstring_io::text::{clip, num, nums, printable};
 
 use crate::budget::{self, budget};
@@ -25,16 +25,12 @@ pub fn check(path: &Path, sets: &[String]) -> Result<()> {
     let file = budget::load(path, sets)?;
     // The system the scenario sets up must be valid too (finite initial energies and
     // forces); set it up only where it fits in memory (otherwise the warning below says so).
+    let validated = file.validated()?;
+    let text = phstring::by_dim!(&validated, v => describe(&file, v));
     let warnings = if budget(&file)?.memory_error(1).is_none() {
-        file.check_with_warnings()?
+        phstring::by_dim!(file.build(validated)?, s => s.warnings)
     } else {
         Vec::new()
-    };
-    let d = file.dimension()?;
-    let text = match d {
-        1 => describe::<1>(&file)?,
-        2 => describe::<2>(&file)?,
-        _ => describe::<3>(&file)?,
     };
     say!("{} is valid:\n{text}", path.display());
     let b = budget(&file)?;
@@ -59,8 +55,7 @@ fn list<T>(out: &mut String, items: &[T], what: &str, line: impl Fn(&T) -> Strin
     }
 }
 
-fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
-    let v = file.validate::<D>()?;
+fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
     let p = &v.problem;
     let c = &v.components;
     let s = &v.settings;
@@ -179,7 +174,7 @@ fn describe<const D: usize>(file: &ScenarioFile) -> Result<String> {
         s.step.newton.max_iter,
         s.step.solver.name()
     );
-    Ok(out)
+    out
 }
 
 /// The Newton convergence test in words: `‖R‖ ≤ max(tol, rtol·F)` or `‖R‖ ≤ tol`.

@@ -12,7 +12,7 @@ use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use phstring_io::drive::outdir::{self, OutLock};
 use phstring_io::drive::run::{self as runner, Progress, RunInfo, RunOptions};
-use phstring_io::scenario::ScenarioFile;
+use phstring_io::scenario::{AnySetup, ScenarioFile};
 use phstring_io::text::{clip, num, printable};
 
 use crate::budget::{self, check_budget};
@@ -48,13 +48,15 @@ where
     }
 }
 
-/// Validates `file` and prints its warnings to stderr; returns them.
-pub fn check_and_warn(file: &ScenarioFile) -> Result<Vec<String>> {
-    let warnings = file.check_with_warnings()?;
+/// Validates `file` and builds its system once ([`ScenarioFile::setup`]) and prints its
+/// warnings to stderr; returns the setup and the warnings.
+pub fn check_and_warn(file: &ScenarioFile) -> Result<(AnySetup, Vec<String>)> {
+    let setup = file.setup()?;
+    let warnings = phstring::by_dim!(&setup, s => s.warnings.clone());
     for w in &warnings {
         tell!("warning: {w}");
     }
-    Ok(warnings)
+    Ok((setup, warnings))
 }
 
 /// `--signal-self-after-ms`, for [`stop_flag`].
@@ -240,8 +242,10 @@ pub struct SetAndForce {
 pub struct Prepared<T> {
     /// Set by a stop request (Ctrl-C, SIGTERM), see [`stop_flag`].
     pub stop: Arc<AtomicBool>,
-    /// The scenario with its overrides, checked.
+    /// The scenario with its overrides.
     pub file: ScenarioFile,
+    /// The scenario validated and its system built, once.
+    pub setup: AnySetup,
     /// The output folder, prepared and locked.
     pub out: PathBuf,
     /// What the command read and checked before the folder was touched.
@@ -262,13 +266,13 @@ pub fn prepare_scenario_command<T>(
     out: Option<PathBuf>,
     suffix: &str,
     inputs: &[&Path],
-    read: impl FnOnce(&ScenarioFile) -> Result<T>,
+    read: impl FnOnce(&AnySetup) -> Result<T>,
 ) -> Result<Prepared<T>> {
     let stop = stop_flag();
     let file = budget::load(scenario, &set_force.sets)?;
     check_budget(&file)?;
-    file.check()?;
-    let read = read(&file)?;
+    let setup = file.setup()?;
+    let read = read(&setup)?;
     let out = out.unwrap_or_else(|| default_out(scenario, suffix));
     let inputs: Vec<&Path> = std::iter::once(scenario)
         .chain(inputs.iter().copied())
@@ -277,6 +281,7 @@ pub fn prepare_scenario_command<T>(
     Ok(Prepared {
         stop,
         file,
+        setup,
         out,
         read,
         _lock: lock,

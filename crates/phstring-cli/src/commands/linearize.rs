@@ -43,14 +43,20 @@ pub fn linearize(args: LinearizeArgs) -> Result<()> {
         args.out,
         "_linear",
         at.as_slice(),
-        |file| match at {
-            Some(path) => Ok(phstring_io::drive::linearize::checkpoint_at(file, path)?),
+        |setup| match at {
+            Some(path) => Ok(phstring_io::drive::linearize::checkpoint_at(setup, path)?),
             None => Ok(LinearizeAt::Equilibrium),
         },
     )?;
     let out = &p.out;
-    let model =
-        phstring_io::drive::linearize::linearize(&p.file, &p.read, args.modes, out, Some(&p.stop));
+    let model = phstring_io::drive::linearize::linearize(
+        &p.file,
+        &p.setup,
+        &p.read,
+        args.modes,
+        out,
+        Some(&p.stop),
+    );
     let m = interrupted_as(model, ExportError::is_interrupted, STOPPED_LINEARIZE, out)?;
     for w in &m.warnings {
         tell!("warning: {w}");

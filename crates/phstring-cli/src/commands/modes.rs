@@ -40,7 +40,7 @@ pub fn modes(args: ModesArgs) -> Result<()> {
         |_| Ok(()),
     )?;
     let out = &p.out;
-    let found = phstring_io::drive::modes::modes(&p.file, args.count, out, Some(&p.stop));
+    let found = phstring_io::drive::modes::modes(&p.file, &p.setup, args.count, out, Some(&p.stop));
     let info = interrupted_as(found, ModesRunError::is_interrupted, STOPPED_MODES, out)?;
     for w in &info.warnings {
         tell!("warning: {w}");

@@ -67,7 +67,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
     // From here on, Ctrl-C or SIGTERM asks the run to stop, and a second one exits.
     let stop = stop_flag();
     // The lock on the output folder is held until the run ends (or the process dies).
-    let (file, out, resume, early, _lock) = match (scenario, resume) {
+    let (file, setup, out, resume, early, _lock) = match (scenario, resume) {
         (_, Some(cp_path)) => {
             let cp = CheckpointFile::read(&cp_path)?;
             let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
@@ -78,8 +78,9 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
                     .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
             });
             check_budget(&file)?;
+            let setup = file.setup()?;
             let lock = outdir::prepare_resume(&dir)?;
-            (file, dir, Some(cp), Vec::new(), lock)
+            (file, setup, dir, Some(cp), Vec::new(), lock)
         }
         (Some(scenario), None) => {
             let file = budget::load(&scenario, &sets)?;
@@ -89,7 +90,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
                 bail!("{e}");
             }
             // Printed now: a run that fails at its first step may be why.
-            let early = check_and_warn(&file)?;
+            let (setup, early) = check_and_warn(&file)?;
             if let Some(w) = b.output_warning() {
                 tell!("warning: {w}");
             }
@@ -100,7 +101,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
                 Path::new("out").join(stem)
             });
             let lock = prepare_out_for(&out, force, &[&scenario])?;
-            (file, out, None, early, lock)
+            (file, setup, out, None, early, lock)
         }
         (None, None) => bail!("give a scenario file or --resume CHECKPOINT"),
     };
@@ -115,7 +116,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
     let mut bar = progress_bar(quiet, &run_label(&file));
     bar.signal = signal;
     // An interrupted time loop keeps its own message (with `--resume`).
-    let ran = runner::run(&file, &out, &mut bar, opts);
+    let ran = runner::run_setup(&file, setup, &out, &mut bar, opts);
     let statics = |e: &RunError| matches!(e, RunError::Statics(_)) && e.is_interrupted();
     let info = interrupted_as(ran, statics, STOPPED_EQUILIBRIUM, &out)?;
     // The scenario's warnings (also in summary.json) were printed before the run.

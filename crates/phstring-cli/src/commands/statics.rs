@@ -37,7 +37,7 @@ pub fn statics(args: StaticsArgs) -> Result<()> {
         |_| Ok(()),
     )?;
     let out = &p.out;
-    let found = phstring_io::drive::statics::statics(&p.file, out, Some(&p.stop));
+    let found = phstring_io::drive::statics::statics(&p.file, &p.setup, out, Some(&p.stop));
     let info = interrupted_as(found, StaticsRunError::is_interrupted, STOPPED_STATICS, out)?;
     say!(
         "equilibrium by {} ({} steps, {} Newton iterations, {:.3} s): residual {:.3e} N (tolerance {:.3e} N){}, tension {} … {} N, internal energy {} J",

@@ -15,15 +15,15 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use faer::sparse::SparseColMat;
+use phstring::Vector;
 use phstring::linear::{ForcePort, LinearPh, force_ports, full_model, reduced_model};
 use phstring::statics::StaticsError;
-use phstring::{PhSystem, Vector};
 use serde::Serialize;
 
 use crate::checkpoint::{CheckpointError, CheckpointFile};
 use crate::files::{LINEAR_AT_FILE, MANIFEST_FILE, atomic_write, num};
 use crate::output::OutputError;
-use crate::scenario::{ScenarioError, ScenarioFile};
+use crate::scenario::{AnySetup, ScenarioError, ScenarioFile, Setup};
 
 /// Why `phstring linearize` failed.
 #[derive(Debug, thiserror::Error)]
@@ -74,14 +74,10 @@ pub enum LinearizeAt {
 /// Reads the checkpoint at `path` and checks that its positions fit the mesh of `file`
 /// (node count × dimension), so that `linearize --at` fails on a bad checkpoint before its
 /// output folder is prepared.
-pub fn checkpoint_at(file: &ScenarioFile, path: &Path) -> Result<LinearizeAt, ExportError> {
+pub fn checkpoint_at(setup: &AnySetup, path: &Path) -> Result<LinearizeAt, ExportError> {
     let cp = CheckpointFile::read(path)?;
-    let (d, nodes) = match file.dimension()? {
-        1 => (1, file.validate::<1>()?.problem.mesh.n_nodes()),
-        2 => (2, file.validate::<2>()?.problem.mesh.n_nodes()),
-        _ => (3, file.validate::<3>()?.problem.mesh.n_nodes()),
-    };
-    check_positions(&cp, nodes, d)?;
+    let nodes = phstring::by_dim!(setup, s => s.problem.system.mesh().n_nodes());
+    check_positions(&cp, nodes, setup.dimension())?;
     Ok(LinearizeAt::Checkpoint(Box::new(cp)))
 }
 
@@ -190,33 +186,30 @@ const REDUCED_EQUATIONS: &str = "x = (q, v) on the free position components: E =
 /// written ([`ExportError::is_interrupted`]).
 pub fn linearize(
     file: &ScenarioFile,
+    setup: &AnySetup,
     at: &LinearizeAt,
     modal: Option<usize>,
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<Manifest, ExportError> {
-    match file.dimension()? {
-        1 => linearize_dim::<1>(file, at, modal, out, stop),
-        2 => linearize_dim::<2>(file, at, modal, out, stop),
-        _ => linearize_dim::<3>(file, at, modal, out, stop),
-    }
+    phstring::by_dim!(setup, s => linearize_dim(file, s, at, modal, out, stop))
 }
 
 fn linearize_dim<const D: usize>(
     file: &ScenarioFile,
+    v: &Setup<D>,
     at: &LinearizeAt,
     modal: Option<usize>,
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<Manifest, ExportError> {
-    let v = file.validate::<D>()?;
-    let (sys, r, time, source) = match at {
+    let sys = &v.problem.system;
+    let (r, time, source) = match at {
         LinearizeAt::Equilibrium => {
-            let (sys, eq) = crate::scenario::start::solve_validated(&v, true, stop)?;
-            (sys, eq.state.r, 0.0, "equilibrium".to_string())
+            let eq = v.equilibrium(true, stop)?;
+            (eq.state.r, 0.0, "equilibrium".to_string())
         }
         LinearizeAt::Checkpoint(cp) => {
-            let (sys, _) = PhSystem::new(v.problem.clone()).map_err(StaticsError::from)?;
             check_positions(cp, sys.mesh().n_nodes(), D)?;
             let r: Vec<Vector<D>> = cp
                 .sim
@@ -225,25 +218,25 @@ fn linearize_dim<const D: usize>(
                 .map(Vector::<D>::from_column_slice)
                 .collect();
             let t = cp.sim.t_base + cp.sim.k as f64 * cp.sim.h_cur;
-            (sys, r, t, cp.path.display().to_string())
+            (r, t, cp.path.display().to_string())
         }
     };
-    let (res, _) = phstring::statics::static_residual(&sys, &r).map_err(|e| {
+    let (res, _) = phstring::statics::static_residual(sys, &r).map_err(|e| {
         ExportError::Mismatch(format!(
             "element {e}'s strain is outside its law's domain at the state linearized at"
         ))
     })?;
     let static_residual = res.iter().map(|f| f.norm_squared()).sum::<f64>().sqrt();
     let stable =
-        phstring::linear::positive_definite(&sys, &phstring::linear::tangent_blocks(&sys, &r));
-    let ports = force_ports(&sys);
+        phstring::linear::positive_definite(sys, &phstring::linear::tangent_blocks(sys, &r));
+    let ports = force_ports(sys);
     // Everything is computed before the first file is written: a stop request leaves the
     // folder as it was.
     let mut warnings = Vec::new();
     let modal_model = match modal {
         Some(k) => {
-            let found = phstring::modes::modes(&sys, &r, k, v.settings.step.solver, stop)?;
-            let (_, free) = phstring::linear::free_dofs(&sys);
+            let found = phstring::modes::modes(sys, &r, k, v.settings.step.solver, stop)?;
+            let (_, free) = phstring::linear::free_dofs(sys);
             warnings.extend(super::modes::fewer_modes(
                 "--modes",
                 k,
@@ -251,7 +244,7 @@ fn linearize_dim<const D: usize>(
                 found.modes.len(),
             ));
             Some(phstring::linear::modal_model(
-                &sys,
+                sys,
                 &r,
                 &found.modes,
                 &ports,
@@ -259,8 +252,8 @@ fn linearize_dim<const D: usize>(
         }
         None => None,
     };
-    let full = full_model(&sys, &r, &ports);
-    let reduced = reduced_model(&sys, &r, &ports);
+    let full = full_model(sys, &r, &ports);
+    let reduced = reduced_model(sys, &r, &ports);
     if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
         return Err(StaticsError::Interrupted.into());
     }

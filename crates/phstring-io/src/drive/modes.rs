@@ -22,7 +22,7 @@ use serde::Serialize;
 use crate::files::{MODES_FILE, MODES_PVD_FILE, SUMMARY_FILE, atomic_write, mode_frame_name, num};
 use crate::output::OutputError;
 use crate::plot::network_plot;
-use crate::scenario::{ScenarioError, ScenarioFile};
+use crate::scenario::{AnySetup, ScenarioError, ScenarioFile, Setup};
 use crate::vtk::{FrameData, PvdWriter, write_vtp_frame};
 
 /// Why `phstring modes` failed.
@@ -96,22 +96,19 @@ pub fn fewer_modes(option: &str, asked: usize, free: usize, given: usize) -> Opt
     })
 }
 
-/// Solves the equilibrium of `file`, then its `count` lowest modes, and writes the outputs
+/// Solves the equilibrium of `file` (validated and built: `setup`), then its `count` lowest modes, and writes the outputs
 /// into `out` (which must exist). `stop`, when set, ends it between Newton iterations,
 /// Lanczos steps or ParaView frames ([`ModesRunError::is_interrupted`]); `modes.csv`,
 /// `modes.pvd` and `summary.json` are then not left behind (`modes.csv`, written before the
 /// frames so that a full disk keeps it, is removed again).
 pub fn modes(
     file: &ScenarioFile,
+    setup: &AnySetup,
     count: usize,
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<ModesInfo, ModesRunError> {
-    match file.dimension()? {
-        1 => modes_dim::<1>(file, count, out, stop),
-        2 => modes_dim::<2>(file, count, out, stop),
-        _ => modes_dim::<3>(file, count, out, stop),
-    }
+    phstring::by_dim!(setup, s => modes_dim(file, s, count, out, stop))
 }
 
 fn write(out: &Path, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
@@ -121,15 +118,16 @@ fn write(out: &Path, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
 
 fn modes_dim<const D: usize>(
     file: &ScenarioFile,
+    v: &Setup<D>,
     count: usize,
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<ModesInfo, ModesRunError> {
-    let v = file.validate::<D>()?;
-    let (sys, eq) = crate::scenario::start::solve_validated(&v, true, stop)?;
+    let eq = v.equilibrium(true, stop)?;
+    let sys = &v.problem.system;
     let r = &eq.state.r;
-    let found = modes::modes(&sys, r, count, v.settings.step.solver, stop)?;
-    let (_, free) = phstring::linear::free_dofs(&sys);
+    let found = modes::modes(sys, r, count, v.settings.step.solver, stop)?;
+    let (_, free) = phstring::linear::free_dofs(sys);
     let warnings = fewer_modes("--count", count, free, found.modes.len())
         .into_iter()
         .collect();
@@ -229,7 +227,7 @@ fn modes_dim<const D: usize>(
     pvd.write().map_err(OutputError::from)?;
     let shape_scale = found.modes.first().map_or(0.0, scale_of);
     if D >= 2 {
-        let topology = crate::output::system_topology(&sys);
+        let topology = crate::output::system_topology(sys);
         let title = format!(
             "{}: equilibrium (t = 0) and modes 1–{} (t = k)",
             file.scenario.title.clone().unwrap_or_default(),

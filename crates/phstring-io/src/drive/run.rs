@@ -7,12 +7,13 @@
 //! replaced atomically, written before the plots and again after them, and a run that fails
 //! on an I/O error still tries to leave a summary with `"status": "failed"`.
 
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use phstring::{Material, SettleWatch, Simulation, StepError};
+use phstring::{Material, SettleWatch, Simulation, StepError, StepReport};
 use serde::Serialize;
 
 use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimState};
@@ -23,8 +24,9 @@ use crate::files::{
 };
 use crate::history::{History, read_history};
 use crate::output::{self, OutputError, Writers};
-use crate::scenario::start::{StartError, start_at_equilibrium};
-use crate::scenario::{Components, RunSettings, ScenarioError, ScenarioFile};
+use crate::scenario::{
+    AnySetup, Components, RunSettings, ScenarioError, ScenarioFile, Setup, StartError,
+};
 
 pub use phstring::nan_max;
 
@@ -157,6 +159,7 @@ impl From<StartError> for RunError {
         match e {
             StartError::Scenario(e) => RunError::Scenario(e),
             StartError::Statics(e) => RunError::Statics(e),
+            StartError::Setup(e) => RunError::Setup(e),
         }
     }
 }
@@ -321,11 +324,18 @@ pub fn run(
     progress: &mut dyn Progress,
     opts: RunOptions,
 ) -> Result<RunInfo, RunError> {
-    match file.dimension()? {
-        1 => run_dim::<1>(file, out, progress, opts),
-        2 => run_dim::<2>(file, out, progress, opts),
-        _ => run_dim::<3>(file, out, progress, opts),
-    }
+    run_setup(file, file.setup()?, out, progress, opts)
+}
+
+/// [`run`] of `file` validated and built already (`setup`, from [`ScenarioFile::setup`]).
+pub fn run_setup(
+    file: &ScenarioFile,
+    setup: AnySetup,
+    out: &Path,
+    progress: &mut dyn Progress,
+    opts: RunOptions,
+) -> Result<RunInfo, RunError> {
+    phstring::by_dim!(setup, s => run_dim(file, s, out, progress, opts))
 }
 
 /// What a run needs besides the simulation and the writers, shared by its parts.
@@ -340,23 +350,19 @@ struct RunContext<'a> {
 
 fn run_dim<const D: usize>(
     file: &ScenarioFile,
+    setup: Setup<D>,
     out: &Path,
     progress: &mut dyn Progress,
     mut opts: RunOptions,
 ) -> Result<RunInfo, RunError> {
-    let mut v = file.validate::<D>()?;
     // The starting equilibrium, then the scenario's displacement and velocity on it; a
     // resume takes its state from the checkpoint instead.
-    let initial_equilibrium = if opts.resume.is_none() {
-        start_at_equilibrium(&mut v, opts.stop.as_deref())?
-    } else {
-        None
-    };
-    let settings = v.settings.clone();
-    let load_error = v.load_error.clone();
-    let scenario_warnings = std::mem::take(&mut v.warnings);
+    let (v, initial_equilibrium) = setup.start(opts.resume.is_none(), opts.stop.as_deref())?;
+    let settings = v.settings;
+    let load_error = v.load_error;
+    let scenario_warnings = v.warnings;
     let components = v.components;
-    let mut sim: Simulation<D, Material> = Simulation::new(v.problem, settings.step)?;
+    let mut sim = v.problem;
     sim.set_stop_flag(opts.stop.clone());
     let resume = opts.resume.take();
     let ctx = RunContext {
@@ -715,6 +721,92 @@ fn write_checkpoint<const D: usize>(
     Ok(())
 }
 
+/// The observer of a run ([`phstring::Observer`]): writes the outputs after every step,
+/// keeps the counters of `summary.json`, shows progress, watches for static settling and
+/// writes periodic checkpoints; it ends the run after `stop_after_steps` steps, once the
+/// string has settled, or on a failed write (kept in `error`).
+struct Recorder<'a, 'b> {
+    ctx: &'a RunContext<'b>,
+    writers: &'a mut Writers,
+    info: &'a mut RunInfo,
+    progress: &'a mut dyn Progress,
+    opts: &'a RunOptions,
+    watch: Option<SettleWatch>,
+    /// When the step under way started, and the steps over tolerance before it.
+    started: (Instant, usize),
+    /// Stopped by `stop_after_steps`.
+    stopped: bool,
+    /// The write that failed.
+    error: Option<RunError>,
+}
+
+impl<const D: usize> phstring::Observer<D, Material> for Recorder<'_, '_> {
+    fn before_step(&mut self, sim: &Simulation<D, Material>) -> ControlFlow<()> {
+        // A stop request (the flag) is seen by the simulation itself, before and during
+        // the step: `StepError::Interrupted`.
+        if self.opts.stop_after_steps.is_some_and(|n| sim.steps() >= n) {
+            self.stopped = true;
+            return ControlFlow::Break(());
+        }
+        self.started = (Instant::now(), sim.steps_over_tolerance());
+        ControlFlow::Continue(())
+    }
+
+    fn on_step(&mut self, sim: &Simulation<D, Material>, report: &StepReport) -> ControlFlow<()> {
+        let info = &mut *self.info;
+        info.time_loop_s += self.started.0.elapsed().as_secs_f64();
+        info.steps += 1;
+        info.rejected_steps += report.rejected;
+        info.line_search_backtracks += report.backtracks;
+        info.total_newton_iterations += report.newton_iterations;
+        info.rejected_newton_iterations += report.rejected_iterations;
+        info.local_newton_iterations += report.local_iterations;
+        info.local_newton_work += (report.local_node_iterations
+            + report.rejected_local_node_iterations) as f64
+            / sim.system().mesh().n_nodes() as f64;
+        info.max_balance_error = nan_max(info.max_balance_error, report.balance_error.abs());
+        info.max_relative_balance_error = nan_max(
+            info.max_relative_balance_error,
+            report.relative_balance_error(),
+        );
+        info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
+        info.steps_at_roundoff += usize::from(report.at_roundoff);
+        info.steps_over_tolerance += sim.steps_over_tolerance() - self.started.1;
+        if let Err(e) = self.writers.step(sim, report) {
+            self.error = Some(e.into());
+            return ControlFlow::Break(());
+        }
+        self.progress.step(report.step, report.t);
+        let at_rest = self.watch.as_mut().and_then(|w| w.check(sim, report));
+        if let Some(w) = &self.watch {
+            info.settle_progress = w.progress();
+        }
+        if let (Some(at), Some(s)) = (at_rest, self.ctx.settings.settle) {
+            info.settled = Some(SettledInfo {
+                settled: true,
+                t: at.t,
+                step: at.step,
+                kinetic: at.kinetic,
+                threshold: s.kinetic,
+                hold: s.hold,
+                fastest_node: at.node,
+                speed: at.speed,
+            });
+            return ControlFlow::Break(());
+        }
+        if self
+            .opts
+            .checkpoint_every
+            .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
+            && let Err(e) = write_checkpoint(self.ctx, sim, self.writers, info)
+        {
+            self.error = Some(e);
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+}
+
 /// Steps to the end time (or a failed step, or a stop), writing the outputs as it goes;
 /// then writes the checkpoint (stopped) or the final state (completed or failed) and
 /// flushes. Returns the failed step's error, if any, and whether the run was stopped.
@@ -726,11 +818,8 @@ fn step_loop<const D: usize>(
     progress: &mut dyn Progress,
     opts: &RunOptions,
 ) -> Result<(Option<StepError>, bool), RunError> {
-    let t_end = ctx.settings.t_end;
-    let mut failure = None;
-    let mut interrupted = false;
     // A fresh run arms the watch on the initial state; a resumed one continues it.
-    let mut watch = ctx.settings.settle.map(|s| {
+    let watch = ctx.settings.settle.map(|s| {
         if info.resumed {
             SettleWatch::resume(s, info.settle_progress)
         } else {
@@ -739,74 +828,34 @@ fn step_loop<const D: usize>(
             w
         }
     });
-    while !sim.reached(t_end) {
-        // A stop request (the flag) is seen by the simulation itself, before and during
-        // the step: `StepError::Interrupted` below.
-        if opts.stop_after_steps.is_some_and(|n| sim.steps() >= n) {
-            interrupted = true;
-            break;
-        }
-        let t0 = Instant::now();
-        let over = sim.steps_over_tolerance();
-        let res = sim.step_until(t_end);
-        info.time_loop_s += t0.elapsed().as_secs_f64();
-        match res {
-            Ok(report) => {
-                info.steps += 1;
-                info.rejected_steps += report.rejected;
-                info.line_search_backtracks += report.backtracks;
-                info.total_newton_iterations += report.newton_iterations;
-                info.rejected_newton_iterations += report.rejected_iterations;
-                info.local_newton_iterations += report.local_iterations;
-                info.local_newton_work +=
-                    (report.local_node_iterations + report.rejected_local_node_iterations) as f64
-                        / sim.system().mesh().n_nodes() as f64;
-                info.max_balance_error =
-                    nan_max(info.max_balance_error, report.balance_error.abs());
-                info.max_relative_balance_error = nan_max(
-                    info.max_relative_balance_error,
-                    report.relative_balance_error(),
-                );
-                info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
-                info.steps_at_roundoff += usize::from(report.at_roundoff);
-                info.steps_over_tolerance += sim.steps_over_tolerance() - over;
-                writers.step(sim, &report)?;
-                progress.step(report.step, report.t);
-                let at_rest = watch.as_mut().and_then(|w| w.check(sim, &report));
-                if let Some(w) = &watch {
-                    info.settle_progress = w.progress();
-                }
-                if let (Some(at), Some(s)) = (at_rest, ctx.settings.settle) {
-                    info.settled = Some(SettledInfo {
-                        settled: true,
-                        t: at.t,
-                        step: at.step,
-                        kinetic: at.kinetic,
-                        threshold: s.kinetic,
-                        hold: s.hold,
-                        fastest_node: at.node,
-                        speed: at.speed,
-                    });
-                    break;
-                }
-                if opts
-                    .checkpoint_every
-                    .is_some_and(|n| n > 0 && sim.steps().is_multiple_of(n))
-                {
-                    write_checkpoint(ctx, sim, writers, info)?;
-                }
-            }
-            // A stop request during the step: the state is that of the last good step.
-            Err(StepError::Interrupted { .. }) => {
-                interrupted = true;
-                break;
-            }
-            Err(e) => {
-                failure = Some(e);
-                break;
-            }
-        }
+    let mut recorder = Recorder {
+        ctx,
+        writers,
+        info,
+        progress,
+        opts,
+        watch,
+        started: (Instant::now(), 0),
+        stopped: false,
+        error: None,
+    };
+    let looped = sim.run_until(ctx.settings.t_end, &mut recorder);
+    let Recorder {
+        writers,
+        info,
+        stopped,
+        error,
+        ..
+    } = recorder;
+    if let Some(e) = error {
+        return Err(e);
     }
+    let (failure, interrupted) = match looped {
+        Ok(_) => (None, stopped),
+        // A stop request during the step: the state is that of the last good step.
+        Err(StepError::Interrupted { .. }) => (None, true),
+        Err(e) => (Some(e), false),
+    };
     if let Some(s) = ctx.settings.settle
         && info.settled.is_none()
         && failure.is_none()

@@ -25,8 +25,7 @@ use crate::files::{
 };
 use crate::output::OutputError;
 use crate::plot::network_plot;
-use crate::scenario::start::solve_validated;
-use crate::scenario::{ScenarioError, ScenarioFile};
+use crate::scenario::{AnySetup, ScenarioError, ScenarioFile, Setup};
 use crate::vtk::{FrameData, write_vtp_frame};
 
 /// Why `phstring statics` failed.
@@ -96,30 +95,30 @@ pub struct StaticsInfo {
     pub solve_s: f64,
 }
 
-/// Solves the equilibrium of `file` and writes the outputs into `out` (which must exist).
+/// Solves the equilibrium of scenario `file` (validated and built: `setup`, from
+/// [`ScenarioFile::setup`](crate::scenario::ScenarioFile::setup)) and writes the outputs
+/// into `out` (which must exist).
 pub fn statics(
     file: &ScenarioFile,
+    setup: &AnySetup,
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<StaticsInfo, StaticsRunError> {
-    match file.dimension()? {
-        1 => statics_dim::<1>(file, out, stop),
-        2 => statics_dim::<2>(file, out, stop),
-        _ => statics_dim::<3>(file, out, stop),
-    }
+    phstring::by_dim!(setup, s => statics_dim(file, s, out, stop))
 }
 
 fn statics_dim<const D: usize>(
     file: &ScenarioFile,
+    v: &Setup<D>,
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<StaticsInfo, StaticsRunError> {
-    let v = file.validate::<D>()?;
     let start = Instant::now();
-    let (sys, eq) = solve_validated(&v, false, stop)?;
+    let eq = v.equilibrium(false, stop)?;
+    let sys = &v.problem.system;
     let solve_s = start.elapsed().as_secs_f64();
-    let tension = tensions(&sys, &eq);
-    write_files(out, &sys, &eq, &tension)?;
+    let tension = tensions(sys, &eq);
+    write_files(out, sys, &eq, &tension)?;
     let (mut max, mut min) = ((f64::NEG_INFINITY, 0), (f64::INFINITY, 0));
     for (e, t) in tension.iter().enumerate() {
         if t.n > max.0 {
@@ -164,7 +163,7 @@ fn statics_dim<const D: usize>(
     };
     let json = serde_json::to_string_pretty(&info).expect("plain data serializes");
     write(out, SUMMARY_FILE, json.as_bytes())?;
-    plot(out, &title, &sys, &eq)?;
+    plot(out, &title, sys, &eq)?;
     Ok(info)
 }
 

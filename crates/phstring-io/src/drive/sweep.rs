@@ -364,7 +364,13 @@ impl Sweep {
             stop: stop.cloned(),
             ..Default::default()
         };
-        match runner::run(&file, dir, &mut (), opts) {
+        // Every run was validated before the first started (refused early); it is validated
+        // again here rather than holding every run's system in memory.
+        let setup = match file.setup() {
+            Ok(s) => s,
+            Err(e) => return (Err(e.to_string()), false),
+        };
+        match runner::run_setup(&file, setup, dir, &mut (), opts) {
             Ok(mut info) => {
                 info.history = Default::default();
                 (Ok(info), false)

@@ -13,7 +13,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 use nanoexpr::{Instruction, Math};
-use phstring::{Law, Material, Network, State, StoredEnergy, Vector};
+use phstring::{
+    Boundary, ElementGroup, Law, Material, Mesh, Network, PhSystem, State, StoredEnergy, Vector,
+};
 use toml::Spanned;
 
 use super::components::AXES;
@@ -111,10 +113,39 @@ struct ArcLengths {
     total: Vec<f64>,
 }
 
+/// The parts of a problem that `[initial]` is applied on: its mesh, element groups and
+/// boundary conditions, of a validated network or of the system built from it.
+#[derive(Clone, Copy)]
+pub struct Net<'a, const D: usize> {
+    mesh: &'a Mesh,
+    groups: &'a [ElementGroup<D, Material>],
+    boundary: &'a Boundary<D>,
+}
+
+impl<'a, const D: usize> From<&'a Network<D, Material>> for Net<'a, D> {
+    fn from(n: &'a Network<D, Material>) -> Self {
+        Self {
+            mesh: &n.mesh,
+            groups: &n.groups,
+            boundary: &n.boundary,
+        }
+    }
+}
+
+impl<'a, const D: usize> From<&'a PhSystem<D, Material>> for Net<'a, D> {
+    fn from(s: &'a PhSystem<D, Material>) -> Self {
+        Self {
+            mesh: s.mesh(),
+            groups: s.groups(),
+            boundary: s.boundary(),
+        }
+    }
+}
+
 /// `s` along every string (group of [`Law::String`]): the compensated sum of the reference
 /// lengths of its elements up to the node, from its first path node. A node shared by several
 /// strings (or met twice along one) takes its first value, in element order (= file order).
-fn arc_lengths<const D: usize>(net: &Network<D, Material>) -> ArcLengths {
+fn arc_lengths<const D: usize>(net: Net<'_, D>) -> ArcLengths {
     let n = net.mesh.n_nodes();
     let mut s = vec![f64::NAN; n];
     let mut owner = vec![NO_STRING; n];
@@ -150,7 +181,7 @@ fn arc_lengths<const D: usize>(net: &Network<D, Material>) -> ArcLengths {
 }
 
 /// What holds each component of the nodes that have fixed or moved components.
-fn holds<const D: usize>(net: &Network<D, Material>) -> HashMap<usize, [Hold; D]> {
+fn holds<const D: usize>(net: Net<'_, D>) -> HashMap<usize, [Hold; D]> {
     let mut held: HashMap<usize, [Hold; D]> = HashMap::new();
     for f in &net.boundary.fixed {
         let h = held.entry(f.node).or_insert([Hold::Free; D]);
@@ -217,11 +248,12 @@ impl<const D: usize> InitialConditions<D> {
     /// Every expression is evaluated at every node on a string; an evaluation error, a
     /// non-finite value or position, and a strain outside an element's law are errors that
     /// name the key, the node (with `s`) and the value.
-    pub fn apply(
+    pub fn apply<'a>(
         &self,
-        net: &Network<D, Material>,
+        net: impl Into<Net<'a, D>>,
         base: &[Vector<D>],
     ) -> Result<State<D>, ScenarioError> {
+        let net = net.into();
         let n = net.mesh.n_nodes();
         if base.len() != n {
             return Err(ScenarioError::Invalid {
@@ -271,7 +303,7 @@ impl<const D: usize> InitialConditions<D> {
             }
             _ => vec![Vector::<D>::zeros(); n],
         };
-        let state = State::consistent(&net.mesh, r, v);
+        let state = State::consistent(net.mesh, r, v);
         self.check_strains(net, &state)?;
         Ok(state)
     }
@@ -343,7 +375,7 @@ impl<const D: usize> InitialConditions<D> {
         f: &Field,
         values: &mut [Vector<D>],
         held: &HashMap<usize, [Hold; D]>,
-        net: &Network<D, Material>,
+        net: Net<'_, D>,
         arc: &ArcLengths,
         refused: impl Fn(Hold) -> bool,
     ) -> Result<(), ScenarioError> {
@@ -392,7 +424,7 @@ impl<const D: usize> InitialConditions<D> {
     fn field(
         &self,
         f: &Field,
-        net: &Network<D, Material>,
+        net: Net<'_, D>,
         arc: &ArcLengths,
         base: &[Vector<D>],
     ) -> Result<Vec<Vector<D>>, ScenarioError> {
@@ -443,12 +475,8 @@ impl<const D: usize> InitialConditions<D> {
     }
 
     /// Every element's strain finite and in its law's domain.
-    fn check_strains(
-        &self,
-        net: &Network<D, Material>,
-        state: &State<D>,
-    ) -> Result<(), ScenarioError> {
-        for grp in &net.groups {
+    fn check_strains(&self, net: Net<'_, D>, state: &State<D>) -> Result<(), ScenarioError> {
+        for grp in net.groups {
             for e in grp.elements.clone() {
                 let c = state.c[e];
                 if c.is_finite() && grp.law.admissible(c) {
@@ -487,13 +515,7 @@ impl<const D: usize> InitialConditions<D> {
     /// Node `i` for messages: `node 12 (s = 24 m)`, in a network with its string and index
     /// along it, `node 12 (s = 3 m along string "cable0", its node 6)`; with `with_l`, the
     /// string's reference length `L` too.
-    fn label(
-        &self,
-        net: &Network<D, Material>,
-        arc: &ArcLengths,
-        i: usize,
-        with_l: bool,
-    ) -> String {
+    fn label(&self, net: Net<'_, D>, arc: &ArcLengths, i: usize, with_l: bool) -> String {
         let g = arc.owner[i];
         if g == NO_STRING {
             return format!("node {i}");
@@ -538,7 +560,7 @@ impl ScenarioFile {
     /// keys that set the same thing.
     pub(super) fn initial_conditions<const D: usize>(
         &self,
-        net: &Network<D, Material>,
+        net: Net<'_, D>,
         network: bool,
     ) -> Result<InitialConditions<D>, ScenarioError> {
         let mut out = InitialConditions::none(self.path.clone(), network);
@@ -627,7 +649,7 @@ impl ScenarioFile {
         &self,
         key: &'static str,
         list: &Spanned<Vec<Spanned<Vec<f64>>>>,
-        net: &Network<D, Material>,
+        net: Net<'_, D>,
         network: bool,
     ) -> Result<List<D>, ScenarioError> {
         let n = net.mesh.n_nodes();
@@ -727,7 +749,7 @@ mod tests {
         };
         b.string(spec, &[a, c, a], 3).unwrap();
         let net = b.build(phstring::Boundary::default(), Vec::new()).unwrap();
-        let arc = arc_lengths(&net);
+        let arc = arc_lengths((&net).into());
         assert_eq!(arc.s[a], 0.0);
         assert_eq!(arc.s[c], 3.0);
         assert_eq!(arc.total[0], 6.0);

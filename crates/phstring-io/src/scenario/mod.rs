@@ -41,7 +41,7 @@ pub use components::{
     StringComponent, SupportComponent,
 };
 pub use expr::Expr;
-pub use initial::InitialConditions;
+pub use initial::{InitialConditions, Net};
 pub use network::{MAX_NAME_BYTES, MAX_NAMED_NODES, MAX_PATH, MAX_SPRINGS, MAX_STRINGS};
 pub use overrides::{MAX_BRACES, MAX_KEY_BYTES, MAX_KEY_SEGMENTS};
 pub use refs::NodeRef;
@@ -53,6 +53,7 @@ pub use spec::{
     NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec, StringPathSpec,
     TimeSpec,
 };
+pub use start::{AnyRunning, AnySetup, Built, Running, Setup, StartError};
 
 use components::AXES;
 use overrides::{apply_set, check_braces, clip_lines, line_col, toml_error};
@@ -283,14 +284,20 @@ pub struct RunSettings {
     pub settle: Option<phstring::Settle>,
 }
 
-/// A validated problem in dimension `D` plus run settings and what reports need.
-pub struct Validated<const D: usize> {
+/// A [`Validated`] scenario of its own dimension.
+pub type AnyValidated = phstring::ByDim<Validated<1>, Validated<2>, Validated<3>>;
+
+/// A validated problem in dimension `D` plus run settings and what reports need. `P` is
+/// the problem as validated (a [`Network`]), then as built once into a system
+/// ([`Built`](start::Built), a [`Setup`](start::Setup)), then as a running simulation
+/// ([`Running`](start::Running)): every front end starts from one value of this type.
+pub struct Validated<const D: usize, P = Network<D, Material>> {
     /// The problem: a network (a single-string scenario is a network of one group, built
     /// as the chain it always was). Its initial state is the one `[initial]` gives on the
     /// geometry's shape — unless `initial.equilibrium` is set: then it is the geometry's
     /// shape at rest, the starting point for the equilibrium solve, and the run builds the
     /// state with [`Validated::initial_state`] on the equilibrium positions.
-    pub problem: Network<D, Material>,
+    pub problem: P,
     /// `[initial]`: equilibrium start, displacement and velocity fields, per-node lists.
     pub initial: InitialConditions<D>,
     /// Settings.
@@ -415,27 +422,37 @@ impl ScenarioFile {
     /// system it sets up (quantities derived from several keys, such as the initial
     /// energies, must be finite).
     pub fn check(&self) -> Result<(), ScenarioError> {
-        self.check_with_warnings().map(|_| ())
+        self.setup().map(|_| ())
     }
 
     /// [`Self::check`], returning the warnings of a valid scenario ([`Validated::warnings`]).
     pub fn check_with_warnings(&self) -> Result<Vec<String>, ScenarioError> {
-        match self.dimension()? {
-            1 => self.check_setup::<1>(),
-            2 => self.check_setup::<2>(),
-            _ => self.check_setup::<3>(),
-        }
+        self.setup().map(|s| phstring::by_dim!(s, s => s.warnings))
     }
 
-    fn check_setup<const D: usize>(&self) -> Result<Vec<String>, ScenarioError> {
-        let v = self.validate::<D>()?;
-        phstring::PhSystem::new(v.problem)
-            .map(|_| v.warnings)
-            .map_err(|cause| ScenarioError::Setup {
-                path: self.path.clone(),
-                with_sets: !self.overrides.is_empty(),
-                cause,
-            })
+    /// Validates the scenario once and builds its system once, in its own dimension: where
+    /// every front end (run, sweep, statics, modes, linearize, check, the FMU, the Python
+    /// package) starts.
+    pub fn setup(&self) -> Result<AnySetup, ScenarioError> {
+        self.build(self.validated()?)
+    }
+
+    /// Validates the scenario in its own dimension (without building its system): the one
+    /// place where the dimension of the file picks the code.
+    pub fn validated(&self) -> Result<AnyValidated, ScenarioError> {
+        Ok(match self.dimension()? {
+            1 => phstring::ByDim::D1(self.validate::<1>()?),
+            2 => phstring::ByDim::D2(self.validate::<2>()?),
+            _ => phstring::ByDim::D3(self.validate::<3>()?),
+        })
+    }
+
+    /// Builds the system of this scenario, validated ([`Self::validated`]).
+    pub fn build(&self, validated: AnyValidated) -> Result<AnySetup, ScenarioError> {
+        phstring::by_dim!(map validated, v => v.map_problem(|p| {
+            start::Built::new(p).map_err(|cause| self.setup_error(cause))
+        }))
+        .transpose()
     }
 
     /// The spatial dimension, checked.
@@ -595,7 +612,7 @@ impl ScenarioFile {
         let mut problem = skeleton
             .finish(parts.boundary, point_masses)
             .map_err(|cause| self.setup_error(cause))?;
-        let initial = self.initial_conditions(&problem, layout == Layout::Network)?;
+        let initial = self.initial_conditions((&problem).into(), layout == Layout::Network)?;
         if initial.changes_base() {
             // Every expression is evaluated at every node now, on the geometry's shape; with
             // `equilibrium` the run applies them again to the equilibrium shape.
@@ -679,6 +696,37 @@ impl<const D: usize> Validated<D> {
     /// positions and velocities of `[initial]`: [`InitialConditions::apply`] on this problem.
     pub fn initial_state(&self, base: &[Vector<D>]) -> Result<State<D>, ScenarioError> {
         self.initial.apply(&self.problem, base)
+    }
+}
+
+impl<const D: usize, P> Validated<D, P> {
+    /// The same scenario with its problem replaced by `f(problem)` (built, started).
+    pub fn map_problem<Q, E>(
+        self,
+        f: impl FnOnce(P) -> Result<Q, E>,
+    ) -> Result<Validated<D, Q>, E> {
+        let Validated {
+            problem,
+            initial,
+            settings,
+            network,
+            components,
+            loads,
+            load_error,
+            fmu_nodes,
+            warnings,
+        } = self;
+        Ok(Validated {
+            problem: f(problem)?,
+            initial,
+            settings,
+            network,
+            components,
+            loads,
+            load_error,
+            fmu_nodes,
+            warnings,
+        })
     }
 }
 

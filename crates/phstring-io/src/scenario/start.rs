@@ -1,11 +1,15 @@
-//! Starting a simulation from a validated scenario, for every front end (the run driver, the
-//! FMU, the Python package): the scenario's equilibrium ([`solve_validated`]) and the
-//! starting state at it (`initial.equilibrium`, [`start_at_equilibrium`]).
+//! Starting from a validated scenario, for every front end: the problem built once into a
+//! system ([`Setup`], from [`ScenarioFile::setup`](super::ScenarioFile::setup)), its static
+//! equilibrium ([`Setup::equilibrium`]), and the running simulation ([`Setup::start`]), with
+//! the starting equilibrium of `initial.equilibrium` and `[initial]`'s fields on it.
+//!
+//! A checkpoint resume starts without the equilibrium (its state comes from the checkpoint,
+//! which the run driver restores on the started simulation).
 
 use std::sync::atomic::AtomicBool;
 
 use phstring::statics::{self, Equilibrium, StaticsError, StaticsParams};
-use phstring::{Material, PhSystem};
+use phstring::{ByDim, Material, Network, PhSystem, SetupError, Simulation, State};
 
 use super::{ScenarioError, Validated};
 
@@ -19,48 +23,92 @@ pub enum StartError {
     /// The starting equilibrium (`initial.equilibrium`) was not found.
     #[error("initial.equilibrium: {0}")]
     Statics(StaticsError),
+    /// The simulation could not start from the starting state.
+    #[error("setup failed: {0}")]
+    Setup(SetupError),
 }
 
-/// The equilibrium of a validated scenario with its Newton settings and linear solver; with
-/// `open_loop`, feedback laws are left out unchecked (the linear model and modes).
-pub fn solve_validated<const D: usize>(
-    v: &Validated<D>,
-    open_loop: bool,
-    stop: Option<&AtomicBool>,
-) -> Result<(PhSystem<D, Material>, Equilibrium<D>), StaticsError> {
-    let (sys, initial) = PhSystem::new(v.problem.clone())?;
-    let params = StaticsParams {
-        newton: phstring::NewtonParams {
-            max_iter: StaticsParams::default().newton.max_iter,
-            ..v.settings.step.newton
-        },
-        solver: v.settings.step.solver,
-        open_loop,
-        ..Default::default()
-    };
-    let eq = statics::solve_system(&sys, &initial.r, &params, stop)?;
-    Ok((sys, eq))
+/// A problem built once: the system and its initial state (the one `[initial]` gives on the
+/// geometry's shape; with `initial.equilibrium`, the shape at rest that the equilibrium
+/// solve starts from).
+pub struct Built<const D: usize> {
+    /// The system.
+    pub system: PhSystem<D, Material>,
+    /// The initial state.
+    pub state: State<D>,
 }
 
-/// With `initial.equilibrium`: solves for the starting equilibrium and sets the problem's
-/// initial state to it, with `[initial]`'s displacement and velocity applied on it; returns
-/// how it was found (for reports). Without it, does nothing and returns `None`. `stop`
-/// ends the solve early (Ctrl-C).
-pub fn start_at_equilibrium<const D: usize>(
-    v: &mut Validated<D>,
-    stop: Option<&AtomicBool>,
-) -> Result<Option<String>, StartError> {
-    if !v.initial.equilibrium {
-        return Ok(None);
+impl<const D: usize> Built<D> {
+    /// Builds `problem` ([`PhSystem::new`]).
+    pub fn new(problem: Network<D, Material>) -> Result<Self, SetupError> {
+        let (system, state) = PhSystem::new(problem)?;
+        Ok(Self { system, state })
     }
-    let (_, eq) = solve_validated(v, false, stop).map_err(StartError::Statics)?;
-    v.problem.initial = v.initial_state(&eq.state.r)?;
-    Ok(Some(format!(
-        "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
-        eq.path.name(),
-        eq.path.steps(),
-        eq.iterations,
-        eq.residual,
-        if eq.stable { "stable" } else { "not stable" }
-    )))
+}
+
+/// A scenario validated once, with its system built once.
+pub type Setup<const D: usize> = Validated<D, Built<D>>;
+
+/// A [`Setup`] of the scenario's own dimension.
+pub type AnySetup = ByDim<Setup<1>, Setup<2>, Setup<3>>;
+
+/// A started scenario: the running simulation with the scenario's settings and components.
+pub type Running<const D: usize> = Validated<D, Simulation<D, Material>>;
+
+/// A [`Running`] scenario of its own dimension.
+pub type AnyRunning = ByDim<Running<1>, Running<2>, Running<3>>;
+
+impl<const D: usize> Setup<D> {
+    /// The static equilibrium of the scenario (loads at `t = 0`) from its initial positions,
+    /// with its Newton settings and linear solver; with `open_loop`, feedback laws are left
+    /// out unchecked (the linear model and modes). `stop` ends the solve early (Ctrl-C).
+    pub fn equilibrium(
+        &self,
+        open_loop: bool,
+        stop: Option<&AtomicBool>,
+    ) -> Result<Equilibrium<D>, StaticsError> {
+        let params = StaticsParams {
+            newton: phstring::NewtonParams {
+                max_iter: StaticsParams::default().newton.max_iter,
+                ..self.settings.step.newton
+            },
+            solver: self.settings.step.solver,
+            open_loop,
+            ..Default::default()
+        };
+        let Built { system, state } = &self.problem;
+        statics::solve_system(system, &state.r, &params, stop)
+    }
+
+    /// Starts the simulation at `t = 0`. With `initial.equilibrium` and `from_equilibrium`,
+    /// from the static equilibrium with `[initial]`'s displacement and velocity applied on
+    /// it; the second value then says how the equilibrium was found (for reports). A
+    /// checkpoint resume passes `from_equilibrium = false`. `stop` ends the equilibrium
+    /// solve early.
+    pub fn start(
+        self,
+        from_equilibrium: bool,
+        stop: Option<&AtomicBool>,
+    ) -> Result<(Running<D>, Option<String>), StartError> {
+        let mut report = None;
+        let mut start_state = None;
+        if from_equilibrium && self.initial.equilibrium {
+            let eq = self.equilibrium(false, stop).map_err(StartError::Statics)?;
+            start_state = Some(self.initial.apply(&self.problem.system, &eq.state.r)?);
+            report = Some(format!(
+                "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
+                eq.path.name(),
+                eq.path.steps(),
+                eq.iterations,
+                eq.residual,
+                if eq.stable { "stable" } else { "not stable" }
+            ));
+        }
+        let params = self.settings.step;
+        let running = self.map_problem(|built| {
+            let state = start_state.unwrap_or(built.state);
+            Simulation::from_system(built.system, state, params).map_err(StartError::Setup)
+        })?;
+        Ok((running, report))
+    }
 }
