@@ -5,8 +5,10 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use phstring::{InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector};
-use phstring_io::checkpoint::{SimState, fnv1a64_hex};
+use phstring::{
+    FlatCheckpoint, InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector,
+};
+use phstring_io::checkpoint::fnv1a64_hex;
 use phstring_io::scenario::{ScenarioFile, Validated};
 use serde::{Deserialize, Serialize};
 
@@ -89,8 +91,8 @@ trait Stepper: Send {
     fn time(&self) -> f64;
     fn step_until(&mut self, t_end: f64) -> Result<(), StepError>;
     fn value(&self, q: Quantity) -> f64;
-    fn save(&self) -> SimState;
-    fn load(&mut self, s: &SimState) -> Result<(), SetupError>;
+    fn save(&self) -> FlatCheckpoint;
+    fn load(&mut self, s: &FlatCheckpoint) -> Result<(), SetupError>;
     /// Holds load `load`'s force at `force` [N] (its first `D` components).
     fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError>;
     /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
@@ -132,10 +134,10 @@ impl<const D: usize> Stepper for Simulation<D, Material> {
             | Quantity::MotionPosition { .. } => f64::NAN,
         }
     }
-    fn save(&self) -> SimState {
-        SimState::from_checkpoint(&self.checkpoint())
+    fn save(&self) -> FlatCheckpoint {
+        self.flat_checkpoint()
     }
-    fn load(&mut self, s: &SimState) -> Result<(), SetupError> {
+    fn load(&mut self, s: &FlatCheckpoint) -> Result<(), SetupError> {
         self.restore(s.to_checkpoint::<D>())
     }
     fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
@@ -202,7 +204,7 @@ pub struct Saved {
     ramps: Vec<Option<Ramp>>,
     /// The port variables' values by value reference (`None` for the others).
     ports: Vec<Option<f64>>,
-    sim: Option<SimState>,
+    sim: Option<FlatCheckpoint>,
     /// `Ĥ(0)` of the run [J] (it depends on the inputs a starting equilibrium was found for).
     h0: Option<f64>,
 }
