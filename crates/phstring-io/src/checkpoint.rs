@@ -560,3 +560,100 @@ impl CheckpointFile {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checkpoint as written by phstring before the simulation record's flat form moved to
+    /// the core: a 12-element taut string in 2D with error control (`time.rtol = 1e-5`),
+    /// interrupted after 12 steps (two points of acceleration history).
+    const FIXTURE: &str = include_str!("../tests/fixtures/checkpoint_taut_string_2d.json");
+
+    /// The fixture parses, its checksum verifies, it serializes back to the same bytes, and it
+    /// fits and restores into a simulation of its scenario, which steps on from it.
+    #[test]
+    fn checkpoint_fixture_reads_back_byte_for_byte_and_resumes() {
+        let cp: CheckpointFile = serde_json::from_str(FIXTURE).unwrap();
+        assert_eq!(cp.checksum, "f66484bd11cfd6b4");
+        assert_eq!(cp.checksum(), cp.checksum);
+        assert_eq!(serde_json::to_string(&cp).unwrap(), FIXTURE);
+        let s = &cp.sim;
+        assert_eq!((s.steps, s.rejected, s.total_newton), (12, 4, 14));
+        assert_eq!((s.r.len(), s.c.len(), s.acc_history.len()), (26, 12, 2));
+        assert_eq!(s.err_prev, 0.5204494196047398);
+        assert_eq!(s.h_cur, 9.389162555012371e-6);
+
+        let file =
+            crate::scenario::parse(&cp.scenario_text, Path::new("checkpoint.toml"), &[]).unwrap();
+        let v = file.validate::<2>().unwrap();
+        let t_end = v.settings.t_end;
+        let mut sim = Simulation::<2, Material>::new(v.problem, v.settings.step).unwrap();
+        cp.check_against(&sim, &v.settings).unwrap();
+        sim.restore(cp.sim.clone().into_checkpoint::<2>()).unwrap();
+        assert_eq!(sim.flat_checkpoint(), cp.sim);
+        assert_eq!(sim.checkpoint().acc_history.points.len(), 2);
+        let report = sim.step_until(t_end).unwrap();
+        assert!(report.balance_error.is_finite());
+        assert_eq!(sim.steps(), 13);
+    }
+
+    /// A file without the error-control fields (written before error control) reads with
+    /// an empty history and a last error of 1; a record that does not fit the scenario is
+    /// refused with a message that names the field and the bad value.
+    #[test]
+    fn checkpoint_defaults_and_refusals_name_the_field() {
+        let mut v: serde_json::Value = serde_json::from_str(FIXTURE).unwrap();
+        let sim = v["sim"].as_object_mut().unwrap();
+        sim.remove("acc_history");
+        sim.remove("err_prev");
+        let cp: CheckpointFile = serde_json::from_value(v).unwrap();
+        assert!(cp.sim.acc_history.is_empty());
+        assert_eq!(cp.sim.err_prev, 1.0);
+
+        let file =
+            crate::scenario::parse(&cp.scenario_text, Path::new("checkpoint.toml"), &[]).unwrap();
+        let v = file.validate::<2>().unwrap();
+        let sim = Simulation::<2, Material>::new(v.problem, v.settings.step).unwrap();
+        let refused = |edit: fn(&mut CheckpointFile)| {
+            let mut bad = cp.clone();
+            edit(&mut bad);
+            bad.check_against(&sim, &v.settings)
+                .unwrap_err()
+                .to_string()
+        };
+        for (edit, message) in [
+            (
+                (|c: &mut CheckpointFile| c.sim.err_prev = -2.0) as fn(&mut CheckpointFile),
+                "sim.err_prev = -2e0 must be positive and finite",
+            ),
+            (
+                |c| c.sim.acc_history = vec![(0.0, vec![0.0; 3])],
+                "sim.acc_history[0] has 3 numbers, the scenario needs 26 (13 nodes × 2 components)",
+            ),
+            (
+                |c| c.sim.v_mid.push(0.0),
+                "sim.v_mid has 27 numbers, the scenario needs 26 (13 nodes × 2 components)",
+            ),
+            (
+                |c| c.sim.total_newton = usize::MAX,
+                "sim.total_newton = 18446744073709551615 is more than 12 steps can have",
+            ),
+            (
+                |c| c.sim.dissipated_total = f64::INFINITY,
+                "sim.dissipated_total = inf must be finite",
+            ),
+            (
+                |c| c.counters.steps = 11,
+                "counters.steps = 11 differs from sim.steps = 12",
+            ),
+        ] {
+            let e = refused(edit);
+            assert!(e.contains(message), "expected {message:?} in {e}");
+        }
+        let mut bad = cp.clone();
+        bad.sim.acc[3] = f64::NAN;
+        let e = bad.write(Path::new("unused.json")).unwrap_err().to_string();
+        assert!(e.contains("non-finite value in sim.acc"), "{e}");
+    }
+}
