@@ -567,7 +567,9 @@ mod tests {
 
     /// A checkpoint as written by phstring before the simulation record's flat form moved to
     /// the core: a 12-element taut string in 2D with error control (`time.rtol = 1e-5`),
-    /// interrupted after 12 steps (two points of acceleration history).
+    /// interrupted after 12 steps (two points of acceleration history). Written by
+    /// `phstring run examples/taut_string.toml --set mesh.elements=12 --set time.rtol=1e-5
+    /// --stop-after-steps 12`; only a deliberate change of the file format replaces it.
     const FIXTURE: &str = include_str!("../tests/fixtures/checkpoint_taut_string_2d.json");
 
     /// The fixture parses, its checksum verifies, it serializes back to the same bytes, and it
