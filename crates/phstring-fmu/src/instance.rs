@@ -6,9 +6,10 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use phstring::{
-    ByDim, InputError, Material, PositionRamp, SetupError, Simulation, StepError, Vector, by_dim,
+    ByDim, FlatCheckpoint, InputError, Material, PositionRamp, SetupError, Simulation, StepError,
+    Vector, by_dim,
 };
-use phstring_io::checkpoint::{SimState, fnv1a64_hex};
+use phstring_io::checkpoint::fnv1a64_hex;
 use phstring_io::scenario::{Setup, StartError};
 use serde::{Deserialize, Serialize};
 
@@ -102,10 +103,10 @@ impl Stepper {
     fn value(&self, q: Quantity) -> f64 {
         by_dim!(&self.0, s => value(s, q))
     }
-    fn save(&self) -> SimState {
-        by_dim!(&self.0, s => SimState::from_checkpoint(&s.checkpoint()))
+    fn save(&self) -> FlatCheckpoint {
+        by_dim!(&self.0, s => s.flat_checkpoint())
     }
-    fn load(&mut self, state: &SimState) -> Result<(), SetupError> {
+    fn load(&mut self, state: &FlatCheckpoint) -> Result<(), SetupError> {
         by_dim!(&mut self.0, s => s.restore(state.to_checkpoint()))
     }
     /// Holds load `load`'s force at `force` [N] (its first `D` components).
@@ -197,7 +198,7 @@ pub struct Saved {
     ramps: Vec<Option<Ramp>>,
     /// The port variables' values by value reference (`None` for the others).
     ports: Vec<Option<f64>>,
-    sim: Option<SimState>,
+    sim: Option<FlatCheckpoint>,
     /// `Ĥ(0)` of the run [J] (it depends on the inputs a starting equilibrium was found for).
     h0: Option<f64>,
 }

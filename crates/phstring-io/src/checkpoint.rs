@@ -7,12 +7,18 @@
 //! detects any edit, and [`CheckpointFile::check_against`] checks every length and value
 //! range against the scenario before anything is restored, so that a damaged or edited file
 //! is refused with a message instead of panicking or silently continuing a different run.
+//!
+//! The simulation part, `sim`, is the core's record in flat form,
+//! [`phstring::FlatCheckpoint`]: its fields, their serialization (the JSON keys and their
+//! order), their conversion and their checks against a simulation are all in the core,
+//! beside the record (`phstring/src/simulation/checkpoint.rs`); this module adds what belongs
+//! to the file (outputs, counters, run id, scenario text, checksum) and its checks.
 
 use std::hash::Hasher;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use phstring::{Checkpoint, Material, Simulation, State, Vector};
+use phstring::{CheckpointFit, FlatCheckpoint, Material, Simulation};
 use serde::{Deserialize, Serialize};
 
 /// The `format` field of every checkpoint.
@@ -33,123 +39,6 @@ pub fn fnv1a64_hex(bytes: &[u8]) -> String {
     let mut h = fnv::FnvHasher::default();
     h.write(bytes);
     format!("{:016x}", h.finish())
-}
-
-/// The simulation part of a checkpoint (flattened vectors, `D` components per node).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct SimState {
-    /// Positions [m].
-    pub r: Vec<f64>,
-    /// Velocities [m/s].
-    pub v: Vec<f64>,
-    /// Strains.
-    pub c: Vec<f64>,
-    /// Time bookkeeping `t = t_base + k h_cur` [s].
-    pub t_base: f64,
-    /// Steps since `t_base`.
-    pub k: usize,
-    /// Current step size [s].
-    pub h_cur: f64,
-    /// Steps taken.
-    pub steps: usize,
-    /// Rejected attempts.
-    pub rejected: usize,
-    /// Easy-step streak.
-    pub easy_streak: usize,
-    /// Smallest accepted step [s].
-    pub h_min_used: f64,
-    /// Predictor acceleration [m/s²].
-    pub acc: Vec<f64>,
-    /// Predictor mid-step velocity [m/s].
-    pub v_mid: Vec<f64>,
-    /// Cumulative supplied energy [J].
-    pub supplied_total: f64,
-    /// Cumulative dissipated energy [J].
-    pub dissipated_total: f64,
-    /// Error control: `(mid time [s], mean accelerations [m/s²] flattened)` of the last steps.
-    #[serde(default)]
-    pub acc_history: Vec<(f64, Vec<f64>)>,
-    /// Error control: the last accepted step's error.
-    #[serde(default = "one")]
-    pub err_prev: f64,
-    /// Newton iterations so far.
-    pub total_newton: usize,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-fn flat<const D: usize>(v: &[Vector<D>]) -> Vec<f64> {
-    v.iter().flat_map(|x| x.iter().copied()).collect()
-}
-
-/// Nodal vectors from a flat array; an incomplete last vector is dropped (lengths are
-/// checked by [`CheckpointFile::check_against`] and again by `Simulation::restore`).
-fn unflat<const D: usize>(v: &[f64]) -> Vec<Vector<D>> {
-    v.chunks_exact(D)
-        .map(Vector::<D>::from_column_slice)
-        .collect()
-}
-
-impl SimState {
-    /// From a library checkpoint.
-    pub fn from_checkpoint<const D: usize>(cp: &Checkpoint<D>) -> Self {
-        Self {
-            r: flat(&cp.state.r),
-            v: flat(&cp.state.v),
-            c: cp.state.c.clone(),
-            t_base: cp.t_base,
-            k: cp.k,
-            h_cur: cp.h_cur,
-            steps: cp.steps,
-            rejected: cp.rejected,
-            easy_streak: cp.easy_streak,
-            h_min_used: cp.h_min_used,
-            acc: flat(&cp.acc),
-            v_mid: flat(&cp.v_mid),
-            supplied_total: cp.supplied_total,
-            dissipated_total: cp.dissipated_total,
-            acc_history: cp
-                .acc_history
-                .points
-                .iter()
-                .map(|(t, a)| (*t, flat(a)))
-                .collect(),
-            err_prev: cp.err_prev,
-            total_newton: cp.total_newton,
-        }
-    }
-    /// To a library checkpoint in dimension `D` (sizes are checked by `Simulation::restore`).
-    pub fn to_checkpoint<const D: usize>(&self) -> Checkpoint<D> {
-        Checkpoint {
-            state: State {
-                r: unflat(&self.r),
-                v: unflat(&self.v),
-                c: self.c.clone(),
-            },
-            t_base: self.t_base,
-            k: self.k,
-            h_cur: self.h_cur,
-            steps: self.steps,
-            rejected: self.rejected,
-            easy_streak: self.easy_streak,
-            h_min_used: self.h_min_used,
-            acc: unflat(&self.acc),
-            v_mid: unflat(&self.v_mid),
-            supplied_total: self.supplied_total,
-            dissipated_total: self.dissipated_total,
-            acc_history: phstring::accuracy::AccelerationHistory {
-                points: self
-                    .acc_history
-                    .iter()
-                    .map(|(t, a)| (*t, unflat(a)))
-                    .collect(),
-            },
-            err_prev: self.err_prev,
-            total_newton: self.total_newton,
-        }
-    }
 }
 
 /// The output part of a checkpoint: file lengths at the checkpoint (longer files are cut back
@@ -237,8 +126,9 @@ pub struct CheckpointFile {
     pub scenario_text: String,
     /// End of the loading phase marked in plots [s], if any.
     pub end_of_loading: Option<f64>,
-    /// Simulation state.
-    pub sim: SimState,
+    /// Simulation state: the core's record in flat form, which serializes, checks and
+    /// converts itself ([`FlatCheckpoint::check_fits`], [`FlatCheckpoint::into_checkpoint`]).
+    pub sim: FlatCheckpoint,
     /// Output files.
     pub outputs: OutputState,
     /// Totals.
@@ -311,7 +201,7 @@ struct CheckpointView<'a> {
     scenario_path: &'a Path,
     scenario_text: &'a str,
     end_of_loading: Option<f64>,
-    sim: &'a SimState,
+    sim: &'a FlatCheckpoint,
     outputs: &'a OutputState,
     counters: &'a Counters,
     checksum: &'a str,
@@ -328,15 +218,6 @@ impl std::io::Write for HashWriter {
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
     }
-}
-
-/// What [`CheckpointFile::check_against`] found of the time of a checkpoint, for its later
-/// checks.
-struct Reached {
-    /// Time reached, `t_base + k h_cur` [s].
-    t: f64,
-    /// `time.max_halvings`, capped at 1074 (below it `time.h / 2^n` is zero).
-    halvings: u32,
 }
 
 impl CheckpointFile {
@@ -389,24 +270,12 @@ impl CheckpointFile {
         })
     }
 
-    /// The first field holding NaN or infinity, if any.
+    /// The first field holding NaN or infinity, if any: the simulation record's
+    /// ([`FlatCheckpoint::non_finite`]), then the counters', the end of loading and the
+    /// snapshots.
     fn non_finite(&self) -> Option<&'static str> {
-        let s = &self.sim;
         let c = &self.counters;
-        let arrays: [(&'static str, &[f64]); 5] = [
-            ("sim.r", &s.r),
-            ("sim.v", &s.v),
-            ("sim.c", &s.c),
-            ("sim.acc", &s.acc),
-            ("sim.v_mid", &s.v_mid),
-        ];
         let scalars = [
-            ("sim.t_base", s.t_base),
-            ("sim.h_cur", s.h_cur),
-            ("sim.h_min_used", s.h_min_used),
-            ("sim.supplied_total", s.supplied_total),
-            ("sim.dissipated_total", s.dissipated_total),
-            ("sim.err_prev", s.err_prev),
             ("counters.max_balance_error", c.max_balance_error),
             (
                 "counters.max_relative_balance_error",
@@ -418,16 +287,8 @@ impl CheckpointFile {
             ("counters.hamiltonian_initial", c.hamiltonian_initial),
             ("end_of_loading", self.end_of_loading.unwrap_or(0.0)),
         ];
-        arrays
-            .into_iter()
-            .find(|(_, a)| a.iter().any(|x| !x.is_finite()))
-            .map(|(n, _)| n)
-            .or_else(|| {
-                s.acc_history
-                    .iter()
-                    .any(|(t, a)| !t.is_finite() || a.iter().any(|x| !x.is_finite()))
-                    .then_some("sim.acc_history")
-            })
+        self.sim
+            .non_finite()
             .or_else(|| {
                 scalars
                     .into_iter()
@@ -511,24 +372,23 @@ impl CheckpointFile {
     }
 
     /// Checks every array length and value range of the checkpoint against the simulation
-    /// set up from its scenario (before [`Simulation::restore`]) and the run settings: node
-    /// and element counts, finite values, strains in the material's domain, the step size
-    /// between the floor `time.h / 2^max_halvings` and `time.h`, the time within
-    /// `[0, time.end]`, step and iteration counts a run to `time.end` can reach, and output
-    /// lengths at least the files' headers.
+    /// set up from its scenario (before [`Simulation::restore`]) and the run settings: the
+    /// simulation record's ([`FlatCheckpoint::check_fits`]: node and element counts, finite
+    /// values, strains in the material's domain, the step size between the floor
+    /// `time.h / 2^max_halvings` and `time.h`, the time within `[0, time.end]`, counts a run
+    /// to that time can reach), then the counters' (the same limits), and output lengths at
+    /// least the files' headers.
     pub fn check_against<const D: usize>(
         &self,
         sim: &Simulation<D, Material>,
         settings: &crate::scenario::RunSettings,
     ) -> Result<(), CheckpointError> {
         let n = sim.system().mesh().n_nodes();
-        let n_el = sim.system().mesh().n_elements();
         let checks = || {
-            self.check_state(sim, n, n_el)?;
-            let time = self.check_time(settings)?;
-            self.check_counts(settings, &time)?;
+            let fit = self.sim.check_fits(sim, settings.t_end)?;
+            self.check_counts(&fit)?;
             self.check_totals()?;
-            self.check_outputs::<D>(settings, n, &time)
+            self.check_outputs::<D>(settings, n, fit.t)
         };
         checks().map_err(|reason| CheckpointError::Invalid {
             path: self.path.clone(),
@@ -536,148 +396,23 @@ impl CheckpointFile {
         })
     }
 
-    /// The state arrays: their lengths for `n` nodes and `n_el` elements in dimension `D`,
-    /// finite values, the acceleration history, the last error estimate, and strains in the
-    /// material's domain. `Err` says what is wrong.
-    fn check_state<const D: usize>(
-        &self,
-        sim: &Simulation<D, Material>,
-        n: usize,
-        n_el: usize,
-    ) -> Result<(), String> {
-        let s = &self.sim;
-        for (name, values, expected, what) in [
-            ("sim.r", &s.r, D * n, "nodes"),
-            ("sim.v", &s.v, D * n, "nodes"),
-            ("sim.acc", &s.acc, D * n, "nodes"),
-            ("sim.v_mid", &s.v_mid, D * n, "nodes"),
-            ("sim.c", &s.c, n_el, "elements"),
-        ] {
-            if values.len() != expected {
-                let count = if what == "nodes" {
-                    format!("{n} nodes × {D} components")
-                } else {
-                    format!("{n_el} elements")
-                };
-                return Err(format!(
-                    "{name} has {} numbers, the scenario needs {expected} ({count})",
-                    values.len()
-                ));
-            }
-            if let Some(i) = values.iter().position(|x| !x.is_finite()) {
-                return Err(format!("{name}[{i}] is not finite"));
-            }
-        }
-        if s.acc_history.len() > 2 {
-            return Err(format!(
-                "sim.acc_history has {} points, at most 2",
-                s.acc_history.len()
-            ));
-        }
-        for (k, (t, a)) in s.acc_history.iter().enumerate() {
-            if a.len() != D * n {
-                return Err(format!(
-                    "sim.acc_history[{k}] has {} numbers, the scenario needs {} ({n} nodes × {D} components)",
-                    a.len(),
-                    D * n
-                ));
-            }
-            if !t.is_finite() || a.iter().any(|x| !x.is_finite()) {
-                return Err(format!("sim.acc_history[{k}] is not finite"));
-            }
-        }
-        if !(s.err_prev > 0.0 && s.err_prev.is_finite()) {
-            return Err(format!(
-                "sim.err_prev = {:e} must be positive and finite",
-                s.err_prev
-            ));
-        }
-        if let Some(i) = sim.system().first_inadmissible(&s.c) {
-            return Err(format!(
-                "sim.c[{i}] = {:e} is outside the material's domain",
-                s.c[i]
-            ));
-        }
-        Ok(())
-    }
-
-    /// The step size (between the floor `time.h / 2^max_halvings` and `time.h`), the time
-    /// (within `[0, time.end]`) and the step count a run to that time can reach; returns the
-    /// time reached.
-    fn check_time(&self, settings: &crate::scenario::RunSettings) -> Result<Reached, String> {
-        let s = &self.sim;
-        let step = &settings.step;
-        let h = step.h;
-        let halvings = step.control.max_halvings.min(1074);
-        let floor = h * 0.5f64.powi(halvings as i32);
-        if !(s.h_cur.is_finite()
-            && s.h_cur > 0.0
-            && s.h_cur >= floor * (1.0 - 1e-9)
-            && s.h_cur <= h * (1.0 + 1e-12))
-        {
-            return Err(format!(
-                "sim.h_cur = {:e} s is not between the step-size floor {floor:e} s and time.h = {h:e} s",
-                s.h_cur
-            ));
-        }
-        if !(s.h_min_used.is_finite() && s.h_min_used > 0.0 && s.h_min_used <= h * (1.0 + 1e-12)) {
-            return Err(format!(
-                "sim.h_min_used = {:e} s is not in (0, time.h = {h:e} s]",
-                s.h_min_used
-            ));
-        }
-        let t_end = settings.t_end;
-        if !(s.t_base.is_finite() && s.t_base >= 0.0 && s.t_base <= t_end * (1.0 + 1e-9)) {
-            return Err(format!(
-                "sim.t_base = {:e} s is not in [0, time.end = {t_end:e} s]",
-                s.t_base
-            ));
-        }
-        let t = s.t_base + s.k as f64 * s.h_cur;
-        if !(t.is_finite() && t <= t_end * (1.0 + 1e-9) + s.h_cur) || s.k > s.steps {
-            return Err(format!(
-                "sim.t_base + sim.k × sim.h_cur = {t:e} s (k = {}, {} steps) is beyond time.end = {t_end:e} s",
-                s.k, s.steps
-            ));
-        }
-        // Every accepted step but a last, clipped one advances at least the floor.
-        // Capped far below usize::MAX, so that the counts below and those a resumed run adds
-        // cannot overflow.
-        let max_steps = ((t / floor).ceil() + 2.0).min(1e15);
-        if s.steps as f64 > max_steps {
-            return Err(format!(
-                "sim.steps = {} is more than a run to t = {t:e} s can take with steps of at least {floor:e} s",
-                s.steps
-            ));
-        }
-        Ok(Reached { t, halvings })
-    }
-
-    /// The step, rejection and iteration counts: at most what `sim.steps` steps can have.
-    fn check_counts(
-        &self,
-        settings: &crate::scenario::RunSettings,
-        time: &Reached,
-    ) -> Result<(), String> {
-        let s = &self.sim;
-        let step = &settings.step;
-        let halvings = time.halvings;
+    /// The counters' step count (that of the simulation record), and their rejection and
+    /// iteration counts: at most what `sim.steps` steps can have.
+    fn check_counts(&self, fit: &CheckpointFit) -> Result<(), String> {
         let c = &self.counters;
-        if c.steps != s.steps {
+        if c.steps != fit.steps {
             return Err(format!(
                 "counters.steps = {} differs from sim.steps = {}",
-                c.steps, s.steps
+                c.steps, fit.steps
             ));
         }
-        let attempts_per_step = halvings as usize + 1;
-        let max_rejected = s.steps.saturating_add(1).saturating_mul(attempts_per_step);
-        let max_iterations = (s.steps.saturating_add(max_rejected).saturating_add(1))
-            .saturating_mul(step.newton.max_iter.max(1));
+        let max_iterations = fit.max_iterations;
         for (name, value, limit) in [
-            ("sim.rejected", s.rejected, max_rejected),
-            ("counters.rejected_steps", c.rejected_steps, max_rejected),
-            ("sim.easy_streak", s.easy_streak, s.steps),
-            ("sim.total_newton", s.total_newton, max_iterations),
+            (
+                "counters.rejected_steps",
+                c.rejected_steps,
+                fit.max_rejected,
+            ),
             (
                 "counters.total_newton_iterations",
                 c.total_newton_iterations,
@@ -698,31 +433,23 @@ impl CheckpointFile {
                 c.local_newton_iterations,
                 max_iterations.saturating_mul(1024),
             ),
-            ("counters.steps_at_roundoff", c.steps_at_roundoff, s.steps),
+            ("counters.steps_at_roundoff", c.steps_at_roundoff, fit.steps),
             (
                 "counters.steps_over_tolerance",
                 c.steps_over_tolerance,
-                s.steps,
+                fit.steps,
             ),
         ] {
-            if value > limit {
-                return Err(format!(
-                    "{name} = {value} is more than {} steps can have (at most {limit})",
-                    s.steps
-                ));
-            }
+            fit.check_count(name, value, limit)?;
         }
         Ok(())
     }
 
-    /// The energy totals and timings: finite, and non-negative where they must be.
+    /// The counters' energy totals and timings: finite, and non-negative where they must
+    /// be; the end of loading finite.
     fn check_totals(&self) -> Result<(), String> {
-        let s = &self.sim;
         let c = &self.counters;
         for (name, value, nonneg) in [
-            ("sim.supplied_total", s.supplied_total, false),
-            // dg4's backward sub-step can give back dissipated energy: finite only.
-            ("sim.dissipated_total", s.dissipated_total, false),
             ("counters.hamiltonian_initial", c.hamiltonian_initial, false),
             ("counters.max_balance_error", c.max_balance_error, true),
             (
@@ -756,10 +483,9 @@ impl CheckpointFile {
         &self,
         settings: &crate::scenario::RunSettings,
         n: usize,
-        time: &Reached,
+        t: f64,
     ) -> Result<(), String> {
         let s = &self.sim;
-        let t = time.t;
         let o = &self.outputs;
         let (energy_header, positions_header, ports_header) = crate::files::headers(D);
         for (name, bytes, header) in [
@@ -832,5 +558,104 @@ impl CheckpointFile {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checkpoint as written by phstring before the simulation record's flat form moved to
+    /// the core: a 12-element taut string in 2D with error control (`time.rtol = 1e-5`),
+    /// interrupted after 12 steps (two points of acceleration history). Written by
+    /// `phstring run examples/taut_string.toml --set mesh.elements=12 --set time.rtol=1e-5
+    /// --stop-after-steps 12`; only a deliberate change of the file format replaces it.
+    const FIXTURE: &str = include_str!("../tests/fixtures/checkpoint_taut_string_2d.json");
+
+    /// The fixture parses, its checksum verifies, it serializes back to the same bytes, and it
+    /// fits and restores into a simulation of its scenario, which steps on from it.
+    #[test]
+    fn checkpoint_fixture_reads_back_byte_for_byte_and_resumes() {
+        let cp: CheckpointFile = serde_json::from_str(FIXTURE).unwrap();
+        assert_eq!(cp.checksum, "f66484bd11cfd6b4");
+        assert_eq!(cp.checksum(), cp.checksum);
+        assert_eq!(serde_json::to_string(&cp).unwrap(), FIXTURE);
+        let s = &cp.sim;
+        assert_eq!((s.steps, s.rejected, s.total_newton), (12, 4, 14));
+        assert_eq!((s.r.len(), s.c.len(), s.acc_history.len()), (26, 12, 2));
+        assert_eq!(s.err_prev, 0.5204494196047398);
+        assert_eq!(s.h_cur, 9.389162555012371e-6);
+
+        let file =
+            crate::scenario::parse(&cp.scenario_text, Path::new("checkpoint.toml"), &[]).unwrap();
+        let v = file.validate::<2>().unwrap();
+        let t_end = v.settings.t_end;
+        let mut sim = Simulation::<2, Material>::new(v.problem, v.settings.step).unwrap();
+        cp.check_against(&sim, &v.settings).unwrap();
+        sim.restore(cp.sim.clone().into_checkpoint::<2>()).unwrap();
+        assert_eq!(sim.flat_checkpoint(), cp.sim);
+        assert_eq!(sim.checkpoint().acc_history.points.len(), 2);
+        let report = sim.step_until(t_end).unwrap();
+        assert!(report.balance_error.is_finite());
+        assert_eq!(sim.steps(), 13);
+    }
+
+    /// A file without the error-control fields (written before error control) reads with
+    /// an empty history and a last error of 1; a record that does not fit the scenario is
+    /// refused with a message that names the field and the bad value.
+    #[test]
+    fn checkpoint_defaults_and_refusals_name_the_field() {
+        let mut v: serde_json::Value = serde_json::from_str(FIXTURE).unwrap();
+        let sim = v["sim"].as_object_mut().unwrap();
+        sim.remove("acc_history");
+        sim.remove("err_prev");
+        let cp: CheckpointFile = serde_json::from_value(v).unwrap();
+        assert!(cp.sim.acc_history.is_empty());
+        assert_eq!(cp.sim.err_prev, 1.0);
+
+        let file =
+            crate::scenario::parse(&cp.scenario_text, Path::new("checkpoint.toml"), &[]).unwrap();
+        let v = file.validate::<2>().unwrap();
+        let sim = Simulation::<2, Material>::new(v.problem, v.settings.step).unwrap();
+        let refused = |edit: fn(&mut CheckpointFile)| {
+            let mut bad = cp.clone();
+            edit(&mut bad);
+            bad.check_against(&sim, &v.settings)
+                .unwrap_err()
+                .to_string()
+        };
+        for (edit, message) in [
+            (
+                (|c: &mut CheckpointFile| c.sim.err_prev = -2.0) as fn(&mut CheckpointFile),
+                "sim.err_prev = -2e0 must be positive and finite",
+            ),
+            (
+                |c| c.sim.acc_history = vec![(0.0, vec![0.0; 3])],
+                "sim.acc_history[0] has 3 numbers, the scenario needs 26 (13 nodes × 2 components)",
+            ),
+            (
+                |c| c.sim.v_mid.push(0.0),
+                "sim.v_mid has 27 numbers, the scenario needs 26 (13 nodes × 2 components)",
+            ),
+            (
+                |c| c.sim.total_newton = usize::MAX,
+                "sim.total_newton = 18446744073709551615 is more than 12 steps can have",
+            ),
+            (
+                |c| c.sim.dissipated_total = f64::INFINITY,
+                "sim.dissipated_total = inf must be finite",
+            ),
+            (
+                |c| c.counters.steps = 11,
+                "counters.steps = 11 differs from sim.steps = 12",
+            ),
+        ] {
+            let e = refused(edit);
+            assert!(e.contains(message), "expected {message:?} in {e}");
+        }
+        let mut bad = cp.clone();
+        bad.sim.acc[3] = f64::NAN;
+        let e = bad.write(Path::new("unused.json")).unwrap_err().to_string();
+        assert!(e.contains("non-finite value in sim.acc"), "{e}");
     }
 }

@@ -105,8 +105,8 @@ pub use observe::{
     Observer, RunSummary, Settle, SettleWatch, Settled, StepReport, fastest_node, nan_max,
 };
 pub use simulation::{
-    Checkpoint, Predictor, Simulation, StepControl, StepParams, estimated_memory_bytes,
-    estimated_seconds_per_iteration, estimated_seconds_per_step,
+    Checkpoint, CheckpointFit, FlatCheckpoint, Predictor, Simulation, StepControl, StepParams,
+    estimated_memory_bytes, estimated_seconds_per_iteration, estimated_seconds_per_step,
 };
 pub use system::{
     Damping, ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State,

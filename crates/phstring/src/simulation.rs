@@ -16,6 +16,9 @@ use crate::observe::{
 
 use crate::system::{Energies, Network, PhSystem, State, Vector};
 
+mod checkpoint;
+pub use checkpoint::{Checkpoint, CheckpointFit, FlatCheckpoint};
+
 /// Parameters of the time stepper.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepParams {
@@ -172,104 +175,6 @@ impl Default for StepControl {
             rtol: 0.0,
             atol: 0.0,
         }
-    }
-}
-
-/// The complete dynamic state of a [`Simulation`]: its state and the progress of its run.
-/// The simulation keeps it as one record, which a checkpoint copies, a restore puts back and
-/// a failed or rejected step is undone to; restoring it into a simulation of the same problem
-/// and parameters continues the run bit for bit as if it had not stopped.
-#[derive(Debug, PartialEq)]
-pub struct Checkpoint<const D: usize> {
-    /// State `(r, v, C)`.
-    pub state: State<D>,
-    /// Time bookkeeping: `t = t_base + k h_cur` [s].
-    pub t_base: f64,
-    /// Steps since `t_base`.
-    pub k: usize,
-    /// Current step size [s].
-    pub h_cur: f64,
-    /// Steps taken.
-    pub steps: usize,
-    /// Rejected step attempts so far.
-    pub rejected: usize,
-    /// Successive easy steps (step-size growth).
-    pub easy_streak: usize,
-    /// Smallest accepted step size [s].
-    pub h_min_used: f64,
-    /// Acceleration estimate of the predictor.
-    pub acc: Vec<Vector<D>>,
-    /// Mid-step velocity of the last step (predictor).
-    pub v_mid: Vec<Vector<D>>,
-    /// Cumulative supplied energy [J].
-    pub supplied_total: f64,
-    /// Cumulative dissipated energy [J].
-    pub dissipated_total: f64,
-    /// Newton iterations so far.
-    pub total_newton: usize,
-    /// Error control: mean accelerations of the last steps (docs/method.md §19).
-    pub acc_history: crate::accuracy::AccelerationHistory<D>,
-    /// Error control: the last accepted step's error.
-    pub err_prev: f64,
-}
-
-impl<const D: usize> Clone for Checkpoint<D> {
-    fn clone(&self) -> Self {
-        let mut c = Self {
-            state: self.state.clone(),
-            t_base: 0.0,
-            k: 0,
-            h_cur: 0.0,
-            steps: 0,
-            rejected: 0,
-            easy_streak: 0,
-            h_min_used: 0.0,
-            acc: Vec::new(),
-            v_mid: Vec::new(),
-            supplied_total: 0.0,
-            dissipated_total: 0.0,
-            total_newton: 0,
-            acc_history: Default::default(),
-            err_prev: 0.0,
-        };
-        c.clone_from(self);
-        c
-    }
-
-    /// Field by field, reusing the buffers (a step saves the record this way).
-    fn clone_from(&mut self, source: &Self) {
-        let Self {
-            state,
-            t_base,
-            k,
-            h_cur,
-            steps,
-            rejected,
-            easy_streak,
-            h_min_used,
-            acc,
-            v_mid,
-            supplied_total,
-            dissipated_total,
-            total_newton,
-            acc_history,
-            err_prev,
-        } = self;
-        state.clone_from(&source.state);
-        *t_base = source.t_base;
-        *k = source.k;
-        *h_cur = source.h_cur;
-        *steps = source.steps;
-        *rejected = source.rejected;
-        *easy_streak = source.easy_streak;
-        *h_min_used = source.h_min_used;
-        acc.clone_from(&source.acc);
-        v_mid.clone_from(&source.v_mid);
-        *supplied_total = source.supplied_total;
-        *dissipated_total = source.dissipated_total;
-        *total_newton = source.total_newton;
-        acc_history.clone_from(&source.acc_history);
-        *err_prev = source.err_prev;
     }
 }
 
@@ -550,23 +455,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             newton_ws: NewtonWorkspace::new(&sys.mesh),
             sys,
             params,
-            run: Checkpoint {
-                state,
-                t_base: 0.0,
-                k: 0,
-                h_cur: params.h,
-                steps: 0,
-                rejected: 0,
-                easy_streak: 0,
-                h_min_used: params.h,
-                acc: vec![Vector::zeros(); n],
-                v_mid: vec![Vector::zeros(); n],
-                supplied_total: 0.0,
-                dissipated_total: 0.0,
-                total_newton: 0,
-                acc_history: Default::default(),
-                err_prev: 1.0,
-            },
+            run: Checkpoint::start(state, params.h),
             energies,
             x: vec![Vector::zeros(); n],
             f_ext: vec![Vector::zeros(); n],
@@ -658,55 +547,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Continues from `cp`, taken from a simulation of the same problem and parameters.
     pub fn restore(&mut self, cp: Checkpoint<D>) -> Result<(), SetupError> {
         let (n, n_el) = (self.run.state.r.len(), self.run.state.c.len());
-        for (what, got, expected) in [
-            ("positions", cp.state.r.len(), n),
-            ("velocities", cp.state.v.len(), n),
-            ("strains", cp.state.c.len(), n_el),
-            ("predictor accelerations", cp.acc.len(), n),
-            ("predictor velocities", cp.v_mid.len(), n),
-        ] {
-            if got != expected {
-                return Err(SetupError::StateSize {
-                    what,
-                    got,
-                    expected,
-                });
-            }
-        }
-        if !(cp.h_cur > 0.0 && cp.h_cur.is_finite()) {
-            return Err(SetupError::NonPositive {
-                what: "checkpoint step size",
-                index: None,
-                value: cp.h_cur,
-            });
-        }
-        // Error-control history: at most two points of n finite accelerations, a finite
-        // positive last error.
-        let points = &cp.acc_history.points;
-        if let Some(bad) = points.iter().find(|(_, a)| a.len() != n) {
-            return Err(SetupError::StateSize {
-                what: "error-control accelerations",
-                got: bad.1.len(),
-                expected: n,
-            });
-        }
-        let finite = points
-            .iter()
-            .all(|(t, a)| t.is_finite() && a.iter().all(|x| x.iter().all(|y| y.is_finite())));
-        if points.len() > 2 || !finite {
-            return Err(SetupError::OutOfRange {
-                what: "error-control history (points)",
-                value: points.len() as f64,
-                range: "at most 2 points, all finite",
-            });
-        }
-        if !(cp.err_prev > 0.0 && cp.err_prev.is_finite()) {
-            return Err(SetupError::NonPositive {
-                what: "checkpoint error-control error",
-                index: None,
-                value: cp.err_prev,
-            });
-        }
+        cp.check_sizes(n, n_el)?;
         self.energies = self.sys.energies(&cp.state);
         self.run = cp;
         Ok(())

@@ -16,7 +16,7 @@ use std::time::Instant;
 use phstring::{Material, SettleWatch, Simulation, StepError, StepReport};
 use serde::Serialize;
 
-use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT, SimState};
+use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT};
 use crate::figures::{draw_animation, draw_plots};
 use crate::files::{
     CHECKPOINT, COMPONENTS_FILE, RUN_ID_FILE, SCENARIO_FILE, SNAPSHOTS, SUMMARY_FILE, atomic_write,
@@ -653,7 +653,9 @@ fn resume_writers<const D: usize>(
 ) -> Result<Writers, RunError> {
     check_resume_folder(&cp, ctx.out)?;
     cp.check_against(sim, &ctx.settings)?;
-    sim.restore(cp.sim.to_checkpoint::<D>())?;
+    // The flat record is turned into the simulation's one array at a time (each freed as
+    // it goes), so that a large state is not held twice in full.
+    sim.restore(cp.sim.into_checkpoint::<D>())?;
     let c = cp.counters;
     info.steps = c.steps;
     info.total_newton_iterations = c.total_newton_iterations;
@@ -694,7 +696,7 @@ fn write_checkpoint<const D: usize>(
         scenario_path: ctx.file.path.clone(),
         scenario_text: ctx.file.text().to_string(),
         end_of_loading: ctx.end_of_loading,
-        sim: SimState::from_checkpoint(&sim.checkpoint()),
+        sim: sim.flat_checkpoint(),
         outputs: writers.state()?,
         counters: Counters {
             steps: info.steps,
