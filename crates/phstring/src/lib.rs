@@ -84,6 +84,7 @@ pub mod statics;
 pub mod system;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
+pub mod water;
 
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
@@ -109,4 +110,8 @@ pub use simulation::{
 pub use system::{
     Damping, ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State,
     Vector,
+};
+pub use water::{
+    Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed, SeabedSurface,
+    Water, WaterWork,
 };

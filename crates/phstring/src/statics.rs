@@ -32,6 +32,7 @@ use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::system::{Energies, Law, Network, PhSystem, State, Vector, element_mass};
+use crate::water::WaterModel;
 
 /// Parameters of the equilibrium solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -280,6 +281,9 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
                 }
             }
         }
+        if let Some(w) = sys.water.as_deref() {
+            scale2 += self.water_terms(w, x, res, jac.as_deref_mut());
+        }
         if self.mu > 0.0 || self.jac_shift > 0.0 {
             let shift = self.mu + self.jac_shift;
             for &(i, m) in &sys.point_mass {
@@ -323,6 +327,54 @@ fn sq_sum<const D: usize>(v: &[Vector<D>]) -> f64 {
 }
 
 impl<const D: usize, M: StoredEnergy> StaticEquations<'_, D, M> {
+    /// The water at rest (docs/method.md §21): buoyancy and the current's drag (loads,
+    /// scaled by `λ`) and the seabed contact, at `r₀ + x`; returns the squares of the forces.
+    fn water_terms(
+        &self,
+        w: &WaterModel<D>,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+    ) -> f64 {
+        let lambda = self.lambda;
+        let mut scale2 = 0.0;
+        for node in &w.nodes {
+            let i = node.node;
+            let r = self.r0[i] + x[i];
+            let (mut f, mut k) = w.static_potential(node, &r, lambda);
+            if node.drag > 0.0 {
+                let (fd, kd) = w.static_point_drag(node, &r);
+                f += fd * lambda;
+                k += kd * lambda;
+            }
+            res[i] += f;
+            scale2 += f.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[i] += k;
+            }
+        }
+        if w.still {
+            return scale2;
+        }
+        for el in &w.elements {
+            let [a, b] = self.sys.mesh.elements()[el.e];
+            let (ra, rb) = (self.r0[a] + x[a], self.r0[b] + x[b]);
+            let l = self.sys.mesh.lengths()[el.e];
+            let (f, [ja, jb]) = w.static_element_drag(el, (&ra, &rb), l, jac.is_some());
+            let half = f * (0.5 * lambda);
+            res[a] -= half;
+            res[b] -= half;
+            scale2 += 2.0 * half.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[a] += ja * lambda;
+                j.diag[b] += jb * lambda;
+                j.off[el.e][0] += jb * lambda;
+                j.off[el.e][1] += ja * lambda;
+            }
+        }
+        scale2
+    }
+
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn elements<L: StoredEnergy>(
@@ -971,9 +1023,18 @@ const POLISH_BELOW: f64 = 1e-3;
 /// …or every this many pseudo-time steps.
 const POLISH_EVERY: usize = 10;
 
-/// Axes along which no node is held.
+/// Axes along which no node is held. In water the vertical axis is not counted (buoyancy
+/// is a load that depends on the height), nor is any axis along which a seabed's normal has
+/// a component (the seabed holds it).
 fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
-    (0..D).filter(|&k| sys.free.iter().all(|f| f[k])).collect()
+    let held_by_water = |k: usize| {
+        sys.water
+            .as_deref()
+            .is_some_and(|w| k == D - 1 || w.bed.as_ref().is_some_and(|b| b.n[k] != 0.0))
+    };
+    (0..D)
+        .filter(|&k| sys.free.iter().all(|f| f[k]) && !held_by_water(k))
+        .collect()
 }
 
 /// The starting shift `μ₀` [1/s²]: the ratio of the stiffness to the mass on the diagonal
