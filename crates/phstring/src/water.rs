@@ -1057,6 +1057,111 @@ mod tests {
         }
     }
 
+    /// Momentum (docs/method.md §21): over every step the change of `Σ M_ρ v` equals the
+    /// impulse of gravity, the water's forces (buoyancy, seabed, drag, friction) and the
+    /// support's reaction, to the Newton residual left at the free components.
+    #[test]
+    fn momentum_changes_by_the_impulse_of_the_external_forces() {
+        use crate::{Boundary, Fixed, MassMatrix, Material, Mesh, Problem, Simulation, State};
+        let (n, l) = (12, 4.0);
+        let mesh = Mesh::uniform_chain(n, l * n as f64).unwrap();
+        let r: Vec<Vector<3>> = (0..=n)
+            .map(|i| Vector::<3>::new(3.5 * i as f64, 0.2 * i as f64, -40.0 + 3.0 * i as f64))
+            .collect();
+        let problem = Problem {
+            initial: State::at_rest(&mesh, r),
+            mesh,
+            material: Material::linear_elastic(1e9),
+            rho_a: 120.0,
+            body_force: Vector::<3>::new(0.0, 0.0, -120.0 * STANDARD_GRAVITY),
+            mass: MassMatrix::Consistent,
+            boundary: Boundary {
+                fixed: vec![Fixed::node(0)],
+                loads: vec![],
+                motions: vec![],
+                feedback: vec![],
+            },
+            point_masses: vec![],
+        };
+        let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
+            coefficient: 0.6,
+            slope: 500.0,
+        });
+        let water = Water::new(1025.0)
+            .with_current(Current::Uniform(Vector::<3>::new(0.8, -0.3, 0.0)))
+            .with_seabed(seabed);
+        let line = LineHydro {
+            diameter: 0.12,
+            cd: 1.2,
+            cd_axial: 0.4,
+            ca: 1.0,
+            ca_axial: 1.0,
+        };
+        let net = crate::Network::from(problem)
+            .with_water(water)
+            .with_line_hydro(0, line)
+            .with_point_hydro(PointHydro {
+                node: n,
+                volume: 0.5,
+                cda: 0.8,
+                ca: 0.5,
+            });
+        let params = crate::StepParams {
+            h: 0.02,
+            ..Default::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap();
+        let mut worst = 0.0f64;
+        for _ in 0..200 {
+            let before = sim.state().clone();
+            let p0 = sim.system().linear_momentum(&before);
+            let rep = sim.step().unwrap();
+            let sys = sim.system();
+            let w = sys.water.as_deref().unwrap();
+            let x: Vec<Vector<3>> = sim
+                .state()
+                .r
+                .iter()
+                .zip(&before.r)
+                .map(|(a, b)| a - b)
+                .collect();
+            // The water's residual terms, summed over the nodes.
+            let mut water_res = Vector::<3>::zeros();
+            for node in &w.nodes {
+                water_res += w
+                    .node_step(node, &before.r[node.node], &x[node.node], rep.h)
+                    .res;
+            }
+            for el in &w.elements {
+                let [a, b] = sys.mesh.elements()[el.e];
+                let l = sys.mesh.lengths()[el.e];
+                let (f, _, _) = w.element_drag(
+                    el,
+                    (&before.r[a], &before.r[b]),
+                    (&x[a], &x[b]),
+                    l,
+                    rep.h,
+                    false,
+                );
+                water_res -= f;
+            }
+            let gravity: Vector<3> = sys.body_force_vector().iter().sum();
+            let supports: Vector<3> = sim.ports().iter().map(|p| p.output).sum();
+            let impulse = (gravity - water_res + supports) * rep.h;
+            let dp = sys.linear_momentum(sim.state()) - p0;
+            let left = rep.h * ((n + 1) as f64 * 3.0).sqrt() * rep.residual;
+            let scale = rep.h * (gravity.norm() + water_res.norm() + supports.norm());
+            let err = (dp - impulse).norm();
+            assert!(
+                err <= left + 1e-12 * scale,
+                "step {}: {err:e} vs {left:e}",
+                rep.step
+            );
+            worst = worst.max(err / scale);
+        }
+        assert!(worst <= 1e-9, "worst {worst:e}");
+    }
+
     /// Fully submerged, the buoyancy is the constant `ρ_w g V` upwards; above the band, none.
     #[test]
     fn buoyancy_potential_far_from_the_surface() {
