@@ -455,3 +455,122 @@ fn chain_pulled_over_the_seabed_needs_mu_w_l() {
     );
     assert!((pull - coulomb).abs() <= 5e-3 * coulomb);
 }
+
+/// A line hanging from a fixed top in a uniform current, its lower end free, with no axial
+/// drag: in statics it is straight at the angle `θ` from the vertical where the normal drag
+/// balances the normal part of the wet weight, `w sin θ = ½ ρ_w C_d d U cos θ √(U² cos² θ + δ²)`
+/// (the drag at rest, `v_r = −u`).
+#[test]
+fn line_in_a_current_hangs_at_the_drag_angle() {
+    let (n, l, d, rho_a, cd, u) = (20, 2.0, 0.1, 100.0, 1.2, 2.0);
+    let r: Vec<Vector<2>> = (0..=n)
+        .map(|i| Vector::<2>::new(0.0, -5.0 - l * i as f64))
+        .collect();
+    let water = Water::new(RHO_W).with_current(Current::Uniform(Vector::<2>::new(u, 0.0)));
+    let delta = water.drag_smoothing;
+    let net = chain(r, l, 1e9, rho_a, &[0])
+        .with_water(water)
+        .with_line_hydro(
+            0,
+            LineHydro {
+                diameter: d,
+                cd,
+                ..Default::default()
+            },
+        );
+    let eq = solve(net, &StaticsParams::default(), None).unwrap();
+    let w = wet_weight(rho_a, d);
+    let normal = |th: f64| {
+        let un = u * th.cos();
+        0.5 * RHO_W * cd * d * un * (un * un + delta * delta).sqrt() - w * th.sin()
+    };
+    let (mut lo, mut hi) = (0.0, 1.5);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if normal(mid) > 0.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let theta = 0.5 * (lo + hi);
+    for pair in eq.state.r.windows(2) {
+        let dr = pair[1] - pair[0];
+        let got = dr[0].atan2(-dr[1]);
+        assert!(
+            (got - theta).abs() <= 1e-9,
+            "angle {got} rad, closed form {theta} rad"
+        );
+    }
+    // The top holds the whole load, weight and normal drag `w sin θ` per length: along the
+    // line, `w L cos θ (sin θ, −cos θ)`.
+    let f = eq.reactions[0];
+    let wl = w * l * n as f64;
+    let expected = [-wl * theta.sin() * theta.cos(), wl * theta.cos().powi(2)];
+    for k in 0..2 {
+        assert!(
+            (f[k] - expected[k]).abs() <= 1e-9 * wl,
+            "{f:?} vs {expected:?}"
+        );
+    }
+}
+
+/// Water's refusals, each naming the bad value: dimension 1, a negative or non-finite
+/// parameter, a profile out of order, hydrodynamics without water or on a spring.
+#[test]
+fn invalid_water_is_refused_with_the_value() {
+    use phstring::{PhSystem, SetupError};
+    let line = LineHydro {
+        diameter: 0.1,
+        cd: 1.2,
+        ..Default::default()
+    };
+    let r1: Vec<Vector<1>> = (0..=2).map(|i| Vector::<1>::new(-(i as f64))).collect();
+    let err =
+        PhSystem::new(chain(r1, 1.0, 1e6, 10.0, &[0]).with_water(Water::new(RHO_W))).unwrap_err();
+    assert_eq!(err, SetupError::WaterDimension { dimension: 1 });
+    assert!(err.to_string().contains("D = 1"), "{err}");
+    let r: Vec<Vector<2>> = (0..=2)
+        .map(|i| Vector::<2>::new(0.0, -(i as f64)))
+        .collect();
+    let net = || chain(r.clone(), 1.0, 1e6, 10.0, &[0]);
+    let refuse = |n: Network<2, Material>| PhSystem::new(n).unwrap_err();
+    let bad_cd = LineHydro { cd: -0.5, ..line };
+    let e = refuse(
+        net()
+            .with_water(Water::new(RHO_W))
+            .with_line_hydro(0, bad_cd),
+    );
+    assert!(
+        matches!(e, SetupError::WaterParameter { value, index: Some(0), .. } if value == -0.5),
+        "{e}"
+    );
+    assert!(e.to_string().contains("-0.5"), "{e}");
+    let e = refuse(net().with_water(Water::new(f64::NAN)));
+    assert!(
+        matches!(e, SetupError::WaterParameter { value, .. } if value.is_nan()),
+        "{e}"
+    );
+    let e = refuse(net().with_water(Water::new(RHO_W).with_seabed(Seabed::flat(-3.0, 1e6, 0.0))));
+    assert!(
+        e.to_string().contains("depth") && e.to_string().contains("-3"),
+        "{e}"
+    );
+    let profile = Current::Profile(vec![(0.0, Vector::zeros()), (-10.0, Vector::zeros())]);
+    let e = refuse(net().with_water(Water::new(RHO_W).with_current(profile)));
+    assert!(
+        matches!(e, SetupError::WaterParameter { index: Some(1), value, .. } if value == -10.0),
+        "{e}"
+    );
+    let e = refuse(net().with_line_hydro(0, line));
+    assert_eq!(e, SetupError::HydroWithoutWater);
+    let e = refuse(net().with_water(Water::new(RHO_W)).with_line_hydro(3, line));
+    assert!(e.to_string().contains('3'), "{e}");
+    let e = refuse(
+        net()
+            .with_water(Water::new(RHO_W))
+            .with_line_hydro(0, line)
+            .with_line_hydro(0, line),
+    );
+    assert!(matches!(e, SetupError::HydroGroup { group: 0, .. }), "{e}");
+}
