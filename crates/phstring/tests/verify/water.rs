@@ -150,6 +150,12 @@ fn balance_is_exact_with_every_mechanism() {
         "every mechanism worked: {shares:?}"
     );
     assert!(worst <= 1e-12, "relative balance error {worst:e}");
+    // Ca ≠ CaAx: the isotropic added mass's axial excess is reported, a part of T̂.
+    let excess = sim.system().added_mass_axial_excess(sim.state());
+    assert!(
+        excess > 0.0 && excess < sim.energies().kinetic,
+        "{excess:e} J"
+    );
     // The run's totals: Ĥ(T) − Ĥ(0) = supplied − dissipated, the water's shares included.
     let total = sim.water_work();
     let closed =
@@ -278,6 +284,9 @@ fn terminal_sinking_speed_of_a_horizontal_cylinder() {
     sim.run_until(10.0, &mut ()).unwrap();
     let v2 = 2.0 * wet_weight(rho_a, d) / (RHO_W * cd * d);
     let smoothed = (0.5 * (-delta.powi(2) + (delta.powi(4) + 4.0 * v2 * v2).sqrt())).sqrt();
+    // Transverse motion: no axial added-mass excess.
+    let excess = sim.system().added_mass_axial_excess(sim.state());
+    assert!(excess <= 1e-12 * sim.energies().kinetic, "{excess:e} J");
     for v in &sim.state().v {
         let vz = -v[2];
         assert!(
@@ -295,7 +304,7 @@ fn terminal_sinking_speed_of_a_horizontal_cylinder() {
 
 /// The elastic catenary of a line of unstretched length `L`, wet weight `w` [N/m] and axial
 /// stiffness `EA` from an anchor on a rigid frictionless seabed to a fairlead `X` away and
-/// `Hv` above the seabed, with a grounded length `L_b` (docs/method.md eq. (21.9)): with
+/// `Hv` above the seabed, with a grounded length `L_b` (docs/method.md eq. (21.8)): with
 /// `L_s = L − L_b` suspended, `V_F = w L_s`,
 ///
 ///   X  = L_b + (H/w) asinh(V_F/H) + H L/EA ,
