@@ -174,6 +174,55 @@ fn balance_is_exact_with_every_mechanism() {
     );
 }
 
+/// The fourth-order composition (docs/method.md §19) in the same water: each sub-step is a
+/// DG step, so the step's balance is exact too (the backward sub-step gives some of its
+/// dissipation back; only the sum is checked).
+#[test]
+fn dg4_balance_is_exact_in_water() {
+    let (n, l, d) = (20, 5.0, 0.12);
+    let r: Vec<Vector<3>> = along(
+        &[
+            Vector::<3>::new(0.0, 0.0, -40.0),
+            Vector::<3>::new(30.0, 0.0, -40.0),
+            Vector::<3>::new(80.0, 5.0, 3.0),
+        ],
+        l,
+        n,
+    );
+    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
+        coefficient: 0.7,
+        slope: 300.0,
+    });
+    let net = chain(r, l, 1e9, 120.0, &[0, n])
+        .with_water(
+            Water::new(RHO_W)
+                .with_current(Current::Uniform(Vector::<3>::new(0.7, 0.4, 0.0)))
+                .with_seabed(seabed),
+        )
+        .with_line_hydro(
+            0,
+            LineHydro {
+                diameter: d,
+                cd: 2.0,
+                cd_axial: 0.4,
+                ca: 1.0,
+                ca_axial: 0.5,
+            },
+        );
+    let params = StepParams {
+        h: 0.02,
+        scheme: phstring::Scheme::DiscreteGradient4,
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    let mut worst = 0.0f64;
+    for _ in 0..100 {
+        worst = worst.max(sim.step().unwrap().relative_balance_error());
+    }
+    assert!(worst <= 1e-12, "dg4: relative balance error {worst:e}");
+    assert!(sim.water_work().dissipated() > 0.0);
+}
+
 /// A line whose weight equals its buoyancy (`ρA = ρ_w π d²/4`), free and fully submerged in
 /// still water, stays where it is.
 #[test]
