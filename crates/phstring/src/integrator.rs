@@ -986,11 +986,26 @@ mod tests {
             Vector::<D>::from_fn(|k, _| 0.3 + 0.1 * k as f64),
             Vector::<D>::from_fn(|k, _| 1.0 - 0.4 * k as f64),
         );
-        let mut seabed =
-            Seabed::flat(2.0, 150.0 * (1.0 + 0.5 * next()), 4.0).with_friction(Friction {
-                coefficient: 0.6,
-                slope: 2.0 + next(),
-            });
+        // Flat at −2 m, or a slightly inclined plane through (0, …, −2).
+        let k = 150.0 * (1.0 + 0.5 * next());
+        let base = if next() > 0.0 {
+            Seabed::flat(2.0, k, 4.0)
+        } else {
+            let up = |i: usize, tilt: f64| {
+                if i == D - 1 {
+                    1.0
+                } else {
+                    tilt * (i as f64 + 1.0)
+                }
+            };
+            let normal = Vector::<D>::from_fn(|i, _| up(i, 0.04));
+            let point = Vector::<D>::from_fn(|i, _| -2.0 * up(i, 0.0));
+            Seabed::plane(point, normal, k, 4.0)
+        };
+        let mut seabed = base.with_friction(Friction {
+            coefficient: 0.6,
+            slope: 2.0 + next(),
+        });
         seabed.damping_ramp = 0.05;
         let mut water = Water::new(1.1)
             .with_current(Current::Profile(vec![(-1.5, u0), (0.0, u1)]))

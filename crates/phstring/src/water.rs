@@ -153,6 +153,15 @@ impl<const D: usize> Seabed<D> {
             friction: None,
         }
     }
+    /// A plane seabed through `point` [m] with the upward normal `normal` (normalized), with
+    /// stiffness `k` [Pa/m] and damping `c` [Pa·s/m], frictionless, the damping ramp at its
+    /// default.
+    pub fn plane(point: Vector<D>, normal: Vector<D>, stiffness: f64, damping: f64) -> Self {
+        Self {
+            surface: SeabedSurface::Plane { point, normal },
+            ..Self::flat(1.0, stiffness, damping)
+        }
+    }
     /// The same seabed with `friction`.
     pub fn with_friction(mut self, friction: Friction) -> Self {
         self.friction = Some(friction);
