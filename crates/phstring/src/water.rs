@@ -1168,6 +1168,7 @@ mod tests {
             );
             worst = worst.max(err / scale);
         }
+        println!("momentum: worst relative defect {worst:e}");
         assert!(worst <= 1e-9, "worst {worst:e}");
     }
 

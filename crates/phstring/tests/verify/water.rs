@@ -336,6 +336,11 @@ fn terminal_sinking_speed_of_a_horizontal_cylinder() {
     // Transverse motion: no axial added-mass excess.
     let excess = sim.system().added_mass_axial_excess(sim.state());
     assert!(excess <= 1e-12 * sim.energies().kinetic, "{excess:e} J");
+    println!(
+        "terminal: v = {} m/s, smoothed law {smoothed} m/s, Morison {} m/s",
+        -sim.state().v[0][2],
+        v2.sqrt()
+    );
     for v in &sim.state().v {
         let vz = -v[2];
         assert!(
