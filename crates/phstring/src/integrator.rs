@@ -428,30 +428,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
         }
         if let Some(j) = jac {
-            let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
-                for k in 0..D {
-                    for m in 0..D {
-                        if !row[k] || !col[m] {
-                            blk[(k, m)] = 0.0;
-                        }
-                    }
-                }
-            };
-            for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
-                let fi = &sys.free[i];
-                mask(&mut j.diag[i], fi, fi);
-                for k in 0..D {
-                    if !fi[k] {
-                        j.diag[i][(k, k)] = 1.0;
-                    }
-                }
-            }
-            for &e in sys.constrained_elements.iter().filter(|e| els.contains(e)) {
-                let [a, b] = sys.mesh.elements()[e];
-                let (fa, fb) = (&sys.free[a], &sys.free[b]);
-                mask(&mut j.off[e][0], fa, fb);
-                mask(&mut j.off[e][1], fb, fa);
-            }
+            mask_constrained(sys, j, &nodes, &els);
         }
         if MEASURE {
             self.scale = scale2.sqrt();
@@ -566,6 +543,40 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
         }
         Ok(())
+    }
+}
+
+/// Replaces the Jacobian's rows and columns of the constrained components of `nodes` (and of
+/// the elements `els` touching them) by the unit vector: their equations are `Δ_k` = known.
+fn mask_constrained<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    j: &mut BlockJacobian<D>,
+    nodes: &std::ops::Range<usize>,
+    els: &std::ops::Range<usize>,
+) {
+    let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
+        for k in 0..D {
+            for m in 0..D {
+                if !row[k] || !col[m] {
+                    blk[(k, m)] = 0.0;
+                }
+            }
+        }
+    };
+    for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
+        let fi = &sys.free[i];
+        mask(&mut j.diag[i], fi, fi);
+        for k in 0..D {
+            if !fi[k] {
+                j.diag[i][(k, k)] = 1.0;
+            }
+        }
+    }
+    for &e in sys.constrained_elements.iter().filter(|e| els.contains(e)) {
+        let [a, b] = sys.mesh.elements()[e];
+        let (fa, fb) = (&sys.free[a], &sys.free[b]);
+        mask(&mut j.off[e][0], fa, fb);
+        mask(&mut j.off[e][1], fb, fa);
     }
 }
 
