@@ -8,6 +8,46 @@
 //! coefficients mean what they mean in MoorDyn (`Cd` on `d·l`, `CdAx` on `π·d·l`, `Ca` and
 //! `CaAx` on the displaced mass `ρ_w π d²/4` per length, `kBot` and `cBot` per unit
 //! diameter and length of line in contact). Water needs `D ≥ 2`.
+//!
+//! ## Example: a chain from an anchor on the seabed to a fairlead, in a current
+//! Water is attached to a [`crate::Network`] (the scenario layer's path): the water with its
+//! current and seabed, then the hydrodynamics of each line (element group) and point.
+//! ```
+//! use phstring::{Current, Fixed, Friction, LineHydro, MassMatrix, Material, Mesh, Network,
+//!                Boundary, Problem, Seabed, Simulation, State, StepParams, Vector, Water};
+//! let (n, depth) = (20, 50.0);
+//! let mesh = Mesh::uniform_chain(n, 100.0)?;                       // 100 m of chain
+//! let initial = State::straight(&mesh, Vector::<3>::new(0.0, 0.0, -depth),
+//!                               Vector::<3>::new(80.0, 0.0, -10.0));
+//! let net: Network<3, Material> = Problem {
+//!     mesh, initial,
+//!     material: Material::linear_elastic(1e9),                       // EA [N]
+//!     rho_a: 100.0,                                                  // [kg/m]
+//!     body_force: Vector::<3>::new(0.0, 0.0, -100.0 * 9.80665),      // its weight [N/m]
+//!     mass: MassMatrix::Lumped,
+//!     boundary: Boundary { fixed: vec![Fixed::node(0), Fixed::node(n)], loads: vec![],
+//!                          motions: vec![], feedback: vec![] },
+//!     point_masses: vec![],
+//! }.into();
+//! let seabed = Seabed::flat(depth, 3e6, 3e5)                          // kBot, cBot
+//!     .with_friction(Friction { coefficient: 0.5, slope: 200.0 });  // μ, FricDamp
+//! let water = Water::new(1025.0)
+//!     .with_current(Current::Uniform(Vector::<3>::new(0.5, 0.2, 0.0)))
+//!     .with_seabed(seabed);
+//! let chain = LineHydro { diameter: 0.1, cd: 2.4, cd_axial: 1.15, ca: 1.0, ca_axial: 0.5 };
+//! let net = net.with_water(water).with_line_hydro(0, chain);
+//! let mut sim = Simulation::new(net, StepParams { h: 0.01, ..Default::default() })?;
+//! for _ in 0..20 {
+//!     let report = sim.step()?;
+//!     assert!(report.relative_balance_error() <= 1e-12);
+//!     assert!(report.water.drag_dissipated >= 0.0);
+//! }
+//! let e = sim.energies();             // in Ĥ: buoyancy −ρ_w g V Φ(z) > 0 below the surface
+//! assert!(e.buoyancy > 0.0 && e.seabed >= 0.0);
+//! let grounded = sim.system().grounded_length(0, &sim.state().r);    // [m]
+//! assert!(grounded >= 0.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use nalgebra::SMatrix;
 
