@@ -223,6 +223,60 @@ fn dg4_balance_is_exact_in_water() {
     assert!(sim.water_work().dissipated() > 0.0);
 }
 
+/// A fine mooring line (120 elements: nonlinear elimination's local solves on node ranges
+/// run, docs/method.md §10) dropped onto the seabed in a current: the balance stays exact.
+#[test]
+fn balance_is_exact_with_nonlinear_elimination() {
+    let (n, l) = (120, 1.0);
+    let r: Vec<Vector<3>> = along(
+        &[
+            Vector::<3>::new(0.0, 0.0, -38.0),
+            Vector::<3>::new(50.0, 0.0, -38.0),
+            Vector::<3>::new(110.0, 10.0, -2.0),
+        ],
+        l,
+        n,
+    );
+    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
+        coefficient: 0.5,
+        slope: 200.0,
+    });
+    let net = chain(r, l, 1e9, 120.0, &[0])
+        .with_water(
+            Water::new(RHO_W)
+                .with_current(Current::Uniform(Vector::<3>::new(0.6, -0.3, 0.0)))
+                .with_seabed(seabed),
+        )
+        .with_line_hydro(
+            0,
+            LineHydro {
+                diameter: 0.12,
+                cd: 2.4,
+                cd_axial: 1.15,
+                ca: 1.0,
+                ca_axial: 0.5,
+            },
+        );
+    let mut sim = Simulation::new(
+        net,
+        StepParams {
+            h: 0.02,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let (mut worst, mut local) = (0.0f64, 0);
+    for _ in 0..150 {
+        let r = sim.step().unwrap();
+        worst = worst.max(r.relative_balance_error());
+        local += r.local_iterations;
+    }
+    assert!(local > 0, "no local solve ran");
+    assert!(worst <= 1e-12, "relative balance error {worst:e}");
+    let grounded = sim.system().grounded_length(0, &sim.state().r);
+    assert!(grounded > 40.0, "grounded length {grounded} m");
+}
+
 /// A line whose weight equals its buoyancy (`ρA = ρ_w π d²/4`), free and fully submerged in
 /// still water, stays where it is.
 #[test]
