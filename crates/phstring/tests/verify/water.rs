@@ -277,6 +277,71 @@ fn balance_is_exact_with_nonlinear_elimination() {
     assert!(grounded > 40.0, "grounded length {grounded} m");
 }
 
+/// Error control (docs/method.md §19) in water: the adaptive run reaches its end with every
+/// accepted step's balance exact, a step rejected by the error estimate undone with the
+/// water's running totals.
+#[test]
+fn error_control_in_water_keeps_the_balance() {
+    let (n, l) = (24, 5.0);
+    let r: Vec<Vector<3>> = along(
+        &[
+            Vector::<3>::new(0.0, 0.0, -50.0),
+            Vector::<3>::new(30.0, 0.0, -50.0),
+            Vector::<3>::new(100.0, 0.0, 4.0),
+        ],
+        l,
+        n,
+    );
+    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction {
+        coefficient: 0.5,
+        slope: 200.0,
+    });
+    let net = chain(r, l, 1e9, 120.0, &[0, n])
+        .with_water(
+            Water::new(RHO_W)
+                .with_current(Current::Uniform(Vector::<3>::new(0.5, 0.5, 0.0)))
+                .with_seabed(seabed),
+        )
+        .with_line_hydro(
+            0,
+            LineHydro {
+                diameter: 0.12,
+                cd: 2.4,
+                cd_axial: 1.15,
+                ca: 1.0,
+                ca_axial: 0.5,
+            },
+        );
+    let params = StepParams {
+        h: 0.1,
+        control: phstring::StepControl::with_tolerance(1e-3, 1e-3),
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    let h0 = sim.energies().hamiltonian();
+    let (mut worst, mut scale, mut rejected) = (0.0f64, 0.0, 0);
+    let mut shares = phstring::WaterWork::default();
+    while !sim.reached(0.5) {
+        let r = sim.step_until(0.5).unwrap();
+        worst = worst.max(r.relative_balance_error());
+        scale += r.energy_scale;
+        rejected += r.rejected;
+        shares.add(&r.water);
+    }
+    println!(
+        "error control: {} steps, {rejected} rejected, worst {worst:e}",
+        sim.steps()
+    );
+    assert!(worst <= 1e-12, "relative balance error {worst:e}");
+    let closed =
+        sim.energies().hamiltonian() - h0 - sim.supplied_energy() + sim.dissipated_energy();
+    assert!(closed.abs() <= 1e-12 * scale, "{closed:e}");
+    // The totals count the accepted steps only.
+    let total = sim.water_work();
+    assert!((total.dissipated() - shares.dissipated()).abs() <= 1e-12 * scale);
+    assert!((total.current_supplied - shares.current_supplied).abs() <= 1e-12 * scale);
+}
+
 /// A line whose weight equals its buoyancy (`ρA = ρ_w π d²/4`), free and fully submerged in
 /// still water, stays where it is.
 #[test]
