@@ -30,7 +30,7 @@
 //!     point_masses: vec![],
 //! }.into();
 //! let seabed = Seabed::flat(depth, 3e6, 3e5)                          // kBot, cBot
-//!     .with_friction(Friction { coefficient: 0.5, slope: 200.0 });  // μ, FricDamp
+//!     .with_friction(Friction { coefficient: 0.5, slope: 0.5 * 200.0 }); // μ, μ·FricDamp
 //! let water = Water::new(1025.0)
 //!     .with_current(Current::Uniform(Vector::<3>::new(0.5, 0.2, 0.0)))
 //!     .with_seabed(seabed);
@@ -156,8 +156,8 @@ pub enum SeabedSurface<const D: usize> {
 pub struct Friction {
     /// Friction coefficient `μ` (MoorDyn's `FrictionCoefficient`, the dynamic one) [–], ≥ 0.
     pub coefficient: f64,
-    /// Slope `c_f` of the friction force at zero slip [N·s/m] per node (MoorDyn's
-    /// `FricDamp`), > 0.
+    /// Slope `c_f` of the friction force at zero slip [N·s/m] per node, > 0. MoorDyn's
+    /// low-speed friction is `μ FricDamp |v_t|`: from a MoorDyn deck, `slope = μ · FricDamp`.
     pub slope: f64,
 }
 
@@ -603,7 +603,7 @@ fn check_water<const D: usize>(w: &Water<D>) -> Result<Option<Bed<D>>, SetupErro
     if let Some(f) = &sb.friction {
         check_value("seabed friction coefficient", None, f.coefficient, false)?;
         check_value(
-            "seabed friction slope FricDamp [N s/m]",
+            "seabed friction slope (mu FricDamp) [N s/m]",
             None,
             f.slope,
             true,
