@@ -14,7 +14,8 @@ use crate::system::{Law, PhSystem, Vector, element_mass};
 
 /// The tangent stiffness `K_T(r)` [N/m] in node-block form, at positions `r` [m], over all
 /// components (fixed ones included): each element adds its `(S I + 4 W'' r' r'ᵀ)/l` to its two
-/// diagonal blocks and subtracts it from its two coupling blocks. Symmetric.
+/// diagonal blocks and subtracts it from its two coupling blocks; in water, the stiffness of
+/// buoyancy and seabed contact on the diagonal blocks. Symmetric.
 pub fn tangent_blocks<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r: &[Vector<D>],
@@ -28,6 +29,10 @@ pub fn tangent_blocks<const D: usize, M: StoredEnergy>(
         j.diag[a] += t;
         j.diag[b] += t;
         j.off[e] = [-t, -t];
+    }
+    if let Some(w) = sys.water.as_deref() {
+        // The stiffness of buoyancy and seabed contact (docs/method.md §21).
+        w.add_potential_stiffness(r, &mut j.diag);
     }
     j
 }

@@ -161,6 +161,38 @@ pub enum SetupError {
         /// The damping kind and where it belongs.
         what: &'static str,
     },
+    /// A parameter of the water, the seabed, the current or a line's or point's
+    /// hydrodynamics (docs/method.md §21) is outside its range.
+    #[error("{what}{} must be {range}, got {}", index.map(|i| format!(" [{i}]")).unwrap_or_default(), Num(*value))]
+    WaterParameter {
+        /// Name of the parameter, with its unit.
+        what: &'static str,
+        /// Index (group, point, profile point), if any.
+        index: Option<usize>,
+        /// The value given.
+        value: f64,
+        /// The allowed range.
+        range: &'static str,
+    },
+    /// Water needs a vertical axis (the last component): dimension 2 or 3.
+    #[error(
+        "water and seabed need a vertical axis: dimension D = {dimension} given, need D = 2 or 3"
+    )]
+    WaterDimension {
+        /// The dimension given.
+        dimension: usize,
+    },
+    /// Line hydrodynamics given for a spring group, or twice for one group.
+    #[error("element group {group} ({name}): line hydrodynamics apply to strings, once per group")]
+    HydroGroup {
+        /// Group index.
+        group: usize,
+        /// Group name.
+        name: String,
+    },
+    /// Hydrodynamic parameters given but no water.
+    #[error("hydrodynamic parameters of lines or points are given, but the network has no water")]
+    HydroWithoutWater,
     /// A node with a free component has no mass (only springs, no string and no point mass
     /// attached): its equation of motion would have no inertia.
     #[error(

@@ -18,6 +18,7 @@ use crate::linsolve::BlockJacobian;
 use crate::material::StoredEnergy;
 use crate::newton::NewtonProblem;
 use crate::system::{Damping, Law, MassMatrix, PhSystem, Vector, element_mass};
+use crate::water::{WaterModel, WaterWork};
 
 /// The part of a residual evaluation that one element group takes.
 struct ElementKernel {
@@ -237,6 +238,78 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         total
     }
 
+    /// What the water does over a step with increment `x` (docs/method.md §21): drag,
+    /// the current's work, seabed damping and friction, each computed as a sum of products
+    /// of non-negative factors where it is a dissipation (≥ 0 exactly for `h > 0`).
+    pub(crate) fn water_work(&self, x: &[Vector<D>]) -> WaterWork {
+        let mut work = WaterWork::default();
+        let Some(w) = self.sys.water.as_deref() else {
+            return work;
+        };
+        for node in &w.nodes {
+            let i = node.node;
+            work.add(&w.node_step(node, &self.r0[i], &x[i], self.h).work);
+        }
+        for el in &w.elements {
+            let [a, b] = self.sys.mesh.elements()[el.e];
+            let l = self.sys.mesh.lengths()[el.e];
+            let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
+            work.add(&w.element_drag(el, r0, xs, l, self.h, false).2);
+        }
+        work
+    }
+
+    /// The water's terms (docs/method.md §21) of the rows of `nodes` (elements `els` for the
+    /// drag), added to `res` and `jac`; returns the squares of their forces (force scale).
+    fn water_terms(
+        &self,
+        w: &WaterModel<D>,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+        nodes: std::ops::Range<usize>,
+        els: std::ops::Range<usize>,
+    ) -> f64 {
+        let mut scale2 = 0.0;
+        for node in w.nodes_in(nodes.clone()) {
+            let i = node.node;
+            let st = w.node_step(node, &self.r0[i], &x[i], self.h);
+            res[i] += st.res;
+            scale2 += st.res.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[i] += st.jac;
+            }
+        }
+        let want = jac.is_some();
+        for el in w.elements_in(els) {
+            let [a, b] = self.sys.mesh.elements()[el.e];
+            let l = self.sys.mesh.lengths()[el.e];
+            let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
+            let (f, [ja, jb], _) = w.element_drag(el, r0, xs, l, self.h, want);
+            let half = f * 0.5;
+            let (in_a, in_b) = (nodes.contains(&a), nodes.contains(&b));
+            if in_a {
+                res[a] -= half;
+            }
+            if in_b {
+                res[b] -= half;
+            }
+            scale2 += 2.0 * half.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                // Rows a and b alike: ∂/∂x_a = ja, ∂/∂x_b = jb.
+                if in_a {
+                    j.diag[a] += ja;
+                }
+                if in_b {
+                    j.diag[b] += jb;
+                }
+                j.off[el.e][0] += jb;
+                j.off[el.e][1] += ja;
+            }
+        }
+        scale2
+    }
+
     /// [`NewtonProblem::evaluate_nodes`]; with `MEASURE` (a full range only) also the force
     /// and strain scales.
     fn evaluate_range<const MEASURE: bool>(
@@ -304,6 +377,13 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 }
             }
         }
+        if let Some(w) = sys.water.as_deref() {
+            let (nodes, els) = (nodes.clone(), els.clone());
+            let s2 = self.water_terms(w, x, res, jac.as_deref_mut(), nodes, els);
+            if MEASURE {
+                scale2 += s2;
+            }
+        }
         // Feedback ports: the force F(t_{n+½}, r_{n+½}, Δ/h) is an input, so −F in the residual.
         for fb in sys
             .boundary
@@ -348,30 +428,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
         }
         if let Some(j) = jac {
-            let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
-                for k in 0..D {
-                    for m in 0..D {
-                        if !row[k] || !col[m] {
-                            blk[(k, m)] = 0.0;
-                        }
-                    }
-                }
-            };
-            for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
-                let fi = &sys.free[i];
-                mask(&mut j.diag[i], fi, fi);
-                for k in 0..D {
-                    if !fi[k] {
-                        j.diag[i][(k, k)] = 1.0;
-                    }
-                }
-            }
-            for &e in sys.constrained_elements.iter().filter(|e| els.contains(e)) {
-                let [a, b] = sys.mesh.elements()[e];
-                let (fa, fb) = (&sys.free[a], &sys.free[b]);
-                mask(&mut j.off[e][0], fa, fb);
-                mask(&mut j.off[e][1], fb, fa);
-            }
+            mask_constrained(sys, j, &nodes, &els);
         }
         if MEASURE {
             self.scale = scale2.sqrt();
@@ -486,6 +543,40 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
         }
         Ok(())
+    }
+}
+
+/// Replaces the Jacobian's rows and columns of the constrained components of `nodes` (and of
+/// the elements `els` touching them) by the unit vector: their equations are `Δ_k` = known.
+fn mask_constrained<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    j: &mut BlockJacobian<D>,
+    nodes: &std::ops::Range<usize>,
+    els: &std::ops::Range<usize>,
+) {
+    let mask = |blk: &mut SMatrix<f64, D, D>, row: &[bool; D], col: &[bool; D]| {
+        for k in 0..D {
+            for m in 0..D {
+                if !row[k] || !col[m] {
+                    blk[(k, m)] = 0.0;
+                }
+            }
+        }
+    };
+    for &i in sys.constrained.iter().filter(|i| nodes.contains(i)) {
+        let fi = &sys.free[i];
+        mask(&mut j.diag[i], fi, fi);
+        for k in 0..D {
+            if !fi[k] {
+                j.diag[i][(k, k)] = 1.0;
+            }
+        }
+    }
+    for &e in sys.constrained_elements.iter().filter(|e| els.contains(e)) {
+        let [a, b] = sys.mesh.elements()[e];
+        let (fa, fb) = (&sys.free[a], &sys.free[b]);
+        mask(&mut j.off[e][0], fa, fb);
+        mask(&mut j.off[e][1], fb, fa);
     }
 }
 
@@ -865,6 +956,104 @@ mod tests {
             ));
         let (sys, state) = PhSystem::new(net).unwrap();
         check_system_jacobian(&sys, &state, &mut next, scheme, false);
+    }
+
+    /// A random chain in water (`D ≥ 2`): crossing the surface band, partly in the seabed
+    /// (stiffness, ramped damping, friction), in a sheared current, with drag, added mass and
+    /// a buoyant point with drag in the surface band; node 0 fixed.
+    fn check_water_jacobian<const D: usize>(seed: &[f64], scheme: Scheme) {
+        use crate::water::{Current, Friction, LineHydro, PointHydro, Seabed, Water};
+        let n_el = 7;
+        let mut it = seed.iter().copied().cycle();
+        let mut next = move || it.next().unwrap();
+        let mesh = Mesh::uniform_chain(n_el, 1.0).unwrap();
+        // Heights from above the surface band down into the seabed at −2 m.
+        let z = [0.6, 0.1, -0.15, -1.0, -1.97, -2.0, -2.03, -2.08];
+        let r: Vec<Vector<D>> = (0..=n_el)
+            .map(|i| {
+                let mut x = Vector::<D>::from_fn(|_, _| 0.02 * next());
+                x[0] += 0.9 * i as f64;
+                x[D - 1] += z[i];
+                x
+            })
+            .collect();
+        let v: Vec<Vector<D>> = (0..=n_el).map(|_| Vector::from_fn(|_, _| next())).collect();
+        let problem = Problem {
+            point_masses: Vec::new(),
+            initial: State::consistent(&mesh, r, v),
+            mesh,
+            material: Material::linear_elastic(40.0),
+            rho_a: 1.3,
+            body_force: Vector::from_fn(|k, _| if k == D - 1 { -3.0 } else { 0.0 }),
+            mass: MassMatrix::Consistent,
+            boundary: Boundary {
+                motions: vec![],
+                feedback: vec![],
+                fixed: vec![Fixed::node(0)],
+                loads: vec![],
+            },
+        };
+        let (u0, u1) = (
+            Vector::<D>::from_fn(|k, _| 0.3 + 0.1 * k as f64),
+            Vector::<D>::from_fn(|k, _| 1.0 - 0.4 * k as f64),
+        );
+        // Flat at −2 m, or a slightly inclined plane through (0, …, −2).
+        let k = 150.0 * (1.0 + 0.5 * next());
+        let base = if next() > 0.0 {
+            Seabed::flat(2.0, k, 4.0)
+        } else {
+            let up = |i: usize, tilt: f64| {
+                if i == D - 1 {
+                    1.0
+                } else {
+                    tilt * (i as f64 + 1.0)
+                }
+            };
+            let normal = Vector::<D>::from_fn(|i, _| up(i, 0.04));
+            let point = Vector::<D>::from_fn(|i, _| -2.0 * up(i, 0.0));
+            Seabed::plane(point, normal, k, 4.0)
+        };
+        let mut seabed = base.with_friction(Friction {
+            coefficient: 0.6,
+            slope: 2.0 + next(),
+        });
+        seabed.damping_ramp = 0.05;
+        let mut water = Water::new(1.1)
+            .with_current(Current::Profile(vec![(-1.5, u0), (0.0, u1)]))
+            .with_seabed(seabed);
+        water.drag_smoothing = 0.2;
+        let net = crate::system::Network::from(problem)
+            .with_water(water)
+            .with_line_hydro(
+                0,
+                LineHydro {
+                    diameter: 0.4,
+                    cd: 1.2,
+                    cd_axial: 0.4,
+                    ca: 0.8,
+                    ca_axial: 0.2,
+                },
+            )
+            .with_point_hydro(PointHydro {
+                // In the surface band, where the submerged fraction varies.
+                node: 2,
+                volume: 0.05,
+                cda: 0.7,
+                ca: 0.5,
+            });
+        let (sys, state) = PhSystem::new(net).unwrap();
+        check_system_jacobian(&sys, &state, &mut next, scheme, false);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        #[test]
+        fn water_jacobian_matches_finite_differences(seed in proptest::collection::vec(-1.0f64..1.0, 37..80)) {
+            for scheme in [Scheme::DiscreteGradient, Scheme::Midpoint] {
+                check_water_jacobian::<2>(&seed, scheme);
+                check_water_jacobian::<3>(&seed, scheme);
+            }
+        }
     }
 
     proptest! {

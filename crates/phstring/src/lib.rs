@@ -15,10 +15,13 @@
 //!   evaluated without cancellation) and the implicit midpoint rule ([`integrator`]), solved
 //!   by Newton's method on the positions alone ([`newton`]) with an O(N) block-tridiagonal
 //!   or a sparse LU linear solve ([`linsolve`]).
+//! * **Water** (§21, [`water`]): buoyancy and seabed contact as potentials, Morison drag in a
+//!   current, seabed damping and friction, added mass; the balance stays exact with each
+//!   mechanism's share reported.
 //!
 //! What it is for: simulations whose energy balance `Ĥ_{n+1} − Ĥ_n = h û·ŷ` must hold to
 //! round-off, ports for coupling and control. What it is not for: bending, torsion,
-//! contact (not modelled).
+//! contact between lines (not modelled).
 //!
 //! ## Conventions
 //! * SI units: m, s, kg, N, J. `EA` [N], `ρA` [kg/m], body force `b` [N/m] per unit
@@ -85,6 +88,7 @@ pub mod statics;
 pub mod system;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
+pub mod water;
 
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
@@ -111,4 +115,8 @@ pub use simulation::{
 pub use system::{
     Damping, ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State,
     Vector,
+};
+pub use water::{
+    Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed, SeabedSurface,
+    Water, WaterWork,
 };

@@ -254,6 +254,8 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
             boundary,
             point_masses,
             initial,
+            water: None,
+            hydro: Default::default(),
         })
     }
 }

@@ -47,10 +47,14 @@ pub struct StepReport {
     pub before: Energies,
     /// Energies at `t_{n+1}` [J].
     pub after: Energies,
-    /// Energy supplied through the ports in this step, `h û_{n+½}·ŷ_{n+½}` [J].
+    /// Energy supplied in this step [J]: through the ports, `h û_{n+½}·ŷ_{n+½}`, and by the
+    /// current through the drag (`water.current_supplied`, docs/method.md §21).
     pub supplied: f64,
-    /// Energy dissipated in this step `D_n ≥ 0` [J] (docs/method.md §18; 0 without damping).
+    /// Energy dissipated in this step `D_n ≥ 0` [J]: the damping of docs/method.md §18 and the
+    /// water's drag, seabed damping and friction (§21); 0 without any.
     pub dissipated: f64,
+    /// The water's shares of `supplied` and `dissipated` (all 0 without water).
+    pub water: crate::water::WaterWork,
     /// Energy-balance error `Ĥ_{n+1} − Ĥ_n − h û·ŷ + D_n` [J].
     pub balance_error: f64,
     /// The step's energy scale [J]: the magnitudes of the energy terms at both ends of the

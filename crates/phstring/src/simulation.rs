@@ -15,6 +15,7 @@ use crate::observe::{
 };
 
 use crate::system::{Energies, Network, PhSystem, State, Vector};
+use crate::water::WaterWork;
 
 mod checkpoint;
 pub use checkpoint::{Checkpoint, CheckpointFit, FlatCheckpoint};
@@ -212,6 +213,9 @@ pub struct Simulation<const D: usize, M> {
     held: HeldVelocities,
     /// Inputs set from outside the run (held forces, ramps of moving supports).
     inputs: crate::boundary::HeldInputs<D>,
+    /// The water's shares of the run's supplied and dissipated totals (docs/method.md §21).
+    /// Not part of the checkpoint: a restored run counts them from the restore on.
+    water_totals: WaterWork,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -392,6 +396,7 @@ struct Backup<const D: usize> {
     run: Option<Checkpoint<D>>,
     energies: Energies,
     ports: Vec<PortSample<D>>,
+    water_totals: WaterWork,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -470,6 +475,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             ports_prev: Vec::new(),
             held,
             inputs: Default::default(),
+            water_totals: WaterWork::default(),
         })
     }
 
@@ -550,6 +556,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         cp.check_sizes(n, n_el)?;
         self.energies = self.sys.energies(&cp.state);
         self.run = cp;
+        self.water_totals = WaterWork::default();
         Ok(())
     }
 
@@ -561,6 +568,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         b.energies = self.energies;
         b.ports.clone_from(&self.ports);
+        b.water_totals = self.water_totals;
     }
 
     /// Puts back what [`Self::save`] saved.
@@ -570,6 +578,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
+        self.water_totals = b.water_totals;
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -592,6 +601,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Cumulative dissipated energy `Σ D_n` [J] (docs/method.md §18).
     pub fn dissipated_energy(&self) -> f64 {
         self.run.dissipated_total
+    }
+    /// The water's shares of [`Self::supplied_energy`] and [`Self::dissipated_energy`] so far
+    /// [J] (docs/method.md §21): drag, the current's work, seabed damping, friction. Counted
+    /// since the start or the last [`Self::restore`] (a checkpoint does not carry them).
+    pub fn water_work(&self) -> WaterWork {
+        self.water_totals
     }
     /// Total Newton iterations so far.
     pub fn total_newton_iterations(&self) -> usize {
@@ -1063,6 +1078,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                             after: r.after,
                             supplied: a.supplied + r.supplied,
                             dissipated: a.dissipated + r.dissipated,
+                            water: {
+                                let mut w = a.water;
+                                w.add(&r.water);
+                                w
+                            },
                             energy_scale: a.energy_scale + r.energy_scale,
                             ..a
                         },
@@ -1112,15 +1132,22 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let t_mid = t + 0.5 * h;
         self.apply_loads(&at)?;
         self.predict(&at)?;
-        let (stats, dissipated) = self.solve_increment(&at)?;
+        let (stats, damped, water) = self.solve_increment(&at)?;
         self.check_new_state(&at)?;
         let after = self.energies_after(&at)?;
         self.ports_prev.clone_from(&self.ports);
-        let supplied = self.form_ports(t_mid, h);
+        let ports = self.form_ports(t_mid, h);
+        // Without water its shares are 0 and these sums change nothing (x + 0 = x).
+        let (supplied, dissipated) = if self.sys.has_water() {
+            (ports + water.current_supplied, damped + water.dissipated())
+        } else {
+            (ports, damped)
+        };
         let before = self.energies;
         let (balance_error, energy_scale) =
-            self.check_balance(&at, &stats, before, after, supplied, dissipated)?;
+            self.check_balance(&at, &stats, before, after, (supplied, dissipated), &water)?;
         self.commit(h, after, supplied, dissipated);
+        self.water_totals.add(&water);
         Ok(StepReport {
             step: step_no,
             t: t_next,
@@ -1140,6 +1167,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             after,
             supplied,
             dissipated,
+            water,
             balance_error,
             energy_scale,
         })
@@ -1224,9 +1252,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(())
     }
 
-    /// Newton on the step's residual from the predicted increment; returns its statistics
-    /// and the energy dissipated over the step [J].
-    fn solve_increment(&mut self, at: &StepAt) -> Result<(NewtonStats, f64), StepError> {
+    /// Newton on the step's residual from the predicted increment; returns its statistics,
+    /// the energy dissipated over the step by the damping of §18 [J] and the water's work.
+    fn solve_increment(&mut self, at: &StepAt) -> Result<(NewtonStats, f64, WaterWork), StepError> {
         let (h, t_mid) = (at.h, at.t + 0.5 * at.h);
         let mut eqs = StepEquations::new(
             &self.sys,
@@ -1250,8 +1278,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         } else {
             0.0
         };
+        let water = if result.is_ok() {
+            eqs.water_work(&self.x)
+        } else {
+            WaterWork::default()
+        };
         let stats = result.map_err(|e| self.newton_failure(e, at))?;
-        Ok((stats, dissipated))
+        Ok((stats, dissipated, water))
     }
 
     /// The step error of a failed Newton solve.
@@ -1401,8 +1434,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         stats: &NewtonStats,
         before: Energies,
         after: Energies,
-        supplied: f64,
-        dissipated: f64,
+        (supplied, dissipated): (f64, f64),
+        water: &WaterWork,
     ) -> Result<(f64, f64), StepError> {
         let (step_no, t, h, t_next) = (at.step, at.t, at.h, at.t_next);
         let balance_error = after.hamiltonian() - before.hamiltonian() - supplied + dissipated;
@@ -1421,11 +1454,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // The work the strain-rounding floor of Newton's test may leave undone, as a scale
         // (its rounding is ε times this, docs/method.md eq. (9.6)).
         let strain_work = newton::ROUNDOFF_STRAIN * stats.strain_scale * newton::norm(&self.x);
-        let energy_scale = before.magnitude
+        let mut energy_scale = before.magnitude
             + after.magnitude
             + supplied_magnitude
             + dissipated.abs()
             + strain_work;
+        if self.sys.has_water() {
+            energy_scale += water.magnitude();
+        }
         let bound = BALANCE_RTOL * energy_scale;
         // A NaN balance misses the bound too.
         let missed = balance_error.is_nan() || balance_error.abs() > bound;

@@ -32,6 +32,7 @@ use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::system::{Energies, Law, Network, PhSystem, State, Vector, element_mass};
+use crate::water::WaterModel;
 
 /// Parameters of the equilibrium solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -214,6 +215,10 @@ struct StaticEquations<'a, const D: usize, M> {
     jac_shift: f64,
     /// Strings carry no compression (an element with `C < 1` is slack) while set.
     release: bool,
+    /// The current's drag is left out while cleared (a stability check judges the
+    /// potential's stiffness alone: the drag at rest is no potential, its tangent not
+    /// symmetric).
+    drag: bool,
     /// Reactions of the last full evaluation [N].
     reaction: Vec<Vector<D>>,
     scale: f64,
@@ -280,6 +285,9 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
                 }
             }
         }
+        if let Some(w) = sys.water.as_deref() {
+            scale2 += self.water_terms(w, x, res, jac.as_deref_mut());
+        }
         if self.mu > 0.0 || self.jac_shift > 0.0 {
             let shift = self.mu + self.jac_shift;
             for &(i, m) in &sys.point_mass {
@@ -323,6 +331,54 @@ fn sq_sum<const D: usize>(v: &[Vector<D>]) -> f64 {
 }
 
 impl<const D: usize, M: StoredEnergy> StaticEquations<'_, D, M> {
+    /// The water at rest (docs/method.md §21): buoyancy and the current's drag (loads,
+    /// scaled by `λ`) and the seabed contact, at `r₀ + x`; returns the squares of the forces.
+    fn water_terms(
+        &self,
+        w: &WaterModel<D>,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+    ) -> f64 {
+        let lambda = self.lambda;
+        let mut scale2 = 0.0;
+        for node in &w.nodes {
+            let i = node.node;
+            let r = self.r0[i] + x[i];
+            let (mut f, mut k) = w.static_potential(node, &r, lambda);
+            if node.drag > 0.0 && self.drag {
+                let (fd, kd) = w.static_point_drag(node, &r);
+                f += fd * lambda;
+                k += kd * lambda;
+            }
+            res[i] += f;
+            scale2 += f.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[i] += k;
+            }
+        }
+        if w.still || !self.drag {
+            return scale2;
+        }
+        for el in &w.elements {
+            let [a, b] = self.sys.mesh.elements()[el.e];
+            let (ra, rb) = (self.r0[a] + x[a], self.r0[b] + x[b]);
+            let l = self.sys.mesh.lengths()[el.e];
+            let (f, [ja, jb]) = w.static_element_drag(el, (&ra, &rb), l, jac.is_some());
+            let half = f * (0.5 * lambda);
+            res[a] -= half;
+            res[b] -= half;
+            scale2 += 2.0 * half.norm_squared();
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[a] += ja * lambda;
+                j.diag[b] += jb * lambda;
+                j.off[el.e][0] += jb * lambda;
+                j.off[el.e][1] += ja * lambda;
+            }
+        }
+        scale2
+    }
+
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn elements<L: StoredEnergy>(
@@ -400,6 +456,7 @@ pub fn static_residual<const D: usize, M: StoredEnergy>(
         anchor: Vec::new(),
         jac_shift: 0.0,
         release: false,
+        drag: true,
         reaction: zeros.clone(),
         scale: 0.0,
         strain_scale: 0.0,
@@ -488,6 +545,7 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         jac_shift: JAC_SHIFT * initial_shift(sys, r_start, &f)
             / (sys.mesh.n_elements() as f64).powi(2),
         release: false,
+        drag: true,
         reaction: vec![Vector::zeros(); n],
         scale: 0.0,
         strain_scale: 0.0,
@@ -935,7 +993,8 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
     ))
 }
 
-/// The tangent stiffness at `r₀ + u`, of the released laws while `eq.release` is set.
+/// The tangent stiffness at `r₀ + u`, of the released laws while `eq.release` is set; the
+/// potential's only (without the current's drag).
 fn tangent_or_released<const D: usize, M: StoredEnergy>(
     eq: &mut StaticEquations<'_, D, M>,
     u: &[Vector<D>],
@@ -945,9 +1004,11 @@ fn tangent_or_released<const D: usize, M: StoredEnergy>(
     let (mu, shift) = (eq.mu, eq.jac_shift);
     eq.mu = 0.0;
     eq.jac_shift = 0.0;
+    eq.drag = false;
     let ok = eq.evaluate(u, &mut res, Some(&mut j)).is_ok();
     eq.mu = mu;
     eq.jac_shift = shift;
+    eq.drag = true;
     if !ok {
         j.clear();
     }
@@ -971,9 +1032,18 @@ const POLISH_BELOW: f64 = 1e-3;
 /// …or every this many pseudo-time steps.
 const POLISH_EVERY: usize = 10;
 
-/// Axes along which no node is held.
+/// Axes along which no node is held. In water the vertical axis is not counted (buoyancy
+/// is a load that depends on the height), nor is any axis along which a seabed's normal has
+/// a component (the seabed holds it).
 fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
-    (0..D).filter(|&k| sys.free.iter().all(|f| f[k])).collect()
+    let held_by_water = |k: usize| {
+        sys.water
+            .as_deref()
+            .is_some_and(|w| k == D - 1 || w.bed.as_ref().is_some_and(|b| b.n[k] != 0.0))
+    };
+    (0..D)
+        .filter(|&k| sys.free.iter().all(|f| f[k]) && !held_by_water(k))
+        .collect()
 }
 
 /// The starting shift `μ₀` [1/s²]: the ratio of the stiffness to the mass on the diagonal
@@ -1110,4 +1180,107 @@ fn ordinal(n: usize) -> String {
         _ => "th",
     };
     format!("{n}{suffix}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::water::{Current, LineHydro, Water};
+    use crate::{Boundary, Fixed, MassMatrix, Material, Mesh, Problem};
+
+    /// The static residual's Jacobian with the water at rest (buoyancy, a sheared current's
+    /// drag) against central differences.
+    #[test]
+    fn static_water_jacobian_matches_finite_differences() {
+        let n = 6;
+        let mesh = Mesh::uniform_chain(n, 6.0).unwrap();
+        let r: Vec<Vector<2>> = (0..=n)
+            .map(|i| {
+                Vector::<2>::new(
+                    0.3 * i as f64,
+                    -0.5 - 0.9 * i as f64 + 0.05 * (i * i) as f64,
+                )
+            })
+            .collect();
+        let problem = Problem {
+            initial: State::at_rest(&mesh, r),
+            mesh,
+            material: Material::linear_elastic(50.0),
+            rho_a: 1.0,
+            body_force: Vector::<2>::new(0.0, -2.0),
+            mass: MassMatrix::Consistent,
+            boundary: Boundary {
+                fixed: vec![Fixed::node(0)],
+                loads: vec![],
+                motions: vec![],
+                feedback: vec![],
+            },
+            point_masses: vec![],
+        };
+        let current = Current::Profile(vec![
+            (-4.0, Vector::<2>::new(0.5, 0.1)),
+            (0.0, Vector::<2>::new(1.5, -0.2)),
+        ]);
+        let mut water = Water::new(1.0).with_current(current);
+        water.drag_smoothing = 0.1;
+        let net = Network::from(problem).with_water(water).with_line_hydro(
+            0,
+            LineHydro {
+                diameter: 0.6,
+                cd: 1.2,
+                cd_axial: 0.5,
+                ca: 0.0,
+                ca_axial: 0.0,
+            },
+        );
+        let (sys, init) = PhSystem::new(net).unwrap();
+        let f = static_load(&sys);
+        let mk = |r0| StaticEquations {
+            sys: &sys,
+            r0,
+            f_ext: &f,
+            lambda: 0.7,
+            mu: 0.0,
+            anchor: Vec::new(),
+            jac_shift: 0.0,
+            release: false,
+            drag: true,
+            reaction: vec![Vector::zeros(); n + 1],
+            scale: 0.0,
+            strain_scale: 0.0,
+        };
+        let mut eq = mk(&init.r);
+        let x: Vec<Vector<2>> = (0..=n)
+            .map(|i| Vector::<2>::new(0.03 * (i as f64).sin(), 0.02 * (i as f64).cos()))
+            .collect();
+        let mut res = vec![Vector::<2>::zeros(); n + 1];
+        let mut jac = BlockJacobian::zeros(&sys.mesh);
+        eq.evaluate(&x, &mut res, Some(&mut jac)).unwrap();
+        let eps = 1e-7;
+        let mut worst = 0.0f64;
+        for j in 1..=n {
+            for m in 0..2 {
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[j][m] += eps;
+                xm[j][m] -= eps;
+                let (mut rp, mut rm) = (res.clone(), res.clone());
+                eq.evaluate(&xp, &mut rp, None).unwrap();
+                eq.evaluate(&xm, &mut rm, None).unwrap();
+                for i in 1..=n {
+                    for k in 0..2 {
+                        let num = (rp[i][k] - rm[i][k]) / (2.0 * eps);
+                        let mut an = if i == j { jac.diag[i][(k, m)] } else { 0.0 };
+                        if j == i + 1 {
+                            an += jac.off[i][0][(k, m)];
+                        }
+                        if i == j + 1 {
+                            an += jac.off[j][1][(k, m)];
+                        }
+                        worst = worst.max((an - num).abs());
+                    }
+                }
+            }
+        }
+        assert!(worst <= 1e-6, "static Jacobian error {worst:e}");
+    }
 }

@@ -12,6 +12,7 @@ use std::ops::Range;
 
 use crate::material::{LinearSpring, StoredEnergy};
 use crate::mesh::Mesh;
+use crate::water::{GroupInfo, Hydrodynamics, LineHydro, PointHydro, Water, WaterModel};
 
 /// A nodal vector in `R^D` [m, m/s or N].
 pub type Vector<const D: usize> = SVector<f64, D>;
@@ -111,21 +112,26 @@ pub struct Energies {
     pub internal: f64,
     /// External potential `−r̂ᵀ F_b`.
     pub external: f64,
+    /// Buoyancy potential `Σ_i −ρ_w g V_i Φ(z_i)` (docs/method.md §21; 0 without water).
+    pub buoyancy: f64,
+    /// Seabed contact potential `Σ_i ½ k d L_i p_i²` (docs/method.md §21; 0 without seabed).
+    pub seabed: f64,
     /// The sum of the magnitudes of the terms summed into the three energies [J]: per element
     /// its kinetic energy and `l_e |W(C_e)|`, per point mass its kinetic energy, per node
-    /// `|r̂_i·F_b,i|`. The rounding of the energies is of order `ε` times this, wherever the
+    /// `|r̂_i·F_b,i|`, per wet node its buoyancy and contact potentials. The rounding of the energies is of order `ε` times this, wherever the
     /// origin lies (a potential near zero by cancellation has large terms).
     pub magnitude: f64,
 }
 
 impl Energies {
-    /// Potential energy `V̂ = internal + external`.
+    /// Potential energy `V̂ = internal + external + buoyancy + seabed`.
     pub fn potential(&self) -> f64 {
-        self.internal + self.external
+        self.internal + self.external + self.buoyancy + self.seabed
     }
-    /// Hamiltonian `Ĥ = T̂ + V̂` (docs/method.md eq. (4.8), paper eq. (26)).
+    /// Hamiltonian `Ĥ = T̂ + V̂` (docs/method.md eq. (4.8), paper eq. (26); with water
+    /// eq. (21.1)).
     pub fn hamiltonian(&self) -> f64 {
-        self.kinetic + self.internal + self.external
+        self.kinetic + self.internal + self.external + self.buoyancy + self.seabed
     }
 }
 
@@ -275,6 +281,29 @@ pub struct Network<const D: usize, M> {
     pub point_masses: Vec<PointMass<D>>,
     /// Initial state.
     pub initial: State<D>,
+    /// Water, current and seabed (docs/method.md §21); `None`: dry.
+    pub water: Option<Water<D>>,
+    /// Hydrodynamic parameters of the lines and points that the water acts on.
+    pub hydro: Hydrodynamics,
+}
+
+impl<const D: usize, M> Network<D, M> {
+    /// The network in `water` (replacing any water set before).
+    pub fn with_water(mut self, water: Water<D>) -> Self {
+        self.water = Some(water);
+        self
+    }
+    /// The network with line hydrodynamics `hydro` for element group `group` (a string); a
+    /// string without them feels no water.
+    pub fn with_line_hydro(mut self, group: usize, hydro: LineHydro) -> Self {
+        self.hydro.lines.push((group, hydro));
+        self
+    }
+    /// The network with the hydrodynamics `point` of a node (buoyancy, drag, added mass).
+    pub fn with_point_hydro(mut self, point: PointHydro) -> Self {
+        self.hydro.points.push(point);
+        self
+    }
 }
 
 impl<const D: usize, M> From<Problem<D, M>> for Network<D, M> {
@@ -295,6 +324,8 @@ impl<const D: usize, M> From<Problem<D, M>> for Network<D, M> {
             boundary: p.boundary,
             point_masses: p.point_masses,
             initial: p.initial,
+            water: None,
+            hydro: Hydrodynamics::default(),
         }
     }
 }
@@ -313,8 +344,11 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) constrained: Vec<usize>,
     /// Elements with a node in `constrained`.
     pub(crate) constrained_elements: Vec<usize>,
-    /// Point masses `(node, mass [kg])`, sorted by node (their weights are in `f_body`).
+    /// Point masses `(node, mass [kg])`, sorted by node (their weights are in `f_body`),
+    /// with the points' added masses.
     pub(crate) point_mass: Vec<(usize, f64)>,
+    /// Water, lumped to nodes and elements (docs/method.md §21); `None`: dry.
+    pub(crate) water: Option<Box<WaterModel<D>>>,
 }
 
 /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
@@ -655,6 +689,48 @@ fn add_point_masses<const D: usize>(
     Ok(point_mass)
 }
 
+/// Validates the water and the hydrodynamics (none without water), adds the lines' added
+/// masses to their groups' `ρA` and the points' to `point_mass`, and returns the lumped model.
+fn attach_water<const D: usize, M>(
+    water: Option<&Water<D>>,
+    hydro: &Hydrodynamics,
+    mesh: &Mesh,
+    groups: &mut [ElementGroup<D, M>],
+    point_mass: &mut Vec<(usize, f64)>,
+) -> Result<Option<Box<WaterModel<D>>>, SetupError> {
+    let Some(water) = water else {
+        return if hydro.is_empty() {
+            Ok(None)
+        } else {
+            Err(SetupError::HydroWithoutWater)
+        };
+    };
+    let info: Vec<GroupInfo<'_>> = groups
+        .iter()
+        .map(|g| GroupInfo {
+            is_string: matches!(g.law, Law::String(_)),
+            name: &g.name,
+            elements: g.elements.clone(),
+        })
+        .collect();
+    let (model, added_rho_a, added_point) = crate::water::build(water, hydro, mesh, &info)?;
+    for (g, add) in groups.iter_mut().zip(added_rho_a) {
+        g.rho_a += add;
+    }
+    if !added_point.is_empty() {
+        point_mass.extend(added_point);
+        point_mass.sort_by_key(|&(node, _)| node);
+        point_mass.dedup_by(|later, first| {
+            let same = later.0 == first.0;
+            if same {
+                first.1 += later.1;
+            }
+            same
+        });
+    }
+    Ok(Some(Box::new(model)))
+}
+
 /// Refuses nodal body forces that are not finite or whose squares overflow.
 fn check_body_forces<const D: usize>(f_body: &[Vector<D>]) -> Result<(), SetupError> {
     if let Some((i, f)) = f_body
@@ -692,7 +768,10 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             boundary,
             point_masses,
             initial,
+            water,
+            hydro,
         } = problem.into();
+        let mut groups = groups;
         check_groups(&mesh, &groups)?;
         check_initial(&mesh, &groups, &initial)?;
         let n = mesh.n_nodes();
@@ -708,7 +787,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             }
         }
         let (mut f_body, mut node_mass) = distributed_loads(&mesh, &groups);
-        let point_mass = add_point_masses(&point_masses, &mut f_body, &mut node_mass)?;
+        let mut point_mass = add_point_masses(&point_masses, &mut f_body, &mut node_mass)?;
+        let water = attach_water(water.as_ref(), &hydro, &mesh, &mut groups, &mut point_mass)?;
         check_body_forces(&f_body)?;
         if let Some(node) = (0..n).find(|&i| free[i].iter().any(|&f| f) && node_mass[i] <= 0.0) {
             return Err(SetupError::MasslessNode { node });
@@ -722,6 +802,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             constrained,
             constrained_elements,
             point_mass,
+            water,
         };
         sys.check_initial_energies(&initial)?;
         Ok((sys, initial))
@@ -743,6 +824,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             ("initial kinetic energy", en.kinetic),
             ("initial internal energy", en.internal),
             ("initial external potential energy", en.external),
+            ("initial buoyancy potential", en.buoyancy),
+            ("initial seabed contact potential", en.seabed),
             ("initial Hamiltonian", en.hamiltonian()),
         ] {
             if !value.is_finite() {
@@ -786,6 +869,60 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// Whether any element group dissipates (Kelvin–Voigt, drag or dashpots).
     pub fn has_damping(&self) -> bool {
         self.groups.iter().any(|g| !g.damping.is_none())
+    }
+    /// Whether the system is in water (docs/method.md §21).
+    pub fn has_water(&self) -> bool {
+        self.water.is_some()
+    }
+    /// Seabed contact of every node that can touch it (lines with hydrodynamics) at
+    /// positions `r` [m]: grounded flag, penetration [m], contact force [N] (docs/method.md
+    /// §21). Empty without seabed.
+    pub fn seabed_contacts(&self, r: &[Vector<D>]) -> Vec<crate::water::NodeContact> {
+        self.water
+            .as_deref()
+            .map_or_else(Vec::new, |w| w.contacts(r))
+    }
+    /// Grounded length [m] of element group `group` at positions `r`: the reference length
+    /// of its elements, each counted half for each of its two nodes that is grounded.
+    pub fn grounded_length(&self, group: usize, r: &[Vector<D>]) -> f64 {
+        let Some(g) = self.groups.get(group) else {
+            return 0.0;
+        };
+        let mut grounded = vec![false; self.mesh.n_nodes()];
+        for c in self.seabed_contacts(r) {
+            grounded[c.node] = c.grounded;
+        }
+        g.elements
+            .clone()
+            .map(|e| {
+                let [a, b] = self.mesh.elements()[e];
+                let k = u8::from(grounded[a]) + u8::from(grounded[b]);
+                0.5 * f64::from(k) * self.mesh.lengths()[e]
+            })
+            .sum()
+    }
+    /// The kinetic energy [J] that the isotropic added mass (with `Ca`) gives to the axial
+    /// motion of the lines beyond their `CaAx`: `Σ_e ½ ρ_w π d²/4 (Ca − CaAx) l_e (v̄_e·t_e)²`
+    /// with the element's mean velocity `v̄_e` and tangent `t_e` (docs/method.md §21). Part
+    /// of `T̂`; it measures the approximation, 0 when `Ca = CaAx`.
+    pub fn added_mass_axial_excess(&self, state: &State<D>) -> f64 {
+        let Some(w) = self.water.as_deref() else {
+            return 0.0;
+        };
+        w.elements
+            .iter()
+            .map(|el| {
+                let [a, b] = self.mesh.elements()[el.e];
+                let d = state.r[b] - state.r[a];
+                let len = d.norm();
+                let vt = if len > 0.0 {
+                    (state.v[a] + state.v[b]).dot(&d) * 0.5 / len
+                } else {
+                    0.0
+                };
+                0.5 * el.axial_excess * vt * vt
+            })
+            .sum()
     }
     /// Which components of each node are free.
     pub fn free_components(&self) -> &[[bool; D]] {
@@ -913,10 +1050,21 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             external -= p;
             magnitude += p.abs();
         }
+        let (mut buoyancy, mut seabed) = (0.0, 0.0);
+        if let Some(w) = &self.water {
+            for node in &w.nodes {
+                let (u, c) = w.node_energies(node, &r(node.node));
+                buoyancy += u;
+                seabed += c;
+                magnitude += u.abs() + c;
+            }
+        }
         Energies {
             kinetic,
             internal,
             external,
+            buoyancy,
+            seabed,
             magnitude,
         }
     }

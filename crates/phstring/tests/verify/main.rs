@@ -17,3 +17,4 @@ mod real_units;
 mod reduction;
 mod solvers;
 mod statics;
+mod water;

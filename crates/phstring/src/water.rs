@@ -1,0 +1,1226 @@
+//! Water and seabed (docs/method.md §21): buoyancy and seabed contact as potentials in `Ĥ`,
+//! Morison drag in a current, seabed damping and friction as resistances (the current's work
+//! is a port), added mass in `M_ρ`.
+//!
+//! Conventions (those of the mooring tools, e.g. MoorDyn): the vertical axis is the last
+//! component (`y` in 2D, `z` in 3D), the free surface is at height 0, water lies below it,
+//! and a flat seabed at depth `h` lies at height `−h`. SI units; the hydrodynamic
+//! coefficients mean what they mean in MoorDyn (`Cd` on `d·l`, `CdAx` on `π·d·l`, `Ca` and
+//! `CaAx` on the displaced mass `ρ_w π d²/4` per length, `kBot` and `cBot` per unit
+//! diameter and length of line in contact). Water needs `D ≥ 2`.
+//!
+//! ## Example: a chain from an anchor on the seabed to a fairlead, in a current
+//! Water is attached to a [`crate::Network`] (the scenario layer's path): the water with its
+//! current and seabed, then the hydrodynamics of each line (element group) and point.
+//! ```
+//! use phstring::{Current, Fixed, Friction, LineHydro, MassMatrix, Material, Mesh, Network,
+//!                Boundary, Problem, Seabed, Simulation, State, StepParams, Vector, Water};
+//! let (n, depth) = (20, 50.0);
+//! let mesh = Mesh::uniform_chain(n, 100.0)?;                       // 100 m of chain
+//! let initial = State::straight(&mesh, Vector::<3>::new(0.0, 0.0, -depth),
+//!                               Vector::<3>::new(80.0, 0.0, -10.0));
+//! let net: Network<3, Material> = Problem {
+//!     mesh, initial,
+//!     material: Material::linear_elastic(1e9),                       // EA [N]
+//!     rho_a: 100.0,                                                  // [kg/m]
+//!     body_force: Vector::<3>::new(0.0, 0.0, -100.0 * 9.80665),      // its weight [N/m]
+//!     mass: MassMatrix::Lumped,
+//!     boundary: Boundary { fixed: vec![Fixed::node(0), Fixed::node(n)], loads: vec![],
+//!                          motions: vec![], feedback: vec![] },
+//!     point_masses: vec![],
+//! }.into();
+//! let seabed = Seabed::flat(depth, 3e6, 3e5)                          // kBot, cBot
+//!     .with_friction(Friction { coefficient: 0.5, slope: 0.5 * 200.0 }); // μ, μ·FricDamp
+//! let water = Water::new(1025.0)
+//!     .with_current(Current::Uniform(Vector::<3>::new(0.5, 0.2, 0.0)))
+//!     .with_seabed(seabed);
+//! let chain = LineHydro { diameter: 0.1, cd: 2.4, cd_axial: 1.15, ca: 1.0, ca_axial: 0.5 };
+//! let net = net.with_water(water).with_line_hydro(0, chain);
+//! let mut sim = Simulation::new(net, StepParams { h: 0.01, ..Default::default() })?;
+//! for _ in 0..20 {
+//!     let report = sim.step()?;
+//!     assert!(report.relative_balance_error() <= 1e-12);
+//!     assert!(report.water.drag_dissipated >= 0.0);
+//! }
+//! let e = sim.energies();             // in Ĥ: buoyancy −ρ_w g V Φ(z) > 0 below the surface
+//! assert!(e.buoyancy > 0.0 && e.seabed >= 0.0);
+//! let grounded = sim.system().grounded_length(0, &sim.state().r);    // [m]
+//! assert!(grounded >= 0.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use nalgebra::SMatrix;
+
+use crate::error::SetupError;
+use crate::mesh::Mesh;
+
+/// A nodal vector in `R^D` [m, m/s or N].
+type Vector<const D: usize> = nalgebra::SVector<f64, D>;
+
+/// What [`build`] needs to know of an element group.
+pub(crate) struct GroupInfo<'a> {
+    /// A string (only strings take line hydrodynamics).
+    pub is_string: bool,
+    pub name: &'a str,
+    pub elements: std::ops::Range<usize>,
+}
+
+/// Standard gravity [m/s²], the default of [`Water::gravity`].
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Default smoothing speed `δ` [m/s] of the drag laws' `|v|` (see [`Water::drag_smoothing`]).
+pub const DEFAULT_DRAG_SMOOTHING: f64 = 1e-3;
+
+/// Default penetration [m] over which the seabed damping ramps up (see
+/// [`Seabed::damping_ramp`]).
+pub const DEFAULT_DAMPING_RAMP: f64 = 1e-3;
+
+/// The current: the water's velocity `u(z)` [m/s] as a function of the height `z` [m].
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Current<const D: usize> {
+    /// The same velocity [m/s] at every depth (zero: still water).
+    Uniform(Vector<D>),
+    /// A depth profile: points `(z [m], u [m/s])` with strictly increasing `z`, linear in
+    /// between, constant beyond the first and the last point.
+    Profile(Vec<(f64, Vector<D>)>),
+}
+
+impl<const D: usize> Current<D> {
+    /// Still water.
+    pub fn still() -> Self {
+        Current::Uniform(Vector::zeros())
+    }
+
+    /// The velocity `u(z)` [m/s] and its derivative `du/dz` [1/s] at height `z` [m].
+    pub fn at(&self, z: f64) -> (Vector<D>, Vector<D>) {
+        match self {
+            Current::Uniform(u) => (*u, Vector::zeros()),
+            Current::Profile(p) => profile_at(p, z),
+        }
+    }
+
+    fn is_still(&self) -> bool {
+        match self {
+            Current::Uniform(u) => u.iter().all(|&x| x == 0.0),
+            Current::Profile(p) => p.iter().all(|(_, u)| u.iter().all(|&x| x == 0.0)),
+        }
+    }
+}
+
+/// Linear interpolation in a profile, constant beyond its ends.
+fn profile_at<const D: usize>(p: &[(f64, Vector<D>)], z: f64) -> (Vector<D>, Vector<D>) {
+    let zero = Vector::zeros();
+    let (Some(first), Some(last)) = (p.first(), p.last()) else {
+        return (zero, zero);
+    };
+    if z <= first.0 {
+        return (first.1, zero);
+    }
+    if z >= last.0 {
+        return (last.1, zero);
+    }
+    let k = p.partition_point(|(zk, _)| *zk <= z).clamp(1, p.len() - 1);
+    let ((z0, u0), (z1, u1)) = (p[k - 1], p[k]);
+    let slope = (u1 - u0) / (z1 - z0);
+    (u0 + slope * (z - z0), slope)
+}
+
+/// The seabed's surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum SeabedSurface<const D: usize> {
+    /// Flat and horizontal at height `−depth` [m] (`depth > 0`).
+    Flat {
+        /// Water depth [m].
+        depth: f64,
+    },
+    /// A plane through `point` [m] with the upward normal `normal` (any length > 0; it is
+    /// normalized, and must point upwards: its vertical component > 0).
+    Plane {
+        /// A point of the plane [m].
+        point: Vector<D>,
+        /// Normal pointing into the water.
+        normal: Vector<D>,
+    },
+    // Extension point: a C¹ bathymetry grid (a height field z = b(x, y) with the gap measured
+    // along the vertical, its quotient taken in the gap as for the plane) would be a third
+    // variant; `Bed::gap` and `Bed::normal_at` are the two functions it has to provide.
+}
+
+/// Regularized Coulomb friction on the seabed (docs/method.md §21): the tangential force
+/// `f = −μ N c_f v_t / √((μ N)² + (c_f |v_t|)²)`, isotropic in the seabed plane, `N` the
+/// node's contact force. At small slip it is a damper of slope `c_f`; at large slip it tends
+/// to `μ N` against the slip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Friction {
+    /// Friction coefficient `μ` (MoorDyn's `FrictionCoefficient`, the dynamic one) [–], ≥ 0.
+    pub coefficient: f64,
+    /// Slope `c_f` of the friction force at zero slip [N·s/m] per node, > 0. MoorDyn's
+    /// low-speed friction is `μ FricDamp |v_t|`: from a MoorDyn deck, `slope = μ · FricDamp`.
+    pub slope: f64,
+}
+
+/// A seabed: a penalty contact of stiffness `k·d` per unit length of line, damping of the
+/// normal velocity while in contact, and optionally friction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Seabed<const D: usize> {
+    /// Where the seabed is.
+    pub surface: SeabedSurface<D>,
+    /// Contact stiffness `k` [Pa/m] (MoorDyn's `kBot`): the force per unit length of a line
+    /// of diameter `d` pressed `p` into the seabed is `k d p`.
+    pub stiffness: f64,
+    /// Contact damping `c` [Pa·s/m] (MoorDyn's `cBot`): the force per unit length is
+    /// `−c d v_n` on the normal velocity `v_n` while in contact (ramped, see
+    /// [`Self::damping_ramp`]).
+    pub damping: f64,
+    /// Penetration [m] over which the damping ramps from 0 to full (a C¹ ramp, so that the
+    /// damping force is continuous where contact starts), > 0.
+    pub damping_ramp: f64,
+    /// Friction, none by default.
+    pub friction: Option<Friction>,
+}
+
+impl<const D: usize> Seabed<D> {
+    /// A flat seabed at depth `depth` [m] with stiffness `k` [Pa/m] and damping `c` [Pa·s/m],
+    /// frictionless, the damping ramp at its default.
+    pub fn flat(depth: f64, stiffness: f64, damping: f64) -> Self {
+        Self {
+            surface: SeabedSurface::Flat { depth },
+            stiffness,
+            damping,
+            damping_ramp: DEFAULT_DAMPING_RAMP,
+            friction: None,
+        }
+    }
+    /// A plane seabed through `point` [m] with the upward normal `normal` (normalized), with
+    /// stiffness `k` [Pa/m] and damping `c` [Pa·s/m], frictionless, the damping ramp at its
+    /// default.
+    pub fn plane(point: Vector<D>, normal: Vector<D>, stiffness: f64, damping: f64) -> Self {
+        Self {
+            surface: SeabedSurface::Plane { point, normal },
+            ..Self::flat(1.0, stiffness, damping)
+        }
+    }
+    /// The same seabed with `friction`.
+    pub fn with_friction(mut self, friction: Friction) -> Self {
+        self.friction = Some(friction);
+        self
+    }
+}
+
+/// Water: density, gravity (for buoyancy), current and seabed. The surface is at height 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Water<const D: usize> {
+    /// Density `ρ_w` [kg/m³] (sea water ≈ 1025), > 0.
+    pub density: f64,
+    /// Gravity `g` [m/s²] of the buoyancy `ρ_w g V`, acting along the vertical axis, > 0.
+    /// (The lines' own weight is their body force, set separately.)
+    pub gravity: f64,
+    /// The current.
+    pub current: Current<D>,
+    /// The seabed, if any.
+    pub seabed: Option<Seabed<D>>,
+    /// Smoothing speed `δ` [m/s] of the quadratic drag laws: `|v|` is taken as
+    /// `√(|v|² + δ²)`, so that the drag's Jacobian is defined at zero relative speed; > 0.
+    pub drag_smoothing: f64,
+}
+
+impl<const D: usize> Water<D> {
+    /// Still water of density `density` [kg/m³], standard gravity, no seabed.
+    pub fn new(density: f64) -> Self {
+        Self {
+            density,
+            gravity: STANDARD_GRAVITY,
+            current: Current::still(),
+            seabed: None,
+            drag_smoothing: DEFAULT_DRAG_SMOOTHING,
+        }
+    }
+    /// The same water with `current`.
+    pub fn with_current(mut self, current: Current<D>) -> Self {
+        self.current = current;
+        self
+    }
+    /// The same water with `seabed`.
+    pub fn with_seabed(mut self, seabed: Seabed<D>) -> Self {
+        self.seabed = Some(seabed);
+        self
+    }
+    /// The same water with gravity `g` [m/s²].
+    pub fn with_gravity(mut self, g: f64) -> Self {
+        self.gravity = g;
+        self
+    }
+}
+
+/// Hydrodynamic parameters of a line (an element group), as in MoorDyn.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LineHydro {
+    /// Volume-equivalent diameter `d` [m] (> 0): displaced volume `π d²/4` per unit length,
+    /// drag areas, contact width.
+    pub diameter: f64,
+    /// Transverse drag coefficient `Cd` [–] on the area `d·l`.
+    pub cd: f64,
+    /// Axial drag coefficient `CdAx` [–] on the area `π·d·l`.
+    pub cd_axial: f64,
+    /// Transverse added-mass coefficient `Ca` [–].
+    pub ca: f64,
+    /// Axial added-mass coefficient `CaAx` [–] (see docs/method.md §21: the added mass is
+    /// taken isotropic with `Ca`; the axial excess is reported).
+    pub ca_axial: f64,
+}
+
+/// Hydrodynamic parameters of a point (a point mass, a buoy, a junction), as in MoorDyn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointHydro {
+    /// Node index.
+    pub node: usize,
+    /// Displaced volume [m³] (buoyancy `ρ_w g V`), ≥ 0.
+    pub volume: f64,
+    /// Drag area times drag coefficient `CdA` [m²]: the drag `½ ρ_w CdA |v_r| v_r`, ≥ 0.
+    pub cda: f64,
+    /// Added-mass coefficient `Ca` [–] on the displaced mass `ρ_w V`, ≥ 0.
+    pub ca: f64,
+}
+
+/// The hydrodynamic parameters of a network's lines and points.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Hydrodynamics {
+    /// `(group index, parameters)`: lines without an entry feel no water.
+    pub lines: Vec<(usize, LineHydro)>,
+    /// Points with buoyancy, drag or added mass.
+    pub points: Vec<PointHydro>,
+}
+
+impl Hydrodynamics {
+    /// No hydrodynamic parameters.
+    pub fn is_empty(&self) -> bool {
+        self.lines.is_empty() && self.points.is_empty()
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// One-dimensional laws and their discrete gradients.
+
+/// Submerged fraction `φ(z)` of a node of band `b` [m] at height `z` [m]: 1 below `−b/2`,
+/// 0 above `b/2`, `1 − S(t)` in between with `S(t) = t²(3 − 2t)`, `t = (z + b/2)/b` (C¹).
+pub fn submerged_fraction(z: f64, b: f64) -> f64 {
+    1.0 - emerged(z, b).0
+}
+
+/// `(S, dS/dz)`: the emerged fraction `1 − φ` and its derivative [1/m].
+fn emerged(z: f64, b: f64) -> (f64, f64) {
+    let half = 0.5 * b;
+    if z <= -half {
+        (0.0, 0.0)
+    } else if z >= half {
+        (1.0, 0.0)
+    } else {
+        let t = (z + half) / b;
+        (t * t * (3.0 - 2.0 * t), 6.0 * t * (1.0 - t) / b)
+    }
+}
+
+/// `A(z) = ∫_{−∞}^{z} (1 − φ)`: 0 below the band, `z` above it, `b (t³ − t⁴/2)` inside [m].
+fn a_int(z: f64, b: f64) -> f64 {
+    let half = 0.5 * b;
+    if z <= -half {
+        0.0
+    } else if z >= half {
+        z
+    } else {
+        let t = (z + half) / b;
+        b * t * t * t * (1.0 - 0.5 * t)
+    }
+}
+
+/// The buoyancy potential per unit `ρ_w g V` [m]: `Φ(z) = ∫_0^z φ = z − A(z) + A(0)`,
+/// `A(0) = 3b/32`, so that `U = −ρ_w g V Φ(z)`; `Φ = z + 3b/32` fully submerged.
+pub fn buoyancy_height(z: f64, b: f64) -> f64 {
+    z - a_int(z, b) + 3.0 * b / 32.0
+}
+
+/// Divided difference of `A` over the band's piece `[ta, tb]` in `t`: exact, no cancellation.
+fn band_quotient(ta: f64, tb: f64) -> f64 {
+    (ta * ta + ta * tb + tb * tb) - 0.5 * (ta + tb) * (ta * ta + tb * tb)
+}
+
+/// `(q, ∂q/∂z₁)`: the divided difference `(A(z₁) − A(z₀))/(z₁ − z₀)` (the emerged fraction
+/// averaged over the step), split at the band's edges into a convex combination of the
+/// pieces' closed-form quotients (no cancellation, no switch); `S(z)` at `z₀ = z₁`.
+pub(crate) fn emerged_quotient(z0: f64, z1: f64, b: f64) -> (f64, f64) {
+    let half = 0.5 * b;
+    let t = |z: f64| ((z + half) / b).clamp(0.0, 1.0);
+    let (lo, hi) = if z0 <= z1 { (z0, z1) } else { (z1, z0) };
+    // Pieces: below (quotient 0), band, above (quotient 1).
+    let below = if lo < -half { hi.min(-half) - lo } else { 0.0 };
+    let (bl, bh) = (lo.max(-half), hi.min(half));
+    let band = if bh > bl { bh - bl } else { 0.0 };
+    let above = if hi > half { hi - lo.max(half) } else { 0.0 };
+    let total = below + band + above;
+    let single_band = lo > -half && hi < half;
+    let q = if total > 0.0 {
+        let qb = if band > 0.0 {
+            band_quotient(t(bl), t(bh))
+        } else {
+            0.0
+        };
+        (band * qb + above) / total
+    } else {
+        emerged(z0, b).0
+    };
+    let dq = if single_band {
+        let (t0, t1) = (t(z0), t(z1));
+        ((2.0 * t1 + t0) - 0.5 * (t1 * t1 + t0 * t0) - (t1 + t0) * t1) / b
+    } else if lo <= -half && hi <= -half || lo >= half && hi >= half {
+        0.0
+    } else if (z1 - z0).abs() > 1e-8 * b {
+        (emerged(z1, b).0 - q) / (z1 - z0)
+    } else {
+        0.5 * emerged(z1, b).1
+    };
+    (q, dq)
+}
+
+/// `(q, ∂q/∂g₁)`: the exact divided difference of `V(g) = ½ k max(0, −g)²` [N] between the
+/// gaps `g₀`, `g₁` [m], for a stiffness `k` [N/m]; `V'(g)` at `g₀ = g₁`.
+pub(crate) fn contact_quotient(g0: f64, g1: f64, k: f64) -> (f64, f64) {
+    match (g0 < 0.0, g1 < 0.0) {
+        (false, false) => (0.0, 0.0),
+        (true, true) => (0.5 * k * (g0 + g1), 0.5 * k),
+        // V₁ − V₀ = −½ k g₀², g₁ − g₀ ≥ −g₀ > 0: the sum of two magnitudes.
+        (true, false) => {
+            let d = g1 - g0;
+            (-0.5 * k * g0 * (g0 / d), 0.5 * k * (g0 / d) * (g0 / d))
+        }
+        (false, true) => {
+            let d = g1 - g0;
+            (
+                0.5 * k * g1 * (g1 / d),
+                0.5 * k * (g1 / d) * ((g1 - 2.0 * g0) / d),
+            )
+        }
+    }
+}
+
+/// The contact potential `½ k max(0, −g)²` [J] of a gap `g` [m].
+fn contact_energy(g: f64, k: f64) -> f64 {
+    if g < 0.0 { 0.5 * k * g * g } else { 0.0 }
+}
+
+/// `(ρ, dρ/dp)`: the C¹ ramp `x²(3 − 2x)`, `x = p/δ` clamped to [0, 1], of the seabed damping.
+fn ramp(p: f64, delta: f64) -> (f64, f64) {
+    if p <= 0.0 {
+        (0.0, 0.0)
+    } else if p >= delta {
+        (1.0, 0.0)
+    } else {
+        let x = p / delta;
+        (x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x) / delta)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The validated model the step evaluates.
+
+/// The seabed as the step sees it: the plane `n·(r − p) = 0` with unit normal `n`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Bed<const D: usize> {
+    pub n: Vector<D>,
+    pub p: Vector<D>,
+    pub ramp: f64,
+    pub friction: Option<Friction>,
+}
+
+impl<const D: usize> Bed<D> {
+    /// The signed gap `n·(r − p)` [m] (negative: penetration).
+    #[inline]
+    pub fn gap(&self, r: &Vector<D>) -> f64 {
+        self.n.dot(&(r - self.p))
+    }
+}
+
+/// A node that water acts on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct WetNode {
+    pub node: usize,
+    /// `ρ_w g V` [N]: the buoyancy fully submerged.
+    pub buoyancy: f64,
+    /// Surface band [m] (the largest diameter at the node).
+    pub band: f64,
+    /// Contact stiffness `k d L` [N/m] and damping `c d L` [N·s/m] (`d L = Σ ½ l_e d_e`).
+    pub stiffness: f64,
+    pub damping: f64,
+    /// Point drag `½ ρ_w CdA` [kg/m].
+    pub drag: f64,
+}
+
+/// An element that drag acts on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct WetElement {
+    pub e: usize,
+    /// `½ ρ_w Cd d l` [kg/m] and `½ ρ_w CdAx π d l` [kg/m].
+    pub normal: f64,
+    pub axial: f64,
+    /// Surface band [m] (the diameter).
+    pub band: f64,
+    /// Added mass the isotropic model gives to axial motion beyond `CaAx`,
+    /// `ρ_w π d²/4 (Ca − CaAx) l` [kg].
+    pub axial_excess: f64,
+}
+
+/// Water, seabed and the lines' and points' hydrodynamics, validated and lumped to nodes and
+/// elements.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct WaterModel<const D: usize> {
+    pub rho: f64,
+    pub current: Current<D>,
+    pub still: bool,
+    pub delta: f64,
+    pub bed: Option<Bed<D>>,
+    /// Sorted by node.
+    pub nodes: Vec<WetNode>,
+    /// Sorted by element.
+    pub elements: Vec<WetElement>,
+}
+
+/// What the water does in a step [J]; each share is reported separately.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct WaterWork {
+    /// Energy dissipated by drag relative to the water, `−h f·v_r ≥ 0`.
+    pub drag_dissipated: f64,
+    /// Work of the current through the drag, `h f·u` (either sign): a port.
+    pub current_supplied: f64,
+    /// Energy dissipated by the seabed's damping, ≥ 0.
+    pub seabed_dissipated: f64,
+    /// Energy dissipated by seabed friction, ≥ 0.
+    pub friction_dissipated: f64,
+}
+
+impl WaterWork {
+    /// Everything dissipated [J].
+    pub fn dissipated(&self) -> f64 {
+        self.drag_dissipated + self.seabed_dissipated + self.friction_dissipated
+    }
+    /// The sum of the magnitudes of the shares [J] (the energy scale of their rounding).
+    pub fn magnitude(&self) -> f64 {
+        self.drag_dissipated.abs()
+            + self.current_supplied.abs()
+            + self.seabed_dissipated.abs()
+            + self.friction_dissipated.abs()
+    }
+    /// Adds `other` share by share.
+    pub fn add(&mut self, other: &WaterWork) {
+        self.drag_dissipated += other.drag_dissipated;
+        self.current_supplied += other.current_supplied;
+        self.seabed_dissipated += other.seabed_dissipated;
+        self.friction_dissipated += other.friction_dissipated;
+    }
+}
+
+/// Contact state of a node on the seabed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeContact {
+    /// Node index.
+    pub node: usize,
+    /// The node is below the seabed's surface (penetration > 0).
+    pub grounded: bool,
+    /// Penetration [m] (≥ 0).
+    pub penetration: f64,
+    /// Contact force [N] on the node, along the seabed's normal (`k d L p`).
+    pub force: f64,
+}
+
+/// Checks `value` against `0 ≤ value < ∞` (or `> 0` with `positive`).
+fn check_value(
+    what: &'static str,
+    index: Option<usize>,
+    value: f64,
+    positive: bool,
+) -> Result<(), SetupError> {
+    let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
+    if ok {
+        Ok(())
+    } else {
+        Err(SetupError::WaterParameter {
+            what,
+            index,
+            value,
+            range: if positive {
+                "0 < value < infinity"
+            } else {
+                "0 <= value < infinity"
+            },
+        })
+    }
+}
+
+fn check_vector<const D: usize>(
+    what: &'static str,
+    index: Option<usize>,
+    v: &Vector<D>,
+) -> Result<(), SetupError> {
+    match v.iter().find(|x| !x.is_finite()) {
+        Some(&value) => Err(SetupError::WaterParameter {
+            what,
+            index,
+            value,
+            range: "finite",
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Checks the water's own parameters and returns its seabed as a plane.
+fn check_water<const D: usize>(w: &Water<D>) -> Result<Option<Bed<D>>, SetupError> {
+    check_value("water density [kg/m^3]", None, w.density, true)?;
+    check_value("gravity [m/s^2]", None, w.gravity, true)?;
+    check_value("drag smoothing speed [m/s]", None, w.drag_smoothing, true)?;
+    match &w.current {
+        Current::Uniform(u) => check_vector("current velocity [m/s]", None, u)?,
+        Current::Profile(p) => {
+            for (k, (z, u)) in p.iter().enumerate() {
+                check_vector("current velocity [m/s] of profile point", Some(k), u)?;
+                let prev = if k > 0 { p[k - 1].0 } else { f64::NEG_INFINITY };
+                if !(z.is_finite() && *z > prev) {
+                    return Err(SetupError::WaterParameter {
+                        what: "current profile height [m] of point",
+                        index: Some(k),
+                        value: *z,
+                        range: "finite and above the previous point's",
+                    });
+                }
+            }
+        }
+    }
+    let Some(sb) = &w.seabed else {
+        return Ok(None);
+    };
+    check_value("seabed stiffness kBot [Pa/m]", None, sb.stiffness, false)?;
+    check_value("seabed damping cBot [Pa s/m]", None, sb.damping, false)?;
+    check_value("seabed damping ramp [m]", None, sb.damping_ramp, true)?;
+    if let Some(f) = &sb.friction {
+        check_value("seabed friction coefficient", None, f.coefficient, false)?;
+        check_value(
+            "seabed friction slope (mu FricDamp) [N s/m]",
+            None,
+            f.slope,
+            true,
+        )?;
+    }
+    let mut up = Vector::<D>::zeros();
+    up[D - 1] = 1.0;
+    let (n, p) = match sb.surface {
+        SeabedSurface::Flat { depth } => {
+            check_value("water depth [m]", None, depth, true)?;
+            (up, -up * depth)
+        }
+        SeabedSurface::Plane { point, normal } => {
+            check_vector("seabed plane point [m]", None, &point)?;
+            check_vector("seabed plane normal", None, &normal)?;
+            let len = normal.norm();
+            if !(len > 0.0 && len.is_finite() && normal[D - 1] > 0.0) {
+                return Err(SetupError::WaterParameter {
+                    what: "vertical component of the seabed plane's normal",
+                    index: None,
+                    value: normal[D - 1],
+                    range: "> 0 (the normal points up, into the water)",
+                });
+            }
+            (normal / len, point)
+        }
+    };
+    Ok(Some(Bed {
+        n,
+        p,
+        ramp: sb.damping_ramp,
+        friction: sb.friction,
+    }))
+}
+
+/// Checks a line's parameters (`group` for messages).
+fn check_line(group: usize, h: &LineHydro) -> Result<(), SetupError> {
+    check_value("line diameter [m] of group", Some(group), h.diameter, true)?;
+    check_value("line Cd of group", Some(group), h.cd, false)?;
+    check_value("line CdAx of group", Some(group), h.cd_axial, false)?;
+    check_value("line Ca of group", Some(group), h.ca, false)?;
+    check_value("line CaAx of group", Some(group), h.ca_axial, false)
+}
+
+/// Checks a point's parameters (`k` its index, `n` the number of nodes).
+fn check_point(k: usize, p: &PointHydro, n: usize) -> Result<(), SetupError> {
+    if p.node >= n {
+        return Err(SetupError::NodeOutOfRange {
+            what: "point hydrodynamics",
+            node: p.node,
+            n_nodes: n,
+        });
+    }
+    check_value("point volume [m^3]", Some(k), p.volume, false)?;
+    check_value("point CdA [m^2]", Some(k), p.cda, false)?;
+    check_value("point Ca", Some(k), p.ca, false)
+}
+
+/// The validated model, and the added masses: per group `ρ_w π d²/4 Ca` [kg/m] to add to
+/// `ρA`, per node `ρ_w V Ca` [kg] to add as point masses.
+pub(crate) type Built<const D: usize> = (WaterModel<D>, Vec<f64>, Vec<(usize, f64)>);
+
+/// Validates `water` and `hydro` for the groups of `mesh` and lumps them to nodes and
+/// elements (docs/method.md §21).
+pub(crate) fn build<const D: usize>(
+    water: &Water<D>,
+    hydro: &Hydrodynamics,
+    mesh: &Mesh,
+    groups: &[GroupInfo<'_>],
+) -> Result<Built<D>, SetupError> {
+    if D < 2 {
+        return Err(SetupError::WaterDimension { dimension: D });
+    }
+    let bed = check_water(water)?;
+    let n = mesh.n_nodes();
+    let (rho, g) = (water.density, water.gravity);
+    let mut node = vec![(0.0f64, 0.0f64, 0.0f64, 0.0f64); n]; // (V, band, d L, drag)
+    let mut added_rho_a = vec![0.0; groups.len()];
+    let mut elements = Vec::new();
+    let mut seen = vec![false; groups.len()];
+    for &(gi, h) in &hydro.lines {
+        let Some(grp) = groups.get(gi) else {
+            return Err(SetupError::NodeOutOfRange {
+                what: "line hydrodynamics (element group)",
+                node: gi,
+                n_nodes: groups.len(),
+            });
+        };
+        if !grp.is_string || std::mem::replace(&mut seen[gi], true) {
+            return Err(SetupError::HydroGroup {
+                group: gi,
+                name: grp.name.to_string(),
+            });
+        }
+        check_line(gi, &h)?;
+        let area = 0.25 * std::f64::consts::PI * h.diameter * h.diameter;
+        added_rho_a[gi] = rho * area * h.ca;
+        for e in grp.elements.clone() {
+            let l = mesh.lengths()[e];
+            for i in mesh.elements()[e] {
+                let nd = &mut node[i];
+                nd.0 += 0.5 * l * area;
+                nd.1 = nd.1.max(h.diameter);
+                nd.2 += 0.5 * l * h.diameter;
+            }
+            elements.push(WetElement {
+                e,
+                normal: 0.5 * rho * h.cd * h.diameter * l,
+                axial: 0.5 * rho * h.cd_axial * std::f64::consts::PI * h.diameter * l,
+                band: h.diameter,
+                axial_excess: rho * area * (h.ca - h.ca_axial) * l,
+            });
+        }
+    }
+    elements.sort_by_key(|w| w.e);
+    let mut added_point = Vec::new();
+    for (k, p) in hydro.points.iter().enumerate() {
+        check_point(k, p, n)?;
+        let nd = &mut node[p.node];
+        nd.0 += p.volume;
+        if nd.1 == 0.0 {
+            // A point alone: the band is its volume's sphere diameter.
+            nd.1 = (6.0 * p.volume / std::f64::consts::PI).cbrt();
+        }
+        nd.3 += 0.5 * rho * p.cda;
+        if p.ca * p.volume > 0.0 {
+            added_point.push((p.node, rho * p.volume * p.ca));
+        }
+    }
+    let (kb, cb) = water
+        .seabed
+        .as_ref()
+        .map_or((0.0, 0.0), |s| (s.stiffness, s.damping));
+    let nodes = node
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| x.0 > 0.0 || x.2 > 0.0 || x.3 > 0.0)
+        .map(|(i, &(v, band, dl, drag))| WetNode {
+            node: i,
+            buoyancy: rho * g * v,
+            band: if band > 0.0 { band } else { 1e-3 },
+            stiffness: kb * dl,
+            damping: cb * dl,
+            drag,
+        })
+        .collect();
+    let model = WaterModel {
+        rho,
+        still: water.current.is_still(),
+        current: water.current.clone(),
+        delta: water.drag_smoothing,
+        bed,
+        nodes,
+        elements,
+    };
+    Ok((model, added_rho_a, added_point))
+}
+
+// ---------------------------------------------------------------------------------------
+// Evaluation: the potentials, and the step's forces, Jacobian blocks and work.
+
+/// Block type of the Jacobian.
+pub(crate) type Block<const D: usize> = SMatrix<f64, D, D>;
+
+impl<const D: usize> WaterModel<D> {
+    /// `(buoyancy, contact)` potentials [J] of node `w` at `r`, and their magnitudes.
+    #[inline]
+    pub fn node_energies(&self, w: &WetNode, r: &Vector<D>) -> (f64, f64) {
+        let u = -w.buoyancy * buoyancy_height(r[D - 1], w.band);
+        let c = match &self.bed {
+            Some(bed) if w.stiffness > 0.0 => contact_energy(bed.gap(r), w.stiffness),
+            _ => 0.0,
+        };
+        (u, c)
+    }
+
+    /// The wet nodes in `nodes` (a sorted range).
+    pub fn nodes_in(&self, nodes: std::ops::Range<usize>) -> &[WetNode] {
+        let lo = self.nodes.partition_point(|w| w.node < nodes.start);
+        let hi = self.nodes.partition_point(|w| w.node < nodes.end);
+        &self.nodes[lo..hi]
+    }
+
+    /// The wet elements in `els` (a sorted range).
+    pub fn elements_in(&self, els: std::ops::Range<usize>) -> &[WetElement] {
+        let lo = self.elements.partition_point(|w| w.e < els.start);
+        let hi = self.elements.partition_point(|w| w.e < els.end);
+        &self.elements[lo..hi]
+    }
+}
+
+/// The step's force on a wet node from the node's start `r0` and increment `x` over a step
+/// of `h` [s]: the residual term (`+∂Ĥ/∂r` of buoyancy and contact, minus the resistive and
+/// drag forces) [N], its Jacobian block, and the node's work in the step.
+pub(crate) struct NodeStep<const D: usize> {
+    pub res: Vector<D>,
+    pub jac: Block<D>,
+    pub work: WaterWork,
+}
+
+impl<const D: usize> WaterModel<D> {
+    /// The step terms of node `w` (docs/method.md §21).
+    pub fn node_step(&self, w: &WetNode, r0: &Vector<D>, x: &Vector<D>, h: f64) -> NodeStep<D> {
+        let inv_h = 1.0 / h;
+        let mut res = Vector::<D>::zeros();
+        let mut jac = Block::<D>::zeros();
+        let mut work = WaterWork::default();
+        let zi = D - 1;
+        let r1 = r0 + x;
+        // Buoyancy: the exact quotient of U(z) = −ρ g V Φ(z), Φ' = 1 − S.
+        if w.buoyancy > 0.0 {
+            let (qa, dqa) = emerged_quotient(r0[zi], r1[zi], w.band);
+            res[zi] -= w.buoyancy * (1.0 - qa);
+            jac[(zi, zi)] += w.buoyancy * dqa;
+        }
+        if let Some(bed) = self.bed.as_ref().filter(|_| w.stiffness > 0.0) {
+            self.contact_step(bed, w, r0, &r1, x, inv_h, (&mut res, &mut jac, &mut work));
+        }
+        if w.drag > 0.0 {
+            // Point drag ½ ρ CdA |v_r|_δ v_r at the mid-step velocity, in water only.
+            let zm = r0[zi] + 0.5 * x[zi];
+            let (u, du) = self.current.at(zm);
+            let (em, dem) = emerged(zm, w.band);
+            let phi = 1.0 - em;
+            let vr = x * inv_h - u;
+            let s = (vr.norm_squared() + self.delta * self.delta).sqrt();
+            let f = vr * (-phi * w.drag * s);
+            res -= f;
+            let g = (Block::<D>::identity() * s + vr * vr.transpose() / s) * (w.drag * phi);
+            let mut dvr = Block::<D>::identity() * inv_h;
+            for k in 0..D {
+                dvr[(k, zi)] -= 0.5 * du[k];
+            }
+            jac += g * dvr;
+            // ∂φ/∂x_z = −½ dS/dz.
+            for k in 0..D {
+                jac[(k, zi)] -= 0.5 * w.drag * s * vr[k] * dem;
+            }
+            work.drag_dissipated += h * phi * w.drag * s * vr.norm_squared();
+            work.current_supplied += h * f.dot(&u);
+        }
+        NodeStep { res, jac, work }
+    }
+
+    /// Contact (the quotient of the penalty potential), the ramped normal damping and the
+    /// friction of node `w`.
+    #[allow(clippy::too_many_arguments)]
+    fn contact_step(
+        &self,
+        bed: &Bed<D>,
+        w: &WetNode,
+        r0: &Vector<D>,
+        r1: &Vector<D>,
+        x: &Vector<D>,
+        inv_h: f64,
+        (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
+    ) {
+        let n = bed.n;
+        let nn = n * n.transpose();
+        let (g0, g1) = (bed.gap(r0), bed.gap(r1));
+        let (q, dq) = contact_quotient(g0, g1, w.stiffness);
+        *res += n * q;
+        *jac += nn * dq;
+        let pm = (-0.5 * (g0 + g1)).max(0.0);
+        if pm <= 0.0 {
+            return;
+        }
+        let h = 1.0 / inv_h;
+        let xn = n.dot(x);
+        if w.damping > 0.0 {
+            let (rho, drho) = ramp(pm, bed.ramp);
+            let c = w.damping * rho;
+            *res += n * (c * xn * inv_h);
+            *jac += nn * (w.damping * (rho * inv_h - 0.5 * xn * inv_h * drho));
+            work.seabed_dissipated += c * xn * xn * inv_h;
+        }
+        if let Some(fr) = &bed.friction {
+            let a = fr.coefficient * w.stiffness * pm;
+            if a > 0.0 {
+                let vt = (x - n * xn) * inv_h;
+                let cf = fr.slope;
+                let vt2 = vt.norm_squared();
+                let s = (a * a + cf * cf * vt2).sqrt();
+                let coef = cf * a / s;
+                *res += vt * coef;
+                let pt = Block::<D>::identity() - nn;
+                let dv = (Block::<D>::identity() / s
+                    - vt * vt.transpose() * (cf * cf / (s * s * s)))
+                    * (cf * a);
+                *jac += dv * pt * inv_h;
+                // ∂a/∂x = −½ μ k n ᵀ (the mid-step penetration).
+                let da = -0.5 * fr.coefficient * w.stiffness;
+                *jac += vt * n.transpose() * (cf * cf * cf * vt2 / (s * s * s) * da);
+                work.friction_dissipated += h * coef * vt2;
+            }
+        }
+    }
+
+    /// `(force F [N] on the element, its Jacobian blocks by x_a and x_b, work)` of the drag on
+    /// wet element `w` = `[a, b]` of reference length `l`: Morison's law at the element's
+    /// mid-step velocity `(Δ_a + Δ_b)/2h` relative to the current at the mid-step mid-point,
+    /// split along the mid-step tangent; half of `F` acts on each node. The blocks are those
+    /// of the residual rows (`−½ F` on each node).
+    #[allow(clippy::too_many_arguments)]
+    pub fn element_drag(
+        &self,
+        w: &WetElement,
+        r0: (&Vector<D>, &Vector<D>),
+        x: (&Vector<D>, &Vector<D>),
+        l: f64,
+        h: f64,
+        want_jac: bool,
+    ) -> (Vector<D>, [Block<D>; 2], WaterWork) {
+        let inv_h = 1.0 / h;
+        let zi = D - 1;
+        let eye = Block::<D>::identity();
+        let ve = (x.0 + x.1) * (0.5 * inv_h);
+        let zm = 0.5 * (r0.0[zi] + r0.1[zi]) + 0.25 * (x.0[zi] + x.1[zi]);
+        let rpm = (r0.1 - r0.0) / l + (x.1 - x.0) * (0.5 / l);
+        let (u, du) = self.current.at(zm);
+        let (em, dem) = emerged(zm, w.band);
+        let phi = 1.0 - em;
+        let vr = ve - u;
+        let len = rpm.norm();
+        let t = if len > 0.0 {
+            rpm / len
+        } else {
+            Vector::zeros()
+        };
+        let vrt = t * t.dot(&vr);
+        let vrn = vr - vrt;
+        let d2 = self.delta * self.delta;
+        let (sn, st) = (
+            (vrn.norm_squared() + d2).sqrt(),
+            (vrt.norm_squared() + d2).sqrt(),
+        );
+        let bvec = vrn * (w.normal * sn) + vrt * (w.axial * st);
+        let f = bvec * -phi;
+        let work = WaterWork {
+            drag_dissipated: h
+                * phi
+                * (w.normal * sn * vrn.norm_squared() + w.axial * st * vrt.norm_squared()),
+            current_supplied: h * f.dot(&u),
+            ..Default::default()
+        };
+        if !want_jac {
+            return (f, [Block::zeros(); 2], work);
+        }
+        let an = (eye * sn + vrn * vrn.transpose() / sn) * w.normal;
+        let at = (eye * st + vrt * vrt.transpose() / st) * w.axial;
+        let tt = t * t.transpose();
+        let gv = an * (eye - tt) + at * tt;
+        let gt = (at - an) * (eye * t.dot(&vr) + t * vr.transpose());
+        let q = if len > 0.0 {
+            (eye - tt) / len
+        } else {
+            Block::zeros()
+        };
+        let mut dvr = eye * (0.5 * inv_h);
+        let mut k0 = Block::<D>::zeros();
+        for k in 0..D {
+            dvr[(k, zi)] -= 0.25 * du[k];
+            // ∂φ/∂x_z = −¼ dS/dz, times ½ of −(−B) on each row.
+            k0[(k, zi)] -= 0.125 * dem * bvec[k];
+        }
+        k0 += gv * dvr * (0.5 * phi);
+        let k1 = gt * q * (0.25 * phi / l);
+        (f, [k0 - k1, k0 + k1], work)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Statics: the same forces at rest (v = 0).
+
+impl<const D: usize> WaterModel<D> {
+    /// At rest at `r`: the potential part of node `w`'s residual (`+∂Ĥ/∂r` of buoyancy,
+    /// scaled by the load factor `lambda`, and of contact) [N], and its stiffness block
+    /// [N/m] (symmetric, ⪰ 0), docs/method.md §21.
+    pub fn static_potential(
+        &self,
+        w: &WetNode,
+        r: &Vector<D>,
+        lambda: f64,
+    ) -> (Vector<D>, Block<D>) {
+        let zi = D - 1;
+        let mut res = Vector::<D>::zeros();
+        let mut jac = Block::<D>::zeros();
+        if w.buoyancy > 0.0 {
+            let (s, ds) = emerged(r[zi], w.band);
+            res[zi] -= lambda * w.buoyancy * (1.0 - s);
+            jac[(zi, zi)] += lambda * w.buoyancy * ds;
+        }
+        if let Some(bed) = &self.bed {
+            let g = bed.gap(r);
+            if w.stiffness > 0.0 && g < 0.0 {
+                res += bed.n * (w.stiffness * g);
+                jac += bed.n * bed.n.transpose() * w.stiffness;
+            }
+        }
+        (res, jac)
+    }
+
+    /// At rest at `r`: the residual term of node `w`'s point drag in the current (`−f` with
+    /// `v_r = −u(z)`) [N] and its derivative by `r` [N/m].
+    pub fn static_point_drag(&self, w: &WetNode, r: &Vector<D>) -> (Vector<D>, Block<D>) {
+        let drag_only = WetNode {
+            buoyancy: 0.0,
+            stiffness: 0.0,
+            damping: 0.0,
+            ..*w
+        };
+        // A step of infinite length from r with no increment has v = 0; the increment enters
+        // the mid-step height with weight ½, so the derivative by r is twice that by x.
+        let st = self.node_step(&drag_only, r, &Vector::zeros(), f64::INFINITY);
+        (st.res, st.jac * 2.0)
+    }
+
+    /// At rest at `r_a`, `r_b`: the drag force `F` [N] on element `w` in the current (half on
+    /// each node) and the derivative of the residual rows (`−½ F`) by `r_a` and `r_b` [N/m].
+    pub fn static_element_drag(
+        &self,
+        w: &WetElement,
+        r: (&Vector<D>, &Vector<D>),
+        l: f64,
+        want_jac: bool,
+    ) -> (Vector<D>, [Block<D>; 2]) {
+        let zero = Vector::<D>::zeros();
+        // As in `static_point_drag`: no velocity, and positions enter with weight ½.
+        let (f, [ja, jb], _) = self.element_drag(w, r, (&zero, &zero), l, f64::INFINITY, want_jac);
+        (f, [ja * 2.0, jb * 2.0])
+    }
+
+    /// The stiffness of the potentials (buoyancy, contact) of every wet node at `r`, added to
+    /// the diagonal blocks `diag` [N/m].
+    pub fn add_potential_stiffness(&self, r: &[Vector<D>], diag: &mut [Block<D>]) {
+        for w in &self.nodes {
+            diag[w.node] += self.static_potential(w, &r[w.node], 1.0).1;
+        }
+    }
+
+    /// Contact of every wet node at `r` with the seabed (none without seabed).
+    pub fn contacts(&self, r: &[Vector<D>]) -> Vec<NodeContact> {
+        let Some(bed) = &self.bed else {
+            return Vec::new();
+        };
+        self.nodes
+            .iter()
+            .filter(|w| w.stiffness > 0.0)
+            .map(|w| {
+                let p = (-bed.gap(&r[w.node])).max(0.0);
+                NodeContact {
+                    node: w.node,
+                    grounded: p > 0.0,
+                    penetration: p,
+                    force: w.stiffness * p,
+                }
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The one-dimensional quotients against their defining differences.
+
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// `q (z₁ − z₀) = A(z₁) − A(z₀)` to rounding, across the band's edges, and `q → S`
+        /// as the heights meet; the derivative against a central difference.
+        #[test]
+        fn emerged_quotient_is_the_divided_difference(z0 in -1.5f64..1.5, dz in -1.0f64..1.0, b in 0.05f64..1.0) {
+            let z1 = z0 + dz;
+            let (q, dq) = emerged_quotient(z0, z1, b);
+            let exact = a_int(z1, b) - a_int(z0, b);
+            prop_assert!((q * (z1 - z0) - exact).abs() <= 8.0 * f64::EPSILON * (z0.abs() + z1.abs() + b));
+            prop_assert!((0.0..=1.0).contains(&q));
+            let (qs, _) = emerged_quotient(z0, z0, b);
+            prop_assert_eq!(qs, emerged(z0, b).0);
+            let eps = 1e-7;
+            let fd = (emerged_quotient(z0, z1 + eps, b).0 - emerged_quotient(z0, z1 - eps, b).0) / (2.0 * eps);
+            // Skip central differences that straddle a band edge (A''' jumps there).
+            let near_edge = ((z1.abs() - 0.5 * b).abs()) < 1e-5;
+            prop_assert!(near_edge || (dq - fd).abs() <= 1e-6 * (1.0 + 1.0 / b), "dq {dq} fd {fd}");
+        }
+
+        /// The contact quotient: `q (g₁ − g₀) = V(g₁) − V(g₀)` and its derivative.
+        #[test]
+        fn contact_quotient_is_the_divided_difference(g0 in -0.1f64..0.1, dg in -0.1f64..0.1) {
+            let (k, g1) = (3.0e6, g0 + dg);
+            let (q, dq) = contact_quotient(g0, g1, k);
+            let exact = contact_energy(g1, k) - contact_energy(g0, k);
+            let scale = contact_energy(-g0.abs(), k) + contact_energy(-g1.abs(), k);
+            prop_assert!((q * (g1 - g0) - exact).abs() <= 8.0 * f64::EPSILON * scale);
+            let eps = 1e-9;
+            let fd = (contact_quotient(g0, g1 + eps, k).0 - contact_quotient(g0, g1 - eps, k).0) / (2.0 * eps);
+            prop_assert!(g1.abs() < 1e-8 || (dq - fd).abs() <= 1e-5 * k, "dq {dq} fd {fd}");
+        }
+    }
+
+    /// Momentum (docs/method.md §21): over every step the change of `Σ M_ρ v` equals the
+    /// impulse of gravity, the water's forces (buoyancy, seabed, drag, friction) and the
+    /// support's reaction, to the Newton residual left at the free components.
+    #[test]
+    fn momentum_changes_by_the_impulse_of_the_external_forces() {
+        use crate::{Boundary, Fixed, MassMatrix, Material, Mesh, Problem, Simulation, State};
+        let (n, l) = (12, 4.0);
+        let mesh = Mesh::uniform_chain(n, l * n as f64).unwrap();
+        let r: Vec<Vector<3>> = (0..=n)
+            .map(|i| Vector::<3>::new(3.5 * i as f64, 0.2 * i as f64, -40.0 + 3.0 * i as f64))
+            .collect();
+        let problem = Problem {
+            initial: State::at_rest(&mesh, r),
+            mesh,
+            material: Material::linear_elastic(1e9),
+            rho_a: 120.0,
+            body_force: Vector::<3>::new(0.0, 0.0, -120.0 * STANDARD_GRAVITY),
+            mass: MassMatrix::Consistent,
+            boundary: Boundary {
+                fixed: vec![Fixed::node(0)],
+                loads: vec![],
+                motions: vec![],
+                feedback: vec![],
+            },
+            point_masses: vec![],
+        };
+        let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
+            coefficient: 0.6,
+            slope: 500.0,
+        });
+        let water = Water::new(1025.0)
+            .with_current(Current::Uniform(Vector::<3>::new(0.8, -0.3, 0.0)))
+            .with_seabed(seabed);
+        let line = LineHydro {
+            diameter: 0.12,
+            cd: 1.2,
+            cd_axial: 0.4,
+            ca: 1.0,
+            ca_axial: 1.0,
+        };
+        let net = crate::Network::from(problem)
+            .with_water(water)
+            .with_line_hydro(0, line)
+            .with_point_hydro(PointHydro {
+                node: n,
+                volume: 0.5,
+                cda: 0.8,
+                ca: 0.5,
+            });
+        let params = crate::StepParams {
+            h: 0.02,
+            ..Default::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap();
+        let mut worst = 0.0f64;
+        for _ in 0..200 {
+            let before = sim.state().clone();
+            let p0 = sim.system().linear_momentum(&before);
+            let rep = sim.step().unwrap();
+            let sys = sim.system();
+            let w = sys.water.as_deref().unwrap();
+            let x: Vec<Vector<3>> = sim
+                .state()
+                .r
+                .iter()
+                .zip(&before.r)
+                .map(|(a, b)| a - b)
+                .collect();
+            // The water's residual terms, summed over the nodes.
+            let mut water_res = Vector::<3>::zeros();
+            for node in &w.nodes {
+                water_res += w
+                    .node_step(node, &before.r[node.node], &x[node.node], rep.h)
+                    .res;
+            }
+            for el in &w.elements {
+                let [a, b] = sys.mesh.elements()[el.e];
+                let l = sys.mesh.lengths()[el.e];
+                let (f, _, _) = w.element_drag(
+                    el,
+                    (&before.r[a], &before.r[b]),
+                    (&x[a], &x[b]),
+                    l,
+                    rep.h,
+                    false,
+                );
+                water_res -= f;
+            }
+            let gravity: Vector<3> = sys.body_force_vector().iter().sum();
+            let supports: Vector<3> = sim.ports().iter().map(|p| p.output).sum();
+            let impulse = (gravity - water_res + supports) * rep.h;
+            let dp = sys.linear_momentum(sim.state()) - p0;
+            let left = rep.h * ((n + 1) as f64 * 3.0).sqrt() * rep.residual;
+            let scale = rep.h * (gravity.norm() + water_res.norm() + supports.norm());
+            let err = (dp - impulse).norm();
+            assert!(
+                err <= left + 1e-12 * scale,
+                "step {}: {err:e} vs {left:e}",
+                rep.step
+            );
+            worst = worst.max(err / scale);
+        }
+        println!("momentum: worst relative defect {worst:e}");
+        assert!(worst <= 1e-9, "worst {worst:e}");
+    }
+
+    /// Fully submerged, the buoyancy is the constant `ρ_w g V` upwards; above the band, none.
+    #[test]
+    fn buoyancy_potential_far_from_the_surface() {
+        let b = 0.2;
+        assert_eq!(buoyancy_height(-5.0, b) - buoyancy_height(-7.0, b), 2.0);
+        assert_eq!(buoyancy_height(3.0, b), buoyancy_height(1.0, b));
+        assert_eq!(emerged_quotient(-5.0, -7.0, b), (0.0, 0.0));
+        assert_eq!(emerged_quotient(3.0, 1.0, b), (1.0, 0.0));
+        // Φ(0) = 0 by definition.
+        assert!(buoyancy_height(0.0, b).abs() <= f64::EPSILON);
+    }
+}
