@@ -608,6 +608,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn water_work(&self) -> WaterWork {
         self.water_totals
     }
+    /// Puts back the water's running totals (as [`Self::water_work`] returned them) after a
+    /// [`Self::restore`], for a front end whose checkpoint file saved them beside the
+    /// [`Checkpoint`] (which does not carry them yet).
+    pub fn set_water_work(&mut self, totals: WaterWork) {
+        self.water_totals = totals;
+    }
     /// Total Newton iterations so far.
     pub fn total_newton_iterations(&self) -> usize {
         self.run.total_newton

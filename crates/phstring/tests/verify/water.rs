@@ -340,6 +340,11 @@ fn error_control_in_water_keeps_the_balance() {
     let total = sim.water_work();
     assert!((total.dissipated() - shares.dissipated()).abs() <= 1e-12 * scale);
     assert!((total.current_supplied - shares.current_supplied).abs() <= 1e-12 * scale);
+    // A restore counts the water's totals anew unless the front end puts them back.
+    sim.restore(sim.checkpoint()).unwrap();
+    assert_eq!(sim.water_work(), phstring::WaterWork::default());
+    sim.set_water_work(total);
+    assert_eq!(sim.water_work(), total);
 }
 
 /// A line whose weight equals its buoyancy (`ρA = ρ_w π d²/4`), free and fully submerged in
