@@ -213,9 +213,6 @@ pub struct Simulation<const D: usize, M> {
     held: HeldVelocities,
     /// Inputs set from outside the run (held forces, ramps of moving supports).
     inputs: crate::boundary::HeldInputs<D>,
-    /// The water's shares of the run's supplied and dissipated totals (docs/method.md §21).
-    /// Not part of the checkpoint: a restored run counts them from the restore on.
-    water_totals: WaterWork,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -396,7 +393,6 @@ struct Backup<const D: usize> {
     run: Option<Checkpoint<D>>,
     energies: Energies,
     ports: Vec<PortSample<D>>,
-    water_totals: WaterWork,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -475,7 +471,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             ports_prev: Vec::new(),
             held,
             inputs: Default::default(),
-            water_totals: WaterWork::default(),
         })
     }
 
@@ -556,7 +551,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         cp.check_sizes(n, n_el)?;
         self.energies = self.sys.energies(&cp.state);
         self.run = cp;
-        self.water_totals = WaterWork::default();
         Ok(())
     }
 
@@ -568,7 +562,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         b.energies = self.energies;
         b.ports.clone_from(&self.ports);
-        b.water_totals = self.water_totals;
     }
 
     /// Puts back what [`Self::save`] saved.
@@ -578,7 +571,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
-        self.water_totals = b.water_totals;
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -603,16 +595,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.run.dissipated_total
     }
     /// The water's shares of [`Self::supplied_energy`] and [`Self::dissipated_energy`] so far
-    /// [J] (docs/method.md §21): drag, the current's work, seabed damping, friction. Counted
-    /// since the start or the last [`Self::restore`] (a checkpoint does not carry them).
+    /// [J] (docs/method.md §21): drag, the current's work, seabed damping, friction (part of
+    /// the [`Checkpoint`]).
     pub fn water_work(&self) -> WaterWork {
-        self.water_totals
-    }
-    /// Puts back the water's running totals (as [`Self::water_work`] returned them) after a
-    /// [`Self::restore`], for a front end whose checkpoint file saved them beside the
-    /// [`Checkpoint`] (which does not carry them yet).
-    pub fn set_water_work(&mut self, totals: WaterWork) {
-        self.water_totals = totals;
+        self.run.water
     }
     /// Total Newton iterations so far.
     pub fn total_newton_iterations(&self) -> usize {
@@ -1153,7 +1139,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let (balance_error, energy_scale) =
             self.check_balance(&at, &stats, before, after, (supplied, dissipated), &water)?;
         self.commit(h, after, supplied, dissipated);
-        self.water_totals.add(&water);
+        self.run.water.add(&water);
         Ok(StepReport {
             step: step_no,
             t: t_next,

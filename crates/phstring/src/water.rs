@@ -487,6 +487,7 @@ pub(crate) struct WaterModel<const D: usize> {
 
 /// What the water does in a step [J]; each share is reported separately.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct WaterWork {
     /// Energy dissipated by drag relative to the water, `−h f·v_r ≥ 0`.
     pub drag_dissipated: f64,
@@ -499,6 +500,10 @@ pub struct WaterWork {
 }
 
 impl WaterWork {
+    /// Whether every share is zero (a run without water).
+    pub fn is_zero(&self) -> bool {
+        *self == Self::default()
+    }
     /// Everything dissipated [J].
     pub fn dissipated(&self) -> f64 {
         self.drag_dissipated + self.seabed_dissipated + self.friction_dissipated

@@ -36,6 +36,7 @@ use crate::accuracy::AccelerationHistory;
 use crate::error::SetupError;
 use crate::material::StoredEnergy;
 use crate::system::{State, Vector};
+use crate::water::WaterWork;
 
 use super::{Simulation, StepParams};
 
@@ -76,6 +77,9 @@ pub struct Checkpoint<const D: usize> {
     /// Error control: the last accepted step's error (dimensionless, 1 before the first
     /// step).
     pub err_prev: f64,
+    /// The water's shares of `supplied_total` and `dissipated_total` [J] (docs/method.md
+    /// §21): drag, the current's work, seabed damping, friction; all zero without water.
+    pub water: WaterWork,
 }
 
 impl<const D: usize> Checkpoint<D> {
@@ -99,6 +103,7 @@ impl<const D: usize> Checkpoint<D> {
             total_newton: 0,
             acc_history: Default::default(),
             err_prev: 1.0,
+            water: WaterWork::default(),
         }
     }
 
@@ -126,6 +131,7 @@ impl<const D: usize> Checkpoint<D> {
             total_newton: _,
             acc_history,
             err_prev,
+            water: _,
         } = self;
         for (what, got, expected) in [
             ("positions", state.r.len(), n),
@@ -198,6 +204,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
             total_newton: 0,
             acc_history: Default::default(),
             err_prev: 0.0,
+            water: WaterWork::default(),
         };
         c.clone_from(self);
         c
@@ -221,6 +228,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
             total_newton,
             acc_history,
             err_prev,
+            water,
         } = self;
         state.clone_from(&source.state);
         *t_base = source.t_base;
@@ -237,6 +245,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
         *total_newton = source.total_newton;
         acc_history.clone_from(&source.acc_history);
         *err_prev = source.err_prev;
+        *water = source.water;
     }
 }
 
@@ -286,6 +295,13 @@ pub struct FlatCheckpoint {
     pub err_prev: f64,
     /// Newton iterations so far.
     pub total_newton: usize,
+    /// The water's shares of the totals [J]: written only when one is not zero, so that a
+    /// run without water writes the file it always wrote; zero when missing.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "WaterWork::is_zero")
+    )]
+    pub water: WaterWork,
 }
 
 /// `err_prev` of a file written before error control.
@@ -326,6 +342,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             total_newton,
             acc_history,
             err_prev,
+            water,
         } = cp;
         Self {
             r: flat(r),
@@ -349,6 +366,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
                 .collect(),
             err_prev: *err_prev,
             total_newton: *total_newton,
+            water: *water,
         }
     }
 }
@@ -404,6 +422,7 @@ impl FlatCheckpoint {
             acc_history,
             err_prev,
             total_newton,
+            water,
         } = self;
         Checkpoint {
             state: State {
@@ -430,6 +449,7 @@ impl FlatCheckpoint {
                     .collect(),
             },
             err_prev,
+            water,
         }
     }
 
@@ -459,6 +479,7 @@ impl FlatCheckpoint {
             acc_history,
             err_prev,
             total_newton: _,
+            water,
         } = self;
         let arrays: [(&'static str, &[f64]); 5] = [
             ("sim.r", r),
@@ -474,6 +495,10 @@ impl FlatCheckpoint {
             ("sim.supplied_total", supplied_total),
             ("sim.dissipated_total", dissipated_total),
             ("sim.err_prev", err_prev),
+            ("sim.water.drag_dissipated", &water.drag_dissipated),
+            ("sim.water.current_supplied", &water.current_supplied),
+            ("sim.water.seabed_dissipated", &water.seabed_dissipated),
+            ("sim.water.friction_dissipated", &water.friction_dissipated),
         ];
         arrays
             .into_iter()
@@ -525,6 +550,7 @@ impl FlatCheckpoint {
             acc_history,
             err_prev,
             total_newton,
+            water,
         } = self;
         let (n, n_el) = (
             sim.system().mesh().n_nodes(),
@@ -571,6 +597,10 @@ impl FlatCheckpoint {
         for (name, value) in [
             ("sim.supplied_total", supplied_total),
             ("sim.dissipated_total", dissipated_total),
+            ("sim.water.drag_dissipated", &water.drag_dissipated),
+            ("sim.water.current_supplied", &water.current_supplied),
+            ("sim.water.seabed_dissipated", &water.seabed_dissipated),
+            ("sim.water.friction_dissipated", &water.friction_dissipated),
         ] {
             if !value.is_finite() {
                 return Err(format!("{name} = {value:e} must be finite"));
