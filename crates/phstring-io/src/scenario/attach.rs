@@ -83,6 +83,14 @@ struct Force {
     loaded: Vec<bool>,
 }
 
+/// The point masses of a scenario, their report entries, and their hydrodynamics (those
+/// with `volume`, `cda` or `ca`).
+pub(super) type PointMasses<const D: usize> = (
+    Vec<PointMass<D>>,
+    Vec<PointMassComponent>,
+    Vec<phstring::PointHydro>,
+);
+
 impl ScenarioFile {
     /// Refuses `node` (given at `key`) if it is the fixed point of a spring with `to_point`:
     /// that node is held in every component, so a condition or a mass there would do nothing
@@ -117,10 +125,11 @@ impl ScenarioFile {
         &self,
         sk: &Skeleton<D>,
         gravity: Vector<D>,
-    ) -> Result<(Vec<PointMass<D>>, Vec<PointMassComponent>), ScenarioError> {
+    ) -> Result<PointMasses<D>, ScenarioError> {
         let list = &self.scenario.point_mass;
         let mut masses = Vec::with_capacity(list.len());
         let mut report = Vec::with_capacity(list.len());
+        let mut hydro = Vec::new();
         for (k, pm) in list.iter().enumerate() {
             let key = |f: &str| format!("point_mass.{k}.{f}");
             let node = self.resolve(&key("node"), &pm.node, &sk.nodes)?;
@@ -156,13 +165,14 @@ impl ScenarioFile {
                 mass: kg,
                 weight,
             });
+            hydro.extend(self.point_hydro(k, pm, node)?);
             report.push(PointMassComponent {
                 node,
                 kg,
                 weight: weight.as_slice().to_vec(),
             });
         }
-        Ok((masses, report))
+        Ok((masses, report, hydro))
     }
 
     /// Refuses a `position` (at `key`) whose every expression is `""`: it prescribes nothing.

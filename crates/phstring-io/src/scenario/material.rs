@@ -39,6 +39,8 @@ pub(super) struct CrossSection {
     pub mass: MassMatrix,
     /// Kelvin–Voigt viscosity and drag.
     pub damping: Damping,
+    /// Hydrodynamic diameter and coefficients (with `diameter`), for `[water]`.
+    pub hydro: Option<phstring::LineHydro>,
 }
 
 /// `consistent` or `lumped`.
@@ -92,6 +94,7 @@ impl ScenarioFile {
             rho_a,
             mass,
             damping,
+            hydro: self.line_hydro(prefix, spec)?,
         })
     }
 }

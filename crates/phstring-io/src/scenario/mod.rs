@@ -25,6 +25,7 @@ mod settings;
 mod single;
 mod spec;
 pub mod start;
+mod water;
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -342,6 +343,8 @@ struct Skeleton<'s, const D: usize> {
     massless: Vec<bool>,
     /// Dissipation of a single string (a network's groups carry their own).
     single_damping: phstring::Damping,
+    /// `(element group, hydrodynamics)` of the strings with a `diameter`.
+    hydro: Vec<(usize, phstring::LineHydro)>,
 }
 
 impl<const D: usize> Skeleton<'_, D> {
@@ -602,7 +605,9 @@ impl ScenarioFile {
             Layout::Single => self.single_string::<D>(&body)?,
             Layout::Network => self.network::<D>(&body)?,
         };
-        let (point_masses, mass_report) = self.point_masses(&skeleton, body.g())?;
+        let (point_masses, mass_report, point_hydro) = self.point_masses(&skeleton, body.g())?;
+        let water = self.water::<D>(body.gravity)?;
+        let line_hydro = std::mem::take(&mut skeleton.hydro);
         let parts = self.boundary(&skeleton, self.first_mid_time())?;
         let fmu_nodes = self.fmu_nodes(&skeleton.nodes)?;
         if layout == Layout::Network {
@@ -612,6 +617,16 @@ impl ScenarioFile {
         let mut problem = skeleton
             .finish(parts.boundary, point_masses)
             .map_err(|cause| self.setup_error(cause))?;
+        if let Some(water) = water {
+            problem = line_hydro
+                .into_iter()
+                .fold(problem.with_water(water), |p, (g, h)| {
+                    p.with_line_hydro(g, h)
+                });
+            problem = point_hydro
+                .into_iter()
+                .fold(problem, |p, h| p.with_point_hydro(h));
+        }
         let initial = self.initial_conditions((&problem).into(), layout == Layout::Network)?;
         if initial.changes_base() {
             // Every expression is evaluated at every node now, on the geometry's shape; with

@@ -142,7 +142,8 @@ impl ScenarioFile {
     }
 
     /// `[[string]]`: each runs straight along its path (`[[node]]`s and nodes of the strings
-    /// above it), `elements` per span, with a `[materials.NAME]` cross-section.
+    /// above it), `elements` per span, with a `[materials.NAME]` cross-section. Returns the
+    /// `(element group, hydrodynamics)` of the strings whose material has a `diameter`.
     #[allow(clippy::too_many_arguments)] // the network's parts, each needed once
     fn strings<'s, const D: usize>(
         &'s self,
@@ -153,10 +154,11 @@ impl ScenarioFile {
         components: &mut Components,
         names: &mut HashMap<&'s str, FirstUse>,
         used: &mut [bool],
-    ) -> Result<(), ScenarioError> {
+    ) -> Result<Vec<(usize, phstring::LineHydro)>, ScenarioError> {
         let list = &self.scenario.string;
         self.at_most("string", list.len(), MAX_STRINGS)?;
         let mut total = 0usize;
+        let mut hydro = Vec::new();
         for (k, spec) in list.iter().enumerate() {
             let spec = spec.get_ref();
             let key = |f: &str| format!("string.{k}.{f}");
@@ -258,6 +260,9 @@ impl ScenarioFile {
                 .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
             b.set_damping(g, cs.damping)
                 .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
+            if let Some(h) = cs.hydro {
+                hydro.push((g, h));
+            }
             total += count;
             let along = Along {
                 path,
@@ -281,7 +286,7 @@ impl ScenarioFile {
             nodes.add_string(name, along);
             nodes.n_nodes = b.n_nodes();
         }
-        Ok(())
+        Ok(hydro)
     }
 
     /// The mesh nodes of `string.{k}.path`: each resolved, consecutive ones different and
@@ -603,7 +608,7 @@ impl ScenarioFile {
         self.named_nodes(&mut b, &mut nodes, &mut components)?;
         let mut used = vec![false; b.n_nodes()];
         let mut names = HashMap::new();
-        self.strings(
+        let hydro = self.strings(
             &mut b,
             &mut nodes,
             &materials,
@@ -649,6 +654,7 @@ impl ScenarioFile {
             components,
             massless,
             single_damping: phstring::Damping::NONE,
+            hydro,
         })
     }
 

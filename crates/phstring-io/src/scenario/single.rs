@@ -284,6 +284,7 @@ impl ScenarioFile {
             components,
             massless: Vec::new(),
             single_damping: cs.damping,
+            hydro: cs.hydro.map(|h| (0, h)).into_iter().collect(),
         })
     }
 }

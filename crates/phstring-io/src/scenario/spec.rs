@@ -65,6 +65,65 @@ pub struct Scenario {
     /// What an FMU built from this scenario reports (`phstring fmu`; ignored otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fmu: Option<Spanned<FmuSpec>>,
+    /// Water (surface at height 0 on the vertical axis, the last one): density, depth,
+    /// current. Dimension 2 or 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water: Option<Spanned<WaterSpec>>,
+    /// The seabed under `[water]`: contact stiffness and damping, friction, slope.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seabed: Option<Spanned<SeabedSpec>>,
+}
+
+/// `[water]`: the water the strings with a `diameter` are in. Its surface is at height 0
+/// on the vertical axis (`y` in 2D, `z` in 3D); buoyancy acts against `body_force.gravity`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaterSpec {
+    /// Density `ρ_w` [kg/m³] (default 1025, sea water).
+    #[serde(default)]
+    pub density: Option<Spanned<f64>>,
+    /// Water depth `h` [m]: a flat seabed at height `−h` (with `[seabed]`).
+    #[serde(default)]
+    pub depth: Option<Spanned<f64>>,
+    /// Uniform current [m/s], one component per axis (default still water).
+    #[serde(default)]
+    pub current: Option<Spanned<Vec<f64>>>,
+    /// A current profile instead: rows `[z, u_x, …]` [m, m/s] with increasing height `z`,
+    /// linear in between and constant beyond the first and last row.
+    #[serde(default)]
+    pub current_profile: Option<Spanned<Vec<Vec<f64>>>>,
+    /// Smoothing speed `δ` [m/s] of the drag laws' `|v|` (default 1e-3).
+    #[serde(default)]
+    pub drag_smoothing: Option<Spanned<f64>>,
+}
+
+/// `[seabed]`: a flat seabed at `−water.depth`, or a plane through `point` with upward
+/// `normal`; penalty contact per unit length and diameter of line, as MoorDyn's `kBot` and
+/// `cBot`; optional Coulomb friction.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeabedSpec {
+    /// Contact stiffness `k` [Pa/m]: force per unit length `k d p` at penetration `p` [m].
+    pub stiffness: Spanned<f64>,
+    /// Contact damping `c` [Pa·s/m]: force per unit length `−c d v_n` (default 0).
+    #[serde(default)]
+    pub damping: Option<Spanned<f64>>,
+    /// Coulomb friction coefficient `μ` (default 0: no friction).
+    #[serde(default)]
+    pub friction: Option<Spanned<f64>>,
+    /// MoorDyn's `FricDamp` [N·s/m]: the friction force is `μ · friction_damping · |v|` at
+    /// small slip (default 200, MoorDyn's default).
+    #[serde(default)]
+    pub friction_damping: Option<Spanned<f64>>,
+    /// A point of an inclined seabed plane [m] (default: on the flat seabed below the origin).
+    #[serde(default)]
+    pub point: Option<Spanned<Vec<f64>>>,
+    /// The plane's normal, pointing up into the water (default vertical: a flat seabed).
+    #[serde(default)]
+    pub normal: Option<Spanned<Vec<f64>>>,
+    /// Penetration [m] over which the damping ramps up (default 1e-3).
+    #[serde(default)]
+    pub damping_ramp: Option<Spanned<f64>>,
 }
 
 /// A named point of a network (`[[node]]`): a junction, an anchor, an attachment point.
@@ -167,6 +226,23 @@ pub struct MaterialSpec {
     /// Linear drag per unit reference length `c` [N·s/m²]: the force `−c v` (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drag: Option<Spanned<f64>>,
+    /// Hydrodynamic (volume-equivalent) diameter `d` [m]: with `[water]`, the string
+    /// displaces `π d²/4` per unit length, feels drag and added mass, and touches the
+    /// seabed. Without it the string feels no water.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diameter: Option<Spanned<f64>>,
+    /// Transverse drag coefficient `Cd` on `d·l` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cd: Option<Spanned<f64>>,
+    /// Axial drag coefficient `CdAx` on `π·d·l` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cd_axial: Option<Spanned<f64>>,
+    /// Transverse added-mass coefficient `Ca` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ca: Option<Spanned<f64>>,
+    /// Axial added-mass coefficient `CaAx` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ca_axial: Option<Spanned<f64>>,
 }
 
 fn default_law() -> Spanned<String> {
@@ -277,6 +353,15 @@ pub struct PointMassSpec {
     pub node: Spanned<NodeRef>,
     /// Mass [kg].
     pub kg: Spanned<f64>,
+    /// Displaced volume [m³] in `[water]`: buoyancy `ρ_w g V` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<Spanned<f64>>,
+    /// Drag coefficient times area `CdA` [m²] in `[water]` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cda: Option<Spanned<f64>>,
+    /// Added-mass coefficient `Ca` on `ρ_w V` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ca: Option<Spanned<f64>>,
 }
 
 /// `[initial]`: how the run starts, instead of at rest in the straight (or polyline, or
