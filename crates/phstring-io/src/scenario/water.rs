@@ -258,7 +258,7 @@ impl ScenarioFile {
     /// `seabed.normal`: finite, not zero, pointing up (positive vertical component).
     fn upward<const D: usize>(&self, n: &Spanned<Vec<f64>>) -> Result<Vector<D>, ScenarioError> {
         let v = self.vector::<D>("seabed.normal", n)?;
-        if !(v[D - 1] > 0.0) {
+        if v[D - 1].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(self.invalid(
                 "seabed.normal",
                 n.span(),
