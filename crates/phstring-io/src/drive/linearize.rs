@@ -243,12 +243,7 @@ fn linearize_dim<const D: usize>(
                 free,
                 found.modes.len(),
             ));
-            Some(phstring::linear::modal_model(
-                sys,
-                &r,
-                &found.modes,
-                &ports,
-            ))
+            Some(phstring::linear::modal_model(sys, &r, &found.modes, &ports))
         }
         None => None,
     };
