@@ -399,15 +399,15 @@ pub fn parse(text: &str, file: &str) -> Result<Deck, DeckError> {
     })
 }
 
-/// The sections present, in order. A known section must not appear twice. The last
-/// block, when it has an unknown title and no rows, is the closing line and not a
-/// section; when there is none, a note says so (the deck is read all the same).
+/// The sections present, in order. A known section must not appear twice. A dashed line
+/// with an unknown title and no rows is a divider, not a section; the last one closes
+/// the deck. When the deck ends without one, a note says so (the deck is read all the
+/// same).
 fn sections(file: &str, l: &Layout, notes: &mut Vec<Note>) -> Result<Vec<Section>, DeckError> {
     let mut out: Vec<Section> = Vec::new();
     let n = l.blocks.len();
     for (i, b) in l.blocks.iter().enumerate() {
-        let closing = i + 1 == n && b.kind == SectionKind::Unknown && b.rows.is_empty();
-        if closing {
+        if b.kind == SectionKind::Unknown && b.rows.is_empty() {
             continue;
         }
         if b.kind != SectionKind::Unknown

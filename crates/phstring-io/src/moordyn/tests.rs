@@ -273,6 +273,25 @@ fn a_missing_end_line_is_accepted_with_a_note() {
     assert_eq!(d.notes[0].line, line_of(SPAR_V2, "AnchTen1"));
     assert!(d.notes[0].text.contains("no closing dashed line"));
     assert!(deck(SPAR_V2).notes.is_empty());
+    // A bare dashed divider between sections is neither a section nor the end.
+    let divided = SPAR_V2.replace(
+        "---------------------- LINES",
+        "--------------------------------\n---------------------- LINES",
+    );
+    let d = deck(&divided);
+    assert_eq!(d.sections_present.len(), 5);
+    assert_eq!(d.unsupported_sections().count(), 0);
+    assert!(d.notes.is_empty());
+    // The same lines, one file line further down.
+    let shifted: Vec<Line> = deck(SPAR_V2)
+        .lines
+        .into_iter()
+        .map(|l| Line {
+            line: l.line + 1,
+            ..l
+        })
+        .collect();
+    assert_eq!(d.lines, shifted);
 }
 
 #[test]
