@@ -6,8 +6,9 @@
 //!
 //! 1. [`text`] (numbers and text in messages) and [`files`] (the names and layout of the
 //!    output files, the run id, atomic writes);
-//! 2. [`plot`], [`vtk`] and [`animation`] (figure and ParaView formats), and [`scenario`]
-//!    (scenario files, validation, and starting a simulation from one);
+//! 2. [`plot`], [`vtk`] and [`animation`] (figure and ParaView formats), [`scenario`]
+//!    (scenario files, validation, and starting a simulation from one), and [`moordyn`]
+//!    (MoorDyn input decks read into a typed deck);
 //! 3. [`checkpoint`] (the checkpoint file);
 //! 4. [`output`] (the writers of a run);
 //! 5. [`history`] (a run's outputs read back) and [`figures`] (the plots drawn from them);
@@ -20,6 +21,7 @@ pub mod drive;
 pub mod figures;
 pub mod files;
 pub mod history;
+pub mod moordyn;
 pub mod output;
 pub mod plot;
 pub mod scenario;

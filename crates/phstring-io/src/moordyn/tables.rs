@@ -1,0 +1,419 @@
+//! The table sections (LINE TYPES, POINTS, LINES) and the OUTPUTS list, read row by row.
+
+use super::error::DeckError;
+use super::layout::{Block, Row, count, is_number, number};
+use super::options::looks_numeric;
+use super::{
+    Attachment, Line, LineType, LineValue, OutputChannel, Point, PointKind, RodEnd, Version,
+};
+
+/// A MoorDyn-F v1 count line at the top of a table (`3  NLines  - number of lines`):
+/// the count and its name.
+pub(super) fn count_line<'a>(row: &Row<'a>) -> Option<(usize, &'a str)> {
+    let f = row.fields();
+    let n = f.first()?.parse::<usize>().ok()?;
+    let key = f.get(1)?;
+    let named = key.len() > 1
+        && key.starts_with(['N', 'n'])
+        && key.chars().all(|c| c.is_ascii_alphabetic());
+    named.then_some((n, *key))
+}
+
+/// The column names and data rows of a table block: skips a count line, checks that the
+/// two header rows (names, units) hold no number, and checks the count if there was one.
+/// A block with no rows at all is an empty table.
+pub(super) fn table<'b, 'a>(
+    file: &str,
+    block: &'b Block<'a>,
+) -> Result<(Vec<&'a str>, &'b [Row<'a>]), DeckError> {
+    let mut rows = &block.rows[..];
+    let declared = rows.first().and_then(count_line).map(|c| (rows[0].line, c));
+    if declared.is_some() {
+        rows = &rows[1..];
+    }
+    if rows.is_empty() && declared.is_none() {
+        return Ok((Vec::new(), rows));
+    }
+    for k in 0..2 {
+        let bad = match rows.get(k) {
+            None => Some((block.line, "")),
+            Some(r) if r.fields().iter().any(|f| is_number(f)) => Some((r.line, r.text)),
+            Some(_) => None,
+        };
+        if let Some((line, text)) = bad {
+            return Err(DeckError::MissingHeader {
+                file: file.to_string(),
+                line,
+                title: block.title.to_string(),
+                text: text.to_string(),
+            });
+        }
+    }
+    let names = rows[0].fields();
+    let data = &rows[2..];
+    if let Some((line, (n, key))) = declared
+        && n != data.len()
+    {
+        return Err(DeckError::CountMismatch {
+            file: file.to_string(),
+            line,
+            key: key.to_string(),
+            declared: n,
+            found: data.len(),
+        });
+    }
+    Ok((names, data))
+}
+
+/// A row being read: file and line for messages, and its fields.
+struct Fields<'a, 'f> {
+    file: &'f str,
+    line: usize,
+    f: Vec<&'a str>,
+}
+
+impl Fields<'_, '_> {
+    /// Field `i` as a finite number, or an error naming the column.
+    fn num(&self, i: usize, field: &'static str) -> Result<f64, DeckError> {
+        number(self.f[i]).ok_or_else(|| DeckError::NotANumber {
+            file: self.file.to_string(),
+            line: self.line,
+            field,
+            text: self.f[i].to_string(),
+        })
+    }
+    /// Field `i` as a count (≥ 1).
+    fn count(&self, i: usize, field: &'static str) -> Result<u32, DeckError> {
+        count(self.f[i]).ok_or_else(|| DeckError::NotACount {
+            file: self.file.to_string(),
+            line: self.line,
+            field,
+            text: self.f[i].to_string(),
+        })
+    }
+    /// Field `i` as a number, a curve file name or bar-separated parts.
+    fn value(&self, i: usize, field: &'static str) -> Result<LineValue, DeckError> {
+        let t = self.f[i];
+        if let Some(x) = number(t) {
+            Ok(LineValue::Number(x))
+        } else if t.contains('|') {
+            Ok(LineValue::Parts(t.split('|').map(str::to_string).collect()))
+        } else if looks_numeric(t) {
+            self.num(i, field).map(LineValue::Number)
+        } else {
+            Ok(LineValue::CurveFile(t.to_string()))
+        }
+    }
+    /// The field-count error for table `table`.
+    fn wrong_count(&self, table: &'static str, expected: &str) -> DeckError {
+        DeckError::FieldCount {
+            file: self.file.to_string(),
+            line: self.line,
+            table,
+            expected: expected.to_string(),
+            found: self.f.len(),
+        }
+    }
+}
+
+/// The known columns of a line type row, in file order, per version.
+const V1_TYPE_COLUMNS: usize = 9;
+const V2_TYPE_COLUMNS: usize = 10;
+
+/// Reads the LINE TYPES rows. v1: `Name Diam MassDen EA BA/-zeta Can Cat Cdn Cdt`; v2:
+/// `Name Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx` then any further columns (`Cl dF
+/// cF`), kept raw under the name of their header column.
+pub(super) fn line_types(
+    file: &str,
+    version: Version,
+    names: &[&str],
+    rows: &[Row],
+) -> Result<Vec<LineType>, DeckError> {
+    let mut out: Vec<LineType> = Vec::with_capacity(rows.len());
+    for row in rows {
+        let r = Fields {
+            file,
+            line: row.line,
+            f: row.fields(),
+        };
+        let (known, expected) = match version {
+            Version::V1 => (
+                V1_TYPE_COLUMNS,
+                "at least 9 (Name Diam MassDen EA BA/-zeta Can Cat Cdn Cdt)",
+            ),
+            Version::V2 => (
+                V2_TYPE_COLUMNS,
+                "at least 10 (Name Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx)",
+            ),
+        };
+        if r.f.len() < known {
+            return Err(r.wrong_count("LINE TYPES", expected));
+        }
+        let name = r.f[0].to_string();
+        if let Some(first) = out.iter().find(|t| t.name == name) {
+            return Err(DeckError::DuplicateLineType {
+                file: file.to_string(),
+                line: row.line,
+                name,
+                first: first.line,
+            });
+        }
+        // Hydrodynamic coefficients: v1 writes added mass first (Can Cat Cdn Cdt).
+        let (ei, cd, ca, cd_ax, ca_ax) = match version {
+            Version::V1 => (
+                LineValue::Number(0.0),
+                r.num(7, "Cdn")?,
+                r.num(5, "Can")?,
+                r.num(8, "Cdt")?,
+                r.num(6, "Cat")?,
+            ),
+            Version::V2 => (
+                r.value(5, "EI")?,
+                r.num(6, "Cd")?,
+                r.num(7, "Ca")?,
+                r.num(8, "CdAx")?,
+                r.num(9, "CaAx")?,
+            ),
+        };
+        let extra = (known..r.f.len())
+            .map(|i| {
+                let col = names
+                    .get(i)
+                    .map_or_else(|| format!("column{}", i + 1), |n| n.to_string());
+                (col, r.f[i].to_string())
+            })
+            .collect();
+        out.push(LineType {
+            name,
+            diameter: r.num(1, "Diam")?,
+            mass_per_length: r.num(2, "MassDen")?,
+            ea: r.value(3, "EA")?,
+            ba: r.value(4, "BA/-zeta")?,
+            ei,
+            cd,
+            ca,
+            cd_ax,
+            ca_ax,
+            extra,
+            line: row.line,
+        });
+    }
+    Ok(out)
+}
+
+/// A MoorDyn word cut into leading letters (upper-cased), digits and the rest:
+/// `Body12` → (`BODY`, `12`, ``), `R1A` → (`R`, `1`, `A`).
+fn decompose(word: &str) -> (String, &str, &str) {
+    let split = word
+        .find(|c: char| !c.is_ascii_alphabetic())
+        .unwrap_or(word.len());
+    let (letters, tail) = word.split_at(split);
+    let digits = tail
+        .find(|c: char| !c.is_ascii_digit())
+        .unwrap_or(tail.len());
+    (
+        letters.to_ascii_uppercase(),
+        &tail[..digits],
+        &tail[digits..],
+    )
+}
+
+/// The point type of the `Attachment` (v1 `Type`) column; see [`PointKind`].
+fn point_kind(text: &str) -> Option<PointKind> {
+    let (letters, digits, rest) = decompose(text);
+    if !rest.is_empty() {
+        return None;
+    }
+    let n = digits.parse::<u32>().ok().filter(|n| *n >= 1);
+    match letters.as_str() {
+        "FIXED" | "FIX" | "ANCHOR" if digits.is_empty() => Some(PointKind::Fixed),
+        "VESSEL" | "VES" | "COUPLED" | "CPLD" | "FAIRLEAD" => Some(PointKind::Coupled),
+        "FREE" | "CONNECT" | "CON" | "POINT" if digits.is_empty() => Some(PointKind::Free),
+        "BODY" => n.map(PointKind::Body),
+        "TURBINE" => n.map(PointKind::Turbine),
+        _ => None,
+    }
+}
+
+/// Reads the POINTS rows: `ID Attachment X Y Z Mass Volume CdA Ca` (9 fields) or, as in v1
+/// decks, with `FX FY FZ` between `Volume` and `CdA` (12 fields). Ids run 1, 2, 3, ….
+pub(super) fn points(file: &str, rows: &[Row]) -> Result<Vec<Point>, DeckError> {
+    let mut out = Vec::with_capacity(rows.len());
+    for row in rows {
+        let r = Fields {
+            file,
+            line: row.line,
+            f: row.fields(),
+        };
+        if r.f.len() != 9 && r.f.len() != 12 {
+            return Err(r.wrong_count(
+                "POINTS",
+                "9 (ID Attachment X Y Z Mass Volume CdA Ca) or 12 (with FX FY FZ after Volume)",
+            ));
+        }
+        let id = r.count(0, "ID")?;
+        let expected = out.len() as u32 + 1;
+        if id != expected {
+            return Err(DeckError::OutOfSequence {
+                file: file.to_string(),
+                line: row.line,
+                table: "POINTS",
+                found: id,
+                expected,
+            });
+        }
+        let kind = point_kind(r.f[1]).ok_or_else(|| DeckError::UnknownPointKind {
+            file: file.to_string(),
+            line: row.line,
+            text: r.f[1].to_string(),
+        })?;
+        let with_force = r.f.len() == 12;
+        let force = if with_force {
+            Some([r.num(7, "FX")?, r.num(8, "FY")?, r.num(9, "FZ")?])
+        } else {
+            None
+        };
+        let tail = if with_force { 10 } else { 7 };
+        out.push(Point {
+            id,
+            kind,
+            kind_text: r.f[1].to_string(),
+            position: [r.num(2, "X")?, r.num(3, "Y")?, r.num(4, "Z")?],
+            mass: r.num(5, "Mass")?,
+            volume: r.num(6, "Volume")?,
+            force,
+            cda: r.num(tail, "CdA")?,
+            ca: r.num(tail + 1, "Ca")?,
+            line: row.line,
+        });
+    }
+    Ok(out)
+}
+
+/// A line end: a point (`3`, `P3`, `Point3`, `C3`, `Con3`) or a rod end (`R1A`, `Rod2B`).
+fn attachment(text: &str) -> Option<Attachment> {
+    let (letters, digits, rest) = decompose(text);
+    let n = digits.parse::<u32>().ok().filter(|n| *n >= 1)?;
+    match (letters.as_str(), rest.to_ascii_uppercase().as_str()) {
+        ("" | "P" | "POINT" | "C" | "CON", "") => Some(Attachment::Point(n)),
+        ("R" | "ROD", "A") => Some(Attachment::Rod(n, RodEnd::A)),
+        ("R" | "ROD", "B") => Some(Attachment::Rod(n, RodEnd::B)),
+        _ => None,
+    }
+}
+
+/// Reads the LINES rows. v2: `ID LineType AttachA AttachB UnstrLen NumSegs Outputs`; v1:
+/// `Line LineType UnstrLen NumSegs NodeAnch NodeFair Flags`. Line types must be defined
+/// and points must exist; ids run 1, 2, 3, ….
+pub(super) fn lines(
+    file: &str,
+    version: Version,
+    rows: &[Row],
+    types: &[LineType],
+    points: &[Point],
+) -> Result<Vec<Line>, DeckError> {
+    let (a, b, len, segs, names) = match version {
+        Version::V1 => (4, 5, 2, 3, ["NodeAnch", "NodeFair"]),
+        Version::V2 => (2, 3, 4, 5, ["AttachA", "AttachB"]),
+    };
+    let mut out = Vec::with_capacity(rows.len());
+    for row in rows {
+        let r = Fields {
+            file,
+            line: row.line,
+            f: row.fields(),
+        };
+        if r.f.len() != 7 {
+            return Err(r.wrong_count(
+                "LINES",
+                match version {
+                    Version::V1 => "7 (Line LineType UnstrLen NumSegs NodeAnch NodeFair Flags)",
+                    Version::V2 => "7 (ID LineType AttachA AttachB UnstrLen NumSegs Outputs)",
+                },
+            ));
+        }
+        let id = r.count(0, "ID")?;
+        let expected = out.len() as u32 + 1;
+        if id != expected {
+            return Err(DeckError::OutOfSequence {
+                file: file.to_string(),
+                line: row.line,
+                table: "LINES",
+                found: id,
+                expected,
+            });
+        }
+        if !types.iter().any(|t| t.name == r.f[1]) {
+            return Err(DeckError::UnknownLineType {
+                file: file.to_string(),
+                line: row.line,
+                name: r.f[1].to_string(),
+            });
+        }
+        let mut ends = [Attachment::Point(0); 2];
+        for (k, (i, field)) in [(a, names[0]), (b, names[1])].into_iter().enumerate() {
+            let end = attachment(r.f[i]).ok_or_else(|| DeckError::BadAttachment {
+                file: file.to_string(),
+                line: row.line,
+                field,
+                text: r.f[i].to_string(),
+            })?;
+            if let Attachment::Point(id) = end
+                && id as usize > points.len()
+            {
+                return Err(DeckError::UnknownPoint {
+                    file: file.to_string(),
+                    line: row.line,
+                    field,
+                    id,
+                    count: points.len(),
+                });
+            }
+            ends[k] = end;
+        }
+        out.push(Line {
+            id,
+            line_type: r.f[1].to_string(),
+            attach_a: ends[0],
+            attach_b: ends[1],
+            unstretched_length: r.num(len, "UnstrLen")?,
+            segments: r.count(segs, "NumSegs")?,
+            outputs: r.f[6].to_string(),
+            line: row.line,
+        });
+    }
+    Ok(out)
+}
+
+/// Reads the OUTPUTS rows: every word is a channel; a row `END` ends the list, and
+/// anything after it is refused.
+pub(super) fn outputs(file: &str, rows: &[Row]) -> Result<Vec<OutputChannel>, DeckError> {
+    let mut out = Vec::new();
+    let mut ended = false;
+    for row in rows {
+        if ended {
+            return Err(DeckError::AfterEnd {
+                file: file.to_string(),
+                line: row.line,
+                text: row.text.to_string(),
+            });
+        }
+        for word in row.fields() {
+            if word.eq_ignore_ascii_case("END") {
+                ended = true;
+            } else if ended {
+                return Err(DeckError::AfterEnd {
+                    file: file.to_string(),
+                    line: row.line,
+                    text: word.to_string(),
+                });
+            } else {
+                out.push(OutputChannel {
+                    name: word.to_string(),
+                    line: row.line,
+                });
+            }
+        }
+    }
+    Ok(out)
+}
