@@ -136,6 +136,7 @@ fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
         );
         let _ = writeln!(out, "  body force: {} N/m", nums(&st.body_force));
     }
+    describe_water(&mut out, p);
     list(&mut out, &c.supports, "fixed nodes", |f| {
         format!("  fixed:     {} ({})", node(f.node), f.fixed.join(", "))
     });
@@ -183,5 +184,73 @@ fn newton_test(n: &phstring::NewtonParams) -> String {
         format!("‖R‖ ≤ max({} N, {} × force scale)", num(n.tol), num(n.rtol))
     } else {
         format!("‖R‖ ≤ {} N (absolute)", num(n.tol))
+    }
+}
+
+/// `[water]`, `[seabed]` and what feels them: each wet string's diameter and coefficients and
+/// its weight in water per unit length `(ρA − ρ_w π d²/4) g` [N/m], each point's volume and
+/// weight in water `(m − ρ_w V) g` [N].
+fn describe_water<const D: usize>(out: &mut String, p: &phstring::Network<D, phstring::Material>) {
+    use std::fmt::Write;
+    let Some(w) = &p.water else { return };
+    let _ = writeln!(
+        out,
+        "  water:     density {} kg/m³, surface at 0, g = {} m/s², current {}",
+        num(w.density),
+        num(w.gravity),
+        match &w.current {
+            phstring::Current::Uniform(u) => format!("{} m/s", nums(u.as_slice())),
+            _ => "a depth profile".to_string(),
+        }
+    );
+    if let Some(sb) = &w.seabed {
+        let _ = writeln!(
+            out,
+            "  seabed:    {}, stiffness {} Pa/m, damping {} Pa·s/m, {}",
+            match sb.surface {
+                phstring::SeabedSurface::Flat { depth } => format!("flat at −{} m", num(depth)),
+                _ => "an inclined plane".to_string(),
+            },
+            num(sb.stiffness),
+            num(sb.damping),
+            match sb.friction {
+                Some(f) => format!("friction μ = {}", num(f.coefficient)),
+                None => "no friction".to_string(),
+            }
+        );
+    }
+    let area = |d: f64| std::f64::consts::PI * d * d / 4.0;
+    for (g, h) in &p.hydro.lines {
+        let grp = &p.groups[*g];
+        let wet = (grp.rho_a - w.density * area(h.diameter)) * w.gravity;
+        let _ = writeln!(
+            out,
+            "  in water:  {}: d = {} m, Cd = {}, CdAx = {}, Ca = {}, CaAx = {}, weight in water {} N/m{}",
+            grp.name,
+            num(h.diameter),
+            num(h.cd),
+            num(h.cd_axial),
+            num(h.ca),
+            num(h.ca_axial),
+            num(wet),
+            if wet < 0.0 { " (it floats)" } else { "" }
+        );
+    }
+    for ph in &p.hydro.points {
+        let mass: f64 = p
+            .point_masses
+            .iter()
+            .filter(|m| m.node == ph.node)
+            .map(|m| m.mass)
+            .sum();
+        let _ = writeln!(
+            out,
+            "  in water:  point at node {}: volume {} m³, CdA = {} m², Ca = {}, weight in water {} N",
+            ph.node,
+            num(ph.volume),
+            num(ph.cda),
+            num(ph.ca),
+            num((mass - w.density * ph.volume) * w.gravity)
+        );
     }
 }

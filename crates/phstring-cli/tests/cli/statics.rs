@@ -341,3 +341,80 @@ fn more_modes_than_exist_are_named_not_silently_dropped() {
     // The modal form's state: 60 modal coordinates and their 60 rates.
     assert_eq!(m["forms"]["modal"]["states"].as_array().unwrap().len(), 120);
 }
+
+/// The mooring line in water rests on the seabed: where it lies (away from the touchdown and
+/// the anchor) its penetration is its weight in water over the contact stiffness,
+/// `w/(k d)` with `w = (ρA − ρ_w π d²/4) g`, to 1e-3; the fairlead carries the weight in
+/// water of the suspended part (the line beyond the last grounded node) to one element's
+/// weight; every element is in tension (the frictionless seabed transmits the horizontal
+/// pull to the anchor).
+#[test]
+fn statics_of_the_mooring_line_in_water_lies_on_the_seabed() {
+    let out = temp_dir("statics-wet-mooring");
+    let o = phstring(&[
+        "statics",
+        "examples/mooring_in_water.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    assert_eq!(s["stable"], true);
+    assert!(s["min_tension"].as_f64().unwrap() > 0.0);
+    let (rho_a, d, rho_w, g, k, depth) = (25.0, 0.076, 1025.0, 9.81, 3.0e6, 60.0);
+    let w = (rho_a - rho_w * std::f64::consts::PI * d * d / 4.0) * g;
+    // node, x, y, reaction_x, reaction_y; the string's nodes in path order are the named
+    // nodes 0 (anchor), 1 (touchdown), 2 (fairlead) and the spans' interior nodes.
+    let rows = csv_rows(&out.join("equilibrium.csv"));
+    let mut along: Vec<&Vec<f64>> = rows.iter().collect();
+    along.sort_by(|a, b| a[1].total_cmp(&b[1]));
+    let grounded: Vec<&&Vec<f64>> = along.iter().filter(|r| r[2] < -depth).collect();
+    let expected = w / (k * d);
+    let middle = grounded[grounded.len() / 2];
+    let penetration = -depth - middle[2];
+    assert!(
+        (penetration - expected).abs() <= 1e-3 * expected,
+        "penetration {penetration} m vs w/(kd) = {expected} m"
+    );
+    // Reference element length: 90 per span, spans of 114.58 m and 65.42 m.
+    let last_grounded_x = grounded.last().unwrap()[1];
+    assert!(
+        (90.0..=115.0).contains(&last_grounded_x),
+        "grounded to x = {last_grounded_x} m"
+    );
+    let l_ground = 114.583333 / 90.0;
+    let (suspended_ref, element_weight) = {
+        // The grounded part is nearly unstretched: its reference length is its x extent.
+        let suspended = 180.0 - last_grounded_x;
+        (suspended, w * l_ground)
+    };
+    let fairlead = rows.iter().find(|r| r[0] == 2.0).unwrap();
+    let v = fairlead[4];
+    assert!(
+        (v - w * suspended_ref).abs() <= 2.0 * element_weight,
+        "fairlead carries {v} N, the suspended {suspended_ref} m weigh {} N",
+        w * suspended_ref
+    );
+}
+
+/// `phstring check` states each wet string's weight in water, `(ρA − ρ_w π d²/4) g`, and the
+/// seabed.
+#[test]
+fn check_states_the_weight_in_water() {
+    let o = phstring(&["check", "examples/mooring_in_water.toml"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let w = (25.0 - 1025.0 * std::f64::consts::PI * 0.076 * 0.076 / 4.0) * 9.81;
+    let line = text
+        .lines()
+        .find(|l| l.contains("weight in water"))
+        .expect("a line with the weight in water");
+    let stated: f64 = line
+        .rsplit("weight in water ")
+        .next()
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .expect("a number");
+    assert!((stated - w).abs() <= 1e-9 * w, "{stated} vs {w}");
+    assert!(text.contains("seabed:    flat at −60 m"), "{text}");
+}
