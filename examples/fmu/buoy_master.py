@@ -1,6 +1,6 @@
 """A buoy moored by the string FMU: two-way coupling through the fairlead's port.
 
-The mooring line of examples/mooring_line.toml (160 m steel rope, EA = 5e8 N, from its static
+The mooring line of examples/slack_wire.toml (160 m steel rope, EA = 5e8 N, from its static
 equilibrium) becomes an FMU whose fairlead position is an input (`external = true`) and whose
 fairlead reaction is an output. This master integrates a 20 t buoy in heave,
 
@@ -48,7 +48,7 @@ WAVE = (0.5, 6.0)  # m, s: amplitude and period of the regular wave
 def build_fmu(phstring, out):
     """The mooring line's FMU with the fairlead as its input and its reaction as an output."""
     subprocess.run(
-        [str(phstring), "fmu", str(ROOT / "examples" / "mooring_line.toml"), "-o", str(out),
+        [str(phstring), "fmu", str(ROOT / "examples" / "slack_wire.toml"), "-o", str(out),
          "--set", "boundary.1.external=true", "--set", "fmu.nodes=[80]"],
         check=True,
         capture_output=True,

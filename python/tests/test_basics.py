@@ -270,7 +270,7 @@ def test_simulation_starts_at_the_equilibrium_when_asked():
     starts at its heave's velocity d/dt (60 + sin(2πt/10)) = 2π/10 m/s (the heave without the
     example's build-up)."""
     sine = 'boundary.1.position=["120", "60 + 1.0 * sin(2*pi*t/10)"]'
-    sc = phstring.Scenario.from_file(str(ROOT / "examples" / "mooring_line.toml"), set=["mesh.elements=40", sine])
+    sc = phstring.Scenario.from_file(str(ROOT / "examples" / "slack_wire.toml"), set=["mesh.elements=40", sine])
     eq = phstring.statics(sc)
     sim = phstring.Simulation(sc)
     assert np.array_equal(sim.r, eq["positions"])

@@ -276,9 +276,9 @@ def test_a_moving_support_from_the_master_follows_its_inputs_with_an_exact_balan
     # The heave without the example's build-up, so that it moves from the start.
     sine = 'boundary.1.position=["120", "60 + 1.0 * sin(2*pi*t/10)"]'
     sets = ["boundary.1.external=true", sine, f"time.h={h}", "time.end=0.5", "fmu.nodes=[160]"]
-    fmu = build(tmp_path, ROOT / "examples" / "mooring_line.toml", "mooring", *sets)
+    fmu = build(tmp_path, ROOT / "examples" / "slack_wire.toml", "mooring", *sets)
     out = tmp_path / "run"
-    args = [BIN, "run", str(ROOT / "examples" / "mooring_line.toml"), "--out", str(out), "--quiet",
+    args = [BIN, "run", str(ROOT / "examples" / "slack_wire.toml"), "--out", str(out), "--quiet",
             "--set", "output.stride=1", "--set", "output.vtk=false", "--set", "output.plots=false",
             "--set", "output.animation=false"]
     for s_ in sets:

@@ -528,7 +528,7 @@ mod c_functions {
 /// ramp's, not the sine's, so it is not the sine's run bit for bit).
 #[test]
 fn a_moving_support_from_the_master_is_the_run_bit_for_bit() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/mooring_line.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/slack_wire.toml");
     let sets = [
         "boundary.1.external=true".to_string(),
         // The heave without the example's build-up, so that it moves from the start.

@@ -117,13 +117,14 @@ fn no_initial_table_is_the_state_of_before() {
     assert_eq!(json["initial"]["equilibrium"], false);
 }
 
-/// Every example still validates, at rest; only `mooring_line.toml` asks for the
-/// equilibrium start (and no displacement or velocity).
+/// Every example still validates, at rest; only `mooring_line.toml` and `slack_wire.toml`
+/// ask for the equilibrium start (and no displacement or velocity).
 #[test]
 fn examples_start_at_rest() {
     fn at_rest<const D: usize>(file: &ScenarioFile) {
         let v = file.validate::<D>().unwrap();
-        let mooring = file.path.ends_with("mooring_line.toml");
+        let mooring =
+            file.path.ends_with("mooring_line.toml") || file.path.ends_with("slack_wire.toml");
         assert!(!v.initial.changes_base() && v.initial.equilibrium == mooring);
         assert!(
             v.problem

@@ -94,8 +94,8 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("crane_2d", 2, 3600, 10, 41),
         ("platform_3d", 3, 1500, 10, 50),
         ("net_3d", 3, 1000, 10, 1321),
-        ("mooring_line", 2, 2000, 20, 161),
-        ("mooring_in_water", 2, 2000, 20, 181),
+        ("slack_wire", 2, 2000, 20, 161),
+        ("mooring_line", 2, 2000, 20, 181),
         ("damped_pendulum", 2, 300, 1, 31),
         // Ends early: it settles (time.settle) at step 622.
         ("damping_injection", 2, 622, 10, 21),
@@ -282,7 +282,7 @@ fn sweep_runs_all_combinations_independently_of_threads() {
 }
 
 /// The step-to-step changes of the fairlead reaction's magnitude [N] in the `ports.csv` of
-/// the mooring line run in `dir` (node 160), sorted.
+/// the slack-wire run in `dir` (node 160), sorted.
 fn fairlead_changes(dir: &Path) -> Vec<f64> {
     let (header, rows) = csv_rows(&dir.join("ports.csv"));
     let col = |name: &str| header.iter().position(|h| h == name).unwrap();
@@ -297,13 +297,13 @@ fn fairlead_changes(dir: &Path) -> Vec<f64> {
     d
 }
 
-/// The mooring example's fairlead tension (25 kN mean) is smooth: its heave is built up
+/// The slack-wire example's fairlead tension (25 kN mean) is smooth: its heave is built up
 /// from rest, so no axial wave strikes the undamped rope, and the tension changes by about
 /// 6 N per step (measured median 6.1 N, largest 33 N). The same heave started abruptly
 /// (`sin(2πt/10)` alone, 0.63 m/s at t = 0) changes it by about 5 kN per step: the reason
 /// the example has its build-up.
 #[test]
-fn the_mooring_examples_fairlead_tension_is_smooth() {
+fn the_slack_wire_examples_fairlead_tension_is_smooth() {
     let tmp = temp_dir("mooring-smooth");
     let quiet = [
         "output.plots=false",
@@ -311,7 +311,7 @@ fn the_mooring_examples_fairlead_tension_is_smooth() {
         "output.animation=false",
     ];
     let built_up = tmp.join("built_up");
-    let o = crate::run_with("examples/mooring_line.toml", &built_up, &quiet, &[]);
+    let o = crate::run_with("examples/slack_wire.toml", &built_up, &quiet, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let d = fairlead_changes(&built_up);
     let (median, largest) = (d[d.len() / 2], d[d.len() - 1]);
@@ -319,7 +319,7 @@ fn the_mooring_examples_fairlead_tension_is_smooth() {
     let abrupt = tmp.join("abrupt");
     let sine = r#"boundary.1.position=["120", "60 + 1.0 * sin(2*pi*t/10)"]"#;
     let sets = [quiet[0], quiet[1], quiet[2], sine];
-    let o = crate::run_with("examples/mooring_line.toml", &abrupt, &sets, &[]);
+    let o = crate::run_with("examples/slack_wire.toml", &abrupt, &sets, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let d = fairlead_changes(&abrupt);
     assert!(d[d.len() / 2] > 1000.0, "{} N", d[d.len() / 2]);

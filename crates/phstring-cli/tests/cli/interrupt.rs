@@ -6,7 +6,7 @@
 //!
 //! Each command signals itself with the hidden `--signal-self-after-ms` (a real SIGINT,
 //! sent with `kill` once the command's handler is installed) on a problem whose phase takes
-//! minutes without the signal (measured: the statics of the 20000-element mooring line
+//! minutes without the signal (measured: the statics of the 20000-element slack wire
 //! 260 s, the 2000 modes of the 20000-element taut string more than 200 s); wherever the
 //! signal lands, the command must end. The limit on the wait is a guard against a hang, far
 //! above the tenth of a second the stop takes.
@@ -79,7 +79,7 @@ fn statics_stops_at_one_signal_and_writes_nothing() {
     let (o, out) = signalled_large(
         "interrupt-statics",
         "statics",
-        "examples/mooring_line.toml",
+        "examples/slack_wire.toml",
         &[],
     );
     assert_interrupted(
@@ -94,7 +94,7 @@ fn run_stops_in_its_starting_equilibrium_and_writes_nothing() {
     let (o, out) = signalled_large(
         "interrupt-run-equilibrium",
         "run",
-        "examples/mooring_line.toml",
+        "examples/slack_wire.toml",
         &[],
     );
     assert_interrupted(

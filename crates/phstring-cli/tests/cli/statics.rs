@@ -1,5 +1,5 @@
 //! `phstring statics` and `phstring linearize`, and a run that starts from the equilibrium
-//! (`initial.equilibrium = true`), on the mooring-line example.
+//! (`initial.equilibrium = true`), on the slack-wire and mooring-line examples.
 
 use super::{phstring, temp_dir};
 
@@ -20,15 +20,15 @@ fn csv_rows(p: &std::path::Path) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The slack mooring line reaches a stable equilibrium; the support reactions carry the
+/// The slack wire rope (a mooring line's geometry in air) reaches a stable equilibrium; the support reactions carry the
 /// line's weight (20 kg/m × 160 m × g) to 1e-9, every element is in tension, and the outputs
 /// are complete.
 #[test]
-fn statics_of_the_mooring_line_balances_its_weight() {
+fn statics_of_the_slack_wire_balances_its_weight() {
     let out = temp_dir("statics-mooring");
     let o = phstring(&[
         "statics",
-        "examples/mooring_line.toml",
+        "examples/slack_wire.toml",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -66,7 +66,7 @@ fn a_run_starts_from_the_statics_equilibrium() {
     let st = temp_dir("statics-for-run");
     let o = phstring(&[
         "statics",
-        "examples/mooring_line.toml",
+        "examples/slack_wire.toml",
         "--out",
         st.to_str().unwrap(),
     ]);
@@ -74,7 +74,7 @@ fn a_run_starts_from_the_statics_equilibrium() {
     let run = temp_dir("run-from-equilibrium");
     let o = phstring(&[
         "run",
-        "examples/mooring_line.toml",
+        "examples/slack_wire.toml",
         "--out",
         run.to_str().unwrap(),
         "--set",
@@ -353,7 +353,7 @@ fn statics_of_the_mooring_line_in_water_lies_on_the_seabed() {
     let out = temp_dir("statics-wet-mooring");
     let o = phstring(&[
         "statics",
-        "examples/mooring_in_water.toml",
+        "examples/mooring_line.toml",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -401,7 +401,7 @@ fn statics_of_the_mooring_line_in_water_lies_on_the_seabed() {
 /// seabed.
 #[test]
 fn check_states_the_weight_in_water() {
-    let o = phstring(&["check", "examples/mooring_in_water.toml"]);
+    let o = phstring(&["check", "examples/mooring_line.toml"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
     let w = (25.0 - 1025.0 * std::f64::consts::PI * 0.076 * 0.076 / 4.0) * 9.81;
