@@ -418,3 +418,40 @@ fn check_states_the_weight_in_water() {
     assert!((stated - w).abs() <= 1e-9 * w, "{stated} vs {w}");
     assert!(text.contains("seabed:    flat at −60 m"), "{text}");
 }
+
+/// The three chains of the spread mooring, 120° apart, pull their anchors equally: the three
+/// anchor reactions have the same magnitude (to 1e-6) and add up to no horizontal force (to
+/// 1e-6 of one), each chain lies partly on the seabed, and the equilibrium is stable.
+#[test]
+fn statics_of_the_spread_mooring_is_symmetric() {
+    let out = temp_dir("statics-spread");
+    let o = phstring(&[
+        "statics",
+        "examples/spread_mooring_3d.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(summary(&out)["stable"], true);
+    // node, x, y, z, reaction_x, reaction_y, reaction_z; anchors are named nodes 0, 3, 6.
+    let rows = csv_rows(&out.join("equilibrium.csv"));
+    let anchors: Vec<&Vec<f64>> = [0.0, 3.0, 6.0]
+        .iter()
+        .map(|k| rows.iter().find(|r| r[0] == *k).unwrap())
+        .collect();
+    let norm = |r: &Vec<f64>| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt();
+    let m0 = norm(anchors[0]);
+    assert!(m0 > 1e5, "anchor pull {m0} N");
+    for a in &anchors[1..] {
+        assert!((norm(a) - m0).abs() <= 1e-6 * m0, "{} vs {m0}", norm(a));
+    }
+    for k in [4, 5] {
+        let sum: f64 = anchors.iter().map(|a| a[k]).sum();
+        assert!(sum.abs() <= 1e-6 * m0, "horizontal sum {sum} N");
+    }
+    let grounded = rows.iter().filter(|r| r[3] < -200.0).count();
+    assert!(
+        (30..=120).contains(&grounded),
+        "{grounded} nodes lie on the seabed"
+    );
+}
