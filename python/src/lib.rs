@@ -279,17 +279,33 @@ impl Simulation {
     }
 
     /// Energies [J] as a dict: `kinetic`, `potential`, `hamiltonian`, `supplied` and
-    /// `dissipated` (cumulative).
+    /// `dissipated` (cumulative); in water also the potential parts `buoyancy` and `seabed`
+    /// (in `potential`) and the water's cumulative shares `drag_dissipated`,
+    /// `current_supplied`, `seabed_dissipated` and `friction_dissipated` (in `supplied` and
+    /// `dissipated`), docs/method.md §21.
     #[getter]
     fn energies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (e, sup, dis) =
-            each!(&*self.lock(), s => (s.energies(), s.supplied_energy(), s.dissipated_energy()));
+        let (e, sup, dis, wet, water) = each!(&*self.lock(), s => (
+            s.energies(),
+            s.supplied_energy(),
+            s.dissipated_energy(),
+            s.system().has_water(),
+            s.water_work()
+        ));
         let d = PyDict::new(py);
         d.set_item("kinetic", e.kinetic)?;
         d.set_item("potential", e.potential())?;
         d.set_item("hamiltonian", e.hamiltonian())?;
         d.set_item("supplied", sup)?;
         d.set_item("dissipated", dis)?;
+        if wet {
+            d.set_item("buoyancy", e.buoyancy)?;
+            d.set_item("seabed", e.seabed)?;
+            d.set_item("drag_dissipated", water.drag_dissipated)?;
+            d.set_item("current_supplied", water.current_supplied)?;
+            d.set_item("seabed_dissipated", water.seabed_dissipated)?;
+            d.set_item("friction_dissipated", water.friction_dissipated)?;
+        }
         Ok(d)
     }
 }
@@ -600,8 +616,14 @@ fn modes_dim<'py, const D: usize>(
     count: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let eq = v.equilibrium(true, None).map_err(statics_err)?;
-    let found = phstring::modes::modes(&v.problem.system, &eq.state.r, count, v.settings.step.solver, None)
-        .map_err(|e| StepError::new_err(format!("modes: {e}")))?;
+    let found = phstring::modes::modes(
+        &v.problem.system,
+        &eq.state.r,
+        count,
+        v.settings.step.solver,
+        None,
+    )
+    .map_err(|e| StepError::new_err(format!("modes: {e}")))?;
     let k = found.modes.len();
     let n = eq.state.r.len();
     let d = PyDict::new(py);

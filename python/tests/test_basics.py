@@ -282,6 +282,26 @@ def test_simulation_starts_at_the_equilibrium_when_asked():
     assert sim.r[:, 1].min() < -1.0
 
 
+def test_water_energies_are_reported_per_mechanism():
+    """The mooring line in water (examples/mooring_line.toml, 2 s): the energies name the
+    buoyancy and seabed potentials and the water's shares; they are inside the totals, the
+    drag and seabed damping dissipate (≥ 0) and the balance closes to round-off."""
+    sc = phstring.Scenario.from_file(str(ROOT / "examples" / "mooring_line.toml"), set=["time.end=2.0"])
+    sim = phstring.Simulation(sc)
+    h0 = sim.energies["hamiltonian"]
+    dry = phstring.Simulation(phstring.Scenario.from_file(str(PAPER)))
+    assert "buoyancy" not in dry.energies
+    while sim.time < 2.0 - 1e-9:
+        sim.step()
+    e = sim.energies
+    assert e["buoyancy"] < 0.0 and e["seabed"] > 0.0
+    assert e["drag_dissipated"] > 0.0 and e["seabed_dissipated"] >= 0.0
+    assert e["drag_dissipated"] + e["seabed_dissipated"] + e["friction_dissipated"] <= e["dissipated"] * (1 + 1e-12)
+    assert e["current_supplied"] == 0.0  # still water
+    scale = abs(h0) + abs(e["hamiltonian"])
+    assert abs(e["hamiltonian"] - h0 - e["supplied"] + e["dissipated"]) <= 1e-12 * scale
+
+
 def test_version_and_a_namespace_of_the_api_only():
     """`phstring.__version__` is the package's version (pyproject.toml), and the package's
     public names are exactly `__all__`: no helper modules (`os`, `json`, `np`) or typing
