@@ -4,13 +4,16 @@
 //! dimension and linear solver. The problem is a taut string (both ends fixed, prestretched
 //! to C = 1.44, gravity on) with a sinusoidal transverse initial velocity, DG scheme, with
 //! a step size small enough that every mesh converges in a few iterations. Nonlinear
-//! elimination is off, so that every iteration counted is a full one.
+//! elimination is off, so that every iteration counted is a full one. The wet rows run the
+//! same string lying on a seabed 10 m down in a current, with buoyancy, drag, added mass,
+//! seabed damping and friction (docs/method.md §21), against the dry string.
 
 use std::time::Instant;
 
 use phstring::{
-    Boundary, Fixed, MassMatrix, Material, Mesh, Network, NetworkBuilder, Problem, Scheme,
-    Simulation, SolverKind, State, StepParams, StringSpec, Vector,
+    Boundary, Current, Fixed, Friction, LineHydro, MassMatrix, Material, Mesh, Network,
+    NetworkBuilder, Problem, Scheme, Seabed, Simulation, SolverKind, State, StepParams, StringSpec,
+    Vector, Water,
 };
 
 fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
@@ -48,7 +51,42 @@ fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
     }
 }
 
+/// The taut string of [`problem`] 10 m under water, resting on a flat seabed there, in a
+/// 0.3 m/s current, with buoyancy, drag, added mass, seabed damping and friction.
+fn wet<const D: usize>(n_el: usize) -> Network<D, Material> {
+    let mut p = problem::<D>(n_el);
+    for r in &mut p.initial.r {
+        r[D - 1] -= 10.0;
+    }
+    let mut u = Vector::<D>::zeros();
+    u[0] = 0.3;
+    let seabed = Seabed::flat(10.0, 3.0e6, 3.0e5).with_friction(Friction {
+        coefficient: 0.5,
+        slope: 100.0,
+    });
+    let water = Water::new(1025.0)
+        .with_gravity(9.81)
+        .with_current(Current::Uniform(u))
+        .with_seabed(seabed);
+    let hydro = LineHydro {
+        diameter: 0.02,
+        cd: 1.2,
+        cd_axial: 0.008,
+        ca: 1.0,
+        ca_axial: 1.0,
+    };
+    Network::from(p).with_water(water).with_line_hydro(0, hydro)
+}
+
 fn measure<const D: usize>(n_el: usize, solver: SolverKind) -> (f64, f64, usize) {
+    measure_problem::<D>(problem::<D>(n_el).into(), n_el, solver)
+}
+
+fn measure_problem<const D: usize>(
+    net: Network<D, Material>,
+    n_el: usize,
+    solver: SolverKind,
+) -> (f64, f64, usize) {
     let params = StepParams {
         h: 1e-3,
         scheme: Scheme::DiscreteGradient,
@@ -61,7 +99,7 @@ fn measure<const D: usize>(n_el: usize, solver: SolverKind) -> (f64, f64, usize)
     params.newton.rtol = 0.0;
     // The cost of a full Newton iteration: no local solves in between.
     params.newton.elimination = false;
-    let mut sim = Simulation::new(problem::<D>(n_el), params).unwrap();
+    let mut sim = Simulation::new(net, params).unwrap();
     sim.step().unwrap(); // warm-up
     let target = if n_el >= 100_000 {
         3
@@ -244,6 +282,23 @@ fn main() {
                 i3
             );
         }
+    }
+    println!("in water (on the seabed, in a current): ratio = wet rate / dry rate");
+    for &n in &[1_000usize, 10_000, 100_000] {
+        if n > max_n {
+            break;
+        }
+        let (dry, _, _) = measure::<3>(n, SolverKind::BlockTridiagonal);
+        let (r3, s3, i3) = measure_problem::<3>(wet::<3>(n), n, SolverKind::BlockTridiagonal);
+        println!(
+            "{n:>9} {:>2} {:>18} {:>22.3e} {:>16.3e} {:>6}   ratio {:.2}",
+            3,
+            "wet BlockTridiagonal",
+            r3,
+            s3,
+            i3,
+            r3 / dry
+        );
     }
     // The net: 50 + 50 strings of 1020 elements crossing at a 50 × 50 grid of junctions,
     // against the chain of (about) the same size.
