@@ -673,12 +673,13 @@ fn resume_writers<const D: usize>(
     info.hamiltonian_initial = c.hamiltonian_initial;
     info.settle_progress = (c.settle_armed, c.settle_since);
     let s = &ctx.settings;
-    Ok(Writers::resume(
+    Ok(Writers::resume::<D>(
         ctx.out,
         s.stride,
         s.output.vtk,
         snapshot_times(s.t_end),
         cp.outputs,
+        sim.system().has_water(),
     )?)
 }
 
