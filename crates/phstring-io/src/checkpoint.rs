@@ -107,6 +107,24 @@ pub struct Counters {
     /// `time.settle`: start of the current stretch below the threshold [s].
     #[serde(default)]
     pub settle_since: Option<f64>,
+    /// In water: the extremes of the seabed contact so far (`summary.json`'s `water`).
+    /// Absent without water, so that a dry run's checkpoint is the file it always was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water: Option<WaterCounters>,
+}
+
+/// The extremes of the seabed contact over a run in water so far, sampled at every row of
+/// `energy.csv` and carried across a resume.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct WaterCounters {
+    /// Per string of the network (in its order), the smallest grounded length [m].
+    pub grounded_length_min: Vec<f64>,
+    /// The largest contact force on a node [N] (0 if nothing touched the seabed).
+    pub max_contact_force: f64,
+    /// The node it acted on (`None` if nothing touched the seabed).
+    pub max_contact_force_node: Option<usize>,
+    /// When [s].
+    pub max_contact_force_t: f64,
 }
 
 /// A checkpoint file.
@@ -388,12 +406,57 @@ impl CheckpointFile {
             let fit = self.sim.check_fits(sim, settings.t_end)?;
             self.check_counts(&fit)?;
             self.check_totals()?;
+            self.check_water(sim, n, fit.t)?;
             self.check_outputs::<D>(settings, n, fit.t)
         };
         checks().map_err(|reason| CheckpointError::Invalid {
             path: self.path.clone(),
             reason,
         })
+    }
+
+    /// The water counters: present exactly for a run in water, one grounded length per
+    /// string, finite and non-negative values, a node of the mesh, a time up to `t`.
+    fn check_water<const D: usize>(
+        &self,
+        sim: &Simulation<D, Material>,
+        n: usize,
+        t: f64,
+    ) -> Result<(), String> {
+        let sys = sim.system();
+        let w = match (&self.counters.water, sys.has_water()) {
+            (None, false) => return Ok(()),
+            (Some(w), true) => w,
+            (w, _) => {
+                return Err(format!(
+                    "counters.water is {} but the scenario {} water",
+                    if w.is_some() { "set" } else { "missing" },
+                    if sys.has_water() { "has" } else { "has no" }
+                ));
+            }
+        };
+        let strings = sys
+            .groups()
+            .iter()
+            .filter(|g| matches!(g.law, phstring::Law::String(_)))
+            .count();
+        if w.grounded_length_min.len() != strings {
+            return Err(format!(
+                "counters.water.grounded_length_min has {} values for {strings} strings",
+                w.grounded_length_min.len()
+            ));
+        }
+        let values = w
+            .grounded_length_min
+            .iter()
+            .chain([&w.max_contact_force, &w.max_contact_force_t]);
+        if values.into_iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err("counters.water holds a negative or non-finite value".into());
+        }
+        if w.max_contact_force_node.is_some_and(|i| i >= n) || w.max_contact_force_t > t {
+            return Err("counters.water.max_contact_force_node or _t is out of range".into());
+        }
+        Ok(())
     }
 
     /// The counters' step count (that of the simulation record), and their rejection and

@@ -5,8 +5,8 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::files::ELEMENTS_FILE;
-use crate::history::{History, read_topology};
+use crate::files::{ELEMENTS_FILE, ENERGY_SPLIT_STEM};
+use crate::history::{History, WaterHistory, read_topology};
 use crate::plot::{self, PlotError, Series};
 
 /// What [`draw_plots`] did.
@@ -45,8 +45,65 @@ impl PlotReport {
     }
 }
 
+/// Draws where the energy of a run in water went ([`ENERGY_SPLIT_STEM`]): the running
+/// totals against time of the energy supplied at the boundaries (the ports other than the
+/// current) and by the current, dissipated by drag, seabed damping, seabed friction and the
+/// rest (material damping), and the energy stored since the start `Ĥ(t) − Ĥ(0)`, which is
+/// the supplied minus the dissipated. Mechanisms that never did anything (a share that stays
+/// exactly zero) are left out of the legend.
+pub fn energy_split_plot(
+    stem: &Path,
+    title: &str,
+    w: &WaterHistory,
+    end_of_loading: Option<f64>,
+) -> Result<(), PlotError> {
+    let ports: Vec<f64> = w
+        .supplied
+        .iter()
+        .zip(&w.current)
+        .map(|(s, c)| s - c)
+        .collect();
+    let water_dissipated = w.drag.iter().zip(&w.seabed).zip(&w.friction);
+    let other: Vec<f64> = w
+        .dissipated
+        .iter()
+        .zip(water_dissipated)
+        .map(|(d, ((a, b), c))| d - (a + b + c))
+        .collect();
+    let candidates: [(&str, &[f64]); 7] = [
+        ("stored: Ĥ(t) − Ĥ(0)", &w.stored),
+        ("supplied at the boundaries", &ports),
+        ("supplied by the current", &w.current),
+        ("dissipated by drag", &w.drag),
+        ("dissipated by seabed damping", &w.seabed),
+        ("dissipated by seabed friction", &w.friction),
+        ("dissipated by material damping", &other),
+    ];
+    // The material share is a difference of sums: zero up to their round-off.
+    let scale = w.dissipated.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let series: Vec<Series> = candidates
+        .iter()
+        .enumerate()
+        .filter(|(k, (_, y))| {
+            let floor = if *k == 6 { 1e-9 * scale } else { 0.0 };
+            *k == 0 || y.iter().any(|v| v.abs() > floor)
+        })
+        .map(|(_, (label, y))| Series { label, x: &w.t, y })
+        .collect();
+    plot::series_plot(
+        stem,
+        &format!("{title}: where the energy went"),
+        "t [s]",
+        "energy since t = 0 [J]",
+        &series,
+        false,
+        end_of_loading.map(|t| (t, "end of loading")),
+    )
+}
+
 /// Draws the `energy`, `configuration` (2D and 3D) and `increments` plots of a run into
-/// `dir`. A plot that cannot be drawn (degenerate or extreme ranges, an I/O error, a
+/// `dir`, and for a run in water the plot of where the energy went
+/// ([`energy_split_plot`]). A plot that cannot be drawn (degenerate or extreme ranges, an I/O error, a
 /// failure inside the plotting library) is skipped with a warning and never fails the run;
 /// once `stop` is set, the remaining plots are skipped. `history = Err(reason)` (it could
 /// not be read, or reading it was stopped) skips all.
@@ -65,6 +122,9 @@ pub fn draw_plots(
         stems.push("configuration");
     }
     stems.push("increments");
+    if history.is_ok_and(|h| h.water.is_some()) {
+        stems.push(ENERGY_SPLIT_STEM);
+    }
     let h = match history {
         Ok(h) => h,
         Err(why) => {
@@ -102,6 +162,10 @@ pub fn draw_plots(
                     path: path.clone(),
                     message: e.clone(),
                 }),
+            },
+            ENERGY_SPLIT_STEM => match &h.water {
+                Some(w) => energy_split_plot(&path, title, w, end_of_loading),
+                None => Ok(()),
             },
             _ => plot::series_plot(
                 &path,
@@ -173,6 +237,7 @@ mod tests {
             increment_t: vec![1.0],
             increment: vec![1e-15],
             snapshots: vec![(0.0, vec![[0.0, 0.0], [1.0, 0.0]])],
+            water: None,
         };
         let stop = AtomicBool::new(true);
         let r = draw_plots(&dir, 2, "t", None, Ok(&h), Some(&stop));
@@ -209,6 +274,52 @@ mod tests {
     }
 
     #[test]
+    fn a_wet_history_adds_the_plot_of_where_the_energy_went() {
+        use crate::history::WaterHistory;
+        let dir = crate::test_util::temp_dir("output", "split");
+        let t = vec![0.0, 1.0, 2.0];
+        let water = WaterHistory {
+            t: t.clone(),
+            stored: vec![0.0, 5.0, 8.0],
+            supplied: vec![0.0, 7.0, 12.0],
+            dissipated: vec![0.0, 2.0, 4.0],
+            drag: vec![0.0, 1.5, 3.0],
+            current: vec![0.0, 1.0, 2.0],
+            seabed: vec![0.0, 0.5, 1.0],
+            friction: vec![0.0; 3],
+        };
+        let h = History {
+            t: t.clone(),
+            kinetic: vec![0.0, 1.0, 2.0],
+            potential: vec![1.0, 5.0, 7.0],
+            hamiltonian: vec![1.0, 6.0, 9.0],
+            increment_t: vec![1.0, 2.0],
+            increment: vec![5.0, 3.0],
+            snapshots: vec![],
+            water: Some(water),
+        };
+        let r = draw_plots(&dir, 2, "wet", None, Ok(&h), None);
+        assert_eq!(r.written, ["energy", "increments", "energy_split"], "{r:?}");
+        let svg = std::fs::read_to_string(dir.join("energy_split.svg")).unwrap();
+        for label in [
+            "where the energy went",
+            "supplied at the boundaries",
+            "supplied by the current",
+            "dissipated by drag",
+            "dissipated by seabed damping",
+            "stored",
+            "energy since t = 0 [J]",
+            "t [s]",
+        ] {
+            assert!(svg.contains(label), "{label}");
+        }
+        // Friction did nothing, and all the dissipation is the water's: neither is drawn.
+        assert!(!svg.contains("friction") && !svg.contains("material"));
+        assert!(dir.join("energy_split.png").exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn plot_problems_are_warnings_not_errors() {
         let dir = crate::test_util::temp_dir("output", "plotwarn");
         let far = vec![[1e308, 0.0], [1e308, -1.0]];
@@ -220,6 +331,7 @@ mod tests {
             increment_t: vec![1.0],
             increment: vec![1e300],
             snapshots: vec![(0.0, far)],
+            water: None,
         };
         let r = draw_plots(&dir, 2, "t", None, Ok(&h), None);
         assert_eq!(r.written, ["increments"]);

@@ -149,6 +149,37 @@ pub fn headers(d: usize) -> (String, String, String) {
     (energy, positions, ports)
 }
 
+/// The columns that `energy.csv` of a run in water has after those of [`headers`] (each
+/// [J]): the buoyancy and seabed contact potentials (parts of `potential`), then the
+/// running totals of the energy dissipated by drag, supplied by the current through the
+/// drag (either sign; part of `supplied_energy`), dissipated by the seabed's damping and by
+/// seabed friction (parts of `dissipated_energy`), docs/method.md §21.
+pub const ENERGY_WATER_COLUMNS: [&str; 6] = [
+    "buoyancy",
+    "seabed",
+    "drag_dissipated",
+    "current_supplied",
+    "seabed_dissipated",
+    "friction_dissipated",
+];
+
+/// The header line of `energy.csv` in dimension `d`: that of [`headers`], followed by
+/// [`ENERGY_WATER_COLUMNS`] for a run in water (`water`).
+pub fn energy_header(d: usize, water: bool) -> String {
+    let (mut energy, _, _) = headers(d);
+    if water {
+        for c in ENERGY_WATER_COLUMNS {
+            energy.push(',');
+            energy.push_str(c);
+        }
+    }
+    energy
+}
+
+/// Stem of the plot of where the energy of a run in water went (`.svg` and `.png`): the
+/// running totals of every supply and dissipation against time.
+pub const ENERGY_SPLIT_STEM: &str = "energy_split";
+
 /// The header line of [`ELEMENTS_FILE`]: one row per element `e = [node_a, node_b]` of the
 /// mesh (node indices as in `positions.csv`), its group index (the ParaView cell array
 /// `string`), the group's kind (`string` or `spring`), its reference length `l_e` [m]
@@ -172,6 +203,8 @@ pub const RUN_FILES: &[&str] = &[
     "configuration.png",
     "increments.svg",
     "increments.png",
+    "energy_split.svg",
+    "energy_split.png",
     ELEMENTS_FILE,
     POINT_MASSES_FILE,
     ANIMATION_FILE,
@@ -287,6 +320,20 @@ mod tests {
             .flat_map(|s| [format!("{s}.svg"), format!("{s}.png")])
             .collect();
         assert_eq!(named, PAPER_FIGURES);
+    }
+
+    #[test]
+    fn a_dry_energy_header_is_the_old_one_and_water_appends_its_columns() {
+        for d in 1..=3 {
+            let dry = headers(d).0;
+            assert_eq!(energy_header(d, false), dry);
+            assert_eq!(
+                energy_header(d, true),
+                format!("{dry},{}", ENERGY_WATER_COLUMNS.join(","))
+            );
+        }
+        assert!(RUN_FILES.contains(&format!("{ENERGY_SPLIT_STEM}.png").as_str()));
+        assert!(RUN_FILES.contains(&format!("{ENERGY_SPLIT_STEM}.svg").as_str()));
     }
 
     #[test]

@@ -160,7 +160,36 @@ pub struct History {
     pub increment: Vec<f64>,
     /// Configuration snapshots `(t, node positions x, y)` for the configuration plot.
     pub snapshots: Vec<(f64, Vec<[f64; 2]>)>,
+    /// The running totals of a run in water (`energy.csv` with the water columns), `None`
+    /// for a dry run.
+    pub water: Option<WaterHistory>,
 }
+
+/// The running totals of a run in water read back from `energy.csv` for the plot of where
+/// the energy went, decimated like [`History`]: all series at the same rows.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WaterHistory {
+    /// Times [s] of the rows kept.
+    pub t: Vec<f64>,
+    /// `Ĥ(t) − Ĥ(0)` [J]: the energy stored since the start.
+    pub stored: Vec<f64>,
+    /// All energy supplied through the ports [J] (`supplied_energy`, with the current's).
+    pub supplied: Vec<f64>,
+    /// All energy dissipated [J] (`dissipated_energy`, with the water's).
+    pub dissipated: Vec<f64>,
+    /// Dissipated by drag [J].
+    pub drag: Vec<f64>,
+    /// Supplied by the current through the drag [J].
+    pub current: Vec<f64>,
+    /// Dissipated by the seabed's damping [J].
+    pub seabed: Vec<f64>,
+    /// Dissipated by seabed friction [J].
+    pub friction: Vec<f64>,
+}
+
+/// Columns of `energy.csv` read for [`WaterHistory`]: `supplied_energy`,
+/// `dissipated_energy`, then the four running totals of the water.
+const WATER_COLUMNS: [usize; 6] = [4, 9, 12, 13, 14, 15];
 
 impl History {
     /// `|Ĥ_{n+1} − Ĥ_n|` per step, at the step end times (as kept, see [`Self::increment`]).
@@ -299,6 +328,9 @@ pub fn read_history(
     })?;
     let mut energies = Decimator::<4>::new(max_points);
     let mut increments = Decimator::<2>::new(max_points);
+    let mut water = Decimator::<8>::new(max_points);
+    let mut wet = false;
+    let mut h0: Option<f64> = None;
     let mut prev_h: Option<f64> = None;
     let flow = rows_until(path, f, |number, row| {
         if number % 4096 == 0 && stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
@@ -309,20 +341,32 @@ pub fn read_history(
             line: number,
             message,
         };
-        let mut v = [0.0; 4];
-        let mut fields = row.trim_end().split(',');
-        for (k, x) in v.iter_mut().enumerate() {
+        let fields: Vec<&str> = row.trim_end().split(',').collect();
+        let parse = |k: usize| -> Result<f64, OutputError> {
             let field = fields
-                .next()
-                .ok_or_else(|| bad(format!("{} fields, expected 10", k)))?;
-            *x = field.parse().map_err(|_| {
+                .get(k)
+                .ok_or_else(|| bad(format!("{} fields, expected 10", fields.len())))?;
+            field.parse().map_err(|_| {
                 bad(format!(
                     "not a number: {}",
                     crate::text::sanitize_text(field, 40)
                 ))
-            })?;
-        }
+            })
+        };
+        let v = [parse(0)?, parse(1)?, parse(2)?, parse(3)?];
         energies.push(v);
+        // A run in water writes its running totals after the 10 columns of a dry run.
+        if number == 2 {
+            wet = fields.len() >= 16;
+        }
+        if wet {
+            let start = *h0.get_or_insert(v[3]);
+            let mut w = [v[0], v[3] - start, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+            for (x, k) in w[2..].iter_mut().zip(WATER_COLUMNS) {
+                *x = parse(k)?;
+            }
+            water.push(w);
+        }
         if let Some(p) = prev_h {
             increments.push([v[0], (v[3] - p).abs()]);
         }
@@ -345,6 +389,30 @@ pub fn read_history(
     for [t, d] in increments.finish() {
         h.increment_t.push(t);
         h.increment.push(d);
+    }
+    if wet {
+        let mut w = WaterHistory::default();
+        for [
+            t,
+            stored,
+            supplied,
+            dissipated,
+            drag,
+            current,
+            seabed,
+            friction,
+        ] in water.finish()
+        {
+            w.t.push(t);
+            w.stored.push(stored);
+            w.supplied.push(supplied);
+            w.dissipated.push(dissipated);
+            w.drag.push(drag);
+            w.current.push(current);
+            w.seabed.push(seabed);
+            w.friction.push(friction);
+        }
+        h.water = Some(w);
     }
     Ok(Some(h))
 }
@@ -419,6 +487,48 @@ mod tests {
                 .is_some()
         );
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn water_totals_are_read_back_for_a_wet_run_only() {
+        let dir = crate::test_util::temp_dir("output", "wethistory");
+        let mut s = crate::test_util::wet_line();
+        let h0 = s.energies().hamiltonian();
+        let mut w = Writers::start(&dir, &s, 100, false, false, vec![]).unwrap();
+        for _ in 0..20 {
+            let r = s.step().unwrap();
+            w.step(&s, &r).unwrap();
+        }
+        w.flush().unwrap();
+        let h = read_history(w.energy_path(), PLOT_POINTS, vec![], None)
+            .unwrap()
+            .unwrap();
+        let water = h.water.unwrap();
+        assert_eq!(water.t.len(), 21);
+        assert_eq!(water.t, h.t);
+        let ww = s.water_work();
+        let last = |v: &[f64]| *v.last().unwrap();
+        assert_eq!(last(&water.drag), ww.drag_dissipated);
+        assert_eq!(last(&water.current), ww.current_supplied);
+        assert_eq!(last(&water.seabed), ww.seabed_dissipated);
+        assert_eq!(last(&water.friction), ww.friction_dissipated);
+        assert_eq!(last(&water.supplied), s.supplied_energy());
+        assert_eq!(last(&water.dissipated), s.dissipated_energy());
+        assert_eq!(last(&water.stored), s.energies().hamiltonian() - h0);
+        assert_eq!(water.stored[0], 0.0);
+        // A dry run has none.
+        let dry = crate::test_util::temp_dir("output", "dryhistory");
+        let mut s = sim();
+        let mut w = Writers::start(&dry, &s, 1, false, false, vec![]).unwrap();
+        let r = s.step().unwrap();
+        w.step(&s, &r).unwrap();
+        w.flush().unwrap();
+        let h = read_history(w.energy_path(), PLOT_POINTS, vec![], None)
+            .unwrap()
+            .unwrap();
+        assert!(h.water.is_none());
+        let _ = std::fs::remove_dir_all(&dir);
+        let _ = std::fs::remove_dir_all(&dry);
     }
 
     #[test]

@@ -15,6 +15,7 @@ mod network;
 mod out_folder;
 mod reliability;
 mod statics;
+mod water;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

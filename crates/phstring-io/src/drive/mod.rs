@@ -6,7 +6,8 @@
 //! * [`modes`]: the natural modes about it (`phstring modes`);
 //! * [`linearize`]: the linear model (`phstring linearize`);
 //! * [`sweep`]: many runs over varied parameters (`phstring sweep`);
-//! * [`outdir`]: preparing and locking an output folder.
+//! * [`outdir`]: preparing and locking an output folder;
+//! * [`water`]: the `water` part of a run's summary.
 
 pub mod linearize;
 pub mod modes;
@@ -14,3 +15,4 @@ pub mod outdir;
 pub mod run;
 pub mod statics;
 pub mod sweep;
+pub mod water;

@@ -16,6 +16,7 @@ use std::time::Instant;
 use phstring::{Material, SettleWatch, Simulation, StepError, StepReport};
 use serde::Serialize;
 
+use super::water::WaterSummary;
 use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT};
 use crate::figures::{draw_animation, draw_plots};
 use crate::files::{
@@ -255,6 +256,12 @@ pub struct RunInfo {
     /// Cumulative dissipated energy `Σ D_n` at the last completed step [J] (0 without
     /// damping).
     pub dissipated_energy: f64,
+    /// In water (docs/method.md §21): the energy each mechanism dissipated or supplied
+    /// [J], the final buoyancy and seabed energies [J], per string its grounded length at
+    /// the end and the smallest over the run [m], and the largest seabed contact force [N]
+    /// (see [`WaterSummary`]); absent without water.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub water: Option<WaterSummary>,
     /// With `time.settle`: where and when the run came to rest (it then ended before
     /// `t_end`), or `settled: false` with the state at the end if it did not; absent
     /// without `time.settle`.
@@ -403,6 +410,9 @@ fn run_dim<const D: usize>(
     info.h_min_used = sim.smallest_step_size();
     info.hamiltonian_final = sim.energies().hamiltonian();
     info.dissipated_energy = sim.dissipated_energy();
+    if let Some(w) = &mut info.water {
+        w.finish(&sim);
+    }
     if let Some(w) = over_tolerance_warning(&info, &ctx.settings) {
         info.warnings.push(w);
     }
@@ -523,6 +533,7 @@ fn new_info<const D: usize>(
         hamiltonian_initial: sim.energies().hamiltonian(),
         hamiltonian_final: sim.energies().hamiltonian(),
         dissipated_energy: 0.0,
+        water: WaterSummary::start(sim),
         settled: None,
         settle_progress: (false, None),
         time_loop_s: 0.0,
@@ -672,13 +683,15 @@ fn resume_writers<const D: usize>(
     info.time_loop_s = c.time_loop_s;
     info.hamiltonian_initial = c.hamiltonian_initial;
     info.settle_progress = (c.settle_armed, c.settle_since);
+    info.water = WaterSummary::resumed(sim, c.water.as_ref());
     let s = &ctx.settings;
-    Ok(Writers::resume(
+    Ok(Writers::resume::<D>(
         ctx.out,
         s.stride,
         s.output.vtk,
         snapshot_times(s.t_end),
         cp.outputs,
+        sim.system().has_water(),
     )?)
 }
 
@@ -715,6 +728,7 @@ fn write_checkpoint<const D: usize>(
             hamiltonian_initial: info.hamiltonian_initial,
             settle_armed: info.settle_progress.0,
             settle_since: info.settle_progress.1,
+            water: info.water.as_ref().map(WaterSummary::counters),
         },
         checksum: String::new(),
         path: ctx.checkpoint_path.clone(),
@@ -774,6 +788,9 @@ impl<const D: usize> phstring::Observer<D, Material> for Recorder<'_, '_> {
         info.max_newton_residual = nan_max(info.max_newton_residual, report.residual);
         info.steps_at_roundoff += usize::from(report.at_roundoff);
         info.steps_over_tolerance += sim.steps_over_tolerance() - self.started.1;
+        if let Some(w) = &mut info.water {
+            w.observe(sim);
+        }
         if let Err(e) = self.writers.step(sim, report) {
             self.error = Some(e.into());
             return ControlFlow::Break(());

@@ -16,13 +16,13 @@ use std::hash::Hasher;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use phstring::{Law, Material, PortKind, Simulation, StepReport};
+use phstring::{Energies, Law, Material, PortKind, Simulation, StepReport};
 
 use self::csv::{Csv, PendingCsv};
 use crate::checkpoint::OutputState;
 use crate::files::{
     ELEMENTS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE,
-    PVD_FILE, elements_header, frame_name, headers, num, remove_stale_temp_files,
+    PVD_FILE, elements_header, energy_header, frame_name, headers, num, remove_stale_temp_files,
 };
 use crate::plot::{GroupDrawing, PlotError, Topology};
 use crate::text::sanitize_text;
@@ -185,6 +185,31 @@ fn check_finite(path: &Path, what: &str, t: f64, values: &[f64]) -> Result<(), O
     }
 }
 
+/// Refuses ([`OutputError::Mismatch`]) a CSV file at `path` whose first line is not
+/// `header`.
+fn check_header(path: &Path, header: &str) -> Result<(), OutputError> {
+    use std::io::{BufRead, Read};
+    let f = std::fs::File::open(path).map_err(|cause| OutputError::Io {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let mut first = String::new();
+    std::io::BufReader::new(f.take(header.len() as u64 + 2))
+        .read_line(&mut first)
+        .map_err(|cause| OutputError::Io {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+    if first.trim_end_matches(['\n', '\r']) == header {
+        Ok(())
+    } else {
+        Err(OutputError::Mismatch {
+            path: path.to_path_buf(),
+            reason: format!("its header is not that of this run ({header})"),
+        })
+    }
+}
+
 /// `path` relative to `dir` (for reports), or as it is if it is not in `dir`.
 fn relative(dir: &Path, path: &Path) -> String {
     path.strip_prefix(dir).unwrap_or(path).display().to_string()
@@ -293,11 +318,53 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
     }
 }
 
+/// The values of the water columns of an `energy.csv` row ([`crate::files::ENERGY_WATER_COLUMNS`])
+/// for energies `e` of `sim`'s state [J]: the buoyancy and seabed potentials, then the water's
+/// running totals of `sim`.
+fn water_values<const D: usize>(sim: &Simulation<D, Material>, e: &Energies) -> [f64; 6] {
+    let w = sim.water_work();
+    [
+        e.buoyancy,
+        e.seabed,
+        w.drag_dissipated,
+        w.current_supplied,
+        w.seabed_dissipated,
+        w.friction_dissipated,
+    ]
+}
+
+/// `values` as the fields of a CSV row, each after a comma.
+fn more_fields(values: &[f64]) -> String {
+    values.iter().map(|x| format!(",{}", num(*x))).collect()
+}
+
+/// The seabed contact of every node at `r` as the ParaView point arrays `grounded` (1 on the
+/// seabed, 0 off it or out of reach of it) and `contact_force` [N]; `None` without a seabed
+/// (the frames then carry neither array).
+fn contact_arrays<const D: usize>(
+    sys: &phstring::PhSystem<D, Material>,
+    r: &[phstring::Vector<D>],
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let contacts = sys.seabed_contacts(r);
+    if contacts.is_empty() {
+        return None;
+    }
+    let mut grounded = vec![0.0; r.len()];
+    let mut force = vec![0.0; r.len()];
+    for c in contacts {
+        grounded[c.node] = if c.grounded { 1.0 } else { 0.0 };
+        force[c.node] = c.force;
+    }
+    Some((grounded, force))
+}
+
 /// Writes the standard outputs of one run into a folder. Memory does not grow with the
 /// number of steps (the configuration snapshots are bounded; the ParaView collection lists
 /// one entry per frame file written).
 pub struct Writers {
     dir: PathBuf,
+    /// The run is in water: `energy.csv` has the water columns.
+    water: bool,
     energy: Csv,
     positions: Option<Csv>,
     ports: Csv,
@@ -338,8 +405,9 @@ impl Writers {
         };
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         remove_stale_temp_files(dir);
-        let (energy_header, positions_header, ports_header) = headers(D);
-        let energy = Csv::create(dir.join(ENERGY_FILE), &energy_header)?;
+        let water = sim.system().has_water();
+        let (_, positions_header, ports_header) = headers(D);
+        let energy = Csv::create(dir.join(ENERGY_FILE), &energy_header(D, water))?;
         let positions = if positions {
             Some(Csv::create(dir.join(POSITIONS_FILE), &positions_header)?)
         } else {
@@ -356,6 +424,7 @@ impl Writers {
         };
         let mut w = Self {
             dir: dir.to_path_buf(),
+            water,
             energy,
             positions,
             ports,
@@ -374,8 +443,16 @@ impl Writers {
         let e = sim.energies();
         let values = [e.kinetic, e.potential(), e.hamiltonian()];
         check_finite(&w.energy.path, "initial energy", 0.0, &values)?;
+        // In water: the two potentials, and the running totals (zero before the first step).
+        let wet = if water {
+            let v = water_values(sim, &e);
+            check_finite(&w.energy.path, "initial energy", 0.0, &v)?;
+            more_fields(&v)
+        } else {
+            String::new()
+        };
         w.energy.row(&format!(
-            "{},{},{},{},0,0,0,0,0,0",
+            "{},{},{},{},0,0,0,0,0,0{wet}",
             num(0.0),
             num(values[0]),
             num(values[1]),
@@ -469,8 +546,14 @@ impl Writers {
                 }
                 m
             });
-            let point_data: Vec<(&str, &[f64])> =
-                mass.iter().map(|m| ("mass", m.as_slice())).collect();
+            let contact = contact_arrays(sys, &st.r);
+            let point_data: Vec<(&str, &[f64])> = mass
+                .iter()
+                .map(|m| ("mass", m.as_slice()))
+                .chain(contact.iter().flat_map(|(g, f)| {
+                    [("grounded", g.as_slice()), ("contact_force", f.as_slice())]
+                }))
+                .collect();
             let name = frame_name(sim.steps());
             let path = self.dir.join(PARAVIEW_DIR).join(&name);
             vtk::write_vtp_frame(
@@ -520,6 +603,13 @@ impl Writers {
             sim.dissipated_energy(),
         ];
         check_finite(&self.energy.path, "energy row value", r.t, &values)?;
+        let wet = if self.water {
+            let v = water_values(sim, &r.after);
+            check_finite(&self.energy.path, "energy row value", r.t, &v)?;
+            more_fields(&v)
+        } else {
+            String::new()
+        };
         let t_mid = r.t - 0.5 * r.h;
         for p in sim.ports() {
             check_finite(&self.ports.path, "port input", t_mid, p.input.as_slice())?;
@@ -527,7 +617,7 @@ impl Writers {
             check_finite(&self.ports.path, "port power", t_mid, &[p.power()])?;
         }
         self.energy.row(&format!(
-            "{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}{wet}",
             num(values[0]),
             num(values[1]),
             num(values[2]),
@@ -567,13 +657,15 @@ impl Writers {
     /// Reopens the outputs of an interrupted run in `dir` at the state a checkpoint recorded
     /// (files longer than recorded are cut back), to continue appending. The ParaView
     /// collection is read back from `paraview/string.pvd` and must list the checkpoint's
-    /// frames.
-    pub fn resume(
+    /// frames; `energy.csv` must have the header of a run of dimension `D` in water
+    /// (`water`) or not, so that the rows appended have its columns.
+    pub fn resume<const D: usize>(
         dir: &Path,
         stride: usize,
         vtk_frames: bool,
         snapshot_times: Vec<f64>,
         state: OutputState,
+        water: bool,
     ) -> Result<Self, OutputError> {
         remove_stale_temp_files(dir);
         let pvd = if vtk_frames {
@@ -600,6 +692,7 @@ impl Writers {
             None
         };
         // Check every file before any is cut back.
+        check_header(&dir.join(ENERGY_FILE), &energy_header(D, water))?;
         let energy = PendingCsv::open(dir.join(ENERGY_FILE), state.energy_bytes)?;
         let ports = PendingCsv::open(dir.join(PORTS_FILE), state.ports_bytes)?;
         let positions = match state.positions_bytes {
@@ -609,6 +702,7 @@ impl Writers {
         let positions = positions.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
+            water,
             energy: energy.commit()?,
             positions,
             ports: ports.commit()?,
@@ -801,6 +895,100 @@ mod tests {
         // One good row after the t = 0 row: the refused rows left nothing behind.
         assert_eq!(lines(&dir.join(ENERGY_FILE)), 3);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The rows of the CSV file at `p` after its header, as numbers.
+    fn number_rows(p: &Path) -> Vec<Vec<f64>> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect()
+    }
+
+    #[test]
+    fn wet_run_writes_the_water_columns_and_contact_arrays() {
+        use crate::test_util::{frame_point_array, wet_line};
+        let dir = crate::test_util::temp_dir("output", "wet");
+        let mut s = wet_line();
+        let mut w = Writers::start(&dir, &s, 10, false, true, vec![]).unwrap();
+        for _ in 0..30 {
+            let r = s.step().unwrap();
+            w.step(&s, &r).unwrap();
+        }
+        w.finish(&s).unwrap();
+        let energy = dir.join(ENERGY_FILE);
+        let text = std::fs::read_to_string(&energy).unwrap();
+        assert_eq!(
+            text.lines().next().unwrap(),
+            format!(
+                "{},buoyancy,seabed,drag_dissipated,current_supplied,seabed_dissipated,friction_dissipated",
+                headers(2).0
+            )
+        );
+        let rows = number_rows(&energy);
+        assert_eq!(rows.len(), 31);
+        assert!(rows.iter().all(|r| r.len() == 16));
+        // Before the first step: the potentials, no work yet.
+        let e0 = &rows[0];
+        assert!(e0[10] != 0.0 && e0[11] >= 0.0, "{e0:?}");
+        assert_eq!(e0[12..], [0.0; 4]);
+        // The last row: this state's potentials and the running totals, to the last digit.
+        let (e, ww) = (s.energies(), s.water_work());
+        let expected = [
+            e.buoyancy,
+            e.seabed,
+            ww.drag_dissipated,
+            ww.current_supplied,
+            ww.seabed_dissipated,
+            ww.friction_dissipated,
+        ];
+        let last = rows.last().unwrap();
+        assert_eq!(last[10..], expected);
+        assert!(ww.drag_dissipated > 0.0 && ww.seabed_dissipated > 0.0);
+        assert!(ww.friction_dissipated > 0.0 && e.seabed > 0.0);
+        // No material damping: the water's shares are all of the dissipated energy.
+        for r in &rows {
+            let water = r[12] + r[14] + r[15];
+            assert!((water - r[9]).abs() <= 1e-12 * r[9].abs(), "{r:?}");
+        }
+        // The frames: one grounded flag and contact force per node, those of the contacts.
+        let frame = dir.join(PARAVIEW_DIR).join(frame_name(30));
+        let grounded = frame_point_array(&frame, "grounded").unwrap();
+        let force = frame_point_array(&frame, "contact_force").unwrap();
+        assert_eq!(grounded.len(), 21);
+        let contacts = s.system().seabed_contacts(&s.state().r);
+        assert_eq!(contacts.len(), 21);
+        for c in &contacts {
+            assert_eq!(grounded[c.node], f64::from(u8::from(c.grounded)));
+            assert_eq!(force[c.node], c.force);
+        }
+        let on_bed = grounded.iter().sum::<f64>();
+        assert!((5.0..21.0).contains(&on_bed), "{on_bed} nodes grounded");
+        // A resume checks the header: a dry one is refused, a wet one appends wet rows.
+        let state = w.state().unwrap();
+        drop(w);
+        let refused = Writers::resume::<2>(&dir, 10, true, vec![], state.clone(), false);
+        let e = refused.err().unwrap();
+        assert!(matches!(e, OutputError::Mismatch { .. }), "{e}");
+        assert!(e.to_string().contains("header"), "{e}");
+        let mut w = Writers::resume::<2>(&dir, 10, true, vec![], state, true).unwrap();
+        let r = s.step().unwrap();
+        w.step(&s, &r).unwrap();
+        w.finish(&s).unwrap();
+        let rows = number_rows(&energy);
+        assert_eq!((rows.len(), rows[31].len()), (32, 16));
+        // A dry run: the header it always had, frames without the contact arrays.
+        let dry = crate::test_util::temp_dir("output", "dry");
+        let _w = Writers::start(&dry, &sim(), 1, false, true, vec![]).unwrap();
+        let header = std::fs::read_to_string(dry.join(ENERGY_FILE)).unwrap();
+        assert_eq!(header.lines().next().unwrap(), headers(2).0);
+        let frame = dry.join(PARAVIEW_DIR).join(frame_name(0));
+        assert!(frame_point_array(&frame, "grounded").is_none());
+        assert!(frame_point_array(&frame, "contact_force").is_none());
+        let _ = std::fs::remove_dir_all(&dir);
+        let _ = std::fs::remove_dir_all(&dry);
     }
 
     #[test]
