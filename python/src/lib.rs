@@ -388,7 +388,7 @@ impl<const D: usize> phstring::Observer<D, Material> for Recorder<'_, '_> {
         out.its.push(r.newton_iterations);
         self.bar.show(r.t, self.t_end);
         self.steps += 1;
-        if self.steps % self.stride == 0 || s.reached(self.t_end) {
+        if self.steps.is_multiple_of(self.stride) || s.reached(self.t_end) {
             out.positions
                 .extend(s.state().r.iter().flat_map(|x| x.iter().copied()));
             out.t_positions.push(r.t);
