@@ -218,7 +218,7 @@ fn a_dry_run_writes_no_water_outputs() {
     let dir = temp_dir("water-dry");
     let out = dir.join("dry");
     let sets = ["time.end=0.05"];
-    let o = run_with("examples/mooring_line.toml", &out, &sets, &[]);
+    let o = run_with("examples/slack_wire.toml", &out, &sets, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (h, _) = table(&out.join("energy.csv"));
     assert_eq!(h.join(","), DRY_HEADER);
