@@ -294,7 +294,8 @@ def test_water_energies_are_reported_per_mechanism():
     while sim.time < 2.0 - 1e-9:
         sim.step()
     e = sim.energies
-    assert e["buoyancy"] < 0.0 and e["seabed"] > 0.0
+    # The buoyancy potential −ρ_w g V z is positive below the surface (z < 0).
+    assert e["buoyancy"] > 0.0 and e["seabed"] > 0.0
     assert e["drag_dissipated"] > 0.0 and e["seabed_dissipated"] >= 0.0
     assert e["drag_dissipated"] + e["seabed_dissipated"] + e["friction_dissipated"] <= e["dissipated"] * (1 + 1e-12)
     assert e["current_supplied"] == 0.0  # still water
