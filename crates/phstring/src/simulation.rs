@@ -399,8 +399,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Validates `problem`, sets up the solver and starts at time `t = 0`.
     pub fn new(problem: impl Into<Network<D, M>>, params: StepParams) -> Result<Self, SetupError> {
         check_params(&params)?;
+        // `PhSystem::new` has checked the state already.
         let (sys, state) = PhSystem::new(problem)?;
-        Self::from_system(sys, state, params)
+        Self::start(sys, state, params)
     }
 
     /// Starts `sys` from `state` at time `t = 0` (a system built once, e.g. for a static
@@ -413,6 +414,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) -> Result<Self, SetupError> {
         check_params(&params)?;
         sys.check_state(&state)?;
+        Self::start(sys, state, params)
+    }
+
+    /// Starts `sys` from `state` (both checked) at `t = 0` with `params` (checked).
+    fn start(sys: PhSystem<D, M>, state: State<D>, params: StepParams) -> Result<Self, SetupError> {
         let n_el = sys.mesh.n_elements();
         let n = sys.mesh.n_nodes();
         let solver = make_solver::<D>(params.solver, &sys.mesh)?;
