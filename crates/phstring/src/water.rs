@@ -811,6 +811,7 @@ pub(crate) struct NodeStep<const D: usize> {
 
 impl<const D: usize> WaterModel<D> {
     /// The step terms of node `w` (docs/method.md §21).
+    #[inline(always)]
     pub fn node_step(&self, w: &WetNode, r0: &Vector<D>, x: &Vector<D>, h: f64) -> NodeStep<D> {
         let inv_h = 1.0 / h;
         let mut res = Vector::<D>::zeros();
@@ -913,6 +914,7 @@ impl<const D: usize> WaterModel<D> {
     /// split along the mid-step tangent; half of `F` acts on each node. The blocks are those
     /// of the residual rows (`−½ F` on each node).
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub fn element_drag(
         &self,
         w: &WetElement,
@@ -927,17 +929,15 @@ impl<const D: usize> WaterModel<D> {
         let eye = Block::<D>::identity();
         let ve = (x.0 + x.1) * (0.5 * inv_h);
         let zm = 0.5 * (r0.0[zi] + r0.1[zi]) + 0.25 * (x.0[zi] + x.1[zi]);
-        let rpm = (r0.1 - r0.0) / l + (x.1 - x.0) * (0.5 / l);
+        let inv_l = 1.0 / l;
+        let rpm = (r0.1 - r0.0 + (x.1 - x.0) * 0.5) * inv_l;
         let (u, du) = self.current.at(zm);
         let (em, dem) = emerged(zm, w.band);
         let phi = 1.0 - em;
         let vr = ve - u;
         let len = rpm.norm();
-        let t = if len > 0.0 {
-            rpm / len
-        } else {
-            Vector::zeros()
-        };
+        let inv_len = if len > 0.0 { 1.0 / len } else { 0.0 };
+        let t = rpm * inv_len;
         let vrt = t * t.dot(&vr);
         let vrn = vr - vrt;
         let d2 = self.delta * self.delta;
@@ -957,25 +957,27 @@ impl<const D: usize> WaterModel<D> {
         if !want_jac {
             return (f, [Block::zeros(); 2], work);
         }
-        let an = (eye * sn + vrn * vrn.transpose() / sn) * w.normal;
-        let at = (eye * st + vrt * vrt.transpose() / st) * w.axial;
+        // With P = I − t tᵀ, a = t·v_r, v_rn = P v_r, v_rt = a t (so v_rnᵀ t = 0):
+        // ∂B/∂v_r = wN (sn P + v_rn v_rnᵀ/sn) + wA (st + a²/st) t tᵀ, and the tangent's part
+        // ∂B/∂t · ∂t/∂r' = (1/|r'|) [(wA st − wN sn)(a P + t v_rnᵀ) + wA a²/st t v_rnᵀ
+        //                            − wN a/sn v_rn v_rnᵀ].
+        let a = t.dot(&vr);
         let tt = t * t.transpose();
-        let gv = an * (eye - tt) + at * tt;
-        let gt = (at - an) * (eye * t.dot(&vr) + t * vr.transpose());
-        let q = if len > 0.0 {
-            (eye - tt) / len
-        } else {
-            Block::zeros()
-        };
-        let mut dvr = eye * (0.5 * inv_h);
-        let mut k0 = Block::<D>::zeros();
+        let pn = eye - tt;
+        let nn = vrn * vrn.transpose();
+        let (inv_sn, inv_st) = (1.0 / sn, 1.0 / st);
+        let aa = w.axial * a * a * inv_st;
+        let gv = pn * (w.normal * sn) + nn * (w.normal * inv_sn) + tt * (w.axial * st + aa);
+        // Zero when the element has no length (t = 0, inv_len = 0).
+        let c = w.axial * st - w.normal * sn;
+        let k1 = (pn * (c * a) + t * vrn.transpose() * (c + aa) - nn * (w.normal * a * inv_sn))
+            * (0.25 * phi * inv_l * inv_len);
+        // ∂v_r/∂x = ½h⁻¹ I − ¼ (du/dz) e_zᵀ; ∂φ/∂x_z = −¼ dS/dz, times ½ of −(−B) on each row.
+        let mut k0 = gv * (0.25 * phi * inv_h);
+        let gdu = gv * du * (-0.125 * phi);
         for k in 0..D {
-            dvr[(k, zi)] -= 0.25 * du[k];
-            // ∂φ/∂x_z = −¼ dS/dz, times ½ of −(−B) on each row.
-            k0[(k, zi)] -= 0.125 * dem * bvec[k];
+            k0[(k, zi)] += gdu[k] - 0.125 * dem * bvec[k];
         }
-        k0 += gv * dvr * (0.5 * phi);
-        let k1 = gt * q * (0.25 * phi / l);
         (f, [k0 - k1, k0 + k1], work)
     }
 }
