@@ -35,7 +35,10 @@ fn damping_triplets<const D: usize, M: StoredEnergy>(
 /// of the dissipative forces by the velocities at rest (docs/method.md §18). Kelvin–Voigt adds
 /// `(2η/l) r' r'ᵀ`, drag `c` times the mass pattern, a dashpot `c I`, to the diagonal blocks
 /// of an element's nodes and the negative (drag: the mass pattern's coupling) to its coupling
-/// blocks. Symmetric positive semidefinite; zero without damping.
+/// blocks. In water ([`crate::water`]), the derivative at rest of the drag in the current (with
+/// the equivalent linear drag of [`crate::Water::linear_drag_amplitude`]), of the seabed
+/// damping and of the friction's zero-slip slope where a node lies on the seabed
+/// (docs/method.md §21). Symmetric positive semidefinite; zero without damping.
 pub fn damping_blocks<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r: &[Vector<D>],
@@ -53,6 +56,19 @@ pub fn damping_blocks<const D: usize, M: StoredEnergy>(
         j.diag[a] += axial + eye * cd;
         j.diag[b] += axial + eye * cd;
         j.off[e] = [eye * co - axial, eye * co - axial];
+    }
+    if let Some(w) = sys.water.as_deref() {
+        for node in &w.nodes {
+            j.diag[node.node] += w.node_damping(node, &r[node.node]);
+        }
+        for el in &w.elements {
+            let [a, b] = sys.mesh.elements()[el.e];
+            let quarter = w.element_damping(el, (&r[a], &r[b])) * 0.25;
+            j.diag[a] += quarter;
+            j.diag[b] += quarter;
+            j.off[el.e][0] += quarter;
+            j.off[el.e][1] += quarter;
+        }
     }
     j
 }
@@ -536,7 +552,7 @@ pub fn modal_model<const D: usize, M: StoredEnergy>(
     let k = modes.len();
     // Φᵀ R_v Φ, from the node blocks (the shapes are zero at fixed components).
     let mut tr = Vec::new();
-    if sys.has_damping() {
+    if sys.has_damping() || sys.water.is_some() {
         let rv = damping_blocks(sys, r);
         let rv_phi: Vec<Vec<Vector<D>>> = modes
             .iter()

@@ -68,6 +68,10 @@ pub(crate) struct GroupInfo<'a> {
 /// Standard gravity [m/s²], the default of [`Water::gravity`].
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
+/// Lorentz's factor `8/(3π)` of the equivalent linear drag: `α |v| v` and `(8/3π) α V v`
+/// dissipate the same energy over a cycle of `v = V sin ωt`.
+const LORENTZ: f64 = 8.0 / (3.0 * std::f64::consts::PI);
+
 /// Default smoothing speed `δ` [m/s] of the drag laws' `|v|` (see [`Water::drag_smoothing`]).
 pub const DEFAULT_DRAG_SMOOTHING: f64 = 1e-3;
 
@@ -224,6 +228,13 @@ pub struct Water<const D: usize> {
     /// Smoothing speed `δ` [m/s] of the quadratic drag laws: `|v|` is taken as
     /// `√(|v|² + δ²)`, so that the drag's Jacobian is defined at zero relative speed; > 0.
     pub drag_smoothing: f64,
+    /// Velocity amplitude `V` [m/s] of the equivalent linear drag in the linear model
+    /// (`linear::damping_blocks`): the quadratic drag `α |v| v` of a harmonic motion of
+    /// velocity amplitude `V` dissipates per cycle what the linear drag `(8/3π) α V v` does,
+    /// and that damping is added to the drag's derivative at rest. 0 (the default): only the
+    /// derivative, which in still water is the negligible `α δ`. ≥ 0. The time step does not
+    /// use it.
+    pub linear_drag_amplitude: f64,
 }
 
 impl<const D: usize> Water<D> {
@@ -235,6 +246,7 @@ impl<const D: usize> Water<D> {
             current: Current::still(),
             seabed: None,
             drag_smoothing: DEFAULT_DRAG_SMOOTHING,
+            linear_drag_amplitude: 0.0,
         }
     }
     /// The same water with `current`.
@@ -478,6 +490,8 @@ pub(crate) struct WaterModel<const D: usize> {
     pub current: Current<D>,
     pub still: bool,
     pub delta: f64,
+    /// [`Water::linear_drag_amplitude`] [m/s].
+    pub amplitude: f64,
     pub bed: Option<Bed<D>>,
     /// Sorted by node.
     pub nodes: Vec<WetNode>,
@@ -582,6 +596,12 @@ fn check_water<const D: usize>(w: &Water<D>) -> Result<Option<Bed<D>>, SetupErro
     check_value("water density [kg/m^3]", None, w.density, true)?;
     check_value("gravity [m/s^2]", None, w.gravity, true)?;
     check_value("drag smoothing speed [m/s]", None, w.drag_smoothing, true)?;
+    check_value(
+        "equivalent linear drag amplitude [m/s]",
+        None,
+        w.linear_drag_amplitude,
+        false,
+    )?;
     match &w.current {
         Current::Uniform(u) => check_vector("current velocity [m/s]", None, u)?,
         Current::Profile(p) => {
@@ -760,6 +780,7 @@ pub(crate) fn build<const D: usize>(
         still: water.current.is_still(),
         current: water.current.clone(),
         delta: water.drag_smoothing,
+        amplitude: water.linear_drag_amplitude,
         bed,
         nodes,
         elements,
@@ -1041,6 +1062,60 @@ impl<const D: usize> WaterModel<D> {
         // As in `static_point_drag`: no velocity, and positions enter with weight ½.
         let (f, [ja, jb], _) = self.element_drag(w, r, (&zero, &zero), l, f64::INFINITY, want_jac);
         (f, [ja * 2.0, jb * 2.0])
+    }
+
+    /// At rest at `r`: the derivative of node `w`'s resistive forces by its velocity [N·s/m]
+    /// (symmetric, ⪰ 0), the node's block of the damping matrix `R_v`: the point drag's
+    /// derivative in the current (with the equivalent linear drag of
+    /// [`Water::linear_drag_amplitude`]), the seabed damping in contact (ramped by the
+    /// penetration), and the friction's slope at zero slip in the seabed plane.
+    pub fn node_damping(&self, w: &WetNode, r: &Vector<D>) -> Block<D> {
+        let eye = Block::<D>::identity();
+        let mut c = Block::<D>::zeros();
+        if w.drag > 0.0 {
+            let (u, _) = self.current.at(r[D - 1]);
+            let phi = 1.0 - emerged(r[D - 1], w.band).0;
+            let s = (u.norm_squared() + self.delta * self.delta).sqrt();
+            let eq = LORENTZ * self.amplitude;
+            c += (eye * (s + eq) + u * u.transpose() / s) * (w.drag * phi);
+        }
+        if let Some(bed) = self.bed.as_ref().filter(|_| w.stiffness > 0.0) {
+            let p = -bed.gap(r);
+            if p > 0.0 {
+                let nn = bed.n * bed.n.transpose();
+                c += nn * (w.damping * ramp(p, bed.ramp).0);
+                if let Some(fr) = &bed.friction {
+                    c += (eye - nn) * fr.slope;
+                }
+            }
+        }
+        c
+    }
+
+    /// At rest at `r_a`, `r_b`: the derivative of element `w`'s drag force by the element's
+    /// mean velocity, negated [N·s/m] (symmetric, ⪰ 0): Morison's law at `v_r = −u` split
+    /// along the tangent, plus the equivalent linear drag of
+    /// [`Water::linear_drag_amplitude`]. Each of the element's four node blocks of `R_v`
+    /// carries a quarter of it.
+    pub fn element_damping(&self, w: &WetElement, r: (&Vector<D>, &Vector<D>)) -> Block<D> {
+        let zi = D - 1;
+        let zm = 0.5 * (r.0[zi] + r.1[zi]);
+        let (u, _) = self.current.at(zm);
+        let phi = 1.0 - emerged(zm, w.band).0;
+        let chord = r.1 - r.0;
+        let len = chord.norm();
+        let t = if len > 0.0 { chord / len } else { chord };
+        let vr = -u;
+        let a = t.dot(&vr);
+        let vrn = vr - t * a;
+        let d2 = self.delta * self.delta;
+        let (sn, st) = ((vrn.norm_squared() + d2).sqrt(), (a * a + d2).sqrt());
+        let (tt, eq) = (t * t.transpose(), LORENTZ * self.amplitude);
+        let pn = Block::<D>::identity() - tt;
+        (pn * (w.normal * (sn + eq))
+            + vrn * vrn.transpose() * (w.normal / sn)
+            + tt * (w.axial * (st + eq + a * a / st)))
+            * phi
     }
 
     /// The stiffness of the potentials (buoyancy, contact) of every wet node at `r`, added to

@@ -229,3 +229,49 @@ fn a_dry_run_writes_no_water_outputs() {
     assert!(!frame.contains("grounded") && !frame.contains("contact_force"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The trace of a MatrixMarket coordinate file (`linearize`'s `FORM/NAME.mtx`).
+fn mtx_trace(p: &Path) -> f64 {
+    let text = std::fs::read_to_string(p).unwrap();
+    let mut rows = text.lines().filter(|l| !l.starts_with('%')).skip(1);
+    let mut trace = 0.0;
+    for line in rows.by_ref() {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        if f.len() == 3 && f[0] == f[1] {
+            trace += f[2].parse::<f64>().unwrap();
+        }
+    }
+    trace
+}
+
+/// `water.linear_drag_amplitude = V` adds Lorentz's equivalent linear drag to `linearize`'s
+/// damping matrix: on the mooring line (2D, every element under water, anchor and fairlead
+/// held), the trace of the reduced `R` grows by `(8/3π) V (½ρ Cd d + ½ρ CdAx π d)` times a
+/// quarter of the free element ends' lengths, `(2L − l_anchor − l_fairlead)/4` (to 1e-9).
+#[test]
+fn linearize_adds_the_equivalent_linear_drag() {
+    let dir = temp_dir("linearize-drag");
+    let lin = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec!["linearize", "examples/mooring_line.toml", "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        let o = phstring(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        mtx_trace(&out.join("reduced/R.mtx"))
+    };
+    let v = 0.5;
+    let plain = lin("plain", &[]);
+    let amplitude = format!("water.linear_drag_amplitude={v}");
+    let with = lin("with", &["--set", &amplitude]);
+    let (rho, d, cd, cda) = (1025.0, 0.076, 1.2, 0.008);
+    let (l1, l2) = (114.583333, (35.416667f64).hypot(55.0));
+    let free_ends = 2.0 * (l1 + l2) - l1 / 90.0 - l2 / 90.0;
+    let per_length = 0.5 * rho * cd * d + 0.5 * rho * cda * std::f64::consts::PI * d;
+    let expected = 8.0 / (3.0 * std::f64::consts::PI) * v * per_length * free_ends / 4.0;
+    assert!(
+        (with - plain - expected).abs() <= 1e-9 * expected,
+        "trace of R grew by {} N·s/m, expected {expected}",
+        with - plain
+    );
+}

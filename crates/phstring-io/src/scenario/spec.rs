@@ -95,6 +95,10 @@ pub struct WaterSpec {
     /// Smoothing speed `δ` [m/s] of the drag laws' `|v|` (default 1e-3).
     #[serde(default)]
     pub drag_smoothing: Option<Spanned<f64>>,
+    /// Velocity amplitude [m/s] of the equivalent linear drag in `linearize` and `modes`
+    /// (default 0: the drag's derivative at rest only).
+    #[serde(default)]
+    pub linear_drag_amplitude: Option<Spanned<f64>>,
 }
 
 /// `[seabed]`: a flat seabed at `−water.depth`, or a plane through `point` with upward

@@ -107,6 +107,10 @@ impl ScenarioFile {
         if let Some(s) = &w.drag_smoothing {
             water.drag_smoothing = self.positive("water.drag_smoothing", s)?;
         }
+        water.linear_drag_amplitude = self.non_negative(
+            "water.linear_drag_amplitude",
+            w.linear_drag_amplitude.as_ref(),
+        )?;
         if let Some(sb) = &self.scenario.seabed {
             water = water.with_seabed(self.seabed::<D>(w, sb)?);
         }

@@ -762,3 +762,125 @@ fn invalid_water_is_refused_with_the_value() {
     );
     assert!(matches!(e, SetupError::HydroGroup { group: 0, .. }), "{e}");
 }
+
+/// The sum of every block of the damping matrix `R_v` of a line at rest: the resisting force
+/// per unit velocity of a rigid translation [N·s/m].
+fn total_damping(net: Network<3, Material>) -> phstring::linsolve::Block<3> {
+    let (sys, state) = phstring::PhSystem::new(net).unwrap();
+    let rv = phstring::linear::damping_blocks(&sys, &state.r);
+    let mut sum = rv.diag.iter().sum::<phstring::linsolve::Block<3>>();
+    for [a, b] in &rv.off {
+        sum += a + b;
+    }
+    sum
+}
+
+/// The linear model's water damping (docs/method.md §21) against closed forms on a 20 m
+/// line (d = 0.1 m, Cd = 1.2, CdAx = 0.4) lying along x, 20 m deep: in still water with an
+/// equivalent-linear amplitude of 0.5 m/s, Lorentz's `(8/3π) ½ρ C d V L` in each direction;
+/// in a transverse current of 1.5 m/s without it, the derivative of `½ρ Cd d |v_r| v_r`,
+/// `2 ½ρ Cd d u L` along the current and `½ρ Cd d u L` across it; on the seabed, the seabed
+/// damping `cBot d L` normal to it and the friction slope per node within its plane.
+#[test]
+fn linear_model_damping_of_the_water_matches_closed_forms() {
+    let (n, l, d, cd, cda) = (10, 2.0, 0.1, 1.2, 0.4);
+    let total = n as f64 * l;
+    let line = |z: f64| -> Network<3, Material> {
+        let r = (0..=n)
+            .map(|i| Vector::<3>::new(l * i as f64, 0.0, z))
+            .collect();
+        chain(r, l, 1e9, 20.0, &[])
+    };
+    let hydro = LineHydro {
+        diameter: d,
+        cd,
+        cd_axial: cda,
+        ca: 1.0,
+        ca_axial: 1.0,
+    };
+    let (an, aa) = (
+        0.5 * RHO_W * cd * d * total,
+        0.5 * RHO_W * cda * PI * d * total,
+    );
+    let lorentz = 8.0 / (3.0 * PI);
+    // Still water, amplitude V.
+    let (v, delta) = (0.5, phstring::water::DEFAULT_DRAG_SMOOTHING);
+    let mut water = Water::new(RHO_W);
+    water.linear_drag_amplitude = v;
+    let c = total_damping(line(-20.0).with_water(water).with_line_hydro(0, hydro));
+    let expected = [
+        aa * (delta + lorentz * v),
+        an * (delta + lorentz * v),
+        an * (delta + lorentz * v),
+    ];
+    for k in 0..3 {
+        assert!(
+            (c[(k, k)] - expected[k]).abs() <= 1e-12 * expected[k],
+            "still water, axis {k}: {} vs {}",
+            c[(k, k)],
+            expected[k]
+        );
+    }
+    // No coupling between the axes of a line along x.
+    let off = c - phstring::linsolve::Block::<3>::from_diagonal(&c.diagonal());
+    assert!(off.abs().max() <= 1e-12 * expected[0], "{c}");
+    // A transverse current along y, no amplitude.
+    let u = 1.5;
+    let water = Water::new(RHO_W).with_current(Current::Uniform(Vector::<3>::new(0.0, u, 0.0)));
+    let c = total_damping(line(-20.0).with_water(water).with_line_hydro(0, hydro));
+    let s = (u * u + delta * delta).sqrt();
+    let expected = [aa * delta, an * (s + u * u / s), an * s];
+    for k in 0..3 {
+        assert!(
+            (c[(k, k)] - expected[k]).abs() <= 1e-12 * expected[k],
+            "current, axis {k}: {} vs {}",
+            c[(k, k)],
+            expected[k]
+        );
+    }
+    // On a seabed at 20 m, pressed 1 cm in (beyond the 1 mm damping ramp); no drag.
+    let (cbot, slope) = (3e5, 200.0);
+    let seabed = Seabed::flat(20.0, 3e6, cbot).with_friction(Friction {
+        coefficient: 0.5,
+        slope,
+    });
+    let calm = LineHydro {
+        cd: 0.0,
+        cd_axial: 0.0,
+        ..hydro
+    };
+    let c = total_damping(
+        line(-20.01)
+            .with_water(Water::new(RHO_W).with_seabed(seabed))
+            .with_line_hydro(0, calm),
+    );
+    let expected = [
+        slope * (n + 1) as f64,
+        slope * (n + 1) as f64,
+        cbot * d * total,
+    ];
+    for k in 0..3 {
+        assert!(
+            (c[(k, k)] - expected[k]).abs() <= 1e-12 * expected[k],
+            "seabed, axis {k}: {} vs {}",
+            c[(k, k)],
+            expected[k]
+        );
+    }
+}
+
+/// Lorentz's equivalence behind `linear_drag_amplitude`: over a cycle of `v = V sin ωt`, the
+/// quadratic drag `α |v| v` and the linear `(8/3π) α V v` dissipate the same energy (midpoint
+/// quadrature of 10⁵ points, to 1e-9).
+#[test]
+fn equivalent_linear_drag_dissipates_as_the_quadratic_one_over_a_cycle() {
+    let (alpha, v) = (61.5, 0.8);
+    let m = 100_000;
+    let (mut quad, mut lin) = (0.0, 0.0);
+    for i in 0..m {
+        let s = (2.0 * PI * (i as f64 + 0.5) / m as f64).sin() * v;
+        quad += alpha * s.abs() * s * s;
+        lin += 8.0 / (3.0 * PI) * alpha * v * s * s;
+    }
+    assert!((quad - lin).abs() <= 1e-9 * quad, "{quad} vs {lin}");
+}
