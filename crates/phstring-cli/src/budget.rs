@@ -170,6 +170,7 @@ pub fn budget(file: &ScenarioFile) -> Result<Budget> {
         stride: usize::try_from(*o.stride.get_ref()).unwrap_or(1).max(1),
         positions: o.positions,
         vtk: o.vtk,
+        wet: s.water.is_some(),
     });
     Ok(Budget {
         dimension,

@@ -234,6 +234,9 @@ pub struct OutputPlan {
     pub positions: bool,
     /// `output.vtk`.
     pub vtk: bool,
+    /// A run in water: six more columns in `energy.csv`, two more arrays per ParaView
+    /// frame, the energy-split plot.
+    pub wet: bool,
 }
 
 /// The size of a run's outputs, estimated before it runs ([`estimated_output`]).
@@ -273,6 +276,12 @@ const FRAME_BYTES_PER_ELEMENT: f64 = 52.0 * 4.0 / 3.0;
 /// `elements.csv`, `summary.json`, the run id, `string.pvd`, six plots, `animation.gif`
 /// (not the lock file).
 const FIXED_FILES: f64 = 13.0;
+/// Bytes of a ParaView frame per node in water: the `grounded` flag and the
+/// `contact_force` (2 Float64), base64.
+const FRAME_BYTES_PER_WET_NODE: f64 = 16.0 * 4.0 / 3.0;
+/// Bytes of a ParaView frame's two water arrays besides their values (tags, base64
+/// headers).
+const FRAME_BYTES_WET: f64 = 300.0;
 
 /// The size and number of files a run writes, from the layout of the writers: a row of
 /// `energy.csv` per step ([`ENERGY_ROW_BYTES`]), a row per port and step in `ports.csv`
@@ -291,7 +300,8 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
     let frames = on_stride + 1.0 + if on_stride * stride < steps { 1.0 } else { 0.0 };
     let digits = |n: f64| n.max(1.0).log10().floor() + 2.0;
     let nodes = p.nodes as f64;
-    let rows = (steps + 1.0) * ENERGY_ROW_BYTES
+    let wet = if p.wet { 1.0 } else { 0.0 };
+    let rows = (steps + 1.0) * (ENERGY_ROW_BYTES + wet * 6.0 * NUM_BYTES)
         + steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0);
     let positions = if p.positions {
         // The first frame's time is written `0`.
@@ -303,14 +313,18 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
         frames
             * (FRAME_BYTES
                 + 70.0
-                + FRAME_BYTES_PER_NODE * nodes
+                + wet * FRAME_BYTES_WET
+                + (FRAME_BYTES_PER_NODE + wet * FRAME_BYTES_PER_WET_NODE) * nodes
                 + FRAME_BYTES_PER_ELEMENT * p.elements as f64)
     } else {
         0.0
     };
     OutputEstimate {
         bytes: rows + positions + paraview,
-        files: FIXED_FILES + if p.positions { 1.0 } else { 0.0 } + if p.vtk { frames } else { 0.0 },
+        files: FIXED_FILES
+            + wet
+            + if p.positions { 1.0 } else { 0.0 }
+            + if p.vtk { frames } else { 0.0 },
         rows,
         positions,
         frames: if p.vtk { frames } else { 0.0 },
@@ -1015,9 +1029,22 @@ mod tests {
 
     #[test]
     fn output_estimate_matches_what_the_writers_write() {
-        for (stride, steps) in [(1, 40), (7, 40), (40, 40)] {
+        let cases = [
+            (1, 40, false),
+            (7, 40, false),
+            (40, 40, false),
+            (1, 40, true),
+            (7, 40, true),
+        ];
+        for (stride, steps, wet) in cases {
             let dir = crate::test_util::temp_dir("output", "estimate");
-            let mut s = sim();
+            let mut s = if wet {
+                crate::test_util::wet_line()
+            } else {
+                sim()
+            };
+            let mesh = s.system().mesh();
+            let (nodes, elements) = (mesh.n_nodes(), mesh.n_elements());
             let mut w = Writers::start(&dir, &s, stride, true, true, vec![]).unwrap();
             for _ in 0..steps {
                 let r = s.step().unwrap();
@@ -1026,13 +1053,14 @@ mod tests {
             w.finish(&s).unwrap();
             let e = estimated_output(&OutputPlan {
                 dimension: 2,
-                nodes: 11,
-                elements: 10,
+                nodes,
+                elements,
                 ports: s.ports().len(),
                 steps: steps as f64,
                 stride,
                 positions: true,
                 vtk: true,
+                wet,
             });
             let pv = dir.join(PARAVIEW_DIR);
             let frames = std::fs::read_dir(&pv).unwrap().count() as f64 - 1.0;
@@ -1048,7 +1076,7 @@ mod tests {
                 let ratio = estimate / actual;
                 assert!(
                     (0.9..=1.1).contains(&ratio),
-                    "stride {stride}, {what}: estimate {estimate}, written {actual}"
+                    "stride {stride}, wet {wet}, {what}: estimate {estimate}, written {actual}"
                 );
             }
             let _ = std::fs::remove_dir_all(&dir);
