@@ -709,6 +709,14 @@ mod tests {
                 "sim.dissipated_total = inf must be finite",
             ),
             (
+                |c| c.sim.water.friction_dissipated = f64::NAN,
+                "sim.water.friction_dissipated = NaN must be finite",
+            ),
+            (
+                |c| c.sim.water.drag_dissipated = 3.5,
+                "sim.water has shares (drag 3.5e0 J, current 0e0 J, seabed 0e0 J, friction 0e0 J) but the scenario has no water",
+            ),
+            (
                 |c| c.counters.steps = 11,
                 "counters.steps = 11 differs from sim.steps = 12",
             ),

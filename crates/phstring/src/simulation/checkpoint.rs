@@ -606,6 +606,15 @@ impl FlatCheckpoint {
                 return Err(format!("{name} = {value:e} must be finite"));
             }
         }
+        if sim.system().water.is_none() && !water.is_zero() {
+            return Err(format!(
+                "sim.water has shares (drag {:e} J, current {:e} J, seabed {:e} J, friction {:e} J) but the scenario has no water",
+                water.drag_dissipated,
+                water.current_supplied,
+                water.seabed_dissipated,
+                water.friction_dissipated
+            ));
+        }
         Ok(fit)
     }
 
