@@ -166,6 +166,7 @@ pub fn budget(file: &ScenarioFile) -> Result<Budget> {
         nodes: elements.saturating_add(1),
         elements,
         ports: s.boundary.len(),
+        strings: s.string.len().max(usize::from(s.material.is_some())),
         steps,
         stride: usize::try_from(*o.stride.get_ref()).unwrap_or(1).max(1),
         positions: o.positions,
