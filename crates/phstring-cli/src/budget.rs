@@ -210,7 +210,10 @@ impl Budget {
     /// The large outputs in words: `positions.csv 1.2 GB, 2.0e6 ParaView frames 19 GB`.
     fn output_parts(&self) -> String {
         let o = &self.output;
-        let mut parts = vec![format!("energy.csv and ports.csv {}", bytes(o.rows))];
+        let mut parts = vec![format!(
+            "energy.csv, ports.csv and end_tensions.csv {}",
+            bytes(o.rows)
+        )];
         if o.positions > 0.0 {
             parts.push(format!("positions.csv {}", bytes(o.positions)));
         }
