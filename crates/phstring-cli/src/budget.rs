@@ -166,6 +166,7 @@ pub fn budget(file: &ScenarioFile) -> Result<Budget> {
         nodes: elements.saturating_add(1),
         elements,
         ports: s.boundary.len(),
+        strings: s.string.len().max(usize::from(s.material.is_some())),
         steps,
         stride: usize::try_from(*o.stride.get_ref()).unwrap_or(1).max(1),
         positions: o.positions,
@@ -210,7 +211,10 @@ impl Budget {
     /// The large outputs in words: `positions.csv 1.2 GB, 2.0e6 ParaView frames 19 GB`.
     fn output_parts(&self) -> String {
         let o = &self.output;
-        let mut parts = vec![format!("energy.csv and ports.csv {}", bytes(o.rows))];
+        let mut parts = vec![format!(
+            "energy.csv, ports.csv and end_tensions.csv {}",
+            bytes(o.rows)
+        )];
         if o.positions > 0.0 {
             parts.push(format!("positions.csv {}", bytes(o.positions)));
         }

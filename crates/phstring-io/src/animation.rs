@@ -30,6 +30,7 @@ use plotters::prelude::*;
 
 use crate::files::{ANIMATION_FILE, POSITIONS_FILE, temp_path};
 use crate::plot::{self, AxisStyle, MASS_COLOR, Topology};
+use crate::scene::Scene;
 
 /// Width of the animation [px].
 pub const ANIMATION_WIDTH: u32 = 480;
@@ -70,7 +71,8 @@ pub struct AnimationReport {
 }
 
 /// Writes `dir/animation.gif`: the configuration of the network `topology` over time, read
-/// back from `dir/positions.csv` (dimension `dim` ≥ 2; 3D as its x-y projection), at most
+/// back from `dir/positions.csv` (dimension `dim` ≥ 2, drawn in the plane of `scene` with
+/// its water, see [`Scene`]), at most
 /// [`MAX_FRAMES`] frames evenly picked from its first to its last, each labelled with its
 /// time and `title`. Returns `Err(reason)` and writes nothing (a stale file from an earlier
 /// attempt stays) if there is nothing to draw (d = 1, no `positions.csv`, degenerate or
@@ -81,6 +83,7 @@ pub fn write_animation(
     dim: usize,
     title: &str,
     topology: &Topology,
+    scene: &Scene,
     stop: Option<&AtomicBool>,
 ) -> Result<AnimationReport, String> {
     if dim < 2 {
@@ -88,7 +91,7 @@ pub fn write_animation(
     }
     let path = dir.join(ANIMATION_FILE);
     let tmp = temp_path(&path);
-    let res = write_to(&tmp, dir, dim, title, topology, stop).and_then(|mut report| {
+    let res = write_to(&tmp, dir, dim, title, (topology, scene), stop).and_then(|mut report| {
         std::fs::rename(&tmp, &path)
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
         report.path = path.clone();
@@ -238,11 +241,12 @@ fn index_frames(
     Ok(index)
 }
 
-/// Reads the frame at `offset` (`n_nodes` rows) into `xy` (x and y of each node).
+/// Reads the frame at `offset` (`n_nodes` rows) into `xy` (each node in the plane of
+/// `scene`).
 fn read_frame(
     reader: &mut BufReader<File>,
-    offset: u64,
-    n_nodes: usize,
+    (offset, n_nodes): (u64, usize),
+    scene: &Scene,
     xy: &mut Vec<[f64; 2]>,
 ) -> Result<(), String> {
     let err = |e: std::io::Error| format!("cannot read positions.csv: {e}");
@@ -257,16 +261,21 @@ fn read_frame(
         if node.parse::<usize>().ok() != Some(i) {
             return Err(bad());
         }
-        let mut c = rest.split(',').map(str::parse::<f64>);
-        let (Some(Ok(x)), Some(Ok(y))) = (c.next(), c.next()) else {
+        let mut p = [0.0; 3];
+        let mut k = 0;
+        for c in rest.split(',').take(3) {
+            p[k] = c.parse::<f64>().map_err(|_| bad())?;
+            k += 1;
+        }
+        if k < 2 {
             return Err(bad());
-        };
-        if !(x.is_finite() && y.is_finite()) {
+        }
+        if !p[..k].iter().all(|x| x.is_finite()) {
             return Err(format!(
                 "positions.csv at byte {offset}: node {i} has a non-finite position"
             ));
         }
-        xy.push([x, y]);
+        xy.push(scene.plane(&p[..k]));
     }
     Ok(())
 }
@@ -354,7 +363,7 @@ impl Palette {
 fn frames_box(
     reader: &mut BufReader<File>,
     frames: &[(u64, f64)],
-    n_nodes: usize,
+    (n_nodes, scene): (usize, &Scene),
     stop: Option<&AtomicBool>,
     xy: &mut Vec<[f64; 2]>,
 ) -> Result<(f64, f64, f64, f64), String> {
@@ -363,7 +372,7 @@ fn frames_box(
         if stopped(stop) {
             return Err("stop requested".into());
         }
-        read_frame(reader, offset, n_nodes, xy)?;
+        read_frame(reader, (offset, n_nodes), scene, xy)?;
         for p in xy.iter() {
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
@@ -371,7 +380,8 @@ fn frames_box(
             }
         }
     }
-    let data_box = plot::padded_box([(lo[0], lo[1]), (hi[0], hi[1])].into_iter());
+    let corners = vec![(lo[0], lo[1]), (hi[0], hi[1])];
+    let data_box = plot::padded_box(plot::with_water(corners, scene.water.as_ref()).into_iter());
     plot::check_box(data_box)?;
     Ok(data_box)
 }
@@ -379,7 +389,7 @@ fn frames_box(
 /// The background of every frame, `w × h` RGB pixels: the title, the axes of `data_box`
 /// with their grid; and the mapping from positions [m] to its pixels.
 fn draw_background(
-    title: &str,
+    (title, scene): (&str, &Scene),
     data_box: (f64, f64, f64, f64),
     (w, h): (u32, u32),
 ) -> Result<(Vec<u8>, Cartesian2d<RangedCoordf64, RangedCoordf64>), String> {
@@ -402,7 +412,13 @@ fn draw_background(
             x_label_area: 36,
             labels: 6,
         };
-        let chart = plot::equal_aspect_chart(&body, data_box, &style)?;
+        let (xl, yl) = scene.axis_labels();
+        let mut chart = plot::equal_aspect_chart(&body, data_box, &style, (&xl, &yl))?;
+        if let Some(water) = &scene.water {
+            let spec = chart.as_coord_spec();
+            let (xr, yr) = (spec.get_x_range(), spec.get_y_range());
+            plot::draw_water(&mut chart, water, (xr.start, xr.end), (yr.start, yr.end))?;
+        }
         let coord = chart.as_coord_spec().clone();
         root.present().map_err(plot::err)?;
         coord
@@ -472,7 +488,7 @@ fn write_to(
     dir: &Path,
     dim: usize,
     title: &str,
-    topology: &Topology,
+    (topology, scene): (&Topology, &Scene),
     stop: Option<&AtomicBool>,
 ) -> Result<AnimationReport, String> {
     let positions = dir.join(POSITIONS_FILE);
@@ -493,18 +509,21 @@ fn write_to(
 
     // Fixed axes: the bounding box of every frame drawn.
     let mut xy = Vec::with_capacity(n_nodes);
-    let data_box = frames_box(&mut reader, &frames, n_nodes, stop, &mut xy)?;
+    let data_box = frames_box(&mut reader, &frames, (n_nodes, scene), stop, &mut xy)?;
     plot::ensure_font().map_err(|e| e.to_string())?;
 
     let (w, h) = (ANIMATION_WIDTH, ANIMATION_HEIGHT);
     let colors = plot::group_colors(topology);
     let mut exact: Vec<RGBColor> = colors.clone();
     exact.insert(0, MASS_COLOR);
+    if scene.water.is_some() {
+        exact.extend([plot::SURFACE_BLUE, plot::SEABED_BROWN, plot::SEABED_FILL]);
+    }
     let palette = Palette::new(&exact);
     let m_max = topology.masses.iter().map(|m| m.1).fold(0.0, f64::max);
 
     // The background: title, axes, grid.
-    let (background, coord) = draw_background(title, data_box, (w, h))?;
+    let (background, coord) = draw_background((title, scene), data_box, (w, h))?;
     let to_px = |p: [f64; 2]| coord.translate(&(p[0], p[1]));
 
     let tmp_file = File::create(tmp).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
@@ -531,7 +550,7 @@ fn write_to(
         if stopped(stop) {
             return Err("stop requested".into());
         }
-        read_frame(&mut reader, offset, n_nodes, &mut xy)?;
+        read_frame(&mut reader, (offset, n_nodes), scene, &mut xy)?;
         rgb.copy_from_slice(&background);
         picture.draw(&mut rgb, (w, h), t, &xy)?;
         for (i, px) in rgb.chunks_exact(3).enumerate() {
@@ -704,7 +723,7 @@ mod tests {
     fn two_string_network_animates() {
         let dir = crate::test_util::temp_dir("animation", "two");
         let topo = two_strings(&dir, 2, 30, 8);
-        let r = write_animation(&dir, 2, "two strings", &topo, None).unwrap();
+        let r = write_animation(&dir, 2, "two strings", &topo, &Scene::default(), None).unwrap();
         assert_eq!(r.path, dir.join(ANIMATION_FILE));
         assert_eq!((r.frames, r.frames_available), (30, 30));
         let bytes = std::fs::read(&r.path).unwrap();
@@ -727,7 +746,7 @@ mod tests {
         let dir = crate::test_util::temp_dir("animation", "long");
         // More frames than the index keeps: thinned twice, the last frame kept.
         let topo = two_strings(&dir, 3, 2 * INDEX_LIMIT + 37, 2);
-        let r = write_animation(&dir, 3, "", &topo, None).unwrap();
+        let r = write_animation(&dir, 3, "", &topo, &Scene::default(), None).unwrap();
         assert_eq!(r.frames, MAX_FRAMES);
         assert_eq!(r.frames_available, 2 * INDEX_LIMIT + 37);
         let (_, _, frames, _) = decode(&r.path);
@@ -749,7 +768,7 @@ mod tests {
         let dir = crate::test_util::temp_dir("animation", "degenerate");
         let topo = Topology::chain(2);
         let skip = |dim: usize, topo: &Topology| {
-            let e = write_animation(&dir, dim, "", topo, None).unwrap_err();
+            let e = write_animation(&dir, dim, "", topo, &Scene::default(), None).unwrap_err();
             assert!(!dir.join(ANIMATION_FILE).exists(), "{e}");
             assert!(!dir.join(".animation.gif.tmp").exists(), "{e}");
             e
@@ -770,7 +789,7 @@ mod tests {
         std::fs::write(dir.join("positions.csv"), "t,node,x,y\n0,0,0,0\n0,1,1,1\n").unwrap();
         assert!(skip(2, &Topology::chain(3)).contains("does not fit"));
         let stop = AtomicBool::new(true);
-        let e = write_animation(&dir, 2, "", &topo, Some(&stop)).unwrap_err();
+        let e = write_animation(&dir, 2, "", &topo, &Scene::default(), Some(&stop)).unwrap_err();
         assert!(e.contains("stop requested"), "{e}");
         // A frame cut short at the end (a killed run) is left out.
         std::fs::write(
@@ -778,7 +797,7 @@ mod tests {
             "t,node,x,y\n0,0,0,0\n0,1,1,1\n0.5,0,0,0\n",
         )
         .unwrap();
-        let r = write_animation(&dir, 2, "", &topo, None).unwrap();
+        let r = write_animation(&dir, 2, "", &topo, &Scene::default(), None).unwrap();
         assert_eq!((r.frames, r.frames_available), (1, 1));
         let _ = std::fs::remove_dir_all(&dir);
     }

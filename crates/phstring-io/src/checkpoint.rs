@@ -52,15 +52,23 @@ pub struct OutputState {
     pub positions_bytes: Option<u64>,
     /// Bytes of `ports.csv`.
     pub ports_bytes: u64,
+    /// Bytes of `end_tensions.csv`, if written (`None` in checkpoints written before it
+    /// existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_tensions_bytes: Option<u64>,
     /// ParaView frames written so far: the first `frames` entries of `paraview/string.pvd`.
     pub frames: usize,
     /// FNV-1a hash of those frames' times and file names (checks `string.pvd` on resume).
     pub frames_hash: u64,
     /// Step of the last frame written.
     pub last_frame: Option<usize>,
-    /// Configuration snapshots `(t, node positions x, y)` for the configuration plot (at most
-    /// six).
+    /// Configuration snapshots `(t, node positions in the drawing plane)` for the
+    /// configuration plot (at most six).
     pub snapshots: Vec<(f64, Vec<[f64; 2]>)>,
+    /// The side view of a 3D run the snapshots are drawn in (`None`: 2D, the plan of a 3D
+    /// run, or a checkpoint written before side views).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub side: Option<[f64; 2]>,
 }
 
 /// Run totals carried across a resume.

@@ -5,9 +5,11 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::files::{ELEMENTS_FILE, ENERGY_SPLIT_STEM};
+use crate::files::{ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_SPLIT_STEM, FAIRLEAD_TENSION_STEM};
 use crate::history::{History, WaterHistory, read_topology};
-use crate::plot::{self, PlotError, Series};
+use crate::output::PLOT_POINTS;
+use crate::plot::{self, PlotError, Series, Topology};
+use crate::scene::Scene;
 
 /// What [`draw_plots`] did.
 #[derive(Debug, Clone, Default)]
@@ -101,16 +103,110 @@ pub fn energy_split_plot(
     )
 }
 
+/// The rows of `end_tensions.csv` in `dir` (`t` and the tensions [N]), evenly thinned to
+/// at most [`PLOT_POINTS`] rows (every `k`-th, `k` doubling as the file grows, and the last
+/// row); `None` if there is no such file.
+fn read_end_tensions(dir: &Path) -> Result<Option<Vec<Vec<f64>>>, String> {
+    let path = dir.join(END_TENSIONS_FILE);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot read {}: {e}", path.display())),
+    };
+    let (mut rows, mut every, mut last) = (Vec::new(), 1usize, None);
+    for (k, line) in text.lines().skip(1).enumerate() {
+        let row: Vec<f64> = line
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("{END_TENSIONS_FILE} line {}: not numbers", k + 2))?;
+        if k % every == 0 {
+            rows.push(row);
+            if rows.len() >= PLOT_POINTS {
+                let mut j = 0;
+                rows.retain(|_| {
+                    j += 1;
+                    (j - 1) % 2 == 0
+                });
+                every *= 2;
+            }
+            last = None;
+        } else {
+            last = Some(row);
+        }
+    }
+    rows.extend(last);
+    Ok(Some(rows))
+}
+
+/// Draws the fairlead tension of every string against time ([`FAIRLEAD_TENSION_STEM`])
+/// from `end_tensions.csv` in `dir` (columns `FairTen<i>`), each string named as in
+/// `topology` (its string groups in order).
+pub fn fairlead_tension_plot(
+    dir: &Path,
+    title: &str,
+    topology: Option<&Topology>,
+) -> Result<(), PlotError> {
+    let stem = dir.join(FAIRLEAD_TENSION_STEM);
+    let input = |message: String| PlotError::Input {
+        path: stem.clone(),
+        message,
+    };
+    let rows = read_end_tensions(dir)
+        .map_err(input)?
+        .ok_or_else(|| input(format!("{END_TENSIONS_FILE} was not written")))?;
+    let n = rows.first().map_or(0, |r| r.len().saturating_sub(1) / 2);
+    let t: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    let columns: Vec<Vec<f64>> = (0..n)
+        .map(|i| {
+            rows.iter()
+                .map(|r| r.get(1 + 2 * i).copied().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let names: Vec<String> = topology
+        .map(|t| {
+            t.groups
+                .iter()
+                .filter(|g| !g.spring)
+                .map(|g| g.name.clone())
+                .collect()
+        })
+        .unwrap_or_default();
+    let labels: Vec<String> = (0..n)
+        .map(|i| match names.get(i) {
+            Some(name) => format!("{name} (FairTen{})", i + 1),
+            None => format!("FairTen{}", i + 1),
+        })
+        .collect();
+    let series: Vec<Series> = labels
+        .iter()
+        .zip(&columns)
+        .map(|(label, y)| Series { label, x: &t, y })
+        .collect();
+    plot::series_plot(
+        &stem,
+        &format!("{title}: fairlead tension"),
+        "t [s]",
+        "fairlead tension [N]",
+        &series,
+        false,
+        None,
+    )
+}
+
 /// Draws the `energy`, `configuration` (2D and 3D) and `increments` plots of a run into
 /// `dir`, and for a run in water the plot of where the energy went
 /// ([`energy_split_plot`]). A plot that cannot be drawn (degenerate or extreme ranges, an I/O error, a
 /// failure inside the plotting library) is skipped with a warning and never fails the run;
 /// once `stop` is set, the remaining plots are skipped. `history = Err(reason)` (it could
-/// not be read, or reading it was stopped) skips all.
+/// not be read, or reading it was stopped) skips all. The configuration is drawn in
+/// `scene` (its snapshots are in its plane, see [`Scene`]). With `end_tensions.csv` in
+/// `dir`, the fairlead tensions are drawn too ([`fairlead_tension_plot`]).
 pub fn draw_plots(
     dir: &Path,
     dim: usize,
-    title: &str,
+    (title, scene): (&str, &Scene),
     end_of_loading: Option<f64>,
     history: Result<&History, &str>,
     stop: Option<&AtomicBool>,
@@ -125,6 +221,9 @@ pub fn draw_plots(
     if history.is_ok_and(|h| h.water.is_some()) {
         stems.push(ENERGY_SPLIT_STEM);
     }
+    if dir.join(END_TENSIONS_FILE).is_file() {
+        stems.push(FAIRLEAD_TENSION_STEM);
+    }
     let h = match history {
         Ok(h) => h,
         Err(why) => {
@@ -137,7 +236,7 @@ pub fn draw_plots(
     };
     let (ti, inc) = h.increments();
     // The network drawn by the configuration plot (a chain in a folder without it).
-    let topology = if configuration {
+    let topology = if configuration || stems.contains(&FAIRLEAD_TENSION_STEM) {
         read_topology(dir).map_err(|e| e.to_string())
     } else {
         Ok(None)
@@ -156,13 +255,16 @@ pub fn draw_plots(
                 plot::energy_plot(&path, title, &h.t, &h.kinetic, &h.potential, &h.hamiltonian)
             }
             "configuration" => match &topology {
-                Ok(Some(t)) => plot::network_plot(&path, title, t, &h.snapshots),
+                Ok(Some(t)) => plot::network_plot_in(&path, title, t, &h.snapshots, scene),
                 Ok(None) => plot::configuration_plot(&path, title, &h.snapshots),
                 Err(e) => Err(PlotError::Input {
                     path: path.clone(),
                     message: e.clone(),
                 }),
             },
+            FAIRLEAD_TENSION_STEM => {
+                fairlead_tension_plot(dir, title, topology.as_ref().ok().and_then(Option::as_ref))
+            }
             ENERGY_SPLIT_STEM => match &h.water {
                 Some(w) => energy_split_plot(&path, title, w, end_of_loading),
                 None => Ok(()),
@@ -193,12 +295,12 @@ pub fn draw_plots(
 
 /// Writes the animation of the run in `dir` (`animation.gif`, see
 /// [`crate::animation::write_animation`]) for `dim ≥ 2`, drawing the network read back from
-/// `dir` ([`read_topology`]), and reports it like [`draw_plots`]: `animation` written, or
+/// `dir` ([`read_topology`]) in `scene`, and reports it like [`draw_plots`]: `animation` written, or
 /// skipped with a warning (never an error; a stop request skips it). Nothing for `dim = 1`.
 pub fn draw_animation(
     dir: &Path,
     dim: usize,
-    title: &str,
+    (title, scene): (&str, &Scene),
     stop: Option<&AtomicBool>,
 ) -> PlotReport {
     let mut report = PlotReport::default();
@@ -210,7 +312,7 @@ pub fn draw_animation(
         let topology = read_topology(dir)
             .map_err(|e| e.to_string())?
             .ok_or_else(|| format!("{ELEMENTS_FILE} was not written"))?;
-        crate::animation::write_animation(dir, dim, title, &topology, stop)
+        crate::animation::write_animation(dir, dim, title, &topology, scene, stop)
     };
     report.record(
         stem,
@@ -240,11 +342,11 @@ mod tests {
             water: None,
         };
         let stop = AtomicBool::new(true);
-        let r = draw_plots(&dir, 2, "t", None, Ok(&h), Some(&stop));
+        let r = draw_plots(&dir, 2, ("t", &Scene::default()), None, Ok(&h), Some(&stop));
         assert!(r.written.is_empty());
         assert_eq!(r.skipped, ["energy", "configuration", "increments"]);
         assert!(r.warnings.iter().all(|w| w.contains("stop requested")));
-        let r = draw_plots(&dir, 2, "t", None, Ok(&h), None);
+        let r = draw_plots(&dir, 2, ("t", &Scene::default()), None, Ok(&h), None);
         assert_eq!(r.written, ["energy", "configuration", "increments"]);
         let _ = std::fs::remove_dir_all(&dir);
     }
@@ -259,16 +361,20 @@ mod tests {
             w.step(&s, &r).unwrap();
         }
         w.finish(&s).unwrap();
-        assert!(draw_animation(&dir, 1, "t", None).written.is_empty());
+        assert!(
+            draw_animation(&dir, 1, ("t", &Scene::default()), None)
+                .written
+                .is_empty()
+        );
         let stop = AtomicBool::new(true);
-        let r = draw_animation(&dir, 2, "t", Some(&stop));
+        let r = draw_animation(&dir, 2, ("t", &Scene::default()), Some(&stop));
         assert_eq!(r.skipped, ["animation"]);
         assert!(r.warnings[0].contains("stop requested"), "{:?}", r.warnings);
-        let r = draw_animation(&dir, 2, "t", None);
+        let r = draw_animation(&dir, 2, ("t", &Scene::default()), None);
         assert_eq!(r.written, ["animation"], "{:?}", r.warnings);
         assert!(dir.join("animation.gif").exists());
         std::fs::remove_file(dir.join(ELEMENTS_FILE)).unwrap();
-        let r = draw_animation(&dir, 2, "t", None);
+        let r = draw_animation(&dir, 2, ("t", &Scene::default()), None);
         assert!(r.warnings[0].contains("elements.csv"), "{:?}", r.warnings);
         let _ = std::fs::remove_dir_all(&dir);
     }
@@ -298,7 +404,7 @@ mod tests {
             snapshots: vec![],
             water: Some(water),
         };
-        let r = draw_plots(&dir, 2, "wet", None, Ok(&h), None);
+        let r = draw_plots(&dir, 2, ("wet", &Scene::default()), None, Ok(&h), None);
         assert_eq!(r.written, ["energy", "increments", "energy_split"], "{r:?}");
         let svg = std::fs::read_to_string(dir.join("energy_split.svg")).unwrap();
         for label in [
@@ -333,7 +439,7 @@ mod tests {
             snapshots: vec![(0.0, far)],
             water: None,
         };
-        let r = draw_plots(&dir, 2, "t", None, Ok(&h), None);
+        let r = draw_plots(&dir, 2, ("t", &Scene::default()), None, Ok(&h), None);
         assert_eq!(r.written, ["increments"]);
         assert_eq!(r.skipped, ["energy", "configuration"]);
         assert_eq!(r.warnings.len(), 2);

@@ -134,6 +134,14 @@ pub fn remove_stale_temp_files(dir: &Path) {
     }
 }
 
+/// The forces of the strings on their end nodes over time (MoorDyn's `FairTen<i>` and
+/// `AnchTen<i>`): written by `run` for every scenario with strings.
+pub const END_TENSIONS_FILE: &str = "end_tensions.csv";
+
+/// Stem of the plot of the fairlead tensions of `end_tensions.csv` against time (`.svg`
+/// and `.png`).
+pub const FAIRLEAD_TENSION_STEM: &str = "fairlead_tension";
+
 /// Configuration snapshots taken for the configuration plot (at `t = k T / 5`).
 pub const SNAPSHOTS: usize = 6;
 
@@ -205,6 +213,9 @@ pub const RUN_FILES: &[&str] = &[
     "increments.png",
     "energy_split.svg",
     "energy_split.png",
+    END_TENSIONS_FILE,
+    "fairlead_tension.svg",
+    "fairlead_tension.png",
     ELEMENTS_FILE,
     POINT_MASSES_FILE,
     ANIMATION_FILE,

@@ -25,6 +25,7 @@ pub mod moordyn;
 pub mod output;
 pub mod plot;
 pub mod scenario;
+pub mod scene;
 #[cfg(test)]
 mod test_util;
 pub mod text;

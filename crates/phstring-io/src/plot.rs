@@ -46,6 +46,7 @@ pub const MIN_RELATIVE_SPAN: f64 = 1e-12;
 /// Longest title or label, in characters (longer ones end in `…`).
 pub const MAX_TEXT_CHARS: usize = 200;
 
+use crate::scene::{Scene, WaterLines};
 use crate::text::sanitize_text;
 
 /// Checks that the axis range `lo..hi` can be drawn: finite, increasing, a span of at
@@ -221,6 +222,21 @@ pub fn network_plot(
     topology: &Topology,
     snapshots: &[(f64, Vec<[f64; 2]>)],
 ) -> Result<(), PlotError> {
+    network_plot_in(stem, title, topology, snapshots, &Scene::default())
+}
+
+/// [`network_plot`] in `scene`: the snapshots are in its drawing plane ([`Scene::plane`]),
+/// its axes are described by [`Scene::axis_labels`], and a run in water has the surface
+/// (height 0, light blue) and the seabed (a brown band below its line) drawn behind it
+/// across the plotted range, each with a legend entry; the data box then takes in the
+/// surface and the seabed under the nodes. A dry scene draws exactly [`network_plot`].
+pub fn network_plot_in(
+    stem: &Path,
+    title: &str,
+    topology: &Topology,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+    scene: &Scene,
+) -> Result<(), PlotError> {
     for (t, nodes) in snapshots {
         topology
             .check(nodes.len())
@@ -230,7 +246,93 @@ pub fn network_plot(
             })?;
     }
     let title = sanitize_text(title, MAX_TEXT_CHARS);
-    write_both(stem, &config_figure(&title, Some(topology), snapshots))
+    let mut fig = config_figure(&title, Some(topology), snapshots);
+    fig.labels = scene.axis_labels();
+    if let Some(w) = scene.water {
+        fig.water = Some(w);
+        fig.entries.extend(water_entries(&w));
+    }
+    write_both(stem, &fig)
+}
+
+/// The surface's colour in configuration plots and animations.
+pub(crate) const SURFACE_BLUE: RGBColor = RGBColor(110, 170, 230);
+/// The seabed line's colour.
+pub(crate) const SEABED_BROWN: RGBColor = RGBColor(150, 115, 80);
+/// The colour of the band below the seabed line.
+pub(crate) const SEABED_FILL: RGBColor = RGBColor(228, 214, 192);
+
+/// The legend entries of the water: its surface, and the seabed if there is one.
+fn water_entries(w: &WaterLines) -> Vec<LegendEntry> {
+    let mut e = vec![LegendEntry {
+        label: "water surface".into(),
+        color: SURFACE_BLUE,
+        dashed: false,
+        marker: false,
+        line: true,
+    }];
+    if w.seabed.is_some() {
+        e.push(LegendEntry {
+            label: "seabed".into(),
+            color: SEABED_BROWN,
+            dashed: false,
+            marker: false,
+            line: true,
+        });
+    }
+    e
+}
+
+/// `points` with, for a run in water, the surface and the seabed under their horizontal
+/// extent: what the data box of a wet drawing takes in.
+pub(crate) fn with_water(points: Vec<(f64, f64)>, water: Option<&WaterLines>) -> Vec<(f64, f64)> {
+    let Some(w) = water else {
+        return points;
+    };
+    let Some((x0, x1)) = bounds(points.iter().map(|p| p.0)) else {
+        return points;
+    };
+    let mut all = points;
+    all.extend([(x0, 0.0), (x1, 0.0)]);
+    for x in [x0, x1] {
+        if let Some(y) = w.seabed_at(x) {
+            all.push((x, y));
+        }
+    }
+    all
+}
+
+/// Draws the water behind a configuration on `chart` (ranges `x`, `y` [m]): the seabed
+/// band from its line to the bottom of the chart and the line, then the surface at
+/// height 0.
+pub(crate) fn draw_water<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    w: &WaterLines,
+    (x0, x1): (f64, f64),
+    (y0, _): (f64, f64),
+) -> Result<(), String> {
+    if let (Some(a), Some(b)) = (w.seabed_at(x0), w.seabed_at(x1)) {
+        let bottom = y0.min(a).min(b);
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                vec![(x0, a), (x1, b), (x1, bottom), (x0, bottom)],
+                SEABED_FILL.filled(),
+            )))
+            .map_err(err)?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(x0, a), (x1, b)],
+                SEABED_BROWN.stroke_width(2),
+            )))
+            .map_err(err)?;
+    }
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            vec![(x0, 0.0), (x1, 0.0)],
+            SURFACE_BLUE.stroke_width(2),
+        )))
+        .map_err(err)?;
+    Ok(())
 }
 
 /// One group of elements of a [`Topology`]: a string, or a set of springs.
@@ -480,6 +582,8 @@ fn chain_figure<'a>(
         dots,
         entries,
         markers,
+        labels: Scene::default().axis_labels(),
+        water: None,
     }
 }
 
@@ -508,6 +612,8 @@ fn network_figure<'a>(
         dots,
         entries,
         markers: false,
+        labels: Scene::default().axis_labels(),
+        water: None,
     }
 }
 
@@ -1410,13 +1516,14 @@ impl AxisStyle {
     };
 }
 
-/// Builds a chart `x [m]`, `y [m]` on `area` with equal scales (1 m in x as long as 1 m in
+/// Builds a chart with axes `x_desc`, `y_desc` (`x [m]`, `y [m]`) on `area` with equal scales (1 m in x as long as 1 m in
 /// y) that shows at least the data box `(x0, x1, y0, y1)`, centred, and draws its axes and
 /// grid. The box must pass [`check_box`].
 pub(crate) fn equal_aspect_chart<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
     data_box: (f64, f64, f64, f64),
     style: &AxisStyle,
+    (x_desc, y_desc): (&str, &str),
 ) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>, String> {
     let (bx0, bx1, by0, by1) = data_box;
     // Label area sized for labels of the padded box (final ranges are similar or wider).
@@ -1451,8 +1558,8 @@ pub(crate) fn equal_aspect_chart<'a, DB: DrawingBackend>(
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc("x [m]")
-        .y_desc("y [m]")
+        .x_desc(x_desc)
+        .y_desc(y_desc)
         .x_labels(style.labels)
         .y_labels(style.labels)
         .x_label_formatter(&x_fmt)
@@ -1483,6 +1590,10 @@ struct ConfigFigure<'a> {
     entries: Vec<LegendEntry>,
     /// Node markers on the curves.
     markers: bool,
+    /// Axis descriptions (horizontal, vertical).
+    labels: (String, String),
+    /// The water drawn behind the configuration (none: dry).
+    water: Option<WaterLines>,
 }
 
 /// The data box `(x0, x1, y0, y1)` of `points` in m, padded by 6 % of its larger span (a
@@ -1517,7 +1628,10 @@ impl ConfigFigure<'_> {
             .iter()
             .flat_map(|c| c.points.iter().copied())
             .chain(self.dots.iter().map(|d| (d.x, d.y)));
-        padded_box(pts)
+        if self.water.is_none() {
+            return padded_box(pts);
+        }
+        padded_box(with_water(pts.collect(), self.water.as_ref()).into_iter())
     }
 }
 
@@ -1534,7 +1648,14 @@ impl Figure for ConfigFigure<'_> {
         let entries = &self.entries;
         let (plot_area, legend_area) = layout(root, self.title, entries)?;
 
-        let mut chart = equal_aspect_chart(&plot_area, self.data_box(), &AxisStyle::FIGURE)?;
+        let (xl, yl) = (&self.labels.0, &self.labels.1);
+        let mut chart =
+            equal_aspect_chart(&plot_area, self.data_box(), &AxisStyle::FIGURE, (xl, yl))?;
+        if let Some(w) = &self.water {
+            let spec = chart.as_coord_spec();
+            let (xr, yr) = (spec.get_x_range(), spec.get_y_range());
+            draw_water(&mut chart, w, (xr.start, xr.end), (yr.start, yr.end))?;
+        }
         draw_curves(&mut chart, &self.curves, self.markers, raster)?;
         chart
             .draw_series(

@@ -14,6 +14,7 @@ use phstring_io::figures::{draw_animation, draw_plots};
 use phstring_io::files::{ELEMENTS_FILE, POINT_MASSES_FILE, elements_header};
 use phstring_io::history::{read_history, read_topology};
 use phstring_io::output::{self, PLOT_POINTS, Writers};
+use phstring_io::scene::Scene;
 use vtkio::model::{Attribute, DataSet, Piece, Vtk};
 
 /// A fresh, empty directory under the system temp dir.
@@ -269,7 +270,14 @@ fn network_outputs_describe_every_element_node_and_port() {
     let history = read_history(w.energy_path(), PLOT_POINTS, w.snapshots().to_vec(), None)
         .unwrap()
         .unwrap();
-    let report = draw_plots(&dir, 2, "Y network", None, Ok(&history), None);
+    let report = draw_plots(
+        &dir,
+        2,
+        ("Y network", &Scene::default()),
+        None,
+        Ok(&history),
+        None,
+    );
     assert_eq!(
         report.written,
         ["energy", "configuration", "increments"],
@@ -286,7 +294,7 @@ fn network_outputs_describe_every_element_node_and_port() {
     ] {
         assert!(svg.contains(text), "configuration.svg lacks {text:?}");
     }
-    let report = draw_animation(&dir, 2, "Y network", None);
+    let report = draw_animation(&dir, 2, ("Y network", &Scene::default()), None);
     assert_eq!(report.written, ["animation"], "{report:?}");
     let gif = std::fs::read(dir.join("animation.gif")).unwrap();
     assert_eq!(&gif[..6], b"GIF89a");

@@ -587,7 +587,7 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
     // The plots and the animation of the interrupted run were skipped because of the stop,
     // and say so.
     assert_eq!(s["plots"].as_array().unwrap().len(), 0, "{s}");
-    assert_eq!(s["plots_skipped"].as_array().unwrap().len(), 4, "{s}");
+    assert_eq!(s["plots_skipped"].as_array().unwrap().len(), 5, "{s}");
     let cp = CheckpointFile::read(&b.join("checkpoint.json")).unwrap();
     let opts = RunOptions {
         stop: Some(Arc::new(AtomicBool::new(false))),
@@ -600,6 +600,7 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
         "energy.csv",
         "ports.csv",
         "positions.csv",
+        "end_tensions.csv",
         "paraview/string.pvd",
     ] {
         assert_eq!(read(&a.join(f)), read(&b.join(f)), "{f}");
@@ -633,7 +634,13 @@ fn stop_during_plots_skips_them_and_lists_them() {
         .collect();
     assert_eq!(
         skipped,
-        ["energy", "configuration", "increments", "animation"]
+        [
+            "energy",
+            "configuration",
+            "increments",
+            "fairlead_tension",
+            "animation"
+        ]
     );
     assert!(s["warnings"].to_string().contains("stop requested"));
     assert!(!out.join("animation.gif").exists());

@@ -190,6 +190,15 @@ fn a_wet_run_reports_the_water_mechanism_by_mechanism() {
         .map(|p| p.as_str().unwrap())
         .collect();
     assert!(plots.contains(&"energy_split"), "{plots:?}");
+    assert!(plots.contains(&"fairlead_tension"), "{plots:?}");
+    // The configuration has the water surface and the seabed behind it.
+    let svg = std::fs::read_to_string(out.join("configuration.svg")).unwrap();
+    assert!(svg.contains("water surface") && svg.contains("seabed"));
+    // end_tensions.csv: a row at t = 0 and per step, each tension positive.
+    let (h, rows) = table(&out.join("end_tensions.csv"));
+    assert_eq!(h.join(","), "t,FairTen1,AnchTen1");
+    assert_eq!(rows.len(), table(&out.join("energy.csv")).1.len());
+    assert!(rows.iter().all(|r| r[1] > 0.0 && r[2] > 0.0));
     for f in ["energy_split.svg", "energy_split.png"] {
         assert!(std::fs::metadata(out.join(f)).unwrap().len() > 1000, "{f}");
     }
@@ -203,7 +212,12 @@ fn a_wet_run_reports_the_water_mechanism_by_mechanism() {
     let cp = part.join("checkpoint.json");
     let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in ["energy.csv", "positions.csv", "paraview/frame_000200.vtp"] {
+    for f in [
+        "energy.csv",
+        "positions.csv",
+        "end_tensions.csv",
+        "paraview/frame_000200.vtp",
+    ] {
         assert!(
             std::fs::read(out.join(f)).unwrap() == std::fs::read(part.join(f)).unwrap(),
             "{f} differs after a resume"
@@ -225,6 +239,8 @@ fn a_dry_run_writes_no_water_outputs() {
     let s = summary(&out);
     assert!(s.get("water").is_none(), "{s}");
     assert!(!out.join("energy_split.png").exists());
+    let svg = std::fs::read_to_string(out.join("configuration.svg")).unwrap();
+    assert!(!svg.contains("water surface") && !svg.contains("seabed"));
     let frame = std::fs::read_to_string(out.join("paraview/frame_000000.vtp")).unwrap();
     assert!(!frame.contains("grounded") && !frame.contains("contact_force"));
     let _ = std::fs::remove_dir_all(&dir);

@@ -9,6 +9,7 @@
 //! * [`outdir`]: preparing and locking an output folder;
 //! * [`water`]: the `water` part of a run's summary.
 
+pub mod ends;
 pub mod linearize;
 pub mod modes;
 pub mod outdir;

@@ -388,11 +388,18 @@ fn run_dim<const D: usize>(
     info.initial_equilibrium = initial_equilibrium;
     info.warnings = scenario_warnings;
     let fresh = resume.is_none();
+    let ends = super::ends::end_forces(file, &components, sim.system());
     let writers = match resume {
         Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
         None => start_writers(&ctx, &sim, &components).map_err(RunError::from),
     };
     drop(components);
+    let writers = writers.and_then(|mut w| {
+        if let Some(model) = ends {
+            w.end_tensions(model, &sim)?;
+        }
+        Ok(w)
+    });
     let mut writers = match writers.and_then(|w| write_running_summary(out, &mut info).map(|()| w))
     {
         Ok(w) => w,
@@ -451,7 +458,8 @@ fn run_dim<const D: usize>(
     // nothing to animate. Written for failed runs too: it shows how far the run got.
     if ctx.settings.animation && ctx.settings.output.positions && info.dimension >= 2 {
         let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
-        let anim = draw_animation(out, info.dimension, title, opts.stop.as_deref());
+        let scene = super::ends::scene(file, writers.side());
+        let anim = draw_animation(out, info.dimension, (title, &scene), opts.stop.as_deref());
         info.plots.extend(anim.written);
         info.plots_skipped.extend(anim.skipped);
         info.warnings.extend(anim.warnings);
@@ -924,10 +932,11 @@ fn draw(
         Err(e) => Err(e.to_string()),
     };
     let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
+    let scene = super::ends::scene(ctx.file, writers.side());
     let report = draw_plots(
         ctx.out,
         info.dimension,
-        title,
+        (title, &scene),
         ctx.end_of_loading,
         history.as_ref().map_err(String::as_str),
         stop,

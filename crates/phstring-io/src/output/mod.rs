@@ -11,6 +11,9 @@
 //! [`PLOT_POINTS`] points per curve.
 
 mod csv;
+mod ends;
+
+pub use ends::{EndForces, EndWater};
 
 use std::hash::Hasher;
 use std::path::{Path, PathBuf};
@@ -21,8 +24,9 @@ use phstring::{Energies, Law, Material, PortKind, Simulation, StepReport};
 use self::csv::{Csv, PendingCsv};
 use crate::checkpoint::OutputState;
 use crate::files::{
-    ELEMENTS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE,
-    PVD_FILE, elements_header, energy_header, frame_name, headers, num, remove_stale_temp_files,
+    ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE, PORTS_FILE,
+    POSITIONS_FILE, PVD_FILE, elements_header, energy_header, frame_name, headers, num,
+    remove_stale_temp_files,
 };
 use crate::plot::{GroupDrawing, PlotError, Topology};
 use crate::text::sanitize_text;
@@ -215,6 +219,24 @@ fn relative(dir: &Path, path: &Path) -> String {
     path.strip_prefix(dir).unwrap_or(path).display().to_string()
 }
 
+/// The side view of `sim` ([`crate::scene::Scene::side`]): for a 3D run whose body force
+/// points straight down the z axis, the principal horizontal direction of its nodes now;
+/// `None` otherwise.
+fn side_view<const D: usize>(sim: &Simulation<D, Material>) -> Option<[f64; 2]> {
+    if D != 3 {
+        return None;
+    }
+    let f = sim
+        .system()
+        .body_force_vector()
+        .iter()
+        .fold(phstring::Vector::<D>::zeros(), |a, b| a + b);
+    let down = f[2] < 0.0 && f[0].hypot(f[1]) <= 1e-12 * f.norm();
+    down.then(|| {
+        crate::scene::principal_horizontal(sim.state().r.iter().map(|r| [r[0], r[1], r[2]]))
+    })
+}
+
 /// What a run will write, for [`estimated_output`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OutputPlan {
@@ -226,6 +248,8 @@ pub struct OutputPlan {
     pub elements: usize,
     /// Ports (rows of `ports.csv` per step).
     pub ports: usize,
+    /// Strings (two columns each in `end_tensions.csv`, written every step).
+    pub strings: usize,
     /// Steps.
     pub steps: f64,
     /// `output.stride`.
@@ -235,7 +259,7 @@ pub struct OutputPlan {
     /// `output.vtk`.
     pub vtk: bool,
     /// A run in water: six more columns in `energy.csv`, two more arrays per ParaView
-    /// frame, the energy-split plot.
+    /// frame, the energy-split plot (PNG and SVG).
     pub wet: bool,
 }
 
@@ -246,7 +270,7 @@ pub struct OutputEstimate {
     pub bytes: f64,
     /// Number of files.
     pub files: f64,
-    /// `energy.csv` and `ports.csv` [bytes].
+    /// `energy.csv`, `ports.csv` and `end_tensions.csv` [bytes].
     pub rows: f64,
     /// `positions.csv` [bytes].
     pub positions: f64,
@@ -273,9 +297,9 @@ const FRAME_BYTES_PER_NODE: f64 = 48.0 * 4.0 / 3.0;
 /// `tension` (3 Float64) and `string` (Int32), base64.
 const FRAME_BYTES_PER_ELEMENT: f64 = 52.0 * 4.0 / 3.0;
 /// Files of a run besides `positions.csv` and the frames: `energy.csv`, `ports.csv`,
-/// `elements.csv`, `summary.json`, the run id, `string.pvd`, six plots, `animation.gif`
-/// (not the lock file).
-const FIXED_FILES: f64 = 13.0;
+/// `end_tensions.csv`, `elements.csv`, `summary.json`, the run id, `string.pvd`, eight
+/// plots, `animation.gif` (not the lock file).
+const FIXED_FILES: f64 = 16.0;
 /// Bytes of a ParaView frame per node in water: the `grounded` flag and the
 /// `contact_force` (2 Float64), base64.
 const FRAME_BYTES_PER_WET_NODE: f64 = 16.0 * 4.0 / 3.0;
@@ -285,7 +309,8 @@ const FRAME_BYTES_WET: f64 = 300.0;
 
 /// The size and number of files a run writes, from the layout of the writers: a row of
 /// `energy.csv` per step ([`ENERGY_ROW_BYTES`]), a row per port and step in `ports.csv`
-/// (`t`, `2d` port values, the power, index, node and kind), a row per node
+/// (`t`, `2d` port values, the power, index, node and kind), a row of `end_tensions.csv`
+/// per step (`t` and two numbers per string), a row per node
 /// and frame in `positions.csv` (`t`, the node, `d` coordinates), a ParaView frame per
 /// frame ([`FRAME_BYTES`] plus the base64 arrays) and its line in `string.pvd`, at steps
 /// 0, stride, 2·stride, … and the last; plots, `animation.gif`, `elements.csv` and
@@ -302,7 +327,12 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
     let nodes = p.nodes as f64;
     let wet = if p.wet { 1.0 } else { 0.0 };
     let rows = (steps + 1.0) * (ENERGY_ROW_BYTES + wet * 6.0 * NUM_BYTES)
-        + steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0);
+        + steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0)
+        + if p.strings > 0 {
+            (steps + 1.0) * (1.0 + 2.0 * p.strings as f64) * NUM_BYTES
+        } else {
+            0.0
+        };
     let positions = if p.positions {
         // The first frame's time is written `0`.
         nodes * (frames * ((1.0 + d) * NUM_BYTES + digits(nodes)) - (NUM_BYTES - 2.0))
@@ -322,7 +352,7 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
     OutputEstimate {
         bytes: rows + positions + paraview,
         files: FIXED_FILES
-            + wet
+            + 2.0 * wet
             + if p.positions { 1.0 } else { 0.0 }
             + if p.vtk { frames } else { 0.0 },
         rows,
@@ -382,6 +412,9 @@ pub struct Writers {
     energy: Csv,
     positions: Option<Csv>,
     ports: Csv,
+    /// `end_tensions.csv` and how its rows are computed (see [`Writers::end_tensions`]).
+    ends: Option<Csv>,
+    end_model: Option<EndForces>,
     pvd: Option<PvdWriter>,
     /// The collection file must be written again before it is whole (a resume continues
     /// it after the checkpoint's frames); frames are listed as they are written.
@@ -389,6 +422,8 @@ pub struct Writers {
     stride: usize,
     snapshot_times: Vec<f64>,
     snapshots: Vec<(f64, Vec<[f64; 2]>)>,
+    /// The side view of a 3D run the snapshots are drawn in ([`crate::scene::Scene::side`]).
+    side: Option<[f64; 2]>,
     last_frame: Option<usize>,
     frames: usize,
     frames_hash: u64,
@@ -442,11 +477,14 @@ impl Writers {
             energy,
             positions,
             ports,
+            ends: None,
+            end_model: None,
             pvd,
             pvd_dirty: false,
             stride,
             snapshot_times,
             snapshots: Vec::new(),
+            side: side_view(sim),
             last_frame: None,
             frames: 0,
             frames_hash: frames_hash_start(),
@@ -495,7 +533,16 @@ impl Writers {
                 .get(next)
                 .is_some_and(|&s| t >= s - 1e-9 * sim.params().h)
         {
-            let pts = sim.state().r.iter().map(|r| [r[0], r[1]]).collect();
+            let scene = crate::scene::Scene {
+                side: self.side,
+                water: None,
+            };
+            let pts = sim
+                .state()
+                .r
+                .iter()
+                .map(|r| scene.plane(r.as_slice()))
+                .collect();
             self.snapshots.push((t, pts));
         }
     }
@@ -660,6 +707,7 @@ impl Writers {
             ))?;
         }
         self.ports.end_record()?;
+        self.end_row(sim, r.t)?;
         self.record(sim);
         self.frame(sim)?;
         if self.last_flush.elapsed() >= self.flush_every {
@@ -713,18 +761,26 @@ impl Writers {
             Some(n) => Some(PendingCsv::open(dir.join(POSITIONS_FILE), n)?),
             None => None,
         };
+        let ends = match state.end_tensions_bytes {
+            Some(n) => Some(PendingCsv::open(dir.join(END_TENSIONS_FILE), n)?),
+            None => None,
+        };
         let positions = positions.map(PendingCsv::commit).transpose()?;
+        let ends = ends.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
             water,
             energy: energy.commit()?,
             positions,
             ports: ports.commit()?,
+            ends,
+            end_model: None,
             pvd,
             pvd_dirty: true,
             stride,
             snapshot_times,
             snapshots: state.snapshots,
+            side: state.side,
             last_frame: state.last_frame,
             frames: state.frames,
             frames_hash: state.frames_hash,
@@ -744,11 +800,62 @@ impl Writers {
                 None => None,
             },
             ports_bytes: self.ports.len()?,
+            end_tensions_bytes: match &mut self.ends {
+                Some(e) => Some(e.len()?),
+                None => None,
+            },
             frames: self.frames,
             frames_hash: self.frames_hash,
             last_frame: self.last_frame,
             snapshots: self.snapshots.clone(),
+            side: self.side,
         })
+    }
+
+    /// The side view of a 3D run that the configuration is drawn in (`None`: 2D, or the
+    /// plan of a 3D run), see [`crate::scene`].
+    pub fn side(&self) -> Option<[f64; 2]> {
+        self.side
+    }
+
+    /// Writes `end_tensions.csv` from now on, its rows computed by `model` (see
+    /// [`EndForces`]): a fresh run creates it with the row of the state of `sim` (`t = 0`);
+    /// a resumed run whose checkpoint recorded the file continues it (the file was reopened
+    /// by [`Self::resume`]).
+    pub fn end_tensions<const D: usize>(
+        &mut self,
+        model: EndForces,
+        sim: &Simulation<D, Material>,
+    ) -> Result<(), OutputError> {
+        let fresh = self.ends.is_none();
+        if fresh {
+            self.ends = Some(Csv::create(
+                self.dir.join(END_TENSIONS_FILE),
+                &model.header(),
+            )?);
+        }
+        self.end_model = Some(model);
+        if fresh {
+            self.end_row(sim, sim.time())?;
+            if let Some(e) = &mut self.ends {
+                e.flush()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the row of `end_tensions.csv` at time `t` [s] (if it is written).
+    fn end_row<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        t: f64,
+    ) -> Result<(), OutputError> {
+        let (Some(csv), Some(model)) = (&mut self.ends, &self.end_model) else {
+            return Ok(());
+        };
+        let values = model.tensions(sim);
+        check_finite(&csv.path, "end tension", t, &values)?;
+        csv.row(&format!("{}{}", num(t), more_fields(&values)))
     }
 
     /// The configuration snapshots taken so far.
@@ -779,6 +886,9 @@ impl Writers {
         if let Some(p) = &mut self.positions {
             p.flush()?;
         }
+        if let Some(e) = &mut self.ends {
+            e.flush()?;
+        }
         if let Some(pvd) = &mut self.pvd
             && self.pvd_dirty
         {
@@ -798,6 +908,7 @@ impl Writers {
             Some(&self.energy),
             self.positions.as_ref(),
             Some(&self.ports),
+            self.ends.as_ref(),
         ]
         .into_iter()
         .flatten()
@@ -818,6 +929,9 @@ impl Writers {
         let _ = self.ports.flush();
         if let Some(p) = &mut self.positions {
             let _ = p.flush();
+        }
+        if let Some(e) = &mut self.ends {
+            let _ = e.flush();
         }
         if let Some(pvd) = &mut self.pvd
             && self.pvd_dirty
@@ -1046,6 +1160,8 @@ mod tests {
             let mesh = s.system().mesh();
             let (nodes, elements) = (mesh.n_nodes(), mesh.n_elements());
             let mut w = Writers::start(&dir, &s, stride, true, true, vec![]).unwrap();
+            let ends = EndForces::new(s.system(), &[], None).unwrap();
+            w.end_tensions(ends, &s).unwrap();
             for _ in 0..steps {
                 let r = s.step().unwrap();
                 w.step(&s, &r).unwrap();
@@ -1056,6 +1172,7 @@ mod tests {
                 nodes,
                 elements,
                 ports: s.ports().len(),
+                strings: 1,
                 steps: steps as f64,
                 stride,
                 positions: true,
@@ -1065,7 +1182,9 @@ mod tests {
             let pv = dir.join(PARAVIEW_DIR);
             let frames = std::fs::read_dir(&pv).unwrap().count() as f64 - 1.0;
             assert_eq!(e.frames, frames, "stride {stride}");
-            let rows = bytes_of(&dir, &|n| n == "energy.csv" || n == "ports.csv");
+            let rows = bytes_of(&dir, &|n| {
+                n == "energy.csv" || n == "ports.csv" || n == END_TENSIONS_FILE
+            });
             let positions = bytes_of(&dir, &|n| n == "positions.csv");
             let paraview = bytes_of(&pv, &|_| true);
             for (what, estimate, actual) in [
