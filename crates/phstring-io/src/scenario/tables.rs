@@ -116,7 +116,9 @@ impl ScenarioFile {
             let signal = table.signal(i);
             let at_zero = signal.value(0.0);
             let tol = START_TOLERANCE * start[i].abs().max(1.0);
-            if (at_zero - start[i]).abs() > tol {
+            // NaN (times so far apart that the interpolant overflows) fails too.
+            let starts_there = (at_zero - start[i]).abs() <= tol;
+            if !starts_there {
                 let row = table.row_near(0.0);
                 return Err(self.invalid(
                     &key,
@@ -389,6 +391,15 @@ adaptive = false
         assert_eq!(
             e,
             "s.toml:27:16: `boundary.1.motion_table` m.csv:1: component x is at 80.001 m at t = 0 (row at t = 0 s), but \"fairlead\" (node 2) starts at 80 m (tolerance 8e-8 m): the table gives the absolute position"
+        );
+        // Times so far apart that the interpolant overflows at t = 0: refused, not NaN.
+        let e = refusal(
+            &at("motion_table = \"m.csv\""),
+            &[("m.csv", "-1e308 80 40\n1e308 80 40\n")],
+        );
+        assert!(
+            e.contains("m.csv:1: component x is at NaN m at t = 0"),
+            "{e}"
         );
         let e = refusal(
             &at("motion_table = \"m.csv\""),
