@@ -4,8 +4,9 @@
 //!
 //! The modules are floors; each uses only the floors below it:
 //!
-//! 1. [`text`] (numbers and text in messages) and [`files`] (the names and layout of the
-//!    output files, the run id, atomic writes);
+//! 1. [`text`] (numbers and text in messages), [`files`] (the names and layout of the
+//!    output files, the run id, atomic writes) and [`tables`] (time tables of motions and
+//!    forces read from text files);
 //! 2. [`plot`], [`vtk`] and [`animation`] (figure and ParaView formats), [`scenario`]
 //!    (scenario files, validation, and starting a simulation from one), and [`moordyn`]
 //!    (MoorDyn input decks read into a typed deck);
@@ -26,6 +27,7 @@ pub mod output;
 pub mod plot;
 pub mod scenario;
 pub mod scene;
+pub mod tables;
 #[cfg(test)]
 mod test_util;
 pub mod text;

@@ -73,6 +73,9 @@ impl<const D: usize> fmt::Debug for NodalLoad<D> {
 /// A position signal `t ↦ x(t)` [s ↦ m].
 pub type PositionFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
 
+/// A velocity signal `t ↦ ẋ(t)` [s ↦ m/s].
+pub type RateFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
+
 /// Prescribed motion (paper Remarks 3–4, velocity in / force out): component `component` of
 /// `node` follows the absolute position `position(t)` [m], which must equal the initial
 /// position at `t = 0`. Its port has the mid-step velocity as input and the reaction force
@@ -88,6 +91,10 @@ pub struct Motion {
     pub component: usize,
     /// The absolute position signal.
     pub position: PositionFn,
+    /// The exact velocity `ẋ(t)` [m/s] of `position`, where it is known (a table's
+    /// interpolant, [`Motion::sampled`]); `None`: [`Motion::velocity`] differentiates
+    /// `position` numerically.
+    pub rate: Option<RateFn>,
 }
 
 impl Motion {
@@ -101,7 +108,33 @@ impl Motion {
             node,
             component,
             position: Arc::new(position),
+            rate: None,
         }
+    }
+
+    /// Component `component` of `node` follows `position(t)` [m] whose exact velocity is
+    /// `rate(t)` [m/s] (the caller's promise: `rate` is the derivative of `position`).
+    pub fn with_rate(
+        node: usize,
+        component: usize,
+        position: impl Fn(f64) -> f64 + Send + Sync + 'static,
+        rate: impl Fn(f64) -> f64 + Send + Sync + 'static,
+    ) -> Self {
+        Self {
+            node,
+            component,
+            position: Arc::new(position),
+            rate: Some(Arc::new(rate)),
+        }
+    }
+
+    /// Component `component` of `node` follows the sampled signal `path` [s ↦ m]
+    /// (docs/method.md §14, motion tables): position and velocity from the same C¹
+    /// interpolant.
+    pub fn sampled(node: usize, component: usize, path: crate::signal::Sampled) -> Self {
+        let path = Arc::new(path);
+        let p = path.clone();
+        Self::with_rate(node, component, move |t| p.value(t), move |t| path.rate(t))
     }
 }
 
@@ -112,14 +145,17 @@ impl Motion {
 pub const MOTION_VELOCITY_DT: f64 = 1e-6;
 
 impl Motion {
-    /// The velocity `ẋ(t⁻)` [m/s] of the prescribed position, from the left: the
-    /// second-order backward difference `(3x(t) − 4x(t − δ) + x(t − 2δ)) / 2δ` with
-    /// `δ = MOTION_VELOCITY_DT`, one-sided forward where the signal is not finite before `t`.
-    /// From the left, so that a signal that is straight over the last step (an FMU's ramp
-    /// to the value its master set, a table's segment) gives that step's slope exactly.
-    /// The stepper holds the node's velocity state at this value; NaN if the signal is not
-    /// finite around `t`.
+    /// The velocity `ẋ(t)` [m/s] of the prescribed position: the exact [`Motion::rate`]
+    /// where it is given; otherwise from the left, the second-order backward difference
+    /// `(3x(t) − 4x(t − δ) + x(t − 2δ)) / 2δ` with `δ = MOTION_VELOCITY_DT`, one-sided
+    /// forward where the signal is not finite before `t`. From the left, so that a signal
+    /// that is straight over the last step (an FMU's ramp to the value its master set)
+    /// gives that step's slope exactly. The stepper holds the node's velocity state at this
+    /// value; NaN if the signal is not finite around `t`.
     pub fn velocity(&self, t: f64) -> f64 {
+        if let Some(rate) = &self.rate {
+            return rate(t);
+        }
         let d = MOTION_VELOCITY_DT;
         let x0 = (self.position)(t);
         let (x1, x2) = ((self.position)(t - d), (self.position)(t - 2.0 * d));
@@ -197,6 +233,8 @@ pub(crate) struct HeldMotion {
     /// The motion's signal before it was held, put back by
     /// [`crate::Simulation::release_motion`].
     pub(crate) signal: PositionFn,
+    /// That signal's exact velocity, if it had one.
+    pub(crate) rate: Option<RateFn>,
 }
 
 /// The inputs held on a running [`crate::Simulation`], per load and per motion (`None`: the

@@ -124,9 +124,11 @@ impl<const D: usize> NodalLoad<D> {
 }
 
 impl Motion {
-    /// Makes the motion follow `ramp`: its position signal becomes [`PositionRamp::position`].
+    /// Makes the motion follow `ramp`: its position signal becomes [`PositionRamp::position`]
+    /// (its velocity the backward difference of the ramp, which is exact on it).
     pub fn hold(&mut self, ramp: PositionRamp) {
         self.position = Arc::new(move |t| ramp.position(t));
+        self.rate = None;
     }
 }
 
@@ -268,12 +270,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let (inputs, boundary) = self.inputs_and_boundary();
         let m = &mut boundary.motions[motion];
         let slots = grow(&mut inputs.motions, motion);
-        let signal = match slots[motion].take() {
-            Some(held) => held.signal,
-            None => m.position.clone(),
+        let (signal, rate) = match slots[motion].take() {
+            Some(held) => (held.signal, held.rate),
+            None => (m.position.clone(), m.rate.clone()),
         };
         m.hold(ramp);
-        slots[motion] = Some(HeldMotion { ramp, signal });
+        slots[motion] = Some(HeldMotion { ramp, signal, rate });
         Ok(())
     }
 
@@ -293,6 +295,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let (inputs, boundary) = self.inputs_and_boundary();
         if let Some(held) = inputs.motions.get_mut(motion).and_then(Option::take) {
             boundary.motions[motion].position = held.signal;
+            boundary.motions[motion].rate = held.rate;
         }
         Ok(())
     }

@@ -83,6 +83,7 @@ pub mod modes;
 pub mod network;
 pub mod newton;
 pub mod observe;
+pub mod signal;
 pub mod simulation;
 pub mod statics;
 pub mod system;
@@ -92,7 +93,7 @@ pub mod water;
 
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
-    PortSample, PositionFn, PositionRamp,
+    PortSample, PositionFn, PositionRamp, RateFn,
 };
 pub use dimension::ByDim;
 pub use error::{LinearSolveError, Num, SetupError, StepError};
@@ -108,6 +109,7 @@ pub use newton::{NewtonParams, NewtonStats};
 pub use observe::{
     Observer, RunSummary, Settle, SettleWatch, Settled, StepReport, fastest_node, nan_max,
 };
+pub use signal::{PlatformPath, SampleError, Sampled};
 pub use simulation::{
     Checkpoint, CheckpointFit, FlatCheckpoint, Predictor, Simulation, StepControl, StepParams,
     estimated_memory_bytes, estimated_seconds_per_iteration, estimated_seconds_per_step,

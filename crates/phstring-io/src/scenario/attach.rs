@@ -1,6 +1,6 @@
 //! Validation of what is attached to nodes: `[[point_mass]]` and `[[boundary]]` (fixed
-//! components, prescribed motions, loads). Both refer to nodes by index, name or
-//! `"STRING:INDEX"`.
+//! components, prescribed motions, loads), with the supports of `[[platform]]` (read in
+//! `tables.rs`). All refer to nodes by index, name or `"STRING:INDEX"`.
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -12,6 +12,7 @@ use super::components::{AXES, ControlComponent, MotionComponent, PointMassCompon
 use super::expr::{Expr, eval_or_record, is_zero};
 use super::refs::label;
 use super::spec::{BoundarySpec, ControlSpec, FixedSpec, GainSpec};
+use super::tables::{ForceTable, Platform, TableMotions, column_text};
 use super::{ScenarioError, ScenarioFile, Skeleton};
 use crate::text::{clip, num};
 
@@ -29,12 +30,25 @@ pub(super) struct BoundaryParts<const D: usize> {
     pub controls: Vec<ControlComponent>,
 }
 
-/// What holds one component of a node: fixed or moved by boundary table `k`.
+/// What holds one component of a node: fixed or moved by boundary table `k` (by its key
+/// `position` or `motion_table`), or moved by platform `k`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Hold {
     Free,
     Fixed(usize),
-    Moved(usize),
+    Moved(usize, &'static str),
+    Platform(usize),
+}
+
+impl Hold {
+    /// What moves the component, for messages (`boundary.2.position`, `platform.0`).
+    fn mover(self) -> String {
+        match self {
+            Hold::Moved(j, what) => format!("boundary.{j}.{what}"),
+            Hold::Platform(j) => format!("platform.{j}"),
+            Hold::Free | Hold::Fixed(_) => String::new(),
+        }
+    }
 }
 
 /// One `[[boundary]]` table, parsed and checked on its own.
@@ -45,7 +59,11 @@ struct Entry<const D: usize> {
     fixed: [bool; D],
     /// Moved components: (component, expression, span of its text).
     motions: Vec<(usize, Expr, Range<usize>)>,
+    /// Components moved by `motion_table`.
+    tabled: TableMotions,
     force: Option<Force>,
+    /// `force_table`.
+    force_table: Option<ForceTable>,
     control: Option<Control<D>>,
     /// `external = true`: the force or the motion is an FMU input.
     external: bool,
@@ -95,7 +113,7 @@ impl ScenarioFile {
     /// Refuses `node` (given at `key`) if it is the fixed point of a spring with `to_point`:
     /// that node is held in every component, so a condition or a mass there would do nothing
     /// (or move the "fixed" point).
-    fn not_an_anchor<const D: usize>(
+    pub(super) fn not_an_anchor<const D: usize>(
         &self,
         key: &str,
         span: Range<usize>,
@@ -204,14 +222,22 @@ impl ScenarioFile {
         let node = self.resolve(&key("node"), &b.node, &sk.nodes)?;
         self.not_an_anchor(&key("node"), b.node.span(), node, sk)?;
         let label = label(b.node.get_ref(), node);
-        if b.fixed.is_none() && b.force.is_none() && b.position.is_none() && b.control.is_none() {
+        if b.fixed.is_none()
+            && b.force.is_none()
+            && b.position.is_none()
+            && b.control.is_none()
+            && b.motion_table.is_none()
+            && b.force_table.is_none()
+        {
             return Err(self.invalid(
                 &key("node"),
                 b.node.span(),
-                "has neither `fixed`, `force`, `position` nor `control`",
+                "has neither `fixed`, `force`, `position`, `motion_table`, `force_table` nor `control`",
             ));
         }
         let motions = self.entry_motions(k, b, sk.position(node), &label, t_check)?;
+        let tabled = self.entry_motion_table(k, b, sk.position(node), &label)?;
+        let force_table = self.entry_force_table::<D>(k, b)?;
         let fixed = self.entry_fixed::<D>(k, b)?;
         let force = self.entry_force::<D>(k, b, t_check)?;
         let control = match &b.control {
@@ -224,7 +250,9 @@ impl ScenarioFile {
             label,
             fixed,
             motions,
+            tabled,
             force,
+            force_table,
             control,
             external,
         })
@@ -374,6 +402,13 @@ impl ScenarioFile {
         let key = |f: &str| format!("boundary.{k}.{f}");
         Ok(match &b.external {
             Some(x) if *x.get_ref() => {
+                if b.motion_table.is_some() || b.force_table.is_some() {
+                    return Err(self.invalid(
+                        &key("external"),
+                        x.span(),
+                        "marks an FMU input, which the FMU's master sets, but this table takes its values from a table file (`motion_table` or `force_table`): remove one of them",
+                    ));
+                }
                 if b.force.is_none() && b.position.is_none() {
                     return Err(self.invalid(
                         &key("external"),
@@ -551,18 +586,20 @@ impl ScenarioFile {
         let entries = (0..self.scenario.boundary.len())
             .map(|k| self.boundary_entry::<D>(k, sk, t_check))
             .collect::<Result<Vec<_>, _>>()?;
-        let held = self.holds(&entries)?;
+        let platforms = self.platforms(sk)?;
+        let held = self.holds(&entries, &platforms)?;
         self.loads_on_free_components(&entries, &held)?;
         self.controls_on_free_components(&entries, &held)?;
-        Ok(self.boundary_parts(entries))
+        Ok(self.boundary_parts(entries, platforms))
     }
 
     /// What holds each component of the nodes that have conditions: fixed by its first
-    /// table, else moved by one motion (a component both fixed and moved, or moved twice, is
-    /// refused).
+    /// table, else moved by one motion or platform (a component both fixed and moved, or
+    /// moved twice, is refused).
     fn holds<const D: usize>(
         &self,
         entries: &[Entry<D>],
+        platforms: &[Platform],
     ) -> Result<HashMap<usize, [Hold; D]>, ScenarioError> {
         // What holds each component, for the nodes that have conditions.
         let mut held: HashMap<usize, [Hold; D]> = HashMap::new();
@@ -574,37 +611,70 @@ impl ScenarioFile {
                 }
             }
         }
+        let table_span = |k: usize| {
+            let b = &self.scenario.boundary[k];
+            b.motion_table.as_ref().map_or(0..0, |f| f.span())
+        };
         for (k, e) in entries.iter().enumerate() {
-            for (i, _, span) in &e.motions {
-                let h = held.entry(e.node).or_insert([Hold::Free; D]);
-                let ckey = format!("boundary.{k}.position.{i}");
-                let axis = AXES[*i];
-                match h[*i] {
-                    Hold::Free => h[*i] = Hold::Moved(k),
-                    Hold::Fixed(_) => {
-                        return Err(self.invalid(
-                            &ckey,
-                            span.clone(),
-                            format!(
-                                "{} is also fixed in component {axis} (give \"\" there, or drop it from `fixed`)",
-                                e.label
-                            ),
-                        ));
-                    }
-                    Hold::Moved(j) => {
-                        return Err(self.invalid(
-                            &ckey,
-                            span.clone(),
-                            format!(
-                                "{} already follows boundary.{j}.position in component {axis}: a component has one prescribed position",
-                                e.label
-                            ),
-                        ));
-                    }
+            let by_expr = e.motions.iter().map(|(i, _, span)| {
+                let key = format!("boundary.{k}.position.{i}");
+                (*i, key, span.clone(), Hold::Moved(k, "position"))
+            });
+            let by_table = e.tabled.iter().map(|(i, _)| {
+                let key = format!("boundary.{k}.motion_table");
+                (*i, key, table_span(k), Hold::Moved(k, "motion_table"))
+            });
+            for (i, key, span, how) in by_expr.chain(by_table) {
+                self.hold_moved(&mut held, e.node, i, how, (&key, span), &e.label)?;
+            }
+        }
+        for (k, p) in platforms.iter().enumerate() {
+            for (i, (node, _, label, span)) in p.nodes.iter().enumerate() {
+                let key = format!("platform.{k}.nodes.{i}");
+                for c in 0..D {
+                    let how = Hold::Platform(k);
+                    self.hold_moved(&mut held, *node, c, how, (&key, span.clone()), label)?;
                 }
             }
         }
         Ok(held)
+    }
+
+    /// Marks component `i` of `node` (called `label`) as moved by `how`, given at `at` (key
+    /// and span); refused if it is already fixed or moved.
+    fn hold_moved<const D: usize>(
+        &self,
+        held: &mut HashMap<usize, [Hold; D]>,
+        node: usize,
+        i: usize,
+        how: Hold,
+        at: (&str, Range<usize>),
+        label: &str,
+    ) -> Result<(), ScenarioError> {
+        let h = held.entry(node).or_insert([Hold::Free; D]);
+        let axis = AXES[i];
+        let (key, span) = at;
+        match h[i] {
+            Hold::Free => {
+                h[i] = how;
+                Ok(())
+            }
+            Hold::Fixed(j) => Err(self.invalid(
+                key,
+                span,
+                format!(
+                    "{label} is also fixed in component {axis} (by boundary.{j}.fixed; give \"\" there, or drop it from `fixed`)"
+                ),
+            )),
+            other => Err(self.invalid(
+                key,
+                span,
+                format!(
+                    "{label} already follows {} in component {axis}: a component has one prescribed position",
+                    other.mover()
+                ),
+            )),
+        }
     }
 
     /// Refuses a force on a component that is fixed or moved (`held`).
@@ -614,8 +684,10 @@ impl ScenarioFile {
         held: &HashMap<usize, [Hold; D]>,
     ) -> Result<(), ScenarioError> {
         for (k, e) in entries.iter().enumerate() {
-            let Some(Force { span, loaded, .. }) = &e.force else {
-                continue;
+            let (key, span, loaded) = match (&e.force, &e.force_table) {
+                (Some(Force { span, loaded, .. }), _) => ("force", span, loaded),
+                (None, Some(ForceTable { span, loaded, .. })) => ("force_table", span, loaded),
+                (None, None) => continue,
             };
             let h = held.get(&e.node).copied().unwrap_or([Hold::Free; D]);
             for i in (0..D).filter(|&i| loaded[i]) {
@@ -623,15 +695,14 @@ impl ScenarioFile {
                 let how = match h[i] {
                     Hold::Free => continue,
                     Hold::Fixed(_) => format!("is fixed in component {axis}"),
-                    Hold::Moved(j) => {
-                        format!(
-                            "has a prescribed position (boundary.{j}.position) in component {axis}"
-                        )
-                    }
+                    moved => format!(
+                        "has a prescribed position ({}) in component {axis}",
+                        moved.mover()
+                    ),
                 };
                 // `node 3 is fixed …` keeps the wording of single-string messages.
                 return Err(self.invalid(
-                    &format!("boundary.{k}.force"),
+                    &format!("boundary.{k}.{key}"),
                     span.clone(),
                     format!(
                         "{} {how} and cannot also be loaded in it (give \"0\" there)",
@@ -657,8 +728,9 @@ impl ScenarioFile {
                 let how = match h[i] {
                     Hold::Free => continue,
                     Hold::Fixed(_) => format!("is fixed in component {axis}"),
-                    Hold::Moved(j) => format!(
-                        "has a prescribed position (boundary.{j}.position) in component {axis}"
+                    moved => format!(
+                        "has a prescribed position ({}) in component {axis}",
+                        moved.mover()
                     ),
                 };
                 return Err(self.invalid(
@@ -674,9 +746,14 @@ impl ScenarioFile {
         Ok(())
     }
 
-    /// The boundary conditions, loads, motions and controls of the checked `entries`, with the
-    /// record of expression failures during a run that they share.
-    fn boundary_parts<const D: usize>(&self, entries: Vec<Entry<D>>) -> BoundaryParts<D> {
+    /// The boundary conditions, loads, motions and controls of the checked `entries` and
+    /// the motions of the `platforms` (after those of the entries), with the record of
+    /// expression failures during a run that they share.
+    fn boundary_parts<const D: usize>(
+        &self,
+        entries: Vec<Entry<D>>,
+        platforms: Vec<Platform>,
+    ) -> BoundaryParts<D> {
         let load_error: Arc<Mutex<Option<String>>> = Arc::default();
         let mut boundary = Boundary::<D>::default();
         let mut controls = Vec::new();
@@ -696,6 +773,17 @@ impl ScenarioFile {
                     eval_or_record(&expr, &errors, "position", k, i, t)
                 }));
             }
+            let table = self.scenario.boundary[k].motion_table.as_ref();
+            for (i, signal) in e.tabled {
+                let file = table.map_or("", |f| f.get_ref().as_str());
+                motions.push(MotionComponent {
+                    node: e.node,
+                    component: AXES[i],
+                    position: column_text(file, i + 1, AXES[i]),
+                    external: false,
+                });
+                boundary.motions.push(Motion::sampled(e.node, i, signal));
+            }
             if e.fixed.iter().any(|&c| c) {
                 boundary.fixed.push(Fixed {
                     node: e.node,
@@ -710,6 +798,12 @@ impl ScenarioFile {
                     Vector::<D>::from_fn(|i, _| {
                         eval_or_record(&exprs[i], &errors, "force", k, i, t)
                     })
+                }));
+            }
+            if let Some(ForceTable { signals, texts, .. }) = e.force_table {
+                loads.push((e.node, texts, false));
+                boundary.loads.push(NodalLoad::new(e.node, move |t| {
+                    Vector::<D>::from_fn(|i, _| signals[i].value(t))
                 }));
             }
             if let Some(c) = e.control {
@@ -732,6 +826,17 @@ impl ScenarioFile {
                     .feedback
                     .push(FeedbackLoad::new(e.node, self.pd_law(k, c, &load_error)));
             }
+        }
+        for p in platforms {
+            for (node, _, _, _) in &p.nodes {
+                motions.extend(AXES[..D].iter().map(|&component| MotionComponent {
+                    node: *node,
+                    component,
+                    position: format!("platform table {}", clip(&p.file)),
+                    external: false,
+                }));
+            }
+            boundary.motions.extend(p.motions());
         }
         BoundaryParts {
             boundary,

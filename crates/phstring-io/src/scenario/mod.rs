@@ -25,6 +25,7 @@ mod settings;
 mod single;
 mod spec;
 pub mod start;
+mod tables;
 mod water;
 
 use std::collections::BTreeMap;

@@ -47,6 +47,10 @@ pub struct Scenario {
     /// Boundary conditions, one table per node.
     #[serde(default)]
     pub boundary: Vec<BoundarySpec>,
+    /// Rigid platforms moving several supports from one table of surge, sway, heave, roll,
+    /// pitch and yaw (dimension 3).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub platform: Vec<PlatformSpec>,
     /// Point masses at nodes (payloads, clump weights), one table each.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point_mass: Vec<PointMassSpec>,
@@ -300,11 +304,34 @@ pub struct BoundarySpec {
     /// Feedback control through the node's force port (PD tracking or damping injection).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub control: Option<Spanned<ControlSpec>>,
+    /// Prescribed absolute position [m] from a table file (path relative to the scenario
+    /// file): columns `t` [s] and one per component, interpolated C¹ (docs/scenario.md,
+    /// "Motion and force tables"). Instead of `position`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion_table: Option<Spanned<String>>,
+    /// Nodal force [N] from a table file (path relative to the scenario file): columns
+    /// `t` [s] and one per component. Instead of `force`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_table: Option<Spanned<String>>,
     /// Whether this table's `force` or `position` is an input of the FMU that
     /// `phstring fmu` builds (its expression at `t = 0` is the input's start value).
     /// `phstring run` and the other commands follow the expression regardless.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub external: Option<Spanned<bool>>,
+}
+
+/// `[[platform]]`: supports moved rigidly by a platform whose motion is a table of
+/// `t, x, y, z, roll, pitch, yaw` [s, m, m, m, rad, rad, rad].
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlatformSpec {
+    /// Free-text name, for reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The support nodes the platform carries (node references); each moves in x, y and z.
+    pub nodes: Spanned<Vec<Spanned<NodeRef>>>,
+    /// The table file (path relative to the scenario file).
+    pub motion_table: Spanned<String>,
 }
 
 /// `[fmu]`: what the FMU built by `phstring fmu` reports besides its ports and energies.
