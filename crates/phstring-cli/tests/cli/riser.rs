@@ -49,7 +49,9 @@ fn against_closed_form(pts: &[(f64, f64)]) -> (f64, f64) {
         .map(|&(x, h)| (x - y(h - bottom)).abs() / mid)
         .fold(0.0, f64::max);
     let taut = q * l * l / (8.0 * (t_top - 0.5 * w * l));
-    println!("riser: mid-depth deflection {mid} m (taut string with the mean tension {taut} m), worst {worst:e} of it");
+    println!(
+        "riser: mid-depth deflection {mid} m (taut string with the mean tension {taut} m), worst {worst:e} of it"
+    );
     (worst, mid)
 }
 
@@ -89,5 +91,8 @@ fn the_riser_bends_in_the_current_as_the_tensioned_line_under_uniform_load() {
         .zip(&statics)
         .map(|(a, b)| (a.0 - b.0).hypot(a.1 - b.1))
         .fold(0.0, f64::max);
-    assert!(apart <= 1e-4 * mid, "the run ends {apart} m from the statics");
+    assert!(
+        apart <= 1e-4 * mid,
+        "the run ends {apart} m from the statics"
+    );
 }

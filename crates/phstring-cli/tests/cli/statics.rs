@@ -504,7 +504,8 @@ fn statics_of_the_chain_on_the_slope_match_the_inclined_catenary() {
         let (h, v0, ls) = (t_td * c, t_td * s, len - lb);
         let v1 = v0 + w * ls;
         let x = xt + h / w * ((v1 / h).asinh() - (v0 / h).asinh()) + h * ls / ea;
-        let z = zt + h / w * ((v1 / h).hypot(1.0) - (v0 / h).hypot(1.0))
+        let z = zt
+            + h / w * ((v1 / h).hypot(1.0) - (v0 / h).hypot(1.0))
             + (v0 * ls + w * ls * ls / 2.0) / ea;
         (x, z, h, v1, xt)
     };
@@ -537,7 +538,13 @@ fn statics_of_the_chain_on_the_slope_match_the_inclined_catenary() {
         (last - x_td).abs() <= element,
         "grounded to x = {last} m, touchdown at {x_td} m"
     );
-    let mid = grounded.iter().find(|r| (r[1] - 80.0).abs() < element).unwrap();
+    let mid = grounded
+        .iter()
+        .find(|r| (r[1] - 80.0).abs() < element)
+        .unwrap();
     let pen = seabed(mid[1]) - mid[2];
-    assert!(rel(pen, p) <= 1e-4, "penetration {pen} m vs w cos²α/(kd) = {p} m");
+    assert!(
+        rel(pen, p) <= 1e-4,
+        "penetration {pen} m vs w cos²α/(kd) = {p} m"
+    );
 }

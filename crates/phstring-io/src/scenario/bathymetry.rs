@@ -223,4 +223,78 @@ mod tests {
         );
         assert!(err("# nothing\n", 3).contains("is empty"));
     }
+
+    /// `seabed.bathymetry` in a scenario: the file is read next to the scenario and becomes
+    /// the seabed (depth 150 m at x = 50, the given value); a bad cell is reported with the
+    /// key, the scenario's place and the table's file:line; a plane's keys with it, a missing
+    /// file and a grid of the wrong dimension are refused.
+    #[test]
+    fn the_scenario_key_reads_the_file_next_to_the_scenario() {
+        let dir = crate::test_util::temp_dir("bathy", "key");
+        let scenario = |seabed: &str, dim: usize| {
+            let (gravity, end) = if dim == 2 {
+                ("[0.0, -9.81]", "[100.0, -140.0]")
+            } else {
+                ("[0.0, 0.0, -9.81]", "[100.0, 0.0, -140.0]")
+            };
+            let start = if dim == 2 {
+                "[0.0, -140.0]"
+            } else {
+                "[0.0, 0.0, -140.0]"
+            };
+            let text = format!(
+                "dimension = {dim}\n[geometry]\nstart = {start}\nend = {end}\n[mesh]\nelements = 10\n\
+                 [material]\nlaw = \"linear_elastic\"\nea = 6.0e8\nrho_a = 113.0\ndiameter = 0.1368\n\
+                 [body_force]\ngravity = {gravity}\n[water]\n[seabed]\nstiffness = 3.0e6\n{seabed}\n\
+                 [[boundary]]\nnode = 0\nfixed = true\n[time]\nh = 0.01\nend = 0.1\n"
+            );
+            let path = dir.join("s.toml");
+            std::fs::write(&path, text).unwrap();
+            crate::scenario::load(&path, &[]).unwrap()
+        };
+        std::fs::write(dir.join("p.csv"), "x,depth\n0,160\n50,150\n100,140\n").unwrap();
+        std::fs::write(dir.join("bad.csv"), "x,depth\n0,160\n50,1 50\n").unwrap();
+        let v = scenario("bathymetry = \"p.csv\"", 2)
+            .validate::<2>()
+            .unwrap();
+        let water = v.problem.water.as_ref().unwrap();
+        let Some(phstring::SeabedSurface::Grid(g)) = water.seabed.as_ref().map(|s| &s.surface)
+        else {
+            panic!("not a grid: {water:?}");
+        };
+        assert_eq!(g.depth_at(50.0, 0.0), 150.0);
+        let e = scenario("bathymetry = \"bad.csv\"", 2)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("s.toml:")
+                && e.contains("`seabed.bathymetry`")
+                && e.contains("bad.csv:3: cell 2 (depth [m]) `1 50` is not a number"),
+            "{e}"
+        );
+        let e = scenario("bathymetry = \"p.csv\"\nnormal = [0.0, 1.0]", 2)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`seabed.normal` is given with seabed.bathymetry"),
+            "{e}"
+        );
+        let e = scenario("bathymetry = \"none.csv\"", 2)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cannot read") && e.contains("none.csv"), "{e}");
+        // A profile in 3D is read as a grid: its header's second cell is no x.
+        let e = scenario("bathymetry = \"p.csv\"", 3)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("p.csv:1: cell 2 (x [m] of the header) `depth` is not a number"),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
