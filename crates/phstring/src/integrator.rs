@@ -959,7 +959,7 @@ mod tests {
     }
 
     /// A random chain in water (`D ≥ 2`): crossing the surface band, partly in the seabed
-    /// (stiffness, ramped damping, friction), in a sheared current, with drag, added mass and
+    /// (flat, a plane or a grid; stiffness, ramped damping, friction), in a sheared current, with drag, added mass and
     /// a buoyant point with drag in the surface band; node 0 fixed.
     fn check_water_jacobian<const D: usize>(seed: &[f64], scheme: Scheme) {
         use crate::water::{Current, Friction, LineHydro, PointHydro, Seabed, Water};
@@ -997,10 +997,27 @@ mod tests {
             Vector::<D>::from_fn(|k, _| 0.3 + 0.1 * k as f64),
             Vector::<D>::from_fn(|k, _| 1.0 - 0.4 * k as f64),
         );
-        // Flat at −2 m, or a slightly inclined plane through (0, …, −2).
+        // Flat at −2 m, a slightly inclined plane through (0, …, −2), or a bumpy bathymetry
+        // grid about −2 m (uneven spacing, nodes between and beyond its points).
         let k = 150.0 * (1.0 + 0.5 * next());
-        let base = if next() > 0.0 {
+        let pick = next();
+        let base = if pick > 0.3 {
             Seabed::flat(2.0, k, 4.0)
+        } else if pick > -0.3 {
+            let xs = vec![-0.5, 0.7, 1.5, 2.6, 3.1, 4.4, 5.0];
+            let ys = if D == 3 {
+                vec![-0.4, 0.1, 0.5]
+            } else {
+                Vec::new()
+            };
+            let depth = |x: f64, y: f64| 2.0 + 0.05 * (2.0 * x).sin() - 0.03 * x + 0.08 * y;
+            let d = ys
+                .iter()
+                .copied()
+                .chain((D == 2).then_some(0.0))
+                .flat_map(|y| xs.iter().map(move |&x| depth(x, y)))
+                .collect();
+            Seabed::grid(crate::Bathymetry::grid(xs, ys, d).unwrap(), k, 4.0)
         } else {
             let up = |i: usize, tilt: f64| {
                 if i == D - 1 {

@@ -68,6 +68,7 @@
 
 pub mod accuracy;
 pub mod assembly;
+pub mod bathymetry;
 pub mod benchmarks;
 pub mod boundary;
 pub mod dimension;
@@ -91,6 +92,7 @@ pub mod system;
 pub mod testing;
 pub mod water;
 
+pub use bathymetry::Bathymetry;
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
     PortSample, PositionFn, PositionRamp, RateFn,

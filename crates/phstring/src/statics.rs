@@ -1039,7 +1039,7 @@ fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
     let held_by_water = |k: usize| {
         sys.water
             .as_deref()
-            .is_some_and(|w| k == D - 1 || w.bed.as_ref().is_some_and(|b| b.n[k] != 0.0))
+            .is_some_and(|w| k == D - 1 || w.bed.as_ref().is_some_and(|b| b.holds(k)))
     };
     (0..D)
         .filter(|&k| sys.free.iter().all(|f| f[k]) && !held_by_water(k))

@@ -49,8 +49,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use std::sync::Arc;
+
 use nalgebra::SMatrix;
 
+use crate::bathymetry::{Bathymetry, height_d, horizontal, widen};
 use crate::error::SetupError;
 use crate::mesh::Mesh;
 
@@ -131,7 +134,7 @@ fn profile_at<const D: usize>(p: &[(f64, Vector<D>)], z: f64) -> (Vector<D>, Vec
 }
 
 /// The seabed's surface.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum SeabedSurface<const D: usize> {
     /// Flat and horizontal at height `−depth` [m] (`depth > 0`).
@@ -147,9 +150,10 @@ pub enum SeabedSurface<const D: usize> {
         /// Normal pointing into the water.
         normal: Vector<D>,
     },
-    // Extension point: a C¹ bathymetry grid (a height field z = b(x, y) with the gap measured
-    // along the vertical, its quotient taken in the gap as for the plane) would be a third
-    // variant; `Bed::gap` and `Bed::normal_at` are the two functions it has to provide.
+    /// A bathymetry grid: the seabed at height `−depth(x, y)` (a profile `−depth(x)` in 2D),
+    /// C¹ between the grid points and continued along its edge tangent beyond them; the
+    /// gap is measured along the vertical (docs/method.md §21).
+    Grid(Arc<Bathymetry>),
 }
 
 /// Regularized Coulomb friction on the seabed (docs/method.md §21): the tangential force
@@ -167,7 +171,7 @@ pub struct Friction {
 
 /// A seabed: a penalty contact of stiffness `k·d` per unit length of line, damping of the
 /// normal velocity while in contact, and optionally friction.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Seabed<const D: usize> {
     /// Where the seabed is.
     pub surface: SeabedSurface<D>,
@@ -203,6 +207,15 @@ impl<const D: usize> Seabed<D> {
     pub fn plane(point: Vector<D>, normal: Vector<D>, stiffness: f64, damping: f64) -> Self {
         Self {
             surface: SeabedSurface::Plane { point, normal },
+            ..Self::flat(1.0, stiffness, damping)
+        }
+    }
+    /// A seabed on the bathymetry grid `grid` (a profile in 2D, a grid in 3D) with
+    /// stiffness `k` [Pa/m] and damping `c` [Pa·s/m], frictionless, the damping ramp at its
+    /// default.
+    pub fn grid(grid: Bathymetry, stiffness: f64, damping: f64) -> Self {
+        Self {
+            surface: SeabedSurface::Grid(Arc::new(grid)),
             ..Self::flat(1.0, stiffness, damping)
         }
     }
@@ -436,21 +449,80 @@ fn ramp(p: f64, delta: f64) -> (f64, f64) {
 // ---------------------------------------------------------------------------------------
 // The validated model the step evaluates.
 
-/// The seabed as the step sees it: the plane `n·(r − p) = 0` with unit normal `n`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The seabed as the step sees it: the plane `n·(r − p) = 0` with unit normal `n`, or, with
+/// `grid`, the height field `z = b(x)` of a bathymetry grid (then `n` and `p` are unused).
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Bed<const D: usize> {
     pub n: Vector<D>,
     pub p: Vector<D>,
+    pub grid: Option<Arc<Bathymetry>>,
     pub ramp: f64,
     pub friction: Option<Friction>,
 }
 
 impl<const D: usize> Bed<D> {
-    /// The signed gap `n·(r − p)` [m] (negative: penetration).
+    /// The signed gap [m] (negative: penetration): `n·(r − p)` for a plane, `z − b(x)` (along
+    /// the vertical) for a grid.
     #[inline]
     pub fn gap(&self, r: &Vector<D>) -> f64 {
-        self.n.dot(&(r - self.p))
+        match &self.grid {
+            None => self.n.dot(&(r - self.p)),
+            Some(g) => r[D - 1] - height_d::<D>(g, r).0,
+        }
     }
+
+    /// `∇g` at `r` (the plane's `n`; `e_z − ∇b` for a grid) and, for a grid, `∇²g = −∇²b`.
+    pub fn gap_gradient(&self, r: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
+        match &self.grid {
+            None => (self.n, None),
+            Some(g) => {
+                let (_, gb, hb) = height_d::<D>(g, r);
+                (up::<D>() - gb, Some(-hb))
+            }
+        }
+    }
+
+    /// The exact discrete gradient `∇̄g` of the gap from `r0` to `r1` (`∇̄g·(r1 − r0) =
+    /// g(r1) − g(r0)`) and, for a grid, its derivative by `r1` (docs/method.md §21).
+    pub fn gap_quotient(&self, r0: &Vector<D>, r1: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
+        match &self.grid {
+            None => (self.n, None),
+            Some(g) => {
+                let (gb, jb) = g.mean_gradient(horizontal(r0), horizontal(r1));
+                let (gb, jb) = widen::<D>(gb, jb);
+                (up::<D>() - gb, Some(-jb))
+            }
+        }
+    }
+
+    /// The unit upward normal at `r` and, for a grid, its derivative by `r`.
+    pub fn normal_at(&self, r: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
+        match self.gap_gradient(r) {
+            (n, None) => (n, None),
+            (grad, Some(hess)) => {
+                let len = grad.norm();
+                let n = grad / len;
+                let dn = (Block::<D>::identity() - n * n.transpose()) * hess / len;
+                (n, Some(dn))
+            }
+        }
+    }
+
+    /// Whether the seabed holds a line along axis `k` (the vertical, or an axis along which
+    /// the seabed slopes).
+    pub fn holds(&self, k: usize) -> bool {
+        match &self.grid {
+            None => self.n[k] != 0.0,
+            Some(g) => k == D - 1 || g.slopes_along(k),
+        }
+    }
+}
+
+/// The unit vector up the vertical axis.
+fn up<const D: usize>() -> Vector<D> {
+    let mut e = Vector::<D>::zeros();
+    e[D - 1] = 1.0;
+    e
 }
 
 /// A node that water acts on.
@@ -545,9 +617,10 @@ pub struct NodeContact {
     pub node: usize,
     /// The node is below the seabed's surface (penetration > 0).
     pub grounded: bool,
-    /// Penetration [m] (≥ 0).
+    /// Penetration [m] (≥ 0): normal to a plane, along the vertical into a grid's seabed.
     pub penetration: f64,
-    /// Contact force [N] on the node, along the seabed's normal (`k d L p`).
+    /// Contact force [N] on the node, along the seabed's normal (`k d L p`; on a grid
+    /// `k d L p |∇g|`, `|∇g| = √(1 + |∇b|²)`).
     pub force: f64,
 }
 
@@ -634,14 +707,26 @@ fn check_water<const D: usize>(w: &Water<D>) -> Result<Option<Bed<D>>, SetupErro
             true,
         )?;
     }
-    let mut up = Vector::<D>::zeros();
-    up[D - 1] = 1.0;
-    let (n, p) = match sb.surface {
-        SeabedSurface::Flat { depth } => {
+    let up = up::<D>();
+    let mut grid = None;
+    let (n, p) = match &sb.surface {
+        &SeabedSurface::Flat { depth } => {
             check_value("water depth [m]", None, depth, true)?;
             (up, -up * depth)
         }
-        SeabedSurface::Plane { point, normal } => {
+        SeabedSurface::Grid(g) => {
+            if g.is_profile() != (D == 2) {
+                return Err(SetupError::WaterParameter {
+                    what: "number of horizontal axes of the bathymetry grid",
+                    index: None,
+                    value: if g.is_profile() { 1.0 } else { 2.0 },
+                    range: "the dimension's: a profile along x in 2D, a grid over x and y in 3D",
+                });
+            }
+            grid = Some(Arc::clone(g));
+            (up, Vector::zeros())
+        }
+        &SeabedSurface::Plane { point, normal } => {
             check_vector("seabed plane point [m]", None, &point)?;
             check_vector("seabed plane normal", None, &normal)?;
             let len = normal.norm();
@@ -659,6 +744,7 @@ fn check_water<const D: usize>(w: &Water<D>) -> Result<Option<Bed<D>>, SetupErro
     Ok(Some(Bed {
         n,
         p,
+        grid,
         ramp: sb.damping_ramp,
         friction: sb.friction,
     }))
@@ -876,7 +962,8 @@ impl<const D: usize> WaterModel<D> {
     }
 
     /// Contact (the quotient of the penalty potential), the ramped normal damping and the
-    /// friction of node `w`.
+    /// friction of node `w`, along the seabed's normal at the mid-step position
+    /// (docs/method.md §21).
     #[allow(clippy::too_many_arguments)]
     fn contact_step(
         &self,
@@ -888,23 +975,41 @@ impl<const D: usize> WaterModel<D> {
         inv_h: f64,
         (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
     ) {
-        let n = bed.n;
-        let nn = n * n.transpose();
         let (g0, g1) = (bed.gap(r0), bed.gap(r1));
         let (q, dq) = contact_quotient(g0, g1, w.stiffness);
-        *res += n * q;
-        *jac += nn * dq;
+        // The quotient in the gap times the gap's exact discrete gradient (21.4).
+        let (dg, ddg) = bed.gap_quotient(r0, r1);
+        let grad1 = bed.gap_gradient(r1).0;
+        *res += dg * q;
+        *jac += dg * grad1.transpose() * dq;
+        if let Some(ddg) = ddg {
+            *jac += ddg * q;
+        }
         let pm = (-0.5 * (g0 + g1)).max(0.0);
         if pm <= 0.0 {
             return;
         }
+        // The normal at the mid-step position; on a grid it turns with the node,
+        // ∂n/∂x = ½ ∂n/∂r.
+        let (n, dn) = bed.normal_at(&(r0 + x * 0.5));
+        let dn = dn.map(|d| d * 0.5);
         let h = 1.0 / inv_h;
         let xn = n.dot(x);
+        // ∂(n·x)/∂x.
+        let dxn = match &dn {
+            None => n.transpose(),
+            Some(d) => n.transpose() + x.transpose() * d,
+        };
         if w.damping > 0.0 {
             let (rho, drho) = ramp(pm, bed.ramp);
             let c = w.damping * rho;
             *res += n * (c * xn * inv_h);
-            *jac += nn * (w.damping * (rho * inv_h - 0.5 * xn * inv_h * drho));
+            // ∂p_m/∂x = −½ ∇g(r₁)ᵀ.
+            *jac +=
+                n * (dxn * (c * inv_h) - grad1.transpose() * (0.5 * w.damping * xn * inv_h * drho));
+            if let Some(d) = &dn {
+                *jac += d * (c * xn * inv_h);
+            }
             work.seabed_dissipated += c * xn * xn * inv_h;
         }
         if let Some(fr) = &bed.friction {
@@ -916,14 +1021,18 @@ impl<const D: usize> WaterModel<D> {
                 let s = (a * a + cf * cf * vt2).sqrt();
                 let coef = cf * a / s;
                 *res += vt * coef;
-                let pt = Block::<D>::identity() - nn;
+                // ∂(h v_t)/∂x: (I − nnᵀ) on a plane.
+                let mut pt = Block::<D>::identity() - n * dxn;
+                if let Some(d) = &dn {
+                    pt -= d * xn;
+                }
                 let dv = (Block::<D>::identity() / s
                     - vt * vt.transpose() * (cf * cf / (s * s * s)))
                     * (cf * a);
                 *jac += dv * pt * inv_h;
-                // ∂a/∂x = −½ μ k n ᵀ (the mid-step penetration).
+                // ∂a/∂x = −½ μ k ∇g(r₁)ᵀ (the mid-step penetration).
                 let da = -0.5 * fr.coefficient * w.stiffness;
-                *jac += vt * n.transpose() * (cf * cf * cf * vt2 / (s * s * s) * da);
+                *jac += vt * grad1.transpose() * (cf * cf * cf * vt2 / (s * s * s) * da);
                 work.friction_dissipated += h * coef * vt2;
             }
         }
@@ -1009,7 +1118,8 @@ impl<const D: usize> WaterModel<D> {
 impl<const D: usize> WaterModel<D> {
     /// At rest at `r`: the potential part of node `w`'s residual (`+∂Ĥ/∂r` of buoyancy,
     /// scaled by the load factor `lambda`, and of contact) [N], and its stiffness block
-    /// [N/m] (symmetric, ⪰ 0), docs/method.md §21.
+    /// [N/m] (symmetric; ⪰ 0 on a plane, with the curvature term `k g ∇²g` on a grid),
+    /// docs/method.md §21.
     pub fn static_potential(
         &self,
         w: &WetNode,
@@ -1027,8 +1137,12 @@ impl<const D: usize> WaterModel<D> {
         if let Some(bed) = &self.bed {
             let g = bed.gap(r);
             if w.stiffness > 0.0 && g < 0.0 {
-                res += bed.n * (w.stiffness * g);
-                jac += bed.n * bed.n.transpose() * w.stiffness;
+                let (grad, hess) = bed.gap_gradient(r);
+                res += grad * (w.stiffness * g);
+                jac += grad * grad.transpose() * w.stiffness;
+                if let Some(hess) = hess {
+                    jac += hess * (w.stiffness * g);
+                }
             }
         }
         (res, jac)
@@ -1136,11 +1250,17 @@ impl<const D: usize> WaterModel<D> {
             .filter(|w| w.stiffness > 0.0)
             .map(|w| {
                 let p = (-bed.gap(&r[w.node])).max(0.0);
+                // |∇g| = 1 on a plane; on a grid the vertical gap's gradient is longer.
+                let stretch = match &bed.grid {
+                    None => 1.0,
+                    Some(_) if p > 0.0 => bed.gap_gradient(&r[w.node]).0.norm(),
+                    Some(_) => 1.0,
+                };
                 NodeContact {
                     node: w.node,
                     grounded: p > 0.0,
                     penetration: p,
-                    force: w.stiffness * p,
+                    force: w.stiffness * p * stretch,
                 }
             })
             .collect()

@@ -190,6 +190,36 @@ fn newton_test(n: &phstring::NewtonParams) -> String {
 /// `[water]`, `[seabed]` and what feels them: each wet string's diameter and coefficients and
 /// its weight in water per unit length `(ρA − ρ_w π d²/4) g` [N/m], each point's volume and
 /// weight in water `(m − ρ_w V) g` [N].
+/// A bathymetry grid in one phrase: its points, extent and depth range.
+fn bathymetry_text(g: &phstring::Bathymetry) -> String {
+    let (lo, hi) = g
+        .depths()
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &d| {
+            (a.min(d), b.max(d))
+        });
+    let span = |t: &[f64]| format!("{} … {} m", num(t[0]), num(t[t.len() - 1]));
+    if g.is_profile() {
+        format!(
+            "a bathymetry profile of {} points over x = {}, {} to {} m deep",
+            g.x().len(),
+            span(g.x()),
+            num(lo),
+            num(hi)
+        )
+    } else {
+        format!(
+            "a bathymetry grid of {} × {} points over x = {}, y = {}, {} to {} m deep",
+            g.x().len(),
+            g.y().len(),
+            span(g.x()),
+            span(g.y()),
+            num(lo),
+            num(hi)
+        )
+    }
+}
+
 fn describe_water<const D: usize>(out: &mut String, p: &phstring::Network<D, phstring::Material>) {
     use std::fmt::Write;
     let Some(w) = &p.water else { return };
@@ -207,8 +237,9 @@ fn describe_water<const D: usize>(out: &mut String, p: &phstring::Network<D, phs
         let _ = writeln!(
             out,
             "  seabed:    {}, stiffness {} Pa/m, damping {} Pa·s/m, {}",
-            match sb.surface {
-                phstring::SeabedSurface::Flat { depth } => format!("flat at −{} m", num(depth)),
+            match &sb.surface {
+                phstring::SeabedSurface::Flat { depth } => format!("flat at −{} m", num(*depth)),
+                phstring::SeabedSurface::Grid(g) => bathymetry_text(g),
                 _ => "an inclined plane".to_string(),
             },
             num(sb.stiffness),

@@ -102,6 +102,9 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("spread_mooring_3d", 3, 1201, 20, 153),
         // Its platform table's accelerations take a few halved steps.
         ("spread_mooring_platform", 3, 606, 20, 153),
+        ("chain_on_slope_2d", 2, 1500, 20, 161),
+        // Ends early: it settles (time.settle) at step 2078.
+        ("riser_in_current", 2, 2078, 10, 51),
         ("damped_pendulum", 2, 300, 1, 31),
         // Ends early: it settles (time.settle) at step 622.
         ("damping_injection", 2, 622, 10, 21),

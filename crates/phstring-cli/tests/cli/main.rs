@@ -14,6 +14,7 @@ mod interrupt;
 mod network;
 mod out_folder;
 mod reliability;
+mod riser;
 mod statics;
 mod water;
 

@@ -455,3 +455,96 @@ fn statics_of_the_spread_mooring_is_symmetric() {
         "{grounded} nodes lie on the seabed"
     );
 }
+
+/// Bisection for the root of `f` in `[lo, hi]` (a sign change there).
+fn bisect(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    let f_lo = f(lo);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if (f(mid) > 0.0) == (f_lo > 0.0) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The chain on the slope (`examples/chain_on_slope_2d.toml`, a bathymetry profile rising at
+/// `tan α = 0.035`) against the elastic catenary with a grounded length on a frictionless
+/// incline: the grounded part (unstretched `L_b`) runs up the slope from the anchor with the
+/// tension `T(s) = T_a + w sin α s` and sinks vertically by `p = w cos²α/(k d)`; from the
+/// touchdown the suspended part (`L − L_b`) leaves tangent to the slope with
+/// `H = T_td cos α`, `V₀ = T_td sin α` and reaches the fairlead (345, −10) as the elastic
+/// catenary (21.8). Solved for `T_a` and `L_b` by bisection: `H` and the fairlead's `V`
+/// within 5e-4 (measured 8e-5, 4e-5: the mesh of 2.6 m elements), the anchor's pull within
+/// 5e-4 (measured 3e-5), the last grounded node within one element of the touchdown, and
+/// the penetration of the grounded chain within 1e-4 of `p` (measured 6e-6).
+#[test]
+fn statics_of_the_chain_on_the_slope_match_the_inclined_catenary() {
+    let out = temp_dir("statics-slope");
+    let o = phstring(&[
+        "statics",
+        "examples/chain_on_slope_2d.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(summary(&out)["stable"], true);
+    let (rho_a, d, ea, k, len, g) = (113.0, 0.1368, 6.0e8, 3.0e6, 420.0, 9.81);
+    let w = (rho_a - 1025.0 * std::f64::consts::PI * d * d / 4.0) * g;
+    let tan_a: f64 = 0.035;
+    let (c, s) = (1.0 / tan_a.hypot(1.0), tan_a / tan_a.hypot(1.0));
+    let p = w * c * c / (k * d);
+    // The fairlead's (x, z, H, V) for the anchor tension `ta` and grounded length `lb`.
+    let fairlead = |ta: f64, lb: f64| {
+        let stretched = lb + (ta * lb + w * s * lb * lb / 2.0) / ea;
+        let (xt, zt) = (c * stretched, -180.0 + s * stretched - p);
+        let t_td = ta + w * s * lb;
+        let (h, v0, ls) = (t_td * c, t_td * s, len - lb);
+        let v1 = v0 + w * ls;
+        let x = xt + h / w * ((v1 / h).asinh() - (v0 / h).asinh()) + h * ls / ea;
+        let z = zt
+            + h / w * ((v1 / h).hypot(1.0) - (v0 / h).hypot(1.0))
+            + (v0 * ls + w * ls * ls / 2.0) / ea;
+        (x, z, h, v1, xt)
+    };
+    let anchor_tension = |lb: f64| bisect(|ta| fairlead(ta, lb).1 + 10.0, 1.0, 5e6);
+    let lb = bisect(|lb| fairlead(anchor_tension(lb), lb).0 - 345.0, 50.0, 300.0);
+    let ta = anchor_tension(lb);
+    let (_, _, h, v, x_td) = fairlead(ta, lb);
+    // node, x, y, reaction_x, reaction_y; named nodes 0 (anchor), 2 (fairlead).
+    let rows = csv_rows(&out.join("equilibrium.csv"));
+    let node = |k: f64| rows.iter().find(|r| r[0] == k).unwrap();
+    let (fl, an) = (node(2.0), node(0.0));
+    let rel = |a: f64, b: f64| (a - b).abs() / b;
+    println!(
+        "slope: H {} vs {h} ({:.1e}), V {} vs {v} ({:.1e}), anchor {} vs {ta} ({:.1e}), L_b {lb} m",
+        fl[3],
+        rel(fl[3], h),
+        fl[4],
+        rel(fl[4], v),
+        an[3].hypot(an[4]),
+        rel(an[3].hypot(an[4]), ta)
+    );
+    assert!(rel(fl[3], h) <= 5e-4, "H {} vs {h}", fl[3]);
+    assert!(rel(fl[4], v) <= 5e-4, "V {} vs {v}", fl[4]);
+    assert!(rel(an[3].hypot(an[4]), ta) <= 5e-4, "anchor {an:?} vs {ta}");
+    let seabed = |x: f64| -180.0 + tan_a * x;
+    let grounded: Vec<&Vec<f64>> = rows.iter().filter(|r| r[2] < seabed(r[1])).collect();
+    let last = grounded.iter().map(|r| r[1]).fold(f64::MIN, f64::max);
+    let element = 2.57;
+    assert!(
+        (last - x_td).abs() <= element,
+        "grounded to x = {last} m, touchdown at {x_td} m"
+    );
+    let mid = grounded
+        .iter()
+        .find(|r| (r[1] - 80.0).abs() < element)
+        .unwrap();
+    let pen = seabed(mid[1]) - mid[2];
+    assert!(
+        rel(pen, p) <= 1e-4,
+        "penetration {pen} m vs w cos²α/(kd) = {p} m"
+    );
+}

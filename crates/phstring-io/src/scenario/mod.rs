@@ -13,6 +13,7 @@
 //! the value).
 
 mod attach;
+mod bathymetry;
 mod components;
 mod expr;
 mod initial;

@@ -132,6 +132,10 @@ pub struct SeabedSpec {
     /// Penetration [m] over which the damping ramps up (default 1e-3).
     #[serde(default)]
     pub damping_ramp: Option<Spanned<f64>>,
+    /// A bathymetry file (CSV of depths [m], positive down; the path relative to the
+    /// scenario file): the seabed as a grid instead of a plane.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bathymetry: Option<Spanned<String>>,
 }
 
 /// A named point of a network (`[[node]]`): a junction, an anchor, an attachment point.

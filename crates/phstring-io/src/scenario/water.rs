@@ -2,7 +2,7 @@
 //! `cd_axial`, `ca`, `ca_axial` of a material) and the point masses' (`volume`, `cda`,
 //! `ca`): the library's [`Water`], [`LineHydro`] and [`PointHydro`] (docs/method.md §21).
 
-use phstring::{Current, Friction, LineHydro, PointHydro, Seabed, Vector, Water};
+use phstring::{Bathymetry, Current, Friction, LineHydro, PointHydro, Seabed, Vector, Water};
 use toml::Spanned;
 
 use super::spec::{MaterialSpec, PointMassSpec, SeabedSpec, WaterSpec};
@@ -204,8 +204,9 @@ impl ScenarioFile {
         let s = sb.get_ref();
         let k = self.positive("seabed.stiffness", &s.stiffness)?;
         let c = self.non_negative("seabed.damping", s.damping.as_ref())?;
-        let mut seabed = match (&s.point, &s.normal) {
-            (None, None) => {
+        let mut seabed = match (&s.bathymetry, &s.point, &s.normal) {
+            (Some(file), _, _) => Seabed::grid(self.bathymetry::<D>(s, file)?, k, c),
+            (None, None, None) => {
                 let Some(depth) = &w.depth else {
                     return Err(self.invalid(
                         "seabed",
@@ -215,7 +216,7 @@ impl ScenarioFile {
                 };
                 Seabed::flat(self.positive("water.depth", depth)?, k, c)
             }
-            (point, normal) => {
+            (None, point, normal) => {
                 let point = match point {
                     Some(p) => self.vector::<D>("seabed.point", p)?,
                     None => {
@@ -257,6 +258,30 @@ impl ScenarioFile {
             });
         }
         Ok(seabed)
+    }
+
+    /// `seabed.bathymetry`: the grid read from its file (relative to the scenario file's
+    /// folder), without `point` or `normal`.
+    fn bathymetry<const D: usize>(
+        &self,
+        s: &SeabedSpec,
+        file: &Spanned<String>,
+    ) -> Result<Bathymetry, ScenarioError> {
+        if let Some(p) = s.point.as_ref().or(s.normal.as_ref()) {
+            let key = if s.point.is_some() {
+                "seabed.point"
+            } else {
+                "seabed.normal"
+            };
+            return Err(self.invalid(
+                key,
+                p.span(),
+                "is given with seabed.bathymetry: a seabed is a plane or a grid, not both",
+            ));
+        }
+        let dir = self.path.parent().unwrap_or(std::path::Path::new(""));
+        super::bathymetry::read(&dir.join(file.get_ref()), D)
+            .map_err(|reason| self.invalid("seabed.bathymetry", file.span(), reason))
     }
 
     /// `seabed.normal`: finite, not zero, pointing up (positive vertical component).

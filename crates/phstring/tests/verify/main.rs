@@ -2,6 +2,7 @@
 //! One module per property or part of the model.
 
 mod accuracy;
+mod bathymetry;
 mod common;
 mod damping;
 mod elimination;
