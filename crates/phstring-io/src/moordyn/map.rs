@@ -291,7 +291,7 @@ pub fn map(deck: &Deck, ignore: &[Feature]) -> Result<Mapping, DeckError> {
         );
     }
     let materials = materials(&mut m)?;
-    points(&mut m)?;
+    points(&mut m, settings.depth)?;
     lines(&mut m, &materials)?;
     outputs(&mut m);
     settings_text(&mut m, &settings);
@@ -359,6 +359,19 @@ fn options(m: &mut Mapper) -> Result<Settings, DeckError> {
         }
         None => None,
     };
+    let positive = |name: &str, x: f64| {
+        let line = o.get(name).map_or(1, |x| x.line);
+        let reason = format!("option {name} = {x} must be positive");
+        if x > 0.0 {
+            Ok(())
+        } else {
+            m.unmappable(line, reason)
+        }
+    };
+    positive("dtM", h)?;
+    if let Some(d) = depth {
+        positive("WtrDpth", d)?;
+    }
     let dt_out = o.dt_out()?.filter(|t| *t > 0.0);
     let period = dt_out.unwrap_or(DEFAULT_OUTPUT_PERIOD);
     let s = Settings {
@@ -603,12 +616,21 @@ fn line_type(m: &mut Mapper, t: &LineType, name: String) -> Result<TypeMaterial,
     })
 }
 
-/// The points on lines: named nodes; fixed and vessel points held (`[[boundary]]`), free
+/// The points on lines (none below the seabed at `depth` [m]): named nodes; fixed and vessel points held (`[[boundary]]`), free
 /// points with mass as point masses.
-fn points(m: &mut Mapper) -> Result<(), DeckError> {
+fn points(m: &mut Mapper, depth: Option<f64>) -> Result<(), DeckError> {
     let points = m.deck.points.clone();
     for p in &points {
         let entry = format!("point {} ({})", p.id, p.kind_text);
+        if let Some(depth) = depth
+            && p.position[2] < -depth * (1.0 + 1e-9)
+        {
+            let z = p.position[2];
+            return m.unmappable(
+                p.line,
+                format!("{entry} at z = {z} m lies below the seabed at WtrDpth = {depth} m"),
+            );
+        }
         match p.kind {
             PointKind::Body(n) => {
                 return m.refuse(p.line, format!("{entry}, attached to body {n}"));

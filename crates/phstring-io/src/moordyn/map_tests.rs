@@ -482,6 +482,22 @@ fn unmappable_decks_say_why() {
         refused(&no_lines),
         "deck.dat:1: the deck has no lines: there is nothing to simulate"
     );
+    let deep = SPAR_V2.replace("-426.935   739.47    -320.0", "-426.935   739.47    -321.0");
+    assert_eq!(
+        refused(&deep),
+        format!(
+            "deck.dat:{}: point 2 (Fixed) at z = -321 m lies below the seabed at WtrDpth = 320 m",
+            line_of(&deep, "-321.0")
+        )
+    );
+    let no_step = SPAR_V2.replace("0.002     dtM", "0     dtM");
+    assert_eq!(
+        refused(&no_step),
+        format!(
+            "deck.dat:{}: option dtM = 0 must be positive",
+            line_of(&no_step, "0     dtM")
+        )
+    );
     let to_itself = SPAR_V2.replace("3   spar_line  3        6", "3   spar_line  3        3");
     assert_eq!(
         refused(&to_itself),
