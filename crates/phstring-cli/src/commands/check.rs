@@ -69,7 +69,9 @@ pub fn check(args: &CheckArgs) -> Result<()> {
 /// caveat, the entries not needed and the features dropped.
 fn mapping_table(path: &Path, m: &Mapping) -> String {
     use std::fmt::Write;
+    // Deck text is clipped; the mapping's own sentences (which quote it clipped) are not.
     let p = |t: &str| printable(&clip(t), false).into_owned();
+    let full = |t: &str| printable(t, false).into_owned();
     let mut out = format!(
         "{} is a MoorDyn {} deck; it maps onto a phstring scenario as follows:\n",
         path.display(),
@@ -82,16 +84,16 @@ fn mapping_table(path: &Path, m: &Mapping) -> String {
         } else {
             r.line.to_string()
         };
-        let _ = writeln!(out, "  {line:>5}  {:<40}  {}", p(&r.entry), p(&r.became));
+        let _ = writeln!(out, "  {line:>5}  {:<40}  {}", p(&r.entry), full(&r.became));
     }
     for c in &m.record.converted {
-        let _ = writeln!(out, "  converted: {}", p(c));
+        let _ = writeln!(out, "  converted: {}", full(c));
     }
     for (k, why) in &m.record.not_needed {
-        let _ = writeln!(out, "  not needed: {}: {}", p(k), p(why));
+        let _ = writeln!(out, "  not needed: {}: {}", p(k), full(why));
     }
     for i in &m.record.ignored {
-        let _ = writeln!(out, "  ignored:   {}", p(i));
+        let _ = writeln!(out, "  ignored:   {}", full(i));
     }
     let _ = write!(
         out,
