@@ -43,11 +43,14 @@ fn sets(set: Option<Vec<String>>) -> Vec<String> {
 
 #[pymethods]
 impl Scenario {
-    /// Loads and checks the scenario file at `path`, with `set` overrides (`"KEY=VALUE"`).
+    /// Loads and checks the scenario file at `path`, or the scenario a MoorDyn deck maps
+    /// onto (docs/moordyn.md), with `set` overrides (`"KEY=VALUE"`).
     #[staticmethod]
     #[pyo3(signature = (path, set=None))]
     fn from_file(path: &str, set: Option<Vec<String>>) -> PyResult<Self> {
-        let file = scenario::load(Path::new(path), &sets(set)).map_err(scenario_err)?;
+        let file = phstring_io::moordyn::load_scenario(Path::new(path), &sets(set), &[])
+            .map_err(scenario_err)?
+            .file;
         file.check().map_err(scenario_err)?;
         Ok(Self { file })
     }

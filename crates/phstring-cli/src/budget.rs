@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use anyhow::{Result, bail};
+use phstring_io::moordyn;
 use phstring_io::output::{OutputEstimate, OutputPlan, estimated_output};
 use phstring_io::scenario::{self, ScenarioFile};
 use phstring_io::text::clip;
@@ -94,10 +95,17 @@ fn parse_memory(bytes: usize) -> f64 {
 
 /// Reads the scenario at `path` with `sets` like [`scenario::load`], after refusing a file
 /// whose parse alone would not fit in the memory available (estimated from its size, see
-/// [`PARSE_BYTES_PER_TEXT_BYTE`]), so that such a file is refused before it is parsed.
-pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile> {
+/// [`PARSE_BYTES_PER_TEXT_BYTE`]), so that such a file is refused before it is parsed. A
+/// MoorDyn deck (told by its content) is mapped onto a scenario first, dropping the
+/// features named in `ignore` ([`moordyn::load_scenario`]).
+pub fn load(path: &Path, sets: &[String], ignore: &[String]) -> Result<ScenarioFile> {
+    Ok(load_any(path, sets, ignore)?.file)
+}
+
+/// [`load`], with the deck's mapping when `path` is a MoorDyn deck.
+pub fn load_any(path: &Path, sets: &[String], ignore: &[String]) -> Result<moordyn::Loaded> {
     check_file_size(path)?;
-    Ok(scenario::load(path, sets)?)
+    Ok(moordyn::load_scenario(path, sets, ignore)?)
 }
 
 /// Refuses a scenario file whose parse would not fit in the memory available (a file that

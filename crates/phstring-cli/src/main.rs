@@ -64,7 +64,8 @@ enum Command {
     /// The lowest natural frequencies and mode shapes about the static equilibrium
     /// (modes.csv, ParaView frames, plot, summary.json).
     Modes(commands::modes::ModesArgs),
-    /// Validate a scenario file and print what would run.
+    /// Validate a scenario file (or a MoorDyn deck: with the table of what each deck entry
+    /// became) and print what would run.
     Check(commands::check::CheckArgs),
     /// Build an FMI 2.0 (or 3.0) Co-Simulation FMU of a scenario: its ports (external = true) as
     /// inputs, port outputs, energies and listed node positions as outputs, EA, ρA and h as
@@ -125,7 +126,7 @@ fn dispatch(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Paper(a) => paper::paper(&a.out, a.force, cli.quiet),
         Command::Run(a) => run::run(a, cli.quiet),
-        Command::Check(a) => check::check(&a.scenario, &a.sets),
+        Command::Check(a) => check::check(&a),
         Command::Fmu(a) => fmu::fmu(a),
         Command::Modes(a) => modes::modes(a),
         Command::Linearize(a) => linearize::linearize(a),

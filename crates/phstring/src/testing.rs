@@ -9,6 +9,8 @@
 //! * [`platform`]: a platform hanging from four steel cables, with springs and a heaving
 //!   fairlead (the network of `examples/platform_3d.toml`);
 //! * [`grid_net`]: the mesh of a net of crossing strings, for the linear solvers;
+//! * [`catenary_on_seabed`]: the elastic catenary with a grounded length on a rigid,
+//!   frictionless seabed (closed form);
 //! * [`CountingAllocator`], [`allocations`] and [`live_bytes`]: a global allocator that counts
 //!   the allocations and the live bytes of each thread.
 //!
@@ -244,4 +246,38 @@ unsafe impl GlobalAlloc for CountingAllocator {
         count(new_size as isize - layout.size() as isize);
         unsafe { System.realloc(ptr, layout, new_size) }
     }
+}
+
+/// The elastic catenary of a line of unstretched length `L`, wet weight `w` [N/m] and axial
+/// stiffness `EA` from an anchor on a rigid frictionless seabed to a fairlead `X` away and
+/// `Hv` above the seabed, with a grounded length `L_b` (docs/method.md eq. (21.8); the
+/// statics tests of phstring and of the MoorDyn decks compare with it): with
+/// `L_s = L − L_b` suspended, `V_F = w L_s`,
+///
+///   X  = L_b + (H/w) asinh(V_F/H) + H L/EA ,
+///   Hv = (H/w) (√(1 + (V_F/H)²) − 1) + w L_s²/(2 EA) .
+///
+/// Returns `(H, V_F, L_b)`.
+pub fn catenary_on_seabed(l: f64, w: f64, ea: f64, x: f64, hv: f64) -> (f64, f64, f64) {
+    let bisect = |f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64| {
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if f(mid) < 0.0 { lo = mid } else { hi = mid }
+        }
+        0.5 * (lo + hi)
+    };
+    let suspended = |h: f64| {
+        let height = |ls: f64| {
+            let v = w * ls;
+            (h / w) * ((1.0 + (v / h).powi(2)).sqrt() - 1.0) + w * ls * ls / (2.0 * ea) - hv
+        };
+        bisect(&height, 0.0, l)
+    };
+    let span = |h: f64| {
+        let ls = suspended(h);
+        l - ls + (h / w) * (w * ls / h).asinh() + h * l / ea - x
+    };
+    let h = bisect(&span, 1.0, 1e9);
+    let ls = suspended(h);
+    (h, w * ls, l - ls)
 }

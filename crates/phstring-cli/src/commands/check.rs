@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
+use phstring_io::moordyn::Mapping;
 use phstring_io::scenario::{ScenarioFile, Validated};
 use phstring_io::text::{clip, num, nums, printable};
 
@@ -12,33 +13,95 @@ use crate::budget::{self, budget};
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct CheckArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
     /// Override a scenario key by its dotted path.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// For a MoorDyn deck: drop a feature phstring does not model (EI, rods, bodies, …;
+    /// docs/moordyn.md).
+    #[arg(long = "ignore", value_name = "FEATURE")]
+    pub ignore: Vec<String>,
+    /// Print the scenario as run (for a deck, the one generated from it, with the line
+    /// numbers its messages refer to) instead of checking it.
+    #[arg(long)]
+    pub print_scenario: bool,
 }
 
-/// `phstring check`: validates the scenario at `path` with the `--set` overrides `sets` and
-/// prints what would run, with the estimate of what it takes and the warnings.
-pub fn check(path: &Path, sets: &[String]) -> Result<()> {
-    let file = budget::load(path, sets)?;
+/// `phstring check`: validates the scenario of `args` (a scenario file or a MoorDyn deck)
+/// with its `--set` overrides and prints what would run, with the estimate of what it
+/// takes and the warnings; for a deck first the table of what each deck entry became.
+/// With `--print-scenario`, prints the scenario text (after `--set`) and nothing else.
+pub fn check(args: &CheckArgs) -> Result<()> {
+    let path = args.scenario.as_path();
+    let loaded = budget::load_any(path, &args.sets, &args.ignore)?;
+    let file = &loaded.file;
+    if args.print_scenario {
+        say!("{}", file.text().trim_end());
+        return Ok(());
+    }
+    if let Some(m) = &loaded.mapping {
+        say!("{}", mapping_table(path, m));
+    }
     // The system the scenario sets up must be valid too (finite initial energies and
     // forces); set it up only where it fits in memory (otherwise the warning below says so).
     let validated = file.validated()?;
-    let text = phstring::by_dim!(&validated, v => describe(&file, v));
-    let warnings = if budget(&file)?.memory_error(1).is_none() {
+    let text = phstring::by_dim!(&validated, v => describe(file, v));
+    let warnings = if budget(file)?.memory_error(1).is_none() {
         phstring::by_dim!(file.build(validated)?, s => s.warnings)
     } else {
         Vec::new()
     };
-    say!("{} is valid:\n{text}", path.display());
-    let b = budget(&file)?;
+    let what = match &loaded.mapping {
+        Some(_) => format!("the scenario generated from {}", path.display()),
+        None => path.display().to_string(),
+    };
+    say!("{what} is valid:\n{text}");
+    let b = budget(file)?;
     say!("  estimate:  {}", b.describe());
     for w in warnings.iter().chain(&b.warnings(1)) {
         tell!("warning: {w}");
     }
     Ok(())
+}
+
+/// The table of what each entry of the deck at `path` became, then the conversions with a
+/// caveat, the entries not needed and the features dropped.
+fn mapping_table(path: &Path, m: &Mapping) -> String {
+    use std::fmt::Write;
+    // Deck text is clipped; the mapping's own sentences (which quote it clipped) are not.
+    let p = |t: &str| printable(&clip(t), false).into_owned();
+    let full = |t: &str| printable(t, false).into_owned();
+    let mut out = format!(
+        "{} is a MoorDyn {} deck; it maps onto a phstring scenario as follows:\n",
+        path.display(),
+        m.record.version
+    );
+    let _ = writeln!(out, "  {:>5}  {:<40}  became", "line", "deck entry");
+    for r in &m.rows {
+        let line = if r.line == 0 {
+            "-".to_string()
+        } else {
+            r.line.to_string()
+        };
+        let _ = writeln!(out, "  {line:>5}  {:<40}  {}", p(&r.entry), full(&r.became));
+    }
+    for c in &m.record.converted {
+        let _ = writeln!(out, "  converted: {}", full(c));
+    }
+    for (k, why) in &m.record.not_needed {
+        let _ = writeln!(out, "  not needed: {}: {}", p(k), full(why));
+    }
+    for i in &m.record.ignored {
+        let _ = writeln!(out, "  ignored:   {}", full(i));
+    }
+    let _ = write!(
+        out,
+        "  (the generated scenario: `phstring check {} --print-scenario`; messages about it name `{}` and its lines)",
+        path.display(),
+        phstring_io::moordyn::generated_name(path).display()
+    );
+    out
 }
 
 /// Most entries of one kind (strings, springs, fixed nodes, …) that `check` lists.

@@ -235,6 +235,10 @@ pub struct SetAndForce {
     /// Overwrite a non-empty output folder.
     #[arg(long)]
     pub force: bool,
+    /// For a MoorDyn deck: drop a feature phstring does not model (EI, rods, bodies, …;
+    /// docs/moordyn.md), recorded in the outputs.
+    #[arg(long = "ignore", value_name = "FEATURE")]
+    pub ignore: Vec<String>,
 }
 
 /// What a command that solves one scenario into one output folder starts from
@@ -269,7 +273,7 @@ pub fn prepare_scenario_command<T>(
     read: impl FnOnce(&AnySetup) -> Result<T>,
 ) -> Result<Prepared<T>> {
     let stop = stop_flag();
-    let file = budget::load(scenario, &set_force.sets)?;
+    let file = budget::load(scenario, &set_force.sets, &set_force.ignore)?;
     check_budget(&file)?;
     let setup = file.setup()?;
     let read = read(&setup)?;

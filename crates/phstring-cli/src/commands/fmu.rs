@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::{Context as _, Result, anyhow, bail};
 use phstring_fmu::{model::ModelSpec, package};
-use phstring_io::scenario;
 
 use crate::budget::check_budget;
 
@@ -16,7 +15,7 @@ const FMU_LIBRARY_ENV: &str = "PHSTRING_FMU_LIBRARY";
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct FmuArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
     /// The FMU file to write; its name (without .fmu) is the model identifier.
     #[arg(short, long, value_name = "NAME.fmu")]
@@ -34,6 +33,10 @@ pub struct FmuArgs {
     /// Replace an existing file NAME.fmu.
     #[arg(long)]
     pub force: bool,
+    /// For a MoorDyn deck: drop a feature phstring does not model (EI, rods, bodies, …;
+    /// docs/moordyn.md).
+    #[arg(long = "ignore", value_name = "FEATURE")]
+    pub ignore: Vec<String>,
 }
 
 /// `phstring fmu`: writes the FMI 2.0 (or 3.0) Co-Simulation FMU of the scenario of `args`;
@@ -50,6 +53,7 @@ pub fn fmu(args: FmuArgs) -> Result<()> {
         sets,
         library,
         force,
+        ignore,
         ..
     } = args;
     let (path, out) = (scenario.as_path(), out.as_path());
@@ -75,7 +79,7 @@ pub fn fmu(args: FmuArgs) -> Result<()> {
         .unwrap_or_default();
     let identifier =
         package::model_identifier(&stem).map_err(|e| anyhow!("-o {}: {e}", out.display()))?;
-    let file = scenario::load(path, &sets)?;
+    let file = phstring_io::moordyn::load_scenario(path, &sets, &ignore)?.file;
     check_budget(&file)?;
     let spec = ModelSpec::new(&file)?;
     let library = match library.or_else(|| std::env::var_os(FMU_LIBRARY_ENV).map(PathBuf::from)) {

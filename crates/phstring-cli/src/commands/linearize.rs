@@ -17,7 +17,7 @@ const STOPPED_LINEARIZE: &str = "interrupted before the model was written; nothi
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct LinearizeArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
     /// Linearize at this checkpoint's positions instead of the equilibrium.
     #[arg(long, value_name = "CHECKPOINT")]

@@ -17,7 +17,7 @@ const STOPPED_MODES: &str =
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct ModesArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
     /// Number of modes.
     #[arg(long, default_value_t = 10, value_parser = at_least_one)]

@@ -23,7 +23,8 @@ const STOPPED_EQUILIBRIUM: &str = "interrupted while finding the starting equili
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct RunArgs {
-    /// Scenario file (TOML); not with --resume.
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content); not with
+    /// --resume.
     #[arg(required_unless_present = "resume", conflicts_with = "resume")]
     pub scenario: Option<PathBuf>,
     /// Output folder (default: out/<scenario name>; with --resume, the checkpoint's folder).
@@ -35,6 +36,10 @@ pub struct RunArgs {
     /// Overwrite a non-empty output folder.
     #[arg(long)]
     pub force: bool,
+    /// For a MoorDyn deck: drop a feature phstring does not model (EI, rods, bodies, …;
+    /// docs/moordyn.md), recorded in summary.json.
+    #[arg(long = "ignore", value_name = "FEATURE", conflicts_with = "resume")]
+    pub ignore: Vec<String>,
     /// Write <out>/checkpoint.json every N steps (an interrupted run always writes one).
     #[arg(long, value_name = "N", value_parser = at_least_one)]
     pub checkpoint_every: Option<usize>,
@@ -59,6 +64,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
         out,
         sets,
         force,
+        ignore,
         checkpoint_every,
         resume,
         stop_after_steps,
@@ -83,7 +89,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
             (file, setup, dir, Some(cp), Vec::new(), lock)
         }
         (Some(scenario), None) => {
-            let file = budget::load(&scenario, &sets)?;
+            let file = budget::load(&scenario, &sets, &ignore)?;
             // Before validation, which itself holds the whole mesh.
             let b = budget(&file)?;
             if let Some(e) = b.memory_error(1) {

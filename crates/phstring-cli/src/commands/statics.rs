@@ -16,7 +16,7 @@ const STOPPED_STATICS: &str =
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct StaticsArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
     /// Output folder (default: out/<scenario name>_statics).
     #[arg(long)]

@@ -11,6 +11,7 @@ mod full_disk;
 mod hardening_cli;
 mod hardening_io;
 mod interrupt;
+mod moordyn;
 mod network;
 mod out_folder;
 mod reliability;

@@ -290,6 +290,11 @@ pub struct RunInfo {
     /// Outputs (relative to the run folder) that a failed write left short of the steps the
     /// run took (see [`Writers::incomplete_files`]); empty unless a write failed.
     pub incomplete_files: Vec<String>,
+    /// For a scenario generated from a MoorDyn deck: the deck, its conversions, the entries
+    /// phstring does not need and the features dropped with `--ignore` (the scenario's
+    /// `[deck]` table); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub deck: Option<crate::scenario::DeckSpec>,
     /// The scenario as run (after `--set` overrides); for a scenario text longer than
     /// [`SUMMARY_SCENARIO_BYTES`], the file that holds it ([`SCENARIO_FILE`]).
     pub scenario: serde_json::Value,
@@ -552,6 +557,7 @@ fn new_info<const D: usize>(
         plots_skipped: Vec::new(),
         warnings: Vec::new(),
         incomplete_files: Vec::new(),
+        deck: ctx.file.scenario.deck.clone(),
         scenario: scenario_entry(ctx.file),
         history: History::default(),
     }

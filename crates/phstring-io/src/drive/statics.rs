@@ -93,6 +93,10 @@ pub struct StaticsInfo {
     pub min_tension_element: usize,
     /// Wall time of the solve [s].
     pub solve_s: f64,
+    /// For a scenario generated from a MoorDyn deck, its `[deck]` record (as in a run's
+    /// `summary.json`); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub deck: Option<crate::scenario::DeckSpec>,
 }
 
 /// Solves the equilibrium of scenario `file` (validated and built: `setup`, from
@@ -160,6 +164,7 @@ fn statics_dim<const D: usize>(
         min_tension: min.0,
         min_tension_element: min.1,
         solve_s,
+        deck: file.scenario.deck.clone(),
     };
     let json = serde_json::to_string_pretty(&info).expect("plain data serializes");
     write(out, SUMMARY_FILE, json.as_bytes())?;

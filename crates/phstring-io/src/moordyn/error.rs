@@ -250,4 +250,50 @@ pub enum DeckError {
         /// Rows found.
         found: usize,
     },
+    /// A deck entry that phstring's mapping does not support (yet): refused rather than run
+    /// approximately. Features that can be dropped on purpose name their `--ignore` word.
+    #[error(
+        "{file}:{line}: {what} is not supported by phstring{}",
+        ignore_hint(ignore)
+    )]
+    Unsupported {
+        /// File name.
+        file: String,
+        /// Line of the entry.
+        line: usize,
+        /// What the entry is and why it cannot be mapped.
+        what: String,
+        /// The `--ignore` word that drops it, if it can be dropped.
+        ignore: Option<&'static str>,
+    },
+    /// A deck that cannot be made into a phstring scenario as written (a free point on no
+    /// line, a line from a point to itself, no lines at all).
+    #[error("{file}:{line}: {reason}")]
+    Unmappable {
+        /// File name.
+        file: String,
+        /// Line of the entry (1 for the deck as a whole).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// An `--ignore` word that names no feature.
+    #[error(
+        "--ignore {}: not a feature that can be dropped (one of: {known})",
+        shown(word)
+    )]
+    UnknownIgnore {
+        /// The word given.
+        word: String,
+        /// The known words, comma-separated.
+        known: String,
+    },
+}
+
+/// `; give --ignore WORD to drop it` for an ignorable feature, nothing otherwise.
+fn ignore_hint(ignore: &Option<&'static str>) -> String {
+    match ignore {
+        Some(w) => format!(" (give `--ignore {w}` to drop it on purpose)"),
+        None => String::new(),
+    }
 }

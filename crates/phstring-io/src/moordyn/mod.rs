@@ -16,7 +16,11 @@
 
 mod error;
 mod layout;
+mod map;
+#[cfg(test)]
+mod map_tests;
 mod options;
+mod shape;
 mod tables;
 #[cfg(test)]
 mod tests;
@@ -24,6 +28,7 @@ mod tests;
 use std::path::Path;
 
 pub use error::DeckError;
+pub use map::{DEFAULT_DT, DEFAULT_END, DEFAULT_OUTPUT_PERIOD, Feature, MapRow, Mapping, map};
 pub use options::{DeckOption, OPTION_NAMES, Options, WaterDepth};
 
 use layout::{Block, Layout};
@@ -297,27 +302,7 @@ impl Deck {
 
 /// Reads the deck at `path` (at most [`MAX_DECK_BYTES`]).
 pub fn load(path: &Path) -> Result<Deck, DeckError> {
-    use std::io::Read as _;
-    let read_err = |cause| DeckError::Read {
-        path: path.to_path_buf(),
-        cause,
-    };
-    let mut bytes = Vec::new();
-    std::fs::File::open(path)
-        .map_err(read_err)?
-        .take(MAX_DECK_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(read_err)?;
-    if bytes.len() as u64 > MAX_DECK_BYTES {
-        return Err(DeckError::TooLarge {
-            path: path.to_path_buf(),
-        });
-    }
-    let text = String::from_utf8(bytes).map_err(|e| DeckError::NotText {
-        path: path.to_path_buf(),
-        valid_up_to: e.utf8_error().valid_up_to(),
-    })?;
-    parse(&text, &path.display().to_string())
+    parse(&load_text(path)?, &path.display().to_string())
 }
 
 /// Whether `text` looks like a MoorDyn deck: its dashed header lines name at least two
@@ -473,4 +458,99 @@ fn version(blocks: &[Block]) -> Version {
         .any(|k| t.starts_with(k))
     });
     if v1 { Version::V1 } else { Version::V2 }
+}
+
+/// Why a scenario or deck could not be loaded by [`load_scenario`].
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The deck could not be read or mapped.
+    #[error(transparent)]
+    Deck(#[from] DeckError),
+    /// The scenario (the file, or the one generated from the deck) is invalid.
+    #[error(transparent)]
+    Scenario(#[from] crate::scenario::ScenarioError),
+    /// `--ignore` was given for a scenario file, which has nothing to drop.
+    #[error(
+        "--ignore {0}: {1} is a scenario file, not a MoorDyn deck; --ignore applies to decks only"
+    )]
+    IgnoreWithoutDeck(String, String),
+}
+
+/// A scenario read by [`load_scenario`], and the mapping when it came from a deck.
+pub struct Loaded {
+    /// The scenario (for a deck: the generated one, named [`generated_name`]).
+    pub file: crate::scenario::ScenarioFile,
+    /// The deck's mapping, for a deck.
+    pub mapping: Option<Mapping>,
+}
+
+/// The name under which the scenario generated from the deck at `path` appears in
+/// messages: `deck.dat (generated scenario)`; its line numbers are those of the text that
+/// `phstring check deck.dat --print-scenario` prints.
+pub fn generated_name(path: &Path) -> std::path::PathBuf {
+    format!("{} (generated scenario)", path.display()).into()
+}
+
+/// Reads `path` as a scenario file or, when its content is a MoorDyn deck
+/// ([`looks_like_moordyn`]), reads the deck, maps it ([`map`], dropping the features named
+/// in `ignore`, `--ignore` words) and parses the generated scenario; then applies the
+/// `--set` overrides `sets` either way.
+pub fn load_scenario(path: &Path, sets: &[String], ignore: &[String]) -> Result<Loaded, LoadError> {
+    let text = match load_text(path) {
+        Ok(t) => t,
+        // Let the scenario reader report what is wrong with the file.
+        Err(_) => return plain(path, sets, ignore),
+    };
+    if !looks_like_moordyn(&text) {
+        return plain(path, sets, ignore);
+    }
+    let features = ignore
+        .iter()
+        .map(|w| Feature::from_word(w))
+        .collect::<Result<Vec<_>, _>>()?;
+    let deck = parse(&text, &path.display().to_string())?;
+    let mapping = map(&deck, &features)?;
+    let file = crate::scenario::parse(&mapping.scenario, &generated_name(path), sets)?;
+    Ok(Loaded {
+        file,
+        mapping: Some(mapping),
+    })
+}
+
+/// A scenario file, refusing `--ignore`.
+fn plain(path: &Path, sets: &[String], ignore: &[String]) -> Result<Loaded, LoadError> {
+    if let Some(w) = ignore.first() {
+        return Err(LoadError::IgnoreWithoutDeck(
+            w.clone(),
+            path.display().to_string(),
+        ));
+    }
+    Ok(Loaded {
+        file: crate::scenario::load(path, sets)?,
+        mapping: None,
+    })
+}
+
+/// The text of `path`, at most [`MAX_DECK_BYTES`], if it is UTF-8.
+fn load_text(path: &Path) -> Result<String, DeckError> {
+    use std::io::Read as _;
+    let read_err = |cause| DeckError::Read {
+        path: path.to_path_buf(),
+        cause,
+    };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .map_err(read_err)?
+        .take(MAX_DECK_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(read_err)?;
+    if bytes.len() as u64 > MAX_DECK_BYTES {
+        return Err(DeckError::TooLarge {
+            path: path.to_path_buf(),
+        });
+    }
+    String::from_utf8(bytes).map_err(|e| DeckError::NotText {
+        path: path.to_path_buf(),
+        valid_up_to: e.utf8_error().valid_up_to(),
+    })
 }

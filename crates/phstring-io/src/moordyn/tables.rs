@@ -120,15 +120,117 @@ impl Fields<'_, '_> {
 const V1_TYPE_COLUMNS: usize = 9;
 const V2_TYPE_COLUMNS: usize = 10;
 
-/// Reads the LINE TYPES rows. v1: `Name Diam MassDen EA BA/-zeta Can Cat Cdn Cdt`; v2:
-/// `Name Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx` then any further columns (`Cl dF
-/// cF`), kept raw under the name of their header column.
+/// The columns of the known line type quantities: name, Diam, MassDen, EA, BA, EI (v1
+/// decks may lack it), Cd (v1 Cdn), Ca (v1 Can), CdAx (v1 Cdt), CaAx (v1 Cat).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct TypeColumns {
+    name: usize,
+    diam: usize,
+    mass: usize,
+    ea: usize,
+    ba: usize,
+    ei: Option<usize>,
+    cd: usize,
+    ca: usize,
+    cd_ax: usize,
+    ca_ax: usize,
+}
+
+impl TypeColumns {
+    /// MoorDyn's positional order for `version`.
+    fn positional(version: Version) -> Self {
+        match version {
+            // v1 writes added mass first: Can Cat Cdn Cdt.
+            Version::V1 => TypeColumns {
+                name: 0,
+                diam: 1,
+                mass: 2,
+                ea: 3,
+                ba: 4,
+                ei: None,
+                ca: 5,
+                ca_ax: 6,
+                cd: 7,
+                cd_ax: 8,
+            },
+            Version::V2 => TypeColumns {
+                name: 0,
+                diam: 1,
+                mass: 2,
+                ea: 3,
+                ba: 4,
+                ei: Some(5),
+                cd: 6,
+                ca: 7,
+                cd_ax: 8,
+                ca_ax: 9,
+            },
+        }
+    }
+
+    /// The columns found by their header names (`LineType`/`TypeName`/`Name`, `Diam`,
+    /// `MassDen…`/`Mass/m`, `EA`, `BA…`, `EI`, `Cd`/`Cdn`, `Ca`/`Can`, `CdAx`/`Cdt`,
+    /// `CaAx`/`Cat`; compared without case and punctuation), when every quantity but `EI`
+    /// is named exactly once; `None` otherwise.
+    fn by_names(names: &[&str]) -> Option<Self> {
+        let norm: Vec<String> = names
+            .iter()
+            .map(|n| {
+                n.chars()
+                    .filter(|c| c.is_ascii_alphanumeric())
+                    .collect::<String>()
+                    .to_ascii_lowercase()
+            })
+            .collect();
+        let find = |accept: &dyn Fn(&str) -> bool| {
+            let mut hits = norm.iter().enumerate().filter(|(_, n)| accept(n));
+            let first = hits.next().map(|(i, _)| i);
+            if hits.next().is_some() { None } else { first }
+        };
+        let is = |set: &'static [&'static str]| move |n: &str| set.contains(&n);
+        Some(TypeColumns {
+            name: find(&is(&["name", "typename", "linetype", "type"]))?,
+            diam: find(&is(&["diam", "d", "diameter"]))?,
+            mass: find(&|n: &str| n.starts_with("massden") || n == "massm" || n == "mass")?,
+            ea: find(&is(&["ea"]))?,
+            ba: find(&|n: &str| n.starts_with("ba"))?,
+            ei: find(&is(&["ei"])),
+            cd: find(&is(&["cd", "cdn"]))?,
+            ca: find(&is(&["ca", "can"]))?,
+            cd_ax: find(&is(&["cdax", "cdt"]))?,
+            ca_ax: find(&is(&["caax", "cat"]))?,
+        })
+    }
+
+    /// The indices of the known columns.
+    fn known(&self) -> Vec<usize> {
+        let mut k = vec![
+            self.name, self.diam, self.mass, self.ea, self.ba, self.cd, self.ca, self.cd_ax,
+            self.ca_ax,
+        ];
+        k.extend(self.ei);
+        k
+    }
+}
+
+/// Reads the LINE TYPES rows. Columns are found by their header names where the header
+/// names every quantity (so that a v1 deck with an `EI` column or further columns, such
+/// as a viscoelastic one, is read right); otherwise by position: v1 `Name Diam MassDen EA
+/// BA/-zeta Can Cat Cdn Cdt`, v2 `Name Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx`. Any
+/// other column (`Cl dF cF`, `viscoE`, …) is kept raw under the name of its header column.
 pub(super) fn line_types(
     file: &str,
     version: Version,
     names: &[&str],
     rows: &[Row],
 ) -> Result<Vec<LineType>, DeckError> {
+    let cols = TypeColumns::by_names(names).unwrap_or_else(|| TypeColumns::positional(version));
+    let known = cols.known();
+    let needed = known.iter().max().map_or(0, |m| m + 1).max(match version {
+        Version::V1 => V1_TYPE_COLUMNS,
+        Version::V2 if cols.ei.is_some() => V2_TYPE_COLUMNS,
+        Version::V2 => V1_TYPE_COLUMNS,
+    });
     let mut out: Vec<LineType> = Vec::with_capacity(rows.len());
     for row in rows {
         let r = Fields {
@@ -136,20 +238,19 @@ pub(super) fn line_types(
             line: row.line,
             f: row.fields(),
         };
-        let (known, expected) = match version {
-            Version::V1 => (
-                V1_TYPE_COLUMNS,
-                "at least 9 (Name Diam MassDen EA BA/-zeta Can Cat Cdn Cdt)",
-            ),
-            Version::V2 => (
-                V2_TYPE_COLUMNS,
-                "at least 10 (Name Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx)",
-            ),
-        };
-        if r.f.len() < known {
-            return Err(r.wrong_count("LINE TYPES", expected));
+        if r.f.len() < needed {
+            let expected = match version {
+                Version::V1 => "at least 9 (Name Diam MassDen EA BA/-zeta Can Cat Cdn Cdt)",
+                Version::V2 => "at least 10 (Name Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx)",
+            };
+            let expected = if cols == TypeColumns::positional(version) {
+                expected.to_string()
+            } else {
+                format!("at least {needed} (up to the last column the header names)")
+            };
+            return Err(r.wrong_count("LINE TYPES", &expected));
         }
-        let name = r.f[0].to_string();
+        let name = r.f[cols.name].to_string();
         if let Some(first) = out.iter().find(|t| t.name == name) {
             return Err(DeckError::DuplicateLineType {
                 file: file.to_string(),
@@ -158,24 +259,16 @@ pub(super) fn line_types(
                 first: first.line,
             });
         }
-        // Hydrodynamic coefficients: v1 writes added mass first (Can Cat Cdn Cdt).
-        let (ei, cd, ca, cd_ax, ca_ax) = match version {
-            Version::V1 => (
-                LineValue::Number(0.0),
-                r.num(7, "Cdn")?,
-                r.num(5, "Can")?,
-                r.num(8, "Cdt")?,
-                r.num(6, "Cat")?,
-            ),
-            Version::V2 => (
-                r.value(5, "EI")?,
-                r.num(6, "Cd")?,
-                r.num(7, "Ca")?,
-                r.num(8, "CdAx")?,
-                r.num(9, "CaAx")?,
-            ),
+        let (cd, ca, cd_ax, ca_ax) = match version {
+            Version::V1 => ("Cdn", "Can", "Cdt", "Cat"),
+            Version::V2 => ("Cd", "Ca", "CdAx", "CaAx"),
         };
-        let extra = (known..r.f.len())
+        let ei = match cols.ei {
+            Some(i) => r.value(i, "EI")?,
+            None => LineValue::Number(0.0),
+        };
+        let extra = (0..r.f.len())
+            .filter(|i| !known.contains(i))
             .map(|i| {
                 let col = names
                     .get(i)
@@ -185,15 +278,15 @@ pub(super) fn line_types(
             .collect();
         out.push(LineType {
             name,
-            diameter: r.num(1, "Diam")?,
-            mass_per_length: r.num(2, "MassDen")?,
-            ea: r.value(3, "EA")?,
-            ba: r.value(4, "BA/-zeta")?,
+            diameter: r.num(cols.diam, "Diam")?,
+            mass_per_length: r.num(cols.mass, "MassDen")?,
+            ea: r.value(cols.ea, "EA")?,
+            ba: r.value(cols.ba, "BA/-zeta")?,
             ei,
-            cd,
-            ca,
-            cd_ax,
-            ca_ax,
+            cd: r.num(cols.cd, cd)?,
+            ca: r.num(cols.ca, ca)?,
+            cd_ax: r.num(cols.cd_ax, cd_ax)?,
+            ca_ax: r.num(cols.ca_ax, ca_ax)?,
             extra,
             line: row.line,
         });

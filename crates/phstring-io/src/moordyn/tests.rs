@@ -578,6 +578,65 @@ fn extra_columns_curve_files_and_fortran_numbers() {
     );
 }
 
+/// v1 decks whose LINE DICTIONARY has more columns than MoorDyn v1's nine (an `EI`
+/// column, a viscoelastic `viscoE` column between the others) are read by their header
+/// names, not by position.
+#[test]
+fn v1_line_dictionary_columns_are_found_by_their_header_names() {
+    let row = |header: &str, units: &str, values: &str| {
+        CHAIN_V1
+            .replace(
+                "LineType  Diam    MassDenInAir  EA        BA/-zeta  Can   Cat   Cdn   Cdt",
+                header,
+            )
+            .replace(
+                "(-)       (m)     (kg/m)        (N)       (Pa-s/-)  (-)   (-)   (-)   (-)",
+                units,
+            )
+            .replace(
+                "chain     0.252   390.0         1.674e9   -1.0      1.0   0.5   2.4   1.15",
+                values,
+            )
+    };
+    let with_visco = row(
+        "LineType Diam MassDenInAir EA viscoE BA/-zeta EI Can Cat Cdn Cdt",
+        "(-) (m) (kg/m) (N) (-) (Pa-s/-) (Nm2) (-) (-) (-) (-)",
+        "chain 0.252 390.0 1.674e9 0.3 -1.0 0 1.0 0.5 2.4 1.15",
+    );
+    let d = deck(&with_visco);
+    assert_eq!(d.version, Version::V1);
+    let t = &d.line_types[0];
+    assert_eq!(t.ea, LineValue::Number(1.674e9));
+    assert_eq!(t.ba, LineValue::Number(-1.0));
+    assert_eq!(t.ei, LineValue::Number(0.0));
+    assert_eq!((t.ca, t.ca_ax, t.cd, t.cd_ax), (1.0, 0.5, 2.4, 1.15));
+    assert_eq!(t.extra, [("viscoE".to_string(), "0.3".to_string())]);
+    // The plain v1 header reads as before, and so does a header without names (positional).
+    let plain = &deck(CHAIN_V1).line_types[0];
+    assert_eq!(
+        (plain.ca, plain.ca_ax, plain.cd, plain.cd_ax),
+        (1.0, 0.5, 2.4, 1.15)
+    );
+    let unnamed = row(
+        "a b c d e f g h i",
+        "(-) (m) (kg/m) (N) (-) (-) (-) (-) (-)",
+        "chain 0.252 390.0 1.674e9 -1.0 1.0 0.5 2.4 1.15",
+    );
+    assert_eq!(deck(&unnamed).line_types[0], *plain);
+    let short = row(
+        "LineType Diam MassDenInAir EA viscoE BA/-zeta EI Can Cat Cdn Cdt",
+        "(-) (m) (kg/m) (N) (-) (Pa-s/-) (Nm2) (-) (-) (-) (-)",
+        "chain 0.252 390.0 1.674e9 0.3 -1.0 0 1.0 0.5 2.4",
+    );
+    assert_eq!(
+        err(&short),
+        format!(
+            "deck.dat:{}: a LINE TYPES row needs at least 11 (up to the last column the header names) fields, this one has 10",
+            line_of(&short, "chain 0.252")
+        )
+    );
+}
+
 #[test]
 fn moordyn_f_v1_count_lines_are_checked_and_skipped() {
     let text = "t\nFalse Echo - echo\n--- LINE TYPES ---\n1 NTypes - number of types\nName Diam Mass EA BA Can Cat Cdn Cdt\n(-) (m) (kg/m) (N) (-) (-) (-) (-) (-)\n\

@@ -52,9 +52,9 @@ pub use rounding::ROUNDING_FACTOR;
 pub use settings::MAX_STEPS;
 pub use single::MAX_ELEMENTS;
 pub use spec::{
-    BodyForceSpec, BoundarySpec, FixedSpec, FmuSpec, Geometry, InitialSpec, MaterialSpec, MeshSpec,
-    NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec, StringPathSpec,
-    TimeSpec,
+    BodyForceSpec, BoundarySpec, DeckSpec, FixedSpec, FmuSpec, Geometry, InitialSpec, MaterialSpec,
+    MeshSpec, NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec,
+    StringPathSpec, TimeSpec,
 };
 pub use start::{AnyRunning, AnySetup, Built, Running, Setup, StartError};
 

@@ -76,6 +76,32 @@ pub struct Scenario {
     /// The seabed under `[water]`: contact stiffness and damping, friction, slope.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seabed: Option<Spanned<SeabedSpec>>,
+    /// Where a scenario generated from a MoorDyn deck came from (written by the mapping,
+    /// `phstring_io::moordyn::map`); a record only, it plays no part in the run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deck: Option<DeckSpec>,
+}
+
+/// `[deck]`: the record of a scenario generated from a MoorDyn deck: the deck, what was
+/// converted with a caveat, what the deck asks that phstring does not need, and what was
+/// dropped on purpose (`--ignore`). Copied into `summary.json` as `deck`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DeckSpec {
+    /// The deck's path, as given.
+    pub path: String,
+    /// The deck's format generation (`v1` or `v2`).
+    #[serde(default)]
+    pub version: String,
+    /// Conversions that are not one to one, with the deck line (`deck.dat:14: BA = -0.8 …`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub converted: Vec<String>,
+    /// Deck entries phstring does not need, by name, with the reason.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub not_needed: BTreeMap<String, String>,
+    /// Features dropped on purpose with `--ignore`, with the deck lines they were on.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ignored: Vec<String>,
 }
 
 /// `[water]`: the water the strings with a `diameter` are in. Its surface is at height 0

@@ -1,0 +1,274 @@
+//! MoorDyn decks through the commands: `check` prints the mapping, `statics` of the example
+//! decks against the elastic catenary with a grounded length, a short `run` whose energy
+//! balance holds, and `--ignore`.
+
+use std::path::Path;
+
+use phstring::testing::catenary_on_seabed;
+
+use crate::{phstring, run_with, summary, temp_dir};
+
+const CHAIN: &str = "examples/moordyn/chain_shallow_v1.dat";
+const SPAR: &str = "examples/moordyn/spar_oc3_v2.dat";
+
+/// Sea water [kg/m³] and gravity [m/s²], the decks' values (MoorDyn's defaults for the
+/// chain deck, which gives neither).
+const RHO_W: f64 = 1025.0;
+const G: f64 = 9.80665;
+
+fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The rows of `equilibrium.csv` in `dir`: position and reaction of every node.
+fn equilibrium(dir: &Path) -> Vec<[f64; 6]> {
+    let mut r = csv::Reader::from_path(dir.join("equilibrium.csv")).unwrap();
+    r.records()
+        .map(|x| {
+            let x = x.unwrap();
+            std::array::from_fn(|k| x[k + 1].parse().unwrap())
+        })
+        .collect()
+}
+
+/// A deck line: unstretched length, wet weight per length, EA, anchor and fairlead.
+struct Line {
+    length: f64,
+    wet_weight: f64,
+    ea: f64,
+    anchor: [f64; 3],
+    fairlead: usize,
+    depth: f64,
+}
+
+/// Runs `phstring statics DECK` with `sets` and compares the fairleads' tensions (their
+/// reactions; nodes 3, 4, 5 are the deck's points 4, 5, 6) with the closed form; returns
+/// the largest relative error of the horizontal tension and of the fairlead tension.
+fn fairlead_errors(deck: &str, name: &str, line: &Line, sets: &[&str]) -> (f64, f64) {
+    let out = temp_dir(name);
+    let mut args = vec!["statics", deck, "--out", out.to_str().unwrap(), "--force"];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let o = phstring(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = equilibrium(&out);
+    let s = summary(&out);
+    assert_eq!(s["deck"]["path"], deck);
+    let mut worst = (0.0f64, 0.0f64);
+    for k in 0..3 {
+        let f = rows[line.fairlead + k];
+        let a = rows[k];
+        let x = ((f[0] - a[0]).powi(2) + (f[1] - a[1]).powi(2)).sqrt();
+        let hv = f[2] + line.depth;
+        if k == 0 {
+            assert_eq!(a[..3], line.anchor);
+        }
+        let (h, v, _) = catenary_on_seabed(line.length, line.wet_weight, line.ea, x, hv);
+        let (hf, vf) = ((f[3].powi(2) + f[4].powi(2)).sqrt(), f[5]);
+        let e_h = (hf - h) / h;
+        let e_t = (hf.hypot(vf) - h.hypot(v)) / h.hypot(v);
+        eprintln!(
+            "{name}: fairlead {k}: H {hf:.1} N (closed form {h:.1}), V {vf:.1} N ({v:.1}); errors H {e_h:.2e}, tension {e_t:.2e}"
+        );
+        worst = (worst.0.max(e_h.abs()), worst.1.max(e_t.abs()));
+    }
+    worst
+}
+
+/// `phstring statics` of both example decks: the fairlead tension against the elastic
+/// catenary with a grounded length on a rigid frictionless seabed (the decks have no
+/// friction; the penalty seabed's penetration w/(k d), 4 mm and 0.3 mm, shifts the height by
+/// 1e-4 and 1e-6 of it). The spar's 20 segments of 45 m resolve its 770 m suspended span:
+/// within 0.5 % (measured 0.13 %). The chain's 10 m segments leave about 6 of them to its 65 m
+/// suspended span (H/w = 29 m): the deck's own mesh is 1.0 % off (measured 1.04 %), and two
+/// and four elements per segment (`--set string.K.elements`) bring it to 0.18 % and 0.034 %.
+#[test]
+fn statics_of_the_example_decks_match_the_elastic_catenary() {
+    let area = |d: f64| std::f64::consts::PI / 4.0 * d * d;
+    let spar = Line {
+        length: 902.2,
+        wet_weight: (77.7066 - RHO_W * area(0.09)) * G,
+        ea: 384.243e6,
+        anchor: [853.87, 0.0, -320.0],
+        fairlead: 3,
+        depth: 320.0,
+    };
+    let (e_h, e_t) = fairlead_errors(SPAR, "deck-spar", &spar, &[]);
+    assert!(e_h <= 5e-3 && e_t <= 5e-3, "{e_h:e} {e_t:e}");
+    let chain = Line {
+        length: 400.0,
+        wet_weight: (390.0 - RHO_W * area(0.252)) * G,
+        ea: 1.674e9,
+        anchor: [420.0, 0.0, -50.0],
+        fairlead: 3,
+        depth: 50.0,
+    };
+    let (_, coarse) = fairlead_errors(CHAIN, "deck-chain", &chain, &[]);
+    assert!(coarse <= 1.5e-2, "{coarse:e}");
+    let fine = [
+        "string.0.elements=4",
+        "string.1.elements=4",
+        "string.2.elements=4",
+    ];
+    let (_, refined) = fairlead_errors(CHAIN, "deck-chain4", &chain, &fine);
+    assert!(
+        refined <= 1e-3 && refined < coarse / 10.0,
+        "{refined:e} {coarse:e}"
+    );
+}
+
+/// `phstring run DECK --set time.end=…`: from the static equilibrium, the lines given an
+/// upward velocity `0.2 sin(π s/L)` m/s swing back with drag, seabed damping and the
+/// Kelvin–Voigt damping converted from the deck's damping ratio; energy.csv's balance
+/// `Ĥ − Ĥ(0) − supplied + dissipated` closes to 1e-9 of the energy scale at every row, and
+/// summary.json records the deck.
+#[test]
+fn a_short_run_of_a_deck_keeps_the_energy_balance() {
+    let dir = temp_dir("deck-run");
+    let out = dir.join("chain");
+    let o = run_with(
+        CHAIN,
+        &out,
+        &[
+            "time.end=0.05",
+            r#"initial.velocity=["0", "0", "0.2*sin(pi*s/L)"]"#,
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = csv::Reader::from_path(out.join("energy.csv")).unwrap();
+    let h: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let c = |n: &str| h.iter().position(|x| x == n).unwrap();
+    let rows: Vec<Vec<f64>> = r
+        .records()
+        .map(|x| x.unwrap().iter().map(|f| f.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 101);
+    let (kin, pot, ham, sup, dis) = (
+        c("kinetic"),
+        c("potential"),
+        c("hamiltonian"),
+        c("supplied_energy"),
+        c("dissipated_energy"),
+    );
+    let h0 = rows[0][ham];
+    assert!(
+        rows[0][kin] > 1e3,
+        "the lines start moving: {}",
+        rows[0][kin]
+    );
+    let mut worst = 0.0f64;
+    for row in &rows {
+        let scale = row[kin].abs() + row[pot].abs() + h0.abs() + row[sup].abs() + row[dis].abs();
+        worst = worst.max((row[ham] - h0 - row[sup] + row[dis]).abs() / scale);
+    }
+    eprintln!("deck run: worst balance closure {worst:.2e}");
+    assert!(worst <= 1e-9, "{worst:e}");
+    let last = rows.last().unwrap();
+    assert!(last[dis] > 0.0 && last[c("drag_dissipated")] > 0.0);
+    let s = summary(&out);
+    assert_eq!(s["status"], "completed");
+    assert_eq!(s["deck"]["path"], CHAIN);
+    assert_eq!(s["deck"]["version"], "v1");
+    assert!(s["deck"]["not_needed"]["TmaxIC"].is_string());
+    assert_eq!(s["deck"]["converted"].as_array().unwrap().len(), 6);
+    assert!(s["deck"].get("ignored").is_none());
+}
+
+/// `check DECK` prints the table of what each deck entry became, then the scenario as
+/// `check` always does; `--print-scenario` prints the generated TOML.
+#[test]
+fn check_prints_the_mapping_of_a_deck() {
+    let o = phstring(&["check", SPAR]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for expected in [
+        "examples/moordyn/spar_oc3_v2.dat is a MoorDyn v2 deck; it maps onto a phstring scenario as follows:",
+        "line type spar_line",
+        "materials spar_line_lineN, one per line: tension_only_linear, EA = 384243000 N, rho_a = 77.7066 kg/m (in air)",
+        "node point4, a support held at its deck position (no vessel motion)",
+        "string line1: 20 elements of 45.11 m from point1 to point4, material spar_line_line1",
+        "option dtM = 0.002",
+        "time.h = 0.002 s (the largest step)",
+        "option rho = 1025",
+        "water.density = 1025 kg/m³",
+        "not needed: TmaxIC: phstring solves the static equilibrium directly",
+        "time.end = 60 s: phstring's default for decks",
+        "converted: examples/moordyn/spar_oc3_v2.dat:20: BA/-zeta = -0.8 of line type spar_line on line 1",
+        "the scenario generated from examples/moordyn/spar_oc3_v2.dat is valid:",
+        "mesh:      60 elements, 63 nodes: 3 strings, 0 springs, 63 named nodes",
+    ] {
+        assert!(text.contains(expected), "missing {expected:?} in\n{text}");
+    }
+    let o = phstring(&["check", SPAR, "--print-scenario", "--set", "time.end=2.0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t: toml::Table = stdout(&o).parse().unwrap();
+    assert_eq!(t["string"].as_array().unwrap().len(), 3);
+    assert_eq!(t["time"]["end"].as_float(), Some(2.0));
+    assert_eq!(t["deck"]["path"].as_str(), Some(SPAR));
+    // A bad override of the generated scenario names the option.
+    let o = phstring(&["check", SPAR, "--set", "time.h=-1"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).starts_with("error: --set time.h=-1: "),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// A deck with bending stiffness is refused naming its line; `--ignore EI` drops it and
+/// the summary records it; `--ignore` of a scenario file is refused.
+#[test]
+fn ignore_drops_a_refused_feature_on_purpose() {
+    let dir = temp_dir("deck-ignore");
+    let deck = dir.join("stiff.dat");
+    let text = std::fs::read_to_string(crate::workspace_root().join(SPAR))
+        .unwrap()
+        .replace("-0.8      0     1.6", "-0.8      2.5e4 1.6");
+    std::fs::write(&deck, &text).unwrap();
+    let deck = deck.to_str().unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("spar_line"))
+        .unwrap()
+        + 1;
+    let o = phstring(&["check", deck]);
+    assert!(!o.status.success());
+    assert_eq!(
+        stderr(&o).trim_end(),
+        format!(
+            "error: {deck}:{line}: bending stiffness EI = 25000 N·m² of line type spar_line is not supported by phstring (give `--ignore EI` to drop it on purpose)"
+        )
+    );
+    let out = dir.join("st");
+    let o = phstring(&[
+        "statics",
+        deck,
+        "--ignore",
+        "EI",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let ignored = s["deck"]["ignored"].as_array().unwrap();
+    assert_eq!(ignored.len(), 1);
+    assert!(
+        ignored[0]
+            .as_str()
+            .unwrap()
+            .starts_with(&format!("{deck}:{line}: bending stiffness EI")),
+        "{ignored:?}"
+    );
+    let o = phstring(&["check", "examples/taut_string.toml", "--ignore", "EI"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--ignore applies to decks only"),
+        "{}",
+        stderr(&o)
+    );
+}

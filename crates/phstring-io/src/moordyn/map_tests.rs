@@ -1,0 +1,538 @@
+//! Tests of the mapping of decks onto scenarios: what the example decks become, value by
+//! value, and a refusal naming the deck line for every feature the mapping does not model.
+
+use std::path::Path;
+
+use super::*;
+use crate::scenario::{self, Scenario, ScenarioFile};
+
+const SPAR_V2: &str = include_str!("../../../../examples/moordyn/spar_oc3_v2.dat");
+const CHAIN_V1: &str = include_str!("../../../../examples/moordyn/chain_shallow_v1.dat");
+
+/// The mapping of deck `text` (named `deck.dat`) and the scenario it parses into.
+fn mapped(text: &str, ignore: &[Feature]) -> (Mapping, ScenarioFile) {
+    let deck = parse(text, "deck.dat").unwrap_or_else(|e| panic!("{e}"));
+    let m = map(&deck, ignore).unwrap_or_else(|e| panic!("{e}"));
+    let file = scenario::parse(&m.scenario, Path::new("deck.dat (generated scenario)"), &[])
+        .unwrap_or_else(|e| panic!("{e}\n{}", m.scenario));
+    (m, file)
+}
+
+/// The refusal of deck `text`.
+fn refused(text: &str) -> String {
+    let deck = parse(text, "deck.dat").unwrap_or_else(|e| panic!("{e}"));
+    map(&deck, &[])
+        .expect_err("the deck should be refused")
+        .to_string()
+}
+
+/// The line of `text` (1-based) holding `needle`.
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines().position(|l| l.contains(needle)).unwrap() + 1
+}
+
+fn material<'a>(s: &'a Scenario, name: &str) -> &'a crate::scenario::MaterialSpec {
+    s.materials[name].get_ref()
+}
+
+fn opt(x: &Option<toml::Spanned<f64>>) -> Option<f64> {
+    x.as_ref().map(|v| *v.get_ref())
+}
+
+/// The v1 chain deck: three lines of 40 elements of 10 m, six supports, the damping ratio
+/// converted per line, and the options as settings.
+#[test]
+fn the_chain_deck_maps_value_by_value() {
+    let (m, file) = mapped(CHAIN_V1, &[]);
+    let s = &file.scenario;
+    assert_eq!(*s.dimension.get_ref(), 3);
+    assert_eq!(s.string.len(), 3);
+    // 6 points and 3 × 39 interior nodes.
+    assert_eq!(s.node.len(), 6 + 3 * 39);
+    for (k, st) in s.string.iter().enumerate() {
+        let st = st.get_ref();
+        assert_eq!(st.name.get_ref(), &format!("line{}", k + 1));
+        assert_eq!(st.path.get_ref().len(), 41);
+        assert_eq!(*st.elements.get_ref(), 1);
+        assert!(st.prestretch.is_none(), "slack lines start stress-free");
+        let mat = material(s, st.material.get_ref());
+        assert_eq!(mat.law.get_ref(), "tension_only_linear");
+        assert_eq!(mat.mass.get_ref(), "lumped");
+        assert_eq!((*mat.ea.get_ref(), *mat.rho_a.get_ref()), (1.674e9, 390.0));
+        assert_eq!(opt(&mat.diameter), Some(0.252));
+        // v1 columns Can Cat Cdn Cdt = 1.0 0.5 2.4 1.15.
+        assert_eq!(
+            (
+                opt(&mat.cd),
+                opt(&mat.ca),
+                opt(&mat.cd_axial),
+                opt(&mat.ca_axial)
+            ),
+            (Some(2.4), Some(1.0), Some(1.15), Some(0.5))
+        );
+        // BA = ζ l_seg √(EA ρA) with ζ = 1, l_seg = 10 m; η = BA/2.
+        let eta = 0.5 * 10.0 * (1.674e9_f64 * 390.0).sqrt();
+        let kv = opt(&mat.kelvin_voigt).unwrap();
+        assert!((kv - eta).abs() <= 1e-12 * eta, "{kv} vs {eta}");
+    }
+    // Every element 10 m: the chords of each string's path.
+    let pos: std::collections::HashMap<&str, Vec<f64>> = s
+        .node
+        .iter()
+        .map(|n| {
+            (
+                n.get_ref().name.get_ref().as_str(),
+                n.get_ref().position.get_ref().clone(),
+            )
+        })
+        .collect();
+    for st in &s.string {
+        let names: Vec<String> = st
+            .get_ref()
+            .path
+            .get_ref()
+            .iter()
+            .map(|r| r.get_ref().to_string())
+            .collect();
+        for w in names.windows(2) {
+            let (a, b) = (&pos[w[0].trim_matches('"')], &pos[w[1].trim_matches('"')]);
+            let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            assert!((d - 10.0).abs() <= 1e-9, "{w:?}: {d}");
+        }
+    }
+    // Six supports: anchors and the vessel's fairleads, held.
+    assert_eq!(s.boundary.len(), 6);
+    assert!(
+        m.record
+            .converted
+            .iter()
+            .filter(|c| c.contains("(Vessel) is held"))
+            .count()
+            == 3
+    );
+    // Options: dtM, WtrDpth, kb, cb; g and density by default; 60 s; a frame every 0.1 s.
+    assert_eq!(*s.time.h.get_ref(), 0.0005);
+    assert_eq!(*s.time.end.get_ref(), 60.0);
+    assert_eq!(*s.output.stride.get_ref(), 200);
+    assert_eq!(
+        s.body_force.gravity.as_ref().unwrap().get_ref(),
+        &vec![0.0, 0.0, -9.80665]
+    );
+    let w = s.water.as_ref().unwrap().get_ref();
+    assert_eq!((opt(&w.density), opt(&w.depth)), (Some(1025.0), Some(50.0)));
+    let b = s.seabed.as_ref().unwrap().get_ref();
+    assert_eq!(*b.stiffness.get_ref(), 3.0e6);
+    assert_eq!(
+        (opt(&b.damping), opt(&b.friction), opt(&b.friction_damping)),
+        (Some(3.0e5), Some(0.0), Some(200.0))
+    );
+    assert!(*s.initial.as_ref().unwrap().equilibrium.get_ref());
+    // Not needed, with reasons; recorded in [deck].
+    let d = s.deck.as_ref().unwrap();
+    assert_eq!(d, &m.record);
+    assert_eq!((d.path.as_str(), d.version.as_str()), ("deck.dat", "v1"));
+    let keys: Vec<&str> = d.not_needed.keys().map(String::as_str).collect();
+    assert_eq!(keys, ["CdScaleIC", "OUTPUTS", "TmaxIC", "threshIC"]);
+    // The rows of `check`: one per type, point, line, option and output list, in deck order.
+    let lines: Vec<usize> = m.rows.iter().map(|r| r.line).collect();
+    assert_eq!(
+        lines,
+        [
+            6, 10, 11, 12, 13, 14, 15, 19, 20, 21, 23, 24, 25, 26, 27, 28, 29, 31, 0, 0
+        ]
+    );
+    file.setup().unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// The v2 spar deck: 20 elements of 45.11 m per line, `rho` as the density, `g`, and the
+/// options not needed.
+#[test]
+fn the_spar_deck_maps_value_by_value() {
+    let (m, file) = mapped(SPAR_V2, &[]);
+    let s = &file.scenario;
+    assert_eq!(s.string.len(), 3);
+    assert_eq!(s.node.len(), 6 + 3 * 19);
+    let mat = material(s, "spar_line_line3");
+    assert_eq!(
+        (*mat.ea.get_ref(), *mat.rho_a.get_ref()),
+        (384.243e6, 77.7066)
+    );
+    assert_eq!(
+        (
+            opt(&mat.cd),
+            opt(&mat.ca),
+            opt(&mat.cd_axial),
+            opt(&mat.ca_axial)
+        ),
+        (Some(1.6), Some(1.0), Some(0.1), Some(0.0))
+    );
+    let eta = 0.5 * 0.8 * (902.2 / 20.0) * (384.243e6_f64 * 77.7066).sqrt();
+    let kv = opt(&mat.kelvin_voigt).unwrap();
+    assert!((kv - eta).abs() <= 1e-12 * eta, "{kv} vs {eta}");
+    assert_eq!((*s.time.h.get_ref(), *s.time.end.get_ref()), (0.002, 60.0));
+    assert_eq!(*s.output.stride.get_ref(), 50);
+    assert_eq!(
+        s.body_force.gravity.as_ref().unwrap().get_ref(),
+        &vec![0.0, 0.0, -9.80665]
+    );
+    let w = s.water.as_ref().unwrap().get_ref();
+    assert_eq!(
+        (opt(&w.density), opt(&w.depth)),
+        (Some(1025.0), Some(320.0))
+    );
+    let keys: Vec<&str> = m.record.not_needed.keys().map(String::as_str).collect();
+    assert_eq!(
+        keys,
+        [
+            "CdScaleIC",
+            "OUTPUTS",
+            "TmaxIC",
+            "dtIC",
+            "line output flags",
+            "tScheme",
+            "threshIC"
+        ]
+    );
+    let row = m
+        .rows
+        .iter()
+        .find(|r| r.entry.starts_with("line 1 "))
+        .unwrap();
+    assert_eq!(row.line, line_of(SPAR_V2, "1   spar_line"));
+    assert!(
+        row.became
+            .starts_with("string line1: 20 elements of 45.11 m from point1 to point4"),
+        "{}",
+        row.became
+    );
+}
+
+/// Taut and negative-length lines, free points with and without mass, BA ≥ 0, dtOut and
+/// friction.
+#[test]
+fn taut_lines_free_points_and_positive_ba() {
+    let text = "t\n--- LINE TYPES ---\nName Diam MassDen EA BA EI Cd Ca CdAx CaAx\n(-) (m) (kg/m) (N) (Ns) (Nm2) (-) (-) (-) (-)\n\
+                wire 0.1 20 1e8 4e5 0 1.2 1 0.2 0\n--- POINTS ---\nID Att X Y Z M V CdA Ca\n(#) (-) (m) (m) (m) (kg) (m3) (m2) (-)\n\
+                1 Fixed 100 0 -50 0 0 0 0\n2 Free 50 0 -30 2000 1.5 0.8 1.0\n3 Vessel 0 0 -5 0 0 0 0\n4 Connect 60 10 -20 0 0 0 0\n5 Fixed 90 20 -50 0 0 0 0\n\
+                --- LINES ---\nID Type A B L N Out\n(#) (-) (#) (#) (m) (-) (-)\n1 wire 1 2 60 6 -\n2 wire 2 3 -1.2 5 -\n3 wire 4 5 40 4 -\n4 wire 2 4 14 2 -\n\
+                --- OPTIONS ---\n0.01 dtM\n50 WtrDpth\n0.5 dtOut\n0.4 FrictionCoefficient\n150 FricDamp\n1.5 StatDynFricScale\n--- END ---\n";
+    let (m, file) = mapped(text, &[]);
+    let s = &file.scenario;
+    let mat = material(s, "wire");
+    assert_eq!(opt(&mat.kelvin_voigt), Some(2e5));
+    // Line 1 runs 53.85 m < 60 m (slack): stress-free. Line 2: 1.2 × its 55.2 m span,
+    // slack. Line 3: 41.23 m > 40 m: straight, stretched 41.23/40.
+    let st = |k: usize| s.string[k].get_ref();
+    assert!(st(0).prestretch.is_none());
+    let span3 = (30.0_f64.powi(2) + 10.0_f64.powi(2) + 30.0_f64.powi(2)).sqrt();
+    let p3 = *st(2).prestretch.as_ref().unwrap().get_ref();
+    assert!((p3 - span3 / 40.0).abs() <= 1e-15, "{p3}");
+    assert!(
+        m.record
+            .converted
+            .iter()
+            .any(|c| c.contains("UnstrLen = -1.2 of line 2"))
+    );
+    // A free point with mass is a point mass; one without is a junction.
+    assert_eq!(s.point_mass.len(), 1);
+    let pm = &s.point_mass[0];
+    assert_eq!(pm.node.get_ref().to_string(), "\"point2\"");
+    assert_eq!(*pm.kg.get_ref(), 2000.0);
+    assert_eq!(
+        (opt(&pm.volume), opt(&pm.cda), opt(&pm.ca)),
+        (Some(1.5), Some(0.8), Some(1.0))
+    );
+    assert_eq!(s.boundary.len(), 3);
+    assert_eq!(*s.output.stride.get_ref(), 50);
+    let b = s.seabed.as_ref().unwrap().get_ref();
+    assert_eq!(
+        (opt(&b.friction), opt(&b.friction_damping)),
+        (Some(0.4), Some(150.0))
+    );
+    assert!(
+        m.record
+            .converted
+            .iter()
+            .any(|c| c.starts_with("deck.dat:") && c.contains("StatDynFricScale = 1.5"))
+    );
+    assert!(m.record.converted.iter().any(|c| {
+        c.contains("BA = 400000 N·s of line type wire → kelvin_voigt η = BA/2 = 200000 N·s")
+    }));
+    file.setup().unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Every feature the mapping does not model is refused naming its deck line (and the
+/// `--ignore` word where it can be dropped); with the word, the deck maps and the record
+/// lists what was dropped.
+#[test]
+fn unsupported_features_are_refused_with_their_line() {
+    let base = SPAR_V2.to_string();
+    let types_row = "spar_line 0.09   77.7066   384.243e6   -0.8      0     1.6   1.0   0.1   0.0";
+    let with_row = |old: &str, new: &str| base.replace(old, new);
+    let section = |title: &str| {
+        base.replace(
+            "---------------------- OPTIONS",
+            &format!("--- {title} ---\nName X\n(-) (-)\na 1\n---------------------- OPTIONS"),
+        )
+    };
+    let option = |o: &str| base.replace("0.002     dtM", &format!("{o}\n0.002     dtM"));
+    let cases: Vec<(String, &str, Option<Feature>, &str)> = vec![
+        (
+            with_row(
+                types_row,
+                &types_row.replace("-0.8      0  ", "-0.8      2e4"),
+            ),
+            "spar_line 0.09",
+            Some(Feature::BendingStiffness),
+            "bending stiffness EI = 20000",
+        ),
+        (
+            with_row(types_row, &types_row.replace("384.243e6", "ea.txt")),
+            "spar_line 0.09",
+            None,
+            "EA from the curve file `ea.txt`",
+        ),
+        (
+            with_row(types_row, &types_row.replace("384.243e6", "3e8|4e8")),
+            "spar_line 0.09",
+            None,
+            "viscoelastic EA `3e8|4e8`",
+        ),
+        (
+            with_row(types_row, &types_row.replace("-0.8  ", "ba.txt")),
+            "spar_line 0.09",
+            None,
+            "BA from the curve file `ba.txt`",
+        ),
+        (
+            section("ROD TYPES"),
+            "ROD TYPES",
+            Some(Feature::Rods),
+            "section `ROD TYPES`",
+        ),
+        (
+            section("RODS"),
+            "--- RODS",
+            Some(Feature::Rods),
+            "section `RODS`",
+        ),
+        (
+            section("BODIES"),
+            "BODIES",
+            Some(Feature::Bodies),
+            "section `BODIES`",
+        ),
+        (
+            section("FAILURE"),
+            "FAILURE",
+            Some(Feature::Failure),
+            "section `FAILURE`",
+        ),
+        (
+            section("CONTROL"),
+            "CONTROL",
+            Some(Feature::Control),
+            "section `CONTROL`",
+        ),
+        (
+            section("EXTERNAL LOADS"),
+            "EXTERNAL LOADS",
+            Some(Feature::ExternalLoads),
+            "section `EXTERNAL LOADS`",
+        ),
+        (
+            section("SYROPE IC"),
+            "SYROPE IC",
+            Some(Feature::SyropeIc),
+            "section `SYROPE IC`",
+        ),
+        (
+            section("MYSTERY"),
+            "MYSTERY",
+            Some(Feature::UnknownSections),
+            "section `MYSTERY`",
+        ),
+        (
+            option("1 WaveKin"),
+            "1 WaveKin",
+            Some(Feature::Waves),
+            "option WaveKin = 1 (WaveKin from files)",
+        ),
+        (
+            option("2 Currents"),
+            "2 Currents",
+            Some(Feature::Currents),
+            "option Currents = 2 (Currents from files)",
+        ),
+        (
+            option("bathy.txt SeafloorFile"),
+            "SeafloorFile",
+            None,
+            "a bathymetry file",
+        ),
+        (
+            base.replace("320       WtrDpth", "bathy.txt WtrDpth"),
+            "WtrDpth",
+            None,
+            "WtrDpth `bathy.txt` (a bathymetry file",
+        ),
+        (
+            option("3 WaterKinematicsMode"),
+            "WaterKinematicsMode",
+            Some(Feature::UnknownOptions),
+            "option `WaterKinematicsMode`",
+        ),
+        (
+            with_row("4   Vessel      5.2", "4   Body1       5.2"),
+            "4   Body1",
+            None,
+            "point 4 (Body1), attached to body 1",
+        ),
+        (
+            with_row("4   Vessel      5.2", "4   Turbine2    5.2"),
+            "4   Turbine2",
+            None,
+            "attached to turbine 2",
+        ),
+        (
+            with_row("3   spar_line  3        6", "3   spar_line  3        R1B"),
+            "3   spar_line",
+            None,
+            "line 3 attached to end B of rod 1",
+        ),
+        (
+            with_row(
+                "4   Vessel      5.2       0.0       -70.0   0     0",
+                "4   Free        5.2       0.0       -70.0   0     3",
+            ),
+            "4   Free",
+            None,
+            "point 4 with Volume, CdA or Ca but no Mass",
+        ),
+    ];
+    for (text, needle, feature, what) in &cases {
+        let line = line_of(text, needle);
+        let e = refused(text);
+        assert!(
+            e.starts_with(&format!("deck.dat:{line}: ")),
+            "{needle}: {e}"
+        );
+        assert!(e.contains(what), "{needle}: {e}");
+        assert!(e.contains("is not supported by phstring"), "{e}");
+        match feature {
+            Some(f) => {
+                assert!(e.contains(&format!("`--ignore {}`", f.word())), "{e}");
+                let (m, _) = mapped(text, &[*f]);
+                assert_eq!(m.record.ignored.len(), 1, "{needle}");
+                assert!(m.record.ignored[0].starts_with(&format!("deck.dat:{line}: ")));
+                assert!(m.scenario.contains(&format!("(--ignore {})", f.word())));
+            }
+            None => assert!(!e.contains("--ignore"), "{e}"),
+        }
+    }
+}
+
+/// The VIV columns, other extra columns and point forces (v1 decks' FX FY FZ).
+#[test]
+fn viv_extra_columns_and_point_forces_are_refused() {
+    let v2 = SPAR_V2
+        .replace(
+            "EI    Cd    Ca    CdAx  CaAx",
+            "EI    Cd    Ca    CdAx  CaAx Cl dF cF",
+        )
+        .replace("0.1   0.0\n", "0.1   0.0  0.8 0.1 0.2\n");
+    let line = line_of(&v2, "spar_line 0.09");
+    let e = refused(&v2);
+    assert!(
+        e.starts_with(&format!(
+            "deck.dat:{line}: vortex-induced vibration (Cl = 0.8)"
+        )),
+        "{e}"
+    );
+    // Zero VIV coefficients are VIV switched off: mapped.
+    mapped(&v2.replace("0.8 0.1 0.2", "0 0 0"), &[]);
+    let other = v2
+        .replace("Cl dF cF", "Xx dF cF")
+        .replace("0.8 0.1 0.2", "0.8 0 0");
+    assert!(refused(&other).contains("line type column `Xx` = 0.8"));
+    let forced = CHAIN_V1.replace(
+        "4     Vessel   40.0     0.0       -8.0   0    0    0    0    0",
+        "4     Vessel   40.0     0.0       -8.0   0    0    0    0    -5",
+    );
+    let e = refused(&forced);
+    assert!(
+        e.starts_with(&format!(
+            "deck.dat:{}: the steady force FX FY FZ = [0.0, 0.0, -5.0] on point 4 (Vessel)",
+            line_of(&forced, "4     Vessel")
+        )),
+        "{e}"
+    );
+    assert!(Feature::from_word("eI").is_ok());
+    assert_eq!(
+        Feature::from_word("wind").unwrap_err().to_string(),
+        "--ignore wind: not a feature that can be dropped (one of: EI, rods, bodies, failure, control, external_loads, waves, currents, viv, point_forces, syrope, unknown_sections, extra_columns, unknown_options)"
+    );
+}
+
+/// Decks that cannot become a scenario as written.
+#[test]
+fn unmappable_decks_say_why() {
+    let no_lines = SPAR_V2.replace("1   spar_line  1        4        902.2     20       -\n2   spar_line  2        5        902.2     20       -\n3   spar_line  3        6        902.2     20       pt\n", "");
+    assert_eq!(
+        refused(&no_lines),
+        "deck.dat:1: the deck has no lines: there is nothing to simulate"
+    );
+    let deep = SPAR_V2.replace("-426.935   739.47    -320.0", "-426.935   739.47    -321.0");
+    assert_eq!(
+        refused(&deep),
+        format!(
+            "deck.dat:{}: point 2 (Fixed) at z = -321 m lies below the seabed at WtrDpth = 320 m",
+            line_of(&deep, "-321.0")
+        )
+    );
+    let no_step = SPAR_V2.replace("0.002     dtM", "0     dtM");
+    assert_eq!(
+        refused(&no_step),
+        format!(
+            "deck.dat:{}: option dtM = 0 must be positive",
+            line_of(&no_step, "0     dtM")
+        )
+    );
+    let to_itself = SPAR_V2.replace("3   spar_line  3        6", "3   spar_line  3        3");
+    assert_eq!(
+        refused(&to_itself),
+        format!(
+            "deck.dat:{}: line 3 runs from point 3 to itself",
+            line_of(&to_itself, "3   spar_line")
+        )
+    );
+}
+
+/// `load_scenario` tells decks from scenario files by content, applies `--set` to the
+/// generated scenario, and refuses `--ignore` for a scenario file.
+#[test]
+fn load_scenario_reads_decks_and_scenarios() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let deck = root.join("moordyn/spar_oc3_v2.dat");
+    let l = load_scenario(&deck, &["time.end=0.2".into()], &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(*l.file.scenario.time.end.get_ref(), 0.2);
+    assert_eq!(l.file.path, generated_name(&deck));
+    assert!(l.mapping.is_some());
+    let toml = root.join("taut_string.toml");
+    assert!(load_scenario(&toml, &[], &[]).unwrap().mapping.is_none());
+    let e = load_scenario(&toml, &[], &["EI".into()])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.starts_with("--ignore EI: ")
+            && e.ends_with(
+                "is a scenario file, not a MoorDyn deck; --ignore applies to decks only"
+            ),
+        "{e}"
+    );
+    // Validation errors of the generated scenario name the option that caused them.
+    let l = load_scenario(&deck, &["time.end=-1".into()], &[]).unwrap();
+    let e = l.file.setup().err().unwrap().to_string();
+    assert!(e.starts_with("--set time.end=-1: "), "{e}");
+}
