@@ -98,14 +98,25 @@ fn parse_memory(bytes: usize) -> f64 {
 /// [`PARSE_BYTES_PER_TEXT_BYTE`]), so that such a file is refused before it is parsed. A
 /// MoorDyn deck (told by its content) is mapped onto a scenario first, dropping the
 /// features named in `ignore` ([`moordyn::load_scenario`]).
-pub fn load(path: &Path, sets: &[String], ignore: &[String]) -> Result<ScenarioFile> {
-    Ok(load_any(path, sets, ignore)?.file)
+pub fn load(
+    path: &Path,
+    sets: &[String],
+    ignore: &[String],
+    motion: Option<&Path>,
+) -> Result<ScenarioFile> {
+    Ok(load_any(path, sets, ignore, motion)?.file)
 }
 
-/// [`load`], with the deck's mapping when `path` is a MoorDyn deck.
-pub fn load_any(path: &Path, sets: &[String], ignore: &[String]) -> Result<moordyn::Loaded> {
+/// [`load`], with the deck's mapping when `path` is a MoorDyn deck; `motion` moves its
+/// coupled points ([`moordyn::load_scenario_driven`]).
+pub fn load_any(
+    path: &Path,
+    sets: &[String],
+    ignore: &[String],
+    motion: Option<&Path>,
+) -> Result<moordyn::Loaded> {
     check_file_size(path)?;
-    Ok(moordyn::load_scenario(path, sets, ignore)?)
+    Ok(moordyn::load_scenario_driven(path, sets, ignore, motion)?)
 }
 
 /// Refuses a scenario file whose parse would not fit in the memory available (a file that

@@ -22,6 +22,11 @@ pub struct CheckArgs {
     /// docs/moordyn.md).
     #[arg(long = "ignore", value_name = "FEATURE")]
     pub ignore: Vec<String>,
+    /// For a MoorDyn deck: the vessel motion, a table `t, x, y, z, roll, pitch, yaw` [s, m,
+    /// rad] that moves the deck's Vessel/Coupled points rigidly (docs/moordyn.md); the run
+    /// ends at its last time unless --set time.end=… is given.
+    #[arg(long, value_name = "FILE")]
+    pub motion: Option<PathBuf>,
     /// Print the scenario as run (for a deck, the one generated from it, with the line
     /// numbers its messages refer to) instead of checking it.
     #[arg(long)]
@@ -34,7 +39,7 @@ pub struct CheckArgs {
 /// With `--print-scenario`, prints the scenario text (after `--set`) and nothing else.
 pub fn check(args: &CheckArgs) -> Result<()> {
     let path = args.scenario.as_path();
-    let loaded = budget::load_any(path, &args.sets, &args.ignore)?;
+    let loaded = budget::load_any(path, &args.sets, &args.ignore, args.motion.as_deref())?;
     let file = &loaded.file;
     if args.print_scenario {
         say!("{}", file.text().trim_end());

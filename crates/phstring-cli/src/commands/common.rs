@@ -239,6 +239,11 @@ pub struct SetAndForce {
     /// docs/moordyn.md), recorded in the outputs.
     #[arg(long = "ignore", value_name = "FEATURE")]
     pub ignore: Vec<String>,
+    /// For a MoorDyn deck: the vessel motion, a table `t, x, y, z, roll, pitch, yaw` [s, m,
+    /// rad] that moves the deck's Vessel/Coupled points rigidly (docs/moordyn.md); the run
+    /// ends at its last time unless --set time.end=… is given.
+    #[arg(long, value_name = "FILE")]
+    pub motion: Option<PathBuf>,
 }
 
 /// What a command that solves one scenario into one output folder starts from
@@ -273,7 +278,12 @@ pub fn prepare_scenario_command<T>(
     read: impl FnOnce(&AnySetup) -> Result<T>,
 ) -> Result<Prepared<T>> {
     let stop = stop_flag();
-    let file = budget::load(scenario, &set_force.sets, &set_force.ignore)?;
+    let file = budget::load(
+        scenario,
+        &set_force.sets,
+        &set_force.ignore,
+        set_force.motion.as_deref(),
+    )?;
     check_budget(&file)?;
     let setup = file.setup()?;
     let read = read(&setup)?;

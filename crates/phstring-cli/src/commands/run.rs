@@ -40,6 +40,11 @@ pub struct RunArgs {
     /// docs/moordyn.md), recorded in summary.json.
     #[arg(long = "ignore", value_name = "FEATURE", conflicts_with = "resume")]
     pub ignore: Vec<String>,
+    /// For a MoorDyn deck: the vessel motion, a table `t, x, y, z, roll, pitch, yaw` [s, m,
+    /// rad] that moves the deck's Vessel/Coupled points rigidly (docs/moordyn.md); the run
+    /// ends at its last time unless --set time.end=… is given.
+    #[arg(long, value_name = "FILE", conflicts_with = "resume")]
+    pub motion: Option<PathBuf>,
     /// Write <out>/checkpoint.json every N steps (an interrupted run always writes one).
     #[arg(long, value_name = "N", value_parser = at_least_one)]
     pub checkpoint_every: Option<usize>,
@@ -65,6 +70,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
         sets,
         force,
         ignore,
+        motion,
         checkpoint_every,
         resume,
         stop_after_steps,
@@ -89,7 +95,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
             (file, setup, dir, Some(cp), Vec::new(), lock)
         }
         (Some(scenario), None) => {
-            let file = budget::load(&scenario, &sets, &ignore)?;
+            let file = budget::load(&scenario, &sets, &ignore, motion.as_deref())?;
             // Before validation, which itself holds the whole mesh.
             let b = budget(&file)?;
             if let Some(e) = b.memory_error(1) {

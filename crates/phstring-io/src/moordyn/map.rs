@@ -205,6 +205,10 @@ fn is_name(s: &str) -> bool {
 struct Mapper<'d> {
     deck: &'d Deck,
     ignore: &'d [Feature],
+    /// The vessel motion (`--motion`), if given.
+    motion: Option<&'d VesselMotion>,
+    /// The coupled points' node names, for the motion's `[[platform]]`.
+    vessels: Vec<String>,
     rows: Vec<MapRow>,
     record: DeckSpec,
     /// The scenario text, table by table.
@@ -268,9 +272,71 @@ impl Mapper<'_> {
 /// Maps `deck` onto a scenario, dropping the features in `ignore`. Refuses (with the deck
 /// line) every entry that the mapping does not support and that is not ignored.
 pub fn map(deck: &Deck, ignore: &[Feature]) -> Result<Mapping, DeckError> {
+    map_driven(deck, ignore, None)
+}
+
+/// A vessel motion for a deck's coupled points (`--motion FILE`): a platform table of the
+/// seven columns `t, x, y, z, roll, pitch, yaw` [s, m, m, m, rad, rad, rad]
+/// (`[[platform]]` in docs/scenario.md, MoorDyn's angle convention).
+#[derive(Debug, Clone)]
+pub struct VesselMotion {
+    /// The table file (absolute, so that the generated scenario finds it).
+    pub path: std::path::PathBuf,
+    /// The platform's position [m] and rotation at `t = 0`.
+    pub start: (phstring::Vector<3>, phstring::linsolve::Block<3>),
+    /// The table's last time [s].
+    pub end: f64,
+}
+
+impl VesselMotion {
+    /// Reads the platform table at `path` (errors name `file:line`).
+    pub fn read(path: &std::path::Path) -> Result<Self, crate::tables::TableError> {
+        let table = crate::tables::read_table(path, 7)?;
+        let at0 = |j: usize| table.signal(j).value(0.0);
+        let p = phstring::Vector::<3>::new(at0(0), at0(1), at0(2));
+        let r = phstring::signal::rotation(at0(3), at0(4), at0(5));
+        let end = *table.times.last().unwrap_or(&0.0);
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        Ok(Self {
+            path,
+            start: (p, r),
+            end,
+        })
+    }
+}
+
+/// [`map`] with the deck's coupled points carried by `motion`: they become the supports of
+/// one `[[platform]]` driven by its table, their deck positions the body coordinates (so a
+/// point starts at `p(0) + R(0) b`), and the run ends at the table's last time.
+pub fn map_driven(
+    deck: &Deck,
+    ignore: &[Feature],
+    motion: Option<&VesselMotion>,
+) -> Result<Mapping, DeckError> {
+    let moved;
+    let deck = match motion {
+        Some(mv) => {
+            let mut d = deck.clone();
+            let (p, r) = &mv.start;
+            for pt in d
+                .points
+                .iter_mut()
+                .filter(|pt| pt.kind == PointKind::Coupled)
+            {
+                let b = phstring::Vector::<3>::from(pt.position);
+                let at = p + r * b;
+                pt.position = [at[0], at[1], at[2]];
+            }
+            moved = d;
+            &moved
+        }
+        None => deck,
+    };
     let mut m = Mapper {
         deck,
         ignore,
+        motion,
+        vessels: Vec::new(),
         rows: Vec::new(),
         record: DeckSpec {
             path: deck.file.clone(),
@@ -292,6 +358,7 @@ pub fn map(deck: &Deck, ignore: &[Feature]) -> Result<Mapping, DeckError> {
     }
     let materials = materials(&mut m)?;
     points(&mut m, settings.depth)?;
+    platform(&mut m)?;
     lines(&mut m, &materials)?;
     outputs(&mut m);
     settings_text(&mut m, &settings);
@@ -664,6 +731,10 @@ fn points(m: &mut Mapper, depth: Option<f64>) -> Result<(), DeckError> {
             f(p.position[2])
         );
         let became = match p.kind {
+            PointKind::Coupled if m.motion.is_some() => {
+                m.vessels.push(name.clone());
+                format!("node {name}, a support moved by the vessel motion (--motion)")
+            }
             PointKind::Fixed | PointKind::Coupled => {
                 let _ = write!(
                     m.text,
@@ -681,6 +752,34 @@ fn points(m: &mut Mapper, depth: Option<f64>) -> Result<(), DeckError> {
         };
         m.row(p.line, entry, became);
     }
+    Ok(())
+}
+
+/// The vessel motion's `[[platform]]` over the coupled points (none without `--motion`).
+fn platform(m: &mut Mapper) -> Result<(), DeckError> {
+    let Some(mv) = m.motion else {
+        return Ok(());
+    };
+    if m.vessels.is_empty() {
+        return m.unmappable(
+            1,
+            format!(
+                "--motion {} moves the deck's Vessel/Coupled points, but no line ends at one",
+                mv.path.display()
+            ),
+        );
+    }
+    let nodes: Vec<String> = m.vessels.iter().map(|n| q(n)).collect();
+    let _ = write!(
+        m.text,
+        "# --motion: the vessel's platform table moves the coupled points rigidly.\n[[platform]]\nname = \"vessel\"\nnodes = [{}]\nmotion_table = {}\n\n",
+        nodes.join(", "),
+        q(&mv.path.display().to_string())
+    );
+    m.record.converted.push(format!(
+        "--motion {}: the coupled points follow the platform table (deck positions are body coordinates)",
+        mv.path.display()
+    ));
     Ok(())
 }
 
@@ -895,7 +994,8 @@ fn outputs(m: &mut Mapper) {
 
 /// `[body_force]`, `[water]`, `[seabed]`, `[initial]`, `[time]`, `[output]`.
 fn settings_text(m: &mut Mapper, s: &Settings) {
-    let end = (DEFAULT_END / s.h - 1e-9).ceil().max(1.0) * s.h;
+    let span = m.motion.map_or(DEFAULT_END, |mv| mv.end);
+    let end = (span / s.h - 1e-9).ceil().max(1.0) * s.h;
     let _ = write!(
         m.text,
         "[body_force]\ngravity = [0.0, 0.0, {}]\n\n[water]\ndensity = {}\n",
@@ -925,7 +1025,7 @@ fn settings_text(m: &mut Mapper, s: &Settings) {
     let _ = write!(
         m.text,
         "# A deck has no initial shape: the run starts from the static equilibrium.\n[initial]\nequilibrium = true\n\n\
-         # A deck has no end time: {DEFAULT_END} s (whole steps) unless --set time.end=… is given.\n\
+         # A deck has no end time: {span} s (whole steps) unless --set time.end=… is given.\n\
          [time]\nh = {}\nend = {}\n\n[output]\nstride = {}\n\n",
         f(s.h),
         f(end),
@@ -934,7 +1034,14 @@ fn settings_text(m: &mut Mapper, s: &Settings) {
     m.row(
         0,
         "(no end time in a deck)",
-        format!("time.end = {end} s: phstring's default for decks; --set time.end=… changes it"),
+        match m.motion {
+            Some(_) => format!(
+                "time.end = {end} s: the vessel motion's last time; --set time.end=… changes it"
+            ),
+            None => format!(
+                "time.end = {end} s: phstring's default for decks; --set time.end=… changes it"
+            ),
+        },
     );
     m.row(
         0,

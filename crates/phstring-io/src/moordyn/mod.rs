@@ -28,7 +28,10 @@ mod tests;
 use std::path::Path;
 
 pub use error::DeckError;
-pub use map::{DEFAULT_DT, DEFAULT_END, DEFAULT_OUTPUT_PERIOD, Feature, MapRow, Mapping, map};
+pub use map::{
+    DEFAULT_DT, DEFAULT_END, DEFAULT_OUTPUT_PERIOD, Feature, MapRow, Mapping, VesselMotion, map,
+    map_driven,
+};
 pub use options::{DeckOption, OPTION_NAMES, Options, WaterDepth};
 
 use layout::{Block, Layout};
@@ -474,6 +477,14 @@ pub enum LoadError {
         "--ignore {0}: {1} is a scenario file, not a MoorDyn deck; --ignore applies to decks only"
     )]
     IgnoreWithoutDeck(String, String),
+    /// The vessel motion of `--motion` could not be read.
+    #[error("--motion: {0}")]
+    Motion(#[from] crate::tables::TableError),
+    /// `--motion` was given for a scenario file, whose supports name their own motions.
+    #[error(
+        "--motion {0}: {1} is a scenario file, not a MoorDyn deck; a scenario moves its supports with position or motion_table keys"
+    )]
+    MotionWithoutDeck(String, String),
 }
 
 /// A scenario read by [`load_scenario`], and the mapping when it came from a deck.
@@ -496,12 +507,34 @@ pub fn generated_name(path: &Path) -> std::path::PathBuf {
 /// in `ignore`, `--ignore` words) and parses the generated scenario; then applies the
 /// `--set` overrides `sets` either way.
 pub fn load_scenario(path: &Path, sets: &[String], ignore: &[String]) -> Result<Loaded, LoadError> {
+    load_scenario_driven(path, sets, ignore, None)
+}
+
+/// [`load_scenario`] with the deck's coupled points moved by the platform table at `motion`
+/// (`--motion FILE`, [`map_driven`]); refused for a scenario file.
+pub fn load_scenario_driven(
+    path: &Path,
+    sets: &[String],
+    ignore: &[String],
+    motion: Option<&Path>,
+) -> Result<Loaded, LoadError> {
+    let refuse_motion = || match motion {
+        Some(mv) => Err(LoadError::MotionWithoutDeck(
+            mv.display().to_string(),
+            path.display().to_string(),
+        )),
+        None => Ok(()),
+    };
     let text = match load_text(path) {
         Ok(t) => t,
         // Let the scenario reader report what is wrong with the file.
-        Err(_) => return plain(path, sets, ignore),
+        Err(_) => {
+            refuse_motion()?;
+            return plain(path, sets, ignore);
+        }
     };
     if !looks_like_moordyn(&text) {
+        refuse_motion()?;
         return plain(path, sets, ignore);
     }
     let features = ignore
@@ -509,7 +542,8 @@ pub fn load_scenario(path: &Path, sets: &[String], ignore: &[String]) -> Result<
         .map(|w| Feature::from_word(w))
         .collect::<Result<Vec<_>, _>>()?;
     let deck = parse(&text, &path.display().to_string())?;
-    let mapping = map(&deck, &features)?;
+    let vessel = motion.map(VesselMotion::read).transpose()?;
+    let mapping = map_driven(&deck, &features, vessel.as_ref())?;
     let file = crate::scenario::parse(&mapping.scenario, &generated_name(path), sets)?;
     Ok(Loaded {
         file,
