@@ -34,6 +34,32 @@ fn equilibrium(dir: &Path) -> Vec<[f64; 6]> {
         .collect()
 }
 
+/// The columns of `energy.csv` in `out` by name, its rows, and the worst closure of the
+/// balance `Ĥ − Ĥ(0) − supplied + dissipated` over its rows, relative to each row's scale.
+fn energy_closure(out: &Path) -> (Vec<String>, Vec<Vec<f64>>, f64) {
+    let mut r = csv::Reader::from_path(out.join("energy.csv")).unwrap();
+    let h: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let c = |n: &str| h.iter().position(|x| x == n).unwrap();
+    let rows: Vec<Vec<f64>> = r
+        .records()
+        .map(|x| x.unwrap().iter().map(|f| f.parse().unwrap()).collect())
+        .collect();
+    let (kin, pot, ham, sup, dis) = (
+        c("kinetic"),
+        c("potential"),
+        c("hamiltonian"),
+        c("supplied_energy"),
+        c("dissipated_energy"),
+    );
+    let h0 = rows[0][ham];
+    let mut worst = 0.0f64;
+    for row in &rows {
+        let scale = row[kin].abs() + row[pot].abs() + h0.abs() + row[sup].abs() + row[dis].abs();
+        worst = worst.max((row[ham] - h0 - row[sup] + row[dis]).abs() / scale);
+    }
+    (h, rows, worst)
+}
+
 /// A deck line: unstretched length, wet weight per length, EA, anchor and fairlead.
 struct Line {
     length: f64,
@@ -140,32 +166,15 @@ fn a_short_run_of_a_deck_keeps_the_energy_balance() {
         &[],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    let mut r = csv::Reader::from_path(out.join("energy.csv")).unwrap();
-    let h: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let (h, rows, worst) = energy_closure(&out);
     let c = |n: &str| h.iter().position(|x| x == n).unwrap();
-    let rows: Vec<Vec<f64>> = r
-        .records()
-        .map(|x| x.unwrap().iter().map(|f| f.parse().unwrap()).collect())
-        .collect();
+    let (kin, dis) = (c("kinetic"), c("dissipated_energy"));
     assert_eq!(rows.len(), 101);
-    let (kin, pot, ham, sup, dis) = (
-        c("kinetic"),
-        c("potential"),
-        c("hamiltonian"),
-        c("supplied_energy"),
-        c("dissipated_energy"),
-    );
-    let h0 = rows[0][ham];
     assert!(
         rows[0][kin] > 1e3,
         "the lines start moving: {}",
         rows[0][kin]
     );
-    let mut worst = 0.0f64;
-    for row in &rows {
-        let scale = row[kin].abs() + row[pot].abs() + h0.abs() + row[sup].abs() + row[dis].abs();
-        worst = worst.max((row[ham] - h0 - row[sup] + row[dis]).abs() / scale);
-    }
     eprintln!("deck run: worst balance closure {worst:.2e}");
     assert!(worst <= 1e-9, "{worst:e}");
     let last = rows.last().unwrap();
@@ -322,26 +331,8 @@ fn a_vessel_motion_table_moves_the_coupled_points() {
     }
     assert!(frames >= 26, "{frames} frames");
     assert!((last_t - 2.5).abs() <= 1e-12, "the run ends at {last_t} s");
-    let mut r = csv::Reader::from_path(out.join("energy.csv")).unwrap();
-    let h: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    let c = |n: &str| h.iter().position(|x| x == n).unwrap();
-    let rows: Vec<Vec<f64>> = r
-        .records()
-        .map(|x| x.unwrap().iter().map(|f| f.parse().unwrap()).collect())
-        .collect();
-    let (kin, pot, ham, sup, dis) = (
-        c("kinetic"),
-        c("potential"),
-        c("hamiltonian"),
-        c("supplied_energy"),
-        c("dissipated_energy"),
-    );
-    let h0 = rows[0][ham];
-    let mut worst = 0.0f64;
-    for row in &rows {
-        let scale = row[kin].abs() + row[pot].abs() + h0.abs() + row[sup].abs() + row[dis].abs();
-        worst = worst.max((row[ham] - h0 - row[sup] + row[dis]).abs() / scale);
-    }
+    let (h, rows, worst) = energy_closure(&out);
+    let sup = h.iter().position(|x| x == "supplied_energy").unwrap();
     assert!(worst <= 1e-9, "balance closure {worst:e}");
     assert!(
         rows.last().unwrap()[sup].abs() > 1.0,

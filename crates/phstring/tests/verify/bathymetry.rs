@@ -7,43 +7,13 @@
 use phstring::statics::{StaticsParams, solve};
 use phstring::water::STANDARD_GRAVITY as G;
 use phstring::{
-    Bathymetry, Boundary, Current, Fixed, Friction, LineHydro, MassMatrix, Material, Mesh, Network,
-    Problem, Seabed, Simulation, State, StepParams, Vector, Water,
+    Bathymetry, Current, Friction, LineHydro, Seabed, Simulation, StepParams, Vector, Water,
 };
 use std::f64::consts::PI;
 
-const RHO_W: f64 = 1025.0;
+use crate::common::chain;
 
-/// A chain of `n` elements of reference length `l` with nodes at `r`, the linear elastic law
-/// `ea`, mass `rho_a` and its weight, the nodes `fixed` held.
-fn chain<const D: usize>(
-    r: Vec<Vector<D>>,
-    l: f64,
-    ea: f64,
-    rho_a: f64,
-    fixed: &[usize],
-) -> Network<D, Material> {
-    let n = r.len() - 1;
-    let mesh = Mesh::uniform_chain(n, l * n as f64).unwrap();
-    let mut b = Vector::<D>::zeros();
-    b[D - 1] = -rho_a * G;
-    Problem {
-        initial: State::at_rest(&mesh, r),
-        mesh,
-        material: Material::linear_elastic(ea),
-        rho_a,
-        body_force: b,
-        mass: MassMatrix::Lumped,
-        boundary: Boundary {
-            fixed: fixed.iter().map(|&i| Fixed::node(i)).collect(),
-            loads: vec![],
-            motions: vec![],
-            feedback: vec![],
-        },
-        point_masses: vec![],
-    }
-    .into()
-}
+const RHO_W: f64 = 1025.0;
 
 /// A bumpy seabed about 50 m deep: ±2 m waves along x, a cross slope along y, on a grid of
 /// 20 m (uneven at one end).

@@ -8,43 +8,14 @@ use phstring::statics::{StaticsParams, solve};
 use phstring::testing::catenary_on_seabed;
 use phstring::water::STANDARD_GRAVITY as G;
 use phstring::{
-    Boundary, Current, Fixed, Friction, LineHydro, MassMatrix, Material, Mesh, Motion, Network,
-    PortKind, Problem, Seabed, Simulation, State, StepParams, Vector, Water,
+    Current, Friction, LineHydro, Material, Motion, Network, PortKind, Seabed, Simulation,
+    StepParams, Vector, Water,
 };
 use std::f64::consts::PI;
 
-const RHO_W: f64 = 1025.0;
+use crate::common::chain;
 
-/// A chain of `n` elements with nodes at `r` (reference lengths `l`), the linear elastic
-/// law `ea`, mass `rho_a` and its weight, the nodes `fixed` held.
-fn chain<const D: usize>(
-    r: Vec<Vector<D>>,
-    l: f64,
-    ea: f64,
-    rho_a: f64,
-    fixed: &[usize],
-) -> Network<D, Material> {
-    let n = r.len() - 1;
-    let mesh = Mesh::uniform_chain(n, l * n as f64).unwrap();
-    let mut b = Vector::<D>::zeros();
-    b[D - 1] = -rho_a * G;
-    Problem {
-        initial: State::at_rest(&mesh, r),
-        mesh,
-        material: Material::linear_elastic(ea),
-        rho_a,
-        body_force: b,
-        mass: MassMatrix::Lumped,
-        boundary: Boundary {
-            fixed: fixed.iter().map(|&i| Fixed::node(i)).collect(),
-            loads: vec![],
-            motions: vec![],
-            feedback: vec![],
-        },
-        point_masses: vec![],
-    }
-    .into()
-}
+const RHO_W: f64 = 1025.0;
 
 /// Points at arc lengths `0, l, 2l, …, n l` along the polyline `path`.
 fn along<const D: usize>(path: &[Vector<D>], l: f64, n: usize) -> Vec<Vector<D>> {
