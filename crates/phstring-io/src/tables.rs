@@ -39,6 +39,14 @@ impl Table {
             .unwrap_or_else(|e| unreachable!("checked table: {e}"))
     }
 
+    /// The platform path of a table of the seven columns `t, x, y, z, roll, pitch, yaw`
+    /// (`[[platform]]`, `--motion`); `None` for another number of columns.
+    pub fn platform(&self) -> Option<phstring::PlatformPath> {
+        (self.values.len() == 6).then(|| phstring::PlatformPath {
+            channels: std::array::from_fn(|j| self.signal(j)),
+        })
+    }
+
     /// `path:line` of row `i`, for messages.
     pub fn at_row(&self, i: usize) -> String {
         format!("{}:{}", self.path.display(), self.lines[i])

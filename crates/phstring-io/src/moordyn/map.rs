@@ -292,16 +292,13 @@ impl VesselMotion {
     /// Reads the platform table at `path` (errors name `file:line`).
     pub fn read(path: &std::path::Path) -> Result<Self, crate::tables::TableError> {
         let table = crate::tables::read_table(path, 7)?;
-        let at0 = |j: usize| table.signal(j).value(0.0);
-        let p = phstring::Vector::<3>::new(at0(0), at0(1), at0(2));
-        let r = phstring::signal::rotation(at0(3), at0(4), at0(5));
+        let start = table
+            .platform()
+            .unwrap_or_else(|| unreachable!("read with 7 columns"))
+            .pose(0.0);
         let end = *table.times.last().unwrap_or(&0.0);
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-        Ok(Self {
-            path,
-            start: (p, r),
-            end,
-        })
+        Ok(Self { path, start, end })
     }
 }
 

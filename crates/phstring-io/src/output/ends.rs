@@ -17,6 +17,7 @@
 //! (`d l_e / 2`) in the node's. Drag, seabed damping and friction and material damping
 //! are left out: they vanish at rest, where `|F|` is the reaction a support must hold.
 
+use phstring::StoredEnergy as _;
 use phstring::{Law, Material, PhSystem, Simulation, Vector};
 
 /// The water that acts on the ends of the strings (see the module's formula).
@@ -140,8 +141,7 @@ impl EndForces {
     pub fn forces<const D: usize>(&self, sim: &Simulation<D, Material>) -> Vec<[Vector<D>; 2]> {
         let sys = sim.system();
         let st = sim.state();
-        let mut s = vec![0.0; st.c.len()];
-        sys.stresses(&st.c, &mut s);
+        let groups = sys.groups();
         let contacts = sys.seabed_contacts(&st.r);
         let contact_force = |node: usize| {
             contacts
@@ -158,7 +158,9 @@ impl EndForces {
                     let l = lengths[end.element];
                     let chord = rm - rn;
                     let len = chord.norm();
-                    let axial = s[end.element] * st.c[end.element].max(0.0).sqrt();
+                    // The end element's stress S = 2W'(C) alone, not every element's.
+                    let c = st.c[end.element];
+                    let axial = 2.0 * groups[*g].law.dw(c) * c.max(0.0).sqrt();
                     let mut f = if len > 0.0 {
                         chord * (axial / len)
                     } else {

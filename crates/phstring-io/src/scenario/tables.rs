@@ -190,9 +190,11 @@ impl ScenarioFile {
                 ));
             }
             let table = self.scenario_table(&key("motion_table"), &p.motion_table, 7)?;
-            let path = Arc::new(PlatformPath {
-                channels: std::array::from_fn(|j| table.signal(j)),
-            });
+            let path = Arc::new(
+                table
+                    .platform()
+                    .unwrap_or_else(|| unreachable!("read with 7 columns")),
+            );
             if p.nodes.get_ref().is_empty() {
                 return Err(self.invalid(
                     &key("nodes"),
