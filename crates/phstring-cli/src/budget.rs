@@ -191,6 +191,7 @@ pub fn budget(file: &ScenarioFile) -> Result<Budget> {
         positions: o.positions,
         vtk: o.vtk,
         wet: s.water.is_some(),
+        channels: o.channels.len(),
     });
     Ok(Budget {
         dimension,

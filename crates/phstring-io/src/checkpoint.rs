@@ -56,6 +56,9 @@ pub struct OutputState {
     /// existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end_tensions_bytes: Option<u64>,
+    /// The channel table (`output.channels`), if written: its file name and bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channels: Option<(String, u64)>,
     /// ParaView frames written so far: the first `frames` entries of `paraview/string.pvd`.
     pub frames: usize,
     /// FNV-1a hash of those frames' times and file names (checks `string.pvd` on resume).

@@ -223,6 +223,18 @@ pub const RUN_FILES: &[&str] = &[
     SCENARIO_FILE,
 ];
 
+/// The channel table's file name when `output.channels_file` gives none.
+pub const CHANNELS_FILE: &str = "channels.out";
+
+/// Whether `name` is a channel table's file name (`output.channels_file`): a plain name
+/// ending in `.out`, MoorDyn's extension, with something before it.
+pub fn is_channel_table(name: &str) -> bool {
+    name.len() > 4
+        && name.ends_with(".out")
+        && !name.contains(['/', '\\'])
+        && !name.starts_with('.')
+}
+
 /// The ParaView sub-folder of a run.
 pub const PARAVIEW_DIR: &str = "paraview";
 /// The ParaView collection in [`PARAVIEW_DIR`] (frames are [`frame_name`]).

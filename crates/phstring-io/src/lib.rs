@@ -4,7 +4,8 @@
 //!
 //! The modules are floors; each uses only the floors below it:
 //!
-//! 1. [`text`] (numbers and text in messages), [`files`] (the names and layout of the
+//! 1. [`text`] (numbers and text in messages), [`channels`] (MoorDyn's output channel
+//!    names), [`files`] (the names and layout of the
 //!    output files, the run id, atomic writes) and [`tables`] (time tables of motions and
 //!    forces read from text files);
 //! 2. [`plot`], [`vtk`] and [`animation`] (figure and ParaView formats), [`scenario`]
@@ -17,6 +18,7 @@
 //!    preparation); nothing below imports them.
 
 pub mod animation;
+pub mod channels;
 pub mod checkpoint;
 pub mod drive;
 pub mod figures;

@@ -354,3 +354,150 @@ fn a_vessel_motion_table_moves_the_coupled_points() {
         stderr(&o)
     );
 }
+
+/// A platform table of `steps` rows 0.05 s apart: a 2 m surge at a 10 s period, ramped in.
+fn surge_table(dir: &Path, steps: usize) -> std::path::PathBuf {
+    let surge =
+        |t: f64| 2.0 * (2.0 * std::f64::consts::PI * t / 10.0).sin() * (1.0 - (-t * t).exp());
+    let mut table = String::from("t, x, y, z, roll, pitch, yaw\n");
+    for i in 0..=steps {
+        let t = 0.05 * i as f64;
+        table.push_str(&format!("{t}, {}, 0, 0, 0, 0, 0\n", surge(t)));
+    }
+    let path = dir.join("surge.csv");
+    std::fs::write(&path, table).unwrap();
+    path
+}
+
+/// The title row, the units row and the value rows of a MoorDyn-style `.out` table.
+fn read_out(path: &Path) -> (Vec<String>, Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let words = |l: &str| l.split_whitespace().map(String::from).collect::<Vec<_>>();
+    let names = words(lines.next().unwrap());
+    let units = words(lines.next().unwrap());
+    let rows = lines
+        .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (names, units, rows)
+}
+
+/// The OUTPUTS section of a deck becomes a table in MoorDyn's `.out` layout, named after
+/// the deck, at the times of `positions.csv`: fairlead and anchor tensions equal those of
+/// `end_tensions.csv` (to the table's 8 significant digits), the point's force is the
+/// force of its one line, the fairlead node follows the vessel; an interrupted run resumed
+/// writes the same table as an uninterrupted one.
+#[test]
+fn the_outputs_section_writes_a_moordyn_style_table() {
+    let dir = temp_dir("deck-out");
+    let table = surge_table(&dir, 20);
+    let out = dir.join("spar");
+    let args = ["--motion", table.to_str().unwrap()];
+    let sets = ["output.plots=false", "output.animation=false"];
+    let o = run_with(SPAR, &out, &sets, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (names, units, rows) = read_out(&out.join("spar_oc3_v2.out"));
+    assert_eq!(
+        names,
+        [
+            "Time", "FairTen1", "FairTen2", "FairTen3", "AnchTen1", "L1N10T", "L1N20PZ",
+            "Point4FX", "Point4FY", "Point4FZ", "Point4T"
+        ]
+    );
+    assert_eq!(
+        units,
+        ["(s)", "N", "N", "N", "N", "N", "m", "N", "N", "N", "N"]
+    );
+    // Every 50 steps of 0.002 s (the deck's dtM, no dtOut) from 0 to 1 s.
+    let times: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    assert_eq!(times.len(), 11, "{times:?}");
+    let mut ends = csv::Reader::from_path(out.join("end_tensions.csv")).unwrap();
+    let ends: Vec<Vec<f64>> = ends
+        .records()
+        .map(|r| r.unwrap().iter().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let close = |a: f64, b: f64| (a - b).abs() <= 5e-8 * b.abs().max(1.0);
+    for row in &rows {
+        let e = ends
+            .iter()
+            .find(|e| (e[0] - row[0]).abs() < 1e-9)
+            .unwrap_or_else(|| panic!("no end_tensions row at t = {}", row[0]));
+        // end_tensions.csv: t, FairTen1, AnchTen1, FairTen2, AnchTen2, FairTen3, AnchTen3.
+        for (col, ecol) in [(1, 1), (2, 3), (3, 5), (4, 2)] {
+            assert!(close(row[col], e[ecol]), "t = {}: {row:?} vs {e:?}", row[0]);
+        }
+        let f = (row[7].powi(2) + row[8].powi(2) + row[9].powi(2)).sqrt();
+        assert!(close(f, row[10]) && close(row[10], row[1]), "{row:?}");
+        // The tension grows from the anchor to the fairlead along a hanging line.
+        assert!(row[4] < row[5] && row[5] < row[1], "{row:?}");
+        // The fairlead node is on the vessel: a surge leaves its depth unchanged.
+        assert!((row[6] + 70.0).abs() <= 1e-6, "{row:?}");
+    }
+    // The surge (+x) moves the fairleads toward anchor 1 (at +x) and away from anchors 2
+    // and 3: line 1 slackens, lines 2 and 3 tighten.
+    let (a, b) = (&rows[0], &rows[10]);
+    assert!(b[1] < a[1] - 1e4 && b[2] > a[2] + 1e4, "{a:?} {b:?}");
+    // Stopped after 130 steps and resumed: the same table, byte for byte.
+    let split = dir.join("split");
+    let mut first_args = args.to_vec();
+    first_args.extend(["--stop-after-steps", "130"]);
+    let o = run_with(SPAR, &split, &sets, &first_args);
+    assert!(!o.status.success());
+    let cp = split.join("checkpoint.json");
+    let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(split.join("spar_oc3_v2.out")).unwrap(),
+        std::fs::read(out.join("spar_oc3_v2.out")).unwrap()
+    );
+}
+
+/// `output.channels` in a TOML scenario: node `j` of line 1 is the `j`-th node along the
+/// first string (here 180 elements, nodes 0 to 180), the table is `channels.out`, and a
+/// channel naming what the run lacks is refused at its entry before anything runs long.
+#[test]
+fn output_channels_of_a_scenario_name_its_strings_and_nodes() {
+    let dir = temp_dir("scenario-channels");
+    let out = dir.join("mooring");
+    let sets = [
+        "time.end=0.02",
+        "output.plots=false",
+        "output.animation=false",
+        r#"output.channels=["FairTen1", "AnchTen1", "L1N90T", "L1N180PY", "L1N0PX"]"#,
+    ];
+    let o = run_with("examples/mooring_line.toml", &out, &sets, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (names, _, rows) = read_out(&out.join("channels.out"));
+    assert_eq!(names.len(), 6);
+    let first = &rows[0];
+    // The fairlead of examples/mooring_line.toml is at (150, −5) m, the anchor at x = 0.
+    assert!(
+        (first[4] + 5.0).abs() < 1e-6 && first[5].abs() < 1e-6,
+        "{first:?}"
+    );
+    assert!(first[2] < first[3] && first[3] < first[1], "{first:?}");
+    for (channel, says) in [
+        ("L2N1T", "reads line 2, but there are 1 lines"),
+        (
+            "L1N181T",
+            "reads node 181 of line 1, which has nodes 0 to 180",
+        ),
+        ("Point1PZ", "reads point 1, which is not in the run"),
+        ("L1N3AX", "not written: accelerations"),
+        ("L1N3Q", "unknown quantity `Q`"),
+    ] {
+        let set = format!(r#"output.channels=["FairTen1", "{channel}"]"#);
+        let o = run_with(
+            "examples/mooring_line.toml",
+            &dir.join("bad"),
+            &[&set],
+            &["--force"],
+        );
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{channel}");
+        assert!(
+            e.contains("output.channels.1") && e.contains(says),
+            "{channel}: {e}"
+        );
+    }
+}

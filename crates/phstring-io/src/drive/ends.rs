@@ -4,8 +4,9 @@
 
 use phstring::{Material, PhSystem};
 
-use crate::output::{EndForces, EndWater};
-use crate::scenario::{Components, ScenarioFile};
+use crate::files::CHANNELS_FILE;
+use crate::output::{ChannelString, ChannelTable, EndForces, EndWater};
+use crate::scenario::{Components, ScenarioError, ScenarioFile};
 use crate::scene::{Scene, WaterLines};
 
 /// Density of sea water [kg/m³], `water.density`'s default.
@@ -52,6 +53,70 @@ pub fn end_forces<const D: usize>(
         }
     });
     EndForces::new(sys, &diameters, water)
+}
+
+/// The channel table of `output.channels` of the scenario `file` (validated) and its file
+/// name, over the strings and named nodes of `components` and the end forces `ends`;
+/// `None` without channels. A channel naming a line, node or point the run does not have
+/// is an error at its entry.
+pub fn channel_table(
+    file: &ScenarioFile,
+    components: &Components,
+    ends: Option<&EndForces>,
+) -> Result<Option<(ChannelTable, String)>, ScenarioError> {
+    let out = &file.scenario.output;
+    if out.channels.is_empty() {
+        return Ok(None);
+    }
+    let channels = out
+        .channels
+        .iter()
+        .enumerate()
+        .map(|(i, c)| crate::channels::parse(c.get_ref()).map_err(|e| file.channel_error(i, e)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let Some(ends) = ends else {
+        return Err(file.channel_error(0, "reads lines, but the run has no strings".into()));
+    };
+    // Node j of line i is the j-th node along the string; from a deck (a `[deck]`
+    // record), MoorDyn's node j: the j-th node of its path, also on a refined mesh.
+    let deck = file.scenario.deck.is_some();
+    let strings: Vec<ChannelString> = components
+        .strings
+        .iter()
+        .map(|s| ChannelString {
+            path_nodes: if deck { s.path_nodes.clone() } else { along(s) },
+            first_element: s.elements[0],
+            elements_per_span: if deck { s.elements_per_span } else { 1 },
+        })
+        .collect();
+    let point = |k: u32| {
+        let name = format!("point{k}");
+        components
+            .nodes
+            .iter()
+            .find(|n| n.name == name)
+            .map(|n| n.node)
+    };
+    let table = ChannelTable::new(&channels, &strings, point, ends.clone())
+        .map_err(|(i, e)| file.channel_error(i, e))?;
+    let name = out
+        .channels_file
+        .as_ref()
+        .map_or_else(|| CHANNELS_FILE.to_string(), |f| f.get_ref().clone());
+    Ok(Some((table, name)))
+}
+
+/// The mesh nodes along string `s`, from its first path node to its last.
+fn along(s: &crate::scenario::StringComponent) -> Vec<usize> {
+    let mut nodes = Vec::with_capacity(s.nodes);
+    let interior: Vec<usize> = (s.interior_nodes[0]..s.interior_nodes[1]).collect();
+    let per = s.elements_per_span.saturating_sub(1);
+    for (span, pair) in s.path_nodes.windows(2).enumerate() {
+        nodes.push(pair[0]);
+        nodes.extend(interior.iter().skip(span * per).take(per));
+    }
+    nodes.extend(s.path_nodes.last());
+    nodes
 }
 
 /// The seabed of the scenario `file` as a point and its unit upward normal, `dimension`

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 use crate::files::{
     FIGURES_DIR, LOCK_FILE, PAPER_FIGURES, PAPER_RUN_DIRS, PARAVIEW_DIR, PVD_FILE, RUN_FILES,
-    RUN_ID_FILE, SWEEP_TABLE, frame_name, is_own_temp_file, run_dir_name,
+    RUN_ID_FILE, SWEEP_TABLE, frame_name, is_channel_table, is_own_temp_file, run_dir_name,
 };
 
 /// Whether `name` is exactly a name that [`frame_name`] gives.
@@ -61,7 +61,7 @@ enum Folder {
 
 fn classify(folder: Folder, name: &str) -> Option<Entry> {
     let run = |name: &str| {
-        if RUN_FILES.contains(&name) || is_own_temp_file(name) {
+        if RUN_FILES.contains(&name) || is_own_temp_file(name) || is_channel_table(name) {
             Some(Entry::File)
         } else if name == PARAVIEW_DIR {
             Some(Entry::Dir(Folder::Paraview))

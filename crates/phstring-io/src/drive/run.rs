@@ -394,6 +394,16 @@ fn run_dim<const D: usize>(
     info.warnings = scenario_warnings;
     let fresh = resume.is_none();
     let ends = super::ends::end_forces(file, &components, sim.system());
+    let channels = match super::ends::channel_table(file, &components, ends.as_ref()) {
+        Ok(c) => c,
+        Err(e) => {
+            let e = RunError::from(e);
+            if fresh {
+                let _ = record_failure(out, &mut info, &e);
+            }
+            return Err(e);
+        }
+    };
     let writers = match resume {
         Some(cp) => resume_writers(&ctx, &mut sim, &mut info, cp),
         None => start_writers(&ctx, &sim, &components).map_err(RunError::from),
@@ -402,6 +412,9 @@ fn run_dim<const D: usize>(
     let writers = writers.and_then(|mut w| {
         if let Some(model) = ends {
             w.end_tensions(model, &sim)?;
+        }
+        if let Some((model, name)) = channels {
+            w.channels(model, &name, &sim)?;
         }
         Ok(w)
     });

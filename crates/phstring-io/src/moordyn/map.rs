@@ -209,6 +209,8 @@ struct Mapper<'d> {
     motion: Option<&'d VesselMotion>,
     /// The coupled points' node names, for the motion's `[[platform]]`.
     vessels: Vec<String>,
+    /// The OUTPUTS channels that are written (`output.channels`).
+    channels: Vec<String>,
     rows: Vec<MapRow>,
     record: DeckSpec,
     /// The scenario text, table by table.
@@ -334,6 +336,7 @@ pub fn map_driven(
         ignore,
         motion,
         vessels: Vec::new(),
+        channels: Vec::new(),
         rows: Vec::new(),
         record: DeckSpec {
             path: deck.file.clone(),
@@ -357,7 +360,7 @@ pub fn map_driven(
     points(&mut m, settings.depth)?;
     platform(&mut m)?;
     lines(&mut m, &materials)?;
-    outputs(&mut m);
+    outputs(&mut m)?;
     settings_text(&mut m, &settings);
     let mut scenario = header(&m);
     scenario.push_str(&m.text);
@@ -967,19 +970,31 @@ fn string_text(m: &mut Mapper, l: &super::Line, shape: &Shape, material: &str, e
     m.text.push('\n');
 }
 
-/// The OUTPUTS section and the lines' output flags: not needed (phstring writes its own
-/// outputs).
-fn outputs(m: &mut Mapper) {
-    if let Some(first) = m.deck.outputs.first() {
-        let names: Vec<&str> = m.deck.outputs.iter().map(|o| o.name.as_str()).collect();
-        let why = "phstring writes energy.csv, positions.csv, ports.csv (the supports' reactions) and summary.json; MoorDyn's output channels are not written";
-        m.record.not_needed.insert("OUTPUTS".into(), why.into());
-        let line = first.line;
-        m.row(
-            line,
-            format!("outputs {}", names.join(" ")),
-            format!("not needed: {why}"),
-        );
+/// The OUTPUTS section: the channels phstring writes go to `output.channels` (a
+/// MoorDyn-style table named after the deck); a channel naming a line, node or point the
+/// deck does not have is refused with its line, as MoorDyn refuses it; a channel phstring
+/// does not write is dropped with a note. The lines' output flags are not needed.
+fn outputs(m: &mut Mapper) -> Result<(), DeckError> {
+    let table = out_file_name(&m.deck.file);
+    for o in m.deck.outputs.clone() {
+        let entry = format!("output {}", o.name);
+        let written = match crate::channels::parse(&o.name) {
+            Err(why) => Err(why),
+            Ok(c) => match deck_channel(m, &c) {
+                Ok(w) => w,
+                Err(e) => return m.unmappable(o.line, e),
+            },
+        };
+        match written {
+            Ok(()) => {
+                m.channels.push(o.name.clone());
+                m.row(o.line, entry, format!("column {} of {table}", o.name));
+            }
+            Err(why) => {
+                m.converted(o.line, format!("channel {} is not written: {why}", o.name));
+                m.row(o.line, entry, format!("not written: {why}"));
+            }
+        }
     }
     if m.deck.lines.iter().any(|l| l.outputs != "-") {
         let why = "phstring writes every node's position in positions.csv; MoorDyn's per-line files are not written";
@@ -987,6 +1002,75 @@ fn outputs(m: &mut Mapper) {
             .not_needed
             .insert("line output flags".into(), why.into());
     }
+    Ok(())
+}
+
+/// Whether channel `c` can be written for the deck of `m`: `Ok(Ok(()))` if so,
+/// `Ok(Err(why))` if phstring does not write it, `Err` if it names a line, node or point
+/// the deck does not have.
+fn deck_channel(m: &Mapper, c: &crate::channels::Channel) -> Result<Result<(), String>, String> {
+    use crate::channels::{LineNode, Object, Quantity};
+    if let Quantity::NotWritten(why) = c.quantity {
+        return Ok(Err(why.to_string()));
+    }
+    match c.object {
+        Object::Line(i, node) => {
+            let Some(line) = m.deck.lines.get(i as usize - 1) else {
+                return Err(format!(
+                    "output channel {} reads line {i}, but the deck has {} lines",
+                    c.name,
+                    m.deck.lines.len()
+                ));
+            };
+            let j = match node {
+                LineNode::EndB => line.segments,
+                LineNode::Index(j) => j,
+            };
+            if j > line.segments {
+                return Err(format!(
+                    "output channel {} reads node {j} of line {i}, which has nodes 0 to {}",
+                    c.name, line.segments
+                ));
+            }
+            if matches!(c.quantity, Quantity::Force(_)) && j != 0 && j != line.segments {
+                return Ok(Err(
+                    "the net force on an interior node is its inertia; phstring writes forces at the line's end nodes only".into(),
+                ));
+            }
+            Ok(Ok(()))
+        }
+        Object::Point(k) => {
+            if k as usize > m.deck.points.len() {
+                return Err(format!(
+                    "output channel {} reads point {k}, but the deck has {} points",
+                    c.name,
+                    m.deck.points.len()
+                ));
+            }
+            let attached =
+                m.deck.lines.iter().any(|l| {
+                    l.attach_a == Attachment::Point(k) || l.attach_b == Attachment::Point(k)
+                });
+            if !attached {
+                return Ok(Err(format!("point {k} has no line and is not simulated")));
+            }
+            if matches!(c.quantity, Quantity::TensionA | Quantity::TensionB) {
+                return Ok(Err("TA and TB are line channels".into()));
+            }
+            Ok(Ok(()))
+        }
+    }
+}
+
+/// The channel table's file name for the deck `file`: its stem with `.out`, as MoorDyn
+/// names its main output file.
+fn out_file_name(file: &str) -> String {
+    let stem = std::path::Path::new(file)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| crate::files::is_channel_table(&format!("{s}.out")))
+        .unwrap_or_else(|| "moordyn".into());
+    format!("{stem}.out")
 }
 
 /// `[body_force]`, `[water]`, `[seabed]`, `[initial]`, `[time]`, `[output]`.
@@ -1023,11 +1107,21 @@ fn settings_text(m: &mut Mapper, s: &Settings) {
         m.text,
         "# A deck has no initial shape: the run starts from the static equilibrium.\n[initial]\nequilibrium = true\n\n\
          # A deck has no end time: {span} s (whole steps) unless --set time.end=… is given.\n\
-         [time]\nh = {}\nend = {}\n\n[output]\nstride = {}\n\n",
+         [time]\nh = {}\nend = {}\n\n[output]\nstride = {}\n",
         f(s.h),
         f(end),
         s.stride
     );
+    if !m.channels.is_empty() {
+        let names: Vec<String> = m.channels.iter().map(|c| q(c)).collect();
+        let _ = write!(
+            m.text,
+            "# The OUTPUTS channels, in MoorDyn's .out layout.\nchannels = [{}]\nchannels_file = {}\n",
+            names.join(", "),
+            q(&out_file_name(&m.deck.file))
+        );
+    }
+    m.text.push('\n');
     m.row(
         0,
         "(no end time in a deck)",

@@ -132,13 +132,33 @@ fn the_chain_deck_maps_value_by_value() {
     assert_eq!(d, &m.record);
     assert_eq!((d.path.as_str(), d.version.as_str()), ("deck.dat", "v1"));
     let keys: Vec<&str> = d.not_needed.keys().map(String::as_str).collect();
-    assert_eq!(keys, ["CdScaleIC", "OUTPUTS", "TmaxIC", "threshIC"]);
-    // The rows of `check`: one per type, point, line, option and output list, in deck order.
+    assert_eq!(keys, ["CdScaleIC", "TmaxIC", "threshIC"]);
+    // The OUTPUTS channels become columns of deck.out, MoorDyn's main output file.
+    let channels: Vec<&str> = s
+        .output
+        .channels
+        .iter()
+        .map(|c| c.get_ref().as_str())
+        .collect();
+    assert_eq!(
+        channels,
+        ["FairTen1", "FairTen2", "FairTen3", "Con4pX", "L1N10T"]
+    );
+    assert_eq!(
+        s.output
+            .channels_file
+            .as_ref()
+            .map(|f| f.get_ref().as_str()),
+        Some("deck.out")
+    );
+    // The rows of `check`: one per type, point, line, option and output channel, in deck
+    // order.
     let lines: Vec<usize> = m.rows.iter().map(|r| r.line).collect();
     assert_eq!(
         lines,
         [
-            6, 10, 11, 12, 13, 14, 15, 19, 20, 21, 23, 24, 25, 26, 27, 28, 29, 31, 0, 0
+            6, 10, 11, 12, 13, 14, 15, 19, 20, 21, 23, 24, 25, 26, 27, 28, 29, 31, 31, 31, 32, 33,
+            0, 0
         ]
     );
     file.setup().unwrap_or_else(|e| panic!("{e}"));
@@ -185,7 +205,6 @@ fn the_spar_deck_maps_value_by_value() {
         keys,
         [
             "CdScaleIC",
-            "OUTPUTS",
             "TmaxIC",
             "dtIC",
             "line output flags",
@@ -535,4 +554,60 @@ fn load_scenario_reads_decks_and_scenarios() {
     let l = load_scenario(&deck, &["time.end=-1".into()], &[]).unwrap();
     let e = l.file.setup().err().unwrap().to_string();
     assert!(e.starts_with("--set time.end=-1: "), "{e}");
+}
+
+/// A deck of one 40 m wire from point 1 (fixed) to point 2 (vessel), 4 segments, with the
+/// OUTPUTS section `outputs` (point 3 has no line).
+fn deck_with_outputs(outputs: &str) -> String {
+    format!(
+        "t\n--- LINE TYPES ---\nName Diam MassDen EA BA EI Cd Ca CdAx CaAx\n(-) (m) (kg/m) (N) (Ns) (Nm2) (-) (-) (-) (-)\n\
+         wire 0.1 20 1e8 0 0 1.2 1 0.2 0\n--- POINTS ---\nID Att X Y Z M V CdA Ca\n(#) (-) (m) (m) (m) (kg) (m3) (m2) (-)\n\
+         1 Fixed 30 0 -50 0 0 0 0\n2 Vessel 0 0 -20 0 0 0 0\n3 Fixed 0 30 -50 0 0 0 0\n\
+         --- LINES ---\nID Type A B L N Out\n(#) (-) (#) (#) (m) (-) (-)\n1 wire 1 2 45 4 -\n\
+         --- OPTIONS ---\n0.01 dtM\n50 WtrDpth\n--- OUTPUTS ---\n{outputs}\n--- END ---\n"
+    )
+}
+
+/// The OUTPUTS channels: those written become `output.channels` with MoorDyn's file name;
+/// those phstring does not write are dropped with a note at their line; a channel naming a
+/// line, node or point the deck lacks is refused at its line, as MoorDyn refuses it.
+#[test]
+fn output_channels_are_written_dropped_with_a_note_or_refused() {
+    let text = deck_with_outputs("FairTen1 L1N2T L1N4PZ\nL1N2AX L1N2FX Point3PZ\nPoint2FZ L1NAFX");
+    let (m, file) = mapped(&text, &[]);
+    let channels: Vec<&str> = file
+        .scenario
+        .output
+        .channels
+        .iter()
+        .map(|c| c.get_ref().as_str())
+        .collect();
+    assert_eq!(
+        channels,
+        ["FairTen1", "L1N2T", "L1N4PZ", "Point2FZ", "L1NAFX"]
+    );
+    let out_line = line_of(&text, "L1N2AX");
+    let notes: Vec<&String> = m
+        .record
+        .converted
+        .iter()
+        .filter(|c| c.starts_with(&format!("deck.dat:{out_line}: channel")))
+        .collect();
+    assert_eq!(notes.len(), 3, "{:?}", m.record.converted);
+    assert!(notes[0].contains("L1N2AX is not written: accelerations"));
+    assert!(notes[1].contains("L1N2FX is not written: the net force on an interior node"));
+    assert!(notes[2].contains("Point3PZ is not written: point 3 has no line"));
+    for (outputs, says) in [
+        ("FairTen2", "reads line 2, but the deck has 1 lines"),
+        ("L1N5T", "reads node 5 of line 1, which has nodes 0 to 4"),
+        ("Point4PZ", "reads point 4, but the deck has 3 points"),
+    ] {
+        let text = deck_with_outputs(outputs);
+        let e = refused(&text);
+        let line = line_of(&text, outputs);
+        assert!(
+            e.contains(&format!("deck.dat:{line}")) && e.contains(says),
+            "{outputs}: {e}"
+        );
+    }
 }

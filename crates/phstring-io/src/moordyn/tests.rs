@@ -85,7 +85,13 @@ fn spar_v2_example_is_read_with_its_values() {
     );
     assert_eq!(rho.remark, "water density (kg/m^3)");
     let names: Vec<&str> = d.outputs.iter().map(|c| c.name.as_str()).collect();
-    assert_eq!(names, ["FairTen1", "FairTen2", "FairTen3", "AnchTen1"]);
+    assert_eq!(
+        names,
+        [
+            "FairTen1", "FairTen2", "FairTen3", "AnchTen1", "L1N10T", "L1N20PZ", "Point4FX",
+            "Point4FY", "Point4FZ", "Point4T"
+        ]
+    );
     assert_eq!(d.sections_present.len(), 5);
     assert_eq!(d.unsupported_sections().count(), 0);
     assert!(d.notes.is_empty(), "{:?}", d.notes);
@@ -268,9 +274,9 @@ fn comments_tabs_and_crlf_do_not_change_the_deck() {
 fn a_missing_end_line_is_accepted_with_a_note() {
     let cut = &SPAR_V2[..SPAR_V2.find("---------------------- END").unwrap()];
     let d = deck(cut);
-    assert_eq!(d.outputs.len(), 4);
+    assert_eq!(d.outputs.len(), 10);
     assert_eq!(d.notes.len(), 1);
-    assert_eq!(d.notes[0].line, line_of(SPAR_V2, "AnchTen1"));
+    assert_eq!(d.notes[0].line, line_of(SPAR_V2, "Point4FX"));
     assert!(d.notes[0].text.contains("no closing dashed line"));
     assert!(deck(SPAR_V2).notes.is_empty());
     // A bare dashed divider between sections is neither a section nor the end.

@@ -132,6 +132,14 @@ impl EndForces {
         h
     }
 
+    /// The end nodes `[A, B]` of every string, in column order.
+    pub fn end_nodes(&self) -> Vec<[usize; 2]> {
+        self.strings
+            .iter()
+            .map(|(_, _, [a, b])| [a.node, b.node])
+            .collect()
+    }
+
     /// The names of the strings, in column order.
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.strings.iter().map(|s| s.0.as_str())

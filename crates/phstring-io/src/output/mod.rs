@@ -10,9 +10,11 @@
 //! read what they need back from `energy.csv` (the `history` module, a floor above), decimated to at most
 //! [`PLOT_POINTS`] points per curve.
 
+mod channels;
 mod csv;
 mod ends;
 
+pub use channels::{ChannelString, ChannelTable};
 pub use ends::{EndForces, EndWater};
 
 use std::hash::Hasher;
@@ -31,6 +33,12 @@ use crate::files::{
 use crate::plot::{GroupDrawing, PlotError, Topology};
 use crate::text::sanitize_text;
 use crate::vtk::{self, FrameData, PvdWriter, VtkError};
+
+/// The file name of `path` (for the checkpoint, which records names, not paths).
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+}
 
 /// Longest wall time between two flushes of the output files during a run.
 pub const FLUSH_EVERY: Duration = Duration::from_millis(500);
@@ -261,6 +269,8 @@ pub struct OutputPlan {
     /// A run in water: six more columns in `energy.csv`, two more arrays per ParaView
     /// frame, the energy-split plot (PNG and SVG).
     pub wet: bool,
+    /// Columns of the channel table (`output.channels`; 0: not written), a row per frame.
+    pub channels: usize,
 }
 
 /// The size of a run's outputs, estimated before it runs ([`estimated_output`]).
@@ -270,7 +280,7 @@ pub struct OutputEstimate {
     pub bytes: f64,
     /// Number of files.
     pub files: f64,
-    /// `energy.csv`, `ports.csv` and `end_tensions.csv` [bytes].
+    /// `energy.csv`, `ports.csv`, `end_tensions.csv` and the channel table [bytes].
     pub rows: f64,
     /// `positions.csv` [bytes].
     pub positions: f64,
@@ -333,6 +343,13 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
         } else {
             0.0
         };
+    // The channel table: two title rows and a row per frame, 10 + 20 bytes a channel.
+    let channels = if p.channels > 0 {
+        (frames + 2.0) * (11.0 + 20.0 * p.channels as f64)
+    } else {
+        0.0
+    };
+    let rows = rows + channels;
     let positions = if p.positions {
         // The first frame's time is written `0`.
         nodes * (frames * ((1.0 + d) * NUM_BYTES + digits(nodes)) - (NUM_BYTES - 2.0))
@@ -353,6 +370,7 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
         bytes: rows + positions + paraview,
         files: FIXED_FILES
             + 2.0 * wet
+            + if p.channels > 0 { 1.0 } else { 0.0 }
             + if p.positions { 1.0 } else { 0.0 }
             + if p.vtk { frames } else { 0.0 },
         rows,
@@ -415,6 +433,9 @@ pub struct Writers {
     /// `end_tensions.csv` and how its rows are computed (see [`Writers::end_tensions`]).
     ends: Option<Csv>,
     end_model: Option<EndForces>,
+    /// The channel table (`output.channels`) and how its rows are computed.
+    channels: Option<Csv>,
+    channel_model: Option<ChannelTable>,
     pvd: Option<PvdWriter>,
     /// The collection file must be written again before it is whole (a resume continues
     /// it after the checkpoint's frames); frames are listed as they are written.
@@ -479,6 +500,8 @@ impl Writers {
             ports,
             ends: None,
             end_model: None,
+            channels: None,
+            channel_model: None,
             pvd,
             pvd_dirty: false,
             stride,
@@ -571,6 +594,7 @@ impl Writers {
             }
         }
         self.last_frame = Some(sim.steps());
+        self.channel_row(sim, t)?;
         if let Some(p) = &mut self.positions {
             for (i, r) in st.r.iter().enumerate() {
                 let comps: Vec<String> = r.iter().map(|x| num(*x)).collect();
@@ -765,8 +789,13 @@ impl Writers {
             Some(n) => Some(PendingCsv::open(dir.join(END_TENSIONS_FILE), n)?),
             None => None,
         };
+        let channels = match &state.channels {
+            Some((name, n)) => Some(PendingCsv::open(dir.join(name), *n)?),
+            None => None,
+        };
         let positions = positions.map(PendingCsv::commit).transpose()?;
         let ends = ends.map(PendingCsv::commit).transpose()?;
+        let channels = channels.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
             water,
@@ -775,6 +804,8 @@ impl Writers {
             ports: ports.commit()?,
             ends,
             end_model: None,
+            channels,
+            channel_model: None,
             pvd,
             pvd_dirty: true,
             stride,
@@ -802,6 +833,10 @@ impl Writers {
             ports_bytes: self.ports.len()?,
             end_tensions_bytes: match &mut self.ends {
                 Some(e) => Some(e.len()?),
+                None => None,
+            },
+            channels: match &mut self.channels {
+                Some(c) => Some((file_name(&c.path), c.len()?)),
                 None => None,
             },
             frames: self.frames,
@@ -842,6 +877,43 @@ impl Writers {
             }
         }
         Ok(())
+    }
+
+    /// Writes the channel table `name` (in the run's folder) from now on, its rows computed
+    /// by `model`, at the times of `positions.csv`: a fresh run creates it with the row of
+    /// the state of `sim`; a resumed run whose checkpoint recorded it continues it.
+    pub fn channels<const D: usize>(
+        &mut self,
+        model: ChannelTable,
+        name: &str,
+        sim: &Simulation<D, Material>,
+    ) -> Result<(), OutputError> {
+        let fresh = self.channels.is_none();
+        if fresh {
+            self.channels = Some(Csv::create(self.dir.join(name), &model.header())?);
+        }
+        self.channel_model = Some(model);
+        if fresh {
+            self.channel_row(sim, sim.time())?;
+            if let Some(c) = &mut self.channels {
+                c.flush()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the channel table's row at time `t` [s] (if it is written).
+    fn channel_row<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        t: f64,
+    ) -> Result<(), OutputError> {
+        let (Some(file), Some(model)) = (&mut self.channels, &self.channel_model) else {
+            return Ok(());
+        };
+        let (row, values) = model.row(t, sim);
+        check_finite(&file.path, "channel value", t, &values)?;
+        file.row(&row)
     }
 
     /// Writes the row of `end_tensions.csv` at time `t` [s] (if it is written).
@@ -889,6 +961,9 @@ impl Writers {
         if let Some(e) = &mut self.ends {
             e.flush()?;
         }
+        if let Some(c) = &mut self.channels {
+            c.flush()?;
+        }
         if let Some(pvd) = &mut self.pvd
             && self.pvd_dirty
         {
@@ -909,6 +984,7 @@ impl Writers {
             self.positions.as_ref(),
             Some(&self.ports),
             self.ends.as_ref(),
+            self.channels.as_ref(),
         ]
         .into_iter()
         .flatten()
@@ -932,6 +1008,9 @@ impl Writers {
         }
         if let Some(e) = &mut self.ends {
             let _ = e.flush();
+        }
+        if let Some(c) = &mut self.channels {
+            let _ = c.flush();
         }
         if let Some(pvd) = &mut self.pvd
             && self.pvd_dirty
@@ -1161,13 +1240,25 @@ mod tests {
             let (nodes, elements) = (mesh.n_nodes(), mesh.n_elements());
             let mut w = Writers::start(&dir, &s, stride, true, true, vec![]).unwrap();
             let ends = EndForces::new(s.system(), &[], None).unwrap();
-            w.end_tensions(ends, &s).unwrap();
+            w.end_tensions(ends.clone(), &s).unwrap();
+            let names = ["FairTen1", "AnchTen1", "L1N1PX", "L1N1PY"];
+            let channels: Vec<_> = names
+                .iter()
+                .map(|n| crate::channels::parse(n).unwrap())
+                .collect();
+            let string = ChannelString {
+                path_nodes: vec![0, nodes - 1],
+                first_element: 0,
+                elements_per_span: elements,
+            };
+            let table = ChannelTable::new(&channels, &[string], |_| None, ends).unwrap();
+            w.channels(table, "run.out", &s).unwrap();
             for _ in 0..steps {
                 let r = s.step().unwrap();
                 w.step(&s, &r).unwrap();
             }
             w.finish(&s).unwrap();
-            let e = estimated_output(&OutputPlan {
+            let plan = OutputPlan {
                 dimension: 2,
                 nodes,
                 elements,
@@ -1178,12 +1269,14 @@ mod tests {
                 positions: true,
                 vtk: true,
                 wet,
-            });
+                channels: names.len(),
+            };
+            let e = estimated_output(&plan);
             let pv = dir.join(PARAVIEW_DIR);
             let frames = std::fs::read_dir(&pv).unwrap().count() as f64 - 1.0;
             assert_eq!(e.frames, frames, "stride {stride}");
             let rows = bytes_of(&dir, &|n| {
-                n == "energy.csv" || n == "ports.csv" || n == END_TENSIONS_FILE
+                n == "energy.csv" || n == "ports.csv" || n == END_TENSIONS_FILE || n == "run.out"
             });
             let positions = bytes_of(&dir, &|n| n == "positions.csv");
             let paraview = bytes_of(&pv, &|_| true);
@@ -1198,6 +1291,18 @@ mod tests {
                     "stride {stride}, wet {wet}, {what}: estimate {estimate}, written {actual}"
                 );
             }
+            // The channel table's share alone: the estimate less the one without it.
+            let without = estimated_output(&OutputPlan {
+                channels: 0,
+                ..plan
+            });
+            let table = bytes_of(&dir, &|n| n == "run.out");
+            assert!(
+                ((e.rows - without.rows) / table - 1.0).abs() < 0.02,
+                "stride {stride}: channel table estimate {}, written {table}",
+                e.rows - without.rows
+            );
+            assert_eq!(e.files - without.files, 1.0);
             let _ = std::fs::remove_dir_all(&dir);
         }
     }

@@ -415,6 +415,18 @@ impl ScenarioFile {
         }
     }
 
+    /// The error of entry `index` of `output.channels` (a channel naming a line, node or
+    /// point the run does not have), pointing at the entry.
+    pub(crate) fn channel_error(&self, index: usize, reason: String) -> ScenarioError {
+        let span = self
+            .scenario
+            .output
+            .channels
+            .get(index)
+            .map_or(0..0, |c| c.span());
+        self.invalid(&format!("output.channels.{index}"), span, reason)
+    }
+
     fn invalid(&self, key: &str, span: Range<usize>, reason: impl Into<String>) -> ScenarioError {
         ScenarioError::Invalid {
             key: key.to_string(),

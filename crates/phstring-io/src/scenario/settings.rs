@@ -237,6 +237,39 @@ impl ScenarioFile {
         }
     }
 
+    /// `output.channels` and `output.channels_file`: every channel name reads (see
+    /// [`crate::channels`]) as a quantity that is written, and the file is a plain name.
+    /// Whether the lines and points they name exist is checked when the run starts.
+    fn output_channels(&self) -> Result<(), ScenarioError> {
+        let out = &self.scenario.output;
+        for (i, c) in out.channels.iter().enumerate() {
+            let key = format!("output.channels.{i}");
+            match crate::channels::parse(c.get_ref()) {
+                Err(reason) => return Err(self.invalid(&key, c.span(), reason)),
+                Ok(ch) => {
+                    if let crate::channels::Quantity::NotWritten(why) = ch.quantity {
+                        return Err(self.invalid(
+                            &key,
+                            c.span(),
+                            format!("= {:?}: not written: {why}", ch.name),
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some(f) = &out.channels_file {
+            let name = f.get_ref();
+            if !crate::files::is_channel_table(name) {
+                return Err(self.invalid(
+                    "output.channels_file",
+                    f.span(),
+                    format!("= {name:?} must be a plain file name ending in .out (no folder), as MoorDyn's tables"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The run settings: `[time]`, `[newton]` and `[output]`; `chain`: whether the mesh is a
     /// chain (element `e` joins nodes `e` and `e+1`: a single string, or a network numbered
     /// like one), which `newton.solver = "block_tridiagonal"` needs.
@@ -251,6 +284,7 @@ impl ScenarioFile {
             ));
         }
         let stride = self.output_stride()?;
+        self.output_channels()?;
         let output = self.scenario.output.clone();
         Ok(RunSettings {
             step: StepParams {

@@ -582,6 +582,15 @@ pub struct OutputSpec {
     /// Write an animated GIF of the configuration (dimension 2 and 3).
     #[serde(default = "yes")]
     pub animation: bool,
+    /// MoorDyn output channels (`FairTen1`, `AnchTen1`, `L1N10T`, `Point4FZ`, …; see
+    /// [`crate::channels`]) written as a MoorDyn-style table (`channels_file`) at the times
+    /// of `positions.csv`. Line `i` is the `i`-th string, point `k` the node named
+    /// `point<k>`.
+    #[serde(default)]
+    pub channels: Vec<Spanned<String>>,
+    /// File name of the channel table in the output folder (default `channels.out`).
+    #[serde(default)]
+    pub channels_file: Option<Spanned<String>>,
 }
 
 fn default_stride() -> Spanned<i64> {
@@ -599,6 +608,8 @@ impl Default for OutputSpec {
             vtk: true,
             plots: true,
             animation: true,
+            channels: Vec::new(),
+            channels_file: None,
         }
     }
 }
