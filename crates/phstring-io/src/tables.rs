@@ -28,6 +28,9 @@ pub struct Table {
     pub values: Vec<Vec<f64>>,
     /// The 1-based line of the file that each row is on.
     pub lines: Vec<usize>,
+    /// The header's fields (the first line with data, when its first field is not a
+    /// number); empty without a header.
+    pub header: Vec<String>,
 }
 
 impl Table {
@@ -170,6 +173,19 @@ impl fmt::Display for RowError {
 
 /// Reads the table at `path` with `columns` columns (the time and `columns − 1` values).
 pub fn read_table(path: &Path, columns: usize) -> Result<Table, TableError> {
+    parse_table(&read_text(path)?, path, columns)
+}
+
+/// Reads the table at `path` with as many columns as its first line with data has (at
+/// least two: the time and one value).
+pub fn read_table_any(path: &Path) -> Result<Table, TableError> {
+    let text = read_text(path)?;
+    let columns = text.lines().find_map(fields).map_or(2, |f| f.len().max(2));
+    parse_table(&text, path, columns)
+}
+
+/// The text of the table file at `path` (at most [`MAX_TABLE_BYTES`], UTF-8).
+fn read_text(path: &Path) -> Result<String, TableError> {
     use std::io::Read as _;
     let read_err = |cause| TableError::Read {
         path: path.to_path_buf(),
@@ -197,7 +213,7 @@ pub fn read_table(path: &Path, columns: usize) -> Result<Table, TableError> {
             e.utf8_error().valid_up_to()
         ))
     })?;
-    parse_table(&text, path, columns)
+    Ok(text)
 }
 
 /// The fields of a line without its comment: comma separated if it has a comma, else
@@ -227,6 +243,7 @@ pub fn parse_table(text: &str, path: &Path, columns: usize) -> Result<Table, Tab
         times: Vec::new(),
         values: vec![Vec::new(); columns.saturating_sub(1)],
         lines: Vec::new(),
+        header: Vec::new(),
     };
     let mut first = true;
     for (k, raw) in text.lines().enumerate() {
@@ -244,6 +261,7 @@ pub fn parse_table(text: &str, path: &Path, columns: usize) -> Result<Table, Tab
             ));
         }
         if is_header {
+            table.header = f.iter().map(|x| x.to_string()).collect();
             continue;
         }
         let mut row = Vec::with_capacity(columns);

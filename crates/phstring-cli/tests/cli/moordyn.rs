@@ -501,3 +501,66 @@ fn output_channels_of_a_scenario_name_its_strings_and_nodes() {
         );
     }
 }
+
+/// `--motion` with three columns per coupled point (MoorDyn's per-point form): each point
+/// follows its own columns as absolute positions (point 4 surges 3 m, points 5 and 6 stay
+/// where the table puts them, 1 m off their deck positions); a table of another width is
+/// refused with both forms' widths.
+#[test]
+fn a_per_point_motion_table_moves_each_coupled_point() {
+    let dir = temp_dir("deck-motion-points");
+    let surge = |t: f64| 3.0 * (1.0 - (-t * t).exp());
+    let mut table = String::from("t x4 y4 z4 x5 y5 z5 x6 y6 z6\n");
+    for i in 0..=20 {
+        let t = 0.05 * i as f64;
+        table.push_str(&format!(
+            "{t} {} 0 -70 -2.6 4.5033 -69 -2.6 -4.5033 -69\n",
+            5.2 + surge(t)
+        ));
+    }
+    let path = dir.join("points.txt");
+    std::fs::write(&path, table).unwrap();
+    let out = dir.join("spar");
+    let sets = ["output.plots=false", "output.animation=false"];
+    let o = run_with(SPAR, &out, &sets, &["--motion", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Points 4, 5, 6 are nodes 3, 4, 5 (the deck's points in order, fixed ones first).
+    let mut r = csv::Reader::from_path(out.join("positions.csv")).unwrap();
+    let mut checked = 0;
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let t: f64 = rec[0].parse().unwrap();
+        let x: [f64; 3] = std::array::from_fn(|k| rec[k + 2].parse().unwrap());
+        let expected = match &rec[1] {
+            "3" => [5.2 + surge(t), 0.0, -70.0],
+            "4" => [-2.6, 4.5033, -69.0],
+            "5" => [-2.6, -4.5033, -69.0],
+            _ => continue,
+        };
+        for k in 0..3 {
+            assert!(
+                (x[k] - expected[k]).abs() <= 1e-9,
+                "t = {t}: {x:?} vs {expected:?}"
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 33, "{checked} rows checked");
+    let s = summary(&out);
+    assert!(
+        s["deck"]["converted"]
+            .to_string()
+            .contains("its three columns")
+    );
+    // Five columns fit neither form for three coupled points.
+    std::fs::write(&path, "t x y z w\n0 1 2 3 4\n1 1 2 3 4\n").unwrap();
+    let o = phstring(&["check", SPAR, "--motion", path.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o)
+            .contains("has 5 columns; the deck's 3 coupled point(s) take a platform table of 7")
+            && stderr(&o).contains("per-point table of 10"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -279,28 +279,116 @@ pub fn map(deck: &Deck, ignore: &[Feature]) -> Result<Mapping, DeckError> {
 
 /// A vessel motion for a deck's coupled points (`--motion FILE`): a platform table of the
 /// seven columns `t, x, y, z, roll, pitch, yaw` [s, m, m, m, rad, rad, rad]
-/// (`[[platform]]` in docs/scenario.md, MoorDyn's angle convention).
+/// (`[[platform]]` in docs/scenario.md, MoorDyn's angle convention), or a per-point table
+/// `t, x1, y1, z1, x2, …` [s, m] with three columns of absolute position per coupled point
+/// in point-ID order (MoorDyn's coupled points driven one by one).
 #[derive(Debug, Clone)]
 pub struct VesselMotion {
     /// The table file (absolute, so that the generated scenario finds it).
     pub path: std::path::PathBuf,
-    /// The platform's position [m] and rotation at `t = 0`.
+    /// The platform's position [m] and rotation at `t = 0` (the identity for a per-point
+    /// table).
     pub start: (phstring::Vector<3>, phstring::linsolve::Block<3>),
+    /// The per-point form: per coupled point in ID order, its id, its three columns
+    /// (1-based, the time is column 1) and its position at `t = 0` [m]; `None` for a
+    /// platform table.
+    pub points: Option<Vec<PointColumns>>,
     /// The table's last time [s].
     pub end: f64,
+}
+
+/// A coupled point of a per-point `--motion` table: its id, its three columns (1-based,
+/// the time is column 1) and its position at `t = 0` [m].
+pub type PointColumns = (u32, [usize; 3], [f64; 3]);
+
+/// A `--motion` table whose number of columns fits neither form for the deck.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "--motion {}: has {got} columns; the deck's {coupled} coupled point(s) take a platform table of 7 (t, x, y, z, roll, pitch, yaw) or a per-point table of {} (t, then x, y, z of each coupled point in ID order)",
+    path.display(),
+    1 + 3 * coupled
+)]
+pub struct MotionColumnsError {
+    /// The table file.
+    pub path: std::path::PathBuf,
+    /// Its columns.
+    pub got: usize,
+    /// The deck's coupled points.
+    pub coupled: usize,
 }
 
 impl VesselMotion {
     /// Reads the platform table at `path` (errors name `file:line`).
     pub fn read(path: &std::path::Path) -> Result<Self, crate::tables::TableError> {
         let table = crate::tables::read_table(path, 7)?;
+        Ok(Self::platform(path, &table))
+    }
+
+    fn platform(path: &std::path::Path, table: &crate::tables::Table) -> Self {
         let start = table
             .platform()
-            .unwrap_or_else(|| unreachable!("read with 7 columns"))
+            .unwrap_or_else(|| unreachable!("a table of 7 columns"))
             .pose(0.0);
         let end = *table.times.last().unwrap_or(&0.0);
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-        Ok(Self { path, start, end })
+        Self {
+            path,
+            start,
+            points: None,
+            end,
+        }
+    }
+
+    /// Reads the table at `path` for the coupled points of `deck`: a platform table (7
+    /// columns) or a per-point table (`1 + 3K` columns for `K` coupled points). With two
+    /// coupled points both have 7 columns: a header naming `roll` makes it a platform
+    /// table; otherwise a v1 deck's (whose Vessel points are fixed to the platform) is one
+    /// and a v2 deck's (whose Coupled points move on their own) is a per-point table.
+    pub fn for_deck(path: &std::path::Path, deck: &Deck) -> Result<Self, super::LoadError> {
+        let table = crate::tables::read_table_any(path)?;
+        let coupled: Vec<u32> = deck
+            .points
+            .iter()
+            .filter(|p| p.kind == PointKind::Coupled)
+            .map(|p| p.id)
+            .collect();
+        let columns = table.values.len() + 1;
+        let named_roll = table
+            .header
+            .iter()
+            .any(|h| h.trim().eq_ignore_ascii_case("roll"));
+        let per_point = columns == 1 + 3 * coupled.len()
+            && !(columns == 7 && (named_roll || deck.version == Version::V1));
+        if per_point {
+            let points = coupled
+                .iter()
+                .enumerate()
+                .map(|(m, &id)| {
+                    let cols = [2 + 3 * m, 3 + 3 * m, 4 + 3 * m];
+                    let at = cols.map(|c| table.signal(c - 2).value(0.0));
+                    (id, cols, at)
+                })
+                .collect();
+            let end = *table.times.last().unwrap_or(&0.0);
+            return Ok(Self {
+                path: std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+                start: (
+                    phstring::Vector::<3>::zeros(),
+                    phstring::linsolve::Block::<3>::identity(),
+                ),
+                points: Some(points),
+                end,
+            });
+        }
+        if columns == 7 {
+            return Ok(Self::platform(path, &table));
+        }
+        Err(MotionColumnsError {
+            path: path.to_path_buf(),
+            got: columns,
+            coupled: coupled.len(),
+        }
+        .into())
     }
 }
 
@@ -322,9 +410,17 @@ pub fn map_driven(
                 .iter_mut()
                 .filter(|pt| pt.kind == PointKind::Coupled)
             {
-                let b = phstring::Vector::<3>::from(pt.position);
-                let at = p + r * b;
-                pt.position = [at[0], at[1], at[2]];
+                pt.position = match &mv.points {
+                    Some(list) => list
+                        .iter()
+                        .find(|(id, _, _)| *id == pt.id)
+                        .map_or(pt.position, |(_, _, at)| *at),
+                    None => {
+                        let b = phstring::Vector::<3>::from(pt.position);
+                        let at = p + r * b;
+                        [at[0], at[1], at[2]]
+                    }
+                };
             }
             moved = d;
             &moved
@@ -768,6 +864,32 @@ fn platform(m: &mut Mapper) -> Result<(), DeckError> {
                 mv.path.display()
             ),
         );
+    }
+    if let Some(points) = &mv.points {
+        let table = q(&mv.path.display().to_string());
+        let _ = writeln!(
+            m.text,
+            "# --motion: each coupled point follows its own three columns of the table."
+        );
+        for (id, cols, _) in points {
+            let name = format!("point{id}");
+            if !m.vessels.contains(&name) {
+                continue;
+            }
+            let _ = write!(
+                m.text,
+                "[[boundary]]\nnode = {}\nmotion_table = {table}\nmotion_columns = [{}, {}, {}]\n\n",
+                q(&name),
+                cols[0],
+                cols[1],
+                cols[2]
+            );
+        }
+        m.record.converted.push(format!(
+            "--motion {}: each coupled point follows its three columns (absolute positions)",
+            mv.path.display()
+        ));
+        return Ok(());
     }
     let nodes: Vec<String> = m.vessels.iter().map(|n| q(n)).collect();
     let _ = write!(

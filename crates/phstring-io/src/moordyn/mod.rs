@@ -29,8 +29,8 @@ use std::path::Path;
 
 pub use error::DeckError;
 pub use map::{
-    DEFAULT_DT, DEFAULT_END, DEFAULT_OUTPUT_PERIOD, Feature, MapRow, Mapping, VesselMotion, map,
-    map_driven,
+    DEFAULT_DT, DEFAULT_END, DEFAULT_OUTPUT_PERIOD, Feature, MapRow, Mapping, MotionColumnsError,
+    VesselMotion, map, map_driven,
 };
 pub use options::{DeckOption, OPTION_NAMES, Options, WaterDepth};
 
@@ -480,6 +480,9 @@ pub enum LoadError {
     /// The vessel motion of `--motion` could not be read.
     #[error("--motion: {0}")]
     Motion(#[from] crate::tables::TableError),
+    /// The `--motion` table fits neither form for the deck's coupled points.
+    #[error(transparent)]
+    MotionColumns(#[from] MotionColumnsError),
     /// `--motion` was given for a scenario file, whose supports name their own motions.
     #[error(
         "--motion {0}: {1} is a scenario file, not a MoorDyn deck; a scenario moves its supports with position or motion_table keys"
@@ -542,7 +545,9 @@ pub fn load_scenario_driven(
         .map(|w| Feature::from_word(w))
         .collect::<Result<Vec<_>, _>>()?;
     let deck = parse(&text, &path.display().to_string())?;
-    let vessel = motion.map(VesselMotion::read).transpose()?;
+    let vessel = motion
+        .map(|p| VesselMotion::for_deck(p, &deck))
+        .transpose()?;
     let mapping = map_driven(&deck, &features, vessel.as_ref())?;
     let file = crate::scenario::parse(&mapping.scenario, &generated_name(path), sets)?;
     Ok(Loaded {

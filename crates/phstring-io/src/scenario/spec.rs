@@ -339,6 +339,11 @@ pub struct BoundarySpec {
     /// "Motion and force tables"). Instead of `position`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion_table: Option<Spanned<String>>,
+    /// The columns of `motion_table` holding the components x[, y[, z]] (1-based; the time
+    /// is column 1), for a table of several nodes' motions (MoorDyn's per-point motion
+    /// files); default: columns 2 … d + 1 of a table of d + 1 columns.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion_columns: Option<Spanned<Vec<i64>>>,
     /// Nodal force [N] from a table file (path relative to the scenario file): columns
     /// `t` [s] and one per component. Instead of `force`.
     #[serde(default, skip_serializing_if = "Option::is_none")]

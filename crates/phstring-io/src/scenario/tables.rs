@@ -100,6 +100,13 @@ impl ScenarioFile {
         label: &str,
     ) -> Result<TableMotions, ScenarioError> {
         let Some(file) = &b.motion_table else {
+            if let Some(cols) = &b.motion_columns {
+                return Err(self.invalid(
+                    &format!("boundary.{k}.motion_columns"),
+                    cols.span(),
+                    "picks columns of a motion_table, but this table has none",
+                ));
+            }
             return Ok(Vec::new());
         };
         let key = format!("boundary.{k}.motion_table");
@@ -110,10 +117,10 @@ impl ScenarioFile {
                 "and `position` both prescribe the motion: give one of them",
             ));
         }
-        let table = self.scenario_table(&key, file, D + 1)?;
+        let (table, columns) = self.motion_columns::<D>(k, b, file)?;
         let mut out = Vec::with_capacity(D);
         for i in 0..D {
-            let signal = table.signal(i);
+            let signal = table.signal(columns[i]);
             let at_zero = signal.value(0.0);
             let tol = START_TOLERANCE * start[i].abs().max(1.0);
             // NaN (times so far apart that the interpolant overflows) fails too.
@@ -137,6 +144,62 @@ impl ScenarioFile {
             out.push((i, signal));
         }
         Ok(out)
+    }
+
+    /// The table of `boundary.{k}.motion_table` (`file`) and, per component, its value
+    /// column (0: the file's second column): `boundary.{k}.motion_columns`, or all `D`
+    /// columns of a table of `D + 1`.
+    fn motion_columns<const D: usize>(
+        &self,
+        k: usize,
+        b: &BoundarySpec,
+        file: &toml::Spanned<String>,
+    ) -> Result<(Table, [usize; D]), ScenarioError> {
+        let Some(cols) = &b.motion_columns else {
+            let table = self.scenario_table(&format!("boundary.{k}.motion_table"), file, D + 1)?;
+            return Ok((table, std::array::from_fn(|i| i)));
+        };
+        let key = format!("boundary.{k}.motion_columns");
+        if file.get_ref().trim().is_empty() {
+            let key = format!("boundary.{k}.motion_table");
+            return Err(self.invalid(&key, file.span(), "is empty: give a table file"));
+        }
+        let table =
+            crate::tables::read_table_any(&self.table_file(file.get_ref())).map_err(|e| {
+                self.invalid(
+                    &format!("boundary.{k}.motion_table"),
+                    file.span(),
+                    e.to_string(),
+                )
+            })?;
+        let width = table.values.len() + 1;
+        let list = cols.get_ref();
+        if list.len() != D {
+            return Err(self.invalid(
+                &key,
+                cols.span(),
+                format!(
+                    "has {} columns, one per component ({D}) is needed",
+                    list.len()
+                ),
+            ));
+        }
+        let mut out = [0; D];
+        for (i, &c) in list.iter().enumerate() {
+            if c < 2 || c > width as i64 {
+                return Err(self.invalid(
+                    &key,
+                    cols.span(),
+                    format!(
+                        "names column {c} for component {}, but {} has columns 2 to {width} after the time (column 1)",
+                        AXES[i],
+                        clip(file.get_ref())
+                    ),
+                ));
+            }
+            out[i] = (c - 2) as usize;
+        }
+        Ok((table, out))
     }
 
     /// `boundary.{k}.force_table`: `D + 1` columns of force [N].
