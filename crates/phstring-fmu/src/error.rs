@@ -208,6 +208,20 @@ pub enum PackageError {
         /// What is wrong (`is not a shared library …`, `does not export …`).
         what: String,
     },
+    /// A data file the scenario reads (a table, a bathymetry grid) cannot be read to be
+    /// packed into the FMU.
+    #[error("cannot pack `{key}` = {} into the FMU: {cause}", path.display())]
+    DataFile {
+        /// The scenario key naming it.
+        key: String,
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        cause: std::io::Error,
+    },
+    /// The scenario with its data files renamed into the FMU does not parse (a bug).
+    #[error("cannot point the FMU's scenario at its packed data files: {0}")]
+    Rename(String),
     /// The archive cannot be built in memory.
     #[error("cannot build the archive of {}: {cause}", out.display())]
     Archive {

@@ -271,6 +271,48 @@ pub fn check_library(
     Ok(())
 }
 
+/// The scenario text of the FMU and the data files it reads (tables, bathymetry), each
+/// under `tables/K-NAME` of the FMU's resources, where the text now names them: the FMU
+/// carries everything it reads, wherever it is unpacked.
+fn pack_data_files(file: &ScenarioFile) -> Result<(String, Vec<(String, Vec<u8>)>), PackageError> {
+    let files = file.data_files();
+    if files.is_empty() {
+        return Ok((file.text().to_string(), Vec::new()));
+    }
+    let mut data = Vec::with_capacity(files.len());
+    let mut sets = Vec::with_capacity(files.len());
+    for (k, (key, path)) in files.into_iter().enumerate() {
+        let bytes = std::fs::read(&path).map_err(|cause| PackageError::DataFile {
+            key: key.clone(),
+            path: path.clone(),
+            cause,
+        })?;
+        let base: String = path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || ".-_".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let name = format!("tables/{k}-{base}");
+        sets.push(format!("{key}={}", toml_string(&name)));
+        data.push((name, bytes));
+    }
+    let packed = phstring_io::scenario::parse(file.text(), &file.path, &sets)
+        .map_err(|e| PackageError::Rename(e.to_string()))?;
+    Ok((packed.text().to_string(), data))
+}
+
+/// `s` as a TOML basic string.
+fn toml_string(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
+}
+
 /// Writes the FMU (FMI `version`) of `file` (variables `spec`) with the shared library
 /// `library` to `out`. The archive is written to a temporary file next to `out` and renamed
 /// into place, so `out` is either the complete FMU or untouched.
@@ -313,15 +355,16 @@ pub fn write_fmu(
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
         std::process::id()
     ));
-    let archive = archive(&[
+    let (text, data) = pack_data_files(file)?;
+    let mut entries: Vec<(String, &[u8])> = vec![
         ("modelDescription.xml".to_string(), description.as_bytes()),
         (format!("binaries/{folder}/{identifier}.{ext}"), &lib),
-        (
-            "resources/scenario.toml".to_string(),
-            file.text().as_bytes(),
-        ),
-    ])
-    .map_err(|cause| PackageError::Archive {
+        ("resources/scenario.toml".to_string(), text.as_bytes()),
+    ];
+    for (name, bytes) in &data {
+        entries.push((format!("resources/{name}"), bytes));
+    }
+    let archive = archive(&entries).map_err(|cause| PackageError::Archive {
         out: out.to_path_buf(),
         cause,
     })?;

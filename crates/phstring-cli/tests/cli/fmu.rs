@@ -352,3 +352,45 @@ fn a_failing_write_names_the_cause_and_leaves_nothing() {
         "a partial file is left"
     );
 }
+
+/// An FMU carries the data files its scenario reads: the platform table of
+/// `examples/spread_mooring_platform.toml` is packed under `resources/tables/` and the
+/// packed scenario names it there, so the FMU unpacked anywhere else still finds it.
+#[test]
+fn an_fmu_packs_the_tables_its_scenario_reads() {
+    let dir = temp_dir("fmu-tables");
+    let out = dir.join("platform.fmu");
+    let o = fmu(&[
+        "examples/spread_mooring_platform.toml",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e = entries(&out);
+    let table = e
+        .iter()
+        .find(|(n, _)| n == "resources/tables/0-oc4_platform.csv")
+        .unwrap_or_else(|| panic!("{:?}", e.iter().map(|x| &x.0).collect::<Vec<_>>()));
+    let source = std::fs::read(workspace_root().join("examples/tables/oc4_platform.csv")).unwrap();
+    assert_eq!(table.1, source);
+    let (_, scenario) = e
+        .iter()
+        .find(|(n, _)| n == "resources/scenario.toml")
+        .unwrap();
+    let scenario = String::from_utf8(scenario.clone()).unwrap();
+    assert!(
+        scenario.contains(r#"motion_table = "tables/0-oc4_platform.csv""#),
+        "{scenario}"
+    );
+    // Unpacked elsewhere, the scenario checks: it finds its table beside it.
+    let unpacked = dir.join("unpacked");
+    for (name, bytes) in &e {
+        if let Some(rest) = name.strip_prefix("resources/") {
+            let path = unpacked.join(rest);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, bytes).unwrap();
+        }
+    }
+    let o = phstring(&["check", unpacked.join("scenario.toml").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -66,6 +66,38 @@ pub(super) fn column_text(file: &str, j: usize, name: &str) -> String {
 }
 
 impl ScenarioFile {
+    /// Every data file the scenario reads, as `(dotted key, the file as the key resolves
+    /// it)`: motion and force tables, platform tables and the bathymetry grid, in key order.
+    pub fn data_files(&self) -> Vec<(String, PathBuf)> {
+        let s = &self.scenario;
+        let mut out = Vec::new();
+        for (k, b) in s.boundary.iter().enumerate() {
+            for (name, file) in [
+                ("motion_table", &b.motion_table),
+                ("force_table", &b.force_table),
+            ] {
+                if let Some(f) = file {
+                    out.push((format!("boundary.{k}.{name}"), self.table_file(f.get_ref())));
+                }
+            }
+        }
+        for (k, p) in s.platform.iter().enumerate() {
+            let f = &p.motion_table;
+            out.push((
+                format!("platform.{k}.motion_table"),
+                self.table_file(f.get_ref()),
+            ));
+        }
+        if let Some(f) = s
+            .seabed
+            .as_ref()
+            .and_then(|b| b.get_ref().bathymetry.as_ref())
+        {
+            out.push(("seabed.bathymetry".into(), self.table_file(f.get_ref())));
+        }
+        out
+    }
+
     /// The file a table key names: relative to the scenario file's folder.
     fn table_file(&self, rel: &str) -> PathBuf {
         let rel = std::path::Path::new(rel);
