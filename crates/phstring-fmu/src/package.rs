@@ -271,10 +271,13 @@ pub fn check_library(
     Ok(())
 }
 
+/// A data file packed into the FMU: its name under `resources/` and its bytes.
+type DataFile = (String, Vec<u8>);
+
 /// The scenario text of the FMU and the data files it reads (tables, bathymetry), each
 /// under `tables/K-NAME` of the FMU's resources, where the text now names them: the FMU
 /// carries everything it reads, wherever it is unpacked.
-fn pack_data_files(file: &ScenarioFile) -> Result<(String, Vec<(String, Vec<u8>)>), PackageError> {
+fn pack_data_files(file: &ScenarioFile) -> Result<(String, Vec<DataFile>), PackageError> {
     let files = file.data_files();
     if files.is_empty() {
         return Ok((file.text().to_string(), Vec::new()));
