@@ -282,7 +282,7 @@ QUIET = ["output.vtk=false", "output.plots=false", "output.animation=false", "ou
 
 def phstring_run(name, t_end, out, h=None, bin_path=None):
     """`phstring run` of deck `name` with `--motion` its table to `t_end` [s] (time.h = `h`
-    when given) into `out`. Returns a dict: `t`, `fair`, `anch` (end_tensions.csv's FairTen and
+    when given) into `out`, which is removed once read. Returns a dict: `t`, `fair`, `anch` (end_tensions.csv's FairTen and
     AnchTen columns, N), `loop_s` (summary.json's time_loop_s), `h`."""
     sets = QUIET + [f"time.end={t_end}"]
     if h is not None:
@@ -297,6 +297,7 @@ def phstring_run(name, t_end, out, h=None, bin_path=None):
     fair = [i for i, c in enumerate(header) if c.startswith("FairTen")]
     anch = [i for i, c in enumerate(header) if c.startswith("AnchTen")]
     summary = json.loads((out / "summary.json").read_text())
+    shutil.rmtree(out, ignore_errors=True)  # a run at a small step writes tens of MB
     return {
         "t": rows[:, 0],
         "fair": rows[:, fair],
@@ -307,13 +308,15 @@ def phstring_run(name, t_end, out, h=None, bin_path=None):
 
 
 def phstring_statics(name, out, bin_path=None):
-    """`phstring statics` of deck `name` into `out`. Returns `(fair, anch)`: the magnitudes
-    of the support reactions [N] at each line's fairlead and anchor (the deck's anchors are
-    its first points, its fairleads the next ones, one per line, as in the example decks)."""
+    """`phstring statics` of deck `name` into `out`, which is removed once read. Returns
+    `(fair, anch)`: the magnitudes of the support reactions [N] at each line's fairlead and
+    anchor (the deck's anchors are its first points, its fairleads the next ones, one per
+    line, as in the example decks)."""
     args = [bin_path or binary(), "statics", str(deck_path(name)), "--out", str(out), "--force", "-q"]
     subprocess.run(args, check=True, capture_output=True)
     rows = np.loadtxt(out / "equilibrium.csv", delimiter=",", skiprows=1, ndmin=2)
     reaction = np.linalg.norm(rows[:, 4:7], axis=1)
+    shutil.rmtree(out, ignore_errors=True)
     lines = sum(1 for line in deck_path(name).read_text().splitlines() if " Vessel " in f" {line} ")
     return reaction[lines : 2 * lines], reaction[:lines]
 
