@@ -60,7 +60,9 @@ fn energy_closure(out: &Path) -> (Vec<String>, Vec<Vec<f64>>, f64) {
     (h, rows, worst)
 }
 
-/// A deck line: unstretched length, wet weight per length, EA, anchor and fairlead.
+/// The lines of a deck, all alike: unstretched length [m], wet weight per length [N/m], EA
+/// [N], the first line's anchor [m], the node of the first fairlead, the water depth [m],
+/// and how many lines (line `k` runs from node `k` to node `fairlead + k`).
 struct Line {
     length: f64,
     wet_weight: f64,
@@ -68,11 +70,12 @@ struct Line {
     anchor: [f64; 3],
     fairlead: usize,
     depth: f64,
+    count: usize,
 }
 
 /// Runs `phstring statics DECK` with `sets` and compares the fairleads' tensions (their
-/// reactions; nodes 3, 4, 5 are the deck's points 4, 5, 6) with the closed form; returns
-/// the largest relative error of the horizontal tension and of the fairlead tension.
+/// reactions; node `i` is the deck's point `i + 1`) with the closed form; returns the
+/// largest relative error of the horizontal tension and of the fairlead tension.
 fn fairlead_errors(deck: &str, name: &str, line: &Line, sets: &[&str]) -> (f64, f64) {
     let out = temp_dir(name);
     let mut args = vec!["statics", deck, "--out", out.to_str().unwrap(), "--force"];
@@ -85,7 +88,7 @@ fn fairlead_errors(deck: &str, name: &str, line: &Line, sets: &[&str]) -> (f64, 
     let s = summary(&out);
     assert_eq!(s["deck"]["path"], deck);
     let mut worst = (0.0f64, 0.0f64);
-    for k in 0..3 {
+    for k in 0..line.count {
         let f = rows[line.fairlead + k];
         let a = rows[k];
         let x = ((f[0] - a[0]).powi(2) + (f[1] - a[1]).powi(2)).sqrt();
@@ -122,6 +125,7 @@ fn statics_of_the_example_decks_match_the_elastic_catenary() {
         anchor: [853.87, 0.0, -320.0],
         fairlead: 3,
         depth: 320.0,
+        count: 3,
     };
     let (e_h, e_t) = fairlead_errors(SPAR, "deck-spar", &spar, &[]);
     assert!(e_h <= 5e-3 && e_t <= 5e-3, "{e_h:e} {e_t:e}");
@@ -132,6 +136,7 @@ fn statics_of_the_example_decks_match_the_elastic_catenary() {
         anchor: [420.0, 0.0, -50.0],
         fairlead: 3,
         depth: 50.0,
+        count: 3,
     };
     let (_, coarse) = fairlead_errors(CHAIN, "deck-chain", &chain, &[]);
     assert!(coarse <= 1.5e-2, "{coarse:e}");
@@ -145,6 +150,151 @@ fn statics_of_the_example_decks_match_the_elastic_catenary() {
         refined <= 1e-3 && refined < coarse / 10.0,
         "{refined:e} {coarse:e}"
     );
+}
+
+/// The v2 example decks written from public numbers (examples/moordyn), each with its
+/// platform motion table `NAME_motion.csv`, and their lines for the closed form.
+fn v2_examples() -> Vec<(&'static str, Line)> {
+    let area = |d: f64| std::f64::consts::PI / 4.0 * d * d;
+    let line = |length, mass: f64, diameter, ea, anchor, depth, count| Line {
+        length,
+        wet_weight: (mass - RHO_W * area(diameter)) * G,
+        ea,
+        anchor,
+        fairlead: count,
+        depth,
+        count,
+    };
+    vec![
+        (
+            "chain_shallow_50m",
+            line(350.0, 200.1, 0.1801, 8.5606e8, [358.0, 0.0, -50.0], 50.0, 1),
+        ),
+        (
+            "chain_intermediate_150m",
+            line(473.3, 130.4, 0.0809, 5.89e8, [422.5, 0.0, -150.0], 150.0, 1),
+        ),
+        (
+            "chain_deep_320m",
+            line(
+                1100.0,
+                685.0,
+                0.333,
+                3.27e9,
+                [1000.0, 0.0, -320.0],
+                320.0,
+                1,
+            ),
+        ),
+        (
+            "semi_oc4",
+            line(
+                835.5,
+                113.35,
+                0.0766,
+                7.536e8,
+                [418.8, 725.383, -200.0],
+                200.0,
+                3,
+            ),
+        ),
+    ]
+}
+
+/// `phstring statics` of the v2 example decks against the elastic catenary with a grounded
+/// length on a rigid frictionless seabed (as above): the fairlead tension within 0.5 % on
+/// the deck's own mesh and within 0.05 % with four elements per segment
+/// (`--set string.K.elements=4`), where the lumped-mass error, O(l²) in the segment length
+/// l, is about 16 times smaller. Measured on the deck's mesh and on 4×: shallow chain (10 m
+/// segments, H/w = 100 m) 0.32 % and 0.013 %, intermediate (11.8 m, H/w = 96 m) 0.028 % and
+/// 0.0023 %, deep (22 m, H/w = 258 m) 0.028 % and 0.0016 %, semi (41.8 m, H/w = 845 m)
+/// 0.17 % and 0.014 %.
+#[test]
+fn statics_of_the_v2_example_decks_match_the_elastic_catenary() {
+    for (name, line) in v2_examples() {
+        let deck = format!("examples/moordyn/{name}_v2.dat");
+        let (_, own) = fairlead_errors(&deck, name, &line, &[]);
+        let fine: Vec<String> = (0..line.count)
+            .map(|k| format!("string.{k}.elements=4"))
+            .collect();
+        let fine: Vec<&str> = fine.iter().map(String::as_str).collect();
+        let (_, refined) = fairlead_errors(&deck, &format!("{name}4"), &line, &fine);
+        eprintln!(
+            "{name}: fairlead tension error {own:.2e} on the deck's mesh, {refined:.2e} on 4x"
+        );
+        assert!(own <= 5e-3, "{name}: {own:e}");
+        assert!(refined <= 5e-4, "{name}: {refined:e}");
+    }
+}
+
+/// Every deck in examples/moordyn is listed here; each v2 example runs through `check`,
+/// `statics` and a short stretch (2 s) of `run --motion` with its table: the run completes,
+/// its end_tensions.csv (`t`, then `FairTen<i>, AnchTen<i>` for each line) starts at the
+/// static fairlead tension of `statics` (to 1e-6) and
+/// its energy balance closes to 1e-9 of its scale.
+#[test]
+fn every_example_deck_runs_check_statics_and_its_motion() {
+    let mut files: Vec<String> =
+        std::fs::read_dir(crate::workspace_root().join("examples/moordyn"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".dat"))
+            .collect();
+    files.sort();
+    let mut listed: Vec<String> = v2_examples()
+        .iter()
+        .map(|(n, _)| format!("{n}_v2.dat"))
+        .chain(["chain_shallow_v1.dat".into(), "spar_oc3_v2.dat".into()])
+        .collect();
+    listed.sort();
+    assert_eq!(files, listed, "every example deck must be covered here");
+    let dir = temp_dir("deck-examples");
+    let names = v2_examples()
+        .into_iter()
+        .map(|(n, _)| n)
+        .chain(["spar_oc3"]);
+    for name in names {
+        let deck = format!("examples/moordyn/{name}_v2.dat");
+        let table = format!("examples/moordyn/{name}_motion.csv");
+        let o = phstring(&["check", &deck, "--motion", &table]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let st = dir.join(format!("{name}-statics"));
+        let o = phstring(&["statics", &deck, "--out", st.to_str().unwrap(), "-q"]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let out = dir.join(name);
+        let o = run_with(
+            &deck,
+            &out,
+            &[
+                "time.end=2.0",
+                "output.plots=false",
+                "output.vtk=false",
+                "output.animation=false",
+            ],
+            &["--motion", &table],
+        );
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        assert_eq!(summary(&out)["status"], "completed", "{name}");
+        let (_, _, worst) = energy_closure(&out);
+        assert!(worst <= 1e-9, "{name}: balance closure {worst:e}");
+        let mut r = csv::Reader::from_path(out.join("end_tensions.csv")).unwrap();
+        let rows: Vec<Vec<f64>> = r
+            .records()
+            .map(|x| x.unwrap().iter().map(|f| f.parse().unwrap()).collect())
+            .collect();
+        assert!((rows.last().unwrap()[0] - 2.0).abs() < 1e-9, "{name}");
+        let reactions = equilibrium(&st);
+        let lines = (rows[0].len() - 1) / 2;
+        for k in 0..lines {
+            let f = reactions[lines + k];
+            let statics = (f[3] * f[3] + f[4] * f[4] + f[5] * f[5]).sqrt();
+            let start = rows[0][1 + 2 * k];
+            assert!(
+                (start - statics).abs() <= 1e-6 * statics,
+                "{name}: line {k}: FairTen at t = 0 is {start} N, statics {statics} N"
+            );
+        }
+    }
 }
 
 /// `phstring run DECK --set time.end=…`: from the static equilibrium, the lines given an
