@@ -188,6 +188,12 @@ pub fn budget(file: &ScenarioFile) -> Result<Budget> {
         strings: s.string.len().max(usize::from(s.material.is_some())),
         steps,
         stride: usize::try_from(*o.stride.get_ref()).unwrap_or(1).max(1),
+        row_stride: o
+            .row_stride
+            .as_ref()
+            .and_then(|r| usize::try_from(*r.get_ref()).ok())
+            .unwrap_or(1)
+            .max(1),
         positions: o.positions,
         vtk: o.vtk,
         wet: s.water.is_some(),

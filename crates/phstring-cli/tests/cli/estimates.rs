@@ -275,3 +275,66 @@ fn check_prices_a_step_with_what_it_evaluates() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("~820 ms per step"), "{}", stdout(&o));
 }
+
+/// `output.row_stride = 7` over 20 steps writes the rows of steps 0, 7, 14 and the last
+/// (20) in `energy.csv`, `ports.csv` and `end_tensions.csv`, each equal to the row of the
+/// same step of a run that writes every step; `check` estimates the thinner files.
+#[test]
+fn a_row_stride_thins_the_per_step_files_to_the_same_rows() {
+    let dir = temp_dir("row-stride");
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "run",
+            "examples/paper_pendulum.toml",
+            "--out",
+            out.to_str().unwrap(),
+            "-q",
+            "--set",
+            "time.end=0.2",
+            "--set",
+            "output.plots=false",
+            "--set",
+            "output.animation=false",
+        ];
+        args.extend_from_slice(extra);
+        let o = phstring(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let every = run("every", &[]);
+    let thin = run("thin", &["--set", "output.row_stride=7"]);
+    let lines = |dir: &Path, file: &str| -> Vec<String> {
+        std::fs::read_to_string(dir.join(file))
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect()
+    };
+    for file in ["energy.csv", "end_tensions.csv"] {
+        let (all, some) = (lines(&every, file), lines(&thin, file));
+        // Header, then steps 0, 7, 14, 20.
+        let expected: Vec<String> = [0, 1, 8, 15, 21].iter().map(|&i| all[i].clone()).collect();
+        assert_eq!(some, expected, "{file}");
+    }
+    // ports.csv has one row per port and step (no t = 0 row): steps 7, 14 and 20.
+    let (all, some) = (lines(&every, "ports.csv"), lines(&thin, "ports.csv"));
+    let per_step = (all.len() - 1) / 20;
+    let mut expected = vec![all[0].clone()];
+    for step in [7, 14, 20] {
+        expected.extend_from_slice(&all[1 + (step - 1) * per_step..1 + step * per_step]);
+    }
+    assert_eq!(some, expected);
+    let o = phstring(&[
+        "check",
+        "examples/paper_pendulum.toml",
+        "--set",
+        "output.row_stride=0",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("output.row_stride` must be at least 1, got 0"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -410,6 +410,7 @@ fn run_dim<const D: usize>(
     };
     drop(components);
     let writers = writers.and_then(|mut w| {
+        w.set_row_stride(ctx.settings.row_stride);
         if let Some(model) = ends {
             w.end_tensions(model, &sim)?;
         }

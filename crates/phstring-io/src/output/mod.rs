@@ -262,6 +262,9 @@ pub struct OutputPlan {
     pub steps: f64,
     /// `output.stride`.
     pub stride: usize,
+    /// `output.row_stride`: rows of `energy.csv`, `ports.csv`, `end_tensions.csv` every
+    /// so many steps.
+    pub row_stride: usize,
     /// `output.positions`.
     pub positions: bool,
     /// `output.vtk`.
@@ -336,10 +339,19 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
     let digits = |n: f64| n.max(1.0).log10().floor() + 2.0;
     let nodes = p.nodes as f64;
     let wet = if p.wet { 1.0 } else { 0.0 };
-    let rows = (steps + 1.0) * (ENERGY_ROW_BYTES + wet * 6.0 * NUM_BYTES)
-        + steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0)
+    // Rows at step 0, every row_stride-th step and the last.
+    let row_stride = p.row_stride.max(1) as f64;
+    let on_rows = (steps / row_stride).floor();
+    let row_steps = on_rows
+        + if on_rows * row_stride < steps {
+            1.0
+        } else {
+            0.0
+        };
+    let rows = (row_steps + 1.0) * (ENERGY_ROW_BYTES + wet * 6.0 * NUM_BYTES)
+        + row_steps * p.ports as f64 * ((2.0 + 2.0 * d) * PORT_VALUE_BYTES + digits(nodes) + 10.0)
         + if p.strings > 0 {
-            (steps + 1.0) * (1.0 + 2.0 * p.strings as f64) * NUM_BYTES
+            (row_steps + 1.0) * (1.0 + 2.0 * p.strings as f64) * NUM_BYTES
         } else {
             0.0
         };
@@ -453,6 +465,10 @@ pub struct Writers {
     /// A ParaView frame or the collection could not be written (the collection lists the
     /// frames written before).
     paraview_failed: bool,
+    /// Rows of `energy.csv`, `ports.csv` and `end_tensions.csv` every `row_stride` steps.
+    row_stride: usize,
+    /// The last step's report when its rows were not written (off the row stride).
+    pending_rows: Option<StepReport>,
 }
 
 impl Writers {
@@ -514,6 +530,8 @@ impl Writers {
             last_flush: Instant::now(),
             flush_every: FLUSH_EVERY,
             paraview_failed: false,
+            row_stride: 1,
+            pending_rows: None,
         };
         let e = sim.energies();
         let values = [e.kinetic, e.potential(), e.hamiltonian()];
@@ -544,6 +562,12 @@ impl Writers {
     /// `Duration::ZERO` flushes after every step).
     pub fn set_flush_interval(&mut self, every: Duration) {
         self.flush_every = every;
+    }
+
+    /// Writes the rows of `energy.csv`, `ports.csv` and `end_tensions.csv` every `n` steps
+    /// (`output.row_stride`; and always the last step) instead of every step.
+    pub fn set_row_stride(&mut self, n: usize) {
+        self.row_stride = n.max(1);
     }
 
     fn record<const D: usize>(&mut self, sim: &Simulation<D, Material>) {
@@ -669,9 +693,30 @@ impl Writers {
         Ok(())
     }
 
-    /// Records one step: energy row, port rows, and (every `stride` steps) positions and a
-    /// ParaView frame. Refuses ([`OutputError::NonFinite`]) a row with NaN or infinity.
+    /// Records one step: energy row, port rows and end tensions (every `row_stride` steps),
+    /// and (every `stride` steps) positions and a ParaView frame. Refuses
+    /// ([`OutputError::NonFinite`]) a row with NaN or infinity.
     pub fn step<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        r: &StepReport,
+    ) -> Result<(), OutputError> {
+        if self.row_stride <= 1 || sim.steps().is_multiple_of(self.row_stride) {
+            self.pending_rows = None;
+            self.rows(sim, r)?;
+        } else {
+            self.pending_rows = Some(*r);
+        }
+        self.record(sim);
+        self.frame(sim)?;
+        if self.last_flush.elapsed() >= self.flush_every {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// The energy row, port rows and end tensions of the step `r` that led to `sim`'s state.
+    fn rows<const D: usize>(
         &mut self,
         sim: &Simulation<D, Material>,
         r: &StepReport,
@@ -732,11 +777,6 @@ impl Writers {
         }
         self.ports.end_record()?;
         self.end_row(sim, r.t)?;
-        self.record(sim);
-        self.frame(sim)?;
-        if self.last_flush.elapsed() >= self.flush_every {
-            self.flush()?;
-        }
         Ok(())
     }
 
@@ -818,6 +858,8 @@ impl Writers {
             last_flush: Instant::now(),
             flush_every: FLUSH_EVERY,
             paraview_failed: false,
+            row_stride: 1,
+            pending_rows: None,
         })
     }
 
@@ -941,11 +983,15 @@ impl Writers {
     }
 
     /// Writes the final state (positions and ParaView frame) if the last step was not on
-    /// the output stride, then flushes all files.
+    /// the output stride, and its rows if it was not on the row stride, then flushes all
+    /// files.
     pub fn finish<const D: usize>(
         &mut self,
         sim: &Simulation<D, Material>,
     ) -> Result<(), OutputError> {
+        if let Some(r) = self.pending_rows.take() {
+            self.rows(sim, &r)?;
+        }
         self.frame_if(sim, true)?;
         self.flush()
     }
@@ -1266,6 +1312,7 @@ mod tests {
                 strings: 1,
                 steps: steps as f64,
                 stride,
+                row_stride: 1,
                 positions: true,
                 vtk: true,
                 wet,

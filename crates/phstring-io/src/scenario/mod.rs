@@ -279,6 +279,9 @@ pub struct RunSettings {
     pub t_end: f64,
     /// Output stride (steps).
     pub stride: usize,
+    /// Rows of `energy.csv`, `ports.csv` and `end_tensions.csv` every so many steps
+    /// (`output.row_stride`).
+    pub row_stride: usize,
     /// Write an animated GIF of the configuration (`output.animation`; dimension 2 and 3).
     pub animation: bool,
     /// Output switches.

@@ -284,6 +284,19 @@ impl ScenarioFile {
             ));
         }
         let stride = self.output_stride()?;
+        let row_stride = match &self.scenario.output.row_stride {
+            None => 1,
+            Some(r) => match *r.get_ref() {
+                n if n >= 1 => usize::try_from(n).unwrap_or(usize::MAX),
+                n => {
+                    return Err(self.invalid(
+                        "output.row_stride",
+                        r.span(),
+                        format!("must be at least 1, got {n}"),
+                    ));
+                }
+            },
+        };
         self.output_channels()?;
         let output = self.scenario.output.clone();
         Ok(RunSettings {
@@ -313,6 +326,7 @@ impl ScenarioFile {
                 }
             },
             stride,
+            row_stride,
             animation: output.animation,
             output,
         })

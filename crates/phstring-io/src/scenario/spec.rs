@@ -591,11 +591,15 @@ pub struct OutputSpec {
     /// [`crate::channels`]) written as a MoorDyn-style table (`channels_file`) at the times
     /// of `positions.csv`. Line `i` is the `i`-th string, point `k` the node named
     /// `point<k>`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub channels: Vec<Spanned<String>>,
     /// File name of the channel table in the output folder (default `channels.out`).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channels_file: Option<Spanned<String>>,
+    /// Write the rows of `energy.csv`, `ports.csv` and `end_tensions.csv` every
+    /// `row_stride` steps (and the last step) instead of every step (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub row_stride: Option<Spanned<i64>>,
 }
 
 fn default_stride() -> Spanned<i64> {
@@ -615,6 +619,7 @@ impl Default for OutputSpec {
             animation: true,
             channels: Vec::new(),
             channels_file: None,
+            row_stride: None,
         }
     }
 }
