@@ -60,10 +60,7 @@ fn balance_is_exact_with_every_mechanism() {
     }
     let path = [anchor, Vector::<3>::new(lo, 0.0, -50.0), fairlead];
     let net = chain(along(&path, l, n), l, 1e9, 150.0, &[0, n]);
-    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let current = Current::Profile(vec![
         (-50.0, Vector::<3>::new(0.2, 0.1, 0.0)),
         (0.0, Vector::<3>::new(1.0, 0.3, 0.0)),
@@ -161,10 +158,7 @@ fn dg4_balance_is_exact_in_water() {
         l,
         n,
     );
-    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.7,
-        slope: 300.0,
-    });
+    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction::new(0.7, 300.0));
     let net = chain(r, l, 1e9, 120.0, &[0, n])
         .with_water(
             Water::new(RHO_W)
@@ -209,10 +203,7 @@ fn balance_is_exact_with_nonlinear_elimination() {
         l,
         n,
     );
-    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let net = chain(r, l, 1e9, 120.0, &[0])
         .with_water(
             Water::new(RHO_W)
@@ -264,10 +255,7 @@ fn error_control_in_water_keeps_the_balance() {
         l,
         n,
     );
-    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let net = chain(r, l, 1e9, 120.0, &[0, n])
         .with_water(
             Water::new(RHO_W)
@@ -533,10 +521,8 @@ fn chain_pulled_over_the_seabed_needs_mu_w_l() {
         .collect();
     let mut net = chain(r, l, 1e9, rho_a, &[])
         .with_water(
-            Water::new(RHO_W).with_seabed(Seabed::flat(depth, 3e6, 3e5).with_friction(Friction {
-                coefficient: mu,
-                slope,
-            })),
+            Water::new(RHO_W)
+                .with_seabed(Seabed::flat(depth, 3e6, 3e5).with_friction(Friction::new(mu, slope))),
         )
         .with_line_hydro(
             0,
@@ -779,10 +765,7 @@ fn linear_model_damping_of_the_water_matches_closed_forms() {
     }
     // On a seabed at 20 m, pressed 1 cm in (beyond the 1 mm damping ramp); no drag.
     let (cbot, slope) = (3e5, 200.0);
-    let seabed = Seabed::flat(20.0, 3e6, cbot).with_friction(Friction {
-        coefficient: 0.5,
-        slope,
-    });
+    let seabed = Seabed::flat(20.0, 3e6, cbot).with_friction(Friction::new(0.5, slope));
     let calm = LineHydro {
         cd: 0.0,
         cd_axial: 0.0,
