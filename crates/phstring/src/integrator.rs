@@ -248,7 +248,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         };
         for node in &w.nodes {
             let i = node.node;
-            let axis = w.node_axis(node, &self.r0);
+            let axis = w.node_axis(node, self.r0);
             work.add(&w.node_step(node, &self.r0[i], &x[i], &axis, self.h).work);
         }
         for el in &w.elements {
@@ -274,7 +274,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         let mut scale2 = 0.0;
         for node in w.nodes_in(nodes.clone()) {
             let i = node.node;
-            let axis = w.node_axis(node, &self.r0);
+            let axis = w.node_axis(node, self.r0);
             let st = w.node_step(node, &self.r0[i], &x[i], &axis, self.h);
             res[i] += st.res;
             scale2 += st.res.norm_squared();

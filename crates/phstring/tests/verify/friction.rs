@@ -88,7 +88,7 @@ fn axial_and_transverse_sliding_resistance() {
     net.boundary
         .motions
         .push(Motion::new(n, 0, move |t: f64| x0 + ramp(t)));
-    let mut sim = Simulation::new(net, params.clone()).unwrap();
+    let mut sim = Simulation::new(net, params).unwrap();
     sim.run_until(15.0, &mut ()).unwrap();
     // The reaction [N] along axis k of the prescribed node i.
     let port = |sim: &Simulation<3, phstring::Material>, i: usize, k: usize| {
