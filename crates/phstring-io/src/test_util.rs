@@ -117,10 +117,7 @@ pub fn wet_line() -> Simulation<2, Material> {
         point_masses: vec![],
     }
     .into();
-    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let water = Water::new(1025.0)
         .with_current(Current::Uniform(Vector::<2>::new(0.5, 0.0)))
         .with_seabed(seabed);

@@ -60,10 +60,7 @@ fn wet<const D: usize>(n_el: usize) -> Network<D, Material> {
     }
     let mut u = Vector::<D>::zeros();
     u[0] = 0.3;
-    let seabed = Seabed::flat(10.0, 3.0e6, 3.0e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 100.0,
-    });
+    let seabed = Seabed::flat(10.0, 3.0e6, 3.0e5).with_friction(Friction::new(0.5, 100.0));
     let water = Water::new(1025.0)
         .with_gravity(9.81)
         .with_current(Current::Uniform(u))

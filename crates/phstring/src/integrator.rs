@@ -248,7 +248,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         };
         for node in &w.nodes {
             let i = node.node;
-            work.add(&w.node_step(node, &self.r0[i], &x[i], self.h).work);
+            let axis = w.node_axis(node, self.r0);
+            work.add(&w.node_step(node, &self.r0[i], &x[i], &axis, self.h).work);
         }
         for el in &w.elements {
             let [a, b] = self.sys.mesh.elements()[el.e];
@@ -273,7 +274,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         let mut scale2 = 0.0;
         for node in w.nodes_in(nodes.clone()) {
             let i = node.node;
-            let st = w.node_step(node, &self.r0[i], &x[i], self.h);
+            let axis = w.node_axis(node, self.r0);
+            let st = w.node_step(node, &self.r0[i], &x[i], &axis, self.h);
             res[i] += st.res;
             scale2 += st.res.norm_squared();
             if let Some(j) = jac.as_deref_mut() {
@@ -1030,10 +1032,16 @@ mod tests {
             let point = Vector::<D>::from_fn(|i, _| -2.0 * up(i, 0.0));
             Seabed::plane(point, normal, k, 4.0)
         };
-        let mut seabed = base.with_friction(Friction {
-            coefficient: 0.6,
-            slope: 2.0 + next(),
-        });
+        // Isotropic, or axial friction along the nodes' axes; with or without a static
+        // peak; the slope small (a damper) or large (saturated, over the peak's decay).
+        let mut friction = Friction::new(0.6, (2.0 + next()) * 10f64.powf(1.5 + 1.5 * next()));
+        if next() > 0.0 {
+            friction = friction.with_axial(0.25, (1.5 + next()) * 10f64.powf(1.5 + 1.5 * next()));
+        }
+        if next() > -0.3 {
+            friction = friction.with_static_scale(1.5 + next());
+        }
+        let mut seabed = base.with_friction(friction);
         seabed.damping_ramp = 0.05;
         let mut water = Water::new(1.1)
             .with_current(Current::Profile(vec![(-1.5, u0), (0.0, u1)]))

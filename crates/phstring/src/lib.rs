@@ -121,6 +121,6 @@ pub use system::{
     Vector,
 };
 pub use water::{
-    Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed, SeabedSurface,
-    Water, WaterWork,
+    AxialFriction, Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed,
+    SeabedSurface, Water, WaterWork,
 };

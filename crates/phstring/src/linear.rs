@@ -59,7 +59,7 @@ pub fn damping_blocks<const D: usize, M: StoredEnergy>(
     }
     if let Some(w) = sys.water.as_deref() {
         for node in &w.nodes {
-            j.diag[node.node] += w.node_damping(node, &r[node.node]);
+            j.diag[node.node] += w.node_damping(node, r);
         }
         for el in &w.elements {
             let [a, b] = sys.mesh.elements()[el.e];

@@ -30,7 +30,7 @@
 //!     point_masses: vec![],
 //! }.into();
 //! let seabed = Seabed::flat(depth, 3e6, 3e5)                          // kBot, cBot
-//!     .with_friction(Friction { coefficient: 0.5, slope: 0.5 * 200.0 }); // μ, μ·FricDamp
+//!     .with_friction(Friction::new(0.5, 0.5 * 200.0)); // μ, μ·FricDamp
 //! let water = Water::new(1025.0)
 //!     .with_current(Current::Uniform(Vector::<3>::new(0.5, 0.2, 0.0)))
 //!     .with_seabed(seabed);
@@ -156,17 +156,62 @@ pub enum SeabedSurface<const D: usize> {
     Grid(Arc<Bathymetry>),
 }
 
-/// Regularized Coulomb friction on the seabed (docs/method.md §21): the tangential force
-/// `f = −μ N c_f v_t / √((μ N)² + (c_f |v_t|)²)`, isotropic in the seabed plane, `N` the
-/// node's contact force. At small slip it is a damper of slope `c_f`; at large slip it tends
-/// to `μ N` against the slip.
+/// Regularized Coulomb friction on the seabed (docs/method.md §21, (21.5) and (21.5a)): a
+/// resistance against the node's slip `v_t` in the seabed plane, `N` the node's contact
+/// force. Isotropic by default: `f = −μ N c_f v_t / √((μ N)² + (c_f |v_t|)²)`, a damper of
+/// slope `c_f` at small slip that tends to `μ N` against the slip at large slip. With
+/// [`Self::axial`] the slip splits into its part along the line's axis and the part across
+/// it, each with its own law (MoorDyn-F's axial and transverse friction); with
+/// [`Self::static_scale`] `s ≠ 1` each law's coefficient rises from `μ` at large slip to
+/// `s·μ` at small slip (a static peak).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Friction {
-    /// Friction coefficient `μ` (MoorDyn's `FrictionCoefficient`, the dynamic one) [–], ≥ 0.
+    /// Friction coefficient `μ` (MoorDyn's `FrictionCoefficient` or `mu_kT`, the kinetic
+    /// one) [–], ≥ 0: isotropic, or across the line's axis when [`Self::axial`] is set.
     pub coefficient: f64,
     /// Slope `c_f` of the friction force at zero slip [N·s/m] per node, > 0. MoorDyn's
     /// low-speed friction is `μ FricDamp |v_t|`: from a MoorDyn deck, `slope = μ · FricDamp`.
     pub slope: f64,
+    /// Friction along the line's axis, if it differs from the transverse one (`None`: the
+    /// isotropic law with [`Self::coefficient`] and [`Self::slope`]).
+    pub axial: Option<AxialFriction>,
+    /// Static over kinetic friction `s = μ_s/μ_k` [–], > 0 (MoorDyn's `StatDynFricScale`);
+    /// 1 (the default): no static peak.
+    pub static_scale: f64,
+}
+
+/// Seabed friction along a line's axis (docs/method.md §21 (21.5a)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxialFriction {
+    /// Axial kinetic friction coefficient `μ_a` [–], ≥ 0 (MoorDyn-F's `mu_kA`).
+    pub coefficient: f64,
+    /// Slope `c_a` of the axial friction force at zero slip [N·s/m] per node, > 0 (from a
+    /// MoorDyn deck `μ_a · FricDamp`).
+    pub slope: f64,
+}
+
+impl Friction {
+    /// Isotropic friction of coefficient `μ` [–] and zero-slip slope `c_f` [N·s/m] per node,
+    /// without a static peak.
+    pub fn new(coefficient: f64, slope: f64) -> Self {
+        Self {
+            coefficient,
+            slope,
+            axial: None,
+            static_scale: 1.0,
+        }
+    }
+    /// The same friction with the axial coefficient `μ_a` [–] and slope `c_a` [N·s/m] along
+    /// the line's axis (the other fields then act across it).
+    pub fn with_axial(mut self, coefficient: f64, slope: f64) -> Self {
+        self.axial = Some(AxialFriction { coefficient, slope });
+        self
+    }
+    /// The same friction with the static peak `s = μ_s/μ_k` [–].
+    pub fn with_static_scale(mut self, scale: f64) -> Self {
+        self.static_scale = scale;
+        self
+    }
 }
 
 /// A seabed: a penalty contact of stiffness `k·d` per unit length of line, damping of the
@@ -538,6 +583,9 @@ pub(crate) struct WetNode {
     pub damping: f64,
     /// Point drag `½ ρ_w CdA` [kg/m].
     pub drag: f64,
+    /// The nodes whose chord at the step's start is the node's axis for axial friction:
+    /// its neighbours along its line (itself at a line's end); `(node, node)` off a line.
+    pub axis: (usize, usize),
 }
 
 /// An element that drag acts on.
@@ -706,6 +754,26 @@ fn check_water<const D: usize>(w: &Water<D>) -> Result<Option<Bed<D>>, SetupErro
             f.slope,
             true,
         )?;
+        if let Some(ax) = &f.axial {
+            check_value(
+                "seabed axial friction coefficient",
+                None,
+                ax.coefficient,
+                false,
+            )?;
+            check_value(
+                "seabed axial friction slope (mu_a FricDamp) [N s/m]",
+                None,
+                ax.slope,
+                true,
+            )?;
+        }
+        check_value(
+            "seabed static friction scale (mu_s/mu_k)",
+            None,
+            f.static_scale,
+            true,
+        )?;
     }
     let up = up::<D>();
     let mut grid = None;
@@ -792,6 +860,8 @@ pub(crate) fn build<const D: usize>(
     let n = mesh.n_nodes();
     let (rho, g) = (water.density, water.gravity);
     let mut node = vec![(0.0f64, 0.0f64, 0.0f64, 0.0f64); n]; // (V, band, d L, drag)
+    // Each node's neighbours along a wet line, for its axis.
+    let (mut prev, mut next) = (vec![None; n], vec![None; n]);
     let mut added_rho_a = vec![0.0; groups.len()];
     let mut elements = Vec::new();
     let mut seen = vec![false; groups.len()];
@@ -814,6 +884,9 @@ pub(crate) fn build<const D: usize>(
         added_rho_a[gi] = rho * area * h.ca;
         for e in grp.elements.clone() {
             let l = mesh.lengths()[e];
+            let [a, b] = mesh.elements()[e];
+            prev[b].get_or_insert(a);
+            next[a].get_or_insert(b);
             for i in mesh.elements()[e] {
                 let nd = &mut node[i];
                 nd.0 += 0.5 * l * area;
@@ -859,6 +932,7 @@ pub(crate) fn build<const D: usize>(
             stiffness: kb * dl,
             damping: cb * dl,
             drag,
+            axis: (prev[i].unwrap_or(i), next[i].unwrap_or(i)),
         })
         .collect();
     let model = WaterModel {
@@ -899,6 +973,22 @@ impl<const D: usize> WaterModel<D> {
         &self.nodes[lo..hi]
     }
 
+    /// The axis of wet node `w` at the positions `r` [m] for axial friction: the chord
+    /// between its neighbours along its line (not normalized); zero when the seabed has no
+    /// axial friction or the node is on no line.
+    #[inline]
+    pub fn node_axis(&self, w: &WetNode, r: &[Vector<D>]) -> Vector<D> {
+        let axial = self
+            .bed
+            .as_ref()
+            .is_some_and(|b| b.friction.is_some_and(|f| f.axial.is_some()));
+        if axial && w.stiffness > 0.0 {
+            r[w.axis.1] - r[w.axis.0]
+        } else {
+            Vector::zeros()
+        }
+    }
+
     /// The wet elements in `els` (a sorted range).
     pub fn elements_in(&self, els: std::ops::Range<usize>) -> &[WetElement] {
         let lo = self.elements.partition_point(|w| w.e < els.start);
@@ -917,9 +1007,17 @@ pub(crate) struct NodeStep<const D: usize> {
 }
 
 impl<const D: usize> WaterModel<D> {
-    /// The step terms of node `w` (docs/method.md §21).
+    /// The step terms of node `w` (docs/method.md §21), `axis` the node's axis at the step's
+    /// start for axial friction ([`Self::node_axis`]; zero: none).
     #[inline(always)]
-    pub fn node_step(&self, w: &WetNode, r0: &Vector<D>, x: &Vector<D>, h: f64) -> NodeStep<D> {
+    pub fn node_step(
+        &self,
+        w: &WetNode,
+        r0: &Vector<D>,
+        x: &Vector<D>,
+        axis: &Vector<D>,
+        h: f64,
+    ) -> NodeStep<D> {
         let inv_h = 1.0 / h;
         let mut res = Vector::<D>::zeros();
         let mut jac = Block::<D>::zeros();
@@ -933,7 +1031,8 @@ impl<const D: usize> WaterModel<D> {
             jac[(zi, zi)] += w.buoyancy * dqa;
         }
         if let Some(bed) = self.bed.as_ref().filter(|_| w.stiffness > 0.0) {
-            self.contact_step(bed, w, r0, &r1, x, inv_h, (&mut res, &mut jac, &mut work));
+            let out = (&mut res, &mut jac, &mut work);
+            self.contact_step(bed, w, r0, &r1, x, axis, inv_h, out);
         }
         if w.drag > 0.0 {
             // Point drag ½ ρ CdA |v_r|_δ v_r at the mid-step velocity, in water only.
@@ -972,6 +1071,7 @@ impl<const D: usize> WaterModel<D> {
         r0: &Vector<D>,
         r1: &Vector<D>,
         x: &Vector<D>,
+        axis: &Vector<D>,
         inv_h: f64,
         (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
     ) {
@@ -993,7 +1093,6 @@ impl<const D: usize> WaterModel<D> {
         // ∂n/∂x = ½ ∂n/∂r.
         let (n, dn) = bed.normal_at(&(r0 + x * 0.5));
         let dn = dn.map(|d| d * 0.5);
-        let h = 1.0 / inv_h;
         let xn = n.dot(x);
         // ∂(n·x)/∂x.
         let dxn = match &dn {
@@ -1013,31 +1112,198 @@ impl<const D: usize> WaterModel<D> {
             work.seabed_dissipated += c * xn * xn * inv_h;
         }
         if let Some(fr) = &bed.friction {
-            let a = fr.coefficient * w.stiffness * pm;
-            if a > 0.0 {
-                let vt = (x - n * xn) * inv_h;
-                let cf = fr.slope;
-                let vt2 = vt.norm_squared();
-                let s = (a * a + cf * cf * vt2).sqrt();
-                let coef = cf * a / s;
-                *res += vt * coef;
-                // ∂(h v_t)/∂x: (I − nnᵀ) on a plane.
-                let mut pt = Block::<D>::identity() - n * dxn;
-                if let Some(d) = &dn {
-                    pt -= d * xn;
-                }
-                let dv = (Block::<D>::identity() / s
-                    - vt * vt.transpose() * (cf * cf / (s * s * s)))
-                    * (cf * a);
-                *jac += dv * pt * inv_h;
-                // ∂a/∂x = −½ μ k ∇g(r₁)ᵀ (the mid-step penetration).
-                let da = -0.5 * fr.coefficient * w.stiffness;
-                *jac += vt * grad1.transpose() * (cf * cf * cf * vt2 / (s * s * s) * da);
-                work.friction_dissipated += h * coef * vt2;
-            }
+            let slip = Slip {
+                n: &n,
+                dn: dn.as_ref(),
+                xn,
+                dxn: &dxn,
+                grad1: &grad1,
+                stiffness: w.stiffness,
+                pm,
+            };
+            slip.friction(fr, x, axis, inv_h, (res, jac, work));
         }
     }
+}
 
+/// Below this length of the axis's part in the seabed plane (relative to the axis), a node's
+/// friction is the transverse law in every direction (a line standing on the seabed).
+const AXIS_IN_PLANE_MIN: f64 = 1e-9;
+
+/// Normalized slip `x_S` [–] about which the static peak's excess decays (docs/method.md
+/// §21 (21.5b)): the coefficient is `μ (1 + (s − 1) exp(−(x/x_S)⁴))` at the normalized slip
+/// `x = c_f |v|/(μ N)`, so that it stays within 2 % of `s μ` at the peak and is `μ` above
+/// `x ≈ 2 x_S`.
+pub const STATIC_PEAK_SLIP: f64 = 20.0;
+
+/// The friction's derivative by the slip at zero slip [N·s/m] in the seabed plane of normal
+/// `n`: `s c_f (I − nnᵀ)`, or with axial friction and an `axis` in the plane,
+/// `s (c_a t tᵀ + c_f (I − nnᵀ − t tᵀ))`, `t` the axis's unit part in the plane.
+fn friction_slope<const D: usize>(fr: &Friction, n: &Vector<D>, axis: &Vector<D>) -> Block<D> {
+    let p = Block::<D>::identity() - n * n.transpose();
+    let s = fr.static_scale;
+    let a = p * axis;
+    let la = a.norm();
+    match fr.axial {
+        Some(ax) if la > AXIS_IN_PLANE_MIN * axis.norm() => {
+            let tt = a * a.transpose() / (la * la);
+            (tt * ax.slope + (p - tt) * fr.slope) * s
+        }
+        _ => p * (fr.slope * s),
+    }
+}
+
+/// One direction of the friction law (21.5)/(21.5b) at the slip `v` [m/s]: the force is
+/// `−coef v` [N]; `dv` is `∂(coef v)/∂v` [N·s/m] and `da` the factor of `v` in
+/// `∂(coef v)/∂a` [s/m], `a = μ N` the Coulomb level [N].
+pub(crate) struct SlipLaw<const D: usize> {
+    pub coef: f64,
+    pub dv: Block<D>,
+    pub da: f64,
+}
+
+/// The regularized Coulomb law (21.5) with zero-slip slope `c` [N·s/m] and Coulomb level
+/// `a = μ N > 0` [N], times the static peak (21.5b) of scale `s` (`s = 1`: none), at the slip
+/// `v` [m/s]: `coef = c φ(x) (1 + (s − 1) G(x))`, `φ = 1/√(1 + x²)`, `x = c|v|/a`,
+/// `G = exp(−(x/x_S)⁴)`. Smooth in `v` (a function of `|v|²`), `coef > 0`.
+pub(crate) fn slip_law<const D: usize>(c: f64, a: f64, s: f64, v: &Vector<D>) -> SlipLaw<D> {
+    let v2 = v.norm_squared();
+    let root = (a * a + c * c * v2).sqrt();
+    let coef = c * a / root;
+    let r3 = root * root * root;
+    let dv = (Block::<D>::identity() / root - v * v.transpose() * (c * c / r3)) * (c * a);
+    let da = c * c * c * v2 / r3;
+    if s == 1.0 {
+        return SlipLaw { coef, dv, da };
+    }
+    // m = 1 + (s − 1) G(q), q = x² = c²|v|²/a², G = exp(−(q/x_S²)²).
+    let xs2 = STATIC_PEAK_SLIP * STATIC_PEAK_SLIP;
+    let q = c * c * v2 / (a * a);
+    let qs = q / xs2;
+    let g = (-qs * qs).exp();
+    let m = 1.0 + (s - 1.0) * g;
+    let dm_dq = -2.0 * (s - 1.0) * g * qs / xs2;
+    // ∂q/∂v = 2 c² v/a², ∂q/∂a = −2 q/a.
+    let dm_dv = v * (dm_dq * 2.0 * c * c / (a * a));
+    let dm_da = -2.0 * dm_dq * q / a;
+    SlipLaw {
+        coef: coef * m,
+        dv: dv * m + v * dm_dv.transpose() * coef,
+        da: da * m + coef * dm_da,
+    }
+}
+
+/// The seabed plane at a node in contact, for its friction: the mid-step normal `n` and its
+/// derivative by the increment `dn` (a grid), `n·x` and its derivative, `∇g(r₁)`, the
+/// node's contact stiffness `k_i` [N/m] and mid-step penetration `p_m` [m].
+struct Slip<'a, const D: usize> {
+    n: &'a Vector<D>,
+    dn: Option<&'a Block<D>>,
+    xn: f64,
+    dxn: &'a nalgebra::SMatrix<f64, 1, D>,
+    grad1: &'a Vector<D>,
+    stiffness: f64,
+    pm: f64,
+}
+
+impl<const D: usize> Slip<'_, D> {
+    /// The friction (21.5), (21.5a), (21.5b) of the increment `x`, the axis `axis` of the node
+    /// at the step's start (zero: none), added to the residual, Jacobian and work.
+    fn friction(
+        &self,
+        fr: &Friction,
+        x: &Vector<D>,
+        axis: &Vector<D>,
+        inv_h: f64,
+        (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
+    ) {
+        let n = self.n;
+        // h v_t and ∂(h v_t)/∂x: (I − nnᵀ) on a plane.
+        let xt = x - n * self.xn;
+        let mut pt = Block::<D>::identity() - n * self.dxn;
+        if let Some(d) = self.dn {
+            pt -= d * self.xn;
+        }
+        let s = fr.static_scale;
+        let along = fr.axial.and_then(|ax| {
+            let a = axis - n * n.dot(axis);
+            let la = a.norm();
+            (la > AXIS_IN_PLANE_MIN * axis.norm()).then_some((ax, a / la, la))
+        });
+        let Some((ax, t, la)) = along else {
+            self.direction(
+                fr.coefficient,
+                fr.slope,
+                s,
+                &xt,
+                &pt,
+                inv_h,
+                (res, jac, work),
+            );
+            return;
+        };
+        // The slip along the axis t (in the seabed plane), h v_a = t tᵀ h v_t, and across it.
+        let ta = t.dot(&xt);
+        let xa = t * ta;
+        let mut pa = t * t.transpose() * pt;
+        if let Some(d) = self.dn {
+            // t = P a₀/|P a₀| turns with n: ∂(P a₀)/∂x = −d (n·a₀) − n (a₀ᵀ d).
+            let a0 = axis;
+            let dpa = -(d * n.dot(a0)) - n * (a0.transpose() * d);
+            let dt = (Block::<D>::identity() - t * t.transpose()) * dpa / la;
+            pa += dt * ta + t * (xt.transpose() * dt);
+        }
+        let (xc, pc) = (xt - xa, pt - pa);
+        self.direction(
+            ax.coefficient,
+            ax.slope,
+            s,
+            &xa,
+            &pa,
+            inv_h,
+            (res, jac, work),
+        );
+        self.direction(
+            fr.coefficient,
+            fr.slope,
+            s,
+            &xc,
+            &pc,
+            inv_h,
+            (res, jac, work),
+        );
+    }
+
+    /// One direction's law: `μ`, zero-slip slope `c`, static scale `s`, the slip times `h`
+    /// and its derivative by the increment.
+    #[allow(clippy::too_many_arguments)]
+    fn direction(
+        &self,
+        mu: f64,
+        c: f64,
+        s: f64,
+        hv: &Vector<D>,
+        dhv: &Block<D>,
+        inv_h: f64,
+        (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
+    ) {
+        let a = mu * self.stiffness * self.pm;
+        if a <= 0.0 {
+            return;
+        }
+        let v = hv * inv_h;
+        let law = slip_law(c, a, s, &v);
+        *res += v * law.coef;
+        *jac += law.dv * dhv * inv_h;
+        // ∂a/∂x = −½ μ k ∇g(r₁)ᵀ (the mid-step penetration).
+        let da = -0.5 * mu * self.stiffness;
+        *jac += v * self.grad1.transpose() * (law.da * da);
+        let h = 1.0 / inv_h;
+        work.friction_dissipated += h * law.coef * v.norm_squared();
+    }
+}
+
+impl<const D: usize> WaterModel<D> {
     /// `(force F [N] on the element, its Jacobian blocks by x_a and x_b, work)` of the drag on
     /// wet element `w` = `[a, b]` of reference length `l`: Morison's law at the element's
     /// mid-step velocity `(Δ_a + Δ_b)/2h` relative to the current at the mid-step mid-point,
@@ -1159,7 +1425,8 @@ impl<const D: usize> WaterModel<D> {
         };
         // A step of infinite length from r with no increment has v = 0; the increment enters
         // the mid-step height with weight ½, so the derivative by r is twice that by x.
-        let st = self.node_step(&drag_only, r, &Vector::zeros(), f64::INFINITY);
+        let zero = Vector::zeros();
+        let st = self.node_step(&drag_only, r, &zero, &zero, f64::INFINITY);
         (st.res, st.jac * 2.0)
     }
 
@@ -1178,13 +1445,15 @@ impl<const D: usize> WaterModel<D> {
         (f, [ja * 2.0, jb * 2.0])
     }
 
-    /// At rest at `r`: the derivative of node `w`'s resistive forces by its velocity [N·s/m]
-    /// (symmetric, ⪰ 0), the node's block of the damping matrix `R_v`: the point drag's
-    /// derivative in the current (with the equivalent linear drag of
+    /// At rest at the positions `r` [m]: the derivative of node `w`'s resistive forces by its
+    /// velocity [N·s/m] (symmetric, ⪰ 0), the node's block of the damping matrix `R_v`: the
+    /// point drag's derivative in the current (with the equivalent linear drag of
     /// [`Water::linear_drag_amplitude`]), the seabed damping in contact (ramped by the
-    /// penetration), and the friction's slope at zero slip in the seabed plane.
-    pub fn node_damping(&self, w: &WetNode, r: &Vector<D>) -> Block<D> {
+    /// penetration), and the friction's slope at zero slip in the seabed plane (times the
+    /// static scale; along and across the node's axis with axial friction).
+    pub fn node_damping(&self, w: &WetNode, rs: &[Vector<D>]) -> Block<D> {
         let eye = Block::<D>::identity();
+        let r = &rs[w.node];
         let mut c = Block::<D>::zeros();
         if w.drag > 0.0 {
             let (u, _) = self.current.at(r[D - 1]);
@@ -1199,7 +1468,7 @@ impl<const D: usize> WaterModel<D> {
                 let nn = bed.n * bed.n.transpose();
                 c += nn * (w.damping * ramp(p, bed.ramp).0);
                 if let Some(fr) = &bed.friction {
-                    c += (eye - nn) * fr.slope;
+                    c += friction_slope(fr, &bed.n, &self.node_axis(w, rs));
                 }
             }
         }
@@ -1308,6 +1577,106 @@ mod tests {
         }
     }
 
+    /// A node of 2 m of 0.1 m chain pressed `p` into a flat seabed, or one of the bumpy grid
+    /// (the normal turning), with the friction `fr` and no damping, buoyancy or drag.
+    fn friction_node(fr: Friction, grid: bool) -> (WaterModel<3>, WetNode) {
+        let g = grid.then(|| {
+            let xs = vec![-3.0, -1.0, 0.5, 2.0, 4.0];
+            let ys = vec![-2.0, 0.0, 3.0];
+            let d = ys
+                .iter()
+                .flat_map(|&y| {
+                    // 50 m deep below the test's node at (0.3, −0.2), sloping about it.
+                    xs.iter().map(move |&x: &f64| {
+                        50.0 + 0.05 * (x.sin() - 0.3f64.sin()) + 0.02 * (y + 0.2)
+                    })
+                })
+                .collect();
+            Arc::new(Bathymetry::grid(xs, ys, d).unwrap())
+        });
+        let model = WaterModel {
+            rho: 1025.0,
+            current: Current::still(),
+            still: true,
+            delta: DEFAULT_DRAG_SMOOTHING,
+            amplitude: 0.0,
+            bed: Some(Bed {
+                n: up::<3>(),
+                p: Vector::<3>::new(0.0, 0.0, -50.0),
+                grid: g,
+                ramp: DEFAULT_DAMPING_RAMP,
+                friction: Some(fr),
+            }),
+            nodes: vec![],
+            elements: vec![],
+        };
+        let node = WetNode {
+            node: 0,
+            buoyancy: 0.0,
+            band: 0.1,
+            stiffness: 3e6 * 0.1 * 2.0,
+            damping: 0.0,
+            drag: 0.0,
+            axis: (0, 0),
+        };
+        (model, node)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// The friction (21.5)–(21.5b) is a resistance at every state: over any step its
+        /// dissipation `h Σ c φ |v|²` is ≥ 0 and is exactly the work `−f·Δ` of its force (the
+        /// friction's residual term times the increment, to rounding), isotropic or split
+        /// along any axis, with and without the static peak, the slip ranging over the peak's
+        /// region and beyond (normalized slip 1e-3 … 1e3).
+        #[test]
+        fn friction_dissipates_its_work(
+            vx in -1.0f64..1.0, vy in -1.0f64..1.0, vz in -0.2f64..0.2, speed in -3.0f64..3.0,
+            ax in -1.0f64..1.0, ay in -1.0f64..1.0, az in -1.0f64..1.0,
+            mu_a in 0.0f64..1.0, scale in 0.5f64..3.0, pick in 0usize..4, grid in proptest::bool::ANY,
+        ) {
+            let mut fr = Friction::new(0.6, 1e5);
+            if pick & 1 == 1 {
+                fr = fr.with_axial(mu_a, mu_a.max(1e-3) * 2e5);
+            }
+            if pick & 2 == 2 {
+                fr = fr.with_static_scale(scale);
+            }
+            let (with, node) = friction_node(fr, grid);
+            let mut without = with.clone();
+            without.bed.as_mut().unwrap().friction = None;
+            let h = 0.01;
+            // 5 mm in, then the slip: |v| from 1e-3 to 1e3 times μN/c (μN ≈ 1800 N).
+            let r0 = Vector::<3>::new(0.3, -0.2, -50.005);
+            let dir = Vector::<3>::new(vx, vy, vz);
+            let x = dir * (h * 1.8e-2 * 10f64.powf(speed) / dir.norm().max(1e-3));
+            let axis = Vector::<3>::new(ax, ay, az);
+            let a = with.node_step(&node, &r0, &x, &axis, h);
+            let b = without.node_step(&node, &r0, &x, &axis, h);
+            let d = a.work.friction_dissipated;
+            let work = (a.res - b.res).dot(&x);
+            prop_assert!(d >= 0.0, "dissipation {d:e}");
+            prop_assert!((d - work).abs() <= 1e-13 * (d.abs() + (a.res - b.res).norm() * x.norm()), "D {d:e} against -f·Δ {work:e}");
+        }
+    }
+
+    /// The law's force over `μN` (21.5b) peaks at `s` less the regularization: the largest
+    /// value over the slip is within 2 % below `s` for `s` from 1.2 to 3, and the coefficient
+    /// is `s c_f` at zero slip and `μ` (the kinetic one) at large slip.
+    #[test]
+    fn static_peak_reaches_s_mu_n_and_falls_to_mu_n() {
+        for s in [1.2, 1.5, 2.0, 3.0] {
+            let (c, a) = (1.0, 1.0);
+            let psi = |x: f64| slip_law::<1>(c, a, s, &Vector::<1>::new(x)).coef * x;
+            let peak = (1..=100_000)
+                .map(|k| psi(k as f64 * 1e-3))
+                .fold(0.0, f64::max);
+            assert!(peak < s && peak >= 0.98 * s, "s = {s}: peak {peak}");
+            assert!((slip_law::<1>(c, a, s, &Vector::<1>::new(0.0)).coef - s).abs() <= 1e-15);
+            assert!((psi(200.0) - 1.0).abs() <= 2e-5, "s = {s}: {}", psi(200.0));
+        }
+    }
+
     /// Momentum (docs/method.md §21): over every step the change of `Σ M_ρ v` equals the
     /// impulse of gravity, the water's forces (buoyancy, seabed, drag, friction) and the
     /// support's reaction, to the Newton residual left at the free components.
@@ -1334,10 +1703,7 @@ mod tests {
             },
             point_masses: vec![],
         };
-        let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
-            coefficient: 0.6,
-            slope: 500.0,
-        });
+        let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction::new(0.6, 500.0));
         let water = Water::new(1025.0)
             .with_current(Current::Uniform(Vector::<3>::new(0.8, -0.3, 0.0)))
             .with_seabed(seabed);
@@ -1379,8 +1745,9 @@ mod tests {
             // The water's residual terms, summed over the nodes.
             let mut water_res = Vector::<3>::zeros();
             for node in &w.nodes {
+                let axis = w.node_axis(node, &before.r);
                 water_res += w
-                    .node_step(node, &before.r[node.node], &x[node.node], rep.h)
+                    .node_step(node, &before.r[node.node], &x[node.node], &axis, rep.h)
                     .res;
             }
             for el in &w.elements {

@@ -500,7 +500,27 @@ struct Settings {
     c_bot: f64,
     friction: f64,
     fric_damp: f64,
+    /// MoorDyn-F's `mu_kA`, if given.
+    friction_axial: Option<f64>,
+    /// `StatDynFricScale` (1 when not given).
+    static_scale: f64,
     stride: u64,
+}
+
+/// The transverse (or isotropic) friction coefficient: `FrictionCoefficient` or MoorDyn-F's
+/// `mu_kT`, refused when both are given (0 when neither is).
+fn friction_coefficient(m: &Mapper) -> Result<f64, DeckError> {
+    let o = &m.deck.options;
+    match (o.friction_coefficient()?, o.friction_transverse()?) {
+        (Some(_), Some(_)) => {
+            let line = o.get("mu_kT").map_or(1, |x| x.line);
+            m.refuse(
+                line,
+                "both FrictionCoefficient and mu_kT (two names for the transverse friction coefficient)".into(),
+            )
+        }
+        (a, b) => Ok(a.or(b).unwrap_or(0.0)),
+    }
 }
 
 /// Reads the options: the mapped ones into [`Settings`], the others recorded as not needed
@@ -544,22 +564,13 @@ fn options(m: &mut Mapper) -> Result<Settings, DeckError> {
         depth,
         k_bot: o.k_bot()?.unwrap_or(3.0e6),
         c_bot: o.c_bot()?.unwrap_or(3.0e5),
-        friction: o.friction_coefficient()?.unwrap_or(0.0),
+        friction: friction_coefficient(m)?,
         fric_damp: o.fric_damp()?.unwrap_or(200.0),
+        friction_axial: o.friction_axial()?,
+        static_scale: o.stat_dyn_fric_scale()?.unwrap_or(1.0),
         stride: ((period / h).round() as u64).max(1),
     };
-    if let Some(scale) = o.stat_dyn_fric_scale()?
-        && scale != 1.0
-    {
-        let line = o.get("StatDynFricScale").map_or(1, |x| x.line);
-        m.converted(
-            line,
-            format!(
-                "StatDynFricScale = {scale}: phstring's friction has no static peak; the kinetic coefficient FrictionCoefficient = {} holds at every sliding speed",
-                s.friction
-            ),
-        );
-    }
+    positive("StatDynFricScale", s.static_scale)?;
     let entries = m.deck.options.entries.clone();
     for e in &entries {
         option_entry(m, e, &s)?;
@@ -580,7 +591,12 @@ fn option_entry(m: &mut Mapper, e: &super::DeckOption, s: &Settings) -> Result<(
         "cBot" => format!("seabed.damping = {} Pa·s/m", s.c_bot),
         "FrictionCoefficient" => format!("seabed.friction = {}", s.friction),
         "FricDamp" => format!("seabed.friction_damping = {} N·s/m", s.fric_damp),
-        "StatDynFricScale" => "not modelled (see the conversions)".into(),
+        "StatDynFricScale" => format!("seabed.friction_static_scale = {}", s.static_scale),
+        "mu_kT" => format!("seabed.friction = {} (transverse)", s.friction),
+        "mu_kA" => format!(
+            "seabed.friction_axial = {}",
+            s.friction_axial.unwrap_or(0.0)
+        ),
         "dtOut" => format!("output.stride = {} steps", s.stride),
         name @ ("WaveKin" | "Currents") => {
             if super::layout::number(&e.value) == Some(0.0) {
@@ -1209,13 +1225,20 @@ fn settings_text(m: &mut Mapper, s: &Settings) {
         Some(depth) => {
             let _ = write!(
                 m.text,
-                "depth = {}\n\n[seabed]\nstiffness = {}\ndamping = {}\nfriction = {}\nfriction_damping = {}\n\n",
+                "depth = {}\n\n[seabed]\nstiffness = {}\ndamping = {}\nfriction = {}\nfriction_damping = {}\n",
                 f(depth),
                 f(s.k_bot),
                 f(s.c_bot),
                 f(s.friction),
                 f(s.fric_damp)
             );
+            if let Some(a) = s.friction_axial {
+                let _ = writeln!(m.text, "friction_axial = {}", f(a));
+            }
+            if s.static_scale != 1.0 {
+                let _ = writeln!(m.text, "friction_static_scale = {}", f(s.static_scale));
+            }
+            m.text.push('\n');
         }
         None => {
             m.text.push('\n');

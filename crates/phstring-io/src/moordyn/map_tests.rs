@@ -265,15 +265,23 @@ fn taut_lines_free_points_and_positive_ba() {
     assert_eq!(*s.output.stride.get_ref(), 50);
     let b = s.seabed.as_ref().unwrap().get_ref();
     assert_eq!(
-        (opt(&b.friction), opt(&b.friction_damping)),
-        (Some(0.4), Some(150.0))
+        (
+            opt(&b.friction),
+            opt(&b.friction_damping),
+            opt(&b.friction_static_scale),
+            opt(&b.friction_axial)
+        ),
+        (Some(0.4), Some(150.0), Some(1.5), None)
     );
+    // StatDynFricScale is mapped, not converted with a warning.
     assert!(
-        m.record
+        !m.record
             .converted
             .iter()
-            .any(|c| c.starts_with("deck.dat:") && c.contains("StatDynFricScale = 1.5"))
+            .any(|c| c.contains("StatDynFricScale"))
     );
+    assert!(m.rows.iter().any(|r| r.entry.contains("StatDynFricScale")
+        && r.became == "seabed.friction_static_scale = 1.5"));
     assert!(m.record.converted.iter().any(|c| {
         c.contains("BA = 400000 N·s of line type wire → kelvin_voigt η = BA/2 = 200000 N·s")
     }));
@@ -610,4 +618,55 @@ fn output_channels_are_written_dropped_with_a_note_or_refused() {
             "{outputs}: {e}"
         );
     }
+
+/// MoorDyn-F's friction options: `mu_kT` and `mu_kA` become the transverse and axial
+/// coefficients, `MC` (StatDynFricScale's other name) the static scale and `CV` (FricDamp's)
+/// the damping; the scenario builds a seabed with axial friction of slope `mu_kA · CV`.
+/// `mu_kT` next to `FrictionCoefficient` is refused, naming its line.
+#[test]
+fn moordyn_f_friction_options_map_to_axial_friction_and_static_scale() {
+    let deck = |extra: &str| {
+        format!(
+            "t\n--- LINE TYPES ---\nName Diam MassDen EA BA EI Cd Ca CdAx CaAx\n(-) (m) (kg/m) (N) (Ns) (Nm2) (-) (-) (-) (-)\n\
+             chain 0.1 100 1e9 -1 0 1.2 1 0.2 0\n--- POINTS ---\nID Att X Y Z M V CdA Ca\n(#) (-) (m) (m) (m) (kg) (m3) (m2) (-)\n\
+             1 Fixed 200 0 -100 0 0 0 0\n2 Vessel 0 0 -5 0 0 0 0\n--- LINES ---\nID Type A B L N Out\n(#) (-) (#) (#) (m) (-) (-)\n1 chain 1 2 250 25 -\n\
+             --- OPTIONS ---\n0.01 dtM\n100 WtrDpth\n{extra}--- END ---\n"
+        )
+    };
+    let (m, file) = mapped(&deck("0.8 mu_kT\n0.4 mu_kA\n1.3 MC\n150 CV\n"), &[]);
+    let b = file.scenario.seabed.as_ref().unwrap().get_ref();
+    assert_eq!(
+        (
+            opt(&b.friction),
+            opt(&b.friction_axial),
+            opt(&b.friction_static_scale),
+            opt(&b.friction_damping)
+        ),
+        (Some(0.8), Some(0.4), Some(1.3), Some(150.0))
+    );
+    for (entry, became) in [
+        ("mu_kT", "seabed.friction = 0.8 (transverse)"),
+        ("mu_kA", "seabed.friction_axial = 0.4"),
+        ("MC", "seabed.friction_static_scale = 1.3"),
+    ] {
+        assert!(
+            m.rows
+                .iter()
+                .any(|r| r.entry.contains(entry) && r.became == became),
+            "{entry}: {:?}",
+            m.rows
+        );
+    }
+    let v = file.validate::<3>().unwrap_or_else(|e| panic!("{e}"));
+    let water = v.problem.water.as_ref().unwrap();
+    let friction = water.seabed.as_ref().unwrap().friction.unwrap();
+    assert_eq!((friction.coefficient, friction.slope), (0.8, 0.8 * 150.0));
+    let axial = friction.axial.unwrap();
+    assert_eq!((axial.coefficient, axial.slope), (0.4, 0.4 * 150.0));
+    assert_eq!(friction.static_scale, 1.3);
+    let message = refused(&deck("0.5 FrictionCoefficient\n0.8 mu_kT\n"));
+    assert!(
+        message.contains("deck.dat:19") && message.contains("both FrictionCoefficient and mu_kT"),
+        "{message}"
+    );
 }

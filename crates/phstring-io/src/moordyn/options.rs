@@ -46,6 +46,8 @@ pub const OPTION_NAMES: &[&[&str]] = &[
     &["kBot", "kb"],
     &["cBot", "cb"],
     &["FrictionCoefficient"],
+    &["mu_kT"],
+    &["mu_kA"],
     &["FricDamp", "CV"],
     &["StatDynFricScale", "MC"],
     &["TmaxIC", "ICTmax"],
@@ -141,6 +143,14 @@ impl Options {
     /// Seabed friction coefficient `FrictionCoefficient` [-].
     pub fn friction_coefficient(&self) -> Result<Option<f64>, DeckError> {
         self.number("FrictionCoefficient")
+    }
+    /// Transverse kinetic seabed friction coefficient `mu_kT` (MoorDyn-F) [-].
+    pub fn friction_transverse(&self) -> Result<Option<f64>, DeckError> {
+        self.number("mu_kT")
+    }
+    /// Axial kinetic seabed friction coefficient `mu_kA` (MoorDyn-F) [-].
+    pub fn friction_axial(&self) -> Result<Option<f64>, DeckError> {
+        self.number("mu_kA")
     }
     /// Seabed friction damping `FricDamp` (MoorDyn-F `CV`) [-]: scales friction from none
     /// at rest to full at large sliding speed.

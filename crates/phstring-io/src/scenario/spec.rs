@@ -149,6 +149,14 @@ pub struct SeabedSpec {
     /// small slip (default 200, MoorDyn's default).
     #[serde(default)]
     pub friction_damping: Option<Spanned<f64>>,
+    /// Coulomb friction coefficient `μ_a` along the line's axis (MoorDyn-F's `mu_kA`; default:
+    /// none, the isotropic law); `friction` is then the transverse coefficient.
+    #[serde(default)]
+    pub friction_axial: Option<Spanned<f64>>,
+    /// Static over kinetic friction `μ_s/μ_k` (MoorDyn's `StatDynFricScale`; default 1: no
+    /// static peak).
+    #[serde(default)]
+    pub friction_static_scale: Option<Spanned<f64>>,
     /// A point of an inclined seabed plane [m] (default: on the flat seabed below the origin).
     #[serde(default)]
     pub point: Option<Spanned<Vec<f64>>>,

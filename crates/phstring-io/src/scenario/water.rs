@@ -247,15 +247,27 @@ impl ScenarioFile {
             seabed.damping_ramp = self.positive("seabed.damping_ramp", r)?;
         }
         let mu = self.non_negative("seabed.friction", s.friction.as_ref())?;
-        if mu > 0.0 {
+        let axial = match &s.friction_axial {
+            Some(a) => Some(self.non_negative("seabed.friction_axial", Some(a))?),
+            None => None,
+        };
+        let scale = match &s.friction_static_scale {
+            Some(f) => self.positive("seabed.friction_static_scale", f)?,
+            None => 1.0,
+        };
+        if mu > 0.0 || axial.is_some_and(|a| a > 0.0) {
             let fric_damp = match &s.friction_damping {
                 Some(f) => self.positive("seabed.friction_damping", f)?,
                 None => DEFAULT_FRICTION_DAMPING,
             };
-            seabed = seabed.with_friction(Friction {
-                coefficient: mu,
-                slope: mu * fric_damp,
-            });
+            // A zero coefficient keeps a positive slope (the law is then off in that
+            // direction: its Coulomb level μN is 0).
+            let slope = |m: f64| if m > 0.0 { m * fric_damp } else { fric_damp };
+            let mut friction = Friction::new(mu, slope(mu)).with_static_scale(scale);
+            if let Some(a) = axial {
+                friction = friction.with_axial(a, slope(a));
+            }
+            seabed = seabed.with_friction(friction);
         }
         Ok(seabed)
     }
@@ -295,5 +307,53 @@ impl ScenarioFile {
             ));
         }
         Ok(v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The friction keys: `friction_axial` and `friction_static_scale` build the library's
+    /// axial friction (slope `μ_a · friction_damping`) and static scale; without them the
+    /// friction is isotropic with scale 1; a scale ≤ 0 is refused naming the key and place.
+    #[test]
+    fn friction_keys_build_axial_friction_and_the_static_scale() {
+        let dir = crate::test_util::temp_dir("friction", "keys");
+        let scenario = |seabed: &str| {
+            let text = format!(
+                "dimension = 3\n[geometry]\nstart = [0.0, 0.0, -100.0]\nend = [100.0, 0.0, -100.0]\n[mesh]\nelements = 10\n\
+                 [material]\nlaw = \"linear_elastic\"\nea = 6.0e8\nrho_a = 113.0\ndiameter = 0.1368\n\
+                 [body_force]\ngravity = [0.0, 0.0, -9.81]\n[water]\ndepth = 100.0\n[seabed]\nstiffness = 3.0e6\n{seabed}\n\
+                 [[boundary]]\nnode = 0\nfixed = true\n[time]\nh = 0.01\nend = 0.1\n"
+            );
+            let path = dir.join("s.toml");
+            std::fs::write(&path, text).unwrap();
+            crate::scenario::load(&path, &[]).unwrap()
+        };
+        let friction = |seabed: &str| {
+            let v = scenario(seabed).validate::<3>().unwrap();
+            v.problem.water.unwrap().seabed.unwrap().friction.unwrap()
+        };
+        let f = friction(
+            "friction = 0.6\nfriction_damping = 150.0\nfriction_axial = 0.3\nfriction_static_scale = 1.4",
+        );
+        assert_eq!(
+            (f.coefficient, f.slope, f.static_scale),
+            (0.6, 0.6 * 150.0, 1.4)
+        );
+        let a = f.axial.unwrap();
+        assert_eq!((a.coefficient, a.slope), (0.3, 0.3 * 150.0));
+        let f = friction("friction = 0.6");
+        assert_eq!((f.axial, f.static_scale, f.slope), (None, 1.0, 0.6 * 200.0));
+        let e = scenario("friction = 0.6\nfriction_static_scale = 0.0")
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("s.toml:")
+                && e.contains("seabed.friction_static_scale")
+                && e.contains("got 0"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -41,10 +41,7 @@ fn balance_is_exact_on_a_bathymetry_grid() {
             Vector::<3>::new(x, 0.0, 0.3 - grid.depth_at(x, 0.0))
         })
         .collect();
-    let seabed = Seabed::grid(grid, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::grid(grid, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let net = chain(r, l, 1e9, 150.0, &[0])
         .with_water(
             Water::new(RHO_W)

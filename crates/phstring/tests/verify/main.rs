@@ -6,6 +6,7 @@ mod bathymetry;
 mod common;
 mod damping;
 mod elimination;
+mod friction;
 mod modes;
 mod momentum;
 mod motion;

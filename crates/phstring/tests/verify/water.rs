@@ -60,10 +60,7 @@ fn balance_is_exact_with_every_mechanism() {
     }
     let path = [anchor, Vector::<3>::new(lo, 0.0, -50.0), fairlead];
     let net = chain(along(&path, l, n), l, 1e9, 150.0, &[0, n]);
-    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let current = Current::Profile(vec![
         (-50.0, Vector::<3>::new(0.2, 0.1, 0.0)),
         (0.0, Vector::<3>::new(1.0, 0.3, 0.0)),
@@ -161,10 +158,7 @@ fn dg4_balance_is_exact_in_water() {
         l,
         n,
     );
-    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.7,
-        slope: 300.0,
-    });
+    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction::new(0.7, 300.0));
     let net = chain(r, l, 1e9, 120.0, &[0, n])
         .with_water(
             Water::new(RHO_W)
@@ -209,10 +203,7 @@ fn balance_is_exact_with_nonlinear_elimination() {
         l,
         n,
     );
-    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(40.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let net = chain(r, l, 1e9, 120.0, &[0])
         .with_water(
             Water::new(RHO_W)
@@ -264,10 +255,7 @@ fn error_control_in_water_keeps_the_balance() {
         l,
         n,
     );
-    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction {
-        coefficient: 0.5,
-        slope: 200.0,
-    });
+    let seabed = Seabed::flat(50.0, 3e6, 3e5).with_friction(Friction::new(0.5, 200.0));
     let net = chain(r, l, 1e9, 120.0, &[0, n])
         .with_water(
             Water::new(RHO_W)
@@ -533,10 +521,8 @@ fn chain_pulled_over_the_seabed_needs_mu_w_l() {
         .collect();
     let mut net = chain(r, l, 1e9, rho_a, &[])
         .with_water(
-            Water::new(RHO_W).with_seabed(Seabed::flat(depth, 3e6, 3e5).with_friction(Friction {
-                coefficient: mu,
-                slope,
-            })),
+            Water::new(RHO_W)
+                .with_seabed(Seabed::flat(depth, 3e6, 3e5).with_friction(Friction::new(mu, slope))),
         )
         .with_line_hydro(
             0,
@@ -719,7 +705,8 @@ fn total_damping(net: Network<3, Material>) -> phstring::linsolve::Block<3> {
 /// equivalent-linear amplitude of 0.5 m/s, Lorentz's `(8/3π) ½ρ C d V L` in each direction;
 /// in a transverse current of 1.5 m/s without it, the derivative of `½ρ Cd d |v_r| v_r`,
 /// `2 ½ρ Cd d u L` along the current and `½ρ Cd d u L` across it; on the seabed, the seabed
-/// damping `cBot d L` normal to it and the friction slope per node within its plane.
+/// damping `cBot d L` normal to it and the friction slope per node within its plane; with
+/// axial friction and a static peak `s`, `s c_a` per node along the line and `s c_f` across.
 #[test]
 fn linear_model_damping_of_the_water_matches_closed_forms() {
     let (n, l, d, cd, cda) = (10, 2.0, 0.1, 1.2, 0.4);
@@ -779,10 +766,7 @@ fn linear_model_damping_of_the_water_matches_closed_forms() {
     }
     // On a seabed at 20 m, pressed 1 cm in (beyond the 1 mm damping ramp); no drag.
     let (cbot, slope) = (3e5, 200.0);
-    let seabed = Seabed::flat(20.0, 3e6, cbot).with_friction(Friction {
-        coefficient: 0.5,
-        slope,
-    });
+    let seabed = Seabed::flat(20.0, 3e6, cbot).with_friction(Friction::new(0.5, slope));
     let calm = LineHydro {
         cd: 0.0,
         cd_axial: 0.0,
@@ -806,6 +790,33 @@ fn linear_model_damping_of_the_water_matches_closed_forms() {
             expected[k]
         );
     }
+    // Axial friction (slope 80 N·s/m along the line's axis x, 200 across it) and a static
+    // peak s = 1.5: the zero-slip slopes s c_a along x and s c_f along y.
+    let seabed = Seabed::flat(20.0, 3e6, cbot).with_friction(
+        Friction::new(0.5, slope)
+            .with_axial(0.2, 80.0)
+            .with_static_scale(1.5),
+    );
+    let c = total_damping(
+        line(-20.01)
+            .with_water(Water::new(RHO_W).with_seabed(seabed))
+            .with_line_hydro(0, calm),
+    );
+    let expected = [
+        1.5 * 80.0 * (n + 1) as f64,
+        1.5 * slope * (n + 1) as f64,
+        cbot * d * total,
+    ];
+    for k in 0..3 {
+        assert!(
+            (c[(k, k)] - expected[k]).abs() <= 1e-12 * expected[k],
+            "axial friction, axis {k}: {} vs {}",
+            c[(k, k)],
+            expected[k]
+        );
+    }
+    let off = c - phstring::linsolve::Block::<3>::from_diagonal(&c.diagonal());
+    assert!(off.abs().max() <= 1e-12 * expected[0], "{c}");
 }
 
 /// Lorentz's equivalence behind `linear_drag_amplitude`: over a cycle of `v = V sin ωt`, the
