@@ -618,6 +618,7 @@ fn output_channels_are_written_dropped_with_a_note_or_refused() {
             "{outputs}: {e}"
         );
     }
+}
 
 /// MoorDyn-F's friction options: `mu_kT` and `mu_kA` become the transverse and axial
 /// coefficients, `MC` (StatDynFricScale's other name) the static scale and `CV` (FricDamp's)
