@@ -402,7 +402,10 @@ fn run_dim<const D: usize>(
         lines: ends.clone().map(|e| LineWatch::new(e, sim.system())),
     };
     let mut info = new_info(&ctx, &sim, &components, resume.is_some());
-    info.lines = (ctx.lines.as_ref()).map(|w| w.start(&sim, info.water.as_ref()));
+    info.lines = ctx
+        .lines
+        .as_ref()
+        .map(|w| w.start(&sim, info.water.as_ref()));
     info.initial_equilibrium = initial_equilibrium;
     info.warnings = scenario_warnings;
     let fresh = resume.is_none();

@@ -490,7 +490,9 @@ impl Sweep {
             cause,
         })?;
         if self.is_deck() {
-            let keys: Vec<&str> = (self.vary.iter())
+            let keys: Vec<&str> = self
+                .vary
+                .iter()
                 .map(|v| v.key.as_str())
                 .filter(|k| *k != MOTION_KEY)
                 .collect();
