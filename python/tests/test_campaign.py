@@ -109,3 +109,33 @@ def test_dask_campaign_example_gives_the_campaign_table(tmp_path):
     # The surge (positive over the first 20 s, towards line 1's anchor) pulls lines 2 and 3
     # harder the larger it is.
     assert direct["fair_ten_max"][1] < direct["fair_ten_max"][4] < direct["fair_ten_max"][7]
+
+
+def test_ctrl_c_stops_a_campaign_with_its_runs_resumable(tmp_path):
+    """An OS signal during a campaign (SIGALRM after 0.5 s, whose handler raises
+    KeyboardInterrupt as Ctrl-C's does) stops every run under way with a checkpoint and
+    raises KeyboardInterrupt; the table marks the runs interrupted."""
+    import csv
+    import signal
+
+    def interrupt(*_):
+        raise KeyboardInterrupt
+
+    deck = tmp_path / "spar.dat"
+    deck.write_text(DECK)
+    motions = [table(tmp_path / "a.csv", 1.0), table(tmp_path / "b.csv", 2.0)]
+    out = tmp_path / "campaign"
+    old = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.5)
+        with pytest.raises(KeyboardInterrupt):
+            # 1e5 steps per case: the runs cannot end before the signal.
+            phstring.campaign(str(deck), motions, out=str(out), jobs=2, set=["time.end=1000"])
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    with open(out / "campaign.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["status"] for r in rows] == ["interrupted", "interrupted"]
+    for folder in ["run_000_a", "run_001_b"]:
+        assert (out / folder / "checkpoint.json").exists()
