@@ -324,3 +324,49 @@ fn the_line_extremes_survive_a_resume() {
     assert_eq!(whole, parts);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A sweep over a deck with one `--motion` table for all runs and another varied key: the
+/// folders keep their plain names, and `campaign.csv` has the table as `case` and the
+/// varied key's column; the run with half the step reaches the same end time.
+#[test]
+fn a_deck_sweep_with_one_motion_varies_other_keys() {
+    let dir = temp_dir("campaign-keys");
+    std::fs::write(dir.join("spar.dat"), DECK).unwrap();
+    std::fs::write(dir.join("surge1.csv"), table(1.0)).unwrap();
+    let o = phstring_in(
+        &dir,
+        &[
+            "sweep",
+            "spar.dat",
+            "--motion",
+            "surge1.csv",
+            "--vary",
+            "time.h=0.01,0.005",
+            "--set",
+            "output.plots=false",
+            "--out",
+            "keys",
+            "-q",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (h, rows) = read_csv(&dir.join("keys").join("campaign.csv"));
+    assert_eq!(
+        h[..5],
+        ["run", "dir", "case", "time.h", "line"].map(String::from)
+    );
+    assert_eq!(rows.len(), 6);
+    for (k, r) in rows.iter().enumerate() {
+        let dir_name = if k < 3 { "run_000" } else { "run_001" };
+        assert_eq!(r[1..4], [dir_name, "surge1.csv", ["0.01", "0.005"][k / 3]]);
+    }
+    for run in ["run_000", "run_001"] {
+        let (eh, erows) = read_csv(&dir.join("keys").join(run).join("end_tensions.csv"));
+        let t = column(&eh, &erows, "t");
+        assert!(
+            (t.last().unwrap() - 2.0).abs() < 1e-12,
+            "{run} ends at {t:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
