@@ -93,6 +93,22 @@ impl LineWatch {
     }
 }
 
+/// The `lines` of `summary.json`: the records, or for more than
+/// [`SUMMARY_COMPONENTS`](super::run::SUMMARY_COMPONENTS) of them their count
+/// (`{"count": N}`), so that the summary of a large network stays small.
+pub fn summary_lines<S: serde::Serializer>(
+    lines: &Option<Vec<LineExtremes>>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    use serde::Serialize as _;
+    match lines {
+        Some(l) if l.len() > super::run::SUMMARY_COMPONENTS => {
+            serde_json::json!({ "count": l.len() }).serialize(s)
+        }
+        _ => lines.serialize(s),
+    }
+}
+
 /// The header of `campaign.csv` after the run's columns (`run,dir,case` and the other
 /// varied keys).
 const LINE_COLUMNS: &str = "line,name,status,fair_ten_max,fair_ten_max_t,fair_ten_min,anch_ten_max,anch_ten_min,grounded_length_min,slack,slack_steps,slack_first_t,stretch_min,error";

@@ -267,8 +267,12 @@ pub struct RunInfo {
     /// Per line (string), in the column order of `end_tensions.csv`: its extreme end
     /// tensions, smallest grounded length and slack, sampled at `t = 0` and every step
     /// (see [`LineExtremes`]); absent without strings, and after a resume from a checkpoint
-    /// that lacks them.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// that lacks them. For more than [`SUMMARY_COMPONENTS`] lines, `summary.json` has
+    /// their count only (`{"count": N}`; a sweep's `campaign.csv` lists them all).
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "super::campaign::summary_lines"
+    )]
     pub lines: Option<Vec<LineExtremes>>,
     /// With `time.settle`: where and when the run came to rest (it then ended before
     /// `t_end`), or `settled: false` with the state at the end if it did not; absent
