@@ -572,6 +572,81 @@ fn run_to_folder(
     }
 }
 
+/// The error of a sweep for Python: refused input as `ScenarioError`, the rest as `OSError`.
+fn sweep_err(e: phstring_io::drive::sweep::SweepError) -> PyErr {
+    use phstring_io::drive::sweep::SweepError;
+    match e {
+        SweepError::Scenario(_) | SweepError::Load(_) | SweepError::TooManyRuns { .. } => {
+            scenario_err(e)
+        }
+        e => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+    }
+}
+
+/// Runs the MoorDyn deck `deck` once per platform table of `motions` (a load-case
+/// campaign, `phstring sweep DECK --vary motion=…`) on `jobs` threads (default: the number
+/// of cores) into the folder `out` (created if needed; the outputs of an earlier run or
+/// sweep there are replaced, as with `--force`), with `set` overrides and `ignore` words as
+/// `phstring run`; returns the text of `campaign.csv`. A case that fails is a row of the
+/// table. Ctrl-C stops the runs under way (each with a checkpoint) and raises
+/// `KeyboardInterrupt`.
+#[pyfunction]
+#[pyo3(signature = (deck, motions, out, jobs=None, set=None, ignore=None))]
+fn campaign_raw(
+    py: Python<'_>,
+    deck: &str,
+    motions: Vec<String>,
+    out: &str,
+    jobs: Option<usize>,
+    set: Option<Vec<String>>,
+    ignore: Option<Vec<String>>,
+) -> PyResult<String> {
+    use phstring_io::drive::sweep::{DeckOptions, MOTION_KEY, Sweep, Vary};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    if motions.is_empty() {
+        return Err(PyValueError::new_err("motions: give at least one table"));
+    }
+    if jobs == Some(0) {
+        return Err(PyValueError::new_err("jobs = 0: give at least 1"));
+    }
+    let vary = vec![Vary {
+        key: MOTION_KEY.into(),
+        values: motions,
+    }];
+    let options = DeckOptions {
+        ignore: ignore.unwrap_or_default(),
+        motion: None,
+    };
+    let plan = Sweep::new_with(Path::new(deck), &sets(set), vary, options, |_, _| Ok(()))
+        .map_err(sweep_err)?;
+    let out = Path::new(out);
+    let os_err = |e: &dyn std::fmt::Display| pyo3::exceptions::PyOSError::new_err(e.to_string());
+    let _lock = phstring_io::drive::outdir::prepare(out, true).map_err(|e| os_err(&e))?;
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut interrupted = None;
+    let ran = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| plan.run(out, jobs, &|_| {}, Some(stop.clone())));
+        // Python sees Ctrl-C on this thread only: poll for it while the runs go on.
+        while !worker.is_finished() {
+            if interrupted.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                stop.store(true, Ordering::Relaxed);
+                interrupted = Some(e);
+            }
+            py.detach(|| std::thread::sleep(std::time::Duration::from_millis(20)));
+        }
+        worker.join()
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    ran.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the campaign's runs panicked"))?
+        .map_err(sweep_err)?;
+    std::fs::read_to_string(out.join(phstring_io::files::CAMPAIGN_TABLE)).map_err(|e| os_err(&e))
+}
+
 fn flat<const D: usize>(v: &[phstring::Vector<D>]) -> Vec<f64> {
     v.iter().flat_map(|x| x.iter().copied()).collect()
 }
@@ -733,6 +808,7 @@ fn _phstring(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Simulation>()?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(run_to_folder, m)?)?;
+    m.add_function(wrap_pyfunction!(campaign_raw, m)?)?;
     m.add_function(wrap_pyfunction!(statics, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;
     m.add_function(wrap_pyfunction!(linearize_raw, m)?)?;

@@ -53,7 +53,8 @@ enum Command {
     Paper(commands::paper::PaperArgs),
     /// Run a scenario file.
     Run(commands::run::RunArgs),
-    /// Run a scenario for every combination of varied values, in parallel.
+    /// Run a scenario or MoorDyn deck for every combination of varied values, in parallel
+    /// (over a deck, --vary motion=a.csv,b.csv is a load-case campaign: campaign.csv).
     Sweep(commands::sweep::SweepArgs),
     /// Find the static equilibrium of a scenario under its loads at t = 0 (positions,
     /// tensions, support reactions; CSV, ParaView, plot, summary.json).

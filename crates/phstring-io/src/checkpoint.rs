@@ -122,6 +122,11 @@ pub struct Counters {
     /// Absent without water, so that a dry run's checkpoint is the file it always was.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub water: Option<WaterCounters>,
+    /// The extremes of every line so far (`summary.json`'s `lines`); absent without
+    /// strings, and in checkpoints written before they were recorded (a run resumed from
+    /// one reports no `lines`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lines: Option<Vec<crate::extremes::LineExtremes>>,
 }
 
 /// The extremes of the seabed contact over a run in water so far, sampled at every row of
@@ -418,6 +423,7 @@ impl CheckpointFile {
             self.check_counts(&fit)?;
             self.check_totals()?;
             self.check_water(sim, n, fit.t)?;
+            self.check_lines(sim, fit.t)?;
             self.check_outputs::<D>(settings, n, fit.t)
         };
         checks().map_err(|reason| CheckpointError::Invalid {
@@ -468,6 +474,34 @@ impl CheckpointFile {
             return Err("counters.water.max_contact_force_node or _t is out of range".into());
         }
         Ok(())
+    }
+
+    /// The lines' extremes, if recorded: one record per string, each consistent
+    /// ([`LineExtremes::check`](crate::extremes::LineExtremes::check)) with times up to `t`.
+    fn check_lines<const D: usize>(
+        &self,
+        sim: &Simulation<D, Material>,
+        t: f64,
+    ) -> Result<(), String> {
+        let Some(lines) = &self.counters.lines else {
+            return Ok(());
+        };
+        let strings = sim
+            .system()
+            .groups()
+            .iter()
+            .filter(|g| matches!(g.law, phstring::Law::String(_)) && !g.elements.is_empty())
+            .count();
+        if lines.len() != strings {
+            return Err(format!(
+                "counters.lines has {} records for {strings} strings",
+                lines.len()
+            ));
+        }
+        lines
+            .iter()
+            .try_for_each(|x| x.check(t))
+            .map_err(|e| format!("counters.lines: {e}"))
     }
 
     /// The counters' step count (that of the simulation record), and their rejection and

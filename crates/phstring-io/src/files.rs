@@ -265,6 +265,9 @@ pub const PAPER_FIGURES: &[&str] = &[
 ];
 /// The table of `phstring sweep`.
 pub const SWEEP_TABLE: &str = "sweep.csv";
+/// The campaign table of a `phstring sweep` over a MoorDyn deck: the extremes of every
+/// line of every run (docs/moordyn.md, "Campaigns").
+pub const CAMPAIGN_TABLE: &str = "campaign.csv";
 /// The lock file of an output folder in use (held by the folder preparation of the command
 /// drivers); it is not an output and is never removed.
 pub const LOCK_FILE: &str = ".phstring.lock";
@@ -282,6 +285,32 @@ pub fn mode_frame_name(number: usize) -> String {
 /// Name of the folder of sweep run `index`.
 pub fn run_dir_name(index: usize) -> String {
     format!("run_{index:03}")
+}
+
+/// Longest label of a sweep run's folder name ([`case_dir_name`]), in characters.
+pub const CASE_LABEL_CHARS: usize = 40;
+
+/// Name of the folder of sweep run `index` labelled `label` (e.g. the stem of its motion
+/// table): `run_007_surge5`, the label's characters other than ASCII letters, digits, `-`
+/// and `.` replaced by `_` and cut to [`CASE_LABEL_CHARS`]; [`run_dir_name`] for an empty
+/// label.
+pub fn case_dir_name(index: usize, label: &str) -> String {
+    let label: String = label
+        .chars()
+        .take(CASE_LABEL_CHARS)
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if label.is_empty() {
+        run_dir_name(index)
+    } else {
+        format!("{}_{label}", run_dir_name(index))
+    }
 }
 
 /// Name of the file in an output folder that holds the id of the run writing it.

@@ -7,7 +7,7 @@
 //! 1. [`text`] (numbers and text in messages), [`channels`] (MoorDyn's output channel
 //!    names), [`files`] (the names and layout of the
 //!    output files, the run id, atomic writes) and [`tables`] (time tables of motions and
-//!    forces read from text files);
+//!    forces read from text files), [`extremes`] (the extremes of every line over a run);
 //! 2. [`plot`], [`vtk`] and [`animation`] (figure and ParaView formats), [`scenario`]
 //!    (scenario files, validation, and starting a simulation from one), and [`moordyn`]
 //!    (MoorDyn input decks read into a typed deck);
@@ -21,6 +21,7 @@ pub mod animation;
 pub mod channels;
 pub mod checkpoint;
 pub mod drive;
+pub mod extremes;
 pub mod figures;
 pub mod files;
 pub mod history;

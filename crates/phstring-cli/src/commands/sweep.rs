@@ -1,11 +1,12 @@
-//! `phstring sweep`: one scenario run for every combination of varied values, in parallel,
-//! into one folder with a table of the runs.
+//! `phstring sweep`: one scenario (or MoorDyn deck) run for every combination of varied
+//! values, in parallel, into one folder with a table of the runs; over a deck, also the
+//! campaign table of its lines' extremes.
 
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use phstring_io::drive::sweep::{Sweep, SweepRun, Vary};
-use phstring_io::files::SWEEP_TABLE;
+use phstring_io::drive::sweep::{DeckOptions, Sweep, SweepRun, Vary};
+use phstring_io::files::{CAMPAIGN_TABLE, SWEEP_TABLE};
 use phstring_io::text::printable;
 
 use super::common::{Interrupted, prepare_out_for, progress_bar, stop_flag};
@@ -16,15 +17,23 @@ use crate::budget::{self, check_budget_of};
 // command's variant in `Command`.
 #[derive(clap::Args)]
 pub struct SweepArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
     /// A key and its values, e.g. --vary mesh.elements=100,300,1000 (repeatable: all
-    /// combinations run).
+    /// combinations run). For a deck, --vary motion=a.csv,b.csv runs it driven by each
+    /// platform table, as `run DECK --motion a.csv` (a load-case campaign: campaign.csv).
     #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
     pub vary: Vec<String>,
     /// Fixed overrides for every run.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// For a MoorDyn deck: drop a feature phstring does not model (as `run --ignore`).
+    #[arg(long = "ignore", value_name = "FEATURE")]
+    pub ignore: Vec<String>,
+    /// For a MoorDyn deck: one vessel motion table for every run (as `run --motion`); to
+    /// vary it, use --vary motion=… instead.
+    #[arg(long, value_name = "FILE")]
+    pub motion: Option<PathBuf>,
     /// Output folder (one sub-folder per run, plus sweep.csv).
     #[arg(long, default_value = "out/sweep")]
     pub out: PathBuf,
@@ -46,6 +55,8 @@ pub fn sweep(args: SweepArgs, quiet: bool) -> Result<()> {
         scenario,
         vary,
         sets,
+        ignore,
+        motion,
         out,
         jobs,
         force,
@@ -70,7 +81,8 @@ pub fn sweep(args: SweepArgs, quiet: bool) -> Result<()> {
     // its mesh) and validated before the output folder is touched.
     let concurrent = jobs.min(phstring_io::drive::sweep::run_count(&vary)?);
     budget::check_file_size(path)?;
-    let plan = Sweep::new_with(path, &sets, vary, |index, file| {
+    let deck = DeckOptions { ignore, motion };
+    let plan = Sweep::new_with(path, &sets, vary, deck, |index, file| {
         check_budget_of(file, concurrent).map_err(|e| format!("run {index} of the sweep: {e:#}"))
     })?;
     let n = plan.len();
@@ -102,8 +114,13 @@ pub fn sweep(args: SweepArgs, quiet: bool) -> Result<()> {
         )));
     }
     let failed = runs.iter().filter(|r| r.result.is_err()).count();
+    let campaign = if plan.is_deck() {
+        format!(", campaign: {}", out.join(CAMPAIGN_TABLE).display())
+    } else {
+        String::new()
+    };
     say!(
-        "{} runs ({failed} failed) in {}; table: {}",
+        "{} runs ({failed} failed) in {}; table: {}{campaign}",
         runs.len(),
         out.display(),
         out.join(SWEEP_TABLE).display()

@@ -122,6 +122,8 @@ fn many_strings_estimate_covers_the_parse_and_summary_stays_small() {
     assert_eq!(s["components"]["strings"], 99_999);
     assert_eq!(s["components"]["nodes"], 100_000);
     assert_eq!(s["scenario"], serde_json::json!({"file": "scenario.json"}));
+    // The lines' extremes are counted too.
+    assert_eq!(s["lines"], serde_json::json!({"count": 99_999}));
     let c: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("components.json")).unwrap())
             .unwrap();

@@ -3,6 +3,7 @@
 mod accuracy;
 mod balance;
 mod broken;
+mod campaign;
 mod control;
 mod estimates;
 mod examples;

@@ -6,9 +6,11 @@
 //! * [`modes`]: the natural modes about it (`phstring modes`);
 //! * [`linearize`]: the linear model (`phstring linearize`);
 //! * [`sweep`]: many runs over varied parameters (`phstring sweep`);
+//! * [`campaign`]: the extremes of a run's lines and a sweep's campaign table;
 //! * [`outdir`]: preparing and locking an output folder;
 //! * [`water`]: the `water` part of a run's summary.
 
+pub mod campaign;
 pub mod ends;
 pub mod linearize;
 pub mod modes;

@@ -16,8 +16,9 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use crate::files::{
-    FIGURES_DIR, LOCK_FILE, PAPER_FIGURES, PAPER_RUN_DIRS, PARAVIEW_DIR, PVD_FILE, RUN_FILES,
-    RUN_ID_FILE, SWEEP_TABLE, frame_name, is_channel_table, is_own_temp_file, run_dir_name,
+    CAMPAIGN_TABLE, FIGURES_DIR, LOCK_FILE, PAPER_FIGURES, PAPER_RUN_DIRS, PARAVIEW_DIR, PVD_FILE,
+    RUN_FILES, RUN_ID_FILE, SWEEP_TABLE, case_dir_name, frame_name, is_channel_table,
+    is_own_temp_file,
 };
 
 /// Whether `name` is exactly a name that [`frame_name`] gives.
@@ -29,12 +30,16 @@ fn is_frame_name(name: &str) -> bool {
         .is_some_and(|n| frame_name(n) == name)
 }
 
-/// Whether `name` is exactly a name that [`run_dir_name`] gives.
+/// Whether `name` is exactly a name that [`run_dir_name`] or [`case_dir_name`] gives.
 fn is_run_dir_name(name: &str) -> bool {
-    name.strip_prefix("run_")
-        .filter(|d| d.bytes().all(|b| b.is_ascii_digit()))
-        .and_then(|d| d.parse::<usize>().ok())
-        .is_some_and(|n| run_dir_name(n) == name)
+    let Some(rest) = name.strip_prefix("run_") else {
+        return false;
+    };
+    let (digits, label) = rest.split_once('_').unwrap_or((rest, ""));
+    digits.bytes().all(|b| b.is_ascii_digit())
+        && digits
+            .parse::<usize>()
+            .is_ok_and(|n| case_dir_name(n, label) == name)
 }
 
 /// What an entry of a folder is to phstring.
@@ -71,7 +76,7 @@ fn classify(folder: Folder, name: &str) -> Option<Entry> {
     };
     match folder {
         Folder::Top => run(name).or_else(|| {
-            if name == SWEEP_TABLE {
+            if name == SWEEP_TABLE || name == CAMPAIGN_TABLE {
                 Some(Entry::File)
             } else if PAPER_RUN_DIRS.contains(&name) || is_run_dir_name(name) {
                 Some(Entry::Dir(Folder::Run))
@@ -361,6 +366,16 @@ mod tests {
         assert!(!is_run_dir_name("run_1"));
         assert!(!is_run_dir_name("run_0001"));
         assert!(!is_run_dir_name("run_+12"));
+        // A campaign's folders carry their motion table's stem.
+        assert_eq!(case_dir_name(7, "surge 5m"), "run_007_surge_5m");
+        assert_eq!(case_dir_name(7, ""), "run_007");
+        assert!(is_run_dir_name("run_007_surge_5m"));
+        assert!(is_run_dir_name("run_012_sea.state-3"));
+        assert!(!is_run_dir_name("run_007_"));
+        assert!(!is_run_dir_name("run_07_surge"));
+        assert!(!is_run_dir_name("run_007_surge 5m"));
+        assert!(!is_run_dir_name(&format!("run_007_{}", "a".repeat(41))));
+        assert_eq!(classify(Folder::Top, CAMPAIGN_TABLE), Some(Entry::File));
         assert_eq!(classify(Folder::Top, "figure1.png"), None);
         assert_eq!(classify(Folder::Top, "fig2_configurations.png"), None);
         assert_eq!(

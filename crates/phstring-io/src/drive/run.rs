@@ -16,8 +16,10 @@ use std::time::Instant;
 use phstring::{Material, SettleWatch, Simulation, StepError, StepReport};
 use serde::Serialize;
 
+use super::campaign::LineWatch;
 use super::water::WaterSummary;
 use crate::checkpoint::{CheckpointError, CheckpointFile, Counters, FORMAT};
+use crate::extremes::LineExtremes;
 use crate::figures::{draw_animation, draw_plots};
 use crate::files::{
     CHECKPOINT, COMPONENTS_FILE, RUN_ID_FILE, SCENARIO_FILE, SNAPSHOTS, SUMMARY_FILE, atomic_write,
@@ -262,6 +264,16 @@ pub struct RunInfo {
     /// (see [`WaterSummary`]); absent without water.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub water: Option<WaterSummary>,
+    /// Per line (string), in the column order of `end_tensions.csv`: its extreme end
+    /// tensions, smallest grounded length and slack, sampled at `t = 0` and every step
+    /// (see [`LineExtremes`]); absent without strings, and after a resume from a checkpoint
+    /// that lacks them. For more than [`SUMMARY_COMPONENTS`] lines, `summary.json` has
+    /// their count only (`{"count": N}`; a sweep's `campaign.csv` lists them all).
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "super::campaign::summary_lines"
+    )]
+    pub lines: Option<Vec<LineExtremes>>,
     /// With `time.settle`: where and when the run came to rest (it then ended before
     /// `t_end`), or `settled: false` with the state at the end if it did not; absent
     /// without `time.settle`.
@@ -358,6 +370,8 @@ struct RunContext<'a> {
     run_id: String,
     end_of_loading: Option<f64>,
     checkpoint_path: PathBuf,
+    /// How the extremes of the lines are sampled (`None` without strings).
+    lines: Option<LineWatch>,
 }
 
 fn run_dim<const D: usize>(
@@ -377,6 +391,7 @@ fn run_dim<const D: usize>(
     let mut sim = v.problem;
     sim.set_stop_flag(opts.stop.clone());
     let resume = opts.resume.take();
+    let ends = super::ends::end_forces(file, &components, sim.system());
     let ctx = RunContext {
         file,
         out,
@@ -388,12 +403,16 @@ fn run_dim<const D: usize>(
             .map_or(opts.end_of_loading, |cp| cp.end_of_loading),
         checkpoint_path: out.join(CHECKPOINT),
         settings,
+        lines: ends.clone().map(|e| LineWatch::new(e, sim.system())),
     };
     let mut info = new_info(&ctx, &sim, &components, resume.is_some());
+    info.lines = ctx
+        .lines
+        .as_ref()
+        .map(|w| w.start(&sim, info.water.as_ref()));
     info.initial_equilibrium = initial_equilibrium;
     info.warnings = scenario_warnings;
     let fresh = resume.is_none();
-    let ends = super::ends::end_forces(file, &components, sim.system());
     let channels = match super::ends::channel_table(file, &components, ends.as_ref()) {
         Ok(c) => c,
         Err(e) => {
@@ -561,6 +580,7 @@ fn new_info<const D: usize>(
         hamiltonian_final: sim.energies().hamiltonian(),
         dissipated_energy: 0.0,
         water: WaterSummary::start(sim),
+        lines: None,
         settled: None,
         settle_progress: (false, None),
         time_loop_s: 0.0,
@@ -712,6 +732,7 @@ fn resume_writers<const D: usize>(
     info.hamiltonian_initial = c.hamiltonian_initial;
     info.settle_progress = (c.settle_armed, c.settle_since);
     info.water = WaterSummary::resumed(sim, c.water.as_ref());
+    info.lines = ctx.lines.as_ref().and(c.lines);
     let s = &ctx.settings;
     Ok(Writers::resume::<D>(
         ctx.out,
@@ -757,6 +778,7 @@ fn write_checkpoint<const D: usize>(
             settle_armed: info.settle_progress.0,
             settle_since: info.settle_progress.1,
             water: info.water.as_ref().map(WaterSummary::counters),
+            lines: info.lines.clone(),
         },
         checksum: String::new(),
         path: ctx.checkpoint_path.clone(),
@@ -818,6 +840,9 @@ impl<const D: usize> phstring::Observer<D, Material> for Recorder<'_, '_> {
         info.steps_over_tolerance += sim.steps_over_tolerance() - self.started.1;
         if let Some(w) = &mut info.water {
             w.observe(sim);
+        }
+        if let (Some(watch), Some(lines)) = (&self.ctx.lines, &mut info.lines) {
+            watch.observe(sim, lines, info.water.as_ref());
         }
         if let Err(e) = self.writers.step(sim, report) {
             self.error = Some(e.into());

@@ -1,5 +1,7 @@
-//! Parameter sweeps: many independent runs of one scenario with different `--set` values,
-//! in parallel (rayon), one output folder each plus a summary table `sweep.csv`.
+//! Parameter sweeps: many independent runs of one scenario or MoorDyn deck with different
+//! `--set` values, in parallel (rayon), one output folder each plus a summary table
+//! `sweep.csv`. Over a deck, the key `motion` varies the vessel's platform table (a load-case
+//! campaign) and `campaign.csv` tabulates the extremes of every line of every run.
 //!
 //! Each run is single-threaded and deterministic, so results do not depend on the number of
 //! threads.
@@ -10,10 +12,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
+use super::campaign::csv_field;
 use super::run::{self as runner, RunInfo};
 use crate::files::num;
-use crate::files::{SWEEP_TABLE, run_dir_name};
+use crate::files::{CAMPAIGN_TABLE, SWEEP_TABLE, case_dir_name};
+use crate::moordyn::{self, LoadError};
 use crate::scenario::{self, ScenarioError, ScenarioFile};
+
+/// The varied key that, over a MoorDyn deck, names the platform table driving its vessel
+/// points (`--vary motion=a.csv,b.csv`, as `phstring run DECK --motion a.csv`).
+pub const MOTION_KEY: &str = "motion";
 
 /// One varied key with its values (TOML literals as text).
 #[derive(Debug, Clone, PartialEq)]
@@ -139,6 +147,9 @@ pub enum SweepError {
     /// A combination was refused before validation (e.g. it does not fit in memory).
     #[error("{0}")]
     Refused(String),
+    /// The deck (or scenario file) could not be read, or its first combination is invalid.
+    #[error(transparent)]
+    Load(#[from] LoadError),
     /// The thread pool could not be built.
     #[error("cannot start {jobs} threads: {cause}")]
     Threads {
@@ -147,7 +158,7 @@ pub enum SweepError {
         /// Why not.
         cause: String,
     },
-    /// `sweep.csv` could not be written.
+    /// `sweep.csv` or `campaign.csv` could not be written.
     #[error("cannot write {}: {cause}", path.display())]
     Table {
         /// The table.
@@ -204,70 +215,168 @@ pub fn combinations(vary: &[Vary]) -> impl Iterator<Item = Vec<(String, String)>
     (0..n).map(move |i| combination(vary, i))
 }
 
-/// A checked sweep: the scenario, the fixed `--set` options and the varied keys, with every
-/// combination validated. Building it writes nothing, so an invalid value fails the sweep
-/// before any folder is touched.
+/// The options of a sweep over a MoorDyn deck: those of `phstring run DECK`.
+#[derive(Debug, Clone, Default)]
+pub struct DeckOptions {
+    /// `--ignore` words: the deck's features to drop (docs/moordyn.md).
+    pub ignore: Vec<String>,
+    /// `--motion FILE`: one platform table for every run (not with `--vary motion=…`);
+    /// relative to the current directory.
+    pub motion: Option<PathBuf>,
+}
+
+/// What the runs of a sweep are made from.
+#[derive(Debug)]
+enum Source {
+    /// A scenario file: its text.
+    Scenario(String),
+    /// A MoorDyn deck, read and mapped again for every run (whose motion table may differ).
+    Deck(DeckOptions),
+}
+
+/// A checked sweep: the scenario or deck, the fixed `--set` options and the varied keys,
+/// with every combination validated. Building it writes nothing, so an invalid value fails
+/// the sweep before any folder is touched.
 #[derive(Debug)]
 pub struct Sweep {
     path: PathBuf,
-    text: String,
+    source: Source,
     sets: Vec<String>,
     vary: Vec<Vary>,
     count: usize,
+}
+
+/// Refuses a key varied twice, or varied and also set with `--set`.
+fn check_keys(sets: &[String], vary: &[Vary]) -> Result<(), SweepError> {
+    for (i, v) in vary.iter().enumerate() {
+        if vary[..i].iter().any(|w| w.key == v.key) {
+            return Err(ScenarioError::Vary {
+                option: format!("{}=…", v.key),
+                reason: "the key is varied twice; give all its values in one --vary".into(),
+            }
+            .into());
+        }
+        if let Some(s) = sets.iter().find(|s| {
+            s.split_once('=')
+                .is_some_and(|(k, _)| normalize_key(k) == v.key)
+        }) {
+            return Err(ScenarioError::Vary {
+                option: format!("{}=…", v.key),
+                reason: format!(
+                    "the key is also given with --set {s}, which the varied values would replace"
+                ),
+            }
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// A `--vary motion=…` value as a path: the text, without the quotes around it if quoted
+/// (`"a,b.csv"` for a name with a comma).
+fn unquote(value: &str) -> &str {
+    ['"', '\'']
+        .iter()
+        .find_map(|q| value.strip_prefix(*q)?.strip_suffix(*q))
+        .unwrap_or(value)
+}
+
+/// The refusal of `--vary motion=…` for the sweep of `path`: `reason` says why.
+fn motion_refused(path: &Path, reason: &str) -> SweepError {
+    ScenarioError::Vary {
+        option: format!("{MOTION_KEY}=…"),
+        reason: format!("{} {reason}", path.display()),
+    }
+    .into()
 }
 
 impl Sweep {
     /// Reads the scenario, refuses a key varied twice (or varied and also set with `--set`)
     /// and more than [`MAX_RUNS`] runs, and validates every combination (one at a time).
     pub fn new(scenario_path: &Path, sets: &[String], vary: Vec<Vary>) -> Result<Self, SweepError> {
-        Self::new_with(scenario_path, sets, vary, |_, _| Ok(()))
+        Self::new_with(scenario_path, sets, vary, DeckOptions::default(), |_, _| {
+            Ok(())
+        })
     }
 
-    /// [`Self::new`], calling `precheck(index, combination)` on every combination before it
-    /// is validated (for checks that must come before validation allocates the mesh, such as
-    /// a memory budget); its message is the error.
+    /// [`Self::new`] for a scenario file or a MoorDyn deck (told by its content, as `phstring
+    /// run` tells them) with the deck's options `deck` (refused for a scenario file, as by
+    /// `run`), calling `precheck(index, combination)` on every combination before it is
+    /// validated (for checks that must come before validation allocates the mesh, such as a
+    /// memory budget); its message is the error. Over a deck, the key [`MOTION_KEY`] varies
+    /// the platform table (a campaign): a combination whose table or scenario is refused
+    /// then becomes a failed run of the sweep, and only a campaign whose every combination
+    /// is refused fails as a whole (with the first refusal).
     pub fn new_with(
-        scenario_path: &Path,
+        path: &Path,
         sets: &[String],
         vary: Vec<Vary>,
+        deck: DeckOptions,
         precheck: impl Fn(usize, &ScenarioFile) -> Result<(), String>,
     ) -> Result<Self, SweepError> {
-        for (i, v) in vary.iter().enumerate() {
-            if vary[..i].iter().any(|w| w.key == v.key) {
-                return Err(ScenarioError::Vary {
-                    option: format!("{}=…", v.key),
-                    reason: "the key is varied twice; give all its values in one --vary".into(),
-                }
-                .into());
-            }
-            if let Some(s) = sets.iter().find(|s| {
-                s.split_once('=')
-                    .is_some_and(|(k, _)| normalize_key(k) == v.key)
-            }) {
-                return Err(ScenarioError::Vary {
-                    option: format!("{}=…", v.key),
-                    reason: format!(
-                        "the key is also given with --set {s}, which the varied values would replace"
-                    ),
-                }
-                .into());
-            }
-        }
+        check_keys(sets, &vary)?;
         let count = run_count(&vary)?;
-        let base = scenario::load(scenario_path, &[])?;
+        let base = moordyn::load_scenario_driven(path, &[], &deck.ignore, deck.motion.as_deref())?;
+        let campaign = vary.iter().any(|v| v.key == MOTION_KEY);
+        let source = match base.mapping {
+            Some(_) if campaign && deck.motion.is_some() => {
+                return Err(motion_refused(
+                    path,
+                    "is driven by --motion, which gives one table for every run; give the tables with --vary motion=… alone",
+                ));
+            }
+            Some(_) => Source::Deck(deck),
+            None if campaign => {
+                return Err(motion_refused(
+                    path,
+                    "is a scenario file, not a MoorDyn deck: --vary motion=… drives a deck's vessel points; vary a scenario's own tables by their keys, e.g. --vary platform.0.motion_table=a.csv,b.csv or boundary.1.motion_table=…",
+                ));
+            }
+            None => Source::Scenario(base.file.text().to_string()),
+        };
         let sweep = Self {
-            path: scenario_path.to_path_buf(),
-            text: base.text().to_string(),
+            path: path.to_path_buf(),
+            source,
             sets: sets.to_vec(),
             vary,
             count,
         };
-        for index in 0..count {
-            let file = sweep.file(index)?;
-            precheck(index, &file).map_err(SweepError::Refused)?;
-            file.check()?;
-        }
+        sweep.validate(campaign, precheck)?;
         Ok(sweep)
+    }
+
+    /// Validates every combination (one at a time) after `precheck`; in a `campaign`, a
+    /// refused combination is left to fail as a run unless all are refused.
+    fn validate(
+        &self,
+        campaign: bool,
+        precheck: impl Fn(usize, &ScenarioFile) -> Result<(), String>,
+    ) -> Result<(), SweepError> {
+        let mut first: Option<LoadError> = None;
+        let mut valid = 0;
+        for index in 0..self.count {
+            let refusal = match self.file(index) {
+                Err(e) => e,
+                Ok(file) => {
+                    precheck(index, &file).map_err(SweepError::Refused)?;
+                    match file.check() {
+                        Ok(()) => {
+                            valid += 1;
+                            continue;
+                        }
+                        Err(e) => e.into(),
+                    }
+                }
+            };
+            if !campaign {
+                return Err(refusal.into());
+            }
+            first.get_or_insert(refusal);
+        }
+        match first {
+            Some(e) if valid == 0 => Err(e.into()),
+            _ => Ok(()),
+        }
     }
 
     /// Number of runs.
@@ -285,21 +394,65 @@ impl Sweep {
         &self.vary
     }
 
-    /// The scenario of run `index`.
-    pub fn file(&self, index: usize) -> Result<ScenarioFile, ScenarioError> {
+    /// Whether the sweep runs a MoorDyn deck (and writes `campaign.csv`).
+    pub fn is_deck(&self) -> bool {
+        matches!(self.source, Source::Deck(_))
+    }
+
+    /// The platform table of run `index` over a deck as given (`--vary motion=…` or
+    /// `--motion`), `None` without one.
+    pub fn motion(&self, index: usize) -> Option<String> {
+        let Source::Deck(deck) = &self.source else {
+            return None;
+        };
+        combination(&self.vary, index)
+            .into_iter()
+            .find(|(k, _)| k == MOTION_KEY)
+            .map(|(_, v)| unquote(&v).to_string())
+            .or_else(|| deck.motion.as_ref().map(|m| m.display().to_string()))
+    }
+
+    /// The scenario of run `index`: for a deck, the deck read and mapped with the run's
+    /// motion table, as `phstring run DECK --motion TABLE --set …` reads it.
+    pub fn file(&self, index: usize) -> Result<ScenarioFile, LoadError> {
         let mut all = self.sets.clone();
         all.extend(
             combination(&self.vary, index)
                 .iter()
+                .filter(|(k, _)| !(self.is_deck() && k == MOTION_KEY))
                 .map(|(k, v)| format!("{k}={v}")),
         );
-        scenario::parse(&self.text, &self.path, &all)
+        match &self.source {
+            Source::Scenario(text) => Ok(scenario::parse(text, &self.path, &all)?),
+            Source::Deck(deck) => {
+                let motion = self.motion(index).map(PathBuf::from);
+                let loaded = moordyn::load_scenario_driven(
+                    &self.path,
+                    &all,
+                    &deck.ignore,
+                    motion.as_deref(),
+                )?;
+                Ok(loaded.file)
+            }
+        }
     }
 
-    /// Runs every combination with `jobs` threads into `out/run_NNN/` (`out` must exist), and
-    /// writes `out/sweep.csv`. `stop`, when set, stops the runs under way as Ctrl-C stops a
-    /// run (with a checkpoint) and starts no further run; those are marked
-    /// [`SweepRun::interrupted`] and have the status `interrupted` in the table.
+    /// The folder name of run `index`: `run_NNN`, in a campaign followed by its motion
+    /// table's file stem (`run_002_surge10`).
+    pub fn dir_name(&self, index: usize) -> String {
+        let varied = self.is_deck() && self.vary.iter().any(|v| v.key == MOTION_KEY);
+        let stem = self
+            .motion(index)
+            .filter(|_| varied)
+            .and_then(|m| Some(Path::new(&m).file_stem()?.to_string_lossy().into_owned()));
+        case_dir_name(index, stem.as_deref().unwrap_or(""))
+    }
+
+    /// Runs every combination with `jobs` threads into `out/run_NNN/` ([`Self::dir_name`];
+    /// `out` must exist), and writes `out/sweep.csv` and, over a deck, `out/campaign.csv`.
+    /// `stop`, when set, stops the runs under way as Ctrl-C stops a run (with a checkpoint)
+    /// and starts no further run; those are marked [`SweepRun::interrupted`] and have the
+    /// status `interrupted` in the tables.
     pub fn run(
         &self,
         out: &Path,
@@ -318,7 +471,7 @@ impl Sweep {
             (0..self.count)
                 .into_par_iter()
                 .map(|index| {
-                    let dir = out.join(run_dir_name(index));
+                    let dir = out.join(self.dir_name(index));
                     let (result, interrupted) = self.run_one(index, &dir, stop.as_ref());
                     let run = SweepRun {
                         index,
@@ -336,6 +489,21 @@ impl Sweep {
             path: out.join(SWEEP_TABLE),
             cause,
         })?;
+        if self.is_deck() {
+            let keys: Vec<&str> = self
+                .vary
+                .iter()
+                .map(|v| v.key.as_str())
+                .filter(|k| *k != MOTION_KEY)
+                .collect();
+            let case = |r: &SweepRun| self.motion(r.index).unwrap_or_default();
+            super::campaign::write_table(out, &keys, &case, &runs).map_err(|cause| {
+                SweepError::Table {
+                    path: out.join(CAMPAIGN_TABLE),
+                    cause,
+                }
+            })?;
+        }
         Ok(runs)
     }
 
@@ -377,15 +545,6 @@ impl Sweep {
             }
             Err(e) => (Err(e.to_string()), e.is_interrupted()),
         }
-    }
-}
-
-/// CSV field: quoted when it holds a comma, a quote or a line break.
-fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
     }
 }
 
@@ -493,6 +652,18 @@ mod tests {
             combination(&[v(3), v(5)], 7),
             vec![("k".into(), "1".into()), ("k".into(), "2".into())]
         );
+    }
+
+    /// A motion table's path may be quoted (for a comma in it); the quotes are not part
+    /// of the path.
+    #[test]
+    fn motion_values_lose_their_quotes() {
+        assert_eq!(unquote("\"a,b.csv\""), "a,b.csv");
+        assert_eq!(unquote("'sea state 1.csv'"), "sea state 1.csv");
+        assert_eq!(unquote("surge2.csv"), "surge2.csv");
+        assert_eq!(unquote("\"half.csv"), "\"half.csv");
+        let v = Vary::parse("motion=\"a,b.csv\",c.csv").unwrap();
+        assert_eq!(v.values, ["\"a,b.csv\"", "c.csv"]);
     }
 
     #[test]
