@@ -16,8 +16,8 @@ How each code is run and measured (the same for every deck):
   (`run DECK --motion TABLE`); MoorDyn gets, every coupling interval `DT_COUPLING`, the
   points' positions and velocities from this module's copy of that interpolant (it holds
   the velocity over the interval, as a coupled program does).
-* **Time.** phstring: `time_loop_s` of summary.json (the stepping, with its outputs; not the
-  start-up statics). MoorDyn: the loop of `moordyn.Step` calls (not `Init`, whose dynamic
+* **Time.** phstring: `time_loop_s` of summary.json (the steps alone: not the writing of
+  the rows that follows each step, nor the start-up statics). MoorDyn: the loop of `moordyn.Step` calls (not `Init`, whose dynamic
   relaxation is MoorDyn's start-up). Each divided by the simulated time. The two codes run
   alternately, in the order phstring, MoorDyn then MoorDyn, phstring, `--repeat` times; the
   table gives the fastest run of each (the least disturbed by the other jobs of a shared
@@ -32,9 +32,9 @@ How each code is run and measured (the same for every deck):
 * **Start.** MoorDyn's `Init` can end with the lines still moving; its lines settle for
   SETTLE s with the vessel held (not timed) before the motion starts. phstring starts from
   its static equilibrium.
-* **Outputs.** phstring writes energy.csv, ports.csv and end_tensions.csv every step (there
-  is no option to thin them) and its time includes that; positions, plots and ParaView
-  files are off. MoorDyn writes nothing (its values are read through its API every 0.1 s).
+* **Outputs.** phstring writes energy.csv, ports.csv and end_tensions.csv every step
+  (`output.row_stride` thins them), outside the time measured; positions, plots and
+  ParaView files are off. MoorDyn writes nothing (its values are read through its API every 0.1 s).
 """
 
 import argparse
