@@ -882,6 +882,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .as_deref()
             .map_or_else(Vec::new, |w| w.contacts(r))
     }
+    /// Seabed contact of mesh node `node` at positions `r` [m] (see
+    /// [`Self::seabed_contacts`]); `None` if it cannot touch the seabed or there is none.
+    pub fn seabed_contact(
+        &self,
+        node: usize,
+        r: &[Vector<D>],
+    ) -> Option<crate::water::NodeContact> {
+        self.water.as_deref()?.contact(node, r)
+    }
     /// Grounded length [m] of element group `group` at positions `r`: the reference length
     /// of its elements, each counted half for each of its two nodes that is grounded.
     pub fn grounded_length(&self, group: usize, r: &[Vector<D>]) -> f64 {

@@ -672,6 +672,23 @@ pub struct NodeContact {
     pub force: f64,
 }
 
+/// The seabed contact of wet node `w` (of nonzero stiffness) at positions `r` [m].
+fn node_contact<const D: usize>(bed: &Bed<D>, w: &WetNode, r: &[Vector<D>]) -> NodeContact {
+    let p = (-bed.gap(&r[w.node])).max(0.0);
+    // |∇g| = 1 on a plane; on a grid the vertical gap's gradient is longer.
+    let stretch = match &bed.grid {
+        None => 1.0,
+        Some(_) if p > 0.0 => bed.gap_gradient(&r[w.node]).0.norm(),
+        Some(_) => 1.0,
+    };
+    NodeContact {
+        node: w.node,
+        grounded: p > 0.0,
+        penetration: p,
+        force: w.stiffness * p * stretch,
+    }
+}
+
 /// Checks `value` against `0 ≤ value < ∞` (or `> 0` with `positive`).
 fn check_value(
     what: &'static str,
@@ -1517,22 +1534,16 @@ impl<const D: usize> WaterModel<D> {
         self.nodes
             .iter()
             .filter(|w| w.stiffness > 0.0)
-            .map(|w| {
-                let p = (-bed.gap(&r[w.node])).max(0.0);
-                // |∇g| = 1 on a plane; on a grid the vertical gap's gradient is longer.
-                let stretch = match &bed.grid {
-                    None => 1.0,
-                    Some(_) if p > 0.0 => bed.gap_gradient(&r[w.node]).0.norm(),
-                    Some(_) => 1.0,
-                };
-                NodeContact {
-                    node: w.node,
-                    grounded: p > 0.0,
-                    penetration: p,
-                    force: w.stiffness * p * stretch,
-                }
-            })
+            .map(|w| node_contact(bed, w, r))
             .collect()
+    }
+
+    /// The seabed contact of mesh node `node` at positions `r` [m] (see [`Self::contacts`]);
+    /// `None` if the node cannot touch the seabed or there is none.
+    pub fn contact(&self, node: usize, r: &[Vector<D>]) -> Option<NodeContact> {
+        let bed = self.bed.as_ref()?;
+        let w = self.nodes_in(node..node + 1).first()?;
+        (w.stiffness > 0.0).then(|| node_contact(bed, w, r))
     }
 }
 

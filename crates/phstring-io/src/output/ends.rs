@@ -150,13 +150,7 @@ impl EndForces {
         let sys = sim.system();
         let st = sim.state();
         let groups = sys.groups();
-        let contacts = sys.seabed_contacts(&st.r);
-        let contact_force = |node: usize| {
-            contacts
-                .iter()
-                .find(|c| c.node == node)
-                .map_or(0.0, |c| c.force)
-        };
+        let contact_force = |node: usize| sys.seabed_contact(node, &st.r).map_or(0.0, |c| c.force);
         let lengths = sys.mesh().lengths();
         self.strings
             .iter()
