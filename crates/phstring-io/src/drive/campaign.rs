@@ -53,20 +53,25 @@ impl LineWatch {
         water: Option<&WaterSummary>,
     ) -> Vec<LineExtremes> {
         let mut records: Vec<LineExtremes> = self.ends.names().map(LineExtremes::new).collect();
-        self.observe(sim, &mut records, water);
+        self.observe(sim, &mut records, water, &self.tensions(sim));
         records
     }
 
-    /// Samples the state of `sim` into `records`: the end tensions (the values of the row of
-    /// `end_tensions.csv`), the grounded length of the water summary `water` sampled in the
+    /// The end tensions of the state of `sim`: the values of the row of `end_tensions.csv`.
+    pub fn tensions<const D: usize>(&self, sim: &Simulation<D, Material>) -> Vec<f64> {
+        self.ends.tensions(sim)
+    }
+
+    /// Samples the state of `sim` into `records`: its end tensions `tensions` (from
+    /// [`Self::tensions`]), the grounded length of the water summary `water` sampled in the
     /// same state (0 without water), the smallest stretch of each line's elements.
     pub fn observe<const D: usize>(
         &self,
         sim: &Simulation<D, Material>,
         records: &mut [LineExtremes],
         water: Option<&WaterSummary>,
+        tensions: &[f64],
     ) {
-        let tensions = self.ends.tensions(sim);
         let c = &sim.state().c;
         for (k, (rec, (elements, wet))) in records.iter_mut().zip(&self.lines).enumerate() {
             let grounded = match (water, wet) {
@@ -235,7 +240,7 @@ mod tests {
         assert!(!rec[0].slack && rec[0].stretch_min == 1.0);
         for _ in 0..50 {
             sim.step().unwrap();
-            watch.observe(&sim, &mut rec, None);
+            watch.observe(&sim, &mut rec, None, &watch.tensions(&sim));
         }
         let x = &rec[0];
         assert!((sim.time() - 0.5).abs() < 1e-12);
@@ -268,7 +273,7 @@ mod tests {
         for _ in 0..30 {
             sim.step().unwrap();
             w.observe(&sim);
-            watch.observe(&sim, &mut rec, Some(&w));
+            watch.observe(&sim, &mut rec, Some(&w), &watch.tensions(&sim));
             let t = ends.tensions(&sim);
             if t[0] > fair[1] {
                 at = sim.time();

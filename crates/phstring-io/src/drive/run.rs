@@ -841,10 +841,12 @@ impl<const D: usize> phstring::Observer<D, Material> for Recorder<'_, '_> {
         if let Some(w) = &mut info.water {
             w.observe(sim);
         }
-        if let (Some(watch), Some(lines)) = (&self.ctx.lines, &mut info.lines) {
-            watch.observe(sim, lines, info.water.as_ref());
+        // The end tensions of the state, computed once for the extremes and the file.
+        let tensions = self.ctx.lines.as_ref().map(|w| w.tensions(sim));
+        if let (Some(watch), Some(lines), Some(t)) = (&self.ctx.lines, &mut info.lines, &tensions) {
+            watch.observe(sim, lines, info.water.as_ref(), t);
         }
-        if let Err(e) = self.writers.step(sim, report) {
+        if let Err(e) = self.writers.step_with(sim, report, tensions.as_deref()) {
             self.error = Some(e.into());
             return ControlFlow::Break(());
         }

@@ -701,9 +701,21 @@ impl Writers {
         sim: &Simulation<D, Material>,
         r: &StepReport,
     ) -> Result<(), OutputError> {
+        self.step_with(sim, r, None)
+    }
+
+    /// [`Self::step`] with the row of `end_tensions.csv` for the state of `sim` already
+    /// computed (`end_tensions`, as [`EndForces::tensions`] gives it), so that a caller who
+    /// needs it too computes it once.
+    pub fn step_with<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+        r: &StepReport,
+        end_tensions: Option<&[f64]>,
+    ) -> Result<(), OutputError> {
         if self.row_stride <= 1 || sim.steps().is_multiple_of(self.row_stride) {
             self.pending_rows = None;
-            self.rows(sim, r)?;
+            self.rows(sim, r, end_tensions)?;
         } else {
             self.pending_rows = Some(*r);
         }
@@ -720,6 +732,7 @@ impl Writers {
         &mut self,
         sim: &Simulation<D, Material>,
         r: &StepReport,
+        end_tensions: Option<&[f64]>,
     ) -> Result<(), OutputError> {
         let values = [
             r.t,
@@ -776,7 +789,7 @@ impl Writers {
             ))?;
         }
         self.ports.end_record()?;
-        self.end_row(sim, r.t)?;
+        self.end_row(sim, r.t, end_tensions)?;
         Ok(())
     }
 
@@ -913,7 +926,7 @@ impl Writers {
         }
         self.end_model = Some(model);
         if fresh {
-            self.end_row(sim, sim.time())?;
+            self.end_row(sim, sim.time(), None)?;
             if let Some(e) = &mut self.ends {
                 e.flush()?;
             }
@@ -963,13 +976,21 @@ impl Writers {
         &mut self,
         sim: &Simulation<D, Material>,
         t: f64,
+        given: Option<&[f64]>,
     ) -> Result<(), OutputError> {
         let (Some(csv), Some(model)) = (&mut self.ends, &self.end_model) else {
             return Ok(());
         };
-        let values = model.tensions(sim);
-        check_finite(&csv.path, "end tension", t, &values)?;
-        csv.row(&format!("{}{}", num(t), more_fields(&values)))
+        let computed;
+        let values = match given {
+            Some(v) => v,
+            None => {
+                computed = model.tensions(sim);
+                &computed
+            }
+        };
+        check_finite(&csv.path, "end tension", t, values)?;
+        csv.row(&format!("{}{}", num(t), more_fields(values)))
     }
 
     /// The configuration snapshots taken so far.
@@ -990,7 +1011,7 @@ impl Writers {
         sim: &Simulation<D, Material>,
     ) -> Result<(), OutputError> {
         if let Some(r) = self.pending_rows.take() {
-            self.rows(sim, &r)?;
+            self.rows(sim, &r, None)?;
         }
         self.frame_if(sim, true)?;
         self.flush()
