@@ -16,6 +16,9 @@
 //! accelerations, rotations, moments and submerged fraction are recognised and reported as
 //! not written ([`Quantity::NotWritten`]).
 
+/// Why a force channel at an interior node of a line is not written.
+pub const INTERIOR_FORCE: &str = "the net force on an interior node is its inertia; phstring writes forces at the line's end nodes only";
+
 /// The object a channel reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Object {

@@ -108,14 +108,17 @@ pub fn channel_table(
 
 /// The mesh nodes along string `s`, from its first path node to its last.
 fn along(s: &crate::scenario::StringComponent) -> Vec<usize> {
-    let mut nodes = Vec::with_capacity(s.nodes);
-    let interior: Vec<usize> = (s.interior_nodes[0]..s.interior_nodes[1]).collect();
+    // Span k's interior nodes are the k-th run of `elements_per_span − 1` consecutive
+    // indices from `interior_nodes[0]`.
     let per = s.elements_per_span.saturating_sub(1);
-    for (span, pair) in s.path_nodes.windows(2).enumerate() {
-        nodes.push(pair[0]);
-        nodes.extend(interior.iter().skip(span * per).take(per));
+    let mut nodes = Vec::with_capacity(s.nodes);
+    for (k, &start) in s.path_nodes.iter().enumerate() {
+        nodes.push(start);
+        if k + 1 < s.path_nodes.len() {
+            let first = s.interior_nodes[0] + k * per;
+            nodes.extend(first..first + per);
+        }
     }
-    nodes.extend(s.path_nodes.last());
     nodes
 }
 

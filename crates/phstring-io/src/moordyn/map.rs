@@ -1171,9 +1171,7 @@ fn deck_channel(m: &Mapper, c: &crate::channels::Channel) -> Result<Result<(), S
                 ));
             }
             if matches!(c.quantity, Quantity::Force(_)) && j != 0 && j != line.segments {
-                return Ok(Err(
-                    "the net force on an interior node is its inertia; phstring writes forces at the line's end nodes only".into(),
-                ));
+                return Ok(Err(crate::channels::INTERIOR_FORCE.into()));
             }
             Ok(Ok(()))
         }

@@ -21,7 +21,6 @@
 //!
 //! Material damping and drag are left out of the forces, as in `end_tensions.csv`.
 
-use phstring::StoredEnergy as _;
 use phstring::{Material, Simulation, Vector};
 
 use super::EndForces;
@@ -53,8 +52,8 @@ enum Column {
     Velocity(usize, usize),
     /// Force of string `s` on its end `e` (0: A, 1: B); component or magnitude (`None`).
     End(usize, usize, Option<usize>),
-    /// Mean tension vector of two elements, magnitude.
-    Interior([usize; 2]),
+    /// Mean tension vector of two elements of group `g`, magnitude.
+    Interior(usize, [usize; 2]),
     /// Sum of the forces of `(string, end)` on a point; component or magnitude.
     Point(Vec<(usize, usize)>, Option<usize>),
 }
@@ -80,10 +79,11 @@ impl ChannelTable {
         ends: EndForces,
     ) -> Result<Self, (usize, String)> {
         let end_nodes = ends.end_nodes();
+        let groups: Vec<usize> = (0..end_nodes.len()).map(|s| ends.group(s)).collect();
         let columns = channels
             .iter()
             .enumerate()
-            .map(|(i, c)| column(c, strings, &point, &end_nodes).map_err(|e| (i, e)))
+            .map(|(i, c)| column(c, strings, &groups, &point, &end_nodes).map_err(|e| (i, e)))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
             names: channels.iter().map(|c| c.name.clone()).collect(),
@@ -125,8 +125,8 @@ impl ChannelTable {
                         .fold(Vector::<D>::zeros(), |acc, (s, e)| acc + forces[*s][*e]);
                     pick(sum, *k)
                 }
-                Column::Interior([a, b]) => {
-                    (element_tension(sim, *a) + element_tension(sim, *b)).norm() * 0.5
+                Column::Interior(g, [a, b]) => {
+                    (element_tension(sim, *g, *a) + element_tension(sim, *g, *b)).norm() * 0.5
                 }
             })
             .collect()
@@ -148,25 +148,10 @@ fn component<const D: usize>(x: &Vector<D>, k: usize) -> f64 {
     if k < D { x[k] } else { 0.0 }
 }
 
-/// The tension vector [N] of element `e`, along it from its first node to its second.
-fn element_tension<const D: usize>(sim: &Simulation<D, Material>, e: usize) -> Vector<D> {
-    let sys = sim.system();
-    let st = sim.state();
-    let [a, b] = sys.mesh().elements()[e];
-    let chord = st.r[b] - st.r[a];
-    let len = chord.norm();
-    let group = sys
-        .groups()
-        .iter()
-        .find(|g| g.elements.contains(&e))
-        .expect("every element is in a group");
-    let c = st.c[e];
-    let axial = 2.0 * group.law.dw(c) * c.max(0.0).sqrt();
-    if len > 0.0 {
-        chord * (axial / len)
-    } else {
-        Vector::<D>::zeros()
-    }
+/// The tension vector [N] of element `e` of group `g`, from its first node to its second.
+fn element_tension<const D: usize>(sim: &Simulation<D, Material>, g: usize, e: usize) -> Vector<D> {
+    let [a, b] = sim.system().mesh().elements()[e];
+    super::ends::element_pull(sim, g, e, a, b)
 }
 
 /// `x` as MoorDyn writes it: 7 decimals and a signed exponent of at least two digits
@@ -186,6 +171,7 @@ fn scientific(x: f64) -> String {
 fn column(
     c: &Channel,
     strings: &[ChannelString],
+    groups: &[usize],
     point: &impl Fn(u32) -> Option<usize>,
     end_nodes: &[[usize; 2]],
 ) -> Result<Column, String> {
@@ -232,13 +218,13 @@ fn column(
                 }
                 (Quantity::Tension, None) => {
                     let after = string.first_element + j * string.elements_per_span;
-                    Column::Interior([after - 1, after])
+                    let g = *groups
+                        .get(s)
+                        .ok_or_else(|| format!("{}: line {i} has no end forces", c.name))?;
+                    Column::Interior(g, [after - 1, after])
                 }
                 (Quantity::Force(_), None) => {
-                    return Err(format!(
-                        "{}: the net force on an interior node is its inertia; phstring writes forces at the line's end nodes only",
-                        c.name
-                    ));
+                    return Err(format!("{}: {}", c.name, crate::channels::INTERIOR_FORCE));
                 }
                 (Quantity::NotWritten(why), _) => return Err(format!("{}: {why}", c.name)),
             })

@@ -140,6 +140,11 @@ impl EndForces {
             .collect()
     }
 
+    /// The element group of string `s` (in column order).
+    pub(super) fn group(&self, s: usize) -> usize {
+        self.strings[s].1
+    }
+
     /// The names of the strings, in column order.
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.strings.iter().map(|s| s.0.as_str())
@@ -149,25 +154,16 @@ impl EndForces {
     pub fn forces<const D: usize>(&self, sim: &Simulation<D, Material>) -> Vec<[Vector<D>; 2]> {
         let sys = sim.system();
         let st = sim.state();
-        let groups = sys.groups();
         let contact_force = |node: usize| sys.seabed_contact(node, &st.r).map_or(0.0, |c| c.force);
         let lengths = sys.mesh().lengths();
         self.strings
             .iter()
             .map(|(_, g, ends)| {
                 ends.map(|end| {
-                    let (rn, rm) = (st.r[end.node], st.r[end.other]);
+                    let rn = st.r[end.node];
                     let l = lengths[end.element];
-                    let chord = rm - rn;
-                    let len = chord.norm();
-                    // The end element's stress S = 2W'(C) alone, not every element's.
-                    let c = st.c[end.element];
-                    let axial = 2.0 * groups[*g].law.dw(c) * c.max(0.0).sqrt();
-                    let mut f = if len > 0.0 {
-                        chord * (axial / len)
-                    } else {
-                        Vector::<D>::zeros()
-                    };
+                    // The end element's stress alone, not every element's.
+                    let mut f = element_pull(sim, *g, end.element, end.node, end.other);
                     for k in 0..D {
                         f[k] += 0.5 * l * self.body[*g][k];
                     }
@@ -196,6 +192,28 @@ impl EndForces {
             .iter()
             .flat_map(|[a, b]| [b.norm(), a.norm()])
             .collect()
+    }
+}
+
+/// The pull [N] of element `e` of group `g` on its node `from`, towards its other node
+/// `to`: the axial force `N = S√C`, `S = 2W'(C)`, along the chord (zero for a chord of zero
+/// length).
+pub(super) fn element_pull<const D: usize>(
+    sim: &Simulation<D, Material>,
+    g: usize,
+    e: usize,
+    from: usize,
+    to: usize,
+) -> Vector<D> {
+    let st = sim.state();
+    let chord = st.r[to] - st.r[from];
+    let len = chord.norm();
+    let c = st.c[e];
+    let axial = 2.0 * sim.system().groups()[g].law.dw(c) * c.max(0.0).sqrt();
+    if len > 0.0 {
+        chord * (axial / len)
+    } else {
+        Vector::<D>::zeros()
     }
 }
 
