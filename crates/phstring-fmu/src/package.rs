@@ -303,17 +303,13 @@ fn pack_data_files(file: &ScenarioFile) -> Result<(String, Vec<DataFile>), Packa
             })
             .collect();
         let name = format!("tables/{k}-{base}");
-        sets.push(format!("{key}={}", toml_string(&name)));
+        // `name` holds letters, digits, `.`, `-`, `_` and `/` only: a TOML string as it is.
+        sets.push(format!("{key}=\"{name}\""));
         data.push((name, bytes));
     }
     let packed = phstring_io::scenario::parse(file.text(), &file.path, &sets)
         .map_err(|e| PackageError::Rename(e.to_string()))?;
     Ok((packed.text().to_string(), data))
-}
-
-/// `s` as a TOML basic string.
-fn toml_string(s: &str) -> String {
-    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
 /// Writes the FMU (FMI `version`) of `file` (variables `spec`) with the shared library

@@ -318,12 +318,7 @@ pub struct MotionColumnsError {
 }
 
 impl VesselMotion {
-    /// Reads the platform table at `path` (errors name `file:line`).
-    pub fn read(path: &std::path::Path) -> Result<Self, crate::tables::TableError> {
-        let table = crate::tables::read_table(path, 7)?;
-        Ok(Self::platform(path, &table))
-    }
-
+    /// The platform form of the 7-column `table` read from `path`.
     fn platform(path: &std::path::Path, table: &crate::tables::Table) -> Self {
         let start = table
             .platform()
