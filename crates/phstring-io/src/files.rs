@@ -351,13 +351,30 @@ pub fn read_run_id(dir: &Path) -> Option<String> {
     })
 }
 
-/// A number as the output files write it (CSV rows, JSON summaries, matrices): 17
-/// significant digits in scientific notation, round-trip exact; zero is written `0`.
+/// A number as the output files write it (CSV rows, JSON summaries, matrices): the shortest
+/// decimal form that reads back to the same `f64` (round-trip exact), in plain notation for
+/// magnitudes from 1e-5 to 1e16 and scientific notation (`e`, no `+`) beyond:
+/// `0.1`, `-909926.4183654375`, `1.2e-7`, `1e300`; zero is written `0`, and the non-finite
+/// values `NaN`, `inf`, `-inf`.
 pub fn num(x: f64) -> String {
+    let mut out = Vec::with_capacity(24);
+    push_num(&mut out, x);
+    // Only ASCII is ever pushed.
+    String::from_utf8(out).unwrap_or_default()
+}
+
+/// Appends [`num`]`(x)` to `out`.
+pub fn push_num(out: &mut Vec<u8>, x: f64) {
     if x == 0.0 {
-        "0".to_string()
+        out.push(b'0');
+    } else if x.is_finite() {
+        out.extend_from_slice(ryu::Buffer::new().format_finite(x).as_bytes());
+    } else if x.is_nan() {
+        out.extend_from_slice(b"NaN");
+    } else if x > 0.0 {
+        out.extend_from_slice(b"inf");
     } else {
-        format!("{x:.16e}")
+        out.extend_from_slice(b"-inf");
     }
 }
 

@@ -540,10 +540,7 @@ mod tests {
         assert!(text.contains(",string,"), "{text}");
         assert!(text.contains("\"a,b \"\"c\"\"\"\n"), "{text}");
         assert!(text.contains("\" linebreak\"\n"), "{text}");
-        assert!(
-            text.ends_with("\n5,0,2,2,spring,1.0000000000000000e0,plain\n"),
-            "{text}"
-        );
+        assert!(text.ends_with("\n5,0,2,2,spring,1.0,plain\n"), "{text}");
         let t = read_topology(&dir).unwrap().unwrap();
         let mut expected = topology(&s);
         expected.groups[1].name = " linebreak".into();

@@ -33,16 +33,16 @@ fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: u
             assert!(x.is_finite());
         }
     }
-    // 17 significant digits.
-    assert_eq!(
-        rows[1][3]
-            .split('e')
-            .next()
-            .unwrap()
-            .replace(['-', '.'], "")
-            .len(),
-        17
-    );
+    // Every number in its shortest round-trip form: the significant digits of Rust's
+    // shortest scientific form of the value read back.
+    let digits = |f: &str| {
+        let m = f.split('e').next().unwrap().replace(['-', '.'], "");
+        m.trim_start_matches('0').trim_end_matches('0').to_string()
+    };
+    for f in &rows[1] {
+        let x: f64 = f.parse().unwrap();
+        assert_eq!(digits(f), digits(&format!("{x:e}")), "{f}");
+    }
     let (h, rows) = csv_rows(&dir.join("positions.csv"));
     assert_eq!(h.len(), 2 + dim);
     // Every `stride` steps from t = 0, and the last step if it falls between.

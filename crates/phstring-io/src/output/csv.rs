@@ -78,7 +78,32 @@ impl<F: Sink> Csv<F> {
 
     /// Adds a row to the current record (ended by [`Self::end_record`]).
     pub fn line(&mut self, s: &str) -> Result<(), OutputError> {
+        self.text(s).end_line()
+    }
+
+    /// Appends `s` to the row being built (ended by [`Self::end_line`]).
+    pub fn text(&mut self, s: &str) -> &mut Self {
         self.buf.extend_from_slice(s.as_bytes());
+        self
+    }
+
+    /// Appends `x` as [`crate::files::num`] writes it to the row being built.
+    pub fn num(&mut self, x: f64) -> &mut Self {
+        crate::files::push_num(&mut self.buf, x);
+        self
+    }
+
+    /// Appends `,x` for each of `xs` to the row being built.
+    pub fn nums(&mut self, xs: &[f64]) -> &mut Self {
+        for &x in xs {
+            self.buf.push(b',');
+            crate::files::push_num(&mut self.buf, x);
+        }
+        self
+    }
+
+    /// Ends the row being built: it becomes a line of the current record.
+    pub fn end_line(&mut self) -> Result<(), OutputError> {
         self.buf.push(b'\n');
         if self.buf.len() >= CSV_BUFFER_MAX {
             self.write_out()?;

@@ -293,14 +293,20 @@ pub struct OutputEstimate {
     pub paraview: f64,
 }
 
-/// Bytes of one number as [`num`] writes it, with its comma (`-3.4565972519949129e0,`).
-const NUM_BYTES: f64 = 22.0;
+/// Bytes of one number as [`num`] writes it, with its comma, on average (`-3.456597251994913,`;
+/// 14.5 to 16.7 bytes a number without the comma in the spar deck's and the mooring line's
+/// outputs).
+const NUM_BYTES: f64 = 17.0;
+/// Bytes of a time with its comma on average: a multiple of the step is mostly short (`0.25,`),
+/// sometimes 17 digits (`0.30000000000000004,`).
+const TIME_BYTES: f64 = 8.0;
 /// Bytes of a row of `energy.csv`: 8 numbers, the iteration count and the dissipated
-/// energy (`0` without damping): 182 in the paper's pendulum, 201 at most.
-const ENERGY_ROW_BYTES: f64 = 190.0;
+/// energy (`0` without damping): 133 on average in the 2D test network below.
+const ENERGY_ROW_BYTES: f64 = 135.0;
 /// Bytes of a port value in `ports.csv` on average: a number, or `0` for the velocity and
-/// power of a fixed support (a force port's row has 142 bytes in 2D, a fixed support's 85).
-const PORT_VALUE_BYTES: f64 = 16.0;
+/// power of a fixed support (10.9 in the 2D test network below, 9.2 in the paper's pendulum,
+/// 13.9 in the spar deck).
+const PORT_VALUE_BYTES: f64 = 11.0;
 /// Bytes of a ParaView frame besides its arrays (XML header, array tags, the base64
 /// headers).
 const FRAME_BYTES: f64 = 1500.0;
@@ -364,7 +370,7 @@ pub fn estimated_output(p: &OutputPlan) -> OutputEstimate {
     let rows = rows + channels;
     let positions = if p.positions {
         // The first frame's time is written `0`.
-        nodes * (frames * ((1.0 + d) * NUM_BYTES + digits(nodes)) - (NUM_BYTES - 2.0))
+        nodes * (frames * (TIME_BYTES + d * NUM_BYTES + digits(nodes)) - (TIME_BYTES - 2.0))
     } else {
         0.0
     };
@@ -621,8 +627,10 @@ impl Writers {
         self.channel_row(sim, t)?;
         if let Some(p) = &mut self.positions {
             for (i, r) in st.r.iter().enumerate() {
-                let comps: Vec<String> = r.iter().map(|x| num(*x)).collect();
-                p.line(&format!("{},{i},{}", num(t), comps.join(",")))?;
+                p.num(t)
+                    .text(&format!(",{i}"))
+                    .nums(r.as_slice())
+                    .end_line()?;
             }
             p.end_record()?;
         }
@@ -749,9 +757,9 @@ impl Writers {
         let wet = if self.water {
             let v = water_values(sim, &r.after);
             check_finite(&self.energy.path, "energy row value", r.t, &v)?;
-            more_fields(&v)
+            Some(v)
         } else {
-            String::new()
+            None
         };
         let t_mid = r.t - 0.5 * r.h;
         for p in sim.ports() {
@@ -759,34 +767,22 @@ impl Writers {
             check_finite(&self.ports.path, "port output", t_mid, p.output.as_slice())?;
             check_finite(&self.ports.path, "port power", t_mid, &[p.power()])?;
         }
-        self.energy.row(&format!(
-            "{},{},{},{},{},{},{},{},{},{}{wet}",
-            num(values[0]),
-            num(values[1]),
-            num(values[2]),
-            num(values[3]),
-            num(values[4]),
-            num(values[5]),
-            r.newton_iterations,
-            num(values[6]),
-            num(values[7]),
-            num(values[8])
-        ))?;
+        let e = &mut self.energy;
+        e.num(values[0]).nums(&values[1..6]);
+        e.text(&format!(",{}", r.newton_iterations))
+            .nums(&values[6..9]);
+        e.nums(wet.as_ref().map_or(&[], |v| v.as_slice()));
+        e.end_line()?;
+        e.end_record()?;
         for (k, p) in sim.ports().iter().enumerate() {
             let kind = match p.kind {
                 PortKind::Force => "force",
                 PortKind::Velocity => "velocity",
             };
-            let u: Vec<String> = p.input.iter().map(|x| num(*x)).collect();
-            let y: Vec<String> = p.output.iter().map(|x| num(*x)).collect();
-            self.ports.line(&format!(
-                "{},{k},{},{kind},{},{},{}",
-                num(t_mid),
-                p.node,
-                u.join(","),
-                y.join(","),
-                num(p.power())
-            ))?;
+            let ports = &mut self.ports;
+            ports.num(t_mid).text(&format!(",{k},{},{kind}", p.node));
+            ports.nums(p.input.as_slice()).nums(p.output.as_slice());
+            ports.nums(&[p.power()]).end_line()?;
         }
         self.ports.end_record()?;
         self.end_row(sim, r.t, end_tensions)?;
@@ -990,7 +986,8 @@ impl Writers {
             }
         };
         check_finite(&csv.path, "end tension", t, values)?;
-        csv.row(&format!("{}{}", num(t), more_fields(values)))
+        csv.num(t).nums(values).end_line()?;
+        csv.end_record()
     }
 
     /// The configuration snapshots taken so far.
