@@ -143,6 +143,9 @@ const ELIMINATION_MAX_ITER: usize = 30;
 const ARMIJO_SIGMA: f64 = 1e-4;
 /// Smallest step length of the line search before it gives up.
 const ALPHA_MIN: f64 = 1.0 / 1024.0;
+/// A full Newton step whose residual quadratic convergence predicts below this fraction of
+/// the tolerance is evaluated first without the Jacobian.
+const PREDICTED_MARGIN: f64 = 0.1;
 
 /// What one Newton solve did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -328,8 +331,9 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
                 Err(e) => return Err(NewtonError::Eval(e)),
             };
     }
-    // Residual before the last iteration, to recognise stagnation.
+    // Residual before the last iteration, to recognise stagnation, and the one before it.
     let mut previous = f64::INFINITY;
+    let mut older;
     loop {
         if stats.residual <= stats.tolerance {
             return Ok(());
@@ -354,6 +358,7 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
         if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
             return Err(NewtonError::Interrupted(*stats));
         }
+        older = previous;
         previous = stats.residual;
         for (d, r) in ws.dir.iter_mut().zip(&ws.res) {
             *d = -r;
@@ -371,10 +376,30 @@ fn solve_counting<const D: usize, P: NewtonProblem<D>>(
         }
         ws.x_old.copy_from_slice(x);
         let phi0 = stats.residual * stats.residual;
+        // The full step's residual as quadratic convergence predicts it from the last two,
+        // `r_{k+1} ≈ r_k³/r_{k−1}²`: far below the tolerance, the full step is first tried
+        // without its Jacobian, which a converged solve never uses.
+        let predicted = if older.is_finite() {
+            previous * (previous / older) * (previous / older)
+        } else {
+            f64::INFINITY
+        };
         let mut alpha = 1.0;
         loop {
             for ((xi, x0), di) in x.iter_mut().zip(&ws.x_old).zip(&ws.dir) {
                 *xi = x0 + di * alpha;
+            }
+            if alpha == 1.0 && predicted <= PREDICTED_MARGIN * stats.tolerance {
+                let r = match problem.evaluate(x, &mut ws.res, None) {
+                    Ok(()) => norm(&ws.res),
+                    Err(_) => f64::INFINITY,
+                };
+                // Accepted as the full evaluation below would accept it (converged, Armijo);
+                // otherwise that evaluation follows, with the Jacobian.
+                if r <= stats.tolerance && r * r <= (1.0 - 2.0 * ARMIJO_SIGMA) * phi0 {
+                    stats.residual = r;
+                    break;
+                }
             }
             let mut r = match problem.evaluate(x, &mut ws.res, Some(&mut ws.jac)) {
                 Ok(()) => norm(&ws.res),

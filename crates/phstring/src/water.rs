@@ -421,8 +421,12 @@ fn band_quotient(ta: f64, tb: f64) -> f64 {
 /// pieces' closed-form quotients (no cancellation, no switch); `S(z)` at `z₀ = z₁`.
 pub(crate) fn emerged_quotient(z0: f64, z1: f64, b: f64) -> (f64, f64) {
     let half = 0.5 * b;
-    let t = |z: f64| ((z + half) / b).clamp(0.0, 1.0);
     let (lo, hi) = if z0 <= z1 { (z0, z1) } else { (z1, z0) };
+    if hi <= -half {
+        // Submerged over the whole step (the common case).
+        return (0.0, 0.0);
+    }
+    let t = |z: f64| ((z + half) / b).clamp(0.0, 1.0);
     // Pieces: below (quotient 0), band, above (quotient 1).
     let below = if lo < -half { hi.min(-half) - lo } else { 0.0 };
     let (bl, bh) = (lo.max(-half), hi.min(half));
@@ -1093,6 +1097,10 @@ impl<const D: usize> WaterModel<D> {
         (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
     ) {
         let (g0, g1) = (bed.gap(r0), bed.gap(r1));
+        if g0 >= 0.0 && g1 >= 0.0 {
+            // Off the seabed at both ends of the step: no contact, no damping, no friction.
+            return;
+        }
         let (q, dq) = contact_quotient(g0, g1, w.stiffness);
         // The quotient in the gap times the gap's exact discrete gradient (21.4).
         let (dg, ddg) = bed.gap_quotient(r0, r1);
@@ -1339,7 +1347,6 @@ impl<const D: usize> WaterModel<D> {
     ) -> (Vector<D>, [Block<D>; 2], WaterWork) {
         let inv_h = 1.0 / h;
         let zi = D - 1;
-        let eye = Block::<D>::identity();
         let ve = (x.0 + x.1) * (0.5 * inv_h);
         let zm = 0.5 * (r0.0[zi] + r0.1[zi]) + 0.25 * (x.0[zi] + x.1[zi]);
         let inv_l = 1.0 / l;
@@ -1348,16 +1355,15 @@ impl<const D: usize> WaterModel<D> {
         let (em, dem) = emerged(zm, w.band);
         let phi = 1.0 - em;
         let vr = ve - u;
-        let len = rpm.norm();
-        let inv_len = if len > 0.0 { 1.0 / len } else { 0.0 };
-        let t = rpm * inv_len;
-        let vrt = t * t.dot(&vr);
+        // The tangent t = p/|p| only enters through p pᵀ/|p|² and (p·v_r)/|p|²: no root.
+        let l2 = rpm.norm_squared();
+        let inv_l2 = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
+        let ap = rpm.dot(&vr);
+        let vrt = rpm * (ap * inv_l2);
         let vrn = vr - vrt;
         let d2 = self.delta * self.delta;
-        let (sn, st) = (
-            (vrn.norm_squared() + d2).sqrt(),
-            (vrt.norm_squared() + d2).sqrt(),
-        );
+        let a2 = ap * ap * inv_l2;
+        let (sn, st) = ((vrn.norm_squared() + d2).sqrt(), (a2 + d2).sqrt());
         let bvec = vrn * (w.normal * sn) + vrt * (w.axial * st);
         let f = bvec * -phi;
         let work = WaterWork {
@@ -1374,24 +1380,41 @@ impl<const D: usize> WaterModel<D> {
         // ∂B/∂v_r = wN (sn P + v_rn v_rnᵀ/sn) + wA (st + a²/st) t tᵀ, and the tangent's part
         // ∂B/∂t · ∂t/∂r' = (1/|r'|) [(wA st − wN sn)(a P + t v_rnᵀ) + wA a²/st t v_rnᵀ
         //                            − wN a/sn v_rn v_rnᵀ].
-        let a = t.dot(&vr);
-        let tt = t * t.transpose();
-        let pn = eye - tt;
-        let nn = vrn * vrn.transpose();
-        let (inv_sn, inv_st) = (1.0 / sn, 1.0 / st);
-        let aa = w.axial * a * a * inv_st;
-        let gv = pn * (w.normal * sn) + nn * (w.normal * inv_sn) + tt * (w.axial * st + aa);
-        // Zero when the element has no length (t = 0, inv_len = 0).
-        let c = w.axial * st - w.normal * sn;
-        let k1 = (pn * (c * a) + t * vrn.transpose() * (c + aa) - nn * (w.normal * a * inv_sn))
-            * (0.25 * phi * inv_l * inv_len);
-        // ∂v_r/∂x = ½h⁻¹ I − ¼ (du/dz) e_zᵀ; ∂φ/∂x_z = −¼ dS/dz, times ½ of −(−B) on each row.
-        let mut k0 = gv * (0.25 * phi * inv_h);
-        let gdu = gv * du * (-0.125 * phi);
-        for k in 0..D {
-            k0[(k, zi)] += gdu[k] - 0.125 * dem * bvec[k];
+        // Entrywise, with a |p| = p·v_r: ∂B/∂v_r = α I + β t tᵀ + γ v_rn v_rnᵀ and the
+        // tangent's part (1/|r'|) [c a I − c a t tᵀ + (c + wA a²/st) t v_rnᵀ − (wN a/sn) v_rn v_rnᵀ].
+        let inv_sn = 1.0 / sn;
+        let aa = w.axial * a2 / st;
+        let (alpha, gamma) = (w.normal * sn, w.normal * inv_sn);
+        let beta = w.axial * st + aa - alpha;
+        // Zero when the element has no length (p = 0, inv_l2 = 0).
+        let c = w.axial * st - alpha;
+        let (s0, s1) = (0.25 * phi * inv_h, 0.25 * phi * inv_l * inv_l2);
+        let (ca, cn, an) = (c * ap, c + aa, gamma * ap);
+        let mut ja = Block::<D>::zeros();
+        let mut jb = Block::<D>::zeros();
+        for j in 0..D {
+            for i in 0..D {
+                let (pp, nn) = (rpm[i] * rpm[j], vrn[i] * vrn[j]);
+                let diag = if i == j { 1.0 } else { 0.0 };
+                let k0 = s0 * (alpha * diag + beta * pp * inv_l2 + gamma * nn);
+                let k1 = s1 * (ca * (diag - pp * inv_l2) + cn * rpm[i] * vrn[j] - an * nn);
+                ja[(i, j)] = k0 - k1;
+                jb[(i, j)] = k0 + k1;
+            }
         }
-        (f, [k0 - k1, k0 + k1], work)
+        // ∂v_r/∂x = ½h⁻¹ I − ¼ (du/dz) e_zᵀ; ∂φ/∂x_z = −¼ dS/dz, times ½ of −(−B) on each row.
+        if dem != 0.0 || du.iter().any(|&d| d != 0.0) {
+            let gv = Block::<D>::identity() * alpha
+                + rpm * rpm.transpose() * (beta * inv_l2)
+                + vrn * vrn.transpose() * gamma;
+            let gdu = gv * du * (-0.125 * phi);
+            for k in 0..D {
+                let col = gdu[k] - 0.125 * dem * bvec[k];
+                ja[(k, zi)] += col;
+                jb[(k, zi)] += col;
+            }
+        }
+        (f, [ja, jb], work)
     }
 }
 
