@@ -888,6 +888,83 @@ mod tests {
         );
     }
 
+    /// A cubic chain that counts its evaluations with and without the Jacobian, and with
+    /// `always` assembles the Jacobian even when the solver does not ask for it.
+    struct Counting {
+        inner: Cubic,
+        always: bool,
+        with_jacobian: usize,
+        without: usize,
+        scratch: BlockJacobian<1>,
+    }
+
+    impl NewtonProblem<1> for Counting {
+        type Error = ();
+        fn evaluate(
+            &mut self,
+            x: &[Vector<1>],
+            res: &mut [Vector<1>],
+            jac: Option<&mut BlockJacobian<1>>,
+        ) -> Result<(), ()> {
+            match jac {
+                Some(j) => {
+                    self.with_jacobian += 1;
+                    self.inner.evaluate(x, res, Some(j))
+                }
+                None if self.always => {
+                    self.with_jacobian += 1;
+                    self.inner.evaluate(x, res, Some(&mut self.scratch))
+                }
+                None => {
+                    self.without += 1;
+                    self.inner.evaluate(x, res, None)
+                }
+            }
+        }
+    }
+
+    /// A solve that converges quadratically ends with a residual-only evaluation: one
+    /// Jacobian per trial point whose Jacobian is used, not one per evaluation, and the same iterates, to the bit,
+    /// as when every evaluation assembles it.
+    #[test]
+    fn converged_step_is_evaluated_without_its_jacobian() {
+        let n = 40;
+        let mesh = Mesh::uniform_chain(n - 1, 1.0).unwrap();
+        let mut ws = NewtonWorkspace::<1>::new(&mesh);
+        let mut solver = BlockTridiagonal::<1>::new(&mesh).unwrap();
+        let params = NewtonParams::absolute(1e-9);
+        let b: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * (i as f64 * 0.7).sin()).collect();
+        let run = |always: bool, ws: &mut NewtonWorkspace<1>, solver: &mut BlockTridiagonal<1>| {
+            let mut p = Counting {
+                inner: Cubic {
+                    b: b.clone(),
+                    kappa: 0.2,
+                },
+                always,
+                with_jacobian: 0,
+                without: 0,
+                scratch: BlockJacobian::zeros(&mesh),
+            };
+            let mut x = vec![Vector::<1>::zeros(); n];
+            let stats = solve(&mut p, &mut x, ws, solver, &params, None).unwrap();
+            (x, stats, p.with_jacobian, p.without)
+        };
+        let (x, stats, jacobians, without) = run(false, &mut ws, &mut solver);
+        assert!(stats.iterations >= 3, "{} iterations", stats.iterations);
+        assert_eq!(without, 1, "the converged evaluation");
+        // One Jacobian per trial point of the line search (a full step or a shortened one).
+        let trials = stats.iterations + stats.backtracks;
+        assert_eq!(jacobians, trials, "{stats:?}");
+        let (x_all, stats_all, jacobians_all, without_all) = run(true, &mut ws, &mut solver);
+        assert_eq!(without_all, 0);
+        assert_eq!(jacobians_all, trials + 1);
+        assert_eq!(stats_all.iterations, stats.iterations);
+        assert_eq!(stats_all.residual.to_bits(), stats.residual.to_bits());
+        for (a, b) in x.iter().zip(&x_all) {
+            assert_eq!(a[0].to_bits(), b[0].to_bits());
+        }
+    }
+
     /// Forces whose squares overflow give an infinite force scale, which
     /// must not make every residual acceptable.
     #[test]
