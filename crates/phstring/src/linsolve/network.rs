@@ -437,6 +437,9 @@ struct Front<const D: usize> {
     /// `(B, C, y)` of the previously eliminated node: `B` its coupling into the current
     /// row.
     prev: Option<(Block<D>, Block<D>, SVector<f64, D>)>,
+    /// Whether `J` couples to the segment at all: not when the element's blocks at `J` are
+    /// zero (a support's row and column), and then `r`, `l` and the `G_k` stay zero.
+    coupled: bool,
 }
 
 impl<const D: usize> Front<D> {
@@ -449,6 +452,7 @@ impl<const D: usize> Front<D> {
             acc_d: Block::zeros(),
             acc_b: SVector::zeros(),
             prev: None,
+            coupled: f.iter().chain(b.iter()).any(|&v| v != 0.0),
         }
     }
 
@@ -471,12 +475,17 @@ impl<const D: usize> Front<D> {
         let inv = d.try_inverse()?;
         let y = inv * *b;
         let c = inv * fo;
-        let g = inv * self.l;
         *b = y;
-        self.acc_d -= self.r * g;
-        self.acc_b -= self.r * y;
-        self.r = -(self.r * c);
-        self.l = -(bo * g);
+        let g = if self.coupled {
+            let g = inv * self.l;
+            self.acc_d -= self.r * g;
+            self.acc_b -= self.r * y;
+            self.r = -(self.r * c);
+            self.l = -(bo * g);
+            g
+        } else {
+            Block::zeros()
+        };
         self.prev = Some((*bo, c, y));
         Some([c, g])
     }
