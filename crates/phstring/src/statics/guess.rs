@@ -115,7 +115,7 @@ fn place<const D: usize, M>(
     let horizontal = chord - up * z;
     let x = horizontal.norm();
     let length: f64 = lengths.iter().sum();
-    if !(x > VERTICAL * length) {
+    if x.is_nan() || x <= VERTICAL * length {
         return Err(format!("string '{name}' hangs vertically between its ends"));
     }
     let across = horizontal / x;
@@ -151,7 +151,7 @@ fn place<const D: usize, M>(
             // On the seabed, pressed in by its weight, if the seabed there is as deep as at
             // the lower end.
             let off = height_above(bed, &p).map_or(f64::INFINITY, |h| h - g);
-            if !(off.abs() <= ON_BED * (z + g).abs().max(1.0)) {
+            if off.is_nan() || off.abs() > ON_BED * (z + g).abs().max(1.0) {
                 return Err(format!(
                     "the seabed under string '{name}' is not flat: {off:.6} m off the depth at its lower end at node {i}"
                 ));
@@ -191,7 +191,7 @@ fn node_weights<const D: usize, M>(
 ) -> Result<(Vector<D>, Vec<f64>), String> {
     let name = &grp.name;
     let weight = grp.body_force.norm();
-    if !(weight > 0.0) {
+    if weight.is_nan() || weight <= 0.0 {
         return Err(format!("string '{name}' has no weight"));
     }
     let up = -grp.body_force / weight;
@@ -221,7 +221,7 @@ fn node_weights<const D: usize, M>(
         weights.push(down - lift);
     }
     let total: f64 = weights.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Err(format!("string '{name}' floats (wet weight {total:.6e} N)"));
     }
     Ok((up, weights))
