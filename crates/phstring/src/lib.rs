@@ -71,6 +71,7 @@ pub mod assembly;
 pub mod bathymetry;
 pub mod benchmarks;
 pub mod boundary;
+pub mod catenary;
 pub mod dimension;
 pub mod eigen;
 pub mod error;

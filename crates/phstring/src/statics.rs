@@ -7,8 +7,11 @@
 //! `t = 0` positions; there the residual is the support reaction (the force the support
 //! exerts on the string, as in the dynamic ports).
 //!
-//! Three paths, tried in this order, each with Newton's method, the line search and the
+//! Four paths, tried in this order, each with Newton's method, the line search and the
 //! linear solvers of the time step:
+//! 0. **Catenary first guess** (`guess.rs`): where every string hangs between two supports,
+//!    Newton at the full load from the strings placed on their elastic catenaries (with
+//!    their grounded parts on the seabed).
 //! 1. **Newton** at the full load, from the scenario's initial positions.
 //! 2. **Load continuation**: the load `λ F`, `λ` from 0 to 1 in steps that halve on failure
 //!    and grow after success.
@@ -19,7 +22,12 @@
 //!    elements are slack (tension-only laws) or compressed. It ends when the unshifted
 //!    residual meets the tolerance.
 //!
-//! Which path succeeded is reported in [`Equilibrium::path`].
+//! Which path succeeded is reported in [`Equilibrium::path`], what became of the first guess
+//! in [`Equilibrium::guess`].
+
+mod guess;
+
+pub use guess::catenary_guess;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -46,6 +54,8 @@ pub struct StaticsParams {
     pub max_load_steps: usize,
     /// Most pseudo-time steps (path 3).
     pub max_pseudo_steps: usize,
+    /// Try the catenary first guess (path 0) where it applies. Default `true`.
+    pub first_guess: bool,
     /// The equilibrium of the open-loop plant: feedback laws are left out without the check
     /// that they vanish at rest (for the linear model and modes, whose feedback ports are
     /// open inputs). Default `false`.
@@ -62,6 +72,7 @@ impl Default for StaticsParams {
             solver: SolverKind::Auto,
             max_load_steps: 200,
             max_pseudo_steps: 2000,
+            first_guess: true,
             open_loop: false,
         }
     }
@@ -70,6 +81,8 @@ impl Default for StaticsParams {
 /// How the equilibrium was reached.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StaticsPath {
+    /// Newton's method at the full load from the catenary first guess.
+    CatenaryGuess,
     /// Newton's method at the full load.
     Newton,
     /// Load continuation in `steps` load steps.
@@ -85,21 +98,46 @@ pub enum StaticsPath {
 }
 
 impl StaticsPath {
-    /// Short name: `newton`, `load_continuation` or `pseudo_transient`.
+    /// Short name: `catenary_guess`, `newton`, `load_continuation` or `pseudo_transient`.
     pub fn name(self) -> &'static str {
         match self {
+            StaticsPath::CatenaryGuess => "catenary_guess",
             StaticsPath::Newton => "newton",
             StaticsPath::LoadContinuation { .. } => "load_continuation",
             StaticsPath::PseudoTransient { .. } => "pseudo_transient",
         }
     }
-    /// Steps of the path (1 for Newton).
+    /// Steps of the path (1 for Newton, from the guess or the start).
     pub fn steps(self) -> usize {
         match self {
-            StaticsPath::Newton => 1,
+            StaticsPath::CatenaryGuess | StaticsPath::Newton => 1,
             StaticsPath::LoadContinuation { steps } | StaticsPath::PseudoTransient { steps } => {
                 steps
             }
+        }
+    }
+}
+
+/// What became of the catenary first guess (docs/method.md §15).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FirstGuess {
+    /// Newton from the guess reached the equilibrium ([`StaticsPath::CatenaryGuess`]).
+    Used,
+    /// The guess was placed but Newton from it failed, for the reason given; the other
+    /// paths started from the initial positions.
+    Failed(String),
+    /// The guess does not apply to the problem, for the reason given (e.g. a string with a
+    /// free end).
+    NotApplicable(String),
+}
+
+impl FirstGuess {
+    /// `used`, `failed: WHY` or `not applicable: WHY`, for reports.
+    pub fn describe(&self) -> String {
+        match self {
+            FirstGuess::Used => "used".into(),
+            FirstGuess::Failed(why) => format!("failed: {why}"),
+            FirstGuess::NotApplicable(why) => format!("not applicable: {why}"),
         }
     }
 }
@@ -125,6 +163,8 @@ pub struct Equilibrium<const D: usize> {
     pub path: StaticsPath,
     /// Newton iterations (linear solves) over all paths, failed attempts included.
     pub iterations: usize,
+    /// What became of the catenary first guess.
+    pub guess: FirstGuess,
     /// Energies at the equilibrium [J] (kinetic energy 0).
     pub energies: Energies,
     /// The tangent stiffness is positive definite on the free components: a stable
@@ -559,16 +599,24 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         stop,
         iterations: 0,
     };
-    let newton_msg = match newton_path(&mut s)? {
+    let guess = match guess_path(&mut s)? {
         Ok(found) => return Ok(found),
+        Err(outcome) => outcome,
+    };
+    let with = |found: Equilibrium<D>| Equilibrium {
+        guess: guess.clone(),
+        ..found
+    };
+    let newton_msg = match newton_path(&mut s, StaticsPath::Newton)? {
+        Ok(found) => return Ok(with(found)),
         Err(msg) => msg,
     };
     let (lambda, failed_step, cont_msg) = match continuation_path(&mut s)? {
-        Ok(found) => return Ok(found),
+        Ok(found) => return Ok(with(found)),
         Err(end) => end,
     };
     let (pseudo_steps, pseudo_msg) = match pseudo_transient_path(&mut s, &f)? {
-        Ok(found) => return Ok(found),
+        Ok(found) => return Ok(with(found)),
         Err(end) => end,
     };
     let u = s.u;
@@ -629,30 +677,51 @@ impl<const D: usize, M: StoredEnergy> Search<'_, '_, D, M> {
 /// and the next path (`T`); an interruption is the error.
 type PathEnd<const D: usize, T> = Result<Result<Equilibrium<D>, T>, StaticsError>;
 
-/// Path 1: Newton at the full load from the start. Fails with its message.
+/// Path 0: Newton at the full load from the catenary first guess. Fails with what became of
+/// the guess, the displacement `u` back at zero.
+fn guess_path<const D: usize, M: StoredEnergy>(
+    s: &mut Search<'_, '_, D, M>,
+) -> PathEnd<D, FirstGuess> {
+    let (sys, r_start) = (s.eq.sys, s.eq.r0);
+    if !s.params.first_guess {
+        return Ok(Err(FirstGuess::NotApplicable("switched off".into())));
+    }
+    let placed = match guess::catenary_guess(sys, r_start) {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(FirstGuess::NotApplicable(why))),
+    };
+    for ((u, g), r) in s.u.iter_mut().zip(&placed).zip(r_start) {
+        *u = g - r;
+    }
+    let end = newton_path(s, StaticsPath::CatenaryGuess)?;
+    s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+    Ok(match end {
+        Ok(found) => Ok(Equilibrium {
+            guess: FirstGuess::Used,
+            ..found
+        }),
+        Err(msg) => Err(FirstGuess::Failed(msg)),
+    })
+}
+
+/// Path 1: Newton at the full load from `u` (the start, or the first guess, reported as
+/// `path`). Fails with its message.
 fn newton_path<const D: usize, M: StoredEnergy>(
     s: &mut Search<'_, '_, D, M>,
+    path: StaticsPath,
 ) -> PathEnd<D, String> {
     let (sys, r_start) = (s.eq.sys, s.eq.r0);
     let msg = match s.newton() {
         Ok(st) => {
             s.iterations += st.iterations;
-            let found = finish(
-                sys,
-                r_start,
-                &s.u,
-                &mut s.eq,
-                st,
-                StaticsPath::Newton,
-                s.iterations,
-            );
+            let found = finish(sys, r_start, &s.u, &mut s.eq, st, path, s.iterations);
             if found.stable {
                 return Ok(Ok(found));
             }
             UNSTABLE.to_string()
         }
         Err(e) => {
-            s.iterations += s.ws.last_stats().iterations;
+            s.iterations += spent(&e, &s.ws);
             if matches!(e, NewtonError::Interrupted(_)) {
                 return Err(StaticsError::Interrupted);
             }
@@ -1104,6 +1173,15 @@ fn largest_strain<const D: usize, M>(
     best
 }
 
+/// Newton iterations that a failed [`solve_rescaled`] spent: all its rounds' where the error
+/// counts them, else its last round's.
+fn spent<E, const D: usize>(e: &NewtonError<E>, ws: &NewtonWorkspace<D>) -> usize {
+    match e {
+        NewtonError::MaxIterations(st) | NewtonError::LineSearch(st) => st.iterations,
+        _ => ws.last_stats().iterations,
+    }
+}
+
 fn describe<E: std::fmt::Debug>(e: &NewtonError<E>) -> String {
     match e {
         NewtonError::Eval(x) => format!("a strain left the law's domain: {x:?}"),
@@ -1166,6 +1244,7 @@ fn finish<const D: usize, M: StoredEnergy>(
         at_roundoff: st.at_roundoff,
         path,
         iterations,
+        guess: FirstGuess::NotApplicable(String::new()),
         energies,
     }
 }

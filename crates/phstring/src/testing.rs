@@ -251,33 +251,8 @@ unsafe impl GlobalAlloc for CountingAllocator {
 /// The elastic catenary of a line of unstretched length `L`, wet weight `w` [N/m] and axial
 /// stiffness `EA` from an anchor on a rigid frictionless seabed to a fairlead `X` away and
 /// `Hv` above the seabed, with a grounded length `L_b` (docs/method.md eq. (21.8); the
-/// statics tests of phstring and of the MoorDyn decks compare with it): with
-/// `L_s = L − L_b` suspended, `V_F = w L_s`,
-///
-///   X  = L_b + (H/w) asinh(V_F/H) + H L/EA ,
-///   Hv = (H/w) (√(1 + (V_F/H)²) − 1) + w L_s²/(2 EA) .
-///
-/// Returns `(H, V_F, L_b)`.
+/// statics tests of phstring and of the MoorDyn decks compare with it): returns
+/// `(H, V_F, L_b)`, [`crate::catenary::on_seabed`].
 pub fn catenary_on_seabed(l: f64, w: f64, ea: f64, x: f64, hv: f64) -> (f64, f64, f64) {
-    let bisect = |f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64| {
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if f(mid) < 0.0 { lo = mid } else { hi = mid }
-        }
-        0.5 * (lo + hi)
-    };
-    let suspended = |h: f64| {
-        let height = |ls: f64| {
-            let v = w * ls;
-            (h / w) * ((1.0 + (v / h).powi(2)).sqrt() - 1.0) + w * ls * ls / (2.0 * ea) - hv
-        };
-        bisect(&height, 0.0, l)
-    };
-    let span = |h: f64| {
-        let ls = suspended(h);
-        l - ls + (h / w) * (w * ls / h).asinh() + h * l / ea - x
-    };
-    let h = bisect(&span, 1.0, 1e9);
-    let ls = suspended(h);
-    (h, w * ls, l - ls)
+    crate::catenary::on_seabed(l, w, ea, x, hv)
 }

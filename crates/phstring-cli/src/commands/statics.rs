@@ -56,6 +56,9 @@ pub fn statics(args: StaticsArgs) -> Result<()> {
         energy(info.max_tension),
         energy(info.internal_energy)
     );
+    if info.path != "catenary_guess" {
+        say!("catenary first guess {}", info.first_guess);
+    }
     say!("outputs in {}", out.display());
     Ok(())
 }

@@ -73,6 +73,16 @@ struct Line {
     count: usize,
 }
 
+/// Every deck's lines hang between an anchor and a vessel point: statics start from the
+/// catenary first guess and Newton converges from it in at most 4 iterations (measured 3 on
+/// the decks' meshes and with 4 elements per segment, 4 for the semi on 4x).
+fn assert_catenary_start(s: &serde_json::Value, name: &str) {
+    assert_eq!(s["path"], "catenary_guess", "{name}: {}", s["first_guess"]);
+    assert_eq!(s["first_guess"], "used", "{name}");
+    let iterations = s["newton_iterations"].as_u64().unwrap();
+    assert!(iterations <= 4, "{name}: {iterations} Newton iterations");
+}
+
 /// Runs `phstring statics DECK` with `sets` and compares the fairleads' tensions (their
 /// reactions; node `i` is the deck's point `i + 1`) with the closed form; returns the
 /// largest relative error of the horizontal tension and of the fairlead tension.
@@ -87,6 +97,7 @@ fn fairlead_errors(deck: &str, name: &str, line: &Line, sets: &[&str]) -> (f64, 
     let rows = equilibrium(&out);
     let s = summary(&out);
     assert_eq!(s["deck"]["path"], deck);
+    assert_catenary_start(&s, name);
     let mut worst = (0.0f64, 0.0f64);
     for k in 0..line.count {
         let f = rows[line.fairlead + k];
@@ -228,7 +239,8 @@ fn statics_of_the_v2_example_decks_match_the_elastic_catenary() {
 }
 
 /// Every deck in examples/moordyn is listed here; each v2 example runs through `check`,
-/// `statics` and a short stretch (2 s) of `run --motion` with its table: the run completes,
+/// `statics` and a short stretch (2 s) of `run --motion` with its table: both start from the
+/// catenary first guess ([`assert_catenary_start`]), the run completes,
 /// its end_tensions.csv (`t`, then `FairTen<i>, AnchTen<i>` for each line) starts at the
 /// static fairlead tension of `statics` (to 1e-6) and
 /// its energy balance closes to 1e-9 of its scale.
@@ -261,6 +273,7 @@ fn every_example_deck_runs_check_statics_and_its_motion() {
         let st = dir.join(format!("{name}-statics"));
         let o = phstring(&["statics", &deck, "--out", st.to_str().unwrap(), "-q"]);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
+        assert_catenary_start(&summary(&st), name);
         let out = dir.join(name);
         let o = run_with(
             &deck,
@@ -274,7 +287,10 @@ fn every_example_deck_runs_check_statics_and_its_motion() {
             &["--motion", &table],
         );
         assert!(o.status.success(), "{name}: {}", stderr(&o));
-        assert_eq!(summary(&out)["status"], "completed", "{name}");
+        let s = summary(&out);
+        assert_eq!(s["status"], "completed", "{name}");
+        let start = s["initial_equilibrium"].as_str().unwrap();
+        assert!(start.starts_with("catenary_guess"), "{name}: {start}");
         let (_, _, worst) = energy_closure(&out);
         assert!(worst <= 1e-9, "{name}: balance closure {worst:e}");
         let mut r = csv::Reader::from_path(out.join("end_tensions.csv")).unwrap();

@@ -9,7 +9,8 @@
 //! * `equilibrium.vtp`: ParaView, cell data `C`, `S`, `N`, `string`; point data the
 //!   reaction components;
 //! * `equilibrium.png` / `.svg`: the equilibrium (the two axes of largest extent in 3D);
-//! * `summary.json`: path, iterations, residual, tolerance, stability, energies, reactions.
+//! * `summary.json`: path, what became of the catenary first guess, iterations, residual,
+//!   tolerance, stability, energies, reactions.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -61,8 +62,11 @@ pub struct StaticsInfo {
     pub nodes: usize,
     /// Elements.
     pub elements: usize,
-    /// `newton`, `load_continuation` or `pseudo_transient`.
+    /// `catenary_guess`, `newton`, `load_continuation` or `pseudo_transient`.
     pub path: &'static str,
+    /// What became of the catenary first guess: `used`, `failed: WHY` or
+    /// `not applicable: WHY` (docs/method.md §15).
+    pub first_guess: String,
     /// Steps of that path (load or pseudo-time steps; 1 for Newton).
     pub path_steps: usize,
     /// Newton iterations over all paths.
@@ -149,6 +153,7 @@ fn statics_dim<const D: usize>(
         nodes: sys.mesh().n_nodes(),
         elements: sys.mesh().n_elements(),
         path: eq.path.name(),
+        first_guess: eq.guess.describe(),
         path_steps: eq.path.steps(),
         newton_iterations: eq.iterations,
         residual: eq.residual,

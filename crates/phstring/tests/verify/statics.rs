@@ -1,7 +1,7 @@
 //! Static equilibrium (docs/method.md §15) against closed forms: the discrete hanging chain
 //! (exact), the continuum hanging length and the elastic catenary (O(h²)).
 
-use phstring::statics::{self, StaticsError, StaticsParams, StaticsPath};
+use phstring::statics::{self, FirstGuess, StaticsError, StaticsParams, StaticsPath};
 use phstring::testing::{between_supports, hanging_chain};
 use phstring::{Material, Problem, Simulation, StepParams, Vector};
 
@@ -437,5 +437,53 @@ fn stop_request_ends_the_continuation_promptly() {
             after < total / 500,
             "stop at {part} of the work: {after} evaluations after it (of {total})"
         );
+    }
+}
+
+/// The catenary first guess of a linear elastic cable between two supports (120 m, 2 kg/m,
+/// EA = 1e6 N, 64 elements, supports 100 m apart and 30 m different in height) is the
+/// discrete equilibrium itself: Newton from it needs at most one iteration (measured 0),
+/// and it is the equilibrium the other paths find from the straight compressed start
+/// (support reactions to 1e-9).
+#[test]
+fn catenary_guess_of_a_cable_between_supports_is_its_discrete_equilibrium() {
+    let n = 64;
+    let eq = statics::solve(catenary(n, 30.0), &StaticsParams::default(), None).unwrap();
+    assert_eq!(eq.path, StaticsPath::CatenaryGuess);
+    assert_eq!(eq.guess, FirstGuess::Used);
+    assert!(eq.iterations <= 1, "{} iterations", eq.iterations);
+    let without = StaticsParams {
+        first_guess: false,
+        ..Default::default()
+    };
+    let old = statics::solve(catenary(n, 30.0), &without, None).unwrap();
+    assert!(
+        matches!(old.path, StaticsPath::PseudoTransient { .. }),
+        "{:?}",
+        old.path
+    );
+    for i in [0, n] {
+        let e = (eq.reactions[i] - old.reactions[i]).norm() / old.reactions[i].norm();
+        assert!(e <= 1e-9, "support {i}: {e:e}");
+    }
+}
+
+/// A chain hanging from one support has a free end: the guess does not apply, says why, and
+/// Newton from the start finds the equilibrium as before.
+#[test]
+fn catenary_guess_needs_two_supports() {
+    let p = hanging_chain(
+        20,
+        100.0,
+        Material::linear_elastic(1e8),
+        10.0,
+        500.0,
+        Vector::<2>::new(0.0, -1.0),
+    );
+    let eq = statics::solve(p, &StaticsParams::default(), None).unwrap();
+    assert_eq!(eq.path, StaticsPath::Newton);
+    match &eq.guess {
+        FirstGuess::NotApplicable(why) => assert!(why.contains("not a support"), "{why}"),
+        other => panic!("{other:?}"),
     }
 }

@@ -4,7 +4,7 @@
 //! form), a chain pulled over the seabed (Coulomb's `μ w L`). Real values: chain
 //! `EA = 1e9 N`, `ρA = 100…150 kg/m`, `d = 0.1…0.15 m`, depths 50–100 m.
 
-use phstring::statics::{StaticsParams, solve};
+use phstring::statics::{FirstGuess, StaticsParams, StaticsPath, solve, solve_system};
 use phstring::testing::catenary_on_seabed;
 use phstring::water::STANDARD_GRAVITY as G;
 use phstring::{
@@ -833,4 +833,134 @@ fn equivalent_linear_drag_dissipates_as_the_quadratic_one_over_a_cycle() {
         lin += 8.0 / (3.0 * PI) * alpha * v * s * s;
     }
     assert!((quad - lin).abs() <= 1e-9 * quad, "{quad} vs {lin}");
+}
+
+/// The shallow chain of `examples/moordyn/chain_shallow_v1.dat` in 3D: 400 m of studless
+/// chain (390 kg/m, d = 0.252 m, EA = 1.674e9 N) in 40 elements from an anchor on a seabed
+/// 50 m deep (kBot = 3e6 Pa/m) to a fairlead 380 m away and 8 m below the surface, laid out
+/// along the seabed and straight up with its unstretched length; `seabed` replaces the flat
+/// seabed if given.
+fn shallow_chain(seabed: Option<Seabed<3>>) -> (phstring::PhSystem<3, Material>, Vec<Vector<3>>) {
+    let (n, l, d, rho_a, ea, depth) = (40, 10.0, 0.252, 390.0, 1.674e9, 50.0);
+    let anchor = Vector::<3>::new(420.0, 0.0, -depth);
+    let fairlead = Vector::<3>::new(40.0, 0.0, -8.0);
+    // The touchdown of the straight layout: seabed and straight up make 400 m.
+    let len = |t: f64| t + (fairlead - Vector::<3>::new(420.0 - t, 0.0, -depth)).norm();
+    let (mut lo, mut hi) = (0.0, 380.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if len(mid) < n as f64 * l {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let touchdown = Vector::<3>::new(420.0 - lo, 0.0, -depth);
+    let seabed = seabed.unwrap_or_else(|| Seabed::flat(depth, 3e6, 0.0));
+    let net = chain(
+        along(&[anchor, touchdown, fairlead], l, n),
+        l,
+        ea,
+        rho_a,
+        &[0, n],
+    )
+    .with_water(Water::new(RHO_W).with_seabed(seabed))
+    .with_line_hydro(
+        0,
+        LineHydro {
+            diameter: d,
+            cd: 2.4,
+            ..Default::default()
+        },
+    );
+    let (sys, init) = phstring::PhSystem::new(net).unwrap();
+    (sys, init.r)
+}
+
+/// The catenary first guess of the shallow chain (grounded over about 300 m, 6–7 elements in
+/// its suspended span) lies within 6 mm of the equilibrium (measured 4.2 mm) and its
+/// fairlead tension within 5e-4 of it (measured 1.4e-4: the touchdown node's share of the
+/// seabed's reaction and the penetration there are what the guess leaves out); Newton from
+/// it converges in at most 4 iterations (measured 3) to the equilibrium the other paths
+/// find without it (pseudo-transient, 31 steps, 423 iterations; fairlead tension to 1e-9,
+/// measured 9.5e-12). With one Newton iteration allowed, Newton from the guess fails and
+/// the pseudo-transient path still finds that equilibrium.
+#[test]
+fn catenary_guess_of_a_grounded_chain_starts_newton_next_to_the_equilibrium() {
+    let (sys, r0) = shallow_chain(None);
+    let n = 40;
+    let guess = phstring::statics::catenary_guess(&sys, &r0).unwrap();
+    let eq = solve_system(&sys, &r0, &StaticsParams::default(), None).unwrap();
+    assert_eq!(eq.path, StaticsPath::CatenaryGuess);
+    assert_eq!(eq.guess, FirstGuess::Used);
+    assert!(eq.iterations <= 4, "{} iterations", eq.iterations);
+    let off = guess
+        .iter()
+        .zip(&eq.state.r)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    let (_, reactions) = phstring::statics::static_residual(&sys, &guess).unwrap();
+    let t_guess = reactions[n].norm();
+    let t_eq = eq.reactions[n].norm();
+    let e_guess = (t_guess - t_eq).abs() / t_eq;
+    println!(
+        "guess: {off:.3e} m off, fairlead tension {t_guess:.3} N against {t_eq:.3} N ({e_guess:.2e}); {} Newton iterations",
+        eq.iterations
+    );
+    assert!(off <= 6e-3, "{off:e} m");
+    assert!(e_guess <= 5e-4, "{e_guess:e}");
+    let without = StaticsParams {
+        first_guess: false,
+        ..Default::default()
+    };
+    let old = solve_system(&sys, &r0, &without, None).unwrap();
+    assert_ne!(old.path, StaticsPath::CatenaryGuess);
+    let e_old = (old.reactions[n].norm() - t_eq).abs() / t_eq;
+    println!(
+        "without the guess: {:?}, {} iterations, tension {e_old:.2e} off",
+        old.path, old.iterations
+    );
+    assert!(e_old <= 1e-9, "{e_old:e}");
+    let mut tight = StaticsParams::default();
+    tight.newton.max_iter = 1;
+    let fallback = solve_system(&sys, &r0, &tight, None).unwrap();
+    assert!(
+        matches!(fallback.guess, FirstGuess::Failed(_)),
+        "{:?}",
+        fallback.guess
+    );
+    let e_fb = (fallback.reactions[n].norm() - t_eq).abs() / t_eq;
+    println!(
+        "fallback: {:?} {:?}, tension {e_fb:.2e} off",
+        fallback.path, fallback.guess
+    );
+    assert!(e_fb <= 1e-9, "{e_fb:e}");
+}
+
+/// On a seabed falling at 2° from the anchor towards the fairlead the grounded part of a flat guess would lie metres off the
+/// seabed: the guess does not apply (the message says where), and the other paths find the
+/// equilibrium, with the anchor's pull along the slope.
+#[test]
+fn catenary_guess_falls_back_on_a_sloped_seabed() {
+    let a = 2f64.to_radians();
+    let normal = Vector::<3>::new(-a.sin(), 0.0, a.cos());
+    let plane = Seabed::plane(Vector::<3>::new(420.0, 0.0, -50.0), normal, 3e6, 0.0);
+    let (sys, r0) = shallow_chain(Some(plane));
+    let why = phstring::statics::catenary_guess(&sys, &r0).unwrap_err();
+    assert!(
+        why.contains("not flat") && why.contains("'string'"),
+        "{why}"
+    );
+    let eq = solve_system(&sys, &r0, &StaticsParams::default(), None).unwrap();
+    assert_ne!(eq.path, StaticsPath::CatenaryGuess);
+    assert!(
+        matches!(&eq.guess, FirstGuess::NotApplicable(w) if *w == why),
+        "{:?}",
+        eq.guess
+    );
+    assert!(
+        eq.stable && eq.reactions[0][0] > 0.0,
+        "{:?}",
+        eq.reactions[0]
+    );
 }
