@@ -45,9 +45,8 @@ impl Table {
     /// The platform path of a table of the seven columns `t, x, y, z, roll, pitch, yaw`
     /// (`[[platform]]`, `--motion`); `None` for another number of columns.
     pub fn platform(&self) -> Option<phstring::PlatformPath> {
-        (self.values.len() == 6).then(|| phstring::PlatformPath {
-            channels: std::array::from_fn(|j| self.signal(j)),
-        })
+        (self.values.len() == 6)
+            .then(|| phstring::PlatformPath::new(std::array::from_fn(|j| self.signal(j))))
     }
 
     /// `path:line` of row `i`, for messages.

@@ -54,6 +54,82 @@ pub fn triple_jump() -> [f64; 3] {
     [g1, 1.0 - 2.0 * g1, g1]
 }
 
+/// A node's damped seabed contact as the backward sub-step of `dg4` sees it
+/// (docs/method.md §19, "Stiff damping and the backward sub-step"): the range of masses
+/// `[m_lo, m_hi]` [kg] its normal motion can have (the mass-matrix row `Σ (m_d ∓ |m_o|)`
+/// plus point masses: neighbours moving against it, with it), the contact damping
+/// `c = c_bed d L` [N·s/m] and stiffness `k = k_bed d L` [N/m] in full contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct DampedContact {
+    /// Smallest effective mass [kg].
+    pub mass_lo: f64,
+    /// Largest effective mass [kg].
+    pub mass_hi: f64,
+    /// Contact damping [N·s/m].
+    pub damping: f64,
+    /// Contact stiffness [N/m].
+    pub stiffness: f64,
+}
+
+/// The damped seabed contacts of `sys`: one per wet node whose contact has damping.
+pub(crate) fn damped_contacts<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+) -> Vec<DampedContact> {
+    let Some(w) = sys.water.as_deref() else {
+        return Vec::new();
+    };
+    if w.bed.is_none() {
+        return Vec::new();
+    }
+    let mut mass = vec![(0.0, 0.0); sys.mesh.n_nodes()];
+    for (g, _, [a, b], l) in sys.each_element() {
+        let (md, mo) = element_mass(g.mass, g.rho_a, l);
+        for i in [a, b] {
+            mass[i].0 += md - mo.abs();
+            mass[i].1 += md + mo.abs();
+        }
+    }
+    for &(i, m) in &sys.point_mass {
+        mass[i].0 += m;
+        mass[i].1 += m;
+    }
+    w.nodes
+        .iter()
+        .filter(|n| n.damping > 0.0 && n.stiffness > 0.0)
+        .map(|n| DampedContact {
+            mass_lo: mass[n.node].0,
+            mass_hi: mass[n.node].1,
+            damping: n.damping,
+            stiffness: n.stiffness,
+        })
+        .collect()
+}
+
+/// Most triple jumps [`compositions`] splits a `dg4` step into.
+pub(crate) const MAX_COMPOSITIONS: usize = 64;
+
+/// The number `n` of triple jumps (19.1) of step `h/n` that a `dg4` step of `h` [s] is made
+/// of (docs/method.md §19, eq. (19.4)): the smallest `n` for which the backward sub-step
+/// `s = |γ₂| h/n` keeps the Newton pivot `(2m − c s + k s²)/s²` of every damped contact and
+/// every mass `m` in its range at least half the mass term `2m/s²` away from zero,
+/// `|2m − c s + k s²| ≥ m`: that is, no mass in `(q/3, q)`, `q = c s − k s²`. Where the pivot
+/// is zero the backward sub-step (whose damping counts negatively) is singular and the
+/// composition amplifies the contact's motion without bound. 1 without damped contacts;
+/// at most [`MAX_COMPOSITIONS`].
+pub(crate) fn compositions(contacts: &[DampedContact], h: f64) -> usize {
+    let g2 = triple_jump()[1].abs();
+    let clear = |n: usize| {
+        let s = g2 * h.abs() / n as f64;
+        contacts.iter().all(|c| {
+            let q = c.damping * s - c.stiffness * s * s;
+            c.mass_lo >= q || 3.0 * c.mass_hi <= q
+        })
+    };
+    (1..MAX_COMPOSITIONS)
+        .find(|&n| clear(n))
+        .unwrap_or(MAX_COMPOSITIONS)
+}
+
 impl Scheme {
     /// `(S̄/2, ∂(S̄/2)/∂C₁)` for an element going from strain `c0` to `c1`.
     #[inline]
@@ -588,6 +664,60 @@ mod tests {
     //! finite differences, on random states, d = 1, 2, 3, all laws, both schemes.
 
     use super::*;
+
+    /// A chain node on a damped seabed (226 kg/m with added mass over 16.7 m: m = 3770 kg,
+    /// c = c_bed d L = 9e5 N·s/m, k = 9e6 N/m). The backward sub-step's pivot
+    /// `2m − c s + k s²` vanishes at `s* = (c − √(c² − 8mk))/2k = 9.23 ms`, that is at
+    /// `h* = s*/|γ₂| = 5.42 ms`; a step there, and at 4 and 5 ms, is split until the pivot is
+    /// at least `m` (two or three triple jumps), a step well beyond it is not, and without a
+    /// damped contact nothing is split.
+    #[test]
+    fn dg4_splits_a_step_whose_backward_sub_step_is_near_a_contacts_singular_step() {
+        let contact = DampedContact {
+            mass_lo: 3770.0,
+            mass_hi: 3770.0,
+            damping: 9.0e5,
+            stiffness: 9.0e6,
+        };
+        let (m, c, k) = (contact.mass_lo, contact.damping, contact.stiffness);
+        let g2 = triple_jump()[1].abs();
+        let pivot = |h: f64, n: usize| {
+            let s = g2 * h / n as f64;
+            (2.0 * m - c * s + k * s * s) / m
+        };
+        let s_star = (c - (c * c - 8.0 * m * k).sqrt()) / (2.0 * k);
+        let h_star = s_star / g2;
+        assert!((h_star - 5.4215e-3).abs() < 1e-7, "h* = {h_star}");
+        assert!(pivot(h_star, 1).abs() < 1e-12);
+        for (h, n) in [
+            (1e-3, 1),
+            (4e-3, 2),
+            (5e-3, 2),
+            (h_star, 3),
+            (1e-2, 1),
+            (2e-2, 1),
+        ] {
+            assert_eq!(compositions(&[contact], h), n, "h = {h}");
+            assert!(pivot(h, n).abs() >= 1.0, "h = {h}: pivot {}", pivot(h, n));
+            if n > 1 {
+                assert!(pivot(h, n - 1).abs() < 1.0, "h = {h}");
+            }
+        }
+        // Pivots / m: 1.03 at 5 ms with two jumps (0.141 with one), −1.37 at 10 ms.
+        assert!((pivot(5e-3, 2) - 1.0272).abs() < 1e-4);
+        assert!((pivot(5e-3, 1) - 0.1409).abs() < 1e-4);
+        assert!((pivot(1e-2, 1) + 1.3722).abs() < 1e-4);
+        assert_eq!(compositions(&[], 5e-3), 1);
+        // A consistent mass row: every mass between m/3 (neighbours against the node) and m
+        // must clear the band `(q/3, q)`: at 5 ms that takes 7 jumps (q = 1081 kg ≤ m/3 =
+        // 1257 kg; 1259 kg with 6), at 10 ms one (q = 12 714 kg ≥ 3m).
+        let consistent = DampedContact {
+            mass_lo: m / 3.0,
+            ..contact
+        };
+        assert_eq!(compositions(&[consistent], 5e-3), 7);
+        assert_eq!(compositions(&[consistent], 1e-2), 1);
+    }
     use crate::boundary::{Boundary, Fixed};
     use crate::material::Material;
     use crate::mesh::Mesh;

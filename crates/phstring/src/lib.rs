@@ -112,7 +112,7 @@ pub use newton::{NewtonParams, NewtonStats};
 pub use observe::{
     Observer, RunSummary, Settle, SettleWatch, Settled, StepReport, fastest_node, nan_max,
 };
-pub use signal::{PlatformPath, SampleError, Sampled};
+pub use signal::{PlatformPath, PlatformState, SampleError, Sampled};
 pub use simulation::{
     Checkpoint, CheckpointFit, FlatCheckpoint, Predictor, Simulation, StepControl, StepParams,
     estimated_memory_bytes, estimated_seconds_per_iteration, estimated_seconds_per_step,

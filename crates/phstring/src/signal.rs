@@ -223,41 +223,117 @@ fn axis_rotation_derivatives(roll: f64, pitch: f64, yaw: f64) -> [Matrix3<f64>; 
     ]
 }
 
+/// The rigid motion of a platform at one time: where its reference point is and how it is
+/// turned, and how fast both change.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlatformState {
+    /// The time [s].
+    pub t: f64,
+    /// The reference point `p(t)` [m].
+    pub position: Vector3<f64>,
+    /// The rotation `R(t) = Rx(φ) Ry(θ) Rz(ψ)` ([`rotation`]).
+    pub rotation: Matrix3<f64>,
+    /// The reference point's velocity `ṗ(t)` [m/s].
+    pub velocity: Vector3<f64>,
+    /// The rotation's rate `Ṙ(t)` [1/s], from the angle rates.
+    pub rotation_rate: Matrix3<f64>,
+}
+
+impl PlatformState {
+    /// The state of `channels` (surge, sway, heave [m], roll, pitch, yaw [rad]) at `t` [s].
+    fn of(channels: &[Sampled; 6], t: f64) -> Self {
+        let c = channels;
+        let (f, th, ps) = (c[3].value(t), c[4].value(t), c[5].value(t));
+        let [rx, ry, rz] = axis_rotations(f, th, ps);
+        let [dx, dy, dz] = axis_rotation_derivatives(f, th, ps);
+        let rotation_rate =
+            dx * ry * rz * c[3].rate(t) + rx * dy * rz * c[4].rate(t) + rx * ry * dz * c[5].rate(t);
+        Self {
+            t,
+            position: Vector3::new(c[0].value(t), c[1].value(t), c[2].value(t)),
+            rotation: rx * ry * rz,
+            velocity: Vector3::new(c[0].rate(t), c[1].rate(t), c[2].rate(t)),
+            rotation_rate,
+        }
+    }
+}
+
 /// The rigid motion of a platform: the position `p(t)` [m] of its reference point and its
 /// orientation `R(t) = Rx(φ) Ry(θ) Rz(ψ)` ([`rotation`]) from six sampled signals, surge,
 /// sway, heave [m] and roll, pitch, yaw [rad]. A point with body coordinates `b` [m] (its
 /// offset from the reference point when the platform is not rotated) is at
 /// `p(t) + R(t) b` and moves at `ṗ(t) + Ṙ(t) b`, with `Ṙ` from the interpolated angle rates:
 /// every point of the platform follows a C¹ path whose velocity is its exact derivative.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// The path remembers the [`PlatformState`] of the last time it was asked about, so that the
+/// supports it carries (three position and three velocity components each, all asked at the
+/// same times by a step) share one evaluation of the six channels per time. The remembered
+/// state is the same computation as a fresh one, so answers do not depend on it.
+#[derive(Debug)]
 pub struct PlatformPath {
     /// Surge, sway, heave [m], roll, pitch, yaw [rad], in this order.
-    pub channels: [Sampled; 6],
+    channels: [Sampled; 6],
+    /// The state at the last time asked (`None` before the first).
+    last: std::sync::Mutex<Option<PlatformState>>,
+}
+
+impl Clone for PlatformPath {
+    fn clone(&self) -> Self {
+        Self::new(self.channels.clone())
+    }
+}
+
+impl PartialEq for PlatformPath {
+    fn eq(&self, other: &Self) -> bool {
+        self.channels == other.channels
+    }
 }
 
 impl PlatformPath {
+    /// The path of the six `channels`: surge, sway, heave [m], roll, pitch, yaw [rad].
+    pub fn new(channels: [Sampled; 6]) -> Self {
+        Self {
+            channels,
+            last: std::sync::Mutex::new(None),
+        }
+    }
+
+    /// The six channels: surge, sway, heave [m], roll, pitch, yaw [rad].
+    pub fn channels(&self) -> &[Sampled; 6] {
+        &self.channels
+    }
+
+    /// The platform's pose and rates at `t` [s] (evaluated once per distinct time).
+    pub fn state(&self, t: f64) -> PlatformState {
+        // A poisoned lock only means another thread panicked while holding it; the cached
+        // value is a plain copy and stays valid.
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        match *last {
+            Some(s) if s.t.to_bits() == t.to_bits() => s,
+            _ => {
+                let s = PlatformState::of(&self.channels, t);
+                *last = Some(s);
+                s
+            }
+        }
+    }
+
     /// The pose at `t` [s]: reference point [m] and rotation.
     pub fn pose(&self, t: f64) -> (Vector3<f64>, Matrix3<f64>) {
-        let c = &self.channels;
-        let p = Vector3::new(c[0].value(t), c[1].value(t), c[2].value(t));
-        (p, rotation(c[3].value(t), c[4].value(t), c[5].value(t)))
+        let s = self.state(t);
+        (s.position, s.rotation)
     }
 
     /// The position [m] at `t` [s] of the point with body coordinates `b` [m].
     pub fn point(&self, t: f64, b: &Vector3<f64>) -> Vector3<f64> {
-        let (p, r) = self.pose(t);
-        p + r * b
+        let s = self.state(t);
+        s.position + s.rotation * b
     }
 
     /// The velocity [m/s] at `t` [s] of the point with body coordinates `b` [m].
     pub fn point_velocity(&self, t: f64, b: &Vector3<f64>) -> Vector3<f64> {
-        let c = &self.channels;
-        let (f, th, ps) = (c[3].value(t), c[4].value(t), c[5].value(t));
-        let [rx, ry, rz] = axis_rotations(f, th, ps);
-        let [dx, dy, dz] = axis_rotation_derivatives(f, th, ps);
-        let r_dot =
-            dx * ry * rz * c[3].rate(t) + rx * dy * rz * c[4].rate(t) + rx * ry * dz * c[5].rate(t);
-        Vector3::new(c[0].rate(t), c[1].rate(t), c[2].rate(t)) + r_dot * b
+        let s = self.state(t);
+        s.velocity + s.rotation_rate * b
     }
 
     /// The body coordinates [m] of the point that is at `r` [m] at time `t` [s]:
@@ -414,16 +490,14 @@ mod tests {
     fn platform_point_velocity_is_the_derivative_of_its_path() {
         let t: Vec<f64> = (0..=40).map(|i| -1.0 + 0.25 * i as f64).collect();
         let ch = |f: &dyn Fn(f64) -> f64| sampled(f, &t);
-        let path = PlatformPath {
-            channels: [
-                ch(&|t| 3.0 * (0.4 * t).sin()),
-                ch(&|t| 0.5 * t),
-                ch(&|t| (0.7 * t).cos()),
-                ch(&|t| 0.05 * (0.9 * t).sin()),
-                ch(&|t| -0.08 * (0.6 * t).cos()),
-                ch(&|t| 0.3 * (0.2 * t).sin()),
-            ],
-        };
+        let path = PlatformPath::new([
+            ch(&|t| 3.0 * (0.4 * t).sin()),
+            ch(&|t| 0.5 * t),
+            ch(&|t| (0.7 * t).cos()),
+            ch(&|t| 0.05 * (0.9 * t).sin()),
+            ch(&|t| -0.08 * (0.6 * t).cos()),
+            ch(&|t| 0.3 * (0.2 * t).sin()),
+        ]);
         let b = Vector3::new(40.0, -25.0, -15.0);
         let d = 1e-5;
         for k in 0..90 {
@@ -434,5 +508,60 @@ mod tests {
         }
         let r = path.point(1.3, &b);
         assert!((path.body_coordinates(1.3, &r) - b).amax() < 1e-12);
+    }
+
+    /// The remembered state changes nothing: positions and velocities of three points, asked
+    /// in the order a step asks (every position, then every velocity, at each of the times
+    /// of a `dg4` step's sub-steps and a repeated time), are bit for bit those of the
+    /// formulas `p + R b` and `ṗ + Ṙ b` evaluated afresh from the channels.
+    #[test]
+    fn remembered_pose_gives_the_same_bits_as_a_fresh_evaluation() {
+        let t: Vec<f64> = (0..=30).map(|i| 0.5 * i as f64).collect();
+        let ch = |f: &dyn Fn(f64) -> f64| sampled(f, &t);
+        let channels = [
+            ch(&|t| 20.0 + 1.5 * (0.52 * t).sin()),
+            ch(&|t| 0.4 * (0.05 * t).sin()),
+            ch(&|t| 0.8 * (0.52 * t).cos()),
+            ch(&|t| 0.01 * (0.3 * t).sin()),
+            ch(&|t| 0.02 * (0.52 * t + 1.0).sin()),
+            ch(&|t| 0.005 * (0.07 * t).sin()),
+        ];
+        let path = PlatformPath::new(channels.clone());
+        let fresh = |t: f64, b: &Vector3<f64>| {
+            let c = &channels;
+            let (f, th, ps) = (c[3].value(t), c[4].value(t), c[5].value(t));
+            let p = Vector3::new(c[0].value(t), c[1].value(t), c[2].value(t));
+            let [rx, ry, rz] = axis_rotations(f, th, ps);
+            let [dx, dy, dz] = axis_rotation_derivatives(f, th, ps);
+            let r_dot = dx * ry * rz * c[3].rate(t)
+                + rx * dy * rz * c[4].rate(t)
+                + rx * ry * dz * c[5].rate(t);
+            let v = Vector3::new(c[0].rate(t), c[1].rate(t), c[2].rate(t));
+            (p + rotation(f, th, ps) * b, v + r_dot * b)
+        };
+        let points = [
+            Vector3::new(-40.87, 70.79, -70.0),
+            Vector3::new(81.75, 0.0, -70.0),
+            Vector3::new(-40.87, -70.79, -70.0),
+        ];
+        // The triple jump's sub-step ends (docs/method.md §19).
+        let g1 = 1.0 / (2.0 - 2f64.cbrt());
+        let g2 = 1.0 - 2.0 * g1;
+        let h = 0.02;
+        let mut times = Vec::new();
+        for n in 0..200 {
+            let t0 = n as f64 * h;
+            times.extend([t0 + g1 * h, t0 + (g1 + g2) * h, t0 + h, t0 + h]);
+        }
+        for &s in &times {
+            let x: Vec<_> = points.iter().map(|b| path.point(s, b)).collect();
+            let v: Vec<_> = points.iter().map(|b| path.point_velocity(s, b)).collect();
+            for (k, b) in points.iter().enumerate() {
+                let (xf, vf) = fresh(s, b);
+                assert_eq!((x[k], v[k]), (xf, vf), "t = {s}, point {k}");
+            }
+        }
+        assert_eq!(path.clone(), path);
+        assert_eq!(path.state(3.7), PlatformPath::new(channels).state(3.7));
     }
 }

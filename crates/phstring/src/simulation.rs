@@ -213,6 +213,8 @@ pub struct Simulation<const D: usize, M> {
     held: HeldVelocities,
     /// Inputs set from outside the run (held forces, ramps of moving supports).
     inputs: crate::boundary::HeldInputs<D>,
+    /// `dg4`: the damped seabed contacts that set how many triple jumps a step takes (§19).
+    contacts: Vec<crate::integrator::DampedContact>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -458,6 +460,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 value: energies.hamiltonian(),
             });
         }
+        let contacts = crate::integrator::damped_contacts(&sys);
         Ok(Self {
             newton_ws: NewtonWorkspace::new(&sys.mesh),
             sys,
@@ -477,6 +480,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             ports_prev: Vec::new(),
             held,
             inputs: Default::default(),
+            contacts,
         })
     }
 
@@ -1030,7 +1034,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(report)
     }
 
-    /// The triple jump (docs/method.md §19): DG sub-steps `γ_k h` from `t`, with the state
+    /// The triple jump (docs/method.md §19): DG sub-steps `γ_k h` from `t` (or `n` triple
+    /// jumps of `h/n` where a damped seabed contact asks for it, (19.4)), with the state
     /// saved first and put back if one fails. The report sums the sub-steps' Newton work,
     /// supplied and dissipated energy; its ports hold the `h_k`-weighted means.
     fn try_composed(
@@ -1043,17 +1048,26 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut backup = self.backup.take().unwrap_or_default();
         self.save(&mut backup);
         let gammas = crate::integrator::triple_jump();
+        // n triple jumps of h/n (19.4): none of their backward sub-steps near a damped
+        // contact's singular step.
+        let n = crate::integrator::compositions(&self.contacts, h);
+        let part = h / n as f64;
         // The ports' h_k-weighted sums, in a buffer kept from step to step.
         let mut sums = std::mem::take(&mut self.port_sums);
         sums.clear();
         sums.resize(self.ports.len(), (Vector::zeros(), Vector::zeros(), 0.0));
         let mut total: Option<StepReport> = None;
         let mut start = t;
-        let mut frac = 0.0;
-        for (k, g) in gammas.iter().enumerate() {
-            frac += g;
-            let hk = g * h;
-            let end = if k == 2 { t_next } else { t + frac * h };
+        let sub_steps = (0..n).flat_map(|j| gammas.iter().enumerate().map(move |(k, g)| (j, k, g)));
+        for (j, k, g) in sub_steps {
+            let hk = g * part;
+            // The sub-steps' ends: t + (j + γ₁ + … + γ_k) h/n, the step's last one t_next.
+            let frac: f64 = gammas[..=k].iter().sum();
+            let end = match (j + 1 == n, k == 2) {
+                (true, true) => t_next,
+                (false, true) => t + (j + 1) as f64 * part,
+                _ => t + (j as f64 + frac) * part,
+            };
             match self.try_single(start, hk, end, step_no) {
                 Ok(r) => {
                     for (s, p) in sums.iter_mut().zip(&self.ports) {
@@ -1103,7 +1117,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             p.mean_power = s.2 / h;
         }
         self.port_sums = sums;
-        let mut r = total.expect("three sub-steps");
+        let mut r = total.expect("at least three sub-steps");
         r.t = t_next;
         r.h = h;
         r.balance_error =
