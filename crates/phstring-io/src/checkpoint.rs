@@ -72,6 +72,14 @@ pub struct OutputState {
     /// run, or a checkpoint written before side views).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub side: Option<[f64; 2]>,
+    /// The view of one plane per line the snapshots are drawn in, if chosen (`None` too in
+    /// checkpoints written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lines: Option<crate::scene::LinePlanes>,
+    /// The nodes on the seabed at each snapshot (empty: dry, or a checkpoint written before
+    /// they were recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grounded: Vec<crate::scene::Grounded>,
 }
 
 /// Run totals carried across a resume.
@@ -665,8 +673,46 @@ impl CheckpointFile {
                 ));
             }
         }
+        check_view(o, n)?;
         Ok(())
     }
+}
+
+/// Checks the drawing record of a checkpoint's outputs for a mesh of `n` nodes: grounded
+/// nodes below `n` for at most the snapshots taken, finite lengths, and a view of one plane
+/// per line with a finite layout and a line for each node.
+fn check_view(o: &OutputState, n: usize) -> Result<(), String> {
+    if o.grounded.len() > o.snapshots.len() {
+        return Err(format!(
+            "outputs.grounded has {} entries for {} snapshots",
+            o.grounded.len(),
+            o.snapshots.len()
+        ));
+    }
+    for (k, g) in o.grounded.iter().enumerate() {
+        if g.nodes.iter().any(|&i| i >= n) || g.lengths.iter().any(|x| !x.is_finite()) {
+            return Err(format!(
+                "outputs.grounded[{k}] must list nodes below {n} and finite lengths"
+            ));
+        }
+    }
+    if let Some(l) = &o.lines {
+        let finite = l.width.is_finite()
+            && l.width > 0.0
+            && l.lines.iter().all(|p| {
+                p.fairlead
+                    .iter()
+                    .chain(&p.azimuth)
+                    .chain([&p.offset])
+                    .all(|x| x.is_finite())
+            });
+        if !finite || l.node_line.len() != n || l.node_line.iter().any(|&k| k >= l.lines.len()) {
+            return Err(format!(
+                "outputs.lines must have a finite layout and a line for each of the {n} nodes"
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
