@@ -766,6 +766,57 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// Pixels with palette index `index` in the last frame of the GIF at `path` (each
+    /// frame is stored as the rectangle that changed; the last one is the largest count
+    /// over them when the marked nodes only sink in).
+    fn marked_pixels(path: &Path, index: u8) -> usize {
+        let mut opts = gif::DecodeOptions::new();
+        opts.set_color_output(gif::ColorOutput::Indexed);
+        let mut d = opts.read_info(File::open(path).unwrap()).unwrap();
+        let mut most = 0;
+        while let Some(f) = d.read_next_frame().unwrap() {
+            most = most.max(f.buffer.iter().filter(|&&i| i == index).count());
+        }
+        most
+    }
+
+    #[test]
+    fn frames_mark_the_nodes_on_the_seabed() {
+        // The wet line of 20 elements of 5 m laid on a seabed 50 m down: its grounded nodes
+        // (the run's contact test on the positions read back) are crimson triangles.
+        let dir = crate::test_util::temp_dir("animation", "grounded");
+        let mut sim = crate::test_util::wet_line();
+        let mut w = crate::output::Writers::start(&dir, &sim, 1, true, false, vec![]).unwrap();
+        for _ in 0..3 {
+            let r = sim.step().unwrap();
+            w.step(&sim, &r).unwrap();
+        }
+        w.finish(&sim).unwrap();
+        let grounded = sim
+            .system()
+            .seabed_contacts(&sim.state().r)
+            .iter()
+            .filter(|c| c.grounded)
+            .count();
+        assert!(grounded >= 5, "{grounded}");
+        let topo = Topology::chain(21);
+        let mut scene = Scene::default();
+        scene.water = Some(crate::scene::WaterLines::new(
+            &scene,
+            Some((&[0.0, -50.0], &[0.0, 1.0])),
+        ));
+        let plain = write_animation(&dir, 2, "wet", &topo, &scene, None).unwrap();
+        // The palette: mass, the string, the three water colours, then the marker.
+        let marker = (EXACT + 5) as u8;
+        assert_eq!(marked_pixels(&plain.path, marker), 0);
+        scene.contact = crate::scene::ContactTest::of(sim.system());
+        let marked = write_animation(&dir, 2, "wet", &topo, &scene, None).unwrap();
+        let pixels = marked_pixels(&marked.path, marker);
+        // Each triangle of side ~7 px covers about 20 pixels; neighbours 5 m apart overlap.
+        assert!(pixels >= 20 * 2, "{pixels} marker pixels for {grounded} nodes");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn long_runs_are_thinned_to_at_most_max_frames_in_3d() {
         let dir = crate::test_util::temp_dir("animation", "long");

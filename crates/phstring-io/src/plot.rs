@@ -259,7 +259,7 @@ pub fn network_plot_in(
 }
 
 /// The colour of the markers of nodes on the seabed.
-pub(crate) const GROUNDED: RGBColor = RGBColor(210, 90, 0);
+pub(crate) const GROUNDED: RGBColor = RGBColor(190, 0, 50);
 /// Size of the triangle marking a node on the seabed [px].
 pub(crate) const GROUNDED_SIZE: u32 = 6;
 
@@ -282,8 +282,8 @@ pub fn grounded_points(
 }
 
 /// Adds to `fig` the triangles of the nodes on the seabed at each snapshot and the legend
-/// entry "on the seabed", with the grounded length at the last snapshot: of the string of
-/// a chain in that entry, of each named string of a network after its name.
+/// entry "on the seabed", with the grounded length at the last snapshot (to 0.1 m): of the
+/// string of a chain in that entry, of each named string of a network after its name.
 fn mark_grounded(
     fig: &mut ConfigFigure<'_>,
     topology: &Topology,
@@ -296,7 +296,7 @@ fn mark_grounded(
         return;
     };
     let t = format_plain(snapshots[last - 1].0);
-    let length = |group: usize| format_plain(g.lengths.get(group).copied().unwrap_or(0.0));
+    let length = |group: usize| format!("{:.1}", g.lengths.get(group).copied().unwrap_or(0.0));
     let label = if topology.is_chain() {
         format!("on the seabed ({} m at t = {t} s)", length(0))
     } else {

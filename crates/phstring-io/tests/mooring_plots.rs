@@ -145,12 +145,12 @@ fn the_nodes_marked_on_the_seabed_are_those_below_it() {
     assert_eq!(drawn[drawn.len() - last.len()..], last[..]);
     // The figure names them, with the grounded length at the last snapshot.
     w.finish(&sim).unwrap();
-    let scene = phstring_io::drive::ends::scene(&file, &w, sim.system());
+    let scene = phstring_io::drive::ends::scene(&file, &w);
     assert_eq!(scene.grounded, w.grounded());
     let svg = configuration_svg(&dir, &w, &scene);
     // Its topology is a network (nodes numbered by the named points first): the length
     // follows the string's name.
-    let label = format!("line: {} m on the seabed", plot::format_plain(g.lengths[0]));
+    let label = format!("line: {:.1} m on the seabed", g.lengths[0]);
     assert!(svg.contains(&label), "{label}");
     assert!(svg.contains("on the seabed (lengths at t = 0.05 s)"));
     let _ = std::fs::remove_dir_all(&dir);
@@ -234,7 +234,7 @@ fn the_spar_lines_are_drawn_one_plane_each_side_by_side() {
     }
     // The seabed is drawn under each line, the grounded nodes marked.
     w.finish(&sim).unwrap();
-    let scene = phstring_io::drive::ends::scene(&file, &w, sim.system());
+    let scene = phstring_io::drive::ends::scene(&file, &w);
     let water = scene.water.as_ref().unwrap();
     assert_eq!(water.seabed_segments((-100.0, 2900.0)).len(), 3);
     assert_eq!(water.seabed_at(2500.0), Some(-320.0));
@@ -270,8 +270,9 @@ fn a_dry_run_is_drawn_as_before() {
     }
     w.finish(&sim).unwrap();
     assert!(w.lines().is_none() && w.grounded().is_empty());
-    let scene = phstring_io::drive::ends::scene(&file, &w, sim.system());
-    assert!(scene.lines.is_none() && scene.grounded.is_empty() && scene.contact.is_none());
+    let scene = phstring_io::drive::ends::scene(&file, &w);
+    assert!(scene.lines.is_none() && scene.grounded.is_empty());
+    assert!(phstring_io::scene::ContactTest::of(sim.system()).is_none());
     let svg = configuration_svg(&dir, &w, &scene);
     let png = std::fs::read(dir.join("configuration.png")).unwrap();
     let plain = Scene {

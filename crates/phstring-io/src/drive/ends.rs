@@ -158,19 +158,15 @@ fn seabed_plane(file: &ScenarioFile, dimension: usize) -> Option<(Vec<f64>, Vec<
 
 /// How the configuration of a run of `file` is drawn: in the view its `writers` chose (the
 /// side view of a 3D run or one plane per line, see [`crate::scene`]), with the water
-/// surface and the seabed if it is in water, and the nodes on the seabed (at the snapshots
-/// `writers` took, and by the contact test of `system` for the animation).
-pub fn scene<const D: usize>(
-    file: &ScenarioFile,
-    writers: &crate::output::Writers,
-    system: &PhSystem<D, Material>,
-) -> Scene {
+/// surface and the seabed if it is in water, and the nodes on the seabed at the snapshots
+/// `writers` took. The contact test for the animation's frames is left to the caller
+/// ([`Scene::contact`]).
+pub fn scene(file: &ScenarioFile, writers: &crate::output::Writers) -> Scene {
     let mut scene = Scene {
         side: writers.side(),
         lines: writers.lines().cloned(),
         grounded: writers.grounded().to_vec(),
-        contact: crate::scene::ContactTest::of(system),
-        water: None,
+        ..Scene::default()
     };
     if file.scenario.water.is_some() {
         let dimension = usize::try_from(*file.scenario.dimension.get_ref()).unwrap_or(0);

@@ -490,7 +490,7 @@ fn run_dim<const D: usize>(
     }
     // The summary is on disk before the plots, whatever happens to them.
     write_summary(out, &info)?;
-    let scene = super::ends::scene(file, &writers, sim.system());
+    let mut scene = super::ends::scene(file, &writers);
     if ctx.settings.output.plots {
         draw(&ctx, (&writers, &scene), &mut info, opts.stop.as_deref())?;
     }
@@ -498,6 +498,8 @@ fn run_dim<const D: usize>(
     // nothing to animate. Written for failed runs too: it shows how far the run got.
     if ctx.settings.animation && ctx.settings.output.positions && info.dimension >= 2 {
         let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
+        // Its frames' nodes on the seabed: the run's own contact test (a copy of the system).
+        scene.contact = crate::scene::ContactTest::of(sim.system());
         let anim = draw_animation(out, info.dimension, (title, &scene), opts.stop.as_deref());
         info.plots.extend(anim.written);
         info.plots_skipped.extend(anim.skipped);
