@@ -813,7 +813,10 @@ mod tests {
         let marked = write_animation(&dir, 2, "wet", &topo, &scene, None).unwrap();
         let pixels = marked_pixels(&marked.path, marker);
         // Each triangle of side ~7 px covers about 20 pixels; neighbours 5 m apart overlap.
-        assert!(pixels >= 20 * 2, "{pixels} marker pixels for {grounded} nodes");
+        assert!(
+            pixels >= 20 * 2,
+            "{pixels} marker pixels for {grounded} nodes"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

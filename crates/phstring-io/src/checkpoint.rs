@@ -766,6 +766,10 @@ mod tests {
         let cp: CheckpointFile = serde_json::from_value(v).unwrap();
         assert!(cp.sim.acc_history.is_empty());
         assert_eq!(cp.sim.err_prev, 1.0);
+        // Written before the drawing record: nothing on the seabed, one plane.
+        assert!(cp.outputs.grounded.is_empty() && cp.outputs.lines.is_none());
+        let snapshots = cp.outputs.snapshots.len();
+        assert!(snapshots >= 1);
 
         let file =
             crate::scenario::parse(&cp.scenario_text, Path::new("checkpoint.toml"), &[]).unwrap();
@@ -810,6 +814,36 @@ mod tests {
             (
                 |c| c.counters.steps = 11,
                 "counters.steps = 11 differs from sim.steps = 12",
+            ),
+            (
+                |c| {
+                    c.outputs.grounded = vec![crate::scene::Grounded {
+                        nodes: vec![3, 13],
+                        lengths: vec![1.0],
+                    }]
+                },
+                "outputs.grounded[0] must list nodes below 13 and finite lengths",
+            ),
+            (
+                |c| {
+                    let one = crate::scene::Grounded::default();
+                    c.outputs.grounded = vec![one; c.outputs.snapshots.len() + 1];
+                },
+                "entries for",
+            ),
+            (
+                |c| {
+                    c.outputs.lines = Some(crate::scene::LinePlanes {
+                        lines: vec![crate::scene::LinePlane {
+                            fairlead: [0.0, 0.0],
+                            azimuth: [1.0, 0.0],
+                            offset: 0.0,
+                        }],
+                        width: 1000.0,
+                        node_line: vec![0; 2],
+                    })
+                },
+                "outputs.lines must have a finite layout and a line for each of the 13 nodes",
             ),
         ] {
             let e = refused(edit);
