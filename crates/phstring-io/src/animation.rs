@@ -812,6 +812,7 @@ mod tests {
         scene.contact = crate::scene::ContactTest::of(sim.system());
         let marked = write_animation(&dir, 2, "wet", &topo, &scene, None).unwrap();
         let pixels = marked_pixels(&marked.path, marker);
+        eprintln!("{grounded} nodes on the seabed, {pixels} marker pixels in a frame");
         // Each triangle of side ~7 px covers about 20 pixels; neighbours 5 m apart overlap.
         assert!(
             pixels >= 20 * 2,
