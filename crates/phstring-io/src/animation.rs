@@ -5,8 +5,9 @@
 //! at most [`INDEX_LIMIT`] byte offsets, evenly thinned), then at most [`MAX_FRAMES`] frames,
 //! evenly picked from the first to the last, are read twice by their offsets: once for the
 //! bounding box of all of them (fixed axes with equal scales), once to draw them. Only one
-//! frame's positions are in memory at a time. In 3D the x-y projection is drawn, as in the
-//! configuration plot.
+//! frame's positions are in memory at a time. A 3D run is drawn in the plane of its
+//! configuration plot ([`Scene`]); in water, the nodes on the seabed in each frame (the
+//! run's contact test, [`crate::scene::ContactTest`]) are marked with triangles.
 //!
 //! Each frame is drawn with plotters into an RGB buffer of [`ANIMATION_WIDTH`] ×
 //! [`ANIMATION_HEIGHT`] px (axes and title drawn once), mapped onto a fixed 256-colour
@@ -242,16 +243,17 @@ fn index_frames(
 }
 
 /// Reads the frame at `offset` (`n_nodes` rows) into `xy` (each node in the plane of
-/// `scene`).
+/// `scene`) and `raw` (as read, `[x, y, z]` with unused components 0).
 fn read_frame(
     reader: &mut BufReader<File>,
     (offset, n_nodes): (u64, usize),
     scene: &Scene,
-    xy: &mut Vec<[f64; 2]>,
+    (xy, raw): (&mut Vec<[f64; 2]>, &mut Vec<[f64; 3]>),
 ) -> Result<(), String> {
     let err = |e: std::io::Error| format!("cannot read positions.csv: {e}");
     reader.seek(SeekFrom::Start(offset)).map_err(err)?;
     xy.clear();
+    raw.clear();
     let mut line = String::new();
     for i in 0..n_nodes {
         line.clear();
@@ -275,7 +277,8 @@ fn read_frame(
                 "positions.csv at byte {offset}: node {i} has a non-finite position"
             ));
         }
-        xy.push(scene.plane(&p[..k]));
+        xy.push(scene.node_point(i, &p[..k]));
+        raw.push(p);
     }
     Ok(())
 }
@@ -358,21 +361,21 @@ impl Palette {
 }
 
 /// The padded bounding box `(x0, x1, y0, y1)` [m] of the node positions of all `frames`
-/// (offsets into `positions.csv` and times), checked drawable; `xy` is the buffer frames are
-/// read into.
+/// (offsets into `positions.csv` and times), checked drawable; `xy` and `raw` are the
+/// buffers frames are read into.
 fn frames_box(
     reader: &mut BufReader<File>,
     frames: &[(u64, f64)],
     (n_nodes, scene): (usize, &Scene),
     stop: Option<&AtomicBool>,
-    xy: &mut Vec<[f64; 2]>,
+    (xy, raw): (&mut Vec<[f64; 2]>, &mut Vec<[f64; 3]>),
 ) -> Result<(f64, f64, f64, f64), String> {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for &(offset, _) in frames {
         if stopped(stop) {
             return Err("stop requested".into());
         }
-        read_frame(reader, (offset, n_nodes), scene, xy)?;
+        read_frame(reader, (offset, n_nodes), scene, (xy, raw))?;
         for p in xy.iter() {
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
@@ -439,15 +442,15 @@ struct Picture<'a> {
 }
 
 impl Picture<'_> {
-    /// Draws the time label `t` [s], the elements (springs under strings) and the point
-    /// masses at the node positions `xy` [m] onto `rgb` (`w × h` RGB pixels, holding the
-    /// background).
+    /// Draws the time label `t` [s], the elements (springs under strings), the nodes on the
+    /// seabed (`grounded`, triangles) and the point masses at the node positions `xy` [m]
+    /// onto `rgb` (`w × h` RGB pixels, holding the background).
     fn draw(
         &self,
         rgb: &mut [u8],
         (w, h): (u32, u32),
         t: f64,
-        xy: &[[f64; 2]],
+        (xy, grounded): (&[[f64; 2]], Option<&[usize]>),
     ) -> Result<(), String> {
         let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
         let label = format!("t = {} s", plot::format_plain(t));
@@ -471,6 +474,18 @@ impl Picture<'_> {
                     .map_err(plot::err)?;
                 }
             }
+        }
+        for p in grounded
+            .unwrap_or_default()
+            .iter()
+            .filter_map(|&i| xy.get(i))
+        {
+            root.draw(&TriangleMarker::new(
+                (self.to_px)(*p),
+                plot::GROUNDED_SIZE - 2,
+                plot::GROUNDED.filled(),
+            ))
+            .map_err(plot::err)?;
         }
         for &(node, m) in &self.topology.masses {
             let r = Topology::mass_radius(m, self.m_max, 2.0, 4.0);
@@ -508,8 +523,14 @@ fn write_to(
     let frames = index.pick(MAX_FRAMES);
 
     // Fixed axes: the bounding box of every frame drawn.
-    let mut xy = Vec::with_capacity(n_nodes);
-    let data_box = frames_box(&mut reader, &frames, (n_nodes, scene), stop, &mut xy)?;
+    let (mut xy, mut raw) = (Vec::with_capacity(n_nodes), Vec::with_capacity(n_nodes));
+    let data_box = frames_box(
+        &mut reader,
+        &frames,
+        (n_nodes, scene),
+        stop,
+        (&mut xy, &mut raw),
+    )?;
     plot::ensure_font().map_err(|e| e.to_string())?;
 
     let (w, h) = (ANIMATION_WIDTH, ANIMATION_HEIGHT);
@@ -518,6 +539,9 @@ fn write_to(
     exact.insert(0, MASS_COLOR);
     if scene.water.is_some() {
         exact.extend([plot::SURFACE_BLUE, plot::SEABED_BROWN, plot::SEABED_FILL]);
+    }
+    if scene.contact.is_some() {
+        exact.push(plot::GROUNDED);
     }
     let palette = Palette::new(&exact);
     let m_max = topology.masses.iter().map(|m| m.1).fold(0.0, f64::max);
@@ -550,9 +574,10 @@ fn write_to(
         if stopped(stop) {
             return Err("stop requested".into());
         }
-        read_frame(&mut reader, (offset, n_nodes), scene, &mut xy)?;
+        read_frame(&mut reader, (offset, n_nodes), scene, (&mut xy, &mut raw))?;
         rgb.copy_from_slice(&background);
-        picture.draw(&mut rgb, (w, h), t, &xy)?;
+        let grounded = scene.contact.as_ref().map(|c| c.grounded(&raw));
+        picture.draw(&mut rgb, (w, h), t, (&xy, grounded.as_deref()))?;
         for (i, px) in rgb.chunks_exact(3).enumerate() {
             indices[i] = palette.index(px[0], px[1], px[2]);
         }
@@ -738,6 +763,61 @@ mod tests {
         assert_eq!(frames, 30);
         assert_eq!(delay, 27, "8 s over 30 frames");
         assert!(!dir.join(".animation.gif.tmp").exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Pixels with palette index `index` in the last frame of the GIF at `path` (each
+    /// frame is stored as the rectangle that changed; the last one is the largest count
+    /// over them when the marked nodes only sink in).
+    fn marked_pixels(path: &Path, index: u8) -> usize {
+        let mut opts = gif::DecodeOptions::new();
+        opts.set_color_output(gif::ColorOutput::Indexed);
+        let mut d = opts.read_info(File::open(path).unwrap()).unwrap();
+        let mut most = 0;
+        while let Some(f) = d.read_next_frame().unwrap() {
+            most = most.max(f.buffer.iter().filter(|&&i| i == index).count());
+        }
+        most
+    }
+
+    #[test]
+    fn frames_mark_the_nodes_on_the_seabed() {
+        // The wet line of 20 elements of 5 m laid on a seabed 50 m down: its grounded nodes
+        // (the run's contact test on the positions read back) are crimson triangles.
+        let dir = crate::test_util::temp_dir("animation", "grounded");
+        let mut sim = crate::test_util::wet_line();
+        let mut w = crate::output::Writers::start(&dir, &sim, 1, true, false, vec![]).unwrap();
+        for _ in 0..3 {
+            let r = sim.step().unwrap();
+            w.step(&sim, &r).unwrap();
+        }
+        w.finish(&sim).unwrap();
+        let grounded = sim
+            .system()
+            .seabed_contacts(&sim.state().r)
+            .iter()
+            .filter(|c| c.grounded)
+            .count();
+        assert!(grounded >= 5, "{grounded}");
+        let topo = Topology::chain(21);
+        let mut scene = Scene::default();
+        scene.water = Some(crate::scene::WaterLines::new(
+            &scene,
+            Some((&[0.0, -50.0], &[0.0, 1.0])),
+        ));
+        let plain = write_animation(&dir, 2, "wet", &topo, &scene, None).unwrap();
+        // The palette: mass, the string, the three water colours, then the marker.
+        let marker = (EXACT + 5) as u8;
+        assert_eq!(marked_pixels(&plain.path, marker), 0);
+        scene.contact = crate::scene::ContactTest::of(sim.system());
+        let marked = write_animation(&dir, 2, "wet", &topo, &scene, None).unwrap();
+        let pixels = marked_pixels(&marked.path, marker);
+        eprintln!("{grounded} nodes on the seabed, {pixels} marker pixels in a frame");
+        // Each triangle of side ~7 px covers about 20 pixels; neighbours 5 m apart overlap.
+        assert!(
+            pixels >= 20 * 2,
+            "{pixels} marker pixels for {grounded} nodes"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -72,6 +72,14 @@ pub struct OutputState {
     /// run, or a checkpoint written before side views).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub side: Option<[f64; 2]>,
+    /// The view of one plane per line the snapshots are drawn in, if chosen (`None` too in
+    /// checkpoints written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lines: Option<crate::scene::LinePlanes>,
+    /// The nodes on the seabed at each snapshot (empty: dry, or a checkpoint written before
+    /// they were recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grounded: Vec<crate::scene::Grounded>,
 }
 
 /// Run totals carried across a resume.
@@ -665,8 +673,46 @@ impl CheckpointFile {
                 ));
             }
         }
+        check_view(o, n)?;
         Ok(())
     }
+}
+
+/// Checks the drawing record of a checkpoint's outputs for a mesh of `n` nodes: grounded
+/// nodes below `n` for at most the snapshots taken, finite lengths, and a view of one plane
+/// per line with a finite layout and a line for each node.
+fn check_view(o: &OutputState, n: usize) -> Result<(), String> {
+    if o.grounded.len() > o.snapshots.len() {
+        return Err(format!(
+            "outputs.grounded has {} entries for {} snapshots",
+            o.grounded.len(),
+            o.snapshots.len()
+        ));
+    }
+    for (k, g) in o.grounded.iter().enumerate() {
+        if g.nodes.iter().any(|&i| i >= n) || g.lengths.iter().any(|x| !x.is_finite()) {
+            return Err(format!(
+                "outputs.grounded[{k}] must list nodes below {n} and finite lengths"
+            ));
+        }
+    }
+    if let Some(l) = &o.lines {
+        let finite = l.width.is_finite()
+            && l.width > 0.0
+            && l.lines.iter().all(|p| {
+                p.fairlead
+                    .iter()
+                    .chain(&p.azimuth)
+                    .chain([&p.offset])
+                    .all(|x| x.is_finite())
+            });
+        if !finite || l.node_line.len() != n || l.node_line.iter().any(|&k| k >= l.lines.len()) {
+            return Err(format!(
+                "outputs.lines must have a finite layout and a line for each of the {n} nodes"
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -720,6 +766,10 @@ mod tests {
         let cp: CheckpointFile = serde_json::from_value(v).unwrap();
         assert!(cp.sim.acc_history.is_empty());
         assert_eq!(cp.sim.err_prev, 1.0);
+        // Written before the drawing record: nothing on the seabed, one plane.
+        assert!(cp.outputs.grounded.is_empty() && cp.outputs.lines.is_none());
+        let snapshots = cp.outputs.snapshots.len();
+        assert!(snapshots >= 1);
 
         let file =
             crate::scenario::parse(&cp.scenario_text, Path::new("checkpoint.toml"), &[]).unwrap();
@@ -764,6 +814,36 @@ mod tests {
             (
                 |c| c.counters.steps = 11,
                 "counters.steps = 11 differs from sim.steps = 12",
+            ),
+            (
+                |c| {
+                    c.outputs.grounded = vec![crate::scene::Grounded {
+                        nodes: vec![3, 13],
+                        lengths: vec![1.0],
+                    }]
+                },
+                "outputs.grounded[0] must list nodes below 13 and finite lengths",
+            ),
+            (
+                |c| {
+                    let one = crate::scene::Grounded::default();
+                    c.outputs.grounded = vec![one; c.outputs.snapshots.len() + 1];
+                },
+                "entries for",
+            ),
+            (
+                |c| {
+                    c.outputs.lines = Some(crate::scene::LinePlanes {
+                        lines: vec![crate::scene::LinePlane {
+                            fairlead: [0.0, 0.0],
+                            azimuth: [1.0, 0.0],
+                            offset: 0.0,
+                        }],
+                        width: 1000.0,
+                        node_line: vec![0; 2],
+                    })
+                },
+                "outputs.lines must have a finite layout and a line for each of the 13 nodes",
             ),
         ] {
             let e = refused(edit);

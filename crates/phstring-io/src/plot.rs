@@ -248,11 +248,78 @@ pub fn network_plot_in(
     let title = sanitize_text(title, MAX_TEXT_CHARS);
     let mut fig = config_figure(&title, Some(topology), snapshots);
     fig.labels = scene.axis_labels();
-    if let Some(w) = scene.water {
-        fig.water = Some(w);
-        fig.entries.extend(water_entries(&w));
+    if let Some(w) = &scene.water {
+        fig.entries.extend(water_entries(w));
+        fig.water = Some(w.clone());
+    }
+    if !scene.grounded.is_empty() {
+        mark_grounded(&mut fig, topology, snapshots, &scene.grounded);
     }
     write_both(stem, &fig)
+}
+
+/// The colour of the markers of nodes on the seabed.
+pub(crate) const GROUNDED: RGBColor = RGBColor(190, 0, 50);
+/// Size of the triangle marking a node on the seabed [px].
+pub(crate) const GROUNDED_SIZE: u32 = 6;
+
+/// The drawn positions of the nodes on the seabed in every snapshot: node `i` of
+/// `grounded[k].nodes` at its position in snapshot `k` (non-finite positions and nodes
+/// beyond a snapshot left out).
+pub fn grounded_points(
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+    grounded: &[crate::scene::Grounded],
+) -> Vec<(f64, f64)> {
+    snapshots
+        .iter()
+        .zip(grounded)
+        .flat_map(|((_, nodes), g)| {
+            g.nodes
+                .iter()
+                .filter_map(|&i| nodes.get(i).filter(|p| finite(p)).map(|p| (p[0], p[1])))
+        })
+        .collect()
+}
+
+/// Adds to `fig` the triangles of the nodes on the seabed at each snapshot and the legend
+/// entry "on the seabed", with the grounded length at the last snapshot (to 0.1 m): of the
+/// string of a chain in that entry, of each named string of a network after its name.
+fn mark_grounded(
+    fig: &mut ConfigFigure<'_>,
+    topology: &Topology,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+    grounded: &[crate::scene::Grounded],
+) {
+    fig.grounded = grounded_points(snapshots, grounded);
+    let last = snapshots.len().min(grounded.len());
+    let Some(g) = last.checked_sub(1).map(|k| &grounded[k]) else {
+        return;
+    };
+    let t = format_plain(snapshots[last - 1].0);
+    let length = |group: usize| format!("{:.1}", g.lengths.get(group).copied().unwrap_or(0.0));
+    let label = if topology.is_chain() {
+        format!("on the seabed ({} m at t = {t} s)", length(0))
+    } else {
+        let strings = topology
+            .groups
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| !g.spring);
+        for ((group, _), entry) in strings.zip(fig.entries.iter_mut()) {
+            if entry.line && !entry.dashed {
+                entry.label = format!("{}: {} m on the seabed", entry.label, length(group));
+            }
+        }
+        format!("on the seabed (lengths at t = {t} s)")
+    };
+    fig.entries.push(LegendEntry {
+        label,
+        color: GROUNDED,
+        dashed: false,
+        marker: true,
+        line: false,
+        triangle: true,
+    });
 }
 
 /// The surface's colour in configuration plots and animations.
@@ -270,6 +337,7 @@ fn water_entries(w: &WaterLines) -> Vec<LegendEntry> {
         dashed: false,
         marker: false,
         line: true,
+        triangle: false,
     }];
     if w.seabed.is_some() {
         e.push(LegendEntry {
@@ -278,6 +346,7 @@ fn water_entries(w: &WaterLines) -> Vec<LegendEntry> {
             dashed: false,
             marker: false,
             line: true,
+            triangle: false,
         });
     }
     e
@@ -294,34 +363,30 @@ pub(crate) fn with_water(points: Vec<(f64, f64)>, water: Option<&WaterLines>) ->
     };
     let mut all = points;
     all.extend([(x0, 0.0), (x1, 0.0)]);
-    for x in [x0, x1] {
-        if let Some(y) = w.seabed_at(x) {
-            all.push((x, y));
-        }
-    }
+    all.extend(w.seabed_segments((x0, x1)).into_iter().flatten());
     all
 }
 
 /// Draws the water behind a configuration on `chart` (ranges `x`, `y` [m]): the seabed
-/// band from its line to the bottom of the chart and the line, then the surface at
-/// height 0.
+/// band from its line to the bottom of the chart and the line (piece by piece in the view
+/// of one plane per line), then the surface at height 0.
 pub(crate) fn draw_water<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     w: &WaterLines,
     (x0, x1): (f64, f64),
     (y0, _): (f64, f64),
 ) -> Result<(), String> {
-    if let (Some(a), Some(b)) = (w.seabed_at(x0), w.seabed_at(x1)) {
+    for [(xa, a), (xb, b)] in w.seabed_segments((x0, x1)) {
         let bottom = y0.min(a).min(b);
         chart
             .draw_series(std::iter::once(Polygon::new(
-                vec![(x0, a), (x1, b), (x1, bottom), (x0, bottom)],
+                vec![(xa, a), (xb, b), (xb, bottom), (xa, bottom)],
                 SEABED_FILL.filled(),
             )))
             .map_err(err)?;
         chart
             .draw_series(std::iter::once(PathElement::new(
-                vec![(x0, a), (x1, b)],
+                vec![(xa, a), (xb, b)],
                 SEABED_BROWN.stroke_width(2),
             )))
             .map_err(err)?;
@@ -525,6 +590,7 @@ fn mass_entry() -> LegendEntry {
         dashed: false,
         marker: true,
         line: false,
+        triangle: false,
     }
 }
 
@@ -566,6 +632,7 @@ fn chain_figure<'a>(
             dashed: false,
             marker: markers,
             line: true,
+            triangle: false,
         })
         .collect();
     let dots: Vec<Dot> = snapshots
@@ -584,6 +651,7 @@ fn chain_figure<'a>(
         markers,
         labels: Scene::default().axis_labels(),
         water: None,
+        grounded: Vec::new(),
     }
 }
 
@@ -614,6 +682,7 @@ fn network_figure<'a>(
         markers: false,
         labels: Scene::default().axis_labels(),
         water: None,
+        grounded: Vec::new(),
     }
 }
 
@@ -689,6 +758,7 @@ fn network_legend(
                 dashed: false,
                 marker: false,
                 line: false,
+                triangle: false,
             });
             break;
         }
@@ -698,6 +768,7 @@ fn network_legend(
             dashed: false,
             marker: false,
             line: true,
+            triangle: false,
         });
     }
     let springs: Vec<&GroupDrawing> = topology.groups.iter().filter(|g| g.spring).collect();
@@ -711,6 +782,7 @@ fn network_legend(
             dashed: true,
             marker: false,
             line: true,
+            triangle: false,
         });
     }
     if masses {
@@ -724,6 +796,7 @@ fn network_legend(
             dashed: false,
             marker: false,
             line: true,
+            triangle: false,
         });
     }
     entries
@@ -1001,7 +1074,7 @@ fn trim_scientific(s: &str) -> String {
 }
 
 /// Short plain representation of a time for legends (e.g. `0.2`, `1`, `1e-5`).
-pub(crate) fn format_plain(v: f64) -> String {
+pub fn format_plain(v: f64) -> String {
     if v == 0.0 {
         return "0".to_string();
     }
@@ -1107,6 +1180,8 @@ struct LegendEntry {
     marker: bool,
     /// Whether the line sample is drawn (a marker alone stands for point masses).
     line: bool,
+    /// A triangle marker (nodes on the seabed) instead of the circle.
+    triangle: bool,
 }
 
 /// Width in pixels needed by a legend panel holding `entries`.
@@ -1157,7 +1232,14 @@ fn draw_legend<DB: DrawingBackend>(
             area.draw(&PathElement::new(vec![(a, y), (b, y)], style))
                 .map_err(err)?;
         }
-        if e.marker {
+        if e.triangle {
+            area.draw(&TriangleMarker::new(
+                ((a + b) / 2, y),
+                GROUNDED_SIZE,
+                e.color.filled(),
+            ))
+            .map_err(err)?;
+        } else if e.marker {
             area.draw(&Circle::new(((a + b) / 2, y), 4, e.color.filled()))
                 .map_err(err)?;
         }
@@ -1374,6 +1456,7 @@ impl XyFigure<'_> {
                 dashed: false,
                 marker: false,
                 line: true,
+                triangle: false,
             })
             .collect();
         if let Some((_, label)) = self.vline {
@@ -1383,6 +1466,7 @@ impl XyFigure<'_> {
                 dashed: true,
                 marker: false,
                 line: true,
+                triangle: false,
             });
         }
         entries
@@ -1594,6 +1678,8 @@ struct ConfigFigure<'a> {
     labels: (String, String),
     /// The water drawn behind the configuration (none: dry).
     water: Option<WaterLines>,
+    /// Nodes on the seabed `(x, y)` [m], drawn as triangles over the curves.
+    grounded: Vec<(f64, f64)>,
 }
 
 /// The data box `(x0, x1, y0, y1)` of `points` in m, padded by 6 % of its larger span (a
@@ -1657,6 +1743,15 @@ impl Figure for ConfigFigure<'_> {
             draw_water(&mut chart, w, (xr.start, xr.end), (yr.start, yr.end))?;
         }
         draw_curves(&mut chart, &self.curves, self.markers, raster)?;
+        if !self.grounded.is_empty() {
+            chart
+                .draw_series(
+                    self.grounded
+                        .iter()
+                        .map(|p| TriangleMarker::new(*p, GROUNDED_SIZE, GROUNDED.filled())),
+                )
+                .map_err(err)?;
+        }
         chart
             .draw_series(
                 self.dots

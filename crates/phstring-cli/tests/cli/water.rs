@@ -191,9 +191,12 @@ fn a_wet_run_reports_the_water_mechanism_by_mechanism() {
         .collect();
     assert!(plots.contains(&"energy_split"), "{plots:?}");
     assert!(plots.contains(&"fairlead_tension"), "{plots:?}");
-    // The configuration has the water surface and the seabed behind it.
+    // The configuration has the water surface and the seabed behind it, the nodes on the
+    // seabed marked, and the grounded length at the last snapshot (the end) in the legend.
     let svg = std::fs::read_to_string(out.join("configuration.svg")).unwrap();
     assert!(svg.contains("water surface") && svg.contains("seabed"));
+    assert!(svg.contains("on the seabed"));
+    assert!(svg.contains(&format!("{end:.1} m")), "{end}");
     // end_tensions.csv: a row at t = 0 and per step, each tension positive.
     let (h, rows) = table(&out.join("end_tensions.csv"));
     assert_eq!(h.join(","), "t,FairTen1,AnchTen1");
@@ -217,6 +220,8 @@ fn a_wet_run_reports_the_water_mechanism_by_mechanism() {
         "positions.csv",
         "end_tensions.csv",
         "paraview/frame_000200.vtp",
+        // The nodes on the seabed at the snapshots before the checkpoint are in it.
+        "configuration.svg",
     ] {
         assert!(
             std::fs::read(out.join(f)).unwrap() == std::fs::read(part.join(f)).unwrap(),

@@ -156,10 +156,18 @@ fn seabed_plane(file: &ScenarioFile, dimension: usize) -> Option<(Vec<f64>, Vec<
     Some((point, normal.iter().map(|x| x / len).collect()))
 }
 
-/// How the configuration of a run of `file` is drawn: in the side view `side` of a 3D run
-/// (see [`crate::scene`]), with the water surface and the seabed if it is in water.
-pub fn scene(file: &ScenarioFile, side: Option<[f64; 2]>) -> Scene {
-    let mut scene = Scene { side, water: None };
+/// How the configuration of a run of `file` is drawn: in the view its `writers` chose (the
+/// side view of a 3D run or one plane per line, see [`crate::scene`]), with the water
+/// surface and the seabed if it is in water, and the nodes on the seabed at the snapshots
+/// `writers` took. The contact test for the animation's frames is left to the caller
+/// ([`Scene::contact`]).
+pub fn scene(file: &ScenarioFile, writers: &crate::output::Writers) -> Scene {
+    let mut scene = Scene {
+        side: writers.side(),
+        lines: writers.lines().cloned(),
+        grounded: writers.grounded().to_vec(),
+        ..Scene::default()
+    };
     if file.scenario.water.is_some() {
         let dimension = usize::try_from(*file.scenario.dimension.get_ref()).unwrap_or(0);
         let seabed = seabed_plane(file, dimension);

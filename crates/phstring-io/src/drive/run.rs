@@ -30,6 +30,7 @@ use crate::output::{self, OutputError, Writers};
 use crate::scenario::{
     AnySetup, Components, RunSettings, ScenarioError, ScenarioFile, Setup, StartError,
 };
+use crate::scene::Scene;
 
 pub use phstring::nan_max;
 
@@ -489,14 +490,16 @@ fn run_dim<const D: usize>(
     }
     // The summary is on disk before the plots, whatever happens to them.
     write_summary(out, &info)?;
+    let mut scene = super::ends::scene(file, &writers);
     if ctx.settings.output.plots {
-        draw(&ctx, &writers, &mut info, opts.stop.as_deref())?;
+        draw(&ctx, (&writers, &scene), &mut info, opts.stop.as_deref())?;
     }
     // The animation reads positions.csv back; without it (output.positions = false) there is
     // nothing to animate. Written for failed runs too: it shows how far the run got.
     if ctx.settings.animation && ctx.settings.output.positions && info.dimension >= 2 {
         let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
-        let scene = super::ends::scene(file, writers.side());
+        // Its frames' nodes on the seabed: the run's own contact test (a copy of the system).
+        scene.contact = crate::scene::ContactTest::of(sim.system());
         let anim = draw_animation(out, info.dimension, (title, &scene), opts.stop.as_deref());
         info.plots.extend(anim.written);
         info.plots_skipped.extend(anim.skipped);
@@ -964,7 +967,7 @@ fn step_loop<const D: usize>(
 /// records them in `info` and rewrites `summary.json`.
 fn draw(
     ctx: &RunContext,
-    writers: &Writers,
+    (writers, scene): (&Writers, &Scene),
     info: &mut RunInfo,
     stop: Option<&AtomicBool>,
 ) -> Result<(), RunError> {
@@ -979,11 +982,10 @@ fn draw(
         Err(e) => Err(e.to_string()),
     };
     let title = ctx.file.scenario.title.as_deref().unwrap_or("phstring");
-    let scene = super::ends::scene(ctx.file, writers.side());
     let report = draw_plots(
         ctx.out,
         info.dimension,
-        (title, &scene),
+        (title, scene),
         ctx.end_of_loading,
         history.as_ref().map_err(String::as_str),
         stop,

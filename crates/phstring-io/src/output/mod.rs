@@ -245,6 +245,60 @@ fn side_view<const D: usize>(sim: &Simulation<D, Material>) -> Option<[f64; 2]> 
     })
 }
 
+/// The view of one plane per line of `sim` ([`crate::scene::LinePlanes`]) for a run in
+/// water drawn in a side view (`side`), chosen from its strings' node paths and its nodes
+/// now; `None` when one plane is right (and for every dry run).
+fn line_planes<const D: usize>(
+    sim: &Simulation<D, Material>,
+    side: Option<[f64; 2]>,
+) -> Option<crate::scene::LinePlanes> {
+    side?;
+    let sys = sim.system();
+    if !sys.has_water() {
+        return None;
+    }
+    let mut springs = false;
+    let mut strings = Vec::new();
+    for group in sys.groups() {
+        if matches!(group.law, Law::Spring(_)) {
+            springs = true;
+            continue;
+        }
+        let mut path: Vec<usize> = Vec::new();
+        for e in group.elements.clone() {
+            let [a, b] = sys.mesh().elements()[e];
+            if path.last() != Some(&a) {
+                path.push(a);
+            }
+            path.push(b);
+        }
+        strings.push(path);
+    }
+    let r: Vec<[f64; 3]> = sim.state().r.iter().map(|p| [p[0], p[1], p[2]]).collect();
+    crate::scene::LinePlanes::layout(&strings, springs, &r)
+}
+
+/// The nodes on the seabed now and every group's grounded length (the core's seabed
+/// contact); `None` without a seabed.
+fn grounded_now<const D: usize>(sim: &Simulation<D, Material>) -> Option<crate::scene::Grounded> {
+    let sys = sim.system();
+    let r = &sim.state().r;
+    let contacts = sys.seabed_contacts(r);
+    if contacts.is_empty() {
+        return None;
+    }
+    Some(crate::scene::Grounded {
+        nodes: contacts
+            .iter()
+            .filter(|c| c.grounded)
+            .map(|c| c.node)
+            .collect(),
+        lengths: (0..sys.groups().len())
+            .map(|g| sys.grounded_length(g, r))
+            .collect(),
+    })
+}
+
 /// What a run will write, for [`estimated_output`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OutputPlan {
@@ -463,6 +517,10 @@ pub struct Writers {
     snapshots: Vec<(f64, Vec<[f64; 2]>)>,
     /// The side view of a 3D run the snapshots are drawn in ([`crate::scene::Scene::side`]).
     side: Option<[f64; 2]>,
+    /// The view of one plane per line the snapshots are drawn in, if chosen.
+    lines: Option<crate::scene::LinePlanes>,
+    /// The nodes on the seabed at each snapshot (runs with a seabed).
+    grounded: Vec<crate::scene::Grounded>,
     last_frame: Option<usize>,
     frames: usize,
     frames_hash: u64,
@@ -530,6 +588,8 @@ impl Writers {
             snapshot_times,
             snapshots: Vec::new(),
             side: side_view(sim),
+            lines: line_planes(sim, side_view(sim)),
+            grounded: Vec::new(),
             last_frame: None,
             frames: 0,
             frames_hash: frames_hash_start(),
@@ -588,15 +648,24 @@ impl Writers {
         {
             let scene = crate::scene::Scene {
                 side: self.side,
-                water: None,
+                lines: self.lines.clone(),
+                ..crate::scene::Scene::default()
             };
             let pts = sim
                 .state()
                 .r
                 .iter()
-                .map(|r| scene.plane(r.as_slice()))
+                .enumerate()
+                .map(|(i, r)| scene.node_point(i, r.as_slice()))
                 .collect();
             self.snapshots.push((t, pts));
+            if let Some(g) = grounded_now(sim) {
+                // Aligned with the snapshots (a checkpoint may predate the record).
+                let before = self.snapshots.len() - 1;
+                self.grounded
+                    .resize(before, crate::scene::Grounded::default());
+                self.grounded.push(g);
+            }
         }
     }
 
@@ -861,6 +930,8 @@ impl Writers {
             snapshot_times,
             snapshots: state.snapshots,
             side: state.side,
+            lines: state.lines,
+            grounded: state.grounded,
             last_frame: state.last_frame,
             frames: state.frames,
             frames_hash: state.frames_hash,
@@ -895,6 +966,8 @@ impl Writers {
             last_frame: self.last_frame,
             snapshots: self.snapshots.clone(),
             side: self.side,
+            lines: self.lines.clone(),
+            grounded: self.grounded.clone(),
         })
     }
 
@@ -902,6 +975,17 @@ impl Writers {
     /// plan of a 3D run), see [`crate::scene`].
     pub fn side(&self) -> Option<[f64; 2]> {
         self.side
+    }
+
+    /// The view of one plane per line the configuration is drawn in, if chosen (see
+    /// [`crate::scene::LinePlanes`]).
+    pub fn lines(&self) -> Option<&crate::scene::LinePlanes> {
+        self.lines.as_ref()
+    }
+
+    /// The nodes on the seabed at each snapshot taken so far (empty without a seabed).
+    pub fn grounded(&self) -> &[crate::scene::Grounded] {
+        &self.grounded
     }
 
     /// Writes `end_tensions.csv` from now on, its rows computed by `model` (see
