@@ -894,21 +894,32 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// Grounded length [m] of element group `group` at positions `r`: the reference length
     /// of its elements, each counted half for each of its two nodes that is grounded.
     pub fn grounded_length(&self, group: usize, r: &[Vector<D>]) -> f64 {
-        let Some(g) = self.groups.get(group) else {
-            return 0.0;
-        };
+        self.grounded_lengths(&self.seabed_contacts(r))
+            .get(group)
+            .copied()
+            .unwrap_or(0.0)
+    }
+    /// Grounded length [m] of every element group, in group order, with the seabed contacts
+    /// `contacts` ([`Self::seabed_contacts`] at some positions): as
+    /// [`Self::grounded_length`], for a caller that has the contacts already.
+    pub fn grounded_lengths(&self, contacts: &[crate::water::NodeContact]) -> Vec<f64> {
         let mut grounded = vec![false; self.mesh.n_nodes()];
-        for c in self.seabed_contacts(r) {
+        for c in contacts {
             grounded[c.node] = c.grounded;
         }
-        g.elements
-            .clone()
-            .map(|e| {
-                let [a, b] = self.mesh.elements()[e];
-                let k = u8::from(grounded[a]) + u8::from(grounded[b]);
-                0.5 * f64::from(k) * self.mesh.lengths()[e]
+        self.groups
+            .iter()
+            .map(|g| {
+                g.elements
+                    .clone()
+                    .map(|e| {
+                        let [a, b] = self.mesh.elements()[e];
+                        let k = u8::from(grounded[a]) + u8::from(grounded[b]);
+                        0.5 * f64::from(k) * self.mesh.lengths()[e]
+                    })
+                    .sum()
             })
-            .sum()
+            .collect()
     }
     /// The kinetic energy [J] that the isotropic added mass (with `Ca`) gives to the axial
     /// motion of the lines beyond their `CaAx`: `Σ_e ½ ρ_w π d²/4 (Ca − CaAx) l_e (v̄_e·t_e)²`

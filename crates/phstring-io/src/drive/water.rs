@@ -61,37 +61,27 @@ fn string_groups<const D: usize>(sys: &PhSystem<D, Material>) -> Vec<usize> {
 }
 
 /// The grounded length [m] of each group in `groups` and the largest contact force [N] with
-/// its node, at positions `r`, from one pass over the seabed contacts (the lengths are those
-/// of [`PhSystem::grounded_length`]).
+/// its node, at positions `r`, from one computation of the seabed contacts (the lengths are
+/// those of [`PhSystem::grounded_length`]).
 fn contact_state<const D: usize>(
     sys: &PhSystem<D, Material>,
     groups: &[usize],
     r: &[Vector<D>],
 ) -> (Vec<f64>, Option<(usize, f64)>) {
     let contacts = sys.seabed_contacts(r);
-    let mut grounded = vec![false; r.len()];
-    let mut largest: Option<(usize, f64)> = None;
-    for c in &contacts {
-        grounded[c.node] = c.grounded;
-        if c.grounded && largest.is_none_or(|(_, f)| c.force > f) {
-            largest = Some((c.node, c.force));
-        }
-    }
-    let (elements, lengths) = (sys.mesh().elements(), sys.mesh().lengths());
-    let lengths = groups
-        .iter()
-        .map(|&g| {
-            sys.groups()[g]
-                .elements
-                .clone()
-                .map(|e| {
-                    let [a, b] = elements[e];
-                    let k = u8::from(grounded[a]) + u8::from(grounded[b]);
-                    0.5 * f64::from(k) * lengths[e]
-                })
-                .sum()
-        })
-        .collect();
+    let largest =
+        contacts
+            .iter()
+            .filter(|c| c.grounded)
+            .fold(None, |best: Option<(usize, f64)>, c| {
+                if best.is_none_or(|(_, f)| c.force > f) {
+                    Some((c.node, c.force))
+                } else {
+                    best
+                }
+            });
+    let all = sys.grounded_lengths(&contacts);
+    let lengths = groups.iter().map(|&g| all[g]).collect();
     (lengths, largest)
 }
 

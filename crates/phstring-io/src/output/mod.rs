@@ -293,9 +293,7 @@ fn grounded_now<const D: usize>(sim: &Simulation<D, Material>) -> Option<crate::
             .filter(|c| c.grounded)
             .map(|c| c.node)
             .collect(),
-        lengths: (0..sys.groups().len())
-            .map(|g| sys.grounded_length(g, r))
-            .collect(),
+        lengths: sys.grounded_lengths(&contacts),
     })
 }
 
