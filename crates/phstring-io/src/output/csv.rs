@@ -87,6 +87,13 @@ impl<F: Sink> Csv<F> {
         self
     }
 
+    /// Appends `,` and `value` (an index, a count, a word) to the row being built.
+    pub fn field(&mut self, value: impl std::fmt::Display) -> &mut Self {
+        // Writing into a Vec<u8> cannot fail.
+        let _ = write!(self.buf, ",{value}");
+        self
+    }
+
     /// Appends `x` as [`crate::files::num`] writes it to the row being built.
     pub fn num(&mut self, x: f64) -> &mut Self {
         crate::files::push_num(&mut self.buf, x);

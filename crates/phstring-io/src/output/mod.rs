@@ -694,10 +694,7 @@ impl Writers {
         self.channel_row(sim, t)?;
         if let Some(p) = &mut self.positions {
             for (i, r) in st.r.iter().enumerate() {
-                p.num(t)
-                    .text(&format!(",{i}"))
-                    .nums(r.as_slice())
-                    .end_line()?;
+                p.num(t).field(i).nums(r.as_slice()).end_line()?;
             }
             p.end_record()?;
         }
@@ -836,8 +833,7 @@ impl Writers {
         }
         let e = &mut self.energy;
         e.num(values[0]).nums(&values[1..6]);
-        e.text(&format!(",{}", r.newton_iterations))
-            .nums(&values[6..9]);
+        e.field(r.newton_iterations).nums(&values[6..9]);
         e.nums(wet.as_ref().map_or(&[], |v| v.as_slice()));
         e.end_line()?;
         e.end_record()?;
@@ -847,7 +843,7 @@ impl Writers {
                 PortKind::Velocity => "velocity",
             };
             let ports = &mut self.ports;
-            ports.num(t_mid).text(&format!(",{k},{},{kind}", p.node));
+            ports.num(t_mid).field(k).field(p.node).field(kind);
             ports.nums(p.input.as_slice()).nums(p.output.as_slice());
             ports.nums(&[p.power()]).end_line()?;
         }
