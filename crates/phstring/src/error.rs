@@ -51,6 +51,16 @@ pub enum SetupError {
         /// Node index.
         node: usize,
     },
+    /// A rigid body's definition or initial state is not usable.
+    #[error("rigid body {index} ('{name}'): {problem}")]
+    Body {
+        /// Index of the body.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// What is wrong, with the value.
+        problem: String,
+    },
     /// A value that must be positive and finite is not.
     #[error("{what}{} must be positive and finite, got {}", index.map(|i| format!(" [{i}]")).unwrap_or_default(), Num(*value))]
     NonPositive {

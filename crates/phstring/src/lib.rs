@@ -70,6 +70,7 @@ pub mod accuracy;
 pub mod assembly;
 pub mod bathymetry;
 pub mod benchmarks;
+pub mod body;
 pub mod boundary;
 pub mod catenary;
 pub mod dimension;
