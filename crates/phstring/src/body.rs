@@ -18,7 +18,9 @@
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
+use crate::boundary::Boundary;
 use crate::error::SetupError;
+use crate::mesh::Mesh;
 
 /// A nodal vector in `R^D`.
 type Vector<const D: usize> = nalgebra::SVector<f64, D>;
@@ -306,6 +308,12 @@ impl BodyModel {
         -st.position.dot(&self.weight)
     }
 
+    /// The radius of gyration `√(tr J / m)` [m] (> 0 for a valid body): the length that
+    /// turns the body's torque row into a force in Newton's norm.
+    pub fn gyration(&self) -> f64 {
+        (self.inertia.trace() / self.mass).sqrt()
+    }
+
     /// Angular velocity in body axes `Ω = J⁻¹Π` [rad/s].
     pub fn omega(&self, st: &BodyState) -> Vec3 {
         self.inertia_inv * st.momentum
@@ -379,6 +387,107 @@ impl BodyModel {
             jac,
         }
     }
+}
+
+/// A network's bodies in the form the system keeps them.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Rigid {
+    pub models: Vec<BodyModel>,
+    pub names: Vec<String>,
+    /// Per body and attachment: `(element, other node, the attached node is its first)`.
+    pub links: Vec<Vec<Vec<(usize, usize, bool)>>>,
+    /// Per node, the body and attachment it is fixed to (empty without bodies).
+    pub attached: Vec<Option<(usize, usize)>>,
+    /// The bodies' initial states.
+    pub states: Vec<BodyState>,
+}
+
+/// Checks the bodies of a network with nodes at `r` [m] moving at `v` [m/s] and forms their
+/// models; the attached nodes' components become non-free (`free`): the bodies move them.
+pub(crate) fn attach_bodies<const D: usize>(
+    bodies: &[RigidBody<D>],
+    mesh: &Mesh,
+    boundary: &Boundary<D>,
+    free: &mut [[bool; D]],
+    r: &[Vector<D>],
+    v: &[Vector<D>],
+) -> Result<Rigid, SetupError> {
+    let mut out = Rigid::default();
+    if bodies.is_empty() {
+        return Ok(out);
+    }
+    let n = mesh.n_nodes();
+    out.attached = vec![None; n];
+    let mut ported = vec![false; n];
+    for i in boundary.fixed.iter().map(|f| f.node) {
+        ported[i] |= i < n;
+    }
+    for i in boundary.motions.iter().map(|m| m.node) {
+        ported[i.min(n - 1)] |= i < n;
+    }
+    for i in boundary.feedback.iter().map(|f| f.node) {
+        ported[i.min(n - 1)] |= i < n;
+    }
+    for (b, body) in bodies.iter().enumerate() {
+        let model = BodyModel::new(b, body, n)?;
+        let fail = |problem: String| SetupError::Body {
+            index: b,
+            name: body.name.clone(),
+            problem,
+        };
+        let st = &body.initial;
+        let omega = st.orientation.transform_vector(&model.omega(st));
+        let mut links = Vec::with_capacity(model.attachments.len());
+        for (k, &(node, s)) in model.attachments.iter().enumerate() {
+            if let Some((other, _)) = out.attached[node] {
+                return Err(fail(format!(
+                    "node {node} is already fixed to body {other}: a node is fixed to one body"
+                )));
+            }
+            if ported[node] {
+                return Err(fail(format!(
+                    "node {node} is a support, a moving support or a feedback port: a node fixed \
+                     to a body is moved by the body alone"
+                )));
+            }
+            let arm = st.orientation.transform_vector(&s);
+            let off = (embed(&r[node]) - st.position - arm).norm();
+            let scale = 1.0 + st.position.norm() + s.norm();
+            if off.is_nan() || off > 1e-9 * scale {
+                return Err(fail(format!(
+                    "node {node} is {off:e} m from its attachment point {:?} (body axes): the \
+                     node must start at the point",
+                    s.as_slice()
+                )));
+            }
+            let slip = (embed(&v[node]) - st.velocity - omega.cross(&arm)).norm();
+            let vscale = 1.0 + st.velocity.norm() + omega.norm() * s.norm();
+            if slip.is_nan() || slip > 1e-9 * vscale {
+                return Err(fail(format!(
+                    "node {node} moves {slip:e} m/s off its attachment point's velocity: the node \
+                     must start with the body's motion"
+                )));
+            }
+            out.attached[node] = Some((b, k));
+            free[node] = [false; D];
+            let at: Vec<(usize, usize, bool)> = mesh
+                .elements()
+                .iter()
+                .enumerate()
+                .filter_map(|(e, &[a, c])| {
+                    (a == node)
+                        .then_some((e, c, true))
+                        .or((c == node).then_some((e, a, false)))
+                })
+                .collect();
+            links.push(at);
+        }
+        out.states.push(*st);
+        out.models.push(model);
+        out.names.push(body.name.clone());
+        out.links.push(links);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -207,6 +207,10 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     /// Measure the scales in the next full evaluation (then cleared): they are taken once
     /// per solve, at the predictor, where they cost nothing in the Newton iterations.
     pub measure: bool,
+    /// The rigid bodies' states at the step's start (docs/method.md §22).
+    pub bodies: &'a [crate::body::BodyState],
+    /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
+    nodes_x: Vec<Vector<D>>,
 }
 
 impl<'a, const D: usize, M> StepEquations<'a, D, M> {
@@ -236,6 +240,8 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             scale: 0.0,
             strain_scale: 0.0,
             measure: true,
+            bodies: &state.bodies,
+            nodes_x: Vec::new(),
         }
     }
 }
@@ -253,7 +259,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
     }
 
     fn chain(&self) -> bool {
-        self.sys.mesh.is_chain()
+        self.sys.mesh.is_chain() && self.sys.bodies.is_empty()
     }
 
     fn force_scale(&self) -> f64 {
@@ -271,12 +277,44 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
     ) -> Result<(), StrainError> {
+        if !self.sys.bodies.is_empty() {
+            return self.evaluate_with_bodies(x, res, jac);
+        }
         // Two instances, so that the Newton iterations run a loop without the scale sums.
         if self.measure && nodes.start == 0 && nodes.end >= x.len() {
-            self.evaluate_range::<true>(x, res, jac, nodes)
+            self.evaluate_range::<true>(x, res, jac, nodes, None)
         } else {
-            self.evaluate_range::<false>(x, res, jac, nodes)
+            self.evaluate_range::<false>(x, res, jac, nodes, None)
         }
+    }
+}
+
+impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
+    /// The full evaluation with rigid bodies: `x` holds the nodes' increments, then the
+    /// bodies' slots; the attached nodes' increments follow from the slots.
+    fn evaluate_with_bodies(
+        &mut self,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        jac: Option<&mut BlockJacobian<D>>,
+    ) -> Result<(), StrainError> {
+        let n = self.sys.mesh.n_nodes();
+        let mut xt = std::mem::take(&mut self.nodes_x);
+        xt.clear();
+        xt.extend_from_slice(&x[..n]);
+        crate::body_step::fill_attachments(self.sys, self.bodies, &x[n..], &mut xt);
+        let step = crate::body_step::BodyStep {
+            states: self.bodies,
+            h: self.h,
+            slots: &x[n..],
+        };
+        let out = if self.measure {
+            self.evaluate_range::<true>(&xt, res, jac, 0..n, Some(&step))
+        } else {
+            self.evaluate_range::<false>(&xt, res, jac, 0..n, Some(&step))
+        };
+        self.nodes_x = xt;
+        out
     }
 }
 
@@ -396,6 +434,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
+        bodies: Option<&crate::body_step::BodyStep<'_, D>>,
     ) -> Result<(), StrainError> {
         let sys = self.sys;
         let h = self.h;
@@ -492,6 +531,13 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 let mm = 2.0 * inv_h * m;
                 scale2 +=
                     mm * mm * (x[i].norm_squared() * (inv_h * inv_h) + self.v0[i].norm_squared());
+            }
+        }
+        // Rigid bodies: their rows take the attached nodes' rows before those are masked.
+        if let Some(step) = bodies {
+            let s2 = step.terms(sys, res, jac.as_deref_mut());
+            if MEASURE {
+                scale2 += s2;
             }
         }
         // Dirichlet components: the residual there is the reaction force; the equation is
@@ -887,6 +933,8 @@ mod tests {
             scale: 0.0,
             strain_scale: 0.0,
             measure: true,
+            bodies: &state.bodies,
+            nodes_x: Vec::new(),
         };
         let n = x.len();
         let mut res = vec![Vector::<D>::zeros(); n];

@@ -71,6 +71,7 @@ pub mod assembly;
 pub mod bathymetry;
 pub mod benchmarks;
 pub mod body;
+mod body_step;
 pub mod boundary;
 pub mod catenary;
 pub mod dimension;
@@ -95,6 +96,7 @@ pub mod testing;
 pub mod water;
 
 pub use bathymetry::Bathymetry;
+pub use body::{Attachment, BodyState, RigidBody};
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
     PortSample, PositionFn, PositionRamp, RateFn,

@@ -256,6 +256,7 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
             initial,
             water: None,
             hydro: Default::default(),
+            bodies: Vec::new(),
         })
     }
 }

@@ -256,12 +256,17 @@ pub struct NewtonWorkspace<const D: usize> {
 impl<const D: usize> NewtonWorkspace<D> {
     /// Workspace for a mesh.
     pub fn new(mesh: &crate::mesh::Mesh) -> Self {
+        Self::with_slots(mesh, 0)
+    }
+    /// Workspace for a mesh and `slots` unknowns after its nodes (rigid bodies).
+    pub fn with_slots(mesh: &crate::mesh::Mesh, slots: usize) -> Self {
         let n = mesh.n_nodes();
+        let all = n + slots;
         Self {
-            res: vec![Vector::zeros(); n],
-            dir: vec![Vector::zeros(); n],
-            x_old: vec![Vector::zeros(); n],
-            jac: BlockJacobian::zeros(mesh),
+            res: vec![Vector::zeros(); all],
+            dir: vec![Vector::zeros(); all],
+            x_old: vec![Vector::zeros(); all],
+            jac: BlockJacobian::with_slots(mesh, slots),
             thomas: vec![Block::zeros(); n],
             last: NewtonStats::default(),
         }

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use crate::boundary::{PortKind, PortSample};
 use crate::error::{SetupError, StepError};
 use crate::integrator::{Scheme, StepEquations, StrainError, element_step};
-use crate::linsolve::{LinearSolver, SolverKind, make_solver};
+use crate::linsolve::{LinearSolver, SolverKind};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonStats, NewtonWorkspace};
 use crate::observe::{
@@ -215,6 +215,9 @@ pub struct Simulation<const D: usize, M> {
     inputs: crate::boundary::HeldInputs<D>,
     /// `dg4`: the damped seabed contacts that set how many triple jumps a step takes (§19).
     contacts: Vec<crate::integrator::DampedContact>,
+    /// The rigid bodies' states at the end of the current step, swapped into the state
+    /// when the step is committed.
+    bodies_next: Vec<crate::body::BodyState>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -302,7 +305,7 @@ impl HeldVelocities {
         }
         // The moving nodes' ports: after the load and feedback ports, in `constrained` order.
         let first = sys.boundary.loads.len() + sys.boundary.feedback.len();
-        let port = |i: usize| first + sys.constrained.iter().position(|&c| c == i).unwrap_or(0);
+        let port = |i: usize| first + sys.support_nodes().position(|c| c == i).unwrap_or(0);
         let mut mass = Vec::new();
         for (g, _, [a, b], l) in sys.each_element() {
             let (md, mo) = crate::system::element_mass(g.mass, g.rho_a, l);
@@ -423,7 +426,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     fn start(sys: PhSystem<D, M>, state: State<D>, params: StepParams) -> Result<Self, SetupError> {
         let n_el = sys.mesh.n_elements();
         let n = sys.mesh.n_nodes();
-        let solver = make_solver::<D>(params.solver, &sys.mesh)?;
+        let slots = 2 * sys.bodies.len();
+        if slots > 0 && params.control.error_control() {
+            return Err(SetupError::Body {
+                index: 0,
+                name: sys.body_names[0].clone(),
+                problem: "error control (rtol, atol) does not cover rigid bodies yet: run \
+                          without it (the step size is then controlled for solvability)"
+                    .into(),
+            });
+        }
+        let solver = crate::linsolve::make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?;
         let mut ports: Vec<PortSample<D>> = sys
             .boundary
             .loads
@@ -443,7 +456,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             output: Vector::zeros(),
             mean_power: 0.0,
         }));
-        ports.extend(sys.constrained.iter().map(|&node| PortSample {
+        ports.extend(sys.support_nodes().map(|node| PortSample {
             node,
             kind: PortKind::Velocity,
             input: Vector::zeros(),
@@ -462,12 +475,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         let contacts = crate::integrator::damped_contacts(&sys);
         Ok(Self {
-            newton_ws: NewtonWorkspace::new(&sys.mesh),
+            newton_ws: NewtonWorkspace::with_slots(&sys.mesh, slots),
+            bodies_next: Vec::with_capacity(sys.bodies.len()),
             sys,
             params,
             run: Checkpoint::start(state, params.h),
             energies,
-            x: vec![Vector::zeros(); n],
+            x: vec![Vector::zeros(); n + slots],
             f_ext: vec![Vector::zeros(); n],
             reaction: vec![Vector::zeros(); n],
             c_next: vec![0.0; n_el],
@@ -558,7 +572,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Continues from `cp`, taken from a simulation of the same problem and parameters.
     pub fn restore(&mut self, cp: Checkpoint<D>) -> Result<(), SetupError> {
         let (n, n_el) = (self.run.state.r.len(), self.run.state.c.len());
-        cp.check_sizes(n, n_el)?;
+        cp.check_sizes(n, n_el, self.sys.bodies.len())?;
         self.energies = self.sys.energies(&cp.state);
         self.run = cp;
         Ok(())
@@ -1261,6 +1275,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
             self.x[m.node][m.component] = target - self.run.state.r[m.node][m.component];
         }
+        if !self.sys.bodies.is_empty() {
+            let n = self.sys.mesh.n_nodes();
+            let states = &self.run.state.bodies;
+            crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
+        }
         Ok(())
     }
 
@@ -1285,6 +1304,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.params.newton,
             self.stop.as_deref(),
         );
+        if result.is_ok() && !self.sys.bodies.is_empty() {
+            // The attached nodes move with their bodies (Newton held their increments).
+            let (nodes, slots) = self.x.split_at_mut(self.sys.mesh.n_nodes());
+            let states = &self.run.state.bodies;
+            crate::body_step::fill_attachments(&self.sys, states, slots, nodes);
+        }
         let dissipated = if result.is_ok() && self.sys.has_damping() {
             eqs.dissipated(&self.x)
         } else {
@@ -1394,6 +1419,22 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             );
             self.c_next[e] = self.run.state.c[e] + dc;
         }
+        // The rigid bodies' new states.
+        let n = mesh.n_nodes();
+        let bodies = &self.run.state.bodies;
+        crate::body_step::advance(&self.sys, bodies, h, &self.x[n..], &mut self.bodies_next);
+        if let Some(b) = self.bodies_next.iter().position(|st| {
+            let finite = |v: &crate::body::Vec3| v.iter().all(|c| c.is_finite());
+            !(finite(&st.position) && finite(&st.velocity) && finite(&st.momentum))
+        }) {
+            let node = self.sys.bodies[b].attachments.first().map_or(0, |a| a.0);
+            return Err(StepError::NonFinite {
+                step: step_no,
+                t,
+                what: "rigid body state (at the body's first attached node)",
+                node,
+            });
+        }
         // The velocities the prescribed motions hold at the step's end.
         for (k, m) in self.sys.boundary.motions.iter().enumerate() {
             let v = m.velocity(t_next);
@@ -1422,6 +1463,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 |i| r0[i] + x[i],
                 |i| held.apply(i, x[i] * (2.0 * inv_h) - v0[i], motions),
                 |e| c[e],
+                &self.bodies_next,
             )
         };
         if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
@@ -1517,6 +1559,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for (m, &v) in self.sys.boundary.motions.iter().zip(&self.held.velocity) {
             self.run.state.v[m.node][m.component] = v;
         }
+        std::mem::swap(&mut self.run.state.bodies, &mut self.bodies_next);
         debug_assert_eq!(after, self.sys.energies(&self.run.state));
         self.energies = after;
         self.run.supplied_total += supplied;

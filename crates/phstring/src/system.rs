@@ -6,6 +6,7 @@
 
 use nalgebra::SVector;
 
+use crate::body::{BodyModel, BodyState, RigidBody};
 use crate::boundary::Boundary;
 use crate::error::SetupError;
 use std::ops::Range;
@@ -36,6 +37,8 @@ pub struct State<const D: usize> {
     pub v: Vec<Vector<D>>,
     /// Element strains `Ĉ` (dimensionless), `C_e = |r'_e|²` for a consistent state.
     pub c: Vec<f64>,
+    /// The rigid bodies' states, in the network's body order (empty without bodies).
+    pub bodies: Vec<BodyState>,
 }
 
 // By hand: `clone_from` copies into the existing vectors (the derived one allocates anew),
@@ -46,12 +49,14 @@ impl<const D: usize> Clone for State<D> {
             r: self.r.clone(),
             v: self.v.clone(),
             c: self.c.clone(),
+            bodies: self.bodies.clone(),
         }
     }
     fn clone_from(&mut self, source: &Self) {
         self.r.clone_from(&source.r);
         self.v.clone_from(&source.v);
         self.c.clone_from(&source.c);
+        self.bodies.clone_from(&source.bodies);
     }
 }
 
@@ -65,7 +70,12 @@ impl<const D: usize> State<D> {
             .zip(mesh.lengths())
             .map(|(&[a, b], &l)| ((r[b] - r[a]) / l).norm_squared())
             .collect();
-        Self { r, v, c }
+        Self {
+            r,
+            v,
+            c,
+            bodies: Vec::new(),
+        }
     }
 
     /// A state at rest (`v̂ = 0`) with consistent strains.
@@ -285,6 +295,9 @@ pub struct Network<const D: usize, M> {
     pub water: Option<Water<D>>,
     /// Hydrodynamic parameters of the lines and points that the water acts on.
     pub hydro: Hydrodynamics,
+    /// Rigid bodies (docs/method.md §22); their initial states are theirs, the attached
+    /// nodes' initial positions and velocities must agree with them.
+    pub bodies: Vec<RigidBody<D>>,
 }
 
 impl<const D: usize, M> Network<D, M> {
@@ -302,6 +315,11 @@ impl<const D: usize, M> Network<D, M> {
     /// The network with the hydrodynamics `point` of a node (buoyancy, drag, added mass).
     pub fn with_point_hydro(mut self, point: PointHydro) -> Self {
         self.hydro.points.push(point);
+        self
+    }
+    /// The network with the rigid body `body`.
+    pub fn with_body(mut self, body: RigidBody<D>) -> Self {
+        self.bodies.push(body);
         self
     }
 }
@@ -326,6 +344,7 @@ impl<const D: usize, M> From<Problem<D, M>> for Network<D, M> {
             initial: p.initial,
             water: None,
             hydro: Hydrodynamics::default(),
+            bodies: Vec::new(),
         }
     }
 }
@@ -349,6 +368,14 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) point_mass: Vec<(usize, f64)>,
     /// Water, lumped to nodes and elements (docs/method.md §21); `None`: dry.
     pub(crate) water: Option<Box<WaterModel<D>>>,
+    /// Rigid bodies (docs/method.md §22), with their names.
+    pub(crate) bodies: Vec<BodyModel>,
+    pub(crate) body_names: Vec<String>,
+    /// Per body and attachment, the elements at the attached node: `(element, other node,
+    /// the attached node is the element's first)`.
+    pub(crate) body_links: Vec<Vec<Vec<(usize, usize, bool)>>>,
+    /// Per node, the body and attachment it is fixed to (empty without bodies).
+    pub(crate) attached: Vec<Option<(usize, usize)>>,
 }
 
 /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
@@ -770,13 +797,19 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             initial,
             water,
             hydro,
+            bodies,
         } = problem.into();
         let mut groups = groups;
+        let mut initial = initial;
         check_groups(&mesh, &groups)?;
         check_initial(&mesh, &groups, &initial)?;
         let n = mesh.n_nodes();
-        let free = free_components(&boundary, &initial, n)?;
+        let mut free = free_components(&boundary, &initial, n)?;
         check_port_nodes(&boundary, n)?;
+        let rigid = crate::body::attach_bodies(
+            &bodies, &mesh, &boundary, &mut free, &initial.r, &initial.v,
+        )?;
+        initial.bodies.clone_from(&rigid.states);
         let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
         for (e, &l) in mesh.lengths().iter().enumerate() {
             if !l.is_finite() {
@@ -803,6 +836,10 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             constrained_elements,
             point_mass,
             water,
+            bodies: rigid.models,
+            body_names: rigid.names,
+            body_links: rigid.links,
+            attached: rigid.attached,
         };
         sys.check_initial_energies(&initial)?;
         Ok((sys, initial))
@@ -813,6 +850,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// and finite energies (the checks [`Self::new`] makes of the problem's initial state).
     pub fn check_state(&self, state: &State<D>) -> Result<(), SetupError> {
         check_initial(&self.mesh, &self.groups, state)?;
+        if state.bodies.len() != self.bodies.len() {
+            return Err(SetupError::StateSize {
+                what: "rigid bodies",
+                got: state.bodies.len(),
+                expected: self.bodies.len(),
+            });
+        }
         free_components(&self.boundary, state, self.mesh.n_nodes())?;
         self.check_initial_energies(state)
     }
@@ -1033,17 +1077,20 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
 
     /// Energies `T̂`, `Σ l_e W(C_e)`, `−r̂ᵀF_b` of `state` [J] (paper eq. (26)).
     pub fn energies(&self, state: &State<D>) -> Energies {
-        self.energies_with(|i| state.r[i], |i| state.v[i], |e| state.c[e])
+        let bodies = &state.bodies;
+        self.energies_with(|i| state.r[i], |i| state.v[i], |e| state.c[e], bodies)
     }
 
     /// [`Self::energies`] of the state with node positions `r(i)`, velocities `v(i)` and
     /// element strains `c(e)` (each called once per node or element, in the same order as
-    /// for a stored state, so the result is bit-identical to `energies` of that state).
+    /// for a stored state, so the result is bit-identical to `energies` of that state), and
+    /// the rigid bodies' states `bodies`.
     pub(crate) fn energies_with(
         &self,
         r: impl Fn(usize) -> Vector<D>,
         v: impl Fn(usize) -> Vector<D>,
         c: impl Fn(usize) -> f64,
+        bodies: &[BodyState],
     ) -> Energies {
         let mut kinetic = 0.0;
         let mut internal = 0.0;
@@ -1069,6 +1116,12 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             let p = r(i).dot(f);
             external -= p;
             magnitude += p.abs();
+        }
+        for (model, st) in self.bodies.iter().zip(bodies) {
+            let (t, p) = (model.kinetic(st), model.potential(st));
+            kinetic += t;
+            external += p;
+            magnitude += t + p.abs();
         }
         let (mut buoyancy, mut seabed) = (0.0, 0.0);
         if let Some(w) = &self.water {
@@ -1099,7 +1152,39 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         for &(i, m) in &self.point_mass {
             p += state.v[i] * m;
         }
+        for (model, st) in self.bodies.iter().zip(&state.bodies) {
+            p += crate::body::project::<D>(&st.velocity) * model.mass;
+        }
         p
+    }
+
+    /// The rigid bodies' angular momenta about the origin, `x × m V + R Π` [kg·m²/s], summed
+    /// (3-vector; in 2D only `z` is non-zero).
+    fn bodies_angular_momentum(&self, state: &State<D>) -> crate::body::Vec3 {
+        let mut l = crate::body::Vec3::zeros();
+        for (model, st) in self.bodies.iter().zip(&state.bodies) {
+            l += st.position.cross(&(st.velocity * model.mass))
+                + st.orientation.transform_vector(&st.momentum);
+        }
+        l
+    }
+
+    /// The nodes with a fixed or moving component (the supports, each a velocity port), in
+    /// increasing order: the constrained nodes less those fixed to rigid bodies.
+    pub(crate) fn support_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.constrained
+            .iter()
+            .copied()
+            .filter(|&i| self.attached.get(i).is_none_or(|a| a.is_none()))
+    }
+
+    /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])`.
+    pub fn bodies(&self) -> Vec<(&str, f64)> {
+        self.body_names
+            .iter()
+            .zip(&self.bodies)
+            .map(|(n, b)| (n.as_str(), b.mass))
+            .collect()
     }
 }
 
@@ -1107,14 +1192,14 @@ impl<M: StoredEnergy> PhSystem<2, M> {
     /// Angular momentum about the origin `Σ_ij M_ij r_i × v_j` (z-component) [kg·m²/s].
     pub fn angular_momentum(&self, state: &State<2>) -> f64 {
         let cross = |r: &Vector<2>, v: &Vector<2>| r[0] * v[1] - r[1] * v[0];
-        self.angular(state, cross)
+        self.angular(state, cross) + self.bodies_angular_momentum(state).z
     }
 }
 
 impl<M: StoredEnergy> PhSystem<3, M> {
     /// Angular momentum about the origin `Σ_ij M_ij r_i × v_j` [kg·m²/s].
     pub fn angular_momentum(&self, state: &State<3>) -> Vector<3> {
-        self.angular(state, |r, v| r.cross(v))
+        self.angular(state, |r, v| r.cross(v)) + self.bodies_angular_momentum(state)
     }
 }
 

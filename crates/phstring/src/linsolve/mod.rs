@@ -9,11 +9,13 @@
 
 mod block_lu;
 mod block_tridiagonal;
+mod bordered;
 mod network;
 mod sparse_lu;
 
 pub use block_tridiagonal::BlockTridiagonal;
 pub(crate) use block_tridiagonal::block_thomas;
+pub use bordered::Bordered;
 pub use network::{JunctionLu, NetworkSolver};
 pub use sparse_lu::SparseLu;
 
@@ -25,32 +27,59 @@ use crate::mesh::Mesh;
 /// A `D×D` block of the Newton matrix.
 pub type Block<const D: usize> = SMatrix<f64, D, D>;
 
-/// Newton matrix in node-block form, matching a [`Mesh`].
+/// Newton matrix in node-block form, matching a [`Mesh`], with a border of unknowns beyond
+/// the nodes (the rigid bodies' slots, two per body: `Δx` and the Cayley vector `w`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BlockJacobian<const D: usize> {
     /// `∂R_i/∂x_i` per node.
     pub diag: Vec<Block<D>>,
     /// Per element `[a, b]`: `[∂R_a/∂x_b, ∂R_b/∂x_a]`.
     pub off: Vec<[Block<D>; 2]>,
+    /// The rows and columns of the slots (empty without bodies).
+    pub border: Border<D>,
+}
+
+/// The slots' part of a [`BlockJacobian`]: unknowns `n_nodes..n_nodes + slots` of the
+/// Newton vector, each a `D`-vector.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Border<const D: usize> {
+    /// Number of slots.
+    pub slots: usize,
+    /// `∂R_s/∂u_t` for slots `s, t`, row-major (`slots²` blocks).
+    pub own: Vec<Block<D>>,
+    /// Couplings of a slot with a node: `(node, slot, ∂R_slot/∂x_node, ∂R_node/∂u_slot)`;
+    /// a pair may appear more than once (the blocks add).
+    pub links: Vec<(usize, usize, Block<D>, Block<D>)>,
 }
 
 impl<const D: usize> BlockJacobian<D> {
     /// A zero matrix for `mesh`.
     pub fn zeros(mesh: &Mesh) -> Self {
+        Self::with_slots(mesh, 0)
+    }
+    /// A zero matrix for `mesh` and `slots` slots beyond its nodes.
+    pub fn with_slots(mesh: &Mesh, slots: usize) -> Self {
         Self {
             diag: vec![Block::zeros(); mesh.n_nodes()],
             off: vec![[Block::zeros(); 2]; mesh.n_elements()],
+            border: Border {
+                slots,
+                own: vec![Block::zeros(); slots * slots],
+                links: Vec::new(),
+            },
         }
     }
-    /// Sets all blocks to zero.
+    /// Sets all blocks to zero (and drops the slots' links).
     pub fn clear(&mut self) {
         self.diag.iter_mut().for_each(|b| b.fill(0.0));
         self.off.iter_mut().for_each(|b| {
             b[0].fill(0.0);
             b[1].fill(0.0);
         });
+        self.border.own.iter_mut().for_each(|b| b.fill(0.0));
+        self.border.links.clear();
     }
-    /// `out = J x`.
+    /// `out = J x` (`x` and `out` of the nodes' length, or with the slots after them).
     pub fn mul(&self, mesh: &Mesh, x: &[SVector<f64, D>], out: &mut [SVector<f64, D>]) {
         for ((o, d), xi) in out.iter_mut().zip(&self.diag).zip(x) {
             *o = d * xi;
@@ -58,6 +87,20 @@ impl<const D: usize> BlockJacobian<D> {
         for (&[a, b], off) in mesh.elements().iter().zip(&self.off) {
             out[a] += off[0] * x[b];
             out[b] += off[1] * x[a];
+        }
+        let (n, m) = (self.diag.len(), self.border.slots);
+        if m == 0 || x.len() < n + m {
+            return;
+        }
+        for s in 0..m {
+            out[n + s] = SVector::zeros();
+            for t in 0..m {
+                out[n + s] += self.border.own[s * m + t] * x[n + t];
+            }
+        }
+        for &(node, slot, row, col) in &self.border.links {
+            out[n + slot] += row * x[node];
+            out[node] += col * x[n + slot];
         }
     }
 }
@@ -99,6 +142,21 @@ pub trait LinearSolver<const D: usize>: Send {
     ) -> Result<(), LinearSolveError>;
     /// Name for reports: `block_tridiagonal`, `sparse_lu` or `network`.
     fn name(&self) -> &'static str;
+}
+
+/// Builds the solver `kind` for `mesh` (with `slots` bordering unknowns, the solver of `kind`
+/// inside a [`Bordered`] one).
+pub fn make_bordered_solver<const D: usize>(
+    kind: SolverKind,
+    mesh: &Mesh,
+    slots: usize,
+) -> Result<Box<dyn LinearSolver<D>>, SetupError> {
+    let inner = make_solver::<D>(kind, mesh)?;
+    Ok(if slots == 0 {
+        inner
+    } else {
+        Box::new(Bordered::new(inner, mesh.n_nodes(), slots))
+    })
 }
 
 /// Builds the solver `kind` for `mesh`.

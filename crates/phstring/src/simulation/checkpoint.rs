@@ -33,6 +33,7 @@
 //! `D` while parsing and would list the keys a second time beside the fields.
 
 use crate::accuracy::AccelerationHistory;
+use crate::body::BodyState;
 use crate::error::SetupError;
 use crate::material::StoredEnergy;
 use crate::system::{State, Vector};
@@ -112,7 +113,7 @@ impl<const D: usize> Checkpoint<D> {
     /// of error-control history of `n` accelerations each, a positive finite last error.
     /// What [`Simulation::restore`] refuses; a checkpoint file's values are checked further
     /// (ranges against the run's settings) by [`FlatCheckpoint::check_fits`].
-    pub fn check_sizes(&self, n: usize, n_el: usize) -> Result<(), SetupError> {
+    pub fn check_sizes(&self, n: usize, n_el: usize, n_bodies: usize) -> Result<(), SetupError> {
         // Counts and totals of any value restore; they are checked against the run by
         // `FlatCheckpoint::check_fits`.
         let Self {
@@ -137,6 +138,7 @@ impl<const D: usize> Checkpoint<D> {
             ("positions", state.r.len(), n),
             ("velocities", state.v.len(), n),
             ("strains", state.c.len(), n_el),
+            ("rigid bodies", state.bodies.len(), n_bodies),
             ("predictor accelerations", acc.len(), n),
             ("predictor velocities", v_mid.len(), n),
         ] {
@@ -264,6 +266,14 @@ pub struct FlatCheckpoint {
     pub v: Vec<f64>,
     /// Strains (dimensionless), one per element.
     pub c: Vec<f64>,
+    /// Rigid bodies' states, [`BODY_NUMBERS`] per body: position [m], velocity [m/s],
+    /// orientation quaternion `(w, x, y, z)`, angular momentum in body axes [kg·m²/s];
+    /// written only when there are bodies, empty when missing.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Vec::is_empty")
+    )]
+    pub bodies: Vec<f64>,
     /// Time bookkeeping `t = t_base + k h_cur` [s].
     pub t_base: f64,
     /// Steps since `t_base`.
@@ -304,6 +314,39 @@ pub struct FlatCheckpoint {
     pub water: WaterWork,
 }
 
+/// Numbers per rigid body in [`FlatCheckpoint::bodies`].
+pub const BODY_NUMBERS: usize = 13;
+
+/// The bodies' states as one flat array, [`BODY_NUMBERS`] per body.
+fn flat_bodies(bodies: &[BodyState]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(BODY_NUMBERS * bodies.len());
+    for b in bodies {
+        out.extend(b.position.iter().chain(&b.velocity));
+        let q = b.orientation.quaternion();
+        out.extend([q.w, q.i, q.j, q.k]);
+        out.extend(b.momentum.iter());
+    }
+    out
+}
+
+/// Bodies' states from a flat array (an incomplete last body is dropped; the lengths are
+/// checked by [`FlatCheckpoint::check_fits`] and [`Checkpoint::check_sizes`]).
+fn unflat_bodies(v: &[f64]) -> Vec<BodyState> {
+    v.chunks_exact(BODY_NUMBERS)
+        .map(|b| {
+            let v3 = |i: usize| crate::body::Vec3::new(b[i], b[i + 1], b[i + 2]);
+            BodyState {
+                position: v3(0),
+                velocity: v3(3),
+                orientation: nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(
+                    b[6], b[7], b[8], b[9],
+                )),
+                momentum: v3(10),
+            }
+        })
+        .collect()
+}
+
 /// `err_prev` of a file written before error control.
 #[cfg(feature = "serde")]
 fn one() -> f64 {
@@ -327,7 +370,7 @@ fn unflat<const D: usize>(v: Vec<f64>) -> Vec<Vector<D>> {
 impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
     fn from(cp: &Checkpoint<D>) -> Self {
         let Checkpoint {
-            state: State { r, v, c },
+            state: State { r, v, c, bodies },
             t_base,
             k,
             h_cur,
@@ -348,6 +391,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             r: flat(r),
             v: flat(v),
             c: c.clone(),
+            bodies: flat_bodies(bodies),
             t_base: *t_base,
             k: *k,
             h_cur: *h_cur,
@@ -408,6 +452,7 @@ impl FlatCheckpoint {
             r,
             v,
             c,
+            bodies,
             t_base,
             k,
             h_cur,
@@ -429,6 +474,7 @@ impl FlatCheckpoint {
                 r: unflat(r),
                 v: unflat(v),
                 c,
+                bodies: unflat_bodies(&bodies),
             },
             t_base,
             k,
@@ -465,6 +511,7 @@ impl FlatCheckpoint {
             r,
             v,
             c,
+            bodies,
             t_base,
             k: _,
             h_cur,
@@ -481,10 +528,11 @@ impl FlatCheckpoint {
             total_newton: _,
             water,
         } = self;
-        let arrays: [(&'static str, &[f64]); 5] = [
+        let arrays: [(&'static str, &[f64]); 6] = [
             ("sim.r", r),
             ("sim.v", v),
             ("sim.c", c),
+            ("sim.bodies", bodies),
             ("sim.acc", acc),
             ("sim.v_mid", v_mid),
         ];
@@ -536,6 +584,7 @@ impl FlatCheckpoint {
             r,
             v,
             c,
+            bodies,
             t_base: _,
             k: _,
             h_cur: _,
@@ -556,16 +605,24 @@ impl FlatCheckpoint {
             sim.system().mesh().n_nodes(),
             sim.system().mesh().n_elements(),
         );
+        let n_bodies = sim.system().bodies().len();
         for (name, values, expected, count) in [
             ("sim.r", r, D * n, None),
             ("sim.v", v, D * n, None),
             ("sim.acc", acc, D * n, None),
             ("sim.v_mid", v_mid, D * n, None),
             ("sim.c", c, n_el, Some("elements")),
+            (
+                "sim.bodies",
+                bodies,
+                BODY_NUMBERS * n_bodies,
+                Some("bodies"),
+            ),
         ] {
             if values.len() != expected {
                 let count = match count {
                     None => format!("{n} nodes × {D} components"),
+                    Some("bodies") => format!("{n_bodies} bodies × {BODY_NUMBERS} numbers"),
                     Some(what) => format!("{n_el} {what}"),
                 };
                 return Err(format!(

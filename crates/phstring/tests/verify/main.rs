@@ -3,6 +3,7 @@
 
 mod accuracy;
 mod bathymetry;
+mod bodies;
 mod common;
 mod damping;
 mod elimination;

@@ -1,0 +1,119 @@
+//! A bordered solve: the node blocks by any [`LinearSolver`], the few slot unknowns beyond
+//! them (rigid bodies) by their Schur complement (docs/method.md §22).
+
+use nalgebra::{DMatrix, DVector, SVector};
+
+use super::{BlockJacobian, LinearSolver};
+use crate::error::LinearSolveError;
+
+/// Solves `[A B; C E] [x; u] = [f; g]` with `A` the node blocks of a [`BlockJacobian`]
+/// (solved by the inner solver) and `B`, `C`, `E` its [`super::Border`]: `x = A⁻¹f − A⁻¹B u`,
+/// `(E − C A⁻¹B) u = g − C A⁻¹f`. Each slot component with couplings costs one more solve
+/// with `A`.
+pub struct Bordered<const D: usize> {
+    inner: Box<dyn LinearSolver<D>>,
+    n: usize,
+    slots: usize,
+    /// `A⁻¹ B`, one node vector per slot component.
+    y: Vec<Vec<SVector<f64, D>>>,
+    /// Which columns of `B` have entries.
+    used: Vec<bool>,
+}
+
+impl<const D: usize> std::fmt::Debug for Bordered<D> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Bordered")
+            .field("inner", &self.inner.name())
+            .field("n", &self.n)
+            .field("slots", &self.slots)
+            .finish()
+    }
+}
+
+impl<const D: usize> Bordered<D> {
+    /// The solver for `n` nodes (solved by `inner`) and `slots` slots after them.
+    pub fn new(inner: Box<dyn LinearSolver<D>>, n: usize, slots: usize) -> Self {
+        Self {
+            inner,
+            n,
+            slots,
+            y: vec![vec![SVector::zeros(); n]; slots * D],
+            used: vec![false; slots * D],
+        }
+    }
+}
+
+impl<const D: usize> LinearSolver<D> for Bordered<D> {
+    fn solve(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        let (n, m) = (self.n, self.slots * D);
+        let border = &jac.border;
+        let (nodes, tail) = rhs.split_at_mut(n);
+        self.inner.solve(jac, nodes)?;
+        // Y = A⁻¹ B, column by column.
+        for (c, (y, used)) in self.y.iter_mut().zip(&mut self.used).enumerate() {
+            let (slot, comp) = (c / D, c % D);
+            y.iter_mut().for_each(|v| v.fill(0.0));
+            *used = false;
+            for &(node, s, _, col) in &border.links {
+                if s == slot {
+                    y[node] += col.column(comp);
+                    *used = true;
+                }
+            }
+            if *used {
+                self.inner.solve(jac, y)?;
+            }
+        }
+        // S = E − C Y, g = rhs_u − C z.
+        let mut s = DMatrix::<f64>::zeros(m, m);
+        let mut g = DVector::<f64>::zeros(m);
+        for a in 0..self.slots {
+            for b in 0..self.slots {
+                let blk = &border.own[a * self.slots + b];
+                s.view_mut((a * D, b * D), (D, D)).copy_from(blk);
+            }
+            for k in 0..D {
+                g[a * D + k] = tail[a][k];
+            }
+        }
+        for &(node, slot, row, _) in &border.links {
+            let cz = row * nodes[node];
+            for k in 0..D {
+                g[slot * D + k] -= cz[k];
+            }
+            for (c, y) in self.y.iter().enumerate() {
+                if self.used[c] {
+                    let cy = row * y[node];
+                    for k in 0..D {
+                        s[(slot * D + k, c)] -= cy[k];
+                    }
+                }
+            }
+        }
+        let u = s
+            .lu()
+            .solve(&g)
+            .filter(|u| u.iter().all(|x| x.is_finite()))
+            .ok_or(LinearSolveError::Singular { block: n })?;
+        for (a, t) in tail.iter_mut().enumerate() {
+            for k in 0..D {
+                t[k] = u[a * D + k];
+            }
+        }
+        for (c, y) in self.y.iter().enumerate() {
+            if self.used[c] && u[c] != 0.0 {
+                for (x, yi) in nodes.iter_mut().zip(y) {
+                    *x -= yi * u[c];
+                }
+            }
+        }
+        Ok(())
+    }
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+}
