@@ -264,8 +264,11 @@ impl BodyModel {
         {
             return Err(fail("initial state is not finite".into()));
         }
-        if D == 2 && (st.position.z != 0.0 || st.velocity.z != 0.0) {
-            return Err(fail("a 2D body moves in the plane z = 0".into()));
+        let q = st.orientation.quaternion();
+        if D == 2 && (st.position.z != 0.0 || st.velocity.z != 0.0 || q.i != 0.0 || q.j != 0.0) {
+            return Err(fail(
+                "a 2D body moves in the plane z = 0 and turns about z only".into(),
+            ));
         }
         let mut attachments = Vec::with_capacity(body.attachments.len());
         for a in &body.attachments {
@@ -435,8 +438,12 @@ pub(crate) fn attach_bodies<const D: usize>(
             name: body.name.clone(),
             problem,
         };
-        let st = &body.initial;
-        let omega = st.orientation.transform_vector(&model.omega(st));
+        let mut st = body.initial;
+        if D == 2 {
+            // A plane body spins about z: only Π_z counts.
+            st.momentum = Vec3::new(0.0, 0.0, st.momentum.z);
+        }
+        let omega = st.orientation.transform_vector(&model.omega(&st));
         let mut links = Vec::with_capacity(model.attachments.len());
         for (k, &(node, s)) in model.attachments.iter().enumerate() {
             if let Some((other, _)) = out.attached[node] {
@@ -482,7 +489,7 @@ pub(crate) fn attach_bodies<const D: usize>(
                 .collect();
             links.push(at);
         }
-        out.states.push(*st);
+        out.states.push(st);
         out.models.push(model);
         out.names.push(body.name.clone());
         out.links.push(links);
