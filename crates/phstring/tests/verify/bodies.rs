@@ -217,7 +217,8 @@ fn bodies_on_strings_keep_momentum_and_energy_2d() {
 /// 0.01 kg/m) fixed at the origin, in gravity. Released in one of the two small-oscillation
 /// modes (largest angle 0.002 rad), it swings at that mode's closed-form frequency of the
 /// double pendulum
-/// `det(K − ω² M) = 0`, `M = [[mL², mLd], [mLd, J + md²]]`, `K = diag(mgL, mgd)`.
+/// `det(K − ω² M) = 0`, `M = [[mL², mLd], [mLd, J + md²]]`, `K = diag(mgL, mgd)` (measured
+/// at h = 5 ms: 7.8e-5 and 2.5e-6 off).
 #[test]
 fn compound_pendulum_on_a_string_swings_at_the_closed_form_frequencies() {
     let (m, j, d, l, g): (f64, f64, f64, f64, f64) = (2000.0, 1500.0, 1.5, 10.0, 9.81);
