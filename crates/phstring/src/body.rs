@@ -87,8 +87,43 @@ pub struct Attachment<const D: usize> {
     pub point: Vector<D>,
 }
 
+/// A signal of time [s] with a 3-vector value (a force [N] or a torque [N·m]).
+pub type Vec3Fn = std::sync::Arc<dyn Fn(f64) -> Vec3 + Send + Sync>;
+
+/// The wrench port of a body: a force at its centre of mass and a torque, both in space axes,
+/// given as functions of time (evaluated at the step's mid time `t_{n+½}`). Its outputs are
+/// the body's mid-step velocity and angular velocity; its power enters the balance.
+#[derive(Clone)]
+pub struct BodyWrench {
+    /// Force [N] at the centre of mass, space axes (in 2D its `z` component is ignored).
+    pub force: Vec3Fn,
+    /// Torque [N·m] about the centre of mass, space axes (in 2D only `z` counts).
+    pub torque: Vec3Fn,
+}
+
+impl std::fmt::Debug for BodyWrench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BodyWrench").finish_non_exhaustive()
+    }
+}
+
+/// A sample of a body's wrench port over the last step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BodyPortSample {
+    /// Force input [N] (space axes; the weight is not included).
+    pub force: Vec3,
+    /// Torque input [N·m] (space axes).
+    pub torque: Vec3,
+    /// Output: the mid-step velocity `Δx/h` [m/s].
+    pub velocity: Vec3,
+    /// Output: the mid-step angular velocity `R_n w/h` [rad/s], space axes.
+    pub omega: Vec3,
+    /// Mean power over the step `F·v + τ·ω` [W] (positive into the body).
+    pub mean_power: f64,
+}
+
 /// A rigid body of a network.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct RigidBody<const D: usize> {
     /// Name for messages and outputs.
     pub name: String,
@@ -103,6 +138,8 @@ pub struct RigidBody<const D: usize> {
     pub attachments: Vec<Attachment<D>>,
     /// Initial state (its angular momentum with the inertia above).
     pub initial: BodyState,
+    /// The wrench port's inputs; `None`: no port.
+    pub wrench: Option<BodyWrench>,
 }
 
 /// `3×3` skew matrix `â` with `â b = a × b`.
@@ -168,7 +205,7 @@ impl Turn {
 }
 
 /// A body's constants in the form the step uses.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub(crate) struct BodyModel {
     pub mass: f64,
     /// Inertia used by the step (in 2D `J_zz I`).
@@ -177,6 +214,8 @@ pub(crate) struct BodyModel {
     pub weight: Vec3,
     /// `(node, point in body axes)`.
     pub attachments: Vec<(usize, Vec3)>,
+    /// The wrench port's inputs.
+    pub wrench: Option<BodyWrench>,
 }
 
 /// The row of an attachment node that a body's equations need: its residual `R_k` [N] and
@@ -212,6 +251,22 @@ pub(crate) fn project<const D: usize>(v: &Vec3) -> Vector<D> {
 }
 
 impl BodyModel {
+    /// The wrench port's force [N] and torque [N·m] at time `t` [s] (in 2D in the plane: the
+    /// force's `z` and the torque's `x`, `y` are dropped); zero without a port.
+    pub fn wrench_at<const D: usize>(&self, t: f64) -> (Vec3, Vec3) {
+        match &self.wrench {
+            None => (Vec3::zeros(), Vec3::zeros()),
+            Some(w) => {
+                let (f, tau) = ((w.force)(t), (w.torque)(t));
+                if D == 2 {
+                    (Vec3::new(f.x, f.y, 0.0), Vec3::new(0.0, 0.0, tau.z))
+                } else {
+                    (f, tau)
+                }
+            }
+        }
+    }
+
     /// Checks body `index` of a network of `n_nodes` nodes and forms its model.
     pub fn new<const D: usize>(
         index: usize,
@@ -297,6 +352,7 @@ impl BodyModel {
             inertia_inv,
             weight,
             attachments,
+            wrench: body.wrench.clone(),
         })
     }
 
@@ -516,6 +572,7 @@ mod tests {
             inertia_inv: inertia.try_inverse().unwrap(),
             weight: Vec3::new(0.0, 0.0, -2000.0 * 9.81),
             attachments: vec![],
+            wrench: None,
         }
     }
 

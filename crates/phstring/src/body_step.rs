@@ -59,6 +59,33 @@ pub(crate) fn predict<const D: usize, M>(
     }
 }
 
+/// The wrench ports' samples of a step of `h` [s] with slots `slots` and inputs `wrenches`
+/// (force [N], torque [N·m] per body), into `out`; returns the energy they supplied [J].
+pub(crate) fn port_samples<const D: usize>(
+    states: &[BodyState],
+    h: f64,
+    slots: &[Vector<D>],
+    wrenches: &[(Vec3, Vec3)],
+    out: &mut [crate::body::BodyPortSample],
+) -> f64 {
+    let mut supplied = 0.0;
+    for (b, ((st, &(force, torque)), p)) in states.iter().zip(wrenches).zip(out).enumerate() {
+        let (dx, w) = unknowns(slots, b);
+        let turned = st.orientation.transform_vector(&w);
+        // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
+        supplied += force.dot(&dx) + torque.dot(&turned);
+        let (velocity, omega) = (dx / h, turned / h);
+        *p = crate::body::BodyPortSample {
+            force,
+            torque,
+            velocity,
+            omega,
+            mean_power: force.dot(&velocity) + torque.dot(&omega),
+        };
+    }
+    supplied
+}
+
 /// The bodies' states after a step of `h` [s] with slots `slots`, into `out`.
 pub(crate) fn advance<const D: usize, M>(
     sys: &PhSystem<D, M>,
@@ -138,6 +165,8 @@ pub(crate) struct BodyStep<'a, const D: usize> {
     pub h: f64,
     /// The slots of the Newton vector.
     pub slots: &'a [Vector<D>],
+    /// Per body, the wrench port's force [N] and torque [N·m] at the mid time.
+    pub wrenches: &'a [(Vec3, Vec3)],
 }
 
 impl<const D: usize> BodyStep<'_, D> {
@@ -178,8 +207,9 @@ impl<const D: usize> BodyStep<'_, D> {
                 })
                 .collect();
             let mut dw_rows = vec![Mat3::zeros(); rows.len()];
-            let zero = Vec3::zeros();
-            let applied = (&model.weight, &zero);
+            let (f_port, torque) = self.wrenches.get(b).copied().unwrap_or_default();
+            let force = model.weight + f_port;
+            let applied = (&force, &torque);
             let out = model.rows(
                 st,
                 self.h,
@@ -195,7 +225,11 @@ impl<const D: usize> BodyStep<'_, D> {
             res[n + 2 * b + 1] = rotation_slot::<D>(&(out.torque * inv_rg));
             let inertia = (dx / self.h - st.velocity) * (2.0 * model.mass / self.h);
             let spin = (model.inertia * w / self.h - st.momentum) * (2.0 / self.h * inv_rg);
-            scale2 += inertia.norm_squared() + model.weight.norm_squared() + spin.norm_squared();
+            scale2 += inertia.norm_squared()
+                + model.weight.norm_squared()
+                + f_port.norm_squared()
+                + (torque * inv_rg).norm_squared()
+                + spin.norm_squared();
             let Some(j) = jac.as_deref_mut() else {
                 continue;
             };
@@ -383,6 +417,7 @@ mod tests {
             weight: v::<D>(0.0, -800.0 * 9.81, 0.0),
             attachments: atts,
             initial,
+            wrench: None,
         };
         let net = net
             .with_body(body(
@@ -410,7 +445,12 @@ mod tests {
         }
         let f_ext = sys.body_force_vector().to_vec();
         let mut reaction = vec![Vector::<D>::zeros(); n];
+        let wrenches = [(
+            Vec3::new(300.0, -200.0, 100.0),
+            Vec3::new(50.0, 40.0, -30.0),
+        ); 2];
         let mut eqs = StepEquations::new(&sys, scheme, h, &state, 0.3, &f_ext, &mut reaction);
+        eqs.wrenches = &wrenches;
         let mut res = vec![Vector::<D>::zeros(); n + slots];
         let mut jac = BlockJacobian::<D>::with_slots(sys.mesh(), slots);
         eqs.evaluate(&x, &mut res, Some(&mut jac)).unwrap();

@@ -209,6 +209,8 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub measure: bool,
     /// The rigid bodies' states at the step's start (docs/method.md §22).
     pub bodies: &'a [crate::body::BodyState],
+    /// Per body, its wrench port's force [N] and torque [N·m] at `t_mid` (empty: none).
+    pub wrenches: &'a [(crate::body::Vec3, crate::body::Vec3)],
     /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
 }
@@ -241,6 +243,7 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             strain_scale: 0.0,
             measure: true,
             bodies: &state.bodies,
+            wrenches: &[],
             nodes_x: Vec::new(),
         }
     }
@@ -307,6 +310,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             states: self.bodies,
             h: self.h,
             slots: &x[n..],
+            wrenches: self.wrenches,
         };
         let out = if self.measure {
             self.evaluate_range::<true>(&xt, res, jac, 0..n, Some(&step))
@@ -934,6 +938,7 @@ mod tests {
             strain_scale: 0.0,
             measure: true,
             bodies: &state.bodies,
+            wrenches: &[],
             nodes_x: Vec::new(),
         };
         let n = x.len();

@@ -218,6 +218,12 @@ pub struct Simulation<const D: usize, M> {
     /// The rigid bodies' states at the end of the current step, swapped into the state
     /// when the step is committed.
     bodies_next: Vec<crate::body::BodyState>,
+    /// Per body, its wrench port's force [N] and torque [N·m] at the current step's mid time.
+    body_wrenches: Vec<(crate::body::Vec3, crate::body::Vec3)>,
+    /// The bodies' wrench port samples of the last step, and of the one before (put back
+    /// if a step fails after they were formed).
+    body_ports: Vec<crate::body::BodyPortSample>,
+    body_ports_prev: Vec<crate::body::BodyPortSample>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -477,6 +483,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(Self {
             newton_ws: NewtonWorkspace::with_slots(&sys.mesh, slots),
             bodies_next: Vec::with_capacity(sys.bodies.len()),
+            body_wrenches: vec![Default::default(); sys.bodies.len()],
+            body_ports: vec![Default::default(); sys.bodies.len()],
+            body_ports_prev: vec![Default::default(); sys.bodies.len()],
             sys,
             params,
             run: Checkpoint::start(state, params.h),
@@ -609,6 +618,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Energies of the current state [J].
     pub fn energies(&self) -> Energies {
         self.energies
+    }
+    /// The rigid bodies' wrench port samples of the last step (docs/method.md §22), in body
+    /// order.
+    pub fn body_ports(&self) -> &[crate::body::BodyPortSample] {
+        &self.body_ports
     }
     /// Cumulative supplied energy `Σ h û·ŷ` [J].
     pub fn supplied_energy(&self) -> f64 {
@@ -1218,6 +1232,18 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             port.input = f;
             self.f_ext[load.node] += f;
         }
+        for (b, model) in self.sys.bodies.iter().enumerate() {
+            let (f, tau) = model.wrench_at::<D>(t_mid);
+            if !(f.iter().chain(&tau).all(|x| x.is_finite())) {
+                return Err(StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "rigid body's wrench (at the body's first attached node)",
+                    node: model.attachments.first().map_or(0, |a| a.0),
+                });
+            }
+            self.body_wrenches[b] = (f, tau);
+        }
         // A feedback law that is not finite at the start of the step (a failing reference
         // expression) fails the step at once, like a load, rather than through Newton.
         for fb in &self.sys.boundary.feedback {
@@ -1296,6 +1322,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.f_ext,
             &mut self.reaction,
         );
+        eqs.wrenches = &self.body_wrenches;
         let result = newton::solve(
             &mut eqs,
             &mut self.x,
@@ -1497,6 +1524,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // for every scheme, `mp` included.
         if !balance_error.is_finite() {
             std::mem::swap(&mut self.ports, &mut self.ports_prev);
+            std::mem::swap(&mut self.body_ports, &mut self.body_ports_prev);
             return Err(StepError::NonFinite {
                 step: step_no,
                 t,
@@ -1521,6 +1549,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let missed = balance_error.is_nan() || balance_error.abs() > bound;
         if self.params.scheme != Scheme::Midpoint && missed {
             std::mem::swap(&mut self.ports, &mut self.ports_prev);
+            std::mem::swap(&mut self.body_ports, &mut self.body_ports_prev);
             return Err(StepError::BalanceNotResolved {
                 step: step_no,
                 t,
@@ -1620,7 +1649,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let beyond = m * dvi.dot(&(raw(j) + dvj * 0.5 - x[i] * inv_h));
             self.ports[port].mean_power += beyond * inv_h;
         }
-        h * self.ports.iter().map(|p| p.power()).sum::<f64>()
+        let nodes = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
+        if self.sys.bodies.is_empty() {
+            return nodes;
+        }
+        self.body_ports_prev.clone_from(&self.body_ports);
+        let n = self.sys.mesh.n_nodes();
+        nodes
+            + crate::body_step::port_samples::<D>(
+                &self.run.state.bodies,
+                h,
+                &self.x[n..],
+                &self.body_wrenches,
+                &mut self.body_ports,
+            )
     }
 
     /// The first node of the first element whose stored energy at the new strains of the

@@ -3,8 +3,8 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 use phstring::{
-    Attachment, BodyState, Boundary, MassMatrix, Material, Network, NetworkBuilder, NewtonParams,
-    RigidBody, Simulation, StepParams, StringSpec, Vector,
+    Attachment, BodyState, BodyWrench, Boundary, MassMatrix, Material, Network, NetworkBuilder,
+    NewtonParams, RigidBody, Simulation, StepParams, StringSpec, Vector,
 };
 
 /// A steel box of 2 t (2 m × 1 m × 0.5 m) in body axes.
@@ -35,7 +35,7 @@ fn embed<const D: usize>(v: &Vector3<f64>) -> Vector<D> {
 
 /// Two boxes of 2 t and 3 t, 20 m apart, joined by three pre-stretched ropes (3D) or two
 /// (2D), each body moving and spinning; no support, no gravity.
-fn two_boxes<const D: usize>() -> Network<D, Material> {
+fn two_boxes<const D: usize>(wrench: Option<BodyWrench>) -> Network<D, Material> {
     let mut nb = NetworkBuilder::<D, Material>::new();
     let (qa, qb) = if D == 3 {
         (
@@ -131,16 +131,17 @@ fn two_boxes<const D: usize>() -> Network<D, Material> {
             }
         }
     }
-    let body = |name: &str, mass, inertia, atts, initial| RigidBody {
+    let body = |name: &str, mass, inertia, atts, initial, wrench| RigidBody {
         name: name.into(),
         mass,
         inertia,
         weight: Vector::zeros(),
         attachments: atts,
         initial,
+        wrench,
     };
-    net.with_body(body("a", ma, ja, att_a, sa))
-        .with_body(body("b", mb, jb, att_b, sb))
+    net.with_body(body("a", ma, ja, att_a, sa, wrench))
+        .with_body(body("b", mb, jb, att_b, sb, None))
 }
 
 fn params() -> StepParams {
@@ -162,7 +163,7 @@ fn params() -> StepParams {
 fn drifts<const D: usize>(
     momentum: impl Fn(&Simulation<D, Material>) -> (f64, Vector3<f64>),
 ) -> [f64; 4] {
-    let mut sim = Simulation::new(two_boxes::<D>(), params()).unwrap();
+    let mut sim = Simulation::new(two_boxes::<D>(None), params()).unwrap();
     let (p0, l0) = momentum(&sim);
     let h0 = sim.energies().hamiltonian();
     let (mut dp, mut dl, mut db) = (0.0f64, 0.0f64, 0.0f64);
@@ -280,6 +281,7 @@ fn swing(m: f64, j: f64, d: f64, l: f64, g: f64, th1: f64, th2: f64, period: f64
             point: Vector::<2>::new(0.0, d),
         }],
         initial: BodyState::at_rest(centre, q),
+        wrench: None,
     };
     let net = net.with_body(body);
     let params = StepParams {
@@ -303,4 +305,52 @@ fn swing(m: f64, j: f64, d: f64, l: f64, g: f64, th1: f64, th2: f64, period: f64
     }
     let cycles = (ups.len() - 1) as f64;
     2.0 * std::f64::consts::PI * cycles / (ups[ups.len() - 1] - ups[0])
+}
+
+/// The wrench port (3D): a force of 2 kN and a torque of 1 kN·m, both turning in time, act
+/// on the first box for 1 s (500 steps). The momentum changes by the impulse `Σ h F(t_{n+½})`,
+/// the angular momentum by `Σ h (x_{n+½} × F + τ)`, both to 1e-13 of their size, and `Ĥ`
+/// by the energy the port supplied, on every step. The port reports its input.
+#[test]
+fn wrench_port_supplies_its_impulse_and_work() {
+    let force = |t: f64| Vector3::new(2e3 * (3.0 * t).cos(), 1e3 * (2.0 * t).sin(), -5e2);
+    let torque = |t: f64| Vector3::new(1e3 * t, -5e2, 8e2 * (5.0 * t).sin());
+    let wrench = BodyWrench {
+        force: std::sync::Arc::new(force),
+        torque: std::sync::Arc::new(torque),
+    };
+    let mut sim = Simulation::new(two_boxes::<3>(Some(wrench)), params()).unwrap();
+    let sys_p = |sim: &Simulation<3, Material>| sim.system().linear_momentum(sim.state());
+    let sys_l = |sim: &Simulation<3, Material>| sim.system().angular_momentum(sim.state());
+    let (p0, l0, h0) = (sys_p(&sim), sys_l(&sim), sim.energies().hamiltonian());
+    let (mut impulse, mut moment) = (Vector3::zeros(), Vector3::zeros());
+    let mut worst_balance = 0.0f64;
+    for _ in 0..500 {
+        let (t, x0) = (sim.time(), sim.state().bodies[0].position);
+        let rep = sim.step().unwrap();
+        let h = rep.h;
+        let x_mid = (x0 + sim.state().bodies[0].position) * 0.5;
+        let f = force(t + 0.5 * h);
+        impulse += f * h;
+        moment += (x_mid.cross(&f) + torque(t + 0.5 * h)) * h;
+        worst_balance = worst_balance.max(rep.balance_error.abs() / rep.energy_scale);
+        let port = sim.body_ports()[0];
+        assert_eq!(port.force, f);
+    }
+    let dp = (sys_p(&sim) - p0 - impulse).norm() / impulse.norm();
+    // Relative to the larger of the angular momentum and the moment (rounding is relative to
+    // the sums' size).
+    let dl = (sys_l(&sim) - l0 - moment).norm() / moment.norm().max(l0.norm());
+    let dh = sim.energies().hamiltonian() - h0 - sim.supplied_energy();
+    assert!(dp < 1e-13, "momentum against impulse: {dp:e}");
+    assert!(dl < 1e-13, "angular momentum against moment: {dl:e}");
+    assert!(
+        worst_balance < 1e-13,
+        "balance error {worst_balance:e} of the energy scale"
+    );
+    assert!(
+        dh.abs() < 1e-12 * sim.supplied_energy().abs().max(h0),
+        "Ĥ moved {dh:e} J beyond the supplied {} J",
+        sim.supplied_energy()
+    );
 }
