@@ -1290,3 +1290,6 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod body_tests;
