@@ -111,6 +111,7 @@ pub fn modes<const D: usize, M: StoredEnergy>(
     stop: Option<&AtomicBool>,
 ) -> Result<Modes<D>, ModesError> {
     let stopped = || stop.is_some_and(|s| s.load(Ordering::Relaxed));
+    sys.refuse_bodies("the modal analysis")?;
     let kb = tangent_blocks(sys, r);
     if !positive_definite(sys, &kb) {
         return Err(ModesError::NotStable);

@@ -530,6 +530,7 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
     params: &StaticsParams,
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
+    sys.refuse_bodies("statics")?;
     let eq = solve_without_feedback(sys, r_start, params, stop)?;
     let checked = if params.open_loop {
         &[][..]

@@ -1178,6 +1178,22 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .filter(|&i| self.attached.get(i).is_none_or(|a| a.is_none()))
     }
 
+    /// Refuses an analysis (`what`: "statics", "modes", …) that does not cover rigid bodies
+    /// yet, naming the first body.
+    pub fn refuse_bodies(&self, what: &str) -> Result<(), SetupError> {
+        match self.body_names.first() {
+            None => Ok(()),
+            Some(name) => Err(SetupError::Body {
+                index: 0,
+                name: name.clone(),
+                problem: format!(
+                    "{what} does not cover rigid bodies yet (the time stepper does): run the \
+                     dynamics from a hand-placed start instead"
+                ),
+            }),
+        }
+    }
+
     /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])`.
     pub fn bodies(&self) -> Vec<(&str, f64)> {
         self.body_names
