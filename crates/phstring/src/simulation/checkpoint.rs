@@ -338,7 +338,9 @@ fn unflat_bodies(v: &[f64]) -> Vec<BodyState> {
             BodyState {
                 position: v3(0),
                 velocity: v3(3),
-                orientation: nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(
+                // Unchecked, so that a record restores bit for bit; `check_fits` has checked
+                // that it is a unit quaternion.
+                orientation: nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
                     b[6], b[7], b[8], b[9],
                 )),
                 momentum: v3(10),
@@ -632,6 +634,14 @@ impl FlatCheckpoint {
             }
             if let Some(i) = values.iter().position(|x| !x.is_finite()) {
                 return Err(format!("{name}[{i}] is not finite"));
+            }
+        }
+        for (b, body) in bodies.chunks_exact(BODY_NUMBERS).enumerate() {
+            let norm = body[6..10].iter().map(|x| x * x).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > 1e-12 {
+                return Err(format!(
+                    "sim.bodies: body {b}'s orientation quaternion has norm {norm:e}, not 1"
+                ));
             }
         }
         check_history::<D>(acc_history, n)?;
