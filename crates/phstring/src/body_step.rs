@@ -86,6 +86,37 @@ pub(crate) fn port_samples<const D: usize>(
     supplied
 }
 
+/// The mid-step velocities of a step of `h` [s] from `states` with slots `slots`, in the
+/// predictor's form (per body `Δx/h` and the slot of `R_n w/h`), into `out`.
+pub(crate) fn mid_velocities<const D: usize>(
+    states: &[BodyState],
+    h: f64,
+    slots: &[Vector<D>],
+    out: &mut [Vector<D>],
+) {
+    for (b, st) in states.iter().enumerate() {
+        let (dx, w) = unknowns(slots, b);
+        out[2 * b] = project(&(dx / h));
+        out[2 * b + 1] = rotation_slot::<D>(&(st.orientation.transform_vector(&w) / h));
+    }
+}
+
+/// The slots predicted from the last step's mid-step velocities `v_mid` (the form of
+/// [`mid_velocities`]): `Δx = h V_{n−½}`, `w = h R_nᵀ ω_{n−½}`.
+pub(crate) fn predict_mid<const D: usize>(
+    states: &[BodyState],
+    h: f64,
+    v_mid: &[Vector<D>],
+    slots: &mut [Vector<D>],
+) {
+    for (b, st) in states.iter().enumerate() {
+        let (v, omega) = unknowns(v_mid, b);
+        slots[2 * b] = project(&(v * h));
+        let w = st.orientation.inverse_transform_vector(&omega) * h;
+        slots[2 * b + 1] = rotation_slot::<D>(&w);
+    }
+}
+
 /// The bodies' states after a step of `h` [s] with slots `slots`, into `out`.
 pub(crate) fn advance<const D: usize, M>(
     sys: &PhSystem<D, M>,

@@ -1304,7 +1304,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         if !self.sys.bodies.is_empty() {
             let n = self.sys.mesh.n_nodes();
             let states = &self.run.state.bodies;
-            crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
+            if mid {
+                let v_mid = &self.run.v_mid[n..];
+                crate::body_step::predict_mid(states, h, v_mid, &mut self.x[n..]);
+            } else {
+                crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
+            }
         }
         Ok(())
     }
@@ -1587,6 +1592,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         for (m, &v) in self.sys.boundary.motions.iter().zip(&self.held.velocity) {
             self.run.state.v[m.node][m.component] = v;
+        }
+        if !self.sys.bodies.is_empty() {
+            let n = self.sys.mesh.n_nodes();
+            let states = &self.run.state.bodies;
+            let v_mid = &mut self.run.v_mid[n..];
+            crate::body_step::mid_velocities(states, h, &self.x[n..], v_mid);
         }
         std::mem::swap(&mut self.run.state.bodies, &mut self.bodies_next);
         debug_assert_eq!(after, self.sys.energies(&self.run.state));

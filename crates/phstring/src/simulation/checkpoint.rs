@@ -65,7 +65,8 @@ pub struct Checkpoint<const D: usize> {
     pub h_min_used: f64,
     /// Acceleration estimate of the predictor [m/s²], per node.
     pub acc: Vec<Vector<D>>,
-    /// Mid-step velocity of the last step (predictor) [m/s], per node.
+    /// Mid-step velocity of the last step (predictor) [m/s], per node, then two per rigid
+    /// body: `Δx/h` and the angular velocity `R_n w/h` [rad/s] in space axes (its slot form).
     pub v_mid: Vec<Vector<D>>,
     /// Cumulative supplied energy [J].
     pub supplied_total: f64,
@@ -88,6 +89,7 @@ impl<const D: usize> Checkpoint<D> {
     /// the predictor's history zero.
     pub(super) fn start(state: State<D>, h: f64) -> Self {
         let n = state.r.len();
+        let slots = 2 * state.bodies.len();
         Self {
             state,
             t_base: 0.0,
@@ -98,7 +100,7 @@ impl<const D: usize> Checkpoint<D> {
             easy_streak: 0,
             h_min_used: h,
             acc: vec![Vector::zeros(); n],
-            v_mid: vec![Vector::zeros(); n],
+            v_mid: vec![Vector::zeros(); n + slots],
             supplied_total: 0.0,
             dissipated_total: 0.0,
             total_newton: 0,
@@ -140,7 +142,7 @@ impl<const D: usize> Checkpoint<D> {
             ("strains", state.c.len(), n_el),
             ("rigid bodies", state.bodies.len(), n_bodies),
             ("predictor accelerations", acc.len(), n),
-            ("predictor velocities", v_mid.len(), n),
+            ("predictor velocities", v_mid.len(), n + 2 * n_bodies),
         ] {
             if got != expected {
                 return Err(SetupError::StateSize {
@@ -612,7 +614,7 @@ impl FlatCheckpoint {
             ("sim.r", r, D * n, None),
             ("sim.v", v, D * n, None),
             ("sim.acc", acc, D * n, None),
-            ("sim.v_mid", v_mid, D * n, None),
+            ("sim.v_mid", v_mid, D * (n + 2 * n_bodies), Some("slots")),
             ("sim.c", c, n_el, Some("elements")),
             (
                 "sim.bodies",
@@ -625,6 +627,9 @@ impl FlatCheckpoint {
                 let count = match count {
                     None => format!("{n} nodes × {D} components"),
                     Some("bodies") => format!("{n_bodies} bodies × {BODY_NUMBERS} numbers"),
+                    Some("slots") => {
+                        format!("{n} nodes and 2 × {n_bodies} body slots, × {D} components")
+                    }
                     Some(what) => format!("{n_el} {what}"),
                 };
                 return Err(format!(
