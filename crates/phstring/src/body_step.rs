@@ -53,9 +53,9 @@ pub(crate) fn predict<const D: usize, M>(
     h: f64,
     slots: &mut [Vector<D>],
 ) {
-    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
+    for (b, st) in states.iter().enumerate().take(sys.bodies.len()) {
         slots[2 * b] = project(&(st.velocity * h));
-        slots[2 * b + 1] = rotation_slot::<D>(&(model.omega(st) * h));
+        slots[2 * b + 1] = rotation_slot::<D>(&(st.omega * h));
     }
 }
 
@@ -115,6 +115,43 @@ pub(crate) fn predict_mid<const D: usize>(
         let w = st.orientation.inverse_transform_vector(&omega) * h;
         slots[2 * b + 1] = rotation_slot::<D>(&w);
     }
+}
+
+/// The current's velocity [m/s], its vertical derivative [1/s] and the vertical unit vector
+/// at body `st`'s mid-step centre `x_n + Δx/2` (3-vectors).
+pub(crate) fn current_at<const D: usize>(
+    water: &crate::water::WaterModel<D>,
+    st: &BodyState,
+    dx: &Vec3,
+) -> (Vec3, Vec3, Vec3) {
+    let mid = st.position + dx * 0.5;
+    let (u, du) = water.current.at(mid[D - 1]);
+    let up = Vec3::from_fn(|k, _| if k + 1 == D { 1.0 } else { 0.0 });
+    (embed(&u), embed(&du), up)
+}
+
+/// The water's work on the bodies over a step of `h` [s] with slots `slots`: their drag's
+/// dissipation and the current's supply [J].
+pub(crate) fn drag_work<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    states: &[BodyState],
+    h: f64,
+    slots: &[Vector<D>],
+) -> (f64, f64) {
+    let Some(water) = sys.water.as_deref() else {
+        return (0.0, 0.0);
+    };
+    let (mut dissipated, mut supplied) = (0.0, 0.0);
+    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
+        if model.drag.is_some() {
+            let dx = unknowns(slots, b).0;
+            let flow = current_at::<D>(water, st, &dx);
+            let (_, _, d, s) = model.drag_step(h, &dx, (&flow.0, &flow.1, &flow.2));
+            dissipated += d;
+            supplied += s;
+        }
+    }
+    (dissipated, supplied)
 }
 
 /// The bodies' states after a step of `h` [s] with slots `slots`, into `out`.
@@ -218,16 +255,25 @@ impl<const D: usize> BodyStep<'_, D> {
             .enumerate()
             .map(|(b, (_, st))| Turn::new(&st.orientation, &unknowns(self.slots, b).1))
             .collect();
+        // The attachments' point steps, then the centre of buoyancy's.
         let points: Vec<Vec<PointStep>> = sys
             .bodies
             .iter()
             .zip(&turns)
-            .map(|(m, t)| m.attachments.iter().map(|(_, s)| t.point(s)).collect())
+            .map(|(m, t)| {
+                let cb = m.buoyancy.map(|(_, s)| s);
+                m.attachments
+                    .iter()
+                    .map(|(_, s)| s)
+                    .chain(cb.as_ref())
+                    .map(|s| t.point(s))
+                    .collect()
+            })
             .collect();
         let mut scale2 = 0.0;
         for (b, (model, st)) in sys.bodies.iter().zip(self.states).enumerate() {
             let (dx, w) = unknowns(self.slots, b);
-            let rows: Vec<NodeRow> = model
+            let mut rows: Vec<NodeRow> = model
                 .attachments
                 .iter()
                 .map(|&(node, _)| NodeRow {
@@ -237,11 +283,27 @@ impl<const D: usize> BodyStep<'_, D> {
                         .map_or(Mat3::zeros(), |j| embed_block(&j.diag[node])),
                 })
                 .collect();
+            // The buoyancy: a constant force at the centre of buoyancy (a row that asks the
+            // body for −F_b and does not depend on the increment).
+            if let Some((f, _)) = model.buoyancy {
+                rows.push(NodeRow {
+                    res: -f,
+                    diag: Mat3::zeros(),
+                });
+            }
             let mut dw_rows = vec![Mat3::zeros(); rows.len()];
             let (f_port, torque) = self.wrenches.get(b).copied().unwrap_or_default();
-            let force = model.weight + f_port;
+            let (f_drag, d_drag) = match sys.water.as_deref() {
+                Some(water) if model.drag.is_some() => {
+                    let flow = current_at::<D>(water, st, &dx);
+                    let (f, df, _, _) = model.drag_step(self.h, &dx, (&flow.0, &flow.1, &flow.2));
+                    (f, df)
+                }
+                _ => (Vec3::zeros(), Mat3::zeros()),
+            };
+            let force = model.weight + f_port + f_drag;
             let applied = (&force, &torque);
-            let out = model.rows(
+            let mut out = model.rows(
                 st,
                 self.h,
                 (&dx, &w),
@@ -251,14 +313,17 @@ impl<const D: usize> BodyStep<'_, D> {
                 applied,
                 &mut dw_rows,
             );
+            out.jac[0][0] -= d_drag;
             let inv_rg = 1.0 / model.gyration();
             res[n + 2 * b] = project(&out.force);
             res[n + 2 * b + 1] = rotation_slot::<D>(&(out.torque * inv_rg));
             let inertia = (dx / self.h - st.velocity) * (2.0 * model.mass / self.h);
-            let spin = (model.inertia * w / self.h - st.momentum) * (2.0 / self.h * inv_rg);
+            let spin = (model.inertia * w / self.h - model.momentum(st)) * (2.0 / self.h * inv_rg);
             scale2 += inertia.norm_squared()
                 + model.weight.norm_squared()
                 + f_port.norm_squared()
+                + f_drag.norm_squared()
+                + model.buoyancy.map_or(0.0, |(f, _)| f.norm_squared())
                 + (torque * inv_rg).norm_squared()
                 + spin.norm_squared();
             let Some(j) = jac.as_deref_mut() else {
@@ -292,7 +357,8 @@ impl<const D: usize> BodyStep<'_, D> {
     ) {
         let eye = Mat3::identity();
         let slots = j.border.slots;
-        for (k, p) in points[b].iter().enumerate() {
+        let n_att = sys.bodies[b].attachments.len();
+        for (k, p) in points[b][..n_att].iter().enumerate() {
             // Body rows from R_k: force ∂/∂R_k = I, torque (scaled) ∂/∂R_k = dw_rows[k].
             let by_res = [eye, dw_rows[k] * inv_rg];
             let da = [eye, p.dw];

@@ -1457,7 +1457,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         crate::body_step::advance(&self.sys, bodies, h, &self.x[n..], &mut self.bodies_next);
         if let Some(b) = self.bodies_next.iter().position(|st| {
             let finite = |v: &crate::body::Vec3| v.iter().all(|c| c.is_finite());
-            !(finite(&st.position) && finite(&st.velocity) && finite(&st.momentum))
+            !(finite(&st.position) && finite(&st.velocity) && finite(&st.omega))
         }) {
             let node = self.sys.bodies[b].attachments.first().map_or(0, |a| a.0);
             return Err(StepError::NonFinite {

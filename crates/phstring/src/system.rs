@@ -807,7 +807,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut free = free_components(&boundary, &initial, n)?;
         check_port_nodes(&boundary, n)?;
         let rigid = crate::body::attach_bodies(
-            &bodies, &mesh, &boundary, &mut free, &initial.r, &initial.v,
+            &bodies,
+            &mesh,
+            &boundary,
+            water.as_ref(),
+            &mut free,
+            &initial.r,
+            &initial.v,
         )?;
         initial.bodies.clone_from(&rigid.states);
         let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
@@ -1117,13 +1123,18 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             external -= p;
             magnitude += p.abs();
         }
+        let (mut buoyancy, mut seabed) = (0.0, 0.0);
         for (model, st) in self.bodies.iter().zip(bodies) {
-            let (t, p) = (model.kinetic(st), model.potential(st));
+            let (t, p, u) = (
+                model.kinetic(st),
+                model.potential(st),
+                model.buoyancy_potential(st),
+            );
             kinetic += t;
             external += p;
-            magnitude += t + p.abs();
+            buoyancy += u;
+            magnitude += t + p.abs() + u.abs();
         }
-        let (mut buoyancy, mut seabed) = (0.0, 0.0);
         if let Some(w) = &self.water {
             for node in &w.nodes {
                 let (u, c) = w.node_energies(node, &r(node.node));
@@ -1164,7 +1175,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut l = crate::body::Vec3::zeros();
         for (model, st) in self.bodies.iter().zip(&state.bodies) {
             l += st.position.cross(&(st.velocity * model.mass))
-                + st.orientation.transform_vector(&st.momentum);
+                + st.orientation.transform_vector(&model.momentum(st));
         }
         l
     }
@@ -1194,12 +1205,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
-    /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])`.
+    /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])` (their own mass,
+    /// without the added mass).
     pub fn bodies(&self) -> Vec<(&str, f64)> {
         self.body_names
             .iter()
             .zip(&self.bodies)
-            .map(|(n, b)| (n.as_str(), b.mass))
+            .map(|(n, b)| (n.as_str(), b.dry_mass))
             .collect()
     }
 }

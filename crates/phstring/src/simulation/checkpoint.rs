@@ -269,7 +269,7 @@ pub struct FlatCheckpoint {
     /// Strains (dimensionless), one per element.
     pub c: Vec<f64>,
     /// Rigid bodies' states, [`BODY_NUMBERS`] per body: position [m], velocity [m/s],
-    /// orientation quaternion `(w, x, y, z)`, angular momentum in body axes [kg·m²/s];
+    /// orientation quaternion `(w, x, y, z)`, angular velocity in body axes [rad/s];
     /// written only when there are bodies, empty when missing.
     #[cfg_attr(
         feature = "serde",
@@ -326,7 +326,7 @@ fn flat_bodies(bodies: &[BodyState]) -> Vec<f64> {
         out.extend(b.position.iter().chain(&b.velocity));
         let q = b.orientation.quaternion();
         out.extend([q.w, q.i, q.j, q.k]);
-        out.extend(b.momentum.iter());
+        out.extend(b.omega.iter());
     }
     out
 }
@@ -345,7 +345,7 @@ fn unflat_bodies(v: &[f64]) -> Vec<BodyState> {
                 orientation: nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
                     b[6], b[7], b[8], b[9],
                 )),
-                momentum: v3(10),
+                omega: v3(10),
             }
         })
         .collect()
