@@ -92,6 +92,7 @@ fn run(n_el: usize, with_body: bool) -> (f64, f64) {
             initial: BodyState::at_rest(centre, UnitQuaternion::identity()),
             wrench: None,
             hydro: None,
+            motion: None,
         });
     }
     let params = StepParams {

@@ -110,12 +110,37 @@ impl std::fmt::Debug for BodyWrench {
     }
 }
 
+/// A body's pose `(position [m], orientation)` as a function of time [s].
+pub type PoseFn = std::sync::Arc<dyn Fn(f64) -> (Vec3, UnitQuaternion<f64>) + Send + Sync>;
+/// A body's velocity [m/s] and angular velocity [rad/s] (space axes) as a function of time [s].
+pub type TwistFn = std::sync::Arc<dyn Fn(f64) -> (Vec3, Vec3) + Send + Sync>;
+
+/// A prescribed motion of a whole body (a vessel, a crane trolley): its pose and the pose's
+/// exact rate. The body's slots are then known; its port's input is the motion, its output
+/// the reaction wrench (with the impulse that holds its velocity at `twist`), and its power
+/// enters the balance. In 2D the position's `z`, and the rotation about other axes than `z`,
+/// must be zero.
+#[derive(Clone)]
+pub struct BodyMotion {
+    /// Pose at time `t`.
+    pub pose: PoseFn,
+    /// Velocity and angular velocity (space axes) at time `t`: the pose's rate.
+    pub twist: TwistFn,
+}
+
+impl std::fmt::Debug for BodyMotion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BodyMotion").finish_non_exhaustive()
+    }
+}
+
 /// A sample of a body's wrench port over the last step.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BodyPortSample {
-    /// Force input [N] (space axes; the weight is not included).
+    /// Force input [N] (space axes; the weight is not included); for a prescribed motion
+    /// the reaction force the motion needs (output).
     pub force: Vec3,
-    /// Torque input [N·m] (space axes).
+    /// Torque input [N·m] (space axes); for a prescribed motion the reaction torque.
     pub torque: Vec3,
     /// Output: the mid-step velocity `Δx/h` [m/s].
     pub velocity: Vec3,
@@ -167,6 +192,8 @@ pub struct RigidBody<const D: usize> {
     pub wrench: Option<BodyWrench>,
     /// The water's action (needs the network's water); `None`: none.
     pub hydro: Option<BodyHydro>,
+    /// A prescribed motion; `None`: the body moves freely.
+    pub motion: Option<BodyMotion>,
 }
 
 /// `3×3` skew matrix `â` with `â b = a × b`.
@@ -249,6 +276,8 @@ pub(crate) struct BodyModel {
     /// Drag at the centre of mass: linear [N·s/m], quadratic `½ ρ_w C_d A` [kg/m], and the
     /// smoothing speed `δ` [m/s] of `|v_r|`.
     pub drag: Option<(f64, f64, f64)>,
+    /// The prescribed motion.
+    pub motion: Option<BodyMotion>,
 }
 
 /// The row of an attachment node that a body's equations need: its residual `R_k` [N] and
@@ -426,6 +455,7 @@ impl BodyModel {
             dry_mass: body.mass,
             buoyancy,
             drag,
+            motion: body.motion.clone(),
         })
     }
 
@@ -550,6 +580,34 @@ impl BodyModel {
     }
 }
 
+/// Checks a body's prescribed motion against its initial state `st` (pose and rate at
+/// `t = 0`, within 1e-9 of their scale) and refuses a wrench port beside it.
+fn check_motion<const D: usize>(
+    fail: &dyn Fn(String) -> SetupError,
+    body: &RigidBody<D>,
+    st: &BodyState,
+) -> Result<(), SetupError> {
+    let Some(m) = &body.motion else {
+        return Ok(());
+    };
+    if body.wrench.is_some() {
+        return Err(fail(
+            "a body with a prescribed motion takes no wrench port (its port is the motion)".into(),
+        ));
+    }
+    let ((x, q), (v, omega)) = ((m.pose)(0.0), (m.twist)(0.0));
+    let off = (x - st.position).norm() + q.angle_to(&st.orientation) * (1.0 + x.norm());
+    let slip = (v - st.velocity).norm() + (omega - st.omega_space()).norm() * (1.0 + x.norm());
+    let scale = 1.0 + st.position.norm() + st.velocity.norm() + st.omega.norm();
+    if !(off <= 1e-9 * scale && slip <= 1e-9 * scale) {
+        return Err(fail(format!(
+            "its prescribed motion does not start at its initial state: pose {off:e}, rate \
+             {slip:e} off at t = 0"
+        )));
+    }
+    Ok(())
+}
+
 /// A network's bodies in the form the system keeps them.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Rigid {
@@ -649,6 +707,7 @@ pub(crate) fn attach_bodies<const D: usize>(
                 .collect();
             links.push(at);
         }
+        check_motion::<D>(&fail, body, &st)?;
         out.states.push(st);
         out.models.push(model);
         out.names.push(body.name.clone());
@@ -679,6 +738,7 @@ mod tests {
             dry_mass: 2000.0,
             buoyancy: None,
             drag: None,
+            motion: None,
         }
     }
 

@@ -59,31 +59,105 @@ pub(crate) fn predict<const D: usize, M>(
     }
 }
 
-/// The wrench ports' samples of a step of `h` [s] with slots `slots` and inputs `wrenches`
-/// (force [N], torque [N·m] per body), into `out`; returns the energy they supplied [J].
-pub(crate) fn port_samples<const D: usize>(
+/// The bodies' port samples of a step of `h` [s] with slots `slots`, into `out`; returns the
+/// energy they supplied [J]. A wrench port's inputs are `wrenches` (force [N], torque [N·m]
+/// per body); a prescribed motion's output is the reaction wrench, formed from the attached
+/// nodes' residuals `reaction` (as the Newton solve left them) and the states `next` the step
+/// ends in (velocities held), with the impulse and the kinetic energy of the hold.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn port_samples<const D: usize, M>(
+    sys: &PhSystem<D, M>,
     states: &[BodyState],
     h: f64,
     slots: &[Vector<D>],
     wrenches: &[(Vec3, Vec3)],
+    reaction: &[Vector<D>],
+    next: &[BodyState],
     out: &mut [crate::body::BodyPortSample],
 ) -> f64 {
     let mut supplied = 0.0;
-    for (b, ((st, &(force, torque)), p)) in states.iter().zip(wrenches).zip(out).enumerate() {
+    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
         let (dx, w) = unknowns(slots, b);
         let turned = st.orientation.transform_vector(&w);
-        // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
-        supplied += force.dot(&dx) + torque.dot(&turned);
         let (velocity, omega) = (dx / h, turned / h);
-        *p = crate::body::BodyPortSample {
+        let (force, torque, work) = if model.motion.is_some() {
+            reaction_wrench(model, st, h, (&dx, &w), reaction, &next[b])
+        } else {
+            // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
+            let (force, torque) = wrenches[b];
+            (force, torque, force.dot(&dx) + torque.dot(&turned))
+        };
+        supplied += work;
+        out[b] = crate::body::BodyPortSample {
             force,
             torque,
             velocity,
             omega,
-            mean_power: force.dot(&velocity) + torque.dot(&omega),
+            mean_power: work / h,
         };
     }
     supplied
+}
+
+/// The wrench [N, N·m] a prescribed motion exerts over a step (the body's rows at the
+/// solution, with the hold's impulse), and the energy it supplies [J]: the wrench's work over
+/// `(Δx, R_n w)` and the kinetic energy the hold of the velocities adds.
+fn reaction_wrench<const D: usize>(
+    model: &crate::body::BodyModel,
+    st: &BodyState,
+    h: f64,
+    (dx, w): (&Vec3, &Vec3),
+    reaction: &[Vector<D>],
+    held: &BodyState,
+) -> (Vec3, Vec3, f64) {
+    let turn = Turn::new(&st.orientation, w);
+    let cb = model.buoyancy.map(|(_, s)| s);
+    let points: Vec<PointStep> = model
+        .attachments
+        .iter()
+        .map(|(_, s)| s)
+        .chain(cb.as_ref())
+        .map(|s| turn.point(s))
+        .collect();
+    let mut rows: Vec<NodeRow> = model
+        .attachments
+        .iter()
+        .map(|&(node, _)| NodeRow {
+            res: embed(&reaction[node]),
+            diag: Mat3::zeros(),
+        })
+        .collect();
+    if let Some((f, _)) = model.buoyancy {
+        rows.push(NodeRow {
+            res: -f,
+            diag: Mat3::zeros(),
+        });
+    }
+    let mut dw = vec![Mat3::zeros(); rows.len()];
+    let zero = Vec3::zeros();
+    let out = model.rows(
+        st,
+        h,
+        (dx, w),
+        &turn,
+        &rows,
+        &points,
+        (&model.weight, &zero),
+        &mut dw,
+    );
+    // The rows with the reaction (F, τ) added are zero: F = force row, τ̃ = (I − ½ŵ)⁻¹ torque.
+    let force = out.force;
+    let torque = turn.rot * (turn.inv_half * out.torque);
+    let raw = model.advance(st, h, dx, w);
+    let work = force.dot(dx) + torque.dot(&st.orientation.transform_vector(w));
+    let hold = model.kinetic(held) - model.kinetic(&raw);
+    // The hold's impulse belongs to the reaction, so that the momentum balance is whole.
+    let impulse = (held.velocity - raw.velocity) * (model.mass / h);
+    let spin = held
+        .orientation
+        .transform_vector(&(model.momentum(held) - model.momentum(&raw)))
+        / h;
+    (force + impulse, torque + spin, work + hold)
 }
 
 /// The mid-step velocities of a step of `h` [s] from `states` with slots `slots`, in the
@@ -158,15 +232,58 @@ pub(crate) fn drag_work<const D: usize, M>(
 pub(crate) fn advance<const D: usize, M>(
     sys: &PhSystem<D, M>,
     states: &[BodyState],
-    h: f64,
+    (h, t_next): (f64, f64),
     slots: &[Vector<D>],
     out: &mut Vec<BodyState>,
 ) {
     out.clear();
     for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
         let (dx, w) = unknowns(slots, b);
-        out.push(model.advance(st, h, &dx, &w));
+        let mut next = model.advance(st, h, &dx, &w);
+        // A prescribed motion holds the velocities at its own (docs/method.md §22).
+        if let Some(m) = &model.motion {
+            let (v, omega) = (m.twist)(t_next);
+            next.velocity = planar::<D>(&v);
+            let omega = next.orientation.inverse_transform_vector(&omega);
+            next.omega = if D == 2 {
+                Vec3::new(0.0, 0.0, omega.z)
+            } else {
+                omega
+            };
+        }
+        out.push(next);
     }
+}
+
+/// `v` in the plane of a `D`-dimensional network (`z = 0` in 2D).
+fn planar<const D: usize>(v: &Vec3) -> Vec3 {
+    if D == 2 { Vec3::new(v.x, v.y, 0.0) } else { *v }
+}
+
+/// The slots of the prescribed bodies for a step from `states` to `t_next` [s]: `Δx` to the
+/// pose's position and the Cayley vector of the turn to its orientation. `Err(b)`: body `b`'s
+/// pose is not finite or turns by more than 170° in the step.
+pub(crate) fn prescribe<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    states: &[BodyState],
+    t_next: f64,
+    slots: &mut [Vector<D>],
+) -> Result<(), usize> {
+    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
+        let Some(m) = &model.motion else {
+            continue;
+        };
+        let (x, q) = (m.pose)(t_next);
+        let rel = st.orientation.inverse() * q;
+        let (qw, qv) = (rel.quaternion().w, rel.quaternion().imag());
+        // cay(w) has the quaternion (1, w/2)/‖·‖: w = 2 q_v/q_w (q and −q are one rotation).
+        if !(x.iter().all(|c| c.is_finite()) && qw.abs() > (85f64).to_radians().cos()) {
+            return Err(b);
+        }
+        slots[2 * b] = project(&(x - st.position));
+        slots[2 * b + 1] = rotation_slot::<D>(&(qv * (2.0 / qw)));
+    }
+    Ok(())
 }
 
 /// `Q m P`: a body's 3×3 block as a `D×D` block between slots of kinds `row` and `col`
@@ -272,6 +389,18 @@ impl<const D: usize> BodyStep<'_, D> {
             .collect();
         let mut scale2 = 0.0;
         for (b, (model, st)) in sys.bodies.iter().zip(self.states).enumerate() {
+            if model.motion.is_some() {
+                // Known slots: their rows are `δu = 0`; the reaction is formed after the solve.
+                res[n + 2 * b] = Vector::zeros();
+                res[n + 2 * b + 1] = Vector::zeros();
+                if let Some(j) = jac.as_deref_mut() {
+                    let slots = j.border.slots;
+                    for s in 0..2 {
+                        j.border.own[(2 * b + s) * slots + 2 * b + s] = Block::identity();
+                    }
+                }
+                continue;
+            }
             let (dx, w) = unknowns(self.slots, b);
             let mut rows: Vec<NodeRow> = model
                 .attachments

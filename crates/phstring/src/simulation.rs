@@ -1310,6 +1310,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             } else {
                 crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
             }
+            crate::body_step::prescribe(&self.sys, states, t_next, &mut self.x[n..]).map_err(
+                |b| StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "prescribed body pose (not finite, or a turn of more than 170° in \
+                           one step; at the body's first attached node)",
+                    node: self.sys.bodies[b].attachments.first().map_or(0, |a| a.0),
+                },
+            )?;
         }
         Ok(())
     }
@@ -1454,7 +1463,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // The rigid bodies' new states.
         let n = mesh.n_nodes();
         let bodies = &self.run.state.bodies;
-        crate::body_step::advance(&self.sys, bodies, h, &self.x[n..], &mut self.bodies_next);
+        let times = (h, t_next);
+        crate::body_step::advance(
+            &self.sys,
+            bodies,
+            times,
+            &self.x[n..],
+            &mut self.bodies_next,
+        );
         if let Some(b) = self.bodies_next.iter().position(|st| {
             let finite = |v: &crate::body::Vec3| v.iter().all(|c| c.is_finite());
             !(finite(&st.position) && finite(&st.velocity) && finite(&st.omega))
@@ -1667,11 +1683,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.body_ports_prev.clone_from(&self.body_ports);
         let n = self.sys.mesh.n_nodes();
         nodes
-            + crate::body_step::port_samples::<D>(
+            + crate::body_step::port_samples::<D, M>(
+                &self.sys,
                 &self.run.state.bodies,
                 h,
                 &self.x[n..],
                 &self.body_wrenches,
+                &self.reaction,
+                &self.bodies_next,
                 &mut self.body_ports,
             )
     }

@@ -123,6 +123,7 @@ fn check<const D: usize>(scheme: Scheme) {
             ca: 0.8,
             added_inertia: Vec3::new(20.0, 30.0, 40.0),
         }),
+        motion: None,
     };
     let net = net
         .with_body(body(

@@ -133,6 +133,7 @@ fn two_boxes<const D: usize>(wrench: Option<BodyWrench>) -> Network<D, Material>
         initial,
         wrench,
         hydro: None,
+        motion: None,
     };
     net.with_body(body("a", ma, ja, att_a, sa, wrench))
         .with_body(body("b", mb, jb, att_b, sb, None))
@@ -320,6 +321,7 @@ fn swing(
         initial: BodyState::at_rest(centre, q),
         wrench: None,
         hydro: None,
+        motion: None,
     };
     let net = net.with_body(body);
     let params = StepParams {
@@ -469,6 +471,7 @@ fn buoy_rises_at_the_closed_form_terminal_speed() {
                 ca: 0.5,
                 ..Default::default()
             }),
+            motion: None,
         });
     let mut sim = Simulation::new(net, params()).unwrap();
     let mut worst = 0.0f64;
@@ -508,5 +511,115 @@ fn buoy_rises_at_the_closed_form_terminal_speed() {
     assert!(
         (dissipated / expected - 1.0).abs() < 1e-9,
         "dissipated {dissipated} J, expected {expected} J"
+    );
+}
+
+/// A prescribed motion (2D): a 50 t "vessel" surges, heaves and pitches (amplitudes 2 m,
+/// 0.5 m, 3°, periods 12 s, 8 s and 10 s) on two 60 m chains (EA = 5e8 N, 100 kg/m) to two
+/// anchors, in gravity, for 20 s. It follows its path to round-off, every step's balance is
+/// exact with the motion's power as supply, and the momentum changes by the impulse of the
+/// weights, the anchors' reactions and the motion's reaction force, to the Newton residuals
+/// `Σ h ‖R‖` the steps left (and 1e-12 of the impulse for rounding).
+#[test]
+fn prescribed_body_follows_its_path_with_exact_balance() {
+    use phstring::BodyMotion;
+    use std::f64::consts::PI;
+    let g = 9.81;
+    let (a1, a2, a3) = (2.0, 0.5, 3f64.to_radians());
+    let (w1, w2, w3) = (2.0 * PI / 12.0, 2.0 * PI / 8.0, 2.0 * PI / 10.0);
+    let pose = move |t: f64| {
+        let x = Vector3::new(a1 * (w1 * t).sin(), -2.0 + a2 * (w2 * t).sin(), 0.0);
+        (
+            x,
+            UnitQuaternion::from_euler_angles(0.0, 0.0, a3 * (w3 * t).sin()),
+        )
+    };
+    let twist = move |t: f64| {
+        let v = Vector3::new(a1 * w1 * (w1 * t).cos(), a2 * w2 * (w2 * t).cos(), 0.0);
+        (v, Vector3::new(0.0, 0.0, a3 * w3 * (w3 * t).cos()))
+    };
+    let (x0, q0) = pose(0.0);
+    let (v0, om0) = twist(0.0);
+    let start = BodyState::new(x0, v0, q0, om0);
+    let mut nb = NetworkBuilder::<2, Material>::new();
+    let fairleads = [
+        Vector3::new(-10.0, -3.0, 0.0),
+        Vector3::new(10.0, -3.0, 0.0),
+    ];
+    let mut atts = Vec::new();
+    let mut anchors = Vec::new();
+    for (k, s) in fairleads.iter().enumerate() {
+        let p = start.point(s);
+        let f = nb.node(Vector::<2>::new(p.x, p.y));
+        let a = nb.node(Vector::<2>::new(if k == 0 { -60.0 } else { 60.0 }, -40.0));
+        let spec = StringSpec {
+            name: format!("chain{k}"),
+            material: Material::tension_only_linear(5e8),
+            rho_a: 100.0,
+            mass: MassMatrix::Consistent,
+            body_force: Vector::<2>::new(0.0, -100.0 * g),
+            prestretch: 1.0,
+        };
+        nb.string(spec, &[a, f], 20).unwrap();
+        atts.push(Attachment {
+            node: f,
+            point: Vector::<2>::new(s.x, s.y),
+        });
+        anchors.push(a);
+    }
+    let boundary = Boundary {
+        fixed: anchors.iter().map(|&a| phstring::Fixed::node(a)).collect(),
+        ..Default::default()
+    };
+    let mut net = nb.build(boundary, Vec::new()).unwrap();
+    for (att, s) in atts.iter().zip(&fairleads) {
+        let arm = start.orientation.transform_vector(s);
+        let v = start.velocity + start.omega_space().cross(&arm);
+        net.initial.v[att.node] = Vector::<2>::new(v.x, v.y);
+    }
+    let m = 5e4;
+    let net = net.with_body(RigidBody {
+        name: "vessel".into(),
+        mass: m,
+        inertia: nalgebra::Matrix3::from_diagonal_element(4e6),
+        weight: Vector::<2>::new(0.0, -m * g),
+        attachments: atts,
+        initial: start,
+        wrench: None,
+        hydro: None,
+        motion: Some(BodyMotion {
+            pose: std::sync::Arc::new(pose),
+            twist: std::sync::Arc::new(twist),
+        }),
+    });
+    let params = StepParams {
+        h: 0.01,
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    let gravity: Vector<2> =
+        sim.system().body_force_vector().iter().sum::<Vector<2>>() + Vector::<2>::new(0.0, -m * g);
+    let p0 = sim.system().linear_momentum(sim.state());
+    let (mut impulse, mut worst, mut off) = (Vector::<2>::zeros(), 0.0f64, 0.0f64);
+    // The momentum balance holds to the Newton residuals left on the free rows.
+    let mut residuals = 0.0;
+    while sim.time() < 20.0 {
+        let rep = sim.step().unwrap();
+        residuals += rep.residual * rep.h;
+        worst = worst.max(rep.balance_error.abs() / rep.energy_scale);
+        let reactions: Vector<2> = sim.ports().iter().map(|p| p.output).sum();
+        let f = sim.body_ports()[0].force;
+        impulse += (gravity + reactions + Vector::<2>::new(f.x, f.y)) * rep.h;
+        let (x, q) = pose(sim.time());
+        let st = sim.state().bodies[0];
+        off = off.max((st.position - x).norm() + st.orientation.angle_to(&q));
+    }
+    let dp = (sim.system().linear_momentum(sim.state()) - p0 - impulse).norm();
+    assert!(off < 1e-12, "off the path by {off:e}");
+    assert!(worst < 1e-13, "balance error {worst:e} of the energy scale");
+    let bound = residuals + 1e-12 * impulse.norm();
+    assert!(
+        dp <= bound,
+        "momentum against impulse: {dp:e} (bound {bound:e})"
     );
 }
