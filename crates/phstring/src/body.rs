@@ -170,6 +170,14 @@ pub struct BodyHydro {
     /// Added moments of inertia about the body axes [kg·m²] (≥ 0), added to the inertia's
     /// diagonal.
     pub added_inertia: Vec3,
+    /// Waterplane area `A_w` [m²] (≥ 0) of a floater: the displaced volume is
+    /// `V − A_w z_w` with `z_w` the height of the waterline point above the free surface
+    /// (`z = 0`), so that besides `ρ_w g V` the heave restoring force `−ρ_w g A_w z_w` acts at
+    /// that point, with the potential `½ ρ_w g A_w z_w²` in `Ĥ`. 0: a submerged body.
+    pub waterplane_area: f64,
+    /// The waterline point in body axes [m] (where `z_w` is measured and the restoring force
+    /// acts).
+    pub waterline: Vec3,
 }
 
 /// A rigid body of a network.
@@ -276,6 +284,9 @@ pub(crate) struct BodyModel {
     /// Drag at the centre of mass: linear [N·s/m], quadratic `½ ρ_w C_d A` [kg/m], and the
     /// smoothing speed `δ` [m/s] of `|v_r|`.
     pub drag: Option<(f64, f64, f64)>,
+    /// Heave restoring: the stiffness `ρ_w g A_w` [N/m], its point (body axes) and the
+    /// vertical unit vector.
+    pub waterplane: Option<(f64, Vec3, Vec3)>,
     /// The prescribed motion.
     pub motion: Option<BodyMotion>,
 }
@@ -370,13 +381,18 @@ impl BodyModel {
             ("added inertia x [kg·m²]", hydro.added_inertia.x),
             ("added inertia y [kg·m²]", hydro.added_inertia.y),
             ("added inertia z [kg·m²]", hydro.added_inertia.z),
+            ("waterplane area [m²]", hydro.waterplane_area),
         ] {
             if !(v >= 0.0 && v.is_finite()) {
                 return Err(fail(format!("{what} must be ≥ 0 and finite, got {v}")));
             }
         }
-        if !hydro.centre_of_buoyancy.iter().all(|x| x.is_finite()) {
-            return Err(fail("centre of buoyancy is not finite".into()));
+        if !hydro.centre_of_buoyancy.iter().all(|x| x.is_finite())
+            || !hydro.waterline.iter().all(|x| x.is_finite())
+        {
+            return Err(fail(
+                "centre of buoyancy or waterline point is not finite".into(),
+            ));
         }
         let rho = water.map_or(0.0, |w| w.density);
         let added = Mat3::from_diagonal(&hydro.added_inertia);
@@ -446,6 +462,10 @@ impl BodyModel {
         let drag = water
             .filter(|_| hydro.cda > 0.0 || hydro.linear_drag > 0.0)
             .map(|w| (hydro.linear_drag, 0.5 * rho * hydro.cda, w.drag_smoothing));
+        let waterplane = water.filter(|_| hydro.waterplane_area > 0.0).map(|w| {
+            let k = w.density * w.gravity * hydro.waterplane_area;
+            (k, embed_point::<D>(&hydro.waterline), up)
+        });
         Ok(Self {
             mass: body.mass + hydro.ca * rho * hydro.volume,
             inertia,
@@ -455,6 +475,7 @@ impl BodyModel {
             dry_mass: body.mass,
             buoyancy,
             drag,
+            waterplane,
             motion: body.motion.clone(),
         })
     }
@@ -470,9 +491,29 @@ impl BodyModel {
         -st.position.dot(&self.weight)
     }
 
-    /// The buoyancy's potential `−F_b·(x + R s_b)` [J] (0 without buoyancy).
+    /// The buoyancy's potential `−F_b·(x + R s_b)` and the waterplane's `½ k z_w²` [J].
     pub fn buoyancy_potential(&self, st: &BodyState) -> f64 {
-        self.buoyancy.map_or(0.0, |(f, s)| -f.dot(&st.point(&s)))
+        let point = self.buoyancy.map_or(0.0, |(f, s)| -f.dot(&st.point(&s)));
+        let plane = self.waterplane.map_or(0.0, |(k, s, up)| {
+            let z = st.point(&s).dot(&up);
+            0.5 * k * z * z
+        });
+        point + plane
+    }
+
+    /// The waterplane's restoring point over a step from `st` whose point moves by `moved`
+    /// beyond the centre's `dx`: the row `R = −F` that asks the body for its negative, with
+    /// `F = −k z̄ e_z` at the mean height `z̄` (the exact discrete gradient of `½ k z²`), and
+    /// `∂R/∂Δa = ½ k e_z e_zᵀ`. `None` without a waterplane.
+    pub fn waterplane_row(&self, st: &BodyState, dx: &Vec3, moved: &Vec3) -> Option<NodeRow> {
+        self.waterplane.map(|(k, s, up)| {
+            let z0 = st.point(&s).dot(&up);
+            let z_mean = z0 + 0.5 * (dx + moved).dot(&up);
+            NodeRow {
+                res: up * (k * z_mean),
+                diag: up * up.transpose() * (0.5 * k),
+            }
+        })
     }
 
     /// The drag at the centre of mass over a step of `h` [s] with increment `dx` [m], in a
@@ -738,6 +779,7 @@ mod tests {
             dry_mass: 2000.0,
             buoyancy: None,
             drag: None,
+            waterplane: None,
             motion: None,
         }
     }

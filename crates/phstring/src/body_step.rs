@@ -112,11 +112,13 @@ fn reaction_wrench<const D: usize>(
 ) -> (Vec3, Vec3, f64) {
     let turn = Turn::new(&st.orientation, w);
     let cb = model.buoyancy.map(|(_, s)| s);
+    let wl = model.waterplane.map(|(_, s, _)| s);
     let points: Vec<PointStep> = model
         .attachments
         .iter()
         .map(|(_, s)| s)
         .chain(cb.as_ref())
+        .chain(wl.as_ref())
         .map(|s| turn.point(s))
         .collect();
     let mut rows: Vec<NodeRow> = model
@@ -132,6 +134,9 @@ fn reaction_wrench<const D: usize>(
             res: -f,
             diag: Mat3::zeros(),
         });
+    }
+    if let Some(p) = points.last().filter(|_| model.waterplane.is_some()) {
+        rows.extend(model.waterplane_row(st, dx, &p.moved));
     }
     let mut dw = vec![Mat3::zeros(); rows.len()];
     let zero = Vec3::zeros();
@@ -379,10 +384,12 @@ impl<const D: usize> BodyStep<'_, D> {
             .zip(&turns)
             .map(|(m, t)| {
                 let cb = m.buoyancy.map(|(_, s)| s);
+                let wl = m.waterplane.map(|(_, s, _)| s);
                 m.attachments
                     .iter()
                     .map(|(_, s)| s)
                     .chain(cb.as_ref())
+                    .chain(wl.as_ref())
                     .map(|s| t.point(s))
                     .collect()
             })
@@ -420,6 +427,10 @@ impl<const D: usize> BodyStep<'_, D> {
                     diag: Mat3::zeros(),
                 });
             }
+            // The waterplane's heave restoring at the waterline point (last in `points`).
+            if let Some(p) = points[b].last().filter(|_| model.waterplane.is_some()) {
+                rows.extend(model.waterplane_row(st, &dx, &p.moved));
+            }
             let mut dw_rows = vec![Mat3::zeros(); rows.len()];
             let (f_port, torque) = self.wrenches.get(b).copied().unwrap_or_default();
             let (f_drag, d_drag) = match sys.water.as_deref() {
@@ -453,6 +464,10 @@ impl<const D: usize> BodyStep<'_, D> {
                 + f_port.norm_squared()
                 + f_drag.norm_squared()
                 + model.buoyancy.map_or(0.0, |(f, _)| f.norm_squared())
+                + rows
+                    .last()
+                    .filter(|_| model.waterplane.is_some())
+                    .map_or(0.0, |r| r.res.norm_squared())
                 + (torque * inv_rg).norm_squared()
                 + spin.norm_squared();
             let Some(j) = jac.as_deref_mut() else {

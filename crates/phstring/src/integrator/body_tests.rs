@@ -2,7 +2,8 @@
 //! its residual, in 2D and 3D, on a network where a body hangs from a support by a rope,
 //! a second body hangs from the first by a one-element rope (body–body blocks), a rope
 //! from it ends at a partly fixed node, and a load acts on an attached node; both bodies
-//! feel buoyancy off their centre, drag in a sheared current and added mass.
+//! feel buoyancy off their centre, a waterplane's heave restoring, drag in a sheared current
+//! and added mass.
 
 use crate::body::{Attachment, RigidBody};
 use crate::body::{BodyState, Mat3, Vec3, project};
@@ -122,6 +123,8 @@ fn check<const D: usize>(scheme: Scheme) {
             linear_drag: 300.0,
             ca: 0.8,
             added_inertia: Vec3::new(20.0, 30.0, 40.0),
+            waterplane_area: 3.0,
+            waterline: planar(Vec3::new(-0.2, 0.5, 0.3)),
         }),
         motion: None,
     };
