@@ -614,7 +614,12 @@ impl FlatCheckpoint {
             ("sim.r", r, D * n, None),
             ("sim.v", v, D * n, None),
             ("sim.acc", acc, D * n, None),
-            ("sim.v_mid", v_mid, D * (n + 2 * n_bodies), Some("slots")),
+            (
+                "sim.v_mid",
+                v_mid,
+                D * (n + 2 * n_bodies),
+                (n_bodies > 0).then_some("slots"),
+            ),
             ("sim.c", c, n_el, Some("elements")),
             (
                 "sim.bodies",
