@@ -224,6 +224,8 @@ pub struct Simulation<const D: usize, M> {
     /// if a step fails after they were formed).
     body_ports: Vec<crate::body::BodyPortSample>,
     body_ports_prev: Vec<crate::body::BodyPortSample>,
+    /// Per body with a held wrench (inputs), the wrench port it had before.
+    held_wrenches: Vec<Option<Option<crate::body::BodyWrench>>>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -486,6 +488,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             body_wrenches: vec![Default::default(); sys.bodies.len()],
             body_ports: vec![Default::default(); sys.bodies.len()],
             body_ports_prev: vec![Default::default(); sys.bodies.len()],
+            held_wrenches: Vec::new(),
             sys,
             params,
             run: Checkpoint::start(state, params.h),
@@ -534,6 +537,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         &self.inputs
     }
     /// The held inputs and the boundary conditions they act on, to set an input.
+    /// The bodies' models and, per body, the wrench it had before a held one (inputs).
+    pub(crate) fn bodies_and_held(
+        &mut self,
+    ) -> (
+        &mut [crate::body::BodyModel],
+        &mut Vec<Option<Option<crate::body::BodyWrench>>>,
+    ) {
+        (&mut self.sys.bodies, &mut self.held_wrenches)
+    }
     pub(crate) fn inputs_and_boundary(
         &mut self,
     ) -> (
