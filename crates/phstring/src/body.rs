@@ -557,7 +557,10 @@ impl BodyModel {
         BodyState {
             position: st.position + dx,
             velocity: dx * (2.0 * inv_h) - st.velocity,
-            orientation: st.orientation * cayley_quaternion(w),
+            // Renormalized: the unit product's norm would random-walk at round-off.
+            orientation: UnitQuaternion::new_normalize(
+                st.orientation.into_inner() * cayley_quaternion(w).into_inner(),
+            ),
             omega: w * (2.0 * inv_h) - st.omega,
         }
     }

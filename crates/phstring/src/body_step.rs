@@ -81,7 +81,8 @@ pub(crate) fn port_samples<const D: usize, M>(
         let turned = st.orientation.transform_vector(&w);
         let (velocity, omega) = (dx / h, turned / h);
         let (force, torque, work) = if model.motion.is_some() {
-            reaction_wrench(model, st, h, (&dx, &w), reaction, &next[b])
+            let water = sys.water.as_deref();
+            reaction_wrench(model, water, st, h, (&dx, &w), reaction, &next[b])
         } else {
             // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
             let (force, torque) = wrenches[b];
@@ -104,6 +105,7 @@ pub(crate) fn port_samples<const D: usize, M>(
 /// `(Δx, R_n w)` and the kinetic energy the hold of the velocities adds.
 fn reaction_wrench<const D: usize>(
     model: &crate::body::BodyModel,
+    water: Option<&crate::water::WaterModel<D>>,
     st: &BodyState,
     h: f64,
     (dx, w): (&Vec3, &Vec3),
@@ -140,6 +142,16 @@ fn reaction_wrench<const D: usize>(
     }
     let mut dw = vec![Mat3::zeros(); rows.len()];
     let zero = Vec3::zeros();
+    // The drag acts as on a free body (its work is in the water's shares), so the reaction
+    // is the motion's own force.
+    let f_drag = match water {
+        Some(water) if model.drag.is_some() => {
+            let flow = current_at::<D>(water, st, dx);
+            model.drag_step(h, dx, (&flow.0, &flow.1, &flow.2)).0
+        }
+        _ => Vec3::zeros(),
+    };
+    let applied = model.weight + f_drag;
     let out = model.rows(
         st,
         h,
@@ -147,7 +159,7 @@ fn reaction_wrench<const D: usize>(
         &turn,
         &rows,
         &points,
-        (&model.weight, &zero),
+        (&applied, &zero),
         &mut dw,
     );
     // The rows with the reaction (F, τ) added are zero: F = force row, τ̃ = (I − ½ŵ)⁻¹ torque.
@@ -267,7 +279,8 @@ fn planar<const D: usize>(v: &Vec3) -> Vec3 {
 
 /// The slots of the prescribed bodies for a step from `states` to `t_next` [s]: `Δx` to the
 /// pose's position and the Cayley vector of the turn to its orientation. `Err(b)`: body `b`'s
-/// pose is not finite or turns by more than 170° in the step.
+/// pose is not finite, leaves the plane of a 2D network, or turns by more than 170° in the
+/// step.
 pub(crate) fn prescribe<const D: usize, M>(
     sys: &PhSystem<D, M>,
     states: &[BodyState],
@@ -282,7 +295,8 @@ pub(crate) fn prescribe<const D: usize, M>(
         let rel = st.orientation.inverse() * q;
         let (qw, qv) = (rel.quaternion().w, rel.quaternion().imag());
         // cay(w) has the quaternion (1, w/2)/‖·‖: w = 2 q_v/q_w (q and −q are one rotation).
-        if !(x.iter().all(|c| c.is_finite()) && qw.abs() > (85f64).to_radians().cos()) {
+        let planar = D == 3 || (x.z == 0.0 && qv.x == 0.0 && qv.y == 0.0);
+        if !(x.iter().all(|c| c.is_finite()) && qw.abs() > (85f64).to_radians().cos() && planar) {
             return Err(b);
         }
         slots[2 * b] = project(&(x - st.position));

@@ -406,6 +406,7 @@ struct Backup<const D: usize> {
     run: Option<Checkpoint<D>>,
     energies: Energies,
     ports: Vec<PortSample<D>>,
+    body_ports: Vec<crate::body::BodyPortSample>,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -536,7 +537,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub(crate) fn held_inputs(&self) -> &crate::boundary::HeldInputs<D> {
         &self.inputs
     }
-    /// The held inputs and the boundary conditions they act on, to set an input.
     /// The bodies' models and, per body, the wrench it had before a held one (inputs).
     pub(crate) fn bodies_and_held(
         &mut self,
@@ -546,6 +546,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) {
         (&mut self.sys.bodies, &mut self.held_wrenches)
     }
+    /// The held inputs and the boundary conditions they act on, to set an input.
     pub(crate) fn inputs_and_boundary(
         &mut self,
     ) -> (
@@ -607,6 +608,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         b.energies = self.energies;
         b.ports.clone_from(&self.ports);
+        b.body_ports.clone_from(&self.body_ports);
     }
 
     /// Puts back what [`Self::save`] saved.
@@ -616,6 +618,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
+        self.body_ports.clone_from(&b.body_ports);
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -1096,6 +1099,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut sums = std::mem::take(&mut self.port_sums);
         sums.clear();
         sums.resize(self.ports.len(), (Vector::zeros(), Vector::zeros(), 0.0));
+        // The bodies' ports likewise (empty without bodies).
+        let mut body_sums = vec![crate::body::BodyPortSample::default(); self.body_ports.len()];
         let mut total: Option<StepReport> = None;
         let mut start = t;
         let sub_steps = (0..n).flat_map(|j| gammas.iter().enumerate().map(move |(k, g)| (j, k, g)));
@@ -1114,6 +1119,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         s.0 += p.input * hk;
                         s.1 += p.output * hk;
                         s.2 += p.mean_power * hk;
+                    }
+                    for (s, p) in body_sums.iter_mut().zip(&self.body_ports) {
+                        s.force += p.force * hk;
+                        s.torque += p.torque * hk;
+                        s.velocity += p.velocity * hk;
+                        s.omega += p.omega * hk;
+                        s.mean_power += p.mean_power * hk;
                     }
                     total = Some(match total {
                         None => r,
@@ -1155,6 +1167,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             p.input = s.0 / h;
             p.output = s.1 / h;
             p.mean_power = s.2 / h;
+        }
+        for (p, s) in self.body_ports.iter_mut().zip(&body_sums) {
+            *p = crate::body::BodyPortSample {
+                force: s.force / h,
+                torque: s.torque / h,
+                velocity: s.velocity / h,
+                omega: s.omega / h,
+                mean_power: s.mean_power / h,
+            };
         }
         self.port_sums = sums;
         let mut r = total.expect("at least three sub-steps");
@@ -1326,8 +1347,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 |b| StepError::NonFinite {
                     step: step_no,
                     t,
-                    what: "prescribed body pose (not finite, or a turn of more than 170° in \
-                           one step; at the body's first attached node)",
+                    what: "prescribed body pose (not finite, out of the plane of a 2D \
+                           network, or a turn of more than 170° in one step; at the body's \
+                           first attached node)",
                     node: self.sys.bodies[b].attachments.first().map_or(0, |a| a.0),
                 },
             )?;
@@ -1565,7 +1587,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node: self.non_finite_energy_node(),
             });
         }
-        let supplied_magnitude = h.abs() * self.ports.iter().map(|p| p.power().abs()).sum::<f64>();
+        let supplied_magnitude = h.abs()
+            * (self.ports.iter().map(|p| p.power().abs()).sum::<f64>()
+                + self
+                    .body_ports
+                    .iter()
+                    .map(|p| p.mean_power.abs())
+                    .sum::<f64>());
         // The work the strain-rounding floor of Newton's test may leave undone, as a scale
         // (its rounding is ε times this, docs/method.md eq. (9.6)).
         let strain_work = newton::ROUNDOFF_STRAIN * stats.strain_scale * newton::norm(&self.x);

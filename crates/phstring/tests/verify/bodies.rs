@@ -522,6 +522,20 @@ fn buoy_rises_at_the_closed_form_terminal_speed() {
 /// `Σ h ‖R‖` the steps left (and 1e-12 of the impulse for rounding).
 #[test]
 fn prescribed_body_follows_its_path_with_exact_balance() {
+    prescribed_vessel(false);
+}
+
+/// The same vessel in water with a current of 0.8 m/s and drag on it (`C_dA` = 20 m²,
+/// 5e4 N·s/m): still on its path and with an exact balance on every step, the drag's work in
+/// the water's shares and not in the motion's reaction (once counted).
+#[test]
+fn prescribed_body_in_a_current_keeps_an_exact_balance() {
+    prescribed_vessel(true);
+}
+
+/// Runs the vessel of [`prescribed_body_follows_its_path_with_exact_balance`], dry or in a
+/// current with drag on the vessel, and checks its path, balance and (dry) momentum.
+fn prescribed_vessel(wet: bool) {
     use phstring::BodyMotion;
     use std::f64::consts::PI;
     let g = 9.81;
@@ -578,6 +592,15 @@ fn prescribed_body_follows_its_path_with_exact_balance() {
         net.initial.v[att.node] = Vector::<2>::new(v.x, v.y);
     }
     let m = 5e4;
+    let hydro = wet.then_some(phstring::BodyHydro {
+        cda: 20.0,
+        linear_drag: 5e4,
+        ..Default::default()
+    });
+    if wet {
+        let current = phstring::Current::Uniform(Vector::<2>::new(0.8, 0.0));
+        net = net.with_water(phstring::Water::new(1025.0).with_current(current));
+    }
     let net = net.with_body(RigidBody {
         name: "vessel".into(),
         mass: m,
@@ -586,7 +609,7 @@ fn prescribed_body_follows_its_path_with_exact_balance() {
         attachments: atts,
         initial: start,
         wrench: None,
-        hydro: None,
+        hydro,
         motion: Some(BodyMotion {
             pose: std::sync::Arc::new(pose),
             twist: std::sync::Arc::new(twist),
@@ -602,10 +625,11 @@ fn prescribed_body_follows_its_path_with_exact_balance() {
     let p0 = sim.system().linear_momentum(sim.state());
     let (mut impulse, mut worst, mut off) = (Vector::<2>::zeros(), 0.0f64, 0.0f64);
     // The momentum balance holds to the Newton residuals left on the free rows.
-    let mut residuals = 0.0;
+    let (mut residuals, mut drag) = (0.0, 0.0);
     while sim.time() < 20.0 {
         let rep = sim.step().unwrap();
         residuals += rep.residual * rep.h;
+        drag += rep.water.drag_dissipated;
         worst = worst.max(rep.balance_error.abs() / rep.energy_scale);
         let reactions: Vector<2> = sim.ports().iter().map(|p| p.output).sum();
         let f = sim.body_ports()[0].force;
@@ -617,6 +641,10 @@ fn prescribed_body_follows_its_path_with_exact_balance() {
     let dp = (sim.system().linear_momentum(sim.state()) - p0 - impulse).norm();
     assert!(off < 1e-12, "off the path by {off:e}");
     assert!(worst < 1e-13, "balance error {worst:e} of the energy scale");
+    if wet {
+        assert!(drag > 0.0, "the drag dissipated {drag} J");
+        return;
+    }
     let bound = residuals + 1e-12 * impulse.norm();
     assert!(
         dp <= bound,
@@ -748,4 +776,30 @@ fn held_body_wrench_equals_the_constant_signal() {
     released.step().unwrap();
     assert_eq!(by_input.state(), released.state());
     assert_ne!(free.state(), by_signal.state());
+}
+
+/// With `dg4` the wrench port's sample is the step's `h_k`-weighted mean over its sub-steps:
+/// `h · mean_power` summed over the steps is the supplied energy (to 1e-12).
+#[test]
+fn dg4_body_port_reports_the_steps_mean() {
+    let force = |t: f64| Vector3::new(2e3 * (3.0 * t).cos(), 1e3, 0.0);
+    let wrench = BodyWrench {
+        force: std::sync::Arc::new(force),
+        torque: std::sync::Arc::new(|_t| Vector3::new(0.0, 0.0, 500.0)),
+    };
+    let params = StepParams {
+        scheme: Scheme::DiscreteGradient4,
+        ..params()
+    };
+    let mut sim = Simulation::new(two_boxes::<3>(Some(wrench)), params).unwrap();
+    let mut port_energy = 0.0;
+    for _ in 0..100 {
+        let rep = sim.step().unwrap();
+        port_energy += sim.body_ports()[0].mean_power * rep.h;
+    }
+    let supplied = sim.supplied_energy();
+    assert!(
+        (port_energy - supplied).abs() <= 1e-12 * supplied.abs(),
+        "port {port_energy} J against supplied {supplied} J"
+    );
 }
