@@ -37,7 +37,6 @@ use thiserror::Error;
 
 use crate::assembly::{element_tangent, mask_fixed, positive_definite, tangent_blocks};
 use crate::body::{BodyState, Vec3};
-use crate::body_step::fill_attachments;
 use crate::error::SetupError;
 use crate::linsolve::{BlockJacobian, SolverKind, make_bordered_solver};
 use crate::material::StoredEnergy;
@@ -281,6 +280,9 @@ struct StaticEquations<'a, const D: usize, M> {
     /// [N·m]); empty without bodies.
     poses: Vec<BodyState>,
     ports: Vec<(Vec3, Vec3)>,
+    /// Per node fixed to a body, its reference point's displacement from `r₀` [m] (zero until
+    /// the reference poses move, see [`Self::rebase`]).
+    offsets: Vec<Vector<D>>,
     /// With bodies: the nodes' displacements with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
 }
@@ -309,7 +311,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
             let mut xt = std::mem::take(&mut self.nodes_x);
             xt.clear();
             xt.extend_from_slice(&x[..n]);
-            fill_attachments(sys, &self.poses, &x[n..], &mut xt);
+            bodies::fill(sys, &self.poses, &self.offsets, &x[n..], &mut xt);
             let out = self.node_terms(&xt, res, jac.as_deref_mut());
             self.nodes_x = xt;
             let (s2, k2) = out?;
@@ -379,6 +381,7 @@ impl<'a, const D: usize, M: StoredEnergy> StaticEquations<'a, D, M> {
             scale: 0.0,
             strain_scale: 0.0,
             poses: poses.to_vec(),
+            offsets: vec![Vector::zeros(); if sys.bodies.is_empty() { 0 } else { n }],
             ports: bodies::ports_at_rest(sys),
             nodes_x: Vec::with_capacity(if sys.bodies.is_empty() { 0 } else { n }),
         }
@@ -395,7 +398,7 @@ impl<'a, const D: usize, M: StoredEnergy> StaticEquations<'a, D, M> {
         self.anchor.copy_from_slice(u);
         if !self.sys.bodies.is_empty() {
             let (nodes, slots) = self.anchor.split_at_mut(self.sys.mesh.n_nodes());
-            fill_attachments(self.sys, &self.poses, slots, nodes);
+            bodies::fill(self.sys, &self.poses, &self.offsets, slots, nodes);
         }
     }
 
@@ -404,9 +407,34 @@ impl<'a, const D: usize, M: StoredEnergy> StaticEquations<'a, D, M> {
         let n = self.sys.mesh.n_nodes();
         let mut x = u[..n].to_vec();
         if !self.sys.bodies.is_empty() {
-            fill_attachments(self.sys, &self.poses, &u[n..], &mut x);
+            bodies::fill(self.sys, &self.poses, &self.offsets, &u[n..], &mut x);
         }
         self.r0.iter().zip(&x).map(|(a, b)| a + b).collect()
+    }
+
+    /// Makes the bodies' poses at the displacement `u` their reference poses and zeroes their
+    /// slots in `u` (the positions stay): a turn is then measured from the pose reached, so
+    /// that the Cayley vector stays away from its singularity at a half turn.
+    fn rebase(&mut self, u: &mut [Vector<D>]) {
+        if self.poses.is_empty() {
+            return;
+        }
+        let n = self.sys.mesh.n_nodes();
+        let mut x = u[..n].to_vec();
+        bodies::fill(self.sys, &self.poses, &self.offsets, &u[n..], &mut x);
+        for model in &self.sys.bodies {
+            for &(node, _) in &model.attachments {
+                self.offsets[node] = x[node];
+            }
+        }
+        self.poses = self.body_poses(u);
+        u[n..].iter_mut().for_each(|v| *v = Vector::zeros());
+    }
+
+    /// Back to the reference poses `poses` and no offsets.
+    fn reset_poses(&mut self, poses: &[BodyState]) {
+        self.poses.copy_from_slice(poses);
+        self.offsets.iter_mut().for_each(|v| *v = Vector::zeros());
     }
 
     /// The bodies' poses (at rest) at the displacement `u`.
@@ -758,6 +786,7 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         params,
         stop,
         iterations: 0,
+        start_poses: poses,
     };
     let guess = match guess_path(&mut s)? {
         Ok(found) => return Ok(found),
@@ -816,9 +845,17 @@ struct Search<'a, 's, const D: usize, M> {
     params: &'a StaticsParams,
     stop: Option<&'s AtomicBool>,
     iterations: usize,
+    /// The bodies' start poses (a path that starts over starts from them).
+    start_poses: &'a [BodyState],
 }
 
 impl<const D: usize, M: StoredEnergy> Search<'_, '_, D, M> {
+    /// Back to the start: zero displacement, the bodies at their start poses.
+    fn restart(&mut self) {
+        self.u.iter_mut().for_each(|x| *x = Vector::zeros());
+        self.eq.reset_poses(self.start_poses);
+    }
+
     /// Newton in rounds ([`solve_rescaled`]) on the equations as they are set, from `u`.
     fn newton(&mut self) -> Result<newton::NewtonStats, NewtonError<Inadmissible>> {
         solve_rescaled(
@@ -853,7 +890,7 @@ fn guess_path<const D: usize, M: StoredEnergy>(
         *u = g - r;
     }
     let end = newton_path(s, StaticsPath::CatenaryGuess)?;
-    s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+    s.restart();
     Ok(match end {
         Ok(found) => Ok(Equilibrium {
             guess: FirstGuess::Used,
@@ -899,7 +936,7 @@ fn continuation_path<const D: usize, M: StoredEnergy>(
     let n = s.u.len();
     let (mut lambda, mut dl, mut steps) = (0.0f64, 0.25f64, 0usize);
     let mut u_ok = vec![Vector::<D>::zeros(); n];
-    s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+    s.restart();
     let mut cont_msg = String::new();
     let mut failed_step = 0;
     let mut attempts = 0;
@@ -971,7 +1008,7 @@ fn pseudo_transient_path<const D: usize, M: StoredEnergy>(
     let mut pseudo_steps = 0;
     let mut pseudo_msg = String::new();
     for release in [true, false] {
-        s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+        s.restart();
         s.eq.release = release;
         let end = pseudo_transient(
             &mut s.eq,
@@ -1147,6 +1184,7 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
             return Err(PseudoEnd::Interrupted);
         }
         eq.mu = mu;
+        eq.rebase(u);
         eq.set_anchor(u);
         match newton::solve(eq, u, ws, solver, &loose, stop) {
             Ok(st) => {

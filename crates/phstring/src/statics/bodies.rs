@@ -46,6 +46,25 @@ pub(super) fn ports_at_rest<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<(Vec
     sys.bodies.iter().map(|m| m.wrench_at::<D>(0.0)).collect()
 }
 
+/// Writes the attached nodes' displacements from their start `offsets[node] + δx +
+/// R₀ (cay(w) − I) s` [m] into `x` (per node), from the reference poses `poses` and the
+/// slots `slots`.
+pub(super) fn fill<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    poses: &[BodyState],
+    offsets: &[Vector<D>],
+    slots: &[Vector<D>],
+    x: &mut [Vector<D>],
+) {
+    for (b, (model, st)) in sys.bodies.iter().zip(poses).enumerate() {
+        let (dx, w) = unknowns(slots, b);
+        let turn = Turn::new(&st.orientation, &w);
+        for &(node, s) in &model.attachments {
+            x[node] = offsets[node] + project(&(dx + turn.point(&s).moved));
+        }
+    }
+}
+
 /// The pose (at rest) of body `b` from its reference pose `pose` and the slots `slots`.
 pub(super) fn pose_of<const D: usize>(
     pose: &BodyState,

@@ -127,7 +127,8 @@ fn spread(i: usize) -> f64 {
 
 /// The Jacobian of the static equations with bodies against central differences at a point
 /// off the equilibrium (nodes moved up to 2 cm, bodies up to 5 cm and 0.1 rad), at load
-/// factor 0.7 with a pseudo-transient shift towards another point: every column of a free
+/// factor 0.7 with a pseudo-transient shift towards another point, the reference poses moved
+/// off the start first (rebasing keeps the positions to 1e-14 m): every column of a free
 /// component or slot, on the rows of the free components and slots, to 1e-6 of the
 /// column's size (measured: 5.3e-9 in 3D over 24 columns, 6.1e-10 in 2D over 12; without
 /// the arm's turn in the moment's tangent, 1.4 and 1.5e-2).
@@ -159,6 +160,22 @@ fn jacobian_matches_finite_differences<const D: usize>() {
             })
             .collect()
     };
+    // Reference poses moved off the start (as the pseudo-transient steps move them): the
+    // positions stay, and the tangent is taken about the new poses with their offsets.
+    let mut first = point(0.03, 11);
+    let before = eq.positions(&first);
+    eq.rebase(&mut first);
+    let after = eq.positions(&first);
+    let shifted = before
+        .iter()
+        .zip(&after)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    assert!(
+        shifted < 1e-14,
+        "{D}D: rebasing moved a node by {shifted:e} m"
+    );
+    assert!(first[n..].iter().all(|v| v.norm() == 0.0));
     let anchor = point(0.01, 7);
     eq.set_anchor(&anchor);
     let x = point(0.02, 0);

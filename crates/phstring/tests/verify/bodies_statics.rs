@@ -435,3 +435,40 @@ fn off_centre_hook_block_balances_and_rests() {
         "{err}"
     );
 }
+
+/// A 500 kg block (J = 60 kg·m²) on one steel sling (EA = 1e8 N, 1.6 kg/m, one element,
+/// 5 m) from a support at the origin, its point 0.4 m above its centre, starting upside down
+/// (turned by `start` [rad]): it comes to hang straight below the support, its centre at
+/// `(0, −L − 0.4)` with `L = l (1 + T/EA)`, `T = m g + w` (`w` the half sling weight lumped
+/// at the block), turned by a multiple of 2π, to 1e-8 m and 1e-8 rad: the statics accept a
+/// residual at the round-off floor of the stiff sling (about 1e-6 N here), which the
+/// pendulum's soft stiffness `T/L ≈ 1e3 N/m` turns into about 1e-9 m (measured: 2.1e-10 m
+/// and 4.2e-11 rad from 3.04 rad, 2.0e-10 m and 4.0e-11 rad from 3.14 rad, a turn whose
+/// Cayley vector from the start would be 2 tan(1.5703) ≈ 4000; the pseudo-transient steps
+/// measure each turn from the pose reached).
+#[test]
+fn block_starting_upside_down_comes_to_hang_below_its_support() {
+    for start in [std::f64::consts::PI - 0.1, std::f64::consts::PI - 1e-3] {
+        let q = UnitQuaternion::from_euler_angles(0.0, 0.0, start);
+        let s = Vector3::new(0.0, 0.4, 0.0);
+        let point = Vector3::new(0.3, -5.0, 0.0);
+        let pose = BodyState::at_rest(point - q.transform_vector(&s), q);
+        let spec = rope::<2>("sling", 1e8, 1.6, 1.0);
+        let body = (500.0, Matrix3::from_diagonal_element(60.0));
+        let (net, _) = hung_body(&[Vector3::zeros()], &[s], body, &pose, &spec, 1);
+        let (sys, init) = PhSystem::new(net).unwrap();
+        let eq = statics::solve_system(&sys, &init.r, &StaticsParams::default(), None).unwrap();
+        assert!(eq.stable);
+        let l = sys.mesh().lengths()[0];
+        let t = 500.0 * G + 0.5 * 1.6 * G * l;
+        let y = -l * (1.0 + t / 1e8) - 0.4;
+        let st = eq.state.bodies[0];
+        let off = (st.position - Vector3::new(0.0, y, 0.0)).norm();
+        let turn = st.orientation.angle();
+        assert!(off < 1e-8, "from {start} rad: centre {off:e} m off");
+        assert!(
+            turn < 1e-8,
+            "from {start} rad: turned {turn:e} rad off hanging"
+        );
+    }
+}
