@@ -24,6 +24,16 @@
 //!
 //! Which path succeeded is reported in [`Equilibrium::path`], what became of the first guess
 //! in [`Equilibrium::guess`].
+//!
+//! **Rigid bodies** (docs/method.md, "Statics with rigid bodies"; `bodies.rs`): each body's
+//! pose joins the unknowns (two slots after the nodes, as in the time step: the centre's
+//! displacement and the Cayley vector of the turn from a reference pose), with its force and
+//! moment balance as rows; the nodes fixed to it follow it exactly and their residual is the
+//! force it exerts on them. All four paths take bodies: the catenary guess treats a body's
+//! points as fixed ends at the body's start pose (the body is then free in the Newton solve
+//! from there), the pseudo-transient shift gives a body its mass and inertia, and each
+//! pseudo-time step measures the turns from the pose reached. A body fixed to no node is
+//! refused ([`StaticsError::LooseBody`]); the stability check includes the bodies' slots.
 
 mod bodies;
 mod guess;
@@ -147,10 +157,13 @@ impl FirstGuess {
 /// A static equilibrium.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Equilibrium<const D: usize> {
-    /// The rest state: equilibrium positions [m], zero velocities, `C_e = |r'_e|²`.
+    /// The rest state: equilibrium positions [m], zero velocities, `C_e = |r'_e|²`, and the
+    /// rigid bodies' equilibrium poses at rest (`state.bodies`, in the network's body order),
+    /// so that a run can start from it ([`crate::Simulation::from_system`]).
     pub state: State<D>,
     /// Per node, the force [N] that the supports (fixed components and prescribed motions)
-    /// exert on the string; zero at free components.
+    /// exert on the string; at a node fixed to a rigid body, the force the body exerts on it;
+    /// zero at free components.
     pub reactions: Vec<Vector<D>>,
     /// Euclidean norm of the residual over the free components [N].
     pub residual: f64,
