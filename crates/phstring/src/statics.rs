@@ -690,7 +690,8 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
 }
 
 /// [`solve_system`] from the node positions and the rigid bodies' poses of `start` (its
-/// velocities are ignored; the nodes fixed to a body start at their body points).
+/// velocities are ignored; the nodes fixed to a body start at their body points). A pose
+/// that is not finite (or, in 2D, not in the plane turned about `z`) is refused by body.
 pub fn solve_from<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     start: &State<D>,
@@ -705,6 +706,7 @@ pub fn solve_from<const D: usize, M: StoredEnergy>(
         }
         .into());
     }
+    bodies::check_poses(sys, &start.bodies)?;
     solve_posed(sys, &start.r, &start.bodies, params, stop)
 }
 

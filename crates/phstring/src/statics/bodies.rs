@@ -230,6 +230,40 @@ pub(super) fn positive_definite<const D: usize, M>(
     }
 }
 
+/// Checks start poses `poses` (one per body): finite, and in 2D in the plane `z = 0` turned
+/// about `z` only.
+pub(super) fn check_poses<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    poses: &[BodyState],
+) -> Result<(), crate::error::SetupError> {
+    for (b, (st, name)) in poses.iter().zip(&sys.body_names).enumerate() {
+        let q = st.orientation.quaternion();
+        let finite = st
+            .position
+            .iter()
+            .chain(q.coords.iter())
+            .all(|x| x.is_finite());
+        let planar = D != 2 || (st.position.z == 0.0 && q.i == 0.0 && q.j == 0.0);
+        if !(finite && planar) {
+            return Err(crate::error::SetupError::Body {
+                index: b,
+                name: name.clone(),
+                problem: format!(
+                    "start pose at {:?} with orientation {:?} is not finite{}",
+                    st.position.as_slice(),
+                    q.coords.as_slice(),
+                    if D == 2 {
+                        " or not in the plane z = 0 turned about z"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The first body fixed to no node: `(index, name)`. Nothing holds it (its tangent is
 /// singular), so the statics refuse it.
 pub(super) fn loose_body<const D: usize, M>(sys: &PhSystem<D, M>) -> Option<(usize, String)> {

@@ -305,3 +305,17 @@ fn body_on_free_strings_is_under_constrained() {
         "net load {net} N against {weight} N"
     );
 }
+
+/// A start pose out of the plane of a 2D network is refused by the body's name.
+#[test]
+fn start_pose_out_of_the_plane_is_refused() {
+    let (sys, init) = two_bodies::<2>();
+    let mut start = init.clone();
+    start.bodies[1].orientation = UnitQuaternion::from_euler_angles(0.1, 0.0, 0.4);
+    let err = solve_from(&sys, &start, &StaticsParams::default(), None).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("rigid body 1 ('b')") && msg.contains("plane"),
+        "{msg}"
+    );
+}
