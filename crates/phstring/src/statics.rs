@@ -33,7 +33,9 @@
 //! points as fixed ends at the body's start pose (the body is then free in the Newton solve
 //! from there), the pseudo-transient shift gives a body its mass and inertia, and each
 //! pseudo-time step measures the turns from the pose reached. A body fixed to no node is
-//! refused ([`StaticsError::LooseBody`]); the stability check includes the bodies' slots.
+//! refused ([`StaticsError::LooseBody`]), and so is one whose points all lie on a line
+//! through its centre ([`StaticsError::FreeSpin`]); the stability check includes the
+//! bodies' slots.
 
 mod bodies;
 mod guess;
@@ -217,6 +219,20 @@ pub enum StaticsError {
         index: usize,
         /// Its name.
         name: String,
+    },
+    /// A rigid body's attachment points all lie on one line through its centre of mass, so
+    /// it can turn about that line with nothing to resist (a block on a single string in
+    /// 3D; in 2D, every point at the centre).
+    #[error(
+        "no equilibrium: rigid body {index} ('{name}') has all its attachment points on one line through its centre of mass (direction {axis:?} in body axes), so nothing holds its turn about that line; attach a string off that line"
+    )]
+    FreeSpin {
+        /// Index of the body.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The line's direction in body axes (unit vector).
+        axis: [f64; 3],
     },
     /// The stop flag was set.
     #[error("interrupted")]
@@ -786,6 +802,9 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         if net.abs() > 1e-9 * total && net.abs() > 0.0 {
             return Err(StaticsError::UnderConstrained { axis: AXES[k], net });
         }
+    }
+    if let Some((index, name, axis)) = bodies::free_spin(sys) {
+        return Err(StaticsError::FreeSpin { index, name, axis });
     }
     let slots = 2 * sys.bodies.len();
     let solver = make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?;

@@ -264,6 +264,34 @@ pub(super) fn check_poses<const D: usize, M>(
     Ok(())
 }
 
+/// The first body whose attachment points all lie on one line through its centre of mass
+/// (in 3D; in 2D, all at the centre): it can turn about that line with no string resisting,
+/// so no rest state holds that turn. Returns `(index, name, the line's direction in body
+/// axes)` (`x` when every point is at the centre).
+pub(super) fn free_spin<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+) -> Option<(usize, String, [f64; 3])> {
+    sys.bodies.iter().enumerate().find_map(|(b, m)| {
+        let far = m
+            .attachments
+            .iter()
+            .map(|(_, s)| *s)
+            .max_by(|a, c| a.norm().total_cmp(&c.norm()))?;
+        let length = far.norm();
+        let axis = if length > 0.0 {
+            far / length
+        } else {
+            Vec3::x()
+        };
+        let on_line = m
+            .attachments
+            .iter()
+            .all(|(_, s)| s.cross(&axis).norm() <= 1e-9 * length);
+        let free = if D == 3 { on_line } else { length == 0.0 };
+        free.then(|| (b, sys.body_names[b].clone(), [axis.x, axis.y, axis.z]))
+    })
+}
+
 /// The first body fixed to no node: `(index, name)`. Nothing holds it (its tangent is
 /// singular), so the statics refuse it.
 pub(super) fn loose_body<const D: usize, M>(sys: &PhSystem<D, M>) -> Option<(usize, String)> {

@@ -319,3 +319,61 @@ fn start_pose_out_of_the_plane_is_refused() {
         "{msg}"
     );
 }
+
+/// A hook block (500 kg) on a single rope in 3D: its spin about the line through its point
+/// and its centre is held by nothing, so the statics refuse it by name with that line; a
+/// block whose two points lie on a line through its centre likewise; in 2D a single point
+/// off the centre is a pendulum and is not refused.
+#[test]
+fn free_spin_about_the_attachment_line_is_refused() {
+    let hook = |points: &[Vector3<f64>]| {
+        let mut nb = NetworkBuilder::<3, Material>::new();
+        let q = UnitQuaternion::from_euler_angles(0.2, -0.1, 0.3);
+        let x = Vector3::new(0.5, 0.2, -5.0);
+        let mut held = Boundary::default();
+        let mut attachments = Vec::new();
+        for (k, s) in points.iter().enumerate() {
+            let a = nb.node(Vector::<3>::new(k as f64, 0.0, 0.0));
+            let b = nb.node(vd(&(x + q * s)));
+            nb.string(rope("r"), &[a, b], 4).unwrap();
+            held.fixed.push(crate::Fixed::node(a));
+            attachments.push(Attachment {
+                node: b,
+                point: vd(s),
+            });
+        }
+        let net = nb.build(held, Vec::new()).unwrap();
+        let net = net.with_body(RigidBody {
+            name: "hook".into(),
+            mass: 500.0,
+            inertia: box_inertia(500.0, (0.6, 0.4, 0.8)),
+            weight: Vector::<3>::new(0.0, 0.0, -500.0 * G),
+            attachments,
+            initial: BodyState::at_rest(x, q),
+            wrench: None,
+        });
+        let (sys, init) = PhSystem::new(net).unwrap();
+        solve_system(&sys, &init.r, &StaticsParams::default(), None)
+    };
+    let s = Vector3::new(0.1, 0.0, 0.4);
+    let err = hook(&[s]).unwrap_err();
+    let StaticsError::FreeSpin {
+        index,
+        ref name,
+        axis,
+    } = err
+    else {
+        panic!("expected a free spin, got {err}");
+    };
+    assert_eq!((index, name.as_str()), (0, "hook"));
+    assert!(
+        (Vector3::from(axis) - s.normalize()).norm() < 1e-15,
+        "axis {axis:?}"
+    );
+    assert!(err.to_string().contains("'hook'"), "{err}");
+    let err = hook(&[s, -s * 2.0]).unwrap_err();
+    assert!(matches!(err, StaticsError::FreeSpin { .. }), "{err}");
+    // Two points off a line through the centre hold every turn.
+    let held = hook(&[s, Vector3::new(-0.1, 0.2, 0.4)]).unwrap();
+    assert!(held.stable);
+}
