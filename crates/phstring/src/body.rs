@@ -719,24 +719,7 @@ pub(crate) fn attach_bodies<const D: usize>(
                      to a body is moved by the body alone"
                 )));
             }
-            let arm = st.orientation.transform_vector(&s);
-            let off = (embed(&r[node]) - st.position - arm).norm();
-            let scale = 1.0 + st.position.norm() + s.norm();
-            if off.is_nan() || off > 1e-9 * scale {
-                return Err(fail(format!(
-                    "node {node} is {off:e} m from its attachment point {:?} (body axes): the \
-                     node must start at the point",
-                    s.as_slice()
-                )));
-            }
-            let slip = (embed(&v[node]) - st.velocity - omega.cross(&arm)).norm();
-            let vscale = 1.0 + st.velocity.norm() + omega.norm() * s.norm();
-            if slip.is_nan() || slip > 1e-9 * vscale {
-                return Err(fail(format!(
-                    "node {node} moves {slip:e} m/s off its attachment point's velocity: the node \
-                     must start with the body's motion"
-                )));
-            }
+            check_point(&fail, node, &s, &st, omega, (&r[node], &v[node]))?;
             out.attached[node] = Some((b, k));
             free[node] = [false; D];
             let at: Vec<(usize, usize, bool)> = mesh
@@ -758,6 +741,65 @@ pub(crate) fn attach_bodies<const D: usize>(
         out.links.push(links);
     }
     Ok(out)
+}
+
+/// Checks that a node at `r` [m] moving at `v` [m/s] sits at the body point `s` (body axes)
+/// of a body in state `st` turning at `omega` [rad/s] (space axes) and moves with it; `fail`
+/// forms the error.
+fn check_point<const D: usize>(
+    fail: &dyn Fn(String) -> SetupError,
+    node: usize,
+    s: &Vec3,
+    st: &BodyState,
+    omega: Vec3,
+    (r, v): (&Vector<D>, &Vector<D>),
+) -> Result<(), SetupError> {
+    let arm = st.orientation.transform_vector(s);
+    let off = (embed(r) - st.position - arm).norm();
+    let scale = 1.0 + st.position.norm() + s.norm();
+    if off.is_nan() || off > 1e-9 * scale {
+        return Err(fail(format!(
+            "node {node} is {off:e} m from its attachment point {:?} (body axes): the node \
+             must start at the point",
+            s.as_slice()
+        )));
+    }
+    let slip = (embed(v) - st.velocity - omega.cross(&arm)).norm();
+    let vscale = 1.0 + st.velocity.norm() + omega.norm() * s.norm();
+    if slip.is_nan() || slip > 1e-9 * vscale {
+        return Err(fail(format!(
+            "node {node} moves {slip:e} m/s off its attachment point's velocity: the node \
+             must start with the body's motion"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks that the bodies' states `states` (one per body of `models`, named `names`) carry
+/// their attached nodes: each such node of positions `r` [m] and velocities `v` [m/s] at its
+/// body point and moving with it (a state handed to a simulation, e.g. an equilibrium's).
+pub(crate) fn check_attached<const D: usize>(
+    models: &[BodyModel],
+    names: &[String],
+    states: &[BodyState],
+    r: &[Vector<D>],
+    v: &[Vector<D>],
+) -> Result<(), SetupError> {
+    for (b, ((model, name), st)) in models.iter().zip(names).zip(states).enumerate() {
+        let fail = |problem: String| SetupError::Body {
+            index: b,
+            name: name.clone(),
+            problem,
+        };
+        let omega = st.omega_space();
+        for (node, s) in &model.attachments {
+            let (Some(rn), Some(vn)) = (r.get(*node), v.get(*node)) else {
+                return Err(fail(format!("attachment node {node} is not in the state")));
+            };
+            check_point(&fail, *node, s, st, omega, (rn, vn))?;
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

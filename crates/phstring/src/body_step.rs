@@ -307,7 +307,7 @@ pub(crate) fn prescribe<const D: usize, M>(
 
 /// `Q m P`: a body's 3×3 block as a `D×D` block between slots of kinds `row` and `col`
 /// (0: `Δx` or force, 1: `w` or torque).
-fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
+pub(crate) fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
     // In 2D the rotation slot's first component is the z component.
     let pick = |kind: usize, k: usize| {
         if D == 2 && kind == 1 {
@@ -323,7 +323,7 @@ fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
 }
 
 /// A node block (`D×D`) in 3D.
-fn embed_block<const D: usize>(b: &Block<D>) -> Mat3 {
+pub(crate) fn embed_block<const D: usize>(b: &Block<D>) -> Mat3 {
     Mat3::from_fn(|i, j| if i < D && j < D { b[(i, j)] } else { 0.0 })
 }
 
@@ -497,56 +497,58 @@ impl<const D: usize> BodyStep<'_, D> {
             if D == 2 {
                 j.border.own[at(1, 1)][(1, 1)] = 1.0;
             }
-            self.couple(sys, b, &points, &dw_rows, inv_rg, j);
+            couple(sys, b, &points, &dw_rows, inv_rg, j);
         }
         scale2
     }
+}
 
-    /// The blocks between body `b`'s rows and the nodes next to its attached nodes (and the
-    /// bodies those are fixed to), and between those nodes' rows and body `b`'s slots.
-    fn couple<M>(
-        &self,
-        sys: &PhSystem<D, M>,
-        b: usize,
-        points: &[Vec<PointStep>],
-        dw_rows: &[Mat3],
-        inv_rg: f64,
-        j: &mut BlockJacobian<D>,
-    ) {
-        let eye = Mat3::identity();
-        let slots = j.border.slots;
-        let n_att = sys.bodies[b].attachments.len();
-        for (k, p) in points[b][..n_att].iter().enumerate() {
-            // Body rows from R_k: force ∂/∂R_k = I, torque (scaled) ∂/∂R_k = dw_rows[k].
-            let by_res = [eye, dw_rows[k] * inv_rg];
-            let da = [eye, p.dw];
-            for &(e, other, first) in &sys.body_links[b][k] {
-                let (kj, jk) = if first {
-                    (j.off[e][0], j.off[e][1])
-                } else {
-                    (j.off[e][1], j.off[e][0])
-                };
-                let (kj, jk) = (embed_block(&kj), embed_block(&jk));
-                match sys.attached.get(other).copied().flatten() {
-                    Some((b2, k2)) => {
-                        let da2 = [eye, points[b2][k2].dw];
-                        for (s, rs) in by_res.iter().enumerate() {
-                            for (t, d2) in da2.iter().enumerate() {
-                                let blk = slot_block::<D>(&(rs * kj * d2), s, t);
-                                j.border.own[(2 * b + s) * slots + 2 * b2 + t] += blk;
-                            }
+/// The blocks between body `b`'s rows and the nodes next to its attached nodes (and the
+/// bodies those are fixed to), and between those nodes' rows and body `b`'s slots: `points`
+/// per body and attachment, `dw_rows[k]` the torque row's `∂/∂R_k` (before the scaling by
+/// `inv_rg`, the inverse radius of gyration).
+pub(crate) fn couple<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    b: usize,
+    points: &[Vec<PointStep>],
+    dw_rows: &[Mat3],
+    inv_rg: f64,
+    j: &mut BlockJacobian<D>,
+) {
+    let eye = Mat3::identity();
+    let slots = j.border.slots;
+    // The attachments only (a body's buoyancy and waterplane points follow them).
+    let n_att = sys.bodies[b].attachments.len();
+    for (k, p) in points[b][..n_att].iter().enumerate() {
+        // Body rows from R_k: force ∂/∂R_k = I, torque (scaled) ∂/∂R_k = dw_rows[k].
+        let by_res = [eye, dw_rows[k] * inv_rg];
+        let da = [eye, p.dw];
+        for &(e, other, first) in &sys.body_links[b][k] {
+            let (kj, jk) = if first {
+                (j.off[e][0], j.off[e][1])
+            } else {
+                (j.off[e][1], j.off[e][0])
+            };
+            let (kj, jk) = (embed_block(&kj), embed_block(&jk));
+            match sys.attached.get(other).copied().flatten() {
+                Some((b2, k2)) => {
+                    let da2 = [eye, points[b2][k2].dw];
+                    for (s, rs) in by_res.iter().enumerate() {
+                        for (t, d2) in da2.iter().enumerate() {
+                            let blk = slot_block::<D>(&(rs * kj * d2), s, t);
+                            j.border.own[(2 * b + s) * slots + 2 * b2 + t] += blk;
                         }
                     }
-                    None => {
-                        let free = &sys.free[other];
-                        if !free.iter().any(|&f| f) {
-                            continue;
-                        }
-                        for s in 0..2 {
-                            let row = mask(slot_node_block::<D>(&(by_res[s] * kj), s), free, false);
-                            let col = mask(node_slot_block::<D>(&(jk * da[s]), s), free, true);
-                            j.border.links.push((other, 2 * b + s, row, col));
-                        }
+                }
+                None => {
+                    let free = &sys.free[other];
+                    if !free.iter().any(|&f| f) {
+                        continue;
+                    }
+                    for s in 0..2 {
+                        let row = mask(slot_node_block::<D>(&(by_res[s] * kj), s), free, false);
+                        let col = mask(node_slot_block::<D>(&(jk * da[s]), s), free, true);
+                        j.border.links.push((other, 2 * b + s, row, col));
                     }
                 }
             }

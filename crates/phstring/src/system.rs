@@ -376,6 +376,8 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) body_links: Vec<Vec<Vec<(usize, usize, bool)>>>,
     /// Per node, the body and attachment it is fixed to (empty without bodies).
     pub(crate) attached: Vec<Option<(usize, usize)>>,
+    /// The bodies' initial states as the network gave them (the start of the statics).
+    pub(crate) body_start: Vec<BodyState>,
 }
 
 /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
@@ -846,14 +848,16 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             body_names: rigid.names,
             body_links: rigid.links,
             attached: rigid.attached,
+            body_start: rigid.states,
         };
         sys.check_initial_energies(&initial)?;
         Ok((sys, initial))
     }
 
     /// Checks that `state` can start this system: its sizes, finite positions and
-    /// velocities, admissible strains, every prescribed motion at its position at `t = 0`
-    /// and finite energies (the checks [`Self::new`] makes of the problem's initial state).
+    /// velocities, admissible strains, every prescribed motion at its position at `t = 0`,
+    /// every node fixed to a rigid body at its body point and moving with the body, and
+    /// finite energies (the checks [`Self::new`] makes of the problem's initial state).
     pub fn check_state(&self, state: &State<D>) -> Result<(), SetupError> {
         check_initial(&self.mesh, &self.groups, state)?;
         if state.bodies.len() != self.bodies.len() {
@@ -864,6 +868,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             });
         }
         free_components(&self.boundary, state, self.mesh.n_nodes())?;
+        crate::body::check_attached(
+            &self.bodies,
+            &self.body_names,
+            &state.bodies,
+            &state.r,
+            &state.v,
+        )?;
         self.check_initial_energies(state)
     }
 
