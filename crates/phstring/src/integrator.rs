@@ -18,7 +18,7 @@ use crate::linsolve::BlockJacobian;
 use crate::material::StoredEnergy;
 use crate::newton::NewtonProblem;
 use crate::system::{Damping, Law, MassMatrix, PhSystem, Vector, element_mass};
-use crate::water::{WaterModel, WaterWork};
+use crate::water::{ElementMotion, WaterModel, WaterWork, WetElement};
 
 /// The part of a residual evaluation that one element group takes.
 struct ElementKernel {
@@ -431,12 +431,26 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             }
         }
         let eye = SMatrix::<f64, D, D>::identity();
+        // The drag of a line's elements goes with their other terms in the element loop (one
+        // pass over the elements) when each group is all wet or all dry, as line
+        // hydrodynamics, given per group, make it.
+        let water = sys.water.as_deref();
+        let fused = water.is_some_and(|w| {
+            sys.groups.iter().all(|g| {
+                let n = w.elements_in(g.elements.clone()).len();
+                n == 0 || n == g.elements.len()
+            })
+        });
         for grp in &sys.groups {
             // This group's part of the elements touching the range.
             let sub = grp.elements.start.max(els.start)..grp.elements.end.min(els.end);
             if sub.is_empty() {
                 continue;
             }
+            let drag = water
+                .filter(|_| fused)
+                .map(|w| (w, w.elements_in(sub.clone())))
+                .filter(|(_, wet)| !wet.is_empty());
             let k = ElementKernel {
                 mass: grp.mass,
                 rho_a: grp.rho_a,
@@ -446,18 +460,23 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 damping: grp.damping,
             };
             let jac = jac.as_deref_mut();
-            match &grp.law {
-                Law::String(m) => {
-                    self.elements::<_, MEASURE>(m, k, x, res, jac, &mut scale2, &mut strain2)?
+            let (s2, c2) = (&mut scale2, &mut strain2);
+            match (&grp.law, drag) {
+                (Law::String(m), Some(d)) => {
+                    self.elements::<_, MEASURE, true>(m, k, Some(d), x, res, jac, s2, c2)?
                 }
-                Law::Spring(sp) => {
-                    self.elements::<_, MEASURE>(sp, k, x, res, jac, &mut scale2, &mut strain2)?
+                (Law::String(m), None) => {
+                    self.elements::<_, MEASURE, false>(m, k, None, x, res, jac, s2, c2)?
+                }
+                (Law::Spring(sp), _) => {
+                    self.elements::<_, MEASURE, false>(sp, k, None, x, res, jac, s2, c2)?
                 }
             }
         }
-        if let Some(w) = sys.water.as_deref() {
-            let (nodes, els) = (nodes.clone(), els.clone());
-            let s2 = self.water_terms(w, x, res, jac.as_deref_mut(), nodes, els);
+        if let Some(w) = water {
+            // The element loop has taken the drag when fused.
+            let drag_els = if fused { 0..0 } else { els.clone() };
+            let s2 = self.water_terms(w, x, res, jac.as_deref_mut(), nodes.clone(), drag_els);
             if MEASURE {
                 scale2 += s2;
             }
@@ -518,13 +537,15 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
 
     /// The inertia and internal-force terms of the elements `k.els` of one group with law
     /// `law` (rows of `k.nodes` only unless `k.full`); with `MEASURE` also their force and
-    /// strain scales, added to `scale2` and `strain2`.
+    /// strain scales, added to `scale2` and `strain2`. With `WET`, also the water's drag on
+    /// them, `drag` (the model and the group's wet elements `k.els`, in order).
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn elements<L: StoredEnergy, const MEASURE: bool>(
+    fn elements<L: StoredEnergy, const MEASURE: bool, const WET: bool>(
         &self,
         law: &L,
         k: ElementKernel,
+        drag: Option<(&WaterModel<D>, &[WetElement])>,
         x: &[Vector<D>],
         res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
@@ -565,6 +586,15 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 dq += kv;
             }
             let f = rpm * (2.0 * q);
+            // The water's drag on the element (docs/method.md §21), with its mid-step tangent.
+            let wet = match drag {
+                Some((w, wet)) if WET => {
+                    let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
+                    let m = ElementMotion::with_tangent(rpm, r0, xs, 1.0 / l, h);
+                    Some(w.drag(&wet[e - els.start], &m, h, jac.is_some()))
+                }
+                _ => None,
+            };
             if MEASURE {
                 // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
                 // force on both nodes.
@@ -584,6 +614,19 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             if in_b {
                 res[b] += wb * md + wa * mo;
                 res[b] += f;
+            }
+            if let Some((fw, _, _)) = &wet {
+                // Half of the drag on each node.
+                let half = fw * 0.5;
+                if in_a {
+                    res[a] -= half;
+                }
+                if in_b {
+                    res[b] -= half;
+                }
+                if MEASURE {
+                    *scale2 += 2.0 * half.norm_squared();
+                }
             }
             // Drag c M_c Δ/h and dashpot c (Δ_b − Δ_a)/h: `(rd, ro)` are their diagonal and
             // coupling coefficients per unit velocity [N·s/m].
@@ -610,14 +653,20 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
                 let rp1 = rpm + dr * 0.5;
                 let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
+                let diag = g + eye * (mass_scale * md + inv_h * rd);
+                let off = eye * (mass_scale * mo + inv_h * ro) - g;
+                // Rows a and b alike: the drag's ∂/∂x_a = ja, ∂/∂x_b = jb.
+                let (da, db, offs) = match &wet {
+                    Some((_, [ja, jb], _)) => (diag + ja, diag + jb, [off + jb, off + ja]),
+                    None => (diag, diag, [off, off]),
+                };
                 if in_a {
-                    j.diag[a] += g + eye * (mass_scale * md + inv_h * rd);
+                    j.diag[a] += da;
                 }
                 if in_b {
-                    j.diag[b] += g + eye * (mass_scale * md + inv_h * rd);
+                    j.diag[b] += db;
                 }
-                let off = eye * (mass_scale * mo + inv_h * ro) - g;
-                j.off[e] = [off, off];
+                j.off[e] = offs;
             }
         }
         Ok(())
