@@ -34,6 +34,15 @@ struct ElementKernel {
     damping: Damping,
 }
 
+/// Where an element loop adds its terms: the residual, the Jacobian (if wanted), the squares
+/// of its force and strain scales, and the water's work.
+type ElementOut<'a, const D: usize> = (
+    &'a mut [Vector<D>],
+    Option<&'a mut BlockJacobian<D>>,
+    (&'a mut f64, &'a mut f64),
+    &'a mut WaterWork,
+);
+
 /// Time-stepping scheme: how the stress `S̄` of a step is formed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Scheme {
@@ -207,6 +216,10 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     /// Measure the scales in the next full evaluation (then cleared): they are taken once
     /// per solve, at the predictor, where they cost nothing in the Newton iterations.
     pub measure: bool,
+    /// What the water did over the step at the increment of the last evaluation when that
+    /// was a full one (`None` after a partial or failed one): the Newton solve ends on an
+    /// evaluation at its result, so the step's [`Self::water_work`] is at hand.
+    work: Option<WaterWork>,
 }
 
 impl<'a, const D: usize, M> StepEquations<'a, D, M> {
@@ -236,6 +249,7 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             scale: 0.0,
             strain_scale: 0.0,
             measure: true,
+            work: None,
         }
     }
 }
@@ -316,28 +330,46 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
 
     /// What the water does over a step with increment `x` (docs/method.md §21): drag,
     /// the current's work, seabed damping and friction, each computed as a sum of products
-    /// of non-negative factors where it is a dissipation (≥ 0 exactly for `h > 0`).
+    /// of non-negative factors where it is a dissipation (≥ 0 exactly for `h > 0`). Taken
+    /// from the last evaluation when that was a full one at `x` (the end of a Newton solve).
     pub(crate) fn water_work(&self, x: &[Vector<D>]) -> WaterWork {
+        match self.work {
+            Some(work) => {
+                debug_assert_eq!(work, self.water_work_at(x), "last evaluation not at x");
+                work
+            }
+            None => self.water_work_at(x),
+        }
+    }
+
+    /// [`Self::water_work`] computed at `x`: the elements' drag, then the nodes' terms, each
+    /// as an evaluation sums them (so that the two agree to the last bit).
+    fn water_work_at(&self, x: &[Vector<D>]) -> WaterWork {
         let mut work = WaterWork::default();
         let Some(w) = self.sys.water.as_deref() else {
             return work;
         };
+        let mesh = &self.sys.mesh;
+        for el in &w.elements {
+            let [a, b] = mesh.elements()[el.e];
+            let l = mesh.lengths()[el.e];
+            let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
+            let rpm = element_step(r0.0, r0.1, xs.0, xs.1, l).0;
+            let m = ElementMotion::with_tangent(rpm, r0, xs, 1.0 / l, self.h);
+            work.add(&w.drag(el, &m, self.h, false).2);
+        }
         for node in &w.nodes {
             let i = node.node;
             let axis = w.node_axis(node, self.r0);
             work.add(&w.node_step(node, &self.r0[i], &x[i], &axis, self.h).work);
         }
-        for el in &w.elements {
-            let [a, b] = self.sys.mesh.elements()[el.e];
-            let l = self.sys.mesh.lengths()[el.e];
-            let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
-            work.add(&w.element_drag(el, r0, xs, l, self.h, false).2);
-        }
         work
     }
 
     /// The water's terms (docs/method.md §21) of the rows of `nodes` (elements `els` for the
-    /// drag), added to `res` and `jac`; returns the squares of their forces (force scale).
+    /// drag), added to `res` and `jac`, and their work to `work` (the elements' first);
+    /// returns the squares of their forces (force scale).
+    #[allow(clippy::too_many_arguments)]
     fn water_terms(
         &self,
         w: &WaterModel<D>,
@@ -346,13 +378,16 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         mut jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
         els: std::ops::Range<usize>,
+        work: &mut WaterWork,
     ) -> f64 {
         let mut scale2 = 0.0;
+        let mut node_work = WaterWork::default();
         for node in w.nodes_in(nodes.clone()) {
             let i = node.node;
             let axis = w.node_axis(node, self.r0);
             let st = w.node_step(node, &self.r0[i], &x[i], &axis, self.h);
             res[i] += st.res;
+            node_work.add(&st.work);
             scale2 += st.res.norm_squared();
             if let Some(j) = jac.as_deref_mut() {
                 j.diag[i] += st.jac;
@@ -363,7 +398,10 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             let [a, b] = self.sys.mesh.elements()[el.e];
             let l = self.sys.mesh.lengths()[el.e];
             let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
-            let (f, [ja, jb], _) = w.element_drag(el, r0, xs, l, self.h, want);
+            let rpm = element_step(r0.0, r0.1, xs.0, xs.1, l).0;
+            let m = ElementMotion::with_tangent(rpm, r0, xs, 1.0 / l, self.h);
+            let (f, [ja, jb], drag_work) = w.drag(el, &m, self.h, want);
+            work.add(&drag_work);
             let half = f * 0.5;
             let (in_a, in_b) = (nodes.contains(&a), nodes.contains(&b));
             if in_a {
@@ -385,6 +423,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 j.off[el.e][1] += ja;
             }
         }
+        work.add(&node_work);
         scale2
     }
 
@@ -418,6 +457,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         // Force scale (docs/method.md §9, eq. (9.2)): squares of the magnitudes of every force term of
         // the residual, summed over the full evaluation.
         let mut strain2 = 0.0;
+        self.work = None;
+        let mut work = WaterWork::default();
         let mut scale2 = if MEASURE {
             self.f_ext.iter().map(|f| f.norm_squared()).sum::<f64>()
         } else {
@@ -460,26 +501,25 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 damping: grp.damping,
             };
             let jac = jac.as_deref_mut();
-            let (s2, c2) = (&mut scale2, &mut strain2);
+            let out = (&mut *res, jac, (&mut scale2, &mut strain2), &mut work);
             match (&grp.law, drag) {
                 (Law::String(m), Some(d)) => {
-                    self.elements::<_, MEASURE, true>(m, k, Some(d), x, res, jac, s2, c2)?
+                    self.elements::<_, MEASURE, true>(m, k, Some(d), x, out)?
                 }
-                (Law::String(m), None) => {
-                    self.elements::<_, MEASURE, false>(m, k, None, x, res, jac, s2, c2)?
-                }
-                (Law::Spring(sp), _) => {
-                    self.elements::<_, MEASURE, false>(sp, k, None, x, res, jac, s2, c2)?
-                }
+                (Law::String(m), None) => self.elements::<_, MEASURE, false>(m, k, None, x, out)?,
+                (Law::Spring(sp), _) => self.elements::<_, MEASURE, false>(sp, k, None, x, out)?,
             }
         }
         if let Some(w) = water {
             // The element loop has taken the drag when fused.
             let drag_els = if fused { 0..0 } else { els.clone() };
-            let s2 = self.water_terms(w, x, res, jac.as_deref_mut(), nodes.clone(), drag_els);
+            let j = jac.as_deref_mut();
+            let s2 = self.water_terms(w, x, res, j, nodes.clone(), drag_els, &mut work);
             if MEASURE {
                 scale2 += s2;
             }
+            // The step's water work, when this evaluation is a full one.
+            self.work = full.then_some(work);
         }
         // Feedback ports: the force F(t_{n+½}, r_{n+½}, Δ/h) is an input, so −F in the residual.
         for fb in sys
@@ -547,10 +587,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         k: ElementKernel,
         drag: Option<(&WaterModel<D>, &[WetElement])>,
         x: &[Vector<D>],
-        res: &mut [Vector<D>],
-        mut jac: Option<&mut BlockJacobian<D>>,
-        scale2: &mut f64,
-        strain2: &mut f64,
+        (res, mut jac, (scale2, strain2), work): ElementOut<'_, D>,
     ) -> Result<(), StrainError> {
         let sys = self.sys;
         let h = self.h;
@@ -615,7 +652,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 res[b] += wb * md + wa * mo;
                 res[b] += f;
             }
-            if let Some((fw, _, _)) = &wet {
+            if let Some((fw, _, drag_work)) = &wet {
+                work.add(drag_work);
                 // Half of the drag on each node.
                 let half = fw * 0.5;
                 if in_a {
@@ -936,6 +974,7 @@ mod tests {
             scale: 0.0,
             strain_scale: 0.0,
             measure: true,
+            work: None,
         };
         let n = x.len();
         let mut res = vec![Vector::<D>::zeros(); n];
