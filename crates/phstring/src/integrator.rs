@@ -384,6 +384,12 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         let mut node_work = WaterWork::default();
         for node in w.nodes_in(nodes.clone()) {
             let i = node.node;
+            if let Some(b) = w.resting_buoyancy(node, &self.r0[i], &x[i]) {
+                // [`WaterModel::node_step`]'s terms then, without adding its zeros.
+                res[i][D - 1] -= b;
+                scale2 += b * b;
+                continue;
+            }
             let axis = w.node_axis(node, self.r0);
             let st = w.node_step(node, &self.r0[i], &x[i], &axis, self.h);
             res[i] += st.res;

@@ -1019,6 +1019,24 @@ impl<const D: usize> WaterModel<D> {
     }
 }
 
+impl<const D: usize> WaterModel<D> {
+    /// The buoyancy [N] of wet node `w` when that is all the water does to it over the step
+    /// from `r0` by `x` [m] (the common case: no point drag, below the surface band and off
+    /// the seabed at both ends of the step), else `None`: then [`Self::node_step`]'s force is
+    /// `−buoyancy e_z`, with a zero Jacobian block and no work.
+    #[inline(always)]
+    pub fn resting_buoyancy(&self, w: &WetNode, r0: &Vector<D>, x: &Vector<D>) -> Option<f64> {
+        let r1 = r0 + x;
+        let zi = D - 1;
+        let submerged = r0[zi].max(r1[zi]) <= -0.5 * w.band;
+        let off_bed = match &self.bed {
+            Some(bed) if w.stiffness > 0.0 => bed.gap(r0) >= 0.0 && bed.gap(&r1) >= 0.0,
+            _ => true,
+        };
+        (w.drag == 0.0 && (submerged || w.buoyancy == 0.0) && off_bed).then_some(w.buoyancy)
+    }
+}
+
 /// The step's force on a wet node from the node's start `r0` and increment `x` over a step
 /// of `h` [s]: the residual term (`+∂Ĥ/∂r` of buoyancy and contact, minus the resistive and
 /// drag forces) [N], its Jacobian block, and the node's work in the step.
