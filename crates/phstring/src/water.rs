@@ -522,6 +522,7 @@ impl<const D: usize> Bed<D> {
     }
 
     /// `∇g` at `r` (the plane's `n`; `e_z − ∇b` for a grid) and, for a grid, `∇²g = −∇²b`.
+    #[inline]
     pub fn gap_gradient(&self, r: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
         match &self.grid {
             None => (self.n, None),
@@ -534,6 +535,7 @@ impl<const D: usize> Bed<D> {
 
     /// The exact discrete gradient `∇̄g` of the gap from `r0` to `r1` (`∇̄g·(r1 − r0) =
     /// g(r1) − g(r0)`) and, for a grid, its derivative by `r1` (docs/method.md §21).
+    #[inline]
     pub fn gap_quotient(&self, r0: &Vector<D>, r1: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
         match &self.grid {
             None => (self.n, None),
@@ -546,6 +548,7 @@ impl<const D: usize> Bed<D> {
     }
 
     /// The unit upward normal at `r` and, for a grid, its derivative by `r`.
+    #[inline]
     pub fn normal_at(&self, r: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
         match self.gap_gradient(r) {
             (n, None) => (n, None),
@@ -1139,7 +1142,11 @@ impl<const D: usize> WaterModel<D> {
         }
         // The normal at the mid-step position; on a grid it turns with the node,
         // ∂n/∂x = ½ ∂n/∂r.
-        let (n, dn) = bed.normal_at(&(r0 + x * 0.5));
+        let (n, dn) = match &bed.grid {
+            // A plane's normal, without the call.
+            None => (bed.n, None),
+            Some(_) => bed.normal_at(&(r0 + x * 0.5)),
+        };
         let dn = dn.map(|d| d * 0.5);
         let xn = n.dot(x);
         // ∂(n·x)/∂x.
