@@ -18,7 +18,7 @@ use crate::linsolve::BlockJacobian;
 use crate::material::StoredEnergy;
 use crate::newton::NewtonProblem;
 use crate::system::{Damping, Law, MassMatrix, PhSystem, Vector, element_mass};
-use crate::water::{WaterModel, WaterWork};
+use crate::water::{ElementMotion, WaterModel, WaterWork, WetElement};
 
 /// The part of a residual evaluation that one element group takes.
 struct ElementKernel {
@@ -33,6 +33,15 @@ struct ElementKernel {
     /// The group's dissipation.
     damping: Damping,
 }
+
+/// Where an element loop adds its terms: the residual, the Jacobian (if wanted), the squares
+/// of its force and strain scales, and the water's work.
+type ElementOut<'a, const D: usize> = (
+    &'a mut [Vector<D>],
+    Option<&'a mut BlockJacobian<D>>,
+    (&'a mut f64, &'a mut f64),
+    &'a mut WaterWork,
+);
 
 /// Time-stepping scheme: how the stress `S̄` of a step is formed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -213,6 +222,10 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub wrenches: &'a [(crate::body::Vec3, crate::body::Vec3)],
     /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
+    /// What the water did over the step at the increment of the last evaluation when that
+    /// was a full one (`None` after a partial or failed one): the Newton solve ends on an
+    /// evaluation at its result, so the step's [`Self::water_work`] is at hand.
+    work: Option<WaterWork>,
 }
 
 impl<'a, const D: usize, M> StepEquations<'a, D, M> {
@@ -245,6 +258,7 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             bodies: &state.bodies,
             wrenches: &[],
             nodes_x: Vec::new(),
+            work: None,
         }
     }
 }
@@ -358,23 +372,17 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
 
     /// What the water does over a step with increment `x` (docs/method.md §21): drag,
     /// the current's work, seabed damping and friction, each computed as a sum of products
-    /// of non-negative factors where it is a dissipation (≥ 0 exactly for `h > 0`).
+    /// of non-negative factors where it is a dissipation (≥ 0 exactly for `h > 0`). Taken
+    /// from the last evaluation when that was a full one at `x` (the end of a Newton solve).
     pub(crate) fn water_work(&self, x: &[Vector<D>]) -> WaterWork {
-        let mut work = WaterWork::default();
-        let Some(w) = self.sys.water.as_deref() else {
-            return work;
+        let mut work = match self.work {
+            Some(work) => {
+                debug_assert_eq!(work, self.water_work_at(x), "last evaluation not at x");
+                work
+            }
+            None => self.water_work_at(x),
         };
-        for node in &w.nodes {
-            let i = node.node;
-            let axis = w.node_axis(node, self.r0);
-            work.add(&w.node_step(node, &self.r0[i], &x[i], &axis, self.h).work);
-        }
-        for el in &w.elements {
-            let [a, b] = self.sys.mesh.elements()[el.e];
-            let l = self.sys.mesh.lengths()[el.e];
-            let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
-            work.add(&w.element_drag(el, r0, xs, l, self.h, false).2);
-        }
+        // The rigid bodies' drag (docs/method.md §22), after the lines' and nodes' terms.
         if !self.sys.bodies.is_empty() {
             let n = self.sys.mesh.n_nodes();
             let (d, s) = crate::body_step::drag_work(self.sys, self.bodies, self.h, &x[n..]);
@@ -384,8 +392,34 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         work
     }
 
+    /// [`Self::water_work`] computed at `x`: the elements' drag, then the nodes' terms, each
+    /// as an evaluation sums them (so that the two agree to the last bit).
+    fn water_work_at(&self, x: &[Vector<D>]) -> WaterWork {
+        let mut work = WaterWork::default();
+        let Some(w) = self.sys.water.as_deref() else {
+            return work;
+        };
+        let mesh = &self.sys.mesh;
+        for el in &w.elements {
+            let [a, b] = mesh.elements()[el.e];
+            let l = mesh.lengths()[el.e];
+            let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
+            let rpm = element_step(r0.0, r0.1, xs.0, xs.1, l).0;
+            let m = ElementMotion::with_tangent(rpm, r0, xs, 1.0 / l, self.h);
+            work.add(&w.drag(el, &m, self.h, false).2);
+        }
+        for node in &w.nodes {
+            let i = node.node;
+            let axis = w.node_axis(node, self.r0);
+            work.add(&w.node_step(node, &self.r0[i], &x[i], &axis, self.h).work);
+        }
+        work
+    }
+
     /// The water's terms (docs/method.md §21) of the rows of `nodes` (elements `els` for the
-    /// drag), added to `res` and `jac`; returns the squares of their forces (force scale).
+    /// drag), added to `res` and `jac`, and their work to `work` (the elements' first);
+    /// returns the squares of their forces (force scale).
+    #[allow(clippy::too_many_arguments)]
     fn water_terms(
         &self,
         w: &WaterModel<D>,
@@ -394,13 +428,22 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         mut jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
         els: std::ops::Range<usize>,
+        work: &mut WaterWork,
     ) -> f64 {
         let mut scale2 = 0.0;
+        let mut node_work = WaterWork::default();
         for node in w.nodes_in(nodes.clone()) {
             let i = node.node;
+            if let Some(b) = w.resting_buoyancy(node, &self.r0[i], &x[i]) {
+                // [`WaterModel::node_step`]'s terms then, without adding its zeros.
+                res[i][D - 1] -= b;
+                scale2 += b * b;
+                continue;
+            }
             let axis = w.node_axis(node, self.r0);
             let st = w.node_step(node, &self.r0[i], &x[i], &axis, self.h);
             res[i] += st.res;
+            node_work.add(&st.work);
             scale2 += st.res.norm_squared();
             if let Some(j) = jac.as_deref_mut() {
                 j.diag[i] += st.jac;
@@ -411,7 +454,10 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             let [a, b] = self.sys.mesh.elements()[el.e];
             let l = self.sys.mesh.lengths()[el.e];
             let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
-            let (f, [ja, jb], _) = w.element_drag(el, r0, xs, l, self.h, want);
+            let rpm = element_step(r0.0, r0.1, xs.0, xs.1, l).0;
+            let m = ElementMotion::with_tangent(rpm, r0, xs, 1.0 / l, self.h);
+            let (f, [ja, jb], drag_work) = w.drag(el, &m, self.h, want);
+            work.add(&drag_work);
             let half = f * 0.5;
             let (in_a, in_b) = (nodes.contains(&a), nodes.contains(&b));
             if in_a {
@@ -433,6 +479,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 j.off[el.e][1] += ja;
             }
         }
+        work.add(&node_work);
         scale2
     }
 
@@ -447,8 +494,6 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         bodies: Option<&crate::body_step::BodyStep<'_, D>>,
     ) -> Result<(), StrainError> {
         let sys = self.sys;
-        let h = self.h;
-        let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
         let n_el = sys.mesh.n_elements();
         let full = nodes.start == 0 && nodes.end >= x.len();
         debug_assert!(full || sys.mesh.is_chain(), "node ranges need a chain mesh");
@@ -467,6 +512,8 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         // Force scale (docs/method.md §9, eq. (9.2)): squares of the magnitudes of every force term of
         // the residual, summed over the full evaluation.
         let mut strain2 = 0.0;
+        self.work = None;
+        let mut work = WaterWork::default();
         let mut scale2 = if MEASURE {
             self.f_ext.iter().map(|f| f.norm_squared()).sum::<f64>()
         } else {
@@ -479,13 +526,26 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 j.diag[nodes.clone()].iter_mut().for_each(|b| b.fill(0.0));
             }
         }
-        let eye = SMatrix::<f64, D, D>::identity();
+        // The drag of a line's elements goes with their other terms in the element loop (one
+        // pass over the elements) when each group is all wet or all dry, as line
+        // hydrodynamics, given per group, make it.
+        let water = sys.water.as_deref();
+        let fused = water.is_some_and(|w| {
+            sys.groups.iter().all(|g| {
+                let n = w.elements_in(g.elements.clone()).len();
+                n == 0 || n == g.elements.len()
+            })
+        });
         for grp in &sys.groups {
             // This group's part of the elements touching the range.
             let sub = grp.elements.start.max(els.start)..grp.elements.end.min(els.end);
             if sub.is_empty() {
                 continue;
             }
+            let drag = water
+                .filter(|_| fused)
+                .map(|w| (w, w.elements_in(sub.clone())))
+                .filter(|(_, wet)| !wet.is_empty());
             let k = ElementKernel {
                 mass: grp.mass,
                 rho_a: grp.rho_a,
@@ -495,54 +555,27 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 damping: grp.damping,
             };
             let jac = jac.as_deref_mut();
-            match &grp.law {
-                Law::String(m) => {
-                    self.elements::<_, MEASURE>(m, k, x, res, jac, &mut scale2, &mut strain2)?
+            let out = (&mut *res, jac, (&mut scale2, &mut strain2), &mut work);
+            match (&grp.law, drag) {
+                (Law::String(m), Some(d)) => {
+                    self.elements::<_, MEASURE, true>(m, k, Some(d), x, out)?
                 }
-                Law::Spring(sp) => {
-                    self.elements::<_, MEASURE>(sp, k, x, res, jac, &mut scale2, &mut strain2)?
-                }
+                (Law::String(m), None) => self.elements::<_, MEASURE, false>(m, k, None, x, out)?,
+                (Law::Spring(sp), _) => self.elements::<_, MEASURE, false>(sp, k, None, x, out)?,
             }
         }
-        if let Some(w) = sys.water.as_deref() {
-            let (nodes, els) = (nodes.clone(), els.clone());
-            let s2 = self.water_terms(w, x, res, jac.as_deref_mut(), nodes, els);
+        if let Some(w) = water {
+            // The element loop has taken the drag when fused.
+            let drag_els = if fused { 0..0 } else { els.clone() };
+            let j = jac.as_deref_mut();
+            let s2 = self.water_terms(w, x, res, j, nodes.clone(), drag_els, &mut work);
             if MEASURE {
                 scale2 += s2;
             }
+            // The step's water work, when this evaluation is a full one.
+            self.work = full.then_some(work);
         }
-        // Feedback ports: the force F(t_{n+½}, r_{n+½}, Δ/h) is an input, so −F in the residual.
-        for fb in sys
-            .boundary
-            .feedback
-            .iter()
-            .filter(|f| nodes.contains(&f.node))
-        {
-            let i = fb.node;
-            let (rm, y) = (self.r0[i] + x[i] * 0.5, x[i] * inv_h);
-            let f = fb.law.force(self.t_mid, &rm, &y);
-            res[i] -= f;
-            if let Some(j) = jac.as_deref_mut() {
-                let (dr, dy) = fb.law.jacobian(self.t_mid, &rm, &y);
-                j.diag[i] -= dr * 0.5 + dy * inv_h;
-            }
-            if MEASURE {
-                scale2 += f.norm_squared();
-            }
-        }
-        // Point masses: inertia m (v_{n+1} − v_n)/h at their nodes.
-        for &(i, m) in sys.point_mass.iter().filter(|(i, _)| nodes.contains(i)) {
-            let w = (x[i] * inv_h - self.v0[i]) * (2.0 * inv_h);
-            res[i] += w * m;
-            if let Some(j) = jac.as_deref_mut() {
-                j.diag[i] += eye * (mass_scale * m);
-            }
-            if MEASURE {
-                let mm = 2.0 * inv_h * m;
-                scale2 +=
-                    mm * mm * (x[i].norm_squared() * (inv_h * inv_h) + self.v0[i].norm_squared());
-            }
-        }
+        self.port_and_mass_terms::<MEASURE>(x, res, jac.as_deref_mut(), &nodes, &mut scale2);
         // Rigid bodies: their rows take the attached nodes' rows before those are masked.
         if let Some(step) = bodies {
             let s2 = step.terms(sys, res, jac.as_deref_mut());
@@ -572,20 +605,68 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         Ok(())
     }
 
-    /// The inertia and internal-force terms of the elements `k.els` of one group with law
-    /// `law` (rows of `k.nodes` only unless `k.full`); with `MEASURE` also their force and
-    /// strain scales, added to `scale2` and `strain2`.
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    fn elements<L: StoredEnergy, const MEASURE: bool>(
+    /// The feedback ports' forces and the point masses' inertia on the rows of `nodes`, added
+    /// to `res` and `jac`; with `MEASURE` the squares of their force terms are added to
+    /// `scale2`, term by term.
+    fn port_and_mass_terms<const MEASURE: bool>(
         &self,
-        law: &L,
-        k: ElementKernel,
         x: &[Vector<D>],
         res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
+        nodes: &std::ops::Range<usize>,
         scale2: &mut f64,
-        strain2: &mut f64,
+    ) {
+        let sys = self.sys;
+        let h = self.h;
+        let (inv_h, mass_scale) = (1.0 / h, 2.0 / (h * h));
+        let eye = SMatrix::<f64, D, D>::identity();
+        // Feedback ports: the force F(t_{n+½}, r_{n+½}, Δ/h) is an input, so −F in the residual.
+        for fb in sys
+            .boundary
+            .feedback
+            .iter()
+            .filter(|f| nodes.contains(&f.node))
+        {
+            let i = fb.node;
+            let (rm, y) = (self.r0[i] + x[i] * 0.5, x[i] * inv_h);
+            let f = fb.law.force(self.t_mid, &rm, &y);
+            res[i] -= f;
+            if let Some(j) = jac.as_deref_mut() {
+                let (dr, dy) = fb.law.jacobian(self.t_mid, &rm, &y);
+                j.diag[i] -= dr * 0.5 + dy * inv_h;
+            }
+            if MEASURE {
+                *scale2 += f.norm_squared();
+            }
+        }
+        // Point masses: inertia m (v_{n+1} − v_n)/h at their nodes.
+        for &(i, m) in sys.point_mass.iter().filter(|(i, _)| nodes.contains(i)) {
+            let w = (x[i] * inv_h - self.v0[i]) * (2.0 * inv_h);
+            res[i] += w * m;
+            if let Some(j) = jac.as_deref_mut() {
+                j.diag[i] += eye * (mass_scale * m);
+            }
+            if MEASURE {
+                let mm = 2.0 * inv_h * m;
+                *scale2 +=
+                    mm * mm * (x[i].norm_squared() * (inv_h * inv_h) + self.v0[i].norm_squared());
+            }
+        }
+    }
+
+    /// The inertia and internal-force terms of the elements `k.els` of one group with law
+    /// `law` (rows of `k.nodes` only unless `k.full`); with `MEASURE` also their force and
+    /// strain scales, added to `scale2` and `strain2`. With `WET`, also the water's drag on
+    /// them, `drag` (the model and the group's wet elements `k.els`, in order).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn elements<L: StoredEnergy, const MEASURE: bool, const WET: bool>(
+        &self,
+        law: &L,
+        k: ElementKernel,
+        drag: Option<(&WaterModel<D>, &[WetElement])>,
+        x: &[Vector<D>],
+        (res, mut jac, (scale2, strain2), work): ElementOut<'_, D>,
     ) -> Result<(), StrainError> {
         let sys = self.sys;
         let h = self.h;
@@ -621,6 +702,15 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 dq += kv;
             }
             let f = rpm * (2.0 * q);
+            // The water's drag on the element (docs/method.md §21), with its mid-step tangent.
+            let wet = match drag {
+                Some((w, wet)) if WET => {
+                    let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
+                    let m = ElementMotion::with_tangent(rpm, r0, xs, 1.0 / l, h);
+                    Some(w.drag(&wet[e - els.start], &m, h, jac.is_some()))
+                }
+                _ => None,
+            };
             if MEASURE {
                 // Inertia terms (2/h²) m Δ and (2/h) m v_n at both nodes; the internal
                 // force on both nodes.
@@ -640,6 +730,20 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             if in_b {
                 res[b] += wb * md + wa * mo;
                 res[b] += f;
+            }
+            if let Some((fw, _, drag_work)) = &wet {
+                work.add(drag_work);
+                // Half of the drag on each node.
+                let half = fw * 0.5;
+                if in_a {
+                    res[a] -= half;
+                }
+                if in_b {
+                    res[b] -= half;
+                }
+                if MEASURE {
+                    *scale2 += 2.0 * half.norm_squared();
+                }
             }
             // Drag c M_c Δ/h and dashpot c (Δ_b − Δ_a)/h: `(rd, ro)` are their diagonal and
             // coupling coefficients per unit velocity [N·s/m].
@@ -666,14 +770,20 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
                 // ∂f/∂r'_{n+1} = q I + 4 ∂q/∂C₁ r'_{n+½} r'_{n+1}ᵀ.
                 let rp1 = rpm + dr * 0.5;
                 let g = (eye * q + rpm * rp1.transpose() * (4.0 * dq)) * (1.0 / l);
+                let diag = g + eye * (mass_scale * md + inv_h * rd);
+                let off = eye * (mass_scale * mo + inv_h * ro) - g;
+                // Rows a and b alike: the drag's ∂/∂x_a = ja, ∂/∂x_b = jb.
+                let (da, db, offs) = match &wet {
+                    Some((_, [ja, jb], _)) => (diag + ja, diag + jb, [off + jb, off + ja]),
+                    None => (diag, diag, [off, off]),
+                };
                 if in_a {
-                    j.diag[a] += g + eye * (mass_scale * md + inv_h * rd);
+                    j.diag[a] += da;
                 }
                 if in_b {
-                    j.diag[b] += g + eye * (mass_scale * md + inv_h * rd);
+                    j.diag[b] += db;
                 }
-                let off = eye * (mass_scale * mo + inv_h * ro) - g;
-                j.off[e] = [off, off];
+                j.off[e] = offs;
             }
         }
         Ok(())
@@ -946,6 +1056,7 @@ mod tests {
             bodies: &state.bodies,
             wrenches: &[],
             nodes_x: Vec::new(),
+            work: None,
         };
         let n = x.len();
         let mut res = vec![Vector::<D>::zeros(); n];

@@ -100,6 +100,7 @@ impl<const D: usize> Current<D> {
     }
 
     /// The velocity `u(z)` [m/s] and its derivative `du/dz` [1/s] at height `z` [m].
+    #[inline]
     pub fn at(&self, z: f64) -> (Vector<D>, Vector<D>) {
         match self {
             Current::Uniform(u) => (*u, Vector::zeros()),
@@ -521,6 +522,7 @@ impl<const D: usize> Bed<D> {
     }
 
     /// `∇g` at `r` (the plane's `n`; `e_z − ∇b` for a grid) and, for a grid, `∇²g = −∇²b`.
+    #[inline]
     pub fn gap_gradient(&self, r: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
         match &self.grid {
             None => (self.n, None),
@@ -533,6 +535,7 @@ impl<const D: usize> Bed<D> {
 
     /// The exact discrete gradient `∇̄g` of the gap from `r0` to `r1` (`∇̄g·(r1 − r0) =
     /// g(r1) − g(r0)`) and, for a grid, its derivative by `r1` (docs/method.md §21).
+    #[inline]
     pub fn gap_quotient(&self, r0: &Vector<D>, r1: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
         match &self.grid {
             None => (self.n, None),
@@ -545,6 +548,7 @@ impl<const D: usize> Bed<D> {
     }
 
     /// The unit upward normal at `r` and, for a grid, its derivative by `r`.
+    #[inline]
     pub fn normal_at(&self, r: &Vector<D>) -> (Vector<D>, Option<Block<D>>) {
         match self.gap_gradient(r) {
             (n, None) => (n, None),
@@ -1018,6 +1022,24 @@ impl<const D: usize> WaterModel<D> {
     }
 }
 
+impl<const D: usize> WaterModel<D> {
+    /// The buoyancy [N] of wet node `w` when that is all the water does to it over the step
+    /// from `r0` by `x` [m] (the common case: no point drag, below the surface band and off
+    /// the seabed at both ends of the step), else `None`: then [`Self::node_step`]'s force is
+    /// `−buoyancy e_z`, with a zero Jacobian block and no work.
+    #[inline(always)]
+    pub fn resting_buoyancy(&self, w: &WetNode, r0: &Vector<D>, x: &Vector<D>) -> Option<f64> {
+        let r1 = r0 + x;
+        let zi = D - 1;
+        let submerged = r0[zi].max(r1[zi]) <= -0.5 * w.band;
+        let off_bed = match &self.bed {
+            Some(bed) if w.stiffness > 0.0 => bed.gap(r0) >= 0.0 && bed.gap(&r1) >= 0.0,
+            _ => true,
+        };
+        (w.drag == 0.0 && (submerged || w.buoyancy == 0.0) && off_bed).then_some(w.buoyancy)
+    }
+}
+
 /// The step's force on a wet node from the node's start `r0` and increment `x` over a step
 /// of `h` [s]: the residual term (`+∂Ĥ/∂r` of buoyancy and contact, minus the resistive and
 /// drag forces) [N], its Jacobian block, and the node's work in the step.
@@ -1046,7 +1068,10 @@ impl<const D: usize> WaterModel<D> {
         let zi = D - 1;
         let r1 = r0 + x;
         // Buoyancy: the exact quotient of U(z) = −ρ g V Φ(z), Φ' = 1 − S.
-        if w.buoyancy > 0.0 {
+        // Submerged over the whole step (the common case): the full buoyancy, no derivative.
+        if w.buoyancy > 0.0 && r0[zi].max(r1[zi]) <= -0.5 * w.band {
+            res[zi] -= w.buoyancy;
+        } else if w.buoyancy > 0.0 {
             let (qa, dqa) = emerged_quotient(r0[zi], r1[zi], w.band);
             res[zi] -= w.buoyancy * (1.0 - qa);
             jac[(zi, zi)] += w.buoyancy * dqa;
@@ -1085,6 +1110,7 @@ impl<const D: usize> WaterModel<D> {
     /// friction of node `w`, along the seabed's normal at the mid-step position
     /// (docs/method.md §21).
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn contact_step(
         &self,
         bed: &Bed<D>,
@@ -1116,7 +1142,11 @@ impl<const D: usize> WaterModel<D> {
         }
         // The normal at the mid-step position; on a grid it turns with the node,
         // ∂n/∂x = ½ ∂n/∂r.
-        let (n, dn) = bed.normal_at(&(r0 + x * 0.5));
+        let (n, dn) = match &bed.grid {
+            // A plane's normal, without the call.
+            None => (bed.n, None),
+            Some(_) => bed.normal_at(&(r0 + x * 0.5)),
+        };
         let dn = dn.map(|d| d * 0.5);
         let xn = n.dot(x);
         // ∂(n·x)/∂x.
@@ -1191,6 +1221,7 @@ pub(crate) struct SlipLaw<const D: usize> {
 /// `a = μ N > 0` [N], times the static peak (21.5b) of scale `s` (`s = 1`: none), at the slip
 /// `v` [m/s]: `coef = c φ(x) (1 + (s − 1) G(x))`, `φ = 1/√(1 + x²)`, `x = c|v|/a`,
 /// `G = exp(−(x/x_S)⁴)`. Smooth in `v` (a function of `|v|²`), `coef > 0`.
+#[inline(always)]
 pub(crate) fn slip_law<const D: usize>(c: f64, a: f64, s: f64, v: &Vector<D>) -> SlipLaw<D> {
     let v2 = v.norm_squared();
     let root = (a * a + c * c * v2).sqrt();
@@ -1234,6 +1265,7 @@ struct Slip<'a, const D: usize> {
 impl<const D: usize> Slip<'_, D> {
     /// The friction (21.5), (21.5a), (21.5b) of the increment `x`, the axis `axis` of the node
     /// at the step's start (zero: none), added to the residual, Jacobian and work.
+    #[inline(always)]
     fn friction(
         &self,
         fr: &Friction,
@@ -1302,6 +1334,7 @@ impl<const D: usize> Slip<'_, D> {
     /// One direction's law: `μ`, zero-slip slope `c`, static scale `s`, the slip times `h`
     /// and its derivative by the increment.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn direction(
         &self,
         mu: f64,
@@ -1328,6 +1361,44 @@ impl<const D: usize> Slip<'_, D> {
     }
 }
 
+/// An element's mid-step motion as its drag sees it: the tangent `r'_{n+½}` [–], the
+/// velocity `(Δ_a + Δ_b)/2h` [m/s], the height of its mid-point `z_{n+½}` [m] and `1/l`
+/// [1/m].
+pub(crate) struct ElementMotion<const D: usize> {
+    pub rpm: Vector<D>,
+    pub ve: Vector<D>,
+    pub zm: f64,
+    pub inv_l: f64,
+}
+
+impl<const D: usize> ElementMotion<D> {
+    /// The motion of element `[a, b]` of reference length `l` [m] from its nodes' starts
+    /// `r0` [m] and increments `x` [m] over a step of `h` [s].
+    #[inline(always)]
+    pub fn new(r0: (&Vector<D>, &Vector<D>), x: (&Vector<D>, &Vector<D>), l: f64, h: f64) -> Self {
+        let inv_l = 1.0 / l;
+        Self::with_tangent((r0.1 - r0.0 + (x.1 - x.0) * 0.5) * inv_l, r0, x, inv_l, h)
+    }
+
+    /// [`Self::new`] with the mid-step tangent `rpm` the element loop has already formed.
+    #[inline(always)]
+    pub fn with_tangent(
+        rpm: Vector<D>,
+        r0: (&Vector<D>, &Vector<D>),
+        x: (&Vector<D>, &Vector<D>),
+        inv_l: f64,
+        h: f64,
+    ) -> Self {
+        let zi = D - 1;
+        Self {
+            rpm,
+            ve: (x.0 + x.1) * (0.5 * (1.0 / h)),
+            zm: 0.5 * (r0.0[zi] + r0.1[zi]) + 0.25 * (x.0[zi] + x.1[zi]),
+            inv_l,
+        }
+    }
+}
+
 impl<const D: usize> WaterModel<D> {
     /// `(force F [N] on the element, its Jacobian blocks by x_a and x_b, work)` of the drag on
     /// wet element `w` = `[a, b]` of reference length `l`: Morison's law at the element's
@@ -1345,16 +1416,29 @@ impl<const D: usize> WaterModel<D> {
         h: f64,
         want_jac: bool,
     ) -> (Vector<D>, [Block<D>; 2], WaterWork) {
+        self.drag(w, &ElementMotion::new(r0, x, l, h), h, want_jac)
+    }
+
+    /// [`Self::element_drag`] of the element's motion `m` over a step of `h` [s].
+    #[inline(always)]
+    pub fn drag(
+        &self,
+        w: &WetElement,
+        m: &ElementMotion<D>,
+        h: f64,
+        want_jac: bool,
+    ) -> (Vector<D>, [Block<D>; 2], WaterWork) {
         let inv_h = 1.0 / h;
         let zi = D - 1;
-        let ve = (x.0 + x.1) * (0.5 * inv_h);
-        let zm = 0.5 * (r0.0[zi] + r0.1[zi]) + 0.25 * (x.0[zi] + x.1[zi]);
-        let inv_l = 1.0 / l;
-        let rpm = (r0.1 - r0.0 + (x.1 - x.0) * 0.5) * inv_l;
-        let (u, du) = self.current.at(zm);
+        let (rpm, zm, inv_l) = (&m.rpm, m.zm, m.inv_l);
+        let (u, du) = if self.still {
+            (Vector::zeros(), Vector::zeros())
+        } else {
+            self.current.at(zm)
+        };
         let (em, dem) = emerged(zm, w.band);
         let phi = 1.0 - em;
-        let vr = ve - u;
+        let vr = m.ve - u;
         // The tangent t = p/|p| only enters through p pᵀ/|p|² and (p·v_r)/|p|²: no root.
         let l2 = rpm.norm_squared();
         let inv_l2 = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
@@ -1389,19 +1473,17 @@ impl<const D: usize> WaterModel<D> {
         // Zero when the element has no length (p = 0, inv_l2 = 0).
         let c = w.axial * st - alpha;
         let (s0, s1) = (0.25 * phi * inv_h, 0.25 * phi * inv_l * inv_l2);
-        let (ca, cn, an) = (c * ap, c + aa, gamma * ap);
-        let mut ja = Block::<D>::zeros();
-        let mut jb = Block::<D>::zeros();
-        for j in 0..D {
-            for i in 0..D {
-                let (pp, nn) = (rpm[i] * rpm[j], vrn[i] * vrn[j]);
-                let diag = if i == j { 1.0 } else { 0.0 };
-                let k0 = s0 * (alpha * diag + beta * pp * inv_l2 + gamma * nn);
-                let k1 = s1 * (ca * (diag - pp * inv_l2) + cn * rpm[i] * vrn[j] - an * nn);
-                ja[(i, j)] = k0 - k1;
-                jb[(i, j)] = k0 + k1;
-            }
-        }
+        // The ½ h⁻¹ ∂B/∂v_r part K₀ and the tangent's part K₁ (rows −½ B): ∂/∂x_a = K₀ − K₁,
+        // ∂/∂x_b = K₀ + K₁, each a multiple of I plus rank-one terms p (·)ᵀ and v_rn (·)ᵀ,
+        // with p pᵀ/|p|² = p (p/|p|²)ᵀ.
+        let (k0i, k0p, k0n) = (s0 * alpha, s0 * beta, s0 * gamma);
+        let (k1i, k1v, k1n) = (s1 * c * ap, s1 * (c + aa), s1 * gamma * ap);
+        let pu = rpm * inv_l2;
+        let (pa, pb) = (pu * (k0p + k1i) - vrn * k1v, pu * (k0p - k1i) + vrn * k1v);
+        let (na, nb) = (vrn * (k0n + k1n), vrn * (k0n - k1n));
+        let eye = Block::<D>::identity();
+        let mut ja = eye * (k0i - k1i) + rpm * pa.transpose() + vrn * na.transpose();
+        let mut jb = eye * (k0i + k1i) + rpm * pb.transpose() + vrn * nb.transpose();
         // ∂v_r/∂x = ½h⁻¹ I − ¼ (du/dz) e_zᵀ; ∂φ/∂x_z = −¼ dS/dz, times ½ of −(−B) on each row.
         if dem != 0.0 || du.iter().any(|&d| d != 0.0) {
             let gv = Block::<D>::identity() * alpha
