@@ -52,12 +52,16 @@ fn problem<const D: usize>(n_el: usize) -> Problem<D, Material> {
 }
 
 /// The taut string of [`problem`] 10 m under water, resting on a flat seabed there, in a
-/// 0.3 m/s current, with buoyancy, drag, added mass, seabed damping and friction.
+/// 0.3 m/s current, with buoyancy, drag, added mass, seabed damping and friction. Its weight
+/// acts along the water's vertical (`z` in 3D), so that it presses on the seabed (in 3D the
+/// dry string's gravity along `y` would leave it floating just off it).
 fn wet<const D: usize>(n_el: usize) -> Network<D, Material> {
     let mut p = problem::<D>(n_el);
     for r in &mut p.initial.r {
         r[D - 1] -= 10.0;
     }
+    p.body_force = Vector::<D>::zeros();
+    p.body_force[D - 1] = -9.81;
     let mut u = Vector::<D>::zeros();
     u[0] = 0.3;
     let seabed = Seabed::flat(10.0, 3.0e6, 3.0e5).with_friction(Friction::new(0.5, 100.0));
