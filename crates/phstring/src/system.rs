@@ -1194,6 +1194,21 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
+    /// The angular velocity of rigid body `b` in state `st`, in space axes:
+    /// `ω = R J⁻¹ Π` [rad/s] (zero for a body index out of range).
+    pub fn body_angular_velocity(&self, b: usize, st: &BodyState) -> crate::body::Vec3 {
+        self.bodies
+            .get(b)
+            .map_or_else(crate::body::Vec3::zeros, |m| {
+                st.orientation.transform_vector(&m.omega(st))
+            })
+    }
+
+    /// Whether rigid body `b` has a wrench port (a force and torque input).
+    pub fn body_has_wrench(&self, b: usize) -> bool {
+        self.bodies.get(b).is_some_and(|m| m.wrench.is_some())
+    }
+
     /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])`.
     pub fn bodies(&self) -> Vec<(&str, f64)> {
         self.body_names
