@@ -335,12 +335,18 @@ fn unflat_bodies(v: &[f64]) -> Vec<BodyState> {
     v.chunks_exact(BODY_NUMBERS)
         .map(|b| {
             let v3 = |i: usize| crate::body::Vec3::new(b[i], b[i + 1], b[i + 2]);
+            let q = nalgebra::Quaternion::new(b[6], b[7], b[8], b[9]);
+            // A run's quaternion is unit to round-off and is kept bit for bit, so that a
+            // resumed run continues exactly as an uninterrupted one; others are normalized.
+            let orientation = if (q.norm() - 1.0).abs() <= 1e-12 {
+                nalgebra::UnitQuaternion::new_unchecked(q)
+            } else {
+                nalgebra::UnitQuaternion::new_normalize(q)
+            };
             BodyState {
                 position: v3(0),
                 velocity: v3(3),
-                orientation: nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(
-                    b[6], b[7], b[8], b[9],
-                )),
+                orientation,
                 momentum: v3(10),
             }
         })
