@@ -76,6 +76,11 @@ fn validate(text: &str) -> Result<scenario::AnySetup, String> {
     file.setup().map_err(|e| e.to_string())
 }
 
+/// The error of a scenario that must be refused.
+fn refused(text: &str) -> String {
+    validate(text).err().expect("refused")
+}
+
 /// The box builds: its points are nodes 2 and 3 (after the two `[[node]]`s), at the body's
 /// points, moving at `V + ω × R s` (0.5 m/s along x, ∓0.2 m/s along y from the spin about
 /// z), its weight is `m g` and the strings' interior nodes start at rest.
@@ -218,13 +223,13 @@ fn body_errors_name_the_key_and_position() {
 #[test]
 fn bodies_need_a_network_of_dimension_two_or_three() {
     let one = "dimension = 1\n[[node]]\nname = \"a\"\nposition = [0.0]\n[bodies.box]\nmass = 1.0\ninertia = [1.0, 1.0, 1.0]\nposition = [-1.0]\npoints = { p = [0.0] }\n[materials.m]\nea = 1e6\nrho_a = 1.0\n[[string]]\nname = \"s\"\npath = [\"a\", \"box.p\"]\nelements = 2\nmaterial = \"m\"\n[time]\nh = 0.01\nend = 0.1\n";
-    let err = validate(one).unwrap_err();
+    let err = refused(one);
     assert!(
         err.contains("`bodies.box` is a rigid body, but the scenario has dimension 1"),
         "{err}"
     );
     let single = "dimension = 2\n[geometry]\nstart = [0.0, 0.0]\nend = [1.0, 0.0]\n[mesh]\nelements = 2\n[material]\nea = 1e6\nrho_a = 1.0\n[bodies.box]\nmass = 1.0\ninertia = [1.0, 1.0, 1.0]\nposition = [0.0, 0.0]\npoints = { p = [0.0, 0.0] }\n[time]\nh = 0.01\nend = 0.1\n";
-    let err = validate(single).unwrap_err();
+    let err = refused(single);
     assert!(
         err.contains("`bodies` belongs to a network, but this scenario has no [[string]] tables"),
         "{err}"
@@ -248,9 +253,7 @@ fn bodies_need_a_network_of_dimension_two_or_three() {
         "{q:?}"
     );
     assert_eq!(b.momentum.z, 0.5);
-    let err =
-        validate(&planar.replace("angular_velocity = [0.5]", "angular_velocity = [0.0, 0.5]"))
-            .unwrap_err();
+    let err = refused(&planar.replace("angular_velocity = [0.5]", "angular_velocity = [0.0, 0.5]"));
     assert!(
         err.contains("`bodies.box.angular_velocity` must have 1 component in 2D (about z), got 2"),
         "{err}"
