@@ -6,9 +6,12 @@ use std::path::Path;
 
 use crate::{phstring, run_with, summary, temp_dir};
 
+/// A CSV row: its fields as numbers (text as NaN) and as text.
+type Row = (Vec<f64>, Vec<String>);
+
 /// The rows of a CSV file: header, then each row's fields (numbers parsed, text as NaN) and
 /// its text fields.
-fn table(p: &Path) -> (Vec<String>, Vec<(Vec<f64>, Vec<String>)>) {
+fn table(p: &Path) -> (Vec<String>, Vec<Row>) {
     let mut r = csv::Reader::from_path(p).unwrap();
     let header = r.headers().unwrap().iter().map(String::from).collect();
     let rows = r
