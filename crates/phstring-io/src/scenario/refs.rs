@@ -1,6 +1,7 @@
 //! Node references (`node`, `path`, `between` keys): a mesh node index, `"NAME"` of a
-//! `[[node]]`, or `"STRING:INDEX"`, the INDEX-th node along a string's path; and their
-//! resolution to mesh nodes, with messages that say what exists.
+//! `[[node]]`, `"STRING:INDEX"`, the INDEX-th node along a string's path, or
+//! `"BODY.POINT"`, a point of a rigid body; and their resolution to mesh nodes, with messages
+//! that say what exists.
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -20,8 +21,9 @@ pub enum NodeRef {
     /// `[[node]]`s in file order, then the interior nodes of each string in file order,
     /// then the fixed ends of springs with `to_point`.
     Index(i64),
-    /// `"NAME"` of a `[[node]]`, or `"STRING:INDEX"`: node INDEX along string STRING's path
-    /// (0 is its first node; negative values count from its last node, `-1`).
+    /// `"NAME"` of a `[[node]]`, `"STRING:INDEX"`: node INDEX along string STRING's path
+    /// (0 is its first node; negative values count from its last node, `-1`), or
+    /// `"BODY.POINT"`: point POINT of the rigid body `[bodies.BODY]`.
     Name(String),
 }
 
