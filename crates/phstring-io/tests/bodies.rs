@@ -259,3 +259,49 @@ fn bodies_need_a_network_of_dimension_two_or_three() {
         "{err}"
     );
 }
+
+/// `initial.velocities` must repeat the body's velocity at a body point (node 2 moves at
+/// [0.5, -0.2, 0] m/s with the box), naming the entry.
+#[test]
+fn listed_velocities_must_agree_with_the_body() {
+    let mut list = vec!["[0.0, 0.0, 0.0]"; 12];
+    list[2] = "[0.5, 0.0, 0.0]";
+    let text = BOX.replace(
+        "[time]",
+        &format!("[initial]\nvelocities = [{}]\n\n[time]", list.join(", ")),
+    );
+    let err = refused(&text);
+    assert!(
+        err.contains("`initial.velocities.2` = [0.5, 0, 0] m/s at node 2, body point \"box.left\", where the body gives [0.5, -0.2, 0] m/s"),
+        "{err}"
+    );
+}
+
+/// A wrench expression that fails during the run stops it at that step as an input failure,
+/// and the record names the body's key, the component, the text and the time:
+/// `sqrt(0.5 - t)` fails at the mid time 0.505 s of step 51 (h = 0.01 s).
+#[test]
+fn a_failing_wrench_expression_names_its_key() {
+    let text = BOX
+        .replace(
+            "[time]",
+            "[bodies.box.wrench]\nforce = [\"sqrt(0.5 - t)\", \"0\", \"0\"]\n\n[time]",
+        )
+        .replace("end = 0.1", "end = 1.0");
+    let phstring::ByDim::D3(s) = validate(&text).unwrap() else {
+        panic!("not 3D")
+    };
+    let (mut run, _) = s.start(false, None).map_err(|e| e.to_string()).unwrap();
+    let err = loop {
+        match run.problem.step() {
+            Ok(_) => assert!(run.problem.time() < 0.6, "no failure by t = 0.6 s"),
+            Err(e) => break e,
+        }
+    };
+    assert!(err.is_input_failure(), "{err}");
+    let message = run.load_error.lock().unwrap().clone().unwrap_or_default();
+    assert_eq!(
+        message,
+        "`bodies.box.wrench.force` component x \"sqrt(0.5 - t)\" at t = 0.505 s: operand out of domain (at \"sqrt(0.5 - t)\", characters 0..13)"
+    );
+}
