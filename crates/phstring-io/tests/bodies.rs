@@ -264,7 +264,7 @@ fn bodies_need_a_network_of_dimension_two_or_three() {
 /// [0.5, -0.2, 0] m/s with the box), naming the entry.
 #[test]
 fn listed_velocities_must_agree_with_the_body() {
-    let mut list = vec!["[0.0, 0.0, 0.0]"; 12];
+    let mut list = ["[0.0, 0.0, 0.0]"; 12];
     list[2] = "[0.5, 0.0, 0.0]";
     let text = BOX.replace(
         "[time]",
