@@ -100,8 +100,8 @@ fn a_body_builds_with_its_points_as_nodes() {
     assert!(st.v[4..].iter().all(|v| v.norm() == 0.0));
     let b = &st.bodies[0];
     assert_eq!(b.position.as_slice(), &[0.0, 0.0, -10.25]);
-    // Π = J Ω: 833.3 kg·m² × 0.2 rad/s about z.
-    assert!((b.momentum.z - 833.3 * 0.2).abs() < 1e-12);
+    // Ω in body axes (not turned): 0.2 rad/s about z.
+    assert_eq!(b.omega.as_slice(), &[0.0, 0.0, 0.2]);
     let c = &s.components.bodies[0];
     assert_eq!(c.weight, vec![0.0, 0.0, -2000.0 * 9.81]);
     assert_eq!(c.points[0].name, "box.left");
@@ -252,7 +252,7 @@ fn bodies_need_a_network_of_dimension_two_or_three() {
         (q.w - q.k).abs() < 1e-15 && q.i == 0.0 && q.j == 0.0,
         "{q:?}"
     );
-    assert_eq!(b.momentum.z, 0.5);
+    assert!((b.omega_space().z - 0.5).abs() < 1e-15);
     let err = refused(&planar.replace("angular_velocity = [0.5]", "angular_velocity = [0.0, 0.5]"));
     assert!(
         err.contains("`bodies.box.angular_velocity` must have 1 component in 2D (about z), got 2"),

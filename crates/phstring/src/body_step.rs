@@ -53,57 +53,261 @@ pub(crate) fn predict<const D: usize, M>(
     h: f64,
     slots: &mut [Vector<D>],
 ) {
-    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
+    for (b, st) in states.iter().enumerate().take(sys.bodies.len()) {
         slots[2 * b] = project(&(st.velocity * h));
-        slots[2 * b + 1] = rotation_slot::<D>(&(model.omega(st) * h));
+        slots[2 * b + 1] = rotation_slot::<D>(&(st.omega * h));
     }
 }
 
-/// The wrench ports' samples of a step of `h` [s] with slots `slots` and inputs `wrenches`
-/// (force [N], torque [N·m] per body), into `out`; returns the energy they supplied [J].
-pub(crate) fn port_samples<const D: usize>(
+/// The bodies' port samples of a step of `h` [s] with slots `slots`, into `out`; returns the
+/// energy they supplied [J]. A wrench port's inputs are `wrenches` (force [N], torque [N·m]
+/// per body); a prescribed motion's output is the reaction wrench, formed from the attached
+/// nodes' residuals `reaction` (as the Newton solve left them) and the states `next` the step
+/// ends in (velocities held), with the impulse and the kinetic energy of the hold.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn port_samples<const D: usize, M>(
+    sys: &PhSystem<D, M>,
     states: &[BodyState],
     h: f64,
     slots: &[Vector<D>],
     wrenches: &[(Vec3, Vec3)],
+    reaction: &[Vector<D>],
+    next: &[BodyState],
     out: &mut [crate::body::BodyPortSample],
 ) -> f64 {
     let mut supplied = 0.0;
-    for (b, ((st, &(force, torque)), p)) in states.iter().zip(wrenches).zip(out).enumerate() {
+    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
         let (dx, w) = unknowns(slots, b);
         let turned = st.orientation.transform_vector(&w);
-        // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
-        supplied += force.dot(&dx) + torque.dot(&turned);
         let (velocity, omega) = (dx / h, turned / h);
-        *p = crate::body::BodyPortSample {
+        let (force, torque, work) = if model.motion.is_some() {
+            let water = sys.water.as_deref();
+            reaction_wrench(model, water, st, h, (&dx, &w), reaction, &next[b])
+        } else {
+            // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
+            let (force, torque) = wrenches[b];
+            (force, torque, force.dot(&dx) + torque.dot(&turned))
+        };
+        supplied += work;
+        out[b] = crate::body::BodyPortSample {
             force,
             torque,
             velocity,
             omega,
-            mean_power: force.dot(&velocity) + torque.dot(&omega),
+            mean_power: work / h,
         };
     }
     supplied
+}
+
+/// The wrench [N, N·m] a prescribed motion exerts over a step (the body's rows at the
+/// solution, with the hold's impulse), and the energy it supplies [J]: the wrench's work over
+/// `(Δx, R_n w)` and the kinetic energy the hold of the velocities adds.
+fn reaction_wrench<const D: usize>(
+    model: &crate::body::BodyModel,
+    water: Option<&crate::water::WaterModel<D>>,
+    st: &BodyState,
+    h: f64,
+    (dx, w): (&Vec3, &Vec3),
+    reaction: &[Vector<D>],
+    held: &BodyState,
+) -> (Vec3, Vec3, f64) {
+    let turn = Turn::new(&st.orientation, w);
+    let cb = model.buoyancy.map(|(_, s)| s);
+    let wl = model.waterplane.map(|(_, s, _)| s);
+    let points: Vec<PointStep> = model
+        .attachments
+        .iter()
+        .map(|(_, s)| s)
+        .chain(cb.as_ref())
+        .chain(wl.as_ref())
+        .map(|s| turn.point(s))
+        .collect();
+    let mut rows: Vec<NodeRow> = model
+        .attachments
+        .iter()
+        .map(|&(node, _)| NodeRow {
+            res: embed(&reaction[node]),
+            diag: Mat3::zeros(),
+        })
+        .collect();
+    if let Some((f, _)) = model.buoyancy {
+        rows.push(NodeRow {
+            res: -f,
+            diag: Mat3::zeros(),
+        });
+    }
+    if let Some(p) = points.last().filter(|_| model.waterplane.is_some()) {
+        rows.extend(model.waterplane_row(st, dx, &p.moved));
+    }
+    let mut dw = vec![Mat3::zeros(); rows.len()];
+    let zero = Vec3::zeros();
+    // The drag acts as on a free body (its work is in the water's shares), so the reaction
+    // is the motion's own force.
+    let f_drag = match water {
+        Some(water) if model.drag.is_some() => {
+            let flow = current_at::<D>(water, st, dx);
+            model.drag_step(h, dx, (&flow.0, &flow.1, &flow.2)).0
+        }
+        _ => Vec3::zeros(),
+    };
+    let applied = model.weight + f_drag;
+    let out = model.rows(
+        st,
+        h,
+        (dx, w),
+        &turn,
+        &rows,
+        &points,
+        (&applied, &zero),
+        &mut dw,
+    );
+    // The rows with the reaction (F, τ) added are zero: F = force row, τ̃ = (I − ½ŵ)⁻¹ torque.
+    let force = out.force;
+    let torque = turn.rot * (turn.inv_half * out.torque);
+    let raw = model.advance(st, h, dx, w);
+    let work = force.dot(dx) + torque.dot(&st.orientation.transform_vector(w));
+    let hold = model.kinetic(held) - model.kinetic(&raw);
+    // The hold's impulse belongs to the reaction, so that the momentum balance is whole.
+    let impulse = (held.velocity - raw.velocity) * (model.mass / h);
+    let spin = held
+        .orientation
+        .transform_vector(&(model.momentum(held) - model.momentum(&raw)))
+        / h;
+    (force + impulse, torque + spin, work + hold)
+}
+
+/// The mid-step velocities of a step of `h` [s] from `states` with slots `slots`, in the
+/// predictor's form (per body `Δx/h` and the slot of `R_n w/h`), into `out`.
+pub(crate) fn mid_velocities<const D: usize>(
+    states: &[BodyState],
+    h: f64,
+    slots: &[Vector<D>],
+    out: &mut [Vector<D>],
+) {
+    for (b, st) in states.iter().enumerate() {
+        let (dx, w) = unknowns(slots, b);
+        out[2 * b] = project(&(dx / h));
+        out[2 * b + 1] = rotation_slot::<D>(&(st.orientation.transform_vector(&w) / h));
+    }
+}
+
+/// The slots predicted from the last step's mid-step velocities `v_mid` (the form of
+/// [`mid_velocities`]): `Δx = h V_{n−½}`, `w = h R_nᵀ ω_{n−½}`.
+pub(crate) fn predict_mid<const D: usize>(
+    states: &[BodyState],
+    h: f64,
+    v_mid: &[Vector<D>],
+    slots: &mut [Vector<D>],
+) {
+    for (b, st) in states.iter().enumerate() {
+        let (v, omega) = unknowns(v_mid, b);
+        slots[2 * b] = project(&(v * h));
+        let w = st.orientation.inverse_transform_vector(&omega) * h;
+        slots[2 * b + 1] = rotation_slot::<D>(&w);
+    }
+}
+
+/// The current's velocity [m/s], its vertical derivative [1/s] and the vertical unit vector
+/// at body `st`'s mid-step centre `x_n + Δx/2` (3-vectors).
+pub(crate) fn current_at<const D: usize>(
+    water: &crate::water::WaterModel<D>,
+    st: &BodyState,
+    dx: &Vec3,
+) -> (Vec3, Vec3, Vec3) {
+    let mid = st.position + dx * 0.5;
+    let (u, du) = water.current.at(mid[D - 1]);
+    let up = Vec3::from_fn(|k, _| if k + 1 == D { 1.0 } else { 0.0 });
+    (embed(&u), embed(&du), up)
+}
+
+/// The water's work on the bodies over a step of `h` [s] with slots `slots`: their drag's
+/// dissipation and the current's supply [J].
+pub(crate) fn drag_work<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    states: &[BodyState],
+    h: f64,
+    slots: &[Vector<D>],
+) -> (f64, f64) {
+    let Some(water) = sys.water.as_deref() else {
+        return (0.0, 0.0);
+    };
+    let (mut dissipated, mut supplied) = (0.0, 0.0);
+    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
+        if model.drag.is_some() {
+            let dx = unknowns(slots, b).0;
+            let flow = current_at::<D>(water, st, &dx);
+            let (_, _, d, s) = model.drag_step(h, &dx, (&flow.0, &flow.1, &flow.2));
+            dissipated += d;
+            supplied += s;
+        }
+    }
+    (dissipated, supplied)
 }
 
 /// The bodies' states after a step of `h` [s] with slots `slots`, into `out`.
 pub(crate) fn advance<const D: usize, M>(
     sys: &PhSystem<D, M>,
     states: &[BodyState],
-    h: f64,
+    (h, t_next): (f64, f64),
     slots: &[Vector<D>],
     out: &mut Vec<BodyState>,
 ) {
     out.clear();
     for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
         let (dx, w) = unknowns(slots, b);
-        out.push(model.advance(st, h, &dx, &w));
+        let mut next = model.advance(st, h, &dx, &w);
+        // A prescribed motion holds the velocities at its own (docs/method.md §22).
+        if let Some(m) = &model.motion {
+            let (v, omega) = (m.twist)(t_next);
+            next.velocity = planar::<D>(&v);
+            let omega = next.orientation.inverse_transform_vector(&omega);
+            next.omega = if D == 2 {
+                Vec3::new(0.0, 0.0, omega.z)
+            } else {
+                omega
+            };
+        }
+        out.push(next);
     }
+}
+
+/// `v` in the plane of a `D`-dimensional network (`z = 0` in 2D).
+fn planar<const D: usize>(v: &Vec3) -> Vec3 {
+    if D == 2 { Vec3::new(v.x, v.y, 0.0) } else { *v }
+}
+
+/// The slots of the prescribed bodies for a step from `states` to `t_next` [s]: `Δx` to the
+/// pose's position and the Cayley vector of the turn to its orientation. `Err(b)`: body `b`'s
+/// pose is not finite, leaves the plane of a 2D network, or turns by more than 170° in the
+/// step.
+pub(crate) fn prescribe<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    states: &[BodyState],
+    t_next: f64,
+    slots: &mut [Vector<D>],
+) -> Result<(), usize> {
+    for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
+        let Some(m) = &model.motion else {
+            continue;
+        };
+        let (x, q) = (m.pose)(t_next);
+        let rel = st.orientation.inverse() * q;
+        let (qw, qv) = (rel.quaternion().w, rel.quaternion().imag());
+        // cay(w) has the quaternion (1, w/2)/‖·‖: w = 2 q_v/q_w (q and −q are one rotation).
+        let planar = D == 3 || (x.z == 0.0 && qv.x == 0.0 && qv.y == 0.0);
+        if !(x.iter().all(|c| c.is_finite()) && qw.abs() > (85f64).to_radians().cos() && planar) {
+            return Err(b);
+        }
+        slots[2 * b] = project(&(x - st.position));
+        slots[2 * b + 1] = rotation_slot::<D>(&(qv * (2.0 / qw)));
+    }
+    Ok(())
 }
 
 /// `Q m P`: a body's 3×3 block as a `D×D` block between slots of kinds `row` and `col`
 /// (0: `Δx` or force, 1: `w` or torque).
-fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
+pub(crate) fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
     // In 2D the rotation slot's first component is the z component.
     let pick = |kind: usize, k: usize| {
         if D == 2 && kind == 1 {
@@ -119,7 +323,7 @@ fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
 }
 
 /// A node block (`D×D`) in 3D.
-fn embed_block<const D: usize>(b: &Block<D>) -> Mat3 {
+pub(crate) fn embed_block<const D: usize>(b: &Block<D>) -> Mat3 {
     Mat3::from_fn(|i, j| if i < D && j < D { b[(i, j)] } else { 0.0 })
 }
 
@@ -187,16 +391,39 @@ impl<const D: usize> BodyStep<'_, D> {
             .enumerate()
             .map(|(b, (_, st))| Turn::new(&st.orientation, &unknowns(self.slots, b).1))
             .collect();
+        // The attachments' point steps, then the centre of buoyancy's.
         let points: Vec<Vec<PointStep>> = sys
             .bodies
             .iter()
             .zip(&turns)
-            .map(|(m, t)| m.attachments.iter().map(|(_, s)| t.point(s)).collect())
+            .map(|(m, t)| {
+                let cb = m.buoyancy.map(|(_, s)| s);
+                let wl = m.waterplane.map(|(_, s, _)| s);
+                m.attachments
+                    .iter()
+                    .map(|(_, s)| s)
+                    .chain(cb.as_ref())
+                    .chain(wl.as_ref())
+                    .map(|s| t.point(s))
+                    .collect()
+            })
             .collect();
         let mut scale2 = 0.0;
         for (b, (model, st)) in sys.bodies.iter().zip(self.states).enumerate() {
+            if model.motion.is_some() {
+                // Known slots: their rows are `δu = 0`; the reaction is formed after the solve.
+                res[n + 2 * b] = Vector::zeros();
+                res[n + 2 * b + 1] = Vector::zeros();
+                if let Some(j) = jac.as_deref_mut() {
+                    let slots = j.border.slots;
+                    for s in 0..2 {
+                        j.border.own[(2 * b + s) * slots + 2 * b + s] = Block::identity();
+                    }
+                }
+                continue;
+            }
             let (dx, w) = unknowns(self.slots, b);
-            let rows: Vec<NodeRow> = model
+            let mut rows: Vec<NodeRow> = model
                 .attachments
                 .iter()
                 .map(|&(node, _)| NodeRow {
@@ -206,11 +433,31 @@ impl<const D: usize> BodyStep<'_, D> {
                         .map_or(Mat3::zeros(), |j| embed_block(&j.diag[node])),
                 })
                 .collect();
+            // The buoyancy: a constant force at the centre of buoyancy (a row that asks the
+            // body for −F_b and does not depend on the increment).
+            if let Some((f, _)) = model.buoyancy {
+                rows.push(NodeRow {
+                    res: -f,
+                    diag: Mat3::zeros(),
+                });
+            }
+            // The waterplane's heave restoring at the waterline point (last in `points`).
+            if let Some(p) = points[b].last().filter(|_| model.waterplane.is_some()) {
+                rows.extend(model.waterplane_row(st, &dx, &p.moved));
+            }
             let mut dw_rows = vec![Mat3::zeros(); rows.len()];
             let (f_port, torque) = self.wrenches.get(b).copied().unwrap_or_default();
-            let force = model.weight + f_port;
+            let (f_drag, d_drag) = match sys.water.as_deref() {
+                Some(water) if model.drag.is_some() => {
+                    let flow = current_at::<D>(water, st, &dx);
+                    let (f, df, _, _) = model.drag_step(self.h, &dx, (&flow.0, &flow.1, &flow.2));
+                    (f, df)
+                }
+                _ => (Vec3::zeros(), Mat3::zeros()),
+            };
+            let force = model.weight + f_port + f_drag;
             let applied = (&force, &torque);
-            let out = model.rows(
+            let mut out = model.rows(
                 st,
                 self.h,
                 (&dx, &w),
@@ -220,14 +467,21 @@ impl<const D: usize> BodyStep<'_, D> {
                 applied,
                 &mut dw_rows,
             );
+            out.jac[0][0] -= d_drag;
             let inv_rg = 1.0 / model.gyration();
             res[n + 2 * b] = project(&out.force);
             res[n + 2 * b + 1] = rotation_slot::<D>(&(out.torque * inv_rg));
             let inertia = (dx / self.h - st.velocity) * (2.0 * model.mass / self.h);
-            let spin = (model.inertia * w / self.h - st.momentum) * (2.0 / self.h * inv_rg);
+            let spin = (model.inertia * w / self.h - model.momentum(st)) * (2.0 / self.h * inv_rg);
             scale2 += inertia.norm_squared()
                 + model.weight.norm_squared()
                 + f_port.norm_squared()
+                + f_drag.norm_squared()
+                + model.buoyancy.map_or(0.0, |(f, _)| f.norm_squared())
+                + rows
+                    .last()
+                    .filter(|_| model.waterplane.is_some())
+                    .map_or(0.0, |r| r.res.norm_squared())
                 + (torque * inv_rg).norm_squared()
                 + spin.norm_squared();
             let Some(j) = jac.as_deref_mut() else {
@@ -243,55 +497,58 @@ impl<const D: usize> BodyStep<'_, D> {
             if D == 2 {
                 j.border.own[at(1, 1)][(1, 1)] = 1.0;
             }
-            self.couple(sys, b, &points, &dw_rows, inv_rg, j);
+            couple(sys, b, &points, &dw_rows, inv_rg, j);
         }
         scale2
     }
+}
 
-    /// The blocks between body `b`'s rows and the nodes next to its attached nodes (and the
-    /// bodies those are fixed to), and between those nodes' rows and body `b`'s slots.
-    fn couple<M>(
-        &self,
-        sys: &PhSystem<D, M>,
-        b: usize,
-        points: &[Vec<PointStep>],
-        dw_rows: &[Mat3],
-        inv_rg: f64,
-        j: &mut BlockJacobian<D>,
-    ) {
-        let eye = Mat3::identity();
-        let slots = j.border.slots;
-        for (k, p) in points[b].iter().enumerate() {
-            // Body rows from R_k: force ∂/∂R_k = I, torque (scaled) ∂/∂R_k = dw_rows[k].
-            let by_res = [eye, dw_rows[k] * inv_rg];
-            let da = [eye, p.dw];
-            for &(e, other, first) in &sys.body_links[b][k] {
-                let (kj, jk) = if first {
-                    (j.off[e][0], j.off[e][1])
-                } else {
-                    (j.off[e][1], j.off[e][0])
-                };
-                let (kj, jk) = (embed_block(&kj), embed_block(&jk));
-                match sys.attached.get(other).copied().flatten() {
-                    Some((b2, k2)) => {
-                        let da2 = [eye, points[b2][k2].dw];
-                        for (s, rs) in by_res.iter().enumerate() {
-                            for (t, d2) in da2.iter().enumerate() {
-                                let blk = slot_block::<D>(&(rs * kj * d2), s, t);
-                                j.border.own[(2 * b + s) * slots + 2 * b2 + t] += blk;
-                            }
+/// The blocks between body `b`'s rows and the nodes next to its attached nodes (and the
+/// bodies those are fixed to), and between those nodes' rows and body `b`'s slots: `points`
+/// per body and attachment, `dw_rows[k]` the torque row's `∂/∂R_k` (before the scaling by
+/// `inv_rg`, the inverse radius of gyration).
+pub(crate) fn couple<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    b: usize,
+    points: &[Vec<PointStep>],
+    dw_rows: &[Mat3],
+    inv_rg: f64,
+    j: &mut BlockJacobian<D>,
+) {
+    let eye = Mat3::identity();
+    let slots = j.border.slots;
+    // The attachments only (a body's buoyancy and waterplane points follow them).
+    let n_att = sys.bodies[b].attachments.len();
+    for (k, p) in points[b][..n_att].iter().enumerate() {
+        // Body rows from R_k: force ∂/∂R_k = I, torque (scaled) ∂/∂R_k = dw_rows[k].
+        let by_res = [eye, dw_rows[k] * inv_rg];
+        let da = [eye, p.dw];
+        for &(e, other, first) in &sys.body_links[b][k] {
+            let (kj, jk) = if first {
+                (j.off[e][0], j.off[e][1])
+            } else {
+                (j.off[e][1], j.off[e][0])
+            };
+            let (kj, jk) = (embed_block(&kj), embed_block(&jk));
+            match sys.attached.get(other).copied().flatten() {
+                Some((b2, k2)) => {
+                    let da2 = [eye, points[b2][k2].dw];
+                    for (s, rs) in by_res.iter().enumerate() {
+                        for (t, d2) in da2.iter().enumerate() {
+                            let blk = slot_block::<D>(&(rs * kj * d2), s, t);
+                            j.border.own[(2 * b + s) * slots + 2 * b2 + t] += blk;
                         }
                     }
-                    None => {
-                        let free = &sys.free[other];
-                        if !free.iter().any(|&f| f) {
-                            continue;
-                        }
-                        for s in 0..2 {
-                            let row = mask(slot_node_block::<D>(&(by_res[s] * kj), s), free, false);
-                            let col = mask(node_slot_block::<D>(&(jk * da[s]), s), free, true);
-                            j.border.links.push((other, 2 * b + s, row, col));
-                        }
+                }
+                None => {
+                    let free = &sys.free[other];
+                    if !free.iter().any(|&f| f) {
+                        continue;
+                    }
+                    for s in 0..2 {
+                        let row = mask(slot_node_block::<D>(&(by_res[s] * kj), s), free, false);
+                        let col = mask(node_slot_block::<D>(&(jk * da[s]), s), free, true);
+                        j.border.links.push((other, 2 * b + s, row, col));
                     }
                 }
             }

@@ -70,6 +70,23 @@ pub enum InputError {
         /// The value given.
         value: f64,
     },
+    /// The body index is not one of the problem's rigid bodies.
+    #[error("body {body} does not exist: the problem has {count} rigid bodies{}", range(*count))]
+    NoSuchBody {
+        /// The index given.
+        body: usize,
+        /// Number of bodies.
+        count: usize,
+    },
+    /// A body's held wrench is not finite, or the body's motion is prescribed (its port is
+    /// the motion).
+    #[error("the wrench of body {body} cannot be held: {why}")]
+    BodyWrench {
+        /// Body index.
+        body: usize,
+        /// Why, with the value.
+        why: String,
+    },
     /// A ramp ends before it starts.
     #[error("the ramp of motion {motion} ends at t = {} s, before it starts at t = {} s", Num(*t1), Num(*t0))]
     RampBackwards {
@@ -307,6 +324,66 @@ fn grow<T>(slots: &mut Vec<Option<T>>, i: usize) -> &mut Vec<Option<T>> {
         slots.resize_with(i + 1, || None);
     }
     slots
+}
+
+impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
+    /// Holds body `body`'s wrench port at `force` [N] and `torque` [N·m] (space axes) from the
+    /// next step on, until it is set again or released (zero-order hold); a body without a
+    /// wrench port gets one. The step samples it like a signal, so a held wrench gives the
+    /// step of a constant wrench bit for bit, and its work enters the supplied energy the
+    /// same way. Refused (nothing changes) for an unknown body, a body whose motion is
+    /// prescribed, or a non-finite component.
+    pub fn set_body_wrench(
+        &mut self,
+        body: usize,
+        force: crate::body::Vec3,
+        torque: crate::body::Vec3,
+    ) -> Result<(), InputError> {
+        let (models, held) = self.bodies_and_held();
+        let count = models.len();
+        let model = models
+            .get_mut(body)
+            .ok_or(InputError::NoSuchBody { body, count })?;
+        if model.motion.is_some() {
+            return Err(InputError::BodyWrench {
+                body,
+                why: "its motion is prescribed".into(),
+            });
+        }
+        if let Some(x) = force.iter().chain(&torque).find(|x| !x.is_finite()) {
+            return Err(InputError::BodyWrench {
+                body,
+                why: format!("a component is {}", Num(*x)),
+            });
+        }
+        if held.len() < count {
+            held.resize(count, None);
+        }
+        let original = match held[body].take() {
+            Some(original) => original,
+            None => model.wrench.clone(),
+        };
+        model.wrench = Some(crate::body::BodyWrench {
+            force: Arc::new(move |_t| force),
+            torque: Arc::new(move |_t| torque),
+        });
+        held[body] = Some(original);
+        Ok(())
+    }
+
+    /// Returns body `body`'s wrench port to what it had before [`Self::set_body_wrench`]
+    /// from the next step on (nothing to do if it is not held). Refused for an unknown body.
+    pub fn release_body_wrench(&mut self, body: usize) -> Result<(), InputError> {
+        let (models, held) = self.bodies_and_held();
+        let count = models.len();
+        if body >= count {
+            return Err(InputError::NoSuchBody { body, count });
+        }
+        if let Some(original) = held.get_mut(body).and_then(Option::take) {
+            models[body].wrench = original;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

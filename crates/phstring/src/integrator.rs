@@ -375,6 +375,12 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             let (r0, xs) = ((&self.r0[a], &self.r0[b]), (&x[a], &x[b]));
             work.add(&w.element_drag(el, r0, xs, l, self.h, false).2);
         }
+        if !self.sys.bodies.is_empty() {
+            let n = self.sys.mesh.n_nodes();
+            let (d, s) = crate::body_step::drag_work(self.sys, self.bodies, self.h, &x[n..]);
+            work.drag_dissipated += d;
+            work.current_supplied += s;
+        }
         work
     }
 

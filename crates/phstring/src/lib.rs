@@ -96,7 +96,9 @@ pub mod testing;
 pub mod water;
 
 pub use bathymetry::Bathymetry;
-pub use body::{Attachment, BodyPortSample, BodyState, BodyWrench, RigidBody};
+pub use body::{
+    Attachment, BodyHydro, BodyMotion, BodyPortSample, BodyState, BodyWrench, RigidBody,
+};
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
     PortSample, PositionFn, PositionRamp, RateFn,

@@ -224,6 +224,8 @@ pub struct Simulation<const D: usize, M> {
     /// if a step fails after they were formed).
     body_ports: Vec<crate::body::BodyPortSample>,
     body_ports_prev: Vec<crate::body::BodyPortSample>,
+    /// Per body with a held wrench (inputs), the wrench port it had before.
+    held_wrenches: Vec<Option<Option<crate::body::BodyWrench>>>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -404,6 +406,7 @@ struct Backup<const D: usize> {
     run: Option<Checkpoint<D>>,
     energies: Energies,
     ports: Vec<PortSample<D>>,
+    body_ports: Vec<crate::body::BodyPortSample>,
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -486,6 +489,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             body_wrenches: vec![Default::default(); sys.bodies.len()],
             body_ports: vec![Default::default(); sys.bodies.len()],
             body_ports_prev: vec![Default::default(); sys.bodies.len()],
+            held_wrenches: Vec::new(),
             sys,
             params,
             run: Checkpoint::start(state, params.h),
@@ -532,6 +536,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// The inputs held from outside the run.
     pub(crate) fn held_inputs(&self) -> &crate::boundary::HeldInputs<D> {
         &self.inputs
+    }
+    /// The bodies' models and, per body, the wrench it had before a held one (inputs).
+    pub(crate) fn bodies_and_held(
+        &mut self,
+    ) -> (
+        &mut [crate::body::BodyModel],
+        &mut Vec<Option<Option<crate::body::BodyWrench>>>,
+    ) {
+        (&mut self.sys.bodies, &mut self.held_wrenches)
     }
     /// The held inputs and the boundary conditions they act on, to set an input.
     pub(crate) fn inputs_and_boundary(
@@ -595,6 +608,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         b.energies = self.energies;
         b.ports.clone_from(&self.ports);
+        b.body_ports.clone_from(&self.body_ports);
     }
 
     /// Puts back what [`Self::save`] saved.
@@ -604,6 +618,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
+        self.body_ports.clone_from(&b.body_ports);
     }
 
     fn set_step_size(&mut self, h: f64) {
@@ -1084,6 +1099,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let mut sums = std::mem::take(&mut self.port_sums);
         sums.clear();
         sums.resize(self.ports.len(), (Vector::zeros(), Vector::zeros(), 0.0));
+        // The bodies' ports likewise (empty without bodies).
+        let mut body_sums = vec![crate::body::BodyPortSample::default(); self.body_ports.len()];
         let mut total: Option<StepReport> = None;
         let mut start = t;
         let sub_steps = (0..n).flat_map(|j| gammas.iter().enumerate().map(move |(k, g)| (j, k, g)));
@@ -1102,6 +1119,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         s.0 += p.input * hk;
                         s.1 += p.output * hk;
                         s.2 += p.mean_power * hk;
+                    }
+                    for (s, p) in body_sums.iter_mut().zip(&self.body_ports) {
+                        s.force += p.force * hk;
+                        s.torque += p.torque * hk;
+                        s.velocity += p.velocity * hk;
+                        s.omega += p.omega * hk;
+                        s.mean_power += p.mean_power * hk;
                     }
                     total = Some(match total {
                         None => r,
@@ -1143,6 +1167,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             p.input = s.0 / h;
             p.output = s.1 / h;
             p.mean_power = s.2 / h;
+        }
+        for (p, s) in self.body_ports.iter_mut().zip(&body_sums) {
+            *p = crate::body::BodyPortSample {
+                force: s.force / h,
+                torque: s.torque / h,
+                velocity: s.velocity / h,
+                omega: s.omega / h,
+                mean_power: s.mean_power / h,
+            };
         }
         self.port_sums = sums;
         let mut r = total.expect("at least three sub-steps");
@@ -1304,7 +1337,22 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         if !self.sys.bodies.is_empty() {
             let n = self.sys.mesh.n_nodes();
             let states = &self.run.state.bodies;
-            crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
+            if mid {
+                let v_mid = &self.run.v_mid[n..];
+                crate::body_step::predict_mid(states, h, v_mid, &mut self.x[n..]);
+            } else {
+                crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
+            }
+            crate::body_step::prescribe(&self.sys, states, t_next, &mut self.x[n..]).map_err(
+                |b| StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "prescribed body pose (not finite, out of the plane of a 2D \
+                           network, or a turn of more than 170° in one step; at the body's \
+                           first attached node)",
+                    node: self.sys.bodies[b].attachments.first().map_or(0, |a| a.0),
+                },
+            )?;
         }
         Ok(())
     }
@@ -1449,10 +1497,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // The rigid bodies' new states.
         let n = mesh.n_nodes();
         let bodies = &self.run.state.bodies;
-        crate::body_step::advance(&self.sys, bodies, h, &self.x[n..], &mut self.bodies_next);
+        let times = (h, t_next);
+        crate::body_step::advance(
+            &self.sys,
+            bodies,
+            times,
+            &self.x[n..],
+            &mut self.bodies_next,
+        );
         if let Some(b) = self.bodies_next.iter().position(|st| {
             let finite = |v: &crate::body::Vec3| v.iter().all(|c| c.is_finite());
-            !(finite(&st.position) && finite(&st.velocity) && finite(&st.momentum))
+            !(finite(&st.position) && finite(&st.velocity) && finite(&st.omega))
         }) {
             let node = self.sys.bodies[b].attachments.first().map_or(0, |a| a.0);
             return Err(StepError::NonFinite {
@@ -1532,7 +1587,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node: self.non_finite_energy_node(),
             });
         }
-        let supplied_magnitude = h.abs() * self.ports.iter().map(|p| p.power().abs()).sum::<f64>();
+        let supplied_magnitude = h.abs()
+            * (self.ports.iter().map(|p| p.power().abs()).sum::<f64>()
+                + self
+                    .body_ports
+                    .iter()
+                    .map(|p| p.mean_power.abs())
+                    .sum::<f64>());
         // The work the strain-rounding floor of Newton's test may leave undone, as a scale
         // (its rounding is ε times this, docs/method.md eq. (9.6)).
         let strain_work = newton::ROUNDOFF_STRAIN * stats.strain_scale * newton::norm(&self.x);
@@ -1587,6 +1648,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         for (m, &v) in self.sys.boundary.motions.iter().zip(&self.held.velocity) {
             self.run.state.v[m.node][m.component] = v;
+        }
+        if !self.sys.bodies.is_empty() {
+            let n = self.sys.mesh.n_nodes();
+            let states = &self.run.state.bodies;
+            let v_mid = &mut self.run.v_mid[n..];
+            crate::body_step::mid_velocities(states, h, &self.x[n..], v_mid);
         }
         std::mem::swap(&mut self.run.state.bodies, &mut self.bodies_next);
         debug_assert_eq!(after, self.sys.energies(&self.run.state));
@@ -1656,11 +1723,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.body_ports_prev.clone_from(&self.body_ports);
         let n = self.sys.mesh.n_nodes();
         nodes
-            + crate::body_step::port_samples::<D>(
+            + crate::body_step::port_samples::<D, M>(
+                &self.sys,
                 &self.run.state.bodies,
                 h,
                 &self.x[n..],
                 &self.body_wrenches,
+                &self.reaction,
+                &self.bodies_next,
                 &mut self.body_ports,
             )
     }

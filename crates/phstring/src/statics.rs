@@ -24,7 +24,20 @@
 //!
 //! Which path succeeded is reported in [`Equilibrium::path`], what became of the first guess
 //! in [`Equilibrium::guess`].
+//!
+//! **Rigid bodies** (docs/method.md, "Statics with rigid bodies"; `bodies.rs`): each body's
+//! pose joins the unknowns (two slots after the nodes, as in the time step: the centre's
+//! displacement and the Cayley vector of the turn from a reference pose), with its force and
+//! moment balance as rows; the nodes fixed to it follow it exactly and their residual is the
+//! force it exerts on them. All four paths take bodies: the catenary guess treats a body's
+//! points as fixed ends at the body's start pose (the body is then free in the Newton solve
+//! from there), the pseudo-transient shift gives a body its mass and inertia, and each
+//! pseudo-time step measures the turns from the pose reached. A body fixed to no node is
+//! refused ([`StaticsError::LooseBody`]), and so is one whose points all lie on a line
+//! through its centre ([`StaticsError::FreeSpin`]); the stability check includes the
+//! bodies' slots.
 
+mod bodies;
 mod guess;
 
 pub use guess::catenary_guess;
@@ -35,8 +48,9 @@ use nalgebra::SMatrix;
 use thiserror::Error;
 
 use crate::assembly::{element_tangent, mask_fixed, positive_definite, tangent_blocks};
+use crate::body::{BodyState, Vec3};
 use crate::error::SetupError;
-use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
+use crate::linsolve::{BlockJacobian, SolverKind, make_bordered_solver};
 use crate::material::StoredEnergy;
 use crate::newton::{self, NewtonError, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::system::{Energies, Law, Network, PhSystem, State, Vector, element_mass};
@@ -145,10 +159,13 @@ impl FirstGuess {
 /// A static equilibrium.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Equilibrium<const D: usize> {
-    /// The rest state: equilibrium positions [m], zero velocities, `C_e = |r'_e|²`.
+    /// The rest state: equilibrium positions [m], zero velocities, `C_e = |r'_e|²`, and the
+    /// rigid bodies' equilibrium poses at rest (`state.bodies`, in the network's body order),
+    /// so that a run can start from it ([`crate::Simulation::from_system`]).
     pub state: State<D>,
     /// Per node, the force [N] that the supports (fixed components and prescribed motions)
-    /// exert on the string; zero at free components.
+    /// exert on the string; at a node fixed to a rigid body, the force the body exerts on it;
+    /// zero at free components.
     pub reactions: Vec<Vector<D>>,
     /// Euclidean norm of the residual over the free components [N].
     pub residual: f64,
@@ -193,6 +210,30 @@ pub enum StaticsError {
     /// Every path failed.
     #[error("{0}")]
     NotFound(Box<NotFound>),
+    /// A rigid body is fixed to no node, so nothing holds it.
+    #[error(
+        "no equilibrium: rigid body {index} ('{name}') is fixed to no node, so nothing holds it; attach strings to it"
+    )]
+    LooseBody {
+        /// Index of the body.
+        index: usize,
+        /// Its name.
+        name: String,
+    },
+    /// A rigid body's attachment points all lie on one line through its centre of mass, so
+    /// it can turn about that line with nothing to resist (a block on a single string in
+    /// 3D; in 2D, every point at the centre).
+    #[error(
+        "no equilibrium: rigid body {index} ('{name}') has all its attachment points on one line through its centre of mass (direction {axis:?} in body axes), so nothing holds its turn about that line; attach a string off that line"
+    )]
+    FreeSpin {
+        /// Index of the body.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The line's direction in body axes (unit vector).
+        axis: [f64; 3],
+    },
     /// The stop flag was set.
     #[error("interrupted")]
     Interrupted,
@@ -263,6 +304,16 @@ struct StaticEquations<'a, const D: usize, M> {
     reaction: Vec<Vector<D>>,
     scale: f64,
     strain_scale: f64,
+    /// The rigid bodies' reference poses (the Newton vector's slots hold their displacement
+    /// and Cayley vector from them) and their wrench ports at `t = 0` (force [N], torque
+    /// [N·m]); empty without bodies.
+    poses: Vec<BodyState>,
+    ports: Vec<(Vec3, Vec3)>,
+    /// Per node fixed to a body, its reference point's displacement from `r₀` [m] (zero until
+    /// the reference poses move, see [`Self::rebase`]).
+    offsets: Vec<Vector<D>>,
+    /// With bodies: the nodes' displacements with the attached nodes' filled in (workspace).
+    nodes_x: Vec<Vector<D>>,
 }
 
 /// A strain outside the law's domain during the equilibrium iteration.
@@ -281,6 +332,157 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
         res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
     ) -> Result<(), Inadmissible> {
+        let sys = self.sys;
+        let n = sys.mesh.n_nodes();
+        let (scale2, strain2) = if sys.bodies.is_empty() {
+            self.node_terms(x, res, jac.as_deref_mut())?
+        } else {
+            let mut xt = std::mem::take(&mut self.nodes_x);
+            xt.clear();
+            xt.extend_from_slice(&x[..n]);
+            bodies::fill(sys, &self.poses, &self.offsets, &x[n..], &mut xt);
+            let out = self.node_terms(&xt, res, jac.as_deref_mut());
+            self.nodes_x = xt;
+            let (s2, k2) = out?;
+            // The bodies' rows take the attached nodes' rows before those are masked.
+            let terms = bodies::BodyTerms {
+                poses: &self.poses,
+                ports: &self.ports,
+                slots: &x[n..],
+                lambda: self.lambda,
+                mu: self.mu,
+                anchor: if self.mu > 0.0 {
+                    &self.anchor[n..]
+                } else {
+                    &[]
+                },
+                jac_shift: self.jac_shift,
+            };
+            (s2 + terms.terms(sys, res, jac.as_deref_mut()), k2)
+        };
+        for &i in &sys.constrained {
+            for k in 0..D {
+                if !sys.free[i][k] {
+                    self.reaction[i][k] = res[i][k];
+                    res[i][k] = 0.0;
+                }
+            }
+        }
+        if let Some(j) = jac {
+            mask_fixed(sys, j);
+        }
+        self.scale = scale2.sqrt();
+        self.strain_scale = strain2.sqrt();
+        Ok(())
+    }
+
+    fn force_scale(&self) -> f64 {
+        self.scale
+    }
+
+    fn strain_scale(&self) -> f64 {
+        self.strain_scale
+    }
+}
+
+impl<'a, const D: usize, M: StoredEnergy> StaticEquations<'a, D, M> {
+    /// The equations at the full load `f_ext` [N] from node positions `r0` [m] and the
+    /// bodies' reference poses `poses` (attached nodes of `r0` at their points), without
+    /// shifts.
+    fn new(
+        sys: &'a PhSystem<D, M>,
+        r0: &'a [Vector<D>],
+        f_ext: &'a [Vector<D>],
+        poses: &[BodyState],
+    ) -> Self {
+        let n = sys.mesh.n_nodes();
+        Self {
+            sys,
+            r0,
+            f_ext,
+            lambda: 1.0,
+            mu: 0.0,
+            anchor: vec![Vector::zeros(); n + 2 * sys.bodies.len()],
+            jac_shift: 0.0,
+            release: false,
+            drag: true,
+            reaction: vec![Vector::zeros(); n],
+            scale: 0.0,
+            strain_scale: 0.0,
+            poses: poses.to_vec(),
+            offsets: vec![Vector::zeros(); if sys.bodies.is_empty() { 0 } else { n }],
+            ports: bodies::ports_at_rest(sys),
+            nodes_x: Vec::with_capacity(if sys.bodies.is_empty() { 0 } else { n }),
+        }
+    }
+
+    /// The Newton vector's length: the nodes, then two slots per body.
+    fn unknowns(&self) -> usize {
+        self.sys.mesh.n_nodes() + 2 * self.sys.bodies.len()
+    }
+
+    /// Sets the pseudo-transient anchor to `u` (the attached nodes' displacements filled in
+    /// from the bodies' slots).
+    fn set_anchor(&mut self, u: &[Vector<D>]) {
+        self.anchor.copy_from_slice(u);
+        if !self.sys.bodies.is_empty() {
+            let (nodes, slots) = self.anchor.split_at_mut(self.sys.mesh.n_nodes());
+            bodies::fill(self.sys, &self.poses, &self.offsets, slots, nodes);
+        }
+    }
+
+    /// The node positions [m] at the displacement `u` (attached nodes at their body points).
+    fn positions(&self, u: &[Vector<D>]) -> Vec<Vector<D>> {
+        let n = self.sys.mesh.n_nodes();
+        let mut x = u[..n].to_vec();
+        if !self.sys.bodies.is_empty() {
+            bodies::fill(self.sys, &self.poses, &self.offsets, &u[n..], &mut x);
+        }
+        self.r0.iter().zip(&x).map(|(a, b)| a + b).collect()
+    }
+
+    /// Makes the bodies' poses at the displacement `u` their reference poses and zeroes their
+    /// slots in `u` (the positions stay): a turn is then measured from the pose reached, so
+    /// that the Cayley vector stays away from its singularity at a half turn.
+    fn rebase(&mut self, u: &mut [Vector<D>]) {
+        if self.poses.is_empty() {
+            return;
+        }
+        let n = self.sys.mesh.n_nodes();
+        let mut x = u[..n].to_vec();
+        bodies::fill(self.sys, &self.poses, &self.offsets, &u[n..], &mut x);
+        for model in &self.sys.bodies {
+            for &(node, _) in &model.attachments {
+                self.offsets[node] = x[node];
+            }
+        }
+        self.poses = self.body_poses(u);
+        u[n..].iter_mut().for_each(|v| *v = Vector::zeros());
+    }
+
+    /// Back to the reference poses `poses` and no offsets.
+    fn reset_poses(&mut self, poses: &[BodyState]) {
+        self.poses.copy_from_slice(poses);
+        self.offsets.iter_mut().for_each(|v| *v = Vector::zeros());
+    }
+
+    /// The bodies' poses (at rest) at the displacement `u`.
+    fn body_poses(&self, u: &[Vector<D>]) -> Vec<BodyState> {
+        let slots = &u[self.sys.mesh.n_nodes()..];
+        (0..self.poses.len())
+            .map(|b| bodies::pose_of(&self.poses[b], slots, b))
+            .collect()
+    }
+
+    /// The nodes' rows (and, with `jac`, blocks) at the displacements `x` (attached nodes'
+    /// included), before the fixed components are masked: loads, elements, the shifts and
+    /// the water; returns the squares of the force terms and of the strain terms.
+    fn node_terms(
+        &self,
+        x: &[Vector<D>],
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+    ) -> Result<(f64, f64), Inadmissible> {
         let sys = self.sys;
         for (r, f) in res.iter_mut().zip(self.f_ext) {
             *r = -f * self.lambda;
@@ -341,28 +543,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
                 }
             }
         }
-        for &i in &sys.constrained {
-            for k in 0..D {
-                if !sys.free[i][k] {
-                    self.reaction[i][k] = res[i][k];
-                    res[i][k] = 0.0;
-                }
-            }
-        }
-        if let Some(j) = jac {
-            mask_fixed(sys, j);
-        }
-        self.scale = scale2.sqrt();
-        self.strain_scale = strain2.sqrt();
-        Ok(())
-    }
-
-    fn force_scale(&self) -> f64 {
-        self.scale
-    }
-
-    fn strain_scale(&self) -> f64 {
-        self.strain_scale
+        Ok((scale2, strain2))
     }
 }
 
@@ -479,30 +660,19 @@ pub fn static_load<const D: usize, M: StoredEnergy>(sys: &PhSystem<D, M>) -> Vec
 }
 
 /// The static residual `K(r) S(C(r)) − F` [N] per node at positions `r`, with the reactions
-/// (the residual at fixed components) moved to `reactions` and zeros left in their place.
-/// `Err(element)` if a strain leaves its law's domain.
+/// (the residual at fixed components) moved to `reactions` and zeros left in their place (at
+/// a node fixed to a rigid body: the force the body must exert on it). `Err(element)` if a
+/// strain leaves its law's domain.
 pub fn static_residual<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r: &[Vector<D>],
 ) -> Result<(Vec<Vector<D>>, Vec<Vector<D>>), usize> {
     let f = static_load(sys);
-    let zeros = vec![Vector::<D>::zeros(); r.len()];
-    let mut eq = StaticEquations {
-        sys,
-        r0: r,
-        f_ext: &f,
-        lambda: 1.0,
-        mu: 0.0,
-        anchor: Vec::new(),
-        jac_shift: 0.0,
-        release: false,
-        drag: true,
-        reaction: zeros.clone(),
-        scale: 0.0,
-        strain_scale: 0.0,
-    };
+    let mut eq = StaticEquations::new(sys, r, &f, &sys.body_start);
+    let zeros = vec![Vector::<D>::zeros(); eq.unknowns()];
     let mut res = zeros.clone();
     eq.evaluate(&zeros, &mut res, None).map_err(|e| e.element)?;
+    res.truncate(r.len());
     Ok((res, eq.reaction))
 }
 
@@ -519,7 +689,9 @@ pub fn solve<const D: usize, M: StoredEnergy>(
 }
 
 /// [`solve`] for a validated system, from positions `r_start` [m] (fixed components must be
-/// at their `t = 0` positions). Feedback ports are left out; unless
+/// at their `t = 0` positions) and the rigid bodies at their initial poses (as the network
+/// gave them; the nodes fixed to them start at their body points, whatever `r_start` holds
+/// there). Feedback ports are left out; unless
 /// [`StaticsParams::open_loop`], each must exert no force at rest at the equilibrium found
 /// (`F(0, r, 0)` within the tolerance), else
 /// [`StaticsError::Feedback`]: damping injection always passes, a PD law if its reference
@@ -530,8 +702,78 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
     params: &StaticsParams,
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
-    sys.refuse_bodies("statics")?;
-    let eq = solve_without_feedback(sys, r_start, params, stop)?;
+    solve_posed(sys, r_start, &sys.body_start, params, stop)
+}
+
+/// [`solve_system`] from the node positions and the rigid bodies' poses of `start` (its
+/// velocities are ignored; the nodes fixed to a body start at their body points). A pose
+/// that is not finite (or, in 2D, not in the plane turned about `z`) is refused by body.
+pub fn solve_from<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    start: &State<D>,
+    params: &StaticsParams,
+    stop: Option<&AtomicBool>,
+) -> Result<Equilibrium<D>, StaticsError> {
+    if start.bodies.len() != sys.bodies.len() {
+        return Err(SetupError::StateSize {
+            what: "rigid bodies",
+            got: start.bodies.len(),
+            expected: sys.bodies.len(),
+        }
+        .into());
+    }
+    bodies::check_poses(sys, &start.bodies)?;
+    solve_posed(sys, &start.r, &start.bodies, params, stop)
+}
+
+/// [`solve_system`] from node positions `r_start` [m] and body poses `poses`.
+fn solve_posed<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r_start: &[Vector<D>],
+    poses: &[BodyState],
+    params: &StaticsParams,
+    stop: Option<&AtomicBool>,
+) -> Result<Equilibrium<D>, StaticsError> {
+    if r_start.len() != sys.mesh.n_nodes() {
+        return Err(SetupError::StateSize {
+            what: "start positions",
+            got: r_start.len(),
+            expected: sys.mesh.n_nodes(),
+        }
+        .into());
+    }
+    if let Some((index, name)) = bodies::loose_body(sys) {
+        return Err(StaticsError::LooseBody { index, name });
+    }
+    // Not yet in statics: the water on a body and a body's prescribed motion.
+    for (index, model) in sys.bodies.iter().enumerate() {
+        let what = if model.motion.is_some() {
+            Some("a prescribed motion")
+        } else if model.buoyancy.is_some() || model.drag.is_some() || model.waterplane.is_some() {
+            Some("hydrodynamics (buoyancy, drag, waterplane)")
+        } else {
+            None
+        };
+        if let Some(what) = what {
+            return Err(SetupError::Body {
+                index,
+                name: sys.body_names[index].clone(),
+                problem: format!(
+                    "statics does not cover a body with {what} yet: run the dynamics from a \
+                     hand-placed start instead"
+                ),
+            }
+            .into());
+        }
+    }
+    // The attached nodes start at their bodies' points.
+    let mut r0 = r_start.to_vec();
+    for (model, st) in sys.bodies.iter().zip(poses) {
+        for (node, s) in &model.attachments {
+            r0[*node] = crate::body::project(&st.point(s));
+        }
+    }
+    let eq = solve_without_feedback(sys, &r0, poses, params, stop)?;
     let checked = if params.open_loop {
         &[][..]
     } else {
@@ -561,44 +803,45 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
 fn solve_without_feedback<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r_start: &[Vector<D>],
+    poses: &[BodyState],
     params: &StaticsParams,
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
     let f = static_load(sys);
     let free_motions = free_translations(sys);
+    let ports = bodies::ports_at_rest(sys);
     for &k in &free_motions {
-        let net: f64 = f.iter().map(|v| v[k]).sum();
-        let total: f64 = f.iter().map(|v| v[k].abs()).sum();
+        // The loads on the nodes and on the bodies (weights and ports).
+        let on_bodies = sys
+            .bodies
+            .iter()
+            .zip(&ports)
+            .map(|(m, p)| (m.weight + p.0)[k]);
+        let loads: Vec<f64> = f.iter().map(|v| v[k]).chain(on_bodies).collect();
+        let net: f64 = loads.iter().sum();
+        let total: f64 = loads.iter().map(|x| x.abs()).sum();
         if net.abs() > 1e-9 * total && net.abs() > 0.0 {
             return Err(StaticsError::UnderConstrained { axis: AXES[k], net });
         }
     }
-    let n = sys.mesh.n_nodes();
-    let solver = make_solver::<D>(params.solver, &sys.mesh)?;
-    let ws = NewtonWorkspace::<D>::new(&sys.mesh);
-    let eq = StaticEquations {
-        sys,
-        r0: r_start,
-        f_ext: &f,
-        lambda: 1.0,
-        mu: 0.0,
-        anchor: vec![Vector::zeros(); n],
-        jac_shift: JAC_SHIFT * initial_shift(sys, r_start, &f)
-            / (sys.mesh.n_elements() as f64).powi(2),
-        release: false,
-        drag: true,
-        reaction: vec![Vector::zeros(); n],
-        scale: 0.0,
-        strain_scale: 0.0,
-    };
+    if let Some((index, name, axis)) = bodies::free_spin(sys) {
+        return Err(StaticsError::FreeSpin { index, name, axis });
+    }
+    let slots = 2 * sys.bodies.len();
+    let solver = make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?;
+    let ws = NewtonWorkspace::<D>::with_slots(&sys.mesh, slots);
+    let mut eq = StaticEquations::new(sys, r_start, &f, poses);
+    eq.jac_shift =
+        JAC_SHIFT * initial_shift(sys, r_start, &f) / (sys.mesh.n_elements() as f64).powi(2);
     let mut s = Search {
+        u: vec![Vector::<D>::zeros(); eq.unknowns()],
         eq,
-        u: vec![Vector::<D>::zeros(); n],
         ws,
         solver,
         params,
         stop,
         iterations: 0,
+        start_poses: poses,
     };
     let guess = match guess_path(&mut s)? {
         Ok(found) => return Ok(found),
@@ -620,8 +863,7 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
         Ok(found) => return Ok(with(found)),
         Err(end) => end,
     };
-    let u = s.u;
-    let (element, c_max) = largest_strain(sys, r_start, &u);
+    let (element, c_max) = largest_strain(sys, &s.eq.positions(&s.u));
     let hint = if free_motions.is_empty() {
         String::new()
     } else {
@@ -658,9 +900,17 @@ struct Search<'a, 's, const D: usize, M> {
     params: &'a StaticsParams,
     stop: Option<&'s AtomicBool>,
     iterations: usize,
+    /// The bodies' start poses (a path that starts over starts from them).
+    start_poses: &'a [BodyState],
 }
 
 impl<const D: usize, M: StoredEnergy> Search<'_, '_, D, M> {
+    /// Back to the start: zero displacement, the bodies at their start poses.
+    fn restart(&mut self) {
+        self.u.iter_mut().for_each(|x| *x = Vector::zeros());
+        self.eq.reset_poses(self.start_poses);
+    }
+
     /// Newton in rounds ([`solve_rescaled`]) on the equations as they are set, from `u`.
     fn newton(&mut self) -> Result<newton::NewtonStats, NewtonError<Inadmissible>> {
         solve_rescaled(
@@ -695,7 +945,7 @@ fn guess_path<const D: usize, M: StoredEnergy>(
         *u = g - r;
     }
     let end = newton_path(s, StaticsPath::CatenaryGuess)?;
-    s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+    s.restart();
     Ok(match end {
         Ok(found) => Ok(Equilibrium {
             guess: FirstGuess::Used,
@@ -711,11 +961,11 @@ fn newton_path<const D: usize, M: StoredEnergy>(
     s: &mut Search<'_, '_, D, M>,
     path: StaticsPath,
 ) -> PathEnd<D, String> {
-    let (sys, r_start) = (s.eq.sys, s.eq.r0);
+    let sys = s.eq.sys;
     let msg = match s.newton() {
         Ok(st) => {
             s.iterations += st.iterations;
-            let found = finish(sys, r_start, &s.u, &mut s.eq, st, path, s.iterations);
+            let found = finish(sys, &s.u, &mut s.eq, st, path, s.iterations);
             if found.stable {
                 return Ok(Ok(found));
             }
@@ -737,11 +987,11 @@ fn newton_path<const D: usize, M: StoredEnergy>(
 fn continuation_path<const D: usize, M: StoredEnergy>(
     s: &mut Search<'_, '_, D, M>,
 ) -> PathEnd<D, (f64, usize, String)> {
-    let (sys, r_start) = (s.eq.sys, s.eq.r0);
+    let sys = s.eq.sys;
     let n = s.u.len();
     let (mut lambda, mut dl, mut steps) = (0.0f64, 0.25f64, 0usize);
     let mut u_ok = vec![Vector::<D>::zeros(); n];
-    s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+    s.restart();
     let mut cont_msg = String::new();
     let mut failed_step = 0;
     let mut attempts = 0;
@@ -762,7 +1012,7 @@ fn continuation_path<const D: usize, M: StoredEnergy>(
                 u_ok.copy_from_slice(&s.u);
                 if lambda >= 1.0 {
                     let path = StaticsPath::LoadContinuation { steps };
-                    let found = finish(sys, r_start, &s.u, &mut s.eq, st, path, s.iterations);
+                    let found = finish(sys, &s.u, &mut s.eq, st, path, s.iterations);
                     if found.stable {
                         return Ok(Ok(found));
                     }
@@ -813,7 +1063,7 @@ fn pseudo_transient_path<const D: usize, M: StoredEnergy>(
     let mut pseudo_steps = 0;
     let mut pseudo_msg = String::new();
     for release in [true, false] {
-        s.u.iter_mut().for_each(|x| *x = Vector::zeros());
+        s.restart();
         s.eq.release = release;
         let end = pseudo_transient(
             &mut s.eq,
@@ -839,15 +1089,7 @@ fn pseudo_transient_path<const D: usize, M: StoredEnergy>(
             steps: pseudo_steps,
         };
         if !release {
-            return Ok(Ok(finish(
-                sys,
-                r_start,
-                &s.u,
-                &mut s.eq,
-                st,
-                path,
-                s.iterations,
-            )));
+            return Ok(Ok(finish(sys, &s.u, &mut s.eq, st, path, s.iterations)));
         }
         // The slack equilibrium; now Newton with the law as is from there.
         let solved = s.newton();
@@ -857,7 +1099,7 @@ fn pseudo_transient_path<const D: usize, M: StoredEnergy>(
         };
         match solved {
             Ok(st2) => {
-                let found = finish(sys, r_start, &s.u, &mut s.eq, st2, path, s.iterations);
+                let found = finish(sys, &s.u, &mut s.eq, st2, path, s.iterations);
                 if found.stable {
                     return Ok(Ok(found));
                 }
@@ -997,7 +1239,8 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
             return Err(PseudoEnd::Interrupted);
         }
         eq.mu = mu;
-        eq.anchor.copy_from_slice(u);
+        eq.rebase(u);
+        eq.set_anchor(u);
         match newton::solve(eq, u, ws, solver, &loose, stop) {
             Ok(st) => {
                 *iterations += st.iterations;
@@ -1025,12 +1268,11 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
                     trial.copy_from_slice(u);
                     let polished = solve_rescaled(eq, &mut trial, ws, solver, &polish, stop);
                     *iterations += ws.last_stats().iterations;
-                    if let Ok(st2) = polished {
-                        let k = tangent_or_released(eq, &trial);
-                        if positive_definite(eq.sys, &k) {
-                            u.copy_from_slice(&trial);
-                            return Ok((steps, st2));
-                        }
+                    if let Ok(st2) = polished
+                        && stable_at(eq, &trial)
+                    {
+                        u.copy_from_slice(&trial);
+                        return Ok((steps, st2));
                     }
                 }
                 mu *= match st.iterations {
@@ -1063,8 +1305,40 @@ fn pseudo_transient<const D: usize, M: StoredEnergy>(
     ))
 }
 
+/// Whether the equilibrium at the displacement `u` is stable: the tangent stiffness (of the
+/// released laws while `eq.release` is set; the potential's only, without the current's
+/// drag) is positive definite on the free components (and the bodies' slots).
+fn stable_at<const D: usize, M: StoredEnergy>(
+    eq: &mut StaticEquations<'_, D, M>,
+    u: &[Vector<D>],
+) -> bool {
+    if eq.sys.bodies.is_empty() {
+        let k = tangent_or_released(eq, u);
+        return positive_definite(eq.sys, &k);
+    }
+    stable_with_bodies(eq.sys, &eq.positions(u), &eq.body_poses(u), eq.release)
+}
+
+/// [`stable_at`] with rigid bodies, at node positions `r` [m] and body poses `poses`: the
+/// tangent taken with the poses as reference (`w = 0`), where it is the potential's Hessian.
+fn stable_with_bodies<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+    poses: &[BodyState],
+    release: bool,
+) -> bool {
+    let f = static_load(sys);
+    let mut eq = StaticEquations::new(sys, r, &f, poses);
+    eq.release = release;
+    eq.drag = false;
+    let x = vec![Vector::<D>::zeros(); eq.unknowns()];
+    let mut res = x.clone();
+    let mut j = BlockJacobian::with_slots(&sys.mesh, 2 * sys.bodies.len());
+    eq.evaluate(&x, &mut res, Some(&mut j)).is_ok() && bodies::positive_definite(sys, &j)
+}
+
 /// The tangent stiffness at `r₀ + u`, of the released laws while `eq.release` is set; the
-/// potential's only (without the current's drag).
+/// potential's only (without the current's drag). Without bodies.
 fn tangent_or_released<const D: usize, M: StoredEnergy>(
     eq: &mut StaticEquations<'_, D, M>,
     u: &[Vector<D>],
@@ -1102,7 +1376,7 @@ const POLISH_BELOW: f64 = 1e-3;
 /// …or every this many pseudo-time steps.
 const POLISH_EVERY: usize = 10;
 
-/// Axes along which no node is held. In water the vertical axis is not counted (buoyancy
+/// Axes along which no node is held (a node fixed to a rigid body is not held). In water the vertical axis is not counted (buoyancy
 /// is a load that depends on the height), nor is any axis along which a seabed's normal has
 /// a component (the seabed holds it).
 fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
@@ -1111,8 +1385,13 @@ fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
             .as_deref()
             .is_some_and(|w| k == D - 1 || w.bed.as_ref().is_some_and(|b| b.holds(k)))
     };
+    // A node fixed to a rigid body holds nothing: the body moves it.
+    let on_body = |i: usize| sys.attached.get(i).copied().flatten().is_some();
     (0..D)
-        .filter(|&k| sys.free.iter().all(|f| f[k]) && !held_by_water(k))
+        .filter(|&k| {
+            let held = (0..sys.free.len()).any(|i| !sys.free[i][k] && !on_body(i));
+            !held && !held_by_water(k)
+        })
         .collect()
 }
 
@@ -1141,6 +1420,12 @@ fn initial_shift<const D: usize, M: StoredEnergy>(
         .iter()
         .map(|&(_, m)| D as f64 * m)
         .sum::<f64>();
+    // A body's mass on its position and (scaled by the radius of gyration) on its turn.
+    m_tr += sys
+        .bodies
+        .iter()
+        .map(|b| 2.0 * D as f64 * b.mass)
+        .sum::<f64>();
     let stiff = if m_tr > 0.0 { k_tr / m_tr } else { 0.0 };
     let f_norm: f64 = f.iter().map(|v| v.norm()).sum();
     let accel = if m_tr > 0.0 && l_min.is_finite() {
@@ -1152,12 +1437,8 @@ fn initial_shift<const D: usize, M: StoredEnergy>(
     if mu > 0.0 && mu.is_finite() { mu } else { 1.0 }
 }
 
-/// The element with the largest strain at `r₀ + u`, and that strain.
-fn largest_strain<const D: usize, M>(
-    sys: &PhSystem<D, M>,
-    r0: &[Vector<D>],
-    u: &[Vector<D>],
-) -> (usize, f64) {
+/// The element with the largest strain at positions `r` [m], and that strain.
+fn largest_strain<const D: usize, M>(sys: &PhSystem<D, M>, r: &[Vector<D>]) -> (usize, f64) {
     let mut best = (0, f64::NEG_INFINITY);
     for (e, (&[a, b], &l)) in sys
         .mesh
@@ -1166,7 +1447,7 @@ fn largest_strain<const D: usize, M>(
         .zip(sys.mesh.lengths())
         .enumerate()
     {
-        let c = (((r0[b] - r0[a]) + (u[b] - u[a])) / l).norm_squared();
+        let c = ((r[b] - r[a]) / l).norm_squared();
         if c > best.1 || c.is_nan() {
             best = (e, c);
         }
@@ -1208,15 +1489,15 @@ fn describe<E: std::fmt::Debug>(e: &NewtonError<E>) -> String {
 
 fn finish<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
-    r0: &[Vector<D>],
     u: &[Vector<D>],
     eq: &mut StaticEquations<'_, D, M>,
     st: newton::NewtonStats,
     path: StaticsPath,
     iterations: usize,
 ) -> Equilibrium<D> {
-    let r: Vec<Vector<D>> = r0.iter().zip(u).map(|(a, b)| a + b).collect();
-    let state = State::at_rest(&sys.mesh, r);
+    let r = eq.positions(u);
+    let mut state = State::at_rest(&sys.mesh, r);
+    state.bodies = eq.body_poses(u);
     // Reactions and the residual at the final displacement, without shift.
     eq.mu = 0.0;
     eq.lambda = 1.0;
@@ -1234,7 +1515,11 @@ fn finish<const D: usize, M: StoredEnergy>(
         }
     }
     let energies = sys.energies(&state);
-    let stable = positive_definite(sys, &tangent_blocks(sys, &state.r));
+    let stable = if sys.bodies.is_empty() {
+        positive_definite(sys, &tangent_blocks(sys, &state.r))
+    } else {
+        stable_with_bodies(sys, &state.r, &state.bodies, false)
+    };
     Equilibrium {
         stable,
         state,
@@ -1261,6 +1546,9 @@ fn ordinal(n: usize) -> String {
     };
     format!("{n}{suffix}")
 }
+
+#[cfg(test)]
+mod body_tests;
 
 #[cfg(test)]
 mod tests {
@@ -1316,18 +1604,8 @@ mod tests {
         let (sys, init) = PhSystem::new(net).unwrap();
         let f = static_load(&sys);
         let mk = |r0| StaticEquations {
-            sys: &sys,
-            r0,
-            f_ext: &f,
             lambda: 0.7,
-            mu: 0.0,
-            anchor: Vec::new(),
-            jac_shift: 0.0,
-            release: false,
-            drag: true,
-            reaction: vec![Vector::zeros(); n + 1],
-            scale: 0.0,
-            strain_scale: 0.0,
+            ..StaticEquations::new(&sys, r0, &f, &[])
         };
         let mut eq = mk(&init.r);
         let x: Vec<Vector<2>> = (0..=n)

@@ -376,6 +376,8 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) body_links: Vec<Vec<Vec<(usize, usize, bool)>>>,
     /// Per node, the body and attachment it is fixed to (empty without bodies).
     pub(crate) attached: Vec<Option<(usize, usize)>>,
+    /// The bodies' initial states as the network gave them (the start of the statics).
+    pub(crate) body_start: Vec<BodyState>,
 }
 
 /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
@@ -807,7 +809,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut free = free_components(&boundary, &initial, n)?;
         check_port_nodes(&boundary, n)?;
         let rigid = crate::body::attach_bodies(
-            &bodies, &mesh, &boundary, &mut free, &initial.r, &initial.v,
+            &bodies,
+            &mesh,
+            &boundary,
+            water.as_ref(),
+            &mut free,
+            &initial.r,
+            &initial.v,
         )?;
         initial.bodies.clone_from(&rigid.states);
         let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
@@ -840,14 +848,16 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             body_names: rigid.names,
             body_links: rigid.links,
             attached: rigid.attached,
+            body_start: rigid.states,
         };
         sys.check_initial_energies(&initial)?;
         Ok((sys, initial))
     }
 
     /// Checks that `state` can start this system: its sizes, finite positions and
-    /// velocities, admissible strains, every prescribed motion at its position at `t = 0`
-    /// and finite energies (the checks [`Self::new`] makes of the problem's initial state).
+    /// velocities, admissible strains, every prescribed motion at its position at `t = 0`,
+    /// every node fixed to a rigid body at its body point and moving with the body, and
+    /// finite energies (the checks [`Self::new`] makes of the problem's initial state).
     pub fn check_state(&self, state: &State<D>) -> Result<(), SetupError> {
         check_initial(&self.mesh, &self.groups, state)?;
         if state.bodies.len() != self.bodies.len() {
@@ -858,6 +868,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             });
         }
         free_components(&self.boundary, state, self.mesh.n_nodes())?;
+        crate::body::check_attached(
+            &self.bodies,
+            &self.body_names,
+            &state.bodies,
+            &state.r,
+            &state.v,
+        )?;
         self.check_initial_energies(state)
     }
 
@@ -1117,13 +1134,18 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             external -= p;
             magnitude += p.abs();
         }
+        let (mut buoyancy, mut seabed) = (0.0, 0.0);
         for (model, st) in self.bodies.iter().zip(bodies) {
-            let (t, p) = (model.kinetic(st), model.potential(st));
+            let (t, p, u) = (
+                model.kinetic(st),
+                model.potential(st),
+                model.buoyancy_potential(st),
+            );
             kinetic += t;
             external += p;
-            magnitude += t + p.abs();
+            buoyancy += u;
+            magnitude += t + p.abs() + u.abs();
         }
-        let (mut buoyancy, mut seabed) = (0.0, 0.0);
         if let Some(w) = &self.water {
             for node in &w.nodes {
                 let (u, c) = w.node_energies(node, &r(node.node));
@@ -1164,7 +1186,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut l = crate::body::Vec3::zeros();
         for (model, st) in self.bodies.iter().zip(&state.bodies) {
             l += st.position.cross(&(st.velocity * model.mass))
-                + st.orientation.transform_vector(&st.momentum);
+                + st.orientation.transform_vector(&model.momentum(st));
         }
         l
     }
@@ -1194,27 +1216,18 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
-    /// The angular velocity of rigid body `b` in state `st`, in space axes:
-    /// `ω = R J⁻¹ Π` [rad/s] (zero for a body index out of range).
-    pub fn body_angular_velocity(&self, b: usize, st: &BodyState) -> crate::body::Vec3 {
-        self.bodies
-            .get(b)
-            .map_or_else(crate::body::Vec3::zeros, |m| {
-                st.orientation.transform_vector(&m.omega(st))
-            })
-    }
-
     /// Whether rigid body `b` has a wrench port (a force and torque input).
     pub fn body_has_wrench(&self, b: usize) -> bool {
         self.bodies.get(b).is_some_and(|m| m.wrench.is_some())
     }
 
-    /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])`.
+    /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])` (their own mass,
+    /// without the added mass).
     pub fn bodies(&self) -> Vec<(&str, f64)> {
         self.body_names
             .iter()
             .zip(&self.bodies)
-            .map(|(n, b)| (n.as_str(), b.mass))
+            .map(|(n, b)| (n.as_str(), b.dry_mass))
             .collect()
     }
 }

@@ -335,20 +335,19 @@ pub struct BodySummary {
     pub orientation: [f64; 4],
     /// Velocity of the centre of mass [m/s].
     pub velocity: [f64; 3],
-    /// Angular velocity in space axes `ω = R J⁻¹ Π` [rad/s].
+    /// Angular velocity in space axes `ω = R Ω` [rad/s].
     pub angular_velocity: [f64; 3],
 }
 
 /// The rigid bodies of `sim` with their current states.
 fn body_summaries<const D: usize>(sim: &Simulation<D, Material>) -> Vec<BodySummary> {
-    let sys = sim.system();
-    sys.bodies()
+    sim.system()
+        .bodies()
         .into_iter()
         .zip(&sim.state().bodies)
-        .enumerate()
-        .map(|(b, ((name, mass), st))| {
+        .map(|((name, mass), st)| {
             let q = st.orientation.quaternion();
-            let w = sys.body_angular_velocity(b, st);
+            let w = st.omega_space();
             BodySummary {
                 name: name.to_string(),
                 mass,

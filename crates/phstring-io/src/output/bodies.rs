@@ -44,7 +44,7 @@ pub(super) fn rows<const D: usize>(
     let names = sys.bodies();
     for (b, st) in sim.state().bodies.iter().enumerate() {
         let q = st.orientation.quaternion();
-        let omega = sys.body_angular_velocity(b, st);
+        let omega = st.omega_space();
         let mut values = [0.0; 20];
         values[..3].copy_from_slice(st.position.as_slice());
         values[3..7].copy_from_slice(&[q.w, q.i, q.j, q.k]);

@@ -130,7 +130,7 @@ impl ScenarioFile {
         let rot = phstring::signal::rotation(angles.x * deg, angles.y * deg, angles.z * deg);
         let orientation =
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
-        let initial = BodyState::new(position, velocity, orientation, rates, &inertia);
+        let initial = BodyState::new(position, velocity, orientation, rates);
         let body = RigidBody {
             name: name.to_string(),
             mass,
@@ -139,6 +139,8 @@ impl ScenarioFile {
             attachments: Vec::new(),
             initial,
             wrench: None,
+            hydro: None,
+            motion: None,
         };
         Ok((body, rates))
     }

@@ -221,6 +221,11 @@ impl<const D: usize> InitialConditions<D> {
         }
     }
 
+    /// The scenario file, for errors that concern no single key.
+    pub fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+
     /// Whether [`Self::apply`] changes the base state at all: whether a displacement,
     /// velocity, positions or velocities are given. Without them the initial state is the
     /// base shape at rest, exactly as [`State::at_rest`] builds it.

@@ -1,7 +1,9 @@
 //! The step's Jacobian with bodies (border included) against central differences of
 //! its residual, in 2D and 3D, on a network where a body hangs from a support by a rope,
 //! a second body hangs from the first by a one-element rope (body–body blocks), a rope
-//! from it ends at a partly fixed node, and a load acts on an attached node.
+//! from it ends at a partly fixed node, and a load acts on an attached node; both bodies
+//! feel buoyancy off their centre, a waterplane's heave restoring, drag in a sheared current
+//! and added mass.
 
 use crate::body::{Attachment, RigidBody};
 use crate::body::{BodyState, Mat3, Vec3, project};
@@ -43,14 +45,12 @@ fn check<const D: usize>(scheme: Scheme) {
         } else {
             Vec3::new(0.2, 0.3, -0.5)
         },
-        &inertia,
     );
     let sb = BodyState::new(
         planar(Vec3::new(1.0, -14.0, -0.3)),
         planar(Vec3::new(-0.1, 0.2, 0.3)),
         q(-0.2, 0.1, -0.4),
         Vec3::new(0.0, 0.0, 0.7),
-        &inertia,
     );
     let (top_a, bot_a, side_a) = (
         planar(Vec3::new(0.2, 1.0, 0.1)),
@@ -100,9 +100,7 @@ fn check<const D: usize>(scheme: Scheme) {
         (nside, &sa, side_a),
         (nb_top, &sb, top_b),
     ] {
-        let om = st
-            .orientation
-            .transform_vector(&(inertia.try_inverse().unwrap() * st.momentum));
+        let om = st.orientation.transform_vector(&st.omega);
         let arm = st.orientation.transform_vector(&s);
         net.initial.v[node] = project(&(st.velocity + om.cross(&arm)));
     }
@@ -118,6 +116,17 @@ fn check<const D: usize>(scheme: Scheme) {
         attachments: atts,
         initial,
         wrench: None,
+        hydro: Some(crate::body::BodyHydro {
+            volume: 0.6,
+            centre_of_buoyancy: planar(Vec3::new(0.1, 0.3, -0.2)),
+            cda: 1.2,
+            linear_drag: 300.0,
+            ca: 0.8,
+            added_inertia: Vec3::new(20.0, 30.0, 40.0),
+            waterplane_area: 3.0,
+            waterline: planar(Vec3::new(-0.2, 0.5, 0.3)),
+        }),
+        motion: None,
     };
     let net = net
         .with_body(body(
@@ -126,7 +135,15 @@ fn check<const D: usize>(scheme: Scheme) {
             sa,
         ))
         .with_body(body("b", vec![att(nb_top, top_b)], sb));
-    let (sys, state) = PhSystem::new(net).unwrap();
+    // Water with a current that turns and grows with height, so that the drag's dependence
+    // on the mid-step height is in the Jacobian too.
+    let profile = vec![
+        (-20.0, v::<D>(0.2, 0.0, -0.1)),
+        (0.0, v::<D>(1.2, 0.3, 0.4)),
+    ];
+    let water =
+        crate::water::Water::new(1025.0).with_current(crate::water::Current::Profile(profile));
+    let (sys, state) = PhSystem::new(net.with_water(water)).unwrap();
     let n = sys.mesh().n_nodes();
     let slots = 4;
     // A trial point: the predictor plus a perturbation.

@@ -15,6 +15,8 @@ use crate::mesh::Mesh;
 pub struct BlockTridiagonal<const D: usize> {
     /// `C_i = D'_i⁻¹ U_i`.
     c: Vec<Block<D>>,
+    /// With [`LinearSolver::keep_factors`]: the pivots' inverses `D'_i⁻¹` (empty otherwise).
+    inv: Vec<Block<D>>,
 }
 
 impl<const D: usize> BlockTridiagonal<D> {
@@ -26,6 +28,7 @@ impl<const D: usize> BlockTridiagonal<D> {
         let n = mesh.n_nodes();
         Ok(Self {
             c: vec![Block::zeros(); n],
+            inv: Vec::new(),
         })
     }
 }
@@ -125,9 +128,110 @@ impl<const D: usize> LinearSolver<D> for BlockTridiagonal<D> {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError> {
-        block_thomas(&jac.diag, &jac.off, &mut self.c, rhs)
+        if self.inv.is_empty() {
+            return block_thomas(&jac.diag, &jac.off, &mut self.c, rhs);
+        }
+        // Keep the pivots: invert them from the factors, then solve with them.
+        factor_kept(&jac.diag, &jac.off, &mut self.c, &mut self.inv)?;
+        self.solve_again(jac, rhs)
     }
     fn name(&self) -> &'static str {
         "block_tridiagonal"
     }
+    fn keep_factors(&mut self) {
+        self.inv = vec![Block::zeros(); self.c.len()];
+    }
+    fn solve_again(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        if self.inv.len() != rhs.len() {
+            return self.solve(jac, rhs);
+        }
+        let (off, c, inv) = (&jac.off, &self.c, &self.inv);
+        let n = rhs.len();
+        if n == 0 {
+            return Ok(());
+        }
+        let m = n / 2;
+        for k in 0..m {
+            let (i, j) = (k, n - 1 - k);
+            let mut b = rhs[i];
+            if i > 0 {
+                b -= off[i - 1][1] * rhs[i - 1];
+            }
+            rhs[i] = inv[i] * b;
+            if j > m {
+                let mut f = rhs[j];
+                if j + 1 < n {
+                    f -= off[j][0] * rhs[j + 1];
+                }
+                rhs[j] = inv[j] * f;
+            }
+        }
+        let mut b = rhs[m];
+        if m > 0 {
+            b -= off[m - 1][1] * rhs[m - 1];
+        }
+        if m + 1 < n {
+            b -= off[m][0] * rhs[m + 1];
+        }
+        rhs[m] = inv[m] * b;
+        for k in (0..m).rev() {
+            let x_next = rhs[k + 1];
+            rhs[k] -= c[k] * x_next;
+            let j = n - 1 - k;
+            if j > m {
+                let x_prev = rhs[j - 1];
+                rhs[j] -= c[j] * x_prev;
+            }
+        }
+        match rhs.iter().position(|x| !x.iter().all(|v| v.is_finite())) {
+            Some(i) => Err(LinearSolveError::Singular { block: i }),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The twisted block Thomas factorization of [`block_thomas`] without a right-hand side: the
+/// couplings `c` and the pivots' inverses `inv`.
+fn factor_kept<const D: usize>(
+    diag: &[Block<D>],
+    off: &[[Block<D>; 2]],
+    c: &mut [Block<D>],
+    inv: &mut [Block<D>],
+) -> Result<(), LinearSolveError> {
+    let n = diag.len();
+    if n == 0 {
+        return Ok(());
+    }
+    let singular = |i| LinearSolveError::Singular { block: i };
+    let m = n / 2;
+    for k in 0..m {
+        let (i, j) = (k, n - 1 - k);
+        let mut d = diag[i];
+        if i > 0 {
+            d -= off[i - 1][1] * c[i - 1];
+        }
+        inv[i] = d.try_inverse().ok_or(singular(i))?;
+        c[i] = inv[i] * off[i][0];
+        if j > m {
+            let mut e = diag[j];
+            if j + 1 < n {
+                e -= off[j][0] * c[j + 1];
+            }
+            inv[j] = e.try_inverse().ok_or(singular(j))?;
+            c[j] = inv[j] * off[j - 1][1];
+        }
+    }
+    let mut d = diag[m];
+    if m > 0 {
+        d -= off[m - 1][1] * c[m - 1];
+    }
+    if m + 1 < n {
+        d -= off[m][0] * c[m + 1];
+    }
+    inv[m] = d.try_inverse().ok_or(singular(m))?;
+    Ok(())
 }

@@ -9,7 +9,7 @@ use crate::error::LinearSolveError;
 /// Solves `[A B; C E] [x; u] = [f; g]` with `A` the node blocks of a [`BlockJacobian`]
 /// (solved by the inner solver) and `B`, `C`, `E` its [`super::Border`]: `x = A⁻¹f − A⁻¹B u`,
 /// `(E − C A⁻¹B) u = g − C A⁻¹f`. Each slot component with couplings costs one more solve
-/// with `A`.
+/// with `A`'s factors (kept from the first solve where the inner solver can keep them).
 pub struct Bordered<const D: usize> {
     inner: Box<dyn LinearSolver<D>>,
     n: usize,
@@ -32,7 +32,8 @@ impl<const D: usize> std::fmt::Debug for Bordered<D> {
 
 impl<const D: usize> Bordered<D> {
     /// The solver for `n` nodes (solved by `inner`) and `slots` slots after them.
-    pub fn new(inner: Box<dyn LinearSolver<D>>, n: usize, slots: usize) -> Self {
+    pub fn new(mut inner: Box<dyn LinearSolver<D>>, n: usize, slots: usize) -> Self {
+        inner.keep_factors();
         Self {
             inner,
             n,
@@ -65,7 +66,7 @@ impl<const D: usize> LinearSolver<D> for Bordered<D> {
                 }
             }
             if *used {
-                self.inner.solve(jac, y)?;
+                self.inner.solve_again(jac, y)?;
             }
         }
         // S = E − C Y, g = rhs_u − C z.

@@ -142,6 +142,19 @@ pub trait LinearSolver<const D: usize>: Send {
     ) -> Result<(), LinearSolveError>;
     /// Name for reports: `block_tridiagonal`, `sparse_lu` or `network`.
     fn name(&self) -> &'static str;
+    /// Asks the solver to keep what [`Self::solve_again`] needs from each factorization
+    /// (more memory per node; the default keeps nothing).
+    fn keep_factors(&mut self) {}
+    /// Solves `jac · x = rhs` again with the factorization of the last successful
+    /// [`Self::solve`] of the same `jac` (after [`Self::keep_factors`]); the default factors
+    /// again.
+    fn solve_again(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        self.solve(jac, rhs)
+    }
 }
 
 /// Builds the solver `kind` for `mesh` (with `slots` bordering unknowns, the solver of `kind`

@@ -170,6 +170,10 @@ pub struct NetworkSolver<const D: usize> {
     /// Schur-complemented junction diagonal blocks (indexed like `junctions`).
     jdiag: Vec<Block<D>>,
     reduced: Option<Reduced<D>>,
+    /// With [`LinearSolver::keep_factors`]: per interior node (indexed like
+    /// `interior_nodes`) its pivot's inverse `D'_k⁻¹` and the junction coupling `r` before its
+    /// elimination, for [`LinearSolver::solve_again`]; empty otherwise.
+    kept: Vec<[Block<D>; 2]>,
 }
 
 impl<const D: usize> std::fmt::Debug for NetworkSolver<D> {
@@ -320,6 +324,7 @@ impl<const D: usize> NetworkSolver<D> {
             cg: vec![[Block::zeros(); 2]; n_int],
             jdiag: vec![Block::zeros(); nj],
             reduced,
+            kept: Vec::new(),
         }
     }
 
@@ -373,9 +378,14 @@ impl<const D: usize> NetworkSolver<D> {
             let q = seg.first_interior + k - 1;
             let node = self.interior_nodes[q];
             let [fo, bo] = self.path_blocks(jac, e0 + k);
-            self.cg[q] = front
+            let r_before = front.r;
+            let (cg, inv) = front
                 .step(&jac.diag[node], &mut rhs[node], fo, bo)
                 .ok_or(LinearSolveError::Singular { block: node })?;
+            self.cg[q] = cg;
+            if let Some(kept) = self.kept.get_mut(q) {
+                *kept = [inv, r_before];
+            }
         }
         let (r0, r1) = (self.junction_index[j0], self.junction_index[j1]);
         self.jdiag[r0] += front.acc_d;
@@ -466,7 +476,7 @@ impl<const D: usize> Front<D> {
         b: &mut SVector<f64, D>,
         fo: &Block<D>,
         bo: &Block<D>,
-    ) -> Option<[Block<D>; 2]> {
+    ) -> Option<([Block<D>; 2], Block<D>)> {
         let mut d = *d;
         if let Some((bp, cp, yp)) = &self.prev {
             d -= bp * cp;
@@ -487,7 +497,7 @@ impl<const D: usize> Front<D> {
             Block::zeros()
         };
         self.prev = Some((*bo, c, y));
-        Some([c, g])
+        Some(([c, g], inv))
     }
 }
 
@@ -510,6 +520,66 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
     }
     fn name(&self) -> &'static str {
         "network"
+    }
+    fn keep_factors(&mut self) {
+        self.kept = vec![[Block::zeros(); 2]; self.interior_nodes.len()];
+    }
+    fn solve_again(
+        &mut self,
+        jac: &BlockJacobian<D>,
+        rhs: &mut [SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        let kept_all = self.kept.len() == self.interior_nodes.len();
+        let Some(Reduced::Block { lu, .. }) = self.reduced.as_mut().filter(|_| kept_all) else {
+            return self.solve(jac, rhs);
+        };
+        // The right-hand side's part of each segment's elimination, with the kept pivots.
+        for seg in &self.segments {
+            let [j0, j1] = seg.ends;
+            let mut acc_b = SVector::<f64, D>::zeros();
+            let mut prev: Option<(usize, SVector<f64, D>)> = None;
+            for k in 0..seg.n_interior {
+                let q = seg.first_interior + k;
+                let node = self.interior_nodes[q];
+                let mut b = rhs[node];
+                if let Some((p, yp)) = prev {
+                    // The coupling of this node's row to the previous one: `B` of element
+                    // e0 + k (the block `∂R_to/∂x_from` along the path).
+                    let (e, forward) = self.path_elements[p];
+                    let bo = if forward {
+                        &jac.off[e][1]
+                    } else {
+                        &jac.off[e][0]
+                    };
+                    b -= bo * yp;
+                }
+                let [inv, r] = &self.kept[q];
+                let y = inv * b;
+                acc_b -= r * y;
+                rhs[node] = y;
+                prev = Some((seg.first_element + k + 1, y));
+            }
+            rhs[j0] += acc_b;
+            if let Some((p, yp)) = prev {
+                let (e, forward) = self.path_elements[p];
+                let bo = if forward {
+                    &jac.off[e][1]
+                } else {
+                    &jac.off[e][0]
+                };
+                rhs[j1] -= bo * yp;
+            }
+        }
+        lu.solve_indexed(rhs, &self.junctions);
+        for &j in &self.junctions {
+            if !finite(&rhs[j]) {
+                return Err(LinearSolveError::Singular { block: j });
+            }
+        }
+        for seg in self.segments.iter().rev() {
+            self.back_substitute(seg, rhs)?;
+        }
+        Ok(())
     }
 }
 
@@ -730,6 +800,40 @@ mod tests {
                 let res = (&j * &x - &bf).norm() / bf.norm();
                 assert!(res <= 1e-10, "D = {D}: residual {res:e}");
             }
+            check_again::<D>(mesh, &jac, &mut rng);
+        }
+    }
+
+    /// A second right-hand side solved with the kept factors of the first solve
+    /// (`solve_again`, used by the bordered solve) agrees with the sparse LU: the network
+    /// solver and, on a chain, the block-tridiagonal one.
+    fn check_again<const D: usize>(mesh: &Mesh, jac: &BlockJacobian<D>, rng: &mut Rng) {
+        let mut solvers: Vec<Box<dyn LinearSolver<D>>> = vec![Box::new(NetworkSolver::new(mesh))];
+        if mesh.is_chain() {
+            solvers.push(Box::new(
+                crate::linsolve::BlockTridiagonal::new(mesh).unwrap(),
+            ));
+        }
+        let mut lu = SparseLu::<D>::new(mesh);
+        let (b1, b2) = (
+            random_rhs::<D>(mesh.n_nodes(), rng),
+            random_rhs::<D>(mesh.n_nodes(), rng),
+        );
+        let mut x_lu = b2.clone();
+        lu.solve(jac, &mut x_lu).unwrap();
+        let x_lu = flat(&x_lu);
+        for solver in &mut solvers {
+            solver.keep_factors();
+            let mut x1 = b1.clone();
+            solver.solve(jac, &mut x1).unwrap();
+            let mut x2 = b2.clone();
+            solver.solve_again(jac, &mut x2).unwrap();
+            let diff = (&flat(&x2) - &x_lu).norm() / x_lu.norm();
+            assert!(
+                diff <= 1e-10,
+                "D = {D}: {} solve_again vs sparse LU {diff:e}",
+                solver.name()
+            );
         }
     }
 

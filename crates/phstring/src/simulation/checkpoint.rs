@@ -65,7 +65,8 @@ pub struct Checkpoint<const D: usize> {
     pub h_min_used: f64,
     /// Acceleration estimate of the predictor [m/s²], per node.
     pub acc: Vec<Vector<D>>,
-    /// Mid-step velocity of the last step (predictor) [m/s], per node.
+    /// Mid-step velocity of the last step (predictor) [m/s], per node, then two per rigid
+    /// body: `Δx/h` and the angular velocity `R_n w/h` [rad/s] in space axes (its slot form).
     pub v_mid: Vec<Vector<D>>,
     /// Cumulative supplied energy [J].
     pub supplied_total: f64,
@@ -88,6 +89,7 @@ impl<const D: usize> Checkpoint<D> {
     /// the predictor's history zero.
     pub(super) fn start(state: State<D>, h: f64) -> Self {
         let n = state.r.len();
+        let slots = 2 * state.bodies.len();
         Self {
             state,
             t_base: 0.0,
@@ -98,7 +100,7 @@ impl<const D: usize> Checkpoint<D> {
             easy_streak: 0,
             h_min_used: h,
             acc: vec![Vector::zeros(); n],
-            v_mid: vec![Vector::zeros(); n],
+            v_mid: vec![Vector::zeros(); n + slots],
             supplied_total: 0.0,
             dissipated_total: 0.0,
             total_newton: 0,
@@ -140,7 +142,7 @@ impl<const D: usize> Checkpoint<D> {
             ("strains", state.c.len(), n_el),
             ("rigid bodies", state.bodies.len(), n_bodies),
             ("predictor accelerations", acc.len(), n),
-            ("predictor velocities", v_mid.len(), n),
+            ("predictor velocities", v_mid.len(), n + 2 * n_bodies),
         ] {
             if got != expected {
                 return Err(SetupError::StateSize {
@@ -267,7 +269,7 @@ pub struct FlatCheckpoint {
     /// Strains (dimensionless), one per element.
     pub c: Vec<f64>,
     /// Rigid bodies' states, [`BODY_NUMBERS`] per body: position [m], velocity [m/s],
-    /// orientation quaternion `(w, x, y, z)`, angular momentum in body axes [kg·m²/s];
+    /// orientation quaternion `(w, x, y, z)`, angular velocity in body axes [rad/s];
     /// written only when there are bodies, empty when missing.
     #[cfg_attr(
         feature = "serde",
@@ -324,7 +326,7 @@ fn flat_bodies(bodies: &[BodyState]) -> Vec<f64> {
         out.extend(b.position.iter().chain(&b.velocity));
         let q = b.orientation.quaternion();
         out.extend([q.w, q.i, q.j, q.k]);
-        out.extend(b.momentum.iter());
+        out.extend(b.omega.iter());
     }
     out
 }
@@ -335,19 +337,15 @@ fn unflat_bodies(v: &[f64]) -> Vec<BodyState> {
     v.chunks_exact(BODY_NUMBERS)
         .map(|b| {
             let v3 = |i: usize| crate::body::Vec3::new(b[i], b[i + 1], b[i + 2]);
-            let q = nalgebra::Quaternion::new(b[6], b[7], b[8], b[9]);
-            // A run's quaternion is unit to round-off and is kept bit for bit, so that a
-            // resumed run continues exactly as an uninterrupted one; others are normalized.
-            let orientation = if (q.norm() - 1.0).abs() <= 1e-12 {
-                nalgebra::UnitQuaternion::new_unchecked(q)
-            } else {
-                nalgebra::UnitQuaternion::new_normalize(q)
-            };
             BodyState {
                 position: v3(0),
                 velocity: v3(3),
-                orientation,
-                momentum: v3(10),
+                // Unchecked, so that a record restores bit for bit; `check_fits` has checked
+                // that it is a unit quaternion.
+                orientation: nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+                    b[6], b[7], b[8], b[9],
+                )),
+                omega: v3(10),
             }
         })
         .collect()
@@ -616,7 +614,12 @@ impl FlatCheckpoint {
             ("sim.r", r, D * n, None),
             ("sim.v", v, D * n, None),
             ("sim.acc", acc, D * n, None),
-            ("sim.v_mid", v_mid, D * n, None),
+            (
+                "sim.v_mid",
+                v_mid,
+                D * (n + 2 * n_bodies),
+                (n_bodies > 0).then_some("slots"),
+            ),
             ("sim.c", c, n_el, Some("elements")),
             (
                 "sim.bodies",
@@ -629,6 +632,9 @@ impl FlatCheckpoint {
                 let count = match count {
                     None => format!("{n} nodes × {D} components"),
                     Some("bodies") => format!("{n_bodies} bodies × {BODY_NUMBERS} numbers"),
+                    Some("slots") => {
+                        format!("{n} nodes and 2 × {n_bodies} body slots, × {D} components")
+                    }
                     Some(what) => format!("{n_el} {what}"),
                 };
                 return Err(format!(
@@ -638,6 +644,14 @@ impl FlatCheckpoint {
             }
             if let Some(i) = values.iter().position(|x| !x.is_finite()) {
                 return Err(format!("{name}[{i}] is not finite"));
+            }
+        }
+        for (b, body) in bodies.chunks_exact(BODY_NUMBERS).enumerate() {
+            let norm = body[6..10].iter().map(|x| x * x).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > 1e-12 {
+                return Err(format!(
+                    "sim.bodies: body {b}'s orientation quaternion has norm {norm:e}, not 1"
+                ));
             }
         }
         check_history::<D>(acc_history, n)?;

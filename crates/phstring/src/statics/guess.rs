@@ -6,7 +6,9 @@
 //! component (fixed, or moving supports at their `t = 0` positions) and whose interior nodes
 //! belong to it alone, with neither supports, loads nor point masses: strings between two
 //! supports, in or out of water. Junction networks, springs, free ends and buoyant lines are
-//! left to the other paths. The current's drag at rest is not in the guess.
+//! left to the other paths. The current's drag at rest is not in the guess. A string end
+//! fixed to a rigid body counts as a support at the body's start pose (the body is free in
+//! the Newton solve from the guess).
 
 use crate::catenary::{Catenary, Chain, Line};
 use crate::material::StoredEnergy;

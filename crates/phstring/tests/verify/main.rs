@@ -4,6 +4,7 @@
 mod accuracy;
 mod bathymetry;
 mod bodies;
+mod bodies_statics;
 mod common;
 mod damping;
 mod elimination;

@@ -1,0 +1,304 @@
+//! Rigid bodies in the statics (docs/method.md, "Statics with rigid bodies"): their pose
+//! unknowns, their force and moment balances with the tangent, the stability check with
+//! them, and the bodies that cannot be held.
+//!
+//! Body `b` has two slots after the `n` nodes, as in the time step: `n + 2b` holds the
+//! displacement `δx` [m] of its centre from a reference pose `(x₀, R₀)` and `n + 2b + 1` the
+//! Cayley vector `w` (body axes) of its turn from it: the pose is `x = x₀ + δx`,
+//! `R = R₀ cay(w)`, and an attached node sits at `x + R s`. Its rows are the force balance
+//! `Σ R_k − W − F_port(0) = 0` [N] and the moment balance about the centre
+//! `R₀ᵀ (Σ (R s_k) × R_k − τ_port(0)) = 0` [N·m] (in the reference body axes, divided by the
+//! radius of gyration so that it is a force too), `R_k` the attached node's static residual:
+//! the force the body must exert on that node.
+
+use faer::Side;
+use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::UnitQuaternion;
+
+use crate::assembly::free_dofs;
+use crate::body::{
+    BodyState, Mat3, PointStep, Turn, Vec3, cayley_quaternion, embed, project, skew,
+};
+use crate::body_step::{couple, embed_block, rotation_slot, slot_block, unknowns};
+use crate::linsolve::BlockJacobian;
+use crate::system::{PhSystem, Vector};
+
+/// The bodies' part of one evaluation of the static equations.
+pub(super) struct BodyTerms<'a, const D: usize> {
+    /// Reference poses `(x₀, R₀)` (at rest).
+    pub poses: &'a [BodyState],
+    /// Per body the wrench port's force [N] and torque [N·m] at `t = 0` (space axes).
+    pub ports: &'a [(Vec3, Vec3)],
+    /// The bodies' slots of the Newton vector.
+    pub slots: &'a [Vector<D>],
+    /// Load factor (weights and ports are loads).
+    pub lambda: f64,
+    /// Pseudo-transient shift [1/s²] and the slots it pulls towards (`anchor`, read only when
+    /// `mu > 0`).
+    pub mu: f64,
+    pub anchor: &'a [Vector<D>],
+    /// Shift of the Newton matrix only [1/s²].
+    pub jac_shift: f64,
+}
+
+/// The wrench ports' force [N] and torque [N·m] at `t = 0`, per body.
+pub(super) fn ports_at_rest<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<(Vec3, Vec3)> {
+    sys.bodies.iter().map(|m| m.wrench_at::<D>(0.0)).collect()
+}
+
+/// Writes the attached nodes' displacements from their start `offsets[node] + δx +
+/// R₀ (cay(w) − I) s` [m] into `x` (per node), from the reference poses `poses` and the
+/// slots `slots`.
+pub(super) fn fill<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    poses: &[BodyState],
+    offsets: &[Vector<D>],
+    slots: &[Vector<D>],
+    x: &mut [Vector<D>],
+) {
+    for (b, (model, st)) in sys.bodies.iter().zip(poses).enumerate() {
+        let (dx, w) = unknowns(slots, b);
+        let turn = Turn::new(&st.orientation, &w);
+        for &(node, s) in &model.attachments {
+            x[node] = offsets[node] + project(&(dx + turn.point(&s).moved));
+        }
+    }
+}
+
+/// The pose (at rest) of body `b` from its reference pose `pose` and the slots `slots`.
+pub(super) fn pose_of<const D: usize>(
+    pose: &BodyState,
+    slots: &[Vector<D>],
+    b: usize,
+) -> BodyState {
+    let (dx, w) = unknowns(slots, b);
+    let q: UnitQuaternion<f64> = pose.orientation * cayley_quaternion(&w);
+    BodyState::at_rest(pose.position + dx, q)
+}
+
+impl<const D: usize> BodyTerms<'_, D> {
+    /// The bodies' rows into `res[n..]` and, with `jac`, their blocks, read from the attached
+    /// nodes' rows and blocks before those are masked; returns the squares of the bodies'
+    /// force terms (force scale).
+    pub(super) fn terms<M>(
+        &self,
+        sys: &PhSystem<D, M>,
+        res: &mut [Vector<D>],
+        mut jac: Option<&mut BlockJacobian<D>>,
+    ) -> f64 {
+        let n = sys.mesh.n_nodes();
+        let turns: Vec<Turn> = self
+            .poses
+            .iter()
+            .enumerate()
+            .map(|(b, st)| Turn::new(&st.orientation, &unknowns(self.slots, b).1))
+            .collect();
+        let points: Vec<Vec<PointStep>> = sys
+            .bodies
+            .iter()
+            .zip(&turns)
+            .map(|(m, t)| m.attachments.iter().map(|(_, s)| t.point(s)).collect())
+            .collect();
+        let mut scale2 = 0.0;
+        for (b, model) in sys.bodies.iter().enumerate() {
+            let (dx, w) = unknowns(self.slots, b);
+            let turn = &turns[b];
+            let rt = turn.rot.transpose();
+            let inv_rg = 1.0 / model.gyration();
+            let (f_port, t_port) = self.ports[b];
+            let load = (model.weight + f_port) * self.lambda;
+            let mut force = -load;
+            let mut moment = -t_port * self.lambda;
+            scale2 += load.norm_squared() + (moment * inv_rg).norm_squared();
+            // Unscaled blocks, the moment row in space axes.
+            let mut jb = [[Mat3::zeros(); 2]; 2];
+            let mut dw_rows = Vec::with_capacity(points[b].len());
+            for (&(node, s), p) in model.attachments.iter().zip(&points[b]) {
+                let rk = embed(&res[node]);
+                let arm = turn.rot * s + p.moved;
+                let m = arm.cross(&rk);
+                force += rk;
+                moment += m;
+                scale2 += (m * inv_rg).norm_squared();
+                let ak = skew(&arm);
+                dw_rows.push(rt * ak);
+                if let Some(j) = jac.as_deref() {
+                    // R_k moves with the node, the arm with w.
+                    let k = embed_block(&j.diag[node]);
+                    jb[0][0] += k;
+                    jb[0][1] += k * p.dw;
+                    jb[1][0] += ak * k;
+                    jb[1][1] += ak * k * p.dw - skew(&rk) * p.dw;
+                }
+            }
+            let mut spin = rt * moment;
+            if self.mu > 0.0 {
+                let (ax, aw) = unknowns(self.anchor, b);
+                let fm = (dx - ax) * (self.mu * model.mass);
+                let sm = model.inertia * (w - aw) * self.mu;
+                force += fm;
+                spin += sm;
+                scale2 += fm.norm_squared() + (sm * inv_rg).norm_squared();
+            }
+            res[n + 2 * b] = project(&force);
+            res[n + 2 * b + 1] = rotation_slot::<D>(&(spin * inv_rg));
+            let Some(j) = jac.as_deref_mut() else {
+                continue;
+            };
+            let shift = self.mu + self.jac_shift;
+            let blocks = [
+                [jb[0][0] + Mat3::identity() * (shift * model.mass), jb[0][1]],
+                [rt * jb[1][0], rt * jb[1][1] + model.inertia * shift],
+            ];
+            let slots = j.border.slots;
+            let at = |s: usize, t: usize| (2 * b + s) * slots + 2 * b + t;
+            for (s, row_scale) in [(0, 1.0), (1, inv_rg)] {
+                for t in 0..2 {
+                    j.border.own[at(s, t)] += slot_block::<D>(&(blocks[s][t] * row_scale), s, t);
+                }
+            }
+            if D == 2 {
+                j.border.own[at(1, 1)][(1, 1)] = 1.0;
+            }
+            couple(sys, b, &points, &dw_rows, inv_rg, j);
+        }
+        scale2
+    }
+}
+
+/// Whether the tangent `j` of the static equations with bodies, evaluated at the reference
+/// pose (`w = 0`) of an equilibrium, is positive definite on the free components and the
+/// bodies' slots: there the moment row in body axes is the gradient of the potential, so `j`
+/// with its rotation columns divided by the radius of gyration (as its rows are) is the
+/// potential's Hessian, symmetric. Checked by a sparse Cholesky factorization.
+pub(super) fn positive_definite<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    j: &BlockJacobian<D>,
+) -> bool {
+    let (dof, n_free) = free_dofs(sys);
+    let slots = j.border.slots;
+    let total = n_free + slots * D;
+    let slot_dof = |s: usize, k: usize| n_free + s * D + k;
+    let col_scale = |s: usize| {
+        if s % 2 == 1 {
+            1.0 / sys.bodies[s / 2].gyration()
+        } else {
+            1.0
+        }
+    };
+    let mut t = Vec::new();
+    let mut push = |r: Option<usize>, c: Option<usize>, v: f64| {
+        if let (Some(r), Some(c)) = (r, c)
+            && v != 0.0
+        {
+            t.push(Triplet::new(r, c, v));
+        }
+    };
+    let node = |i: usize, k: usize| dof[i * D + k];
+    for (i, d) in j.diag.iter().enumerate() {
+        for (k, m) in (0..D).flat_map(|k| (0..D).map(move |m| (k, m))) {
+            push(node(i, k), node(i, m), d[(k, m)]);
+        }
+    }
+    for (&[a, b], off) in sys.mesh.elements().iter().zip(&j.off) {
+        for (k, m) in (0..D).flat_map(|k| (0..D).map(move |m| (k, m))) {
+            push(node(a, k), node(b, m), off[0][(k, m)]);
+            push(node(b, k), node(a, m), off[1][(k, m)]);
+        }
+    }
+    for s in 0..slots {
+        for c in 0..slots {
+            let blk = &j.border.own[s * slots + c];
+            for (k, m) in (0..D).flat_map(|k| (0..D).map(move |m| (k, m))) {
+                push(
+                    Some(slot_dof(s, k)),
+                    Some(slot_dof(c, m)),
+                    blk[(k, m)] * col_scale(c),
+                );
+            }
+        }
+    }
+    for &(i, s, row, col) in &j.border.links {
+        for (k, m) in (0..D).flat_map(|k| (0..D).map(move |m| (k, m))) {
+            push(Some(slot_dof(s, k)), node(i, m), row[(k, m)]);
+            push(node(i, k), Some(slot_dof(s, m)), col[(k, m)] * col_scale(s));
+        }
+    }
+    match SparseColMat::try_new_from_triplets(total, total, &t) {
+        Ok(k) => k.sp_cholesky(Side::Lower).is_ok(),
+        Err(_) => false,
+    }
+}
+
+/// Checks start poses `poses` (one per body): finite, and in 2D in the plane `z = 0` turned
+/// about `z` only.
+pub(super) fn check_poses<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    poses: &[BodyState],
+) -> Result<(), crate::error::SetupError> {
+    for (b, (st, name)) in poses.iter().zip(&sys.body_names).enumerate() {
+        let q = st.orientation.quaternion();
+        let finite = st
+            .position
+            .iter()
+            .chain(q.coords.iter())
+            .all(|x| x.is_finite());
+        let planar = D != 2 || (st.position.z == 0.0 && q.i == 0.0 && q.j == 0.0);
+        if !(finite && planar) {
+            return Err(crate::error::SetupError::Body {
+                index: b,
+                name: name.clone(),
+                problem: format!(
+                    "start pose at {:?} with orientation {:?} is not finite{}",
+                    st.position.as_slice(),
+                    q.coords.as_slice(),
+                    if D == 2 {
+                        " or not in the plane z = 0 turned about z"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The first body whose attachment points all lie on one line through its centre of mass
+/// (in 3D; in 2D, all at the centre): it can turn about that line with no string resisting,
+/// so no rest state holds that turn. Returns `(index, name, the line's direction in body
+/// axes)` (`x` when every point is at the centre).
+pub(super) fn free_spin<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+) -> Option<(usize, String, [f64; 3])> {
+    sys.bodies.iter().enumerate().find_map(|(b, m)| {
+        let far = m
+            .attachments
+            .iter()
+            .map(|(_, s)| *s)
+            .max_by(|a, c| a.norm().total_cmp(&c.norm()))?;
+        let length = far.norm();
+        let axis = if length > 0.0 {
+            far / length
+        } else {
+            Vec3::x()
+        };
+        let on_line = m
+            .attachments
+            .iter()
+            .all(|(_, s)| s.cross(&axis).norm() <= 1e-9 * length);
+        let free = if D == 3 { on_line } else { length == 0.0 };
+        free.then(|| (b, sys.body_names[b].clone(), [axis.x, axis.y, axis.z]))
+    })
+}
+
+/// The first body fixed to no node: `(index, name)`. Nothing holds it (its tangent is
+/// singular), so the statics refuse it.
+pub(super) fn loose_body<const D: usize, M>(sys: &PhSystem<D, M>) -> Option<(usize, String)> {
+    sys.bodies
+        .iter()
+        .zip(&sys.body_names)
+        .enumerate()
+        .find(|(_, (m, _))| m.attachments.is_empty())
+        .map(|(b, (_, name))| (b, name.clone()))
+}
