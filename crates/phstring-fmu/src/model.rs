@@ -134,6 +134,15 @@ impl ModelSpec {
 
     /// The variables of the FMU of `file` in `D` dimensions: parameters, inputs, outputs.
     fn of<const D: usize>(file: &ScenarioFile, v: Setup<D>) -> Result<Self, ScenarioError> {
+        // Its variables do not carry rigid bodies yet (their states and wrench ports).
+        v.problem
+            .system
+            .refuse_bodies("the FMU export")
+            .map_err(|cause| ScenarioError::Setup {
+                path: file.path.clone(),
+                with_sets: false,
+                cause,
+            })?;
         let (mut vars, parameters) = parameter_variables(&file.scenario);
         // Inputs: external loads, then external motions.
         vars.extend(load_inputs(file, &v)?);

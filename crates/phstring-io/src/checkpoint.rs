@@ -56,6 +56,9 @@ pub struct OutputState {
     /// existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end_tensions_bytes: Option<u64>,
+    /// Bytes of `bodies.csv`, if written (runs with rigid bodies).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bodies_bytes: Option<u64>,
     /// The channel table (`output.channels`), if written: its file name and bytes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channels: Option<(String, u64)>,

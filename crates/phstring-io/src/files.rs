@@ -9,6 +9,24 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+/// The rigid bodies' states, one row per body at every row of `energy.csv` (header:
+/// [`bodies_header`]); written by runs with bodies.
+pub const BODIES_FILE: &str = "bodies.csv";
+
+/// The header line of [`BODIES_FILE`]: the time [s], the body's name, its centre of mass
+/// `x, y, z` [m], its orientation as the unit quaternion `qw, qx, qy, qz` (body axes to
+/// space), the velocity of the centre `vx, vy, vz` [m/s] and the angular velocity in space
+/// axes `wx, wy, wz` [rad/s], all at the step's end; with `wrench` (some body has a wrench
+/// port) then the port's force `fx, fy, fz` [N] and torque `tx, ty, tz` [N·m] over the step
+/// and its mean power `power` [W] (zero at `t = 0` and for a body without a port).
+pub fn bodies_header(wrench: bool) -> String {
+    let mut h = "t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz".to_string();
+    if wrench {
+        h.push_str(",fx,fy,fz,tx,ty,tz,power");
+    }
+    h
+}
+
 /// Energies, one row per step (header: [`headers`]).
 pub const ENERGY_FILE: &str = "energy.csv";
 /// Node positions, one row per node and frame (header: [`headers`]).
@@ -221,6 +239,7 @@ pub const RUN_FILES: &[&str] = &[
     ANIMATION_FILE,
     COMPONENTS_FILE,
     SCENARIO_FILE,
+    BODIES_FILE,
 ];
 
 /// The channel table's file name when `output.channels_file` gives none.

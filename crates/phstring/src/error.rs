@@ -267,7 +267,11 @@ impl StepError {
         matches!(
             self,
             StepError::NonFinite {
-                what: "load" | "prescribed position" | "prescribed velocity" | "feedback force",
+                what: "load"
+                    | "prescribed position"
+                    | "prescribed velocity"
+                    | "feedback force"
+                    | "rigid body's wrench (at the body's first attached node)",
                 ..
             }
         )

@@ -1216,6 +1216,11 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
+    /// Whether rigid body `b` has a wrench port (a force and torque input).
+    pub fn body_has_wrench(&self, b: usize) -> bool {
+        self.bodies.get(b).is_some_and(|m| m.wrench.is_some())
+    }
+
     /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])` (their own mass,
     /// without the added mass).
     pub fn bodies(&self) -> Vec<(&str, f64)> {

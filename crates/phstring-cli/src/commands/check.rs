@@ -228,6 +228,7 @@ fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
             nums(&pm.weight)
         )
     });
+    describe_bodies(&mut out, &c.bodies);
     let steps = (s.t_end / s.step.h).round() as usize;
     let _ = writeln!(
         out,
@@ -244,6 +245,55 @@ fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
         s.step.solver.name()
     );
     out
+}
+
+/// The rigid bodies: mass, weight, inertia, initial pose, each point with what attaches
+/// there, and the wrench port.
+fn describe_bodies(out: &mut String, bodies: &[phstring_io::scenario::BodyComponent]) {
+    use std::fmt::Write;
+    for b in bodies {
+        let j = &b.inertia;
+        let _ = writeln!(
+            out,
+            "  body:      {}: {} kg, weight {} N, inertia [{}, {}, {}] kg·m² (body axes), centre at {} m, orientation {} deg",
+            b.name,
+            num(b.mass),
+            nums(&b.weight),
+            nums(&j[0]),
+            nums(&j[1]),
+            nums(&j[2]),
+            nums(&b.position),
+            nums(&b.orientation)
+        );
+        for p in &b.points {
+            let _ = writeln!(
+                out,
+                "  point:     {} (node {}) at {} m in body axes, {} m in space; holds {}",
+                p.name,
+                p.node,
+                nums(&p.point),
+                nums(&p.position),
+                p.attached.join(", ")
+            );
+        }
+        if !b.wrench_force.is_empty() || !b.wrench_torque.is_empty() {
+            let list = |l: &[String]| {
+                let v: Vec<String> = l.iter().map(|e| clip(e).into_owned()).collect();
+                if v.is_empty() {
+                    "0".to_string()
+                } else {
+                    format!("[{}]", v.join(", "))
+                }
+            };
+            let _ = writeln!(
+                out,
+                "  wrench:    {}: force {} N, torque {} N·m (space axes; velocity and angular velocity out)",
+                b.name,
+                list(&b.wrench_force),
+                list(&b.wrench_torque)
+            );
+        }
+    }
 }
 
 /// The Newton convergence test in words: `‖R‖ ≤ max(tol, rtol·F)` or `‖R‖ ≤ tol`.

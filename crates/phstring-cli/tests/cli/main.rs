@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod balance;
+mod bodies;
 mod broken;
 mod campaign;
 mod control;

@@ -204,6 +204,9 @@ fn linearize_dim<const D: usize>(
     stop: Option<&AtomicBool>,
 ) -> Result<Manifest, ExportError> {
     let sys = &v.problem.system;
+    // Also at a checkpoint's state, which needs no statics: the linear model has no bodies.
+    sys.refuse_bodies("the linear model")
+        .map_err(StaticsError::from)?;
     let (r, time, source) = match at {
         LinearizeAt::Equilibrium => {
             let eq = v.equilibrium(true, stop)?;

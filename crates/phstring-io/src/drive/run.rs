@@ -280,6 +280,10 @@ pub struct RunInfo {
     /// without `time.settle`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub settled: Option<SettledInfo>,
+    /// The rigid bodies with their state at the last completed step (at the start in the
+    /// summary written when the run starts); absent without bodies.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodySummary>,
     /// Progress of the `time.settle` watch `(armed, since)`, carried in checkpoints.
     #[serde(skip)]
     pub settle_progress: (bool, Option<f64>),
@@ -316,6 +320,54 @@ pub struct RunInfo {
     /// serialized; empty if `output.plots` is off or the run was stopped before it was read).
     #[serde(skip)]
     pub history: History,
+}
+
+/// A rigid body and its state, in `summary.json`.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct BodySummary {
+    /// Name.
+    pub name: String,
+    /// Mass [kg].
+    pub mass: f64,
+    /// Position of the centre of mass [m] (3 components, `z = 0` in 2D).
+    pub position: [f64; 3],
+    /// Orientation, the unit quaternion `[w, x, y, z]` from body axes to space.
+    pub orientation: [f64; 4],
+    /// Velocity of the centre of mass [m/s].
+    pub velocity: [f64; 3],
+    /// Angular velocity in space axes `ω = R Ω` [rad/s].
+    pub angular_velocity: [f64; 3],
+}
+
+/// The rigid bodies of `sim` with their current states.
+fn body_summaries<const D: usize>(sim: &Simulation<D, Material>) -> Vec<BodySummary> {
+    sim.system()
+        .bodies()
+        .into_iter()
+        .zip(&sim.state().bodies)
+        .map(|((name, mass), st)| {
+            let q = st.orientation.quaternion();
+            let w = st.omega_space();
+            BodySummary {
+                name: name.to_string(),
+                mass,
+                position: [st.position.x, st.position.y, st.position.z],
+                orientation: [q.w, q.i, q.j, q.k],
+                velocity: [st.velocity.x, st.velocity.y, st.velocity.z],
+                angular_velocity: [w.x, w.y, w.z],
+            }
+        })
+        .collect()
+}
+
+/// Records the end of the run of `sim` in `info`: the time reached, the smallest step, the
+/// final energies and the bodies' final states.
+fn record_end<const D: usize>(info: &mut RunInfo, sim: &Simulation<D, Material>) {
+    info.t_reached = sim.time();
+    info.h_min_used = sim.smallest_step_size();
+    info.hamiltonian_final = sim.energies().hamiltonian();
+    info.dissipated_energy = sim.dissipated_energy();
+    info.bodies = body_summaries(sim);
 }
 
 /// Where and when a run with `time.settle` came to rest.
@@ -452,10 +504,7 @@ fn run_dim<const D: usize>(
     progress.start(ctx.settings.t_end);
     let looped = step_loop(&ctx, &mut sim, &mut writers, &mut info, progress, &opts);
     progress.finish();
-    info.t_reached = sim.time();
-    info.h_min_used = sim.smallest_step_size();
-    info.hamiltonian_final = sim.energies().hamiltonian();
-    info.dissipated_energy = sim.dissipated_energy();
+    record_end(&mut info, &sim);
     if let Some(w) = &mut info.water {
         w.finish(&sim);
     }
@@ -585,6 +634,7 @@ fn new_info<const D: usize>(
         water: WaterSummary::start(sim),
         lines: None,
         settled: None,
+        bodies: body_summaries(sim),
         settle_progress: (false, None),
         time_loop_s: 0.0,
         resumed,

@@ -271,8 +271,10 @@ fn write_files<const D: usize>(
     let s: Vec<f64> = tension.iter().map(|t| t.s).collect();
     let n: Vec<f64> = tension.iter().map(|t| t.n).collect();
     let g: Vec<i32> = groups.iter().map(|&x| x as i32).collect();
+    // One per node (the equilibrium's list may go on with its rigid bodies' slots).
+    let at_nodes = &eq.reactions[..points.len().min(eq.reactions.len())];
     let reaction: Vec<Vec<f64>> = (0..D)
-        .map(|k| eq.reactions.iter().map(|f| f[k]).collect())
+        .map(|k| at_nodes.iter().map(|f| f[k]).collect())
         .collect();
     let names = ["reaction_x", "reaction_y", "reaction_z"];
     let point_data: Vec<(&str, &[f64])> = reaction

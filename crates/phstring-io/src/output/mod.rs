@@ -10,6 +10,7 @@
 //! read what they need back from `energy.csv` (the `history` module, a floor above), decimated to at most
 //! [`PLOT_POINTS`] points per curve.
 
+mod bodies;
 mod channels;
 mod csv;
 mod ends;
@@ -26,8 +27,8 @@ use phstring::{Energies, Law, Material, PortKind, Simulation, StepReport};
 use self::csv::{Csv, PendingCsv};
 use crate::checkpoint::OutputState;
 use crate::files::{
-    ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE, PORTS_FILE,
-    POSITIONS_FILE, PVD_FILE, elements_header, energy_header, frame_name, headers, num,
+    BODIES_FILE, ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE,
+    PORTS_FILE, POSITIONS_FILE, PVD_FILE, elements_header, energy_header, frame_name, headers, num,
     remove_stale_temp_files,
 };
 use crate::plot::{GroupDrawing, PlotError, Topology};
@@ -503,6 +504,8 @@ pub struct Writers {
     /// `end_tensions.csv` and how its rows are computed (see [`Writers::end_tensions`]).
     ends: Option<Csv>,
     end_model: Option<EndForces>,
+    /// `bodies.csv` (runs with rigid bodies).
+    bodies: Option<Csv>,
     /// The channel table (`output.channels`) and how its rows are computed.
     channels: Option<Csv>,
     channel_model: Option<ChannelTable>,
@@ -562,6 +565,7 @@ impl Writers {
             None
         };
         let ports = Csv::create(dir.join(PORTS_FILE), &ports_header)?;
+        let bodies = bodies::create(dir, sim)?;
         write_topology(dir, sim)?;
         let pvd = if vtk_frames {
             let pdir = dir.join(PARAVIEW_DIR);
@@ -578,6 +582,7 @@ impl Writers {
             ports,
             ends: None,
             end_model: None,
+            bodies,
             channels: None,
             channel_model: None,
             pvd,
@@ -849,6 +854,9 @@ impl Writers {
         }
         self.ports.end_record()?;
         self.end_row(sim, r.t, end_tensions)?;
+        if let Some(b) = &mut self.bodies {
+            bodies::rows(b, sim, true)?;
+        }
         Ok(())
     }
 
@@ -901,12 +909,17 @@ impl Writers {
             Some(n) => Some(PendingCsv::open(dir.join(END_TENSIONS_FILE), n)?),
             None => None,
         };
+        let bodies = match state.bodies_bytes {
+            Some(n) => Some(PendingCsv::open(dir.join(BODIES_FILE), n)?),
+            None => None,
+        };
         let channels = match &state.channels {
             Some((name, n)) => Some(PendingCsv::open(dir.join(name), *n)?),
             None => None,
         };
         let positions = positions.map(PendingCsv::commit).transpose()?;
         let ends = ends.map(PendingCsv::commit).transpose()?;
+        let bodies = bodies.map(PendingCsv::commit).transpose()?;
         let channels = channels.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -916,6 +929,7 @@ impl Writers {
             ports: ports.commit()?,
             ends,
             end_model: None,
+            bodies,
             channels,
             channel_model: None,
             pvd,
@@ -949,6 +963,10 @@ impl Writers {
             ports_bytes: self.ports.len()?,
             end_tensions_bytes: match &mut self.ends {
                 Some(e) => Some(e.len()?),
+                None => None,
+            },
+            bodies_bytes: match &mut self.bodies {
+                Some(b) => Some(b.len()?),
                 None => None,
             },
             channels: match &mut self.channels {
@@ -1103,6 +1121,9 @@ impl Writers {
         if let Some(e) = &mut self.ends {
             e.flush()?;
         }
+        if let Some(b) = &mut self.bodies {
+            b.flush()?;
+        }
         if let Some(c) = &mut self.channels {
             c.flush()?;
         }
@@ -1126,6 +1147,7 @@ impl Writers {
             self.positions.as_ref(),
             Some(&self.ports),
             self.ends.as_ref(),
+            self.bodies.as_ref(),
             self.channels.as_ref(),
         ]
         .into_iter()
@@ -1150,6 +1172,9 @@ impl Writers {
         }
         if let Some(e) = &mut self.ends {
             let _ = e.flush();
+        }
+        if let Some(b) = &mut self.bodies {
+            let _ = b.flush();
         }
         if let Some(c) = &mut self.channels {
             let _ = c.flush();

@@ -26,6 +26,51 @@ pub struct Components {
     pub loads: Vec<LoadComponent>,
     /// Feedback controls, in file order (their force ports follow the loads').
     pub controls: Vec<ControlComponent>,
+    /// Rigid bodies, in file order (their points are also in `nodes`, as `"BODY.POINT"`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodyComponent>,
+}
+
+/// A rigid body (`[bodies.NAME]`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BodyComponent {
+    /// Name.
+    pub name: String,
+    /// Mass [kg].
+    pub mass: f64,
+    /// Weight [N] (`mass · body_force.gravity`).
+    pub weight: Vec<f64>,
+    /// Inertia tensor about the centre of mass in body axes [kg·m²], by rows.
+    pub inertia: [[f64; 3]; 3],
+    /// Initial position of the centre of mass [m].
+    pub position: Vec<f64>,
+    /// Initial orientation as given [deg]: roll, pitch, yaw (`R = Rx Ry Rz`) in 3D, the angle
+    /// about `z` in 2D.
+    pub orientation: Vec<f64>,
+    /// Its attachment points, in file order.
+    pub points: Vec<BodyPointComponent>,
+    /// The wrench port's force [N], one expression of `t` [s] per component (empty: none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub wrench_force: Vec<String>,
+    /// The wrench port's torque [N·m] (3 expressions in 3D, the one about `z` in 2D; empty:
+    /// none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub wrench_torque: Vec<String>,
+}
+
+/// An attachment point of a rigid body: a mesh node that moves with the body.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BodyPointComponent {
+    /// `"BODY.POINT"`.
+    pub name: String,
+    /// Mesh node index.
+    pub node: usize,
+    /// The point in body axes, relative to the centre of mass [m].
+    pub point: Vec<f64>,
+    /// Its initial position [m].
+    pub position: Vec<f64>,
+    /// What attaches there: `string NAME` (on its path) and `spring NAME` (an end).
+    pub attached: Vec<String>,
 }
 
 /// A feedback control at a node (a force port whose force is a law of its output).

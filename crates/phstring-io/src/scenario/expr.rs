@@ -17,8 +17,45 @@ pub(super) fn eval_or_record(
     component: usize,
     t: f64,
 ) -> f64 {
-    let what = match expr.eval(t) {
-        Ok(x) if x.is_finite() => return x,
+    match expr.eval(t) {
+        Ok(x) if x.is_finite() => x,
+        failed => record(
+            failed,
+            expr,
+            slot,
+            &format!("boundary.{k}.{key}"),
+            component,
+            t,
+        ),
+    }
+}
+
+/// [`eval_or_record`] of an expression at the full dotted `key` (e.g.
+/// `bodies.hook.wrench.force`).
+pub(super) fn eval_or_record_at(
+    expr: &Expr,
+    slot: &std::sync::Mutex<Option<String>>,
+    key: &str,
+    component: usize,
+    t: f64,
+) -> f64 {
+    match expr.eval(t) {
+        Ok(x) if x.is_finite() => x,
+        failed => record(failed, expr, slot, key, component, t),
+    }
+}
+
+/// Keeps the first failure (`failed`: an error or a non-finite value) of `expr` at `key`
+/// in `slot`; NaN.
+fn record(
+    failed: Result<f64, String>,
+    expr: &Expr,
+    slot: &std::sync::Mutex<Option<String>>,
+    key: &str,
+    component: usize,
+    t: f64,
+) -> f64 {
+    let what = match failed {
         Ok(x) => format!("value {}", num(x)),
         Err(m) => m,
     };
@@ -26,7 +63,7 @@ pub(super) fn eval_or_record(
         && s.is_none()
     {
         *s = Some(format!(
-            "`boundary.{k}.{key}` component {} \"{}\" at t = {} s: {what}",
+            "`{key}` component {} \"{}\" at t = {} s: {what}",
             ["x", "y", "z"][component.min(2)],
             clip(expr.text()),
             num(t)

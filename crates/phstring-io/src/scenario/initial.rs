@@ -221,6 +221,11 @@ impl<const D: usize> InitialConditions<D> {
         }
     }
 
+    /// The scenario file, for errors that concern no single key.
+    pub fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+
     /// Whether [`Self::apply`] changes the base state at all: whether a displacement,
     /// velocity, positions or velocities are given. Without them the initial state is the
     /// base shape at rest, exactly as [`State::at_rest`] builds it.
@@ -306,6 +311,46 @@ impl<const D: usize> InitialConditions<D> {
         let state = State::consistent(net.mesh, r, v);
         self.check_strains(net, &state)?;
         Ok(state)
+    }
+
+    /// `state` with every node fixed to a rigid body (`points`: its node, the body point's
+    /// position [m] and velocity [m/s], and its name `"BODY.POINT"`) at its point with the
+    /// body's velocity there: the displacement and velocity fields do not apply to body
+    /// points, and `initial.positions` and `initial.velocities` must repeat the body's values
+    /// there (to 1e-9 relative). The strains follow from the positions.
+    pub(super) fn on_bodies(
+        &self,
+        mesh: &Mesh,
+        state: State<D>,
+        points: &[(usize, Vector<D>, Vector<D>, String)],
+    ) -> Result<State<D>, ScenarioError> {
+        if points.is_empty() {
+            return Ok(state);
+        }
+        let State { mut r, mut v, .. } = state;
+        for (node, rb, vb, name) in points {
+            let lists = [(&self.positions, rb, "m"), (&self.velocities, vb, "m/s")];
+            for (list, want, unit) in lists {
+                let Some(list) = list else { continue };
+                let got = list.values[*node];
+                let tol = NEGLIGIBLE * want.amax().max(1.0);
+                if (got - want).amax() > tol {
+                    return Err(ScenarioError::Invalid {
+                        key: format!("{}.{node}", list.key),
+                        origin: list.origin_of(*node),
+                        reason: format!(
+                            "= {} {unit} at node {node}, body point \"{}\", where the body gives {} {unit}: a body point starts with its body (repeat the body's value there)",
+                            nums(got.as_slice()),
+                            clip(name),
+                            nums(want.as_slice())
+                        ),
+                    });
+                }
+            }
+            r[*node] = *rb;
+            v[*node] = *vb;
+        }
+        Ok(State::consistent(mesh, r, v))
     }
 
     /// `initial.positions`, which must repeat `base` at fixed and moved components (which

@@ -14,6 +14,7 @@
 
 mod attach;
 mod bathymetry;
+mod bodies;
 mod components;
 mod expr;
 mod initial;
@@ -40,8 +41,8 @@ use phstring::{
 use toml::Spanned;
 
 pub use components::{
-    Components, LoadComponent, MotionComponent, NamedNode, PointMassComponent, SpringComponent,
-    StringComponent, SupportComponent,
+    BodyComponent, BodyPointComponent, Components, LoadComponent, MotionComponent, NamedNode,
+    PointMassComponent, SpringComponent, StringComponent, SupportComponent,
 };
 pub use expr::Expr;
 pub use initial::{InitialConditions, Net};
@@ -52,9 +53,9 @@ pub use rounding::ROUNDING_FACTOR;
 pub use settings::MAX_STEPS;
 pub use single::MAX_ELEMENTS;
 pub use spec::{
-    BodyForceSpec, BoundarySpec, DeckSpec, FixedSpec, FmuSpec, Geometry, InitialSpec, MaterialSpec,
-    MeshSpec, NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec,
-    StringPathSpec, TimeSpec,
+    BodyForceSpec, BodySpec, BoundarySpec, DeckSpec, FixedSpec, FmuSpec, Geometry, InitialSpec,
+    MaterialSpec, MeshSpec, NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec,
+    StringPathSpec, TimeSpec, WrenchSpec,
 };
 pub use start::{AnyRunning, AnySetup, Built, Running, Setup, StartError};
 
@@ -350,6 +351,8 @@ struct Skeleton<'s, const D: usize> {
     single_damping: phstring::Damping,
     /// `(element group, hydrodynamics)` of the strings with a `diameter`.
     hydro: Vec<(usize, phstring::LineHydro)>,
+    /// The rigid bodies (a network's), without their wrench ports yet.
+    bodies: Vec<bodies::BodyDraft<D>>,
 }
 
 impl<const D: usize> Skeleton<'_, D> {
@@ -564,6 +567,7 @@ impl ScenarioFile {
         }
         let network = [
             ("node", s.node.first().map(|n| n.span())),
+            ("bodies", s.bodies.values().next().map(|b| b.span())),
             ("materials", s.materials.values().next().map(|m| m.span())),
             ("spring", s.spring.first().map(|n| n.span())),
         ];
@@ -626,6 +630,8 @@ impl ScenarioFile {
         let water = self.water::<D>(body.gravity)?;
         let line_hydro = std::mem::take(&mut skeleton.hydro);
         let parts = self.boundary(&skeleton, self.first_mid_time())?;
+        let mut drafts = std::mem::take(&mut skeleton.bodies);
+        self.checked_bodies(&skeleton.nodes, &parts, &mut drafts)?;
         let fmu_nodes = self.fmu_nodes(&skeleton.nodes)?;
         if layout == Layout::Network {
             self.check_spring_nodes(&skeleton, &parts.boundary, &point_masses)?;
@@ -644,13 +650,14 @@ impl ScenarioFile {
                 .into_iter()
                 .fold(problem, |p, h| p.with_point_hydro(h));
         }
+        let starts = bodies::with_bodies(&mut problem, drafts);
         let initial = self.initial_conditions((&problem).into(), layout == Layout::Network)?;
         if initial.changes_base() {
             // Every expression is evaluated at every node now, on the geometry's shape; with
             // `equilibrium` the run applies them again to the equilibrium shape.
             let state = initial.apply(&problem, &problem.initial.r)?;
             if !initial.equilibrium {
-                problem.initial = state;
+                problem.initial = initial.on_bodies(&problem.mesh, state, &starts)?;
             }
         }
         // Block Thomas needs a chain mesh: every single string, and a network numbered as one.

@@ -37,7 +37,7 @@ impl ScenarioFile {
     /// `name` (the value of `key`) if it is a valid name: 1 to [`MAX_NAME_BYTES`] ASCII
     /// letters, digits, `_` and `-`, starting with a letter or `_` (so that it cannot be
     /// mistaken for an index, and `:` can separate a string's name from a node index).
-    fn checked_name<'a>(
+    pub(super) fn checked_name<'a>(
         &self,
         key: &str,
         name: &'a str,
@@ -606,6 +606,7 @@ impl ScenarioFile {
         );
         let mut components = Components::default();
         self.named_nodes(&mut b, &mut nodes, &mut components)?;
+        let bodies = self.body_points(&mut b, &mut nodes, &mut components, body.g())?;
         let mut used = vec![false; b.n_nodes()];
         let mut names = HashMap::new();
         let hydro = self.strings(
@@ -627,7 +628,7 @@ impl ScenarioFile {
             &mut used,
             first_spring,
         )?;
-        if let Some(k) = used.iter().position(|u| !u) {
+        if let Some(k) = used.iter().take(s.node.len()).position(|u| !u) {
             let spec = s.node[k].get_ref();
             return Err(self.invalid(
                 &format!("node.{k}.name"),
@@ -638,8 +639,13 @@ impl ScenarioFile {
                 ),
             ));
         }
-        // Nodes that no string touches (only springs, which are massless).
+        self.body_points_used(&mut components, &used)?;
+        // Nodes that no string touches (only springs, which are massless); a body carries
+        // its points.
         let mut massless = vec![true; b.n_nodes()];
+        for p in components.bodies.iter().flat_map(|bd| &bd.points) {
+            massless[p.node] = false;
+        }
         for st in &components.strings {
             for &p in &st.path_nodes {
                 massless[p] = false;
@@ -655,6 +661,7 @@ impl ScenarioFile {
             massless,
             single_damping: phstring::Damping::NONE,
             hydro,
+            bodies,
         })
     }
 

@@ -1,6 +1,7 @@
 //! Node references (`node`, `path`, `between` keys): a mesh node index, `"NAME"` of a
-//! `[[node]]`, or `"STRING:INDEX"`, the INDEX-th node along a string's path; and their
-//! resolution to mesh nodes, with messages that say what exists.
+//! `[[node]]`, `"STRING:INDEX"`, the INDEX-th node along a string's path, or
+//! `"BODY.POINT"`, a point of a rigid body; and their resolution to mesh nodes, with messages
+//! that say what exists.
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -20,8 +21,9 @@ pub enum NodeRef {
     /// `[[node]]`s in file order, then the interior nodes of each string in file order,
     /// then the fixed ends of springs with `to_point`.
     Index(i64),
-    /// `"NAME"` of a `[[node]]`, or `"STRING:INDEX"`: node INDEX along string STRING's path
-    /// (0 is its first node; negative values count from its last node, `-1`).
+    /// `"NAME"` of a `[[node]]`, `"STRING:INDEX"`: node INDEX along string STRING's path
+    /// (0 is its first node; negative values count from its last node, `-1`), or
+    /// `"BODY.POINT"`: point POINT of the rigid body `[bodies.BODY]`.
     Name(String),
 }
 
@@ -110,6 +112,10 @@ pub(super) struct Nodes<'s> {
     along: Vec<Along>,
     /// Names of all `[[string]]`s in file order, for messages.
     string_names: Vec<&'s str>,
+    /// The bodies' points `(point name, mesh node)`, by body name (`"BODY.POINT"`).
+    bodies: HashMap<&'s str, Vec<(&'s str, usize)>>,
+    /// Body names in file order, for messages.
+    body_names: Vec<&'s str>,
 }
 
 impl<'s> Nodes<'s> {
@@ -145,6 +151,11 @@ impl<'s> Nodes<'s> {
     /// The nodes along string `name`.
     pub fn string(&self, name: &str) -> Option<&Along> {
         self.strings.get(name).map(|&g| &self.along[g])
+    }
+    /// Adds body `name` with its points `(point name, mesh node)`.
+    pub fn add_body(&mut self, name: &'s str, points: Vec<(&'s str, usize)>) {
+        self.bodies.insert(name, points);
+        self.body_names.push(name);
     }
 }
 
@@ -243,6 +254,7 @@ impl ScenarioFile {
                 })
             }),
             NodeRef::Name(name) => match name.rsplit_once(':') {
+                None if name.contains('.') => self.body_point(name, nodes).map_err(err),
                 None => nodes.named(name).ok_or_else(|| {
                     err(if nodes.names.is_empty() {
                         format!(
@@ -291,6 +303,41 @@ impl ScenarioFile {
                     })
                 }
             },
+        }
+    }
+}
+
+impl ScenarioFile {
+    /// The mesh node of body point `"BODY.POINT"` (`name`), or why there is none.
+    fn body_point(&self, name: &str, nodes: &Nodes) -> Result<usize, String> {
+        let (body, point) = name.split_once('.').unwrap_or((name, ""));
+        let Some(points) = nodes.bodies.get(body) else {
+            return Err(if nodes.body_names.is_empty() {
+                format!(
+                    "names body point \"{}\", but the scenario has no [bodies.NAME] tables (\"BODY.POINT\" names a point of a rigid body)",
+                    clip(name)
+                )
+            } else {
+                format!(
+                    "names body point \"{}\", but \"{}\" is not a [bodies.NAME] table (known: {})",
+                    clip(name),
+                    clip(body),
+                    known(&nodes.body_names, body)
+                )
+            });
+        };
+        match points.iter().find(|(p, _)| *p == point) {
+            Some(&(_, node)) => Ok(node),
+            None => {
+                let names: Vec<&str> = points.iter().map(|(p, _)| *p).collect();
+                Err(format!(
+                    "names body point \"{}\", but body \"{}\" has no point \"{}\" (its points: {})",
+                    clip(name),
+                    clip(body),
+                    clip(point),
+                    known(&names, point)
+                ))
+            }
         }
     }
 }

@@ -285,6 +285,7 @@ impl ScenarioFile {
             massless: Vec::new(),
             single_damping: cs.damping,
             hydro: cs.hydro.map(|h| (0, h)).into_iter().collect(),
+            bodies: Vec::new(),
         })
     }
 }

@@ -54,6 +54,10 @@ pub struct Scenario {
     /// Point masses at nodes (payloads, clump weights), one table each.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point_mass: Vec<PointMassSpec>,
+    /// Rigid bodies of a network (`[bodies.NAME]`), by name; strings attach to their points
+    /// as `"NAME.POINT"` (dimension 2 or 3).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub bodies: BTreeMap<String, Spanned<BodySpec>>,
     /// The initial state, if it is not the straight one at rest: static equilibrium,
     /// displacement and velocity fields, or per-node lists.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -436,6 +440,50 @@ pub struct PointMassSpec {
     /// Added-mass coefficient `Ca` on `ρ_w V` (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ca: Option<Spanned<f64>>,
+}
+
+/// `[bodies.NAME]`: a rigid body of a network, its attachment points in body axes and an
+/// optional wrench port. Angles and rates about axes are scalars in 2D (about `z`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Mass [kg].
+    pub mass: Spanned<f64>,
+    /// Inertia about the centre of mass in body axes [kg·m²]: the principal moments
+    /// `[Ixx, Iyy, Izz]`, or the tensor's entries `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`.
+    pub inertia: Spanned<Vec<f64>>,
+    /// Initial position of the centre of mass [m].
+    pub position: Spanned<Vec<f64>>,
+    /// Initial orientation [deg]: `[roll, pitch, yaw]` with `R = Rx Ry Rz` in 3D, `[yaw]`
+    /// (about `z`) in 2D (default: body axes along space axes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<Spanned<Vec<f64>>>,
+    /// Initial velocity of the centre of mass [m/s] (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<Spanned<Vec<f64>>>,
+    /// Initial angular velocity in space axes [rad/s]: 3 components in 3D, the rate about
+    /// `z` in 2D (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_velocity: Option<Spanned<Vec<f64>>>,
+    /// Attachment points in body axes relative to the centre of mass [m], by name.
+    pub points: Spanned<BTreeMap<String, Spanned<Vec<f64>>>>,
+    /// A wrench port: force and torque in space axes as expressions of `t` [s].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wrench: Option<Spanned<WrenchSpec>>,
+}
+
+/// `wrench = { force = […], torque = […] }` of a body: expressions of `t` [s] in space axes,
+/// evaluated at the mid time of each step.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WrenchSpec {
+    /// Force at the centre of mass [N], one expression per component (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<Spanned<Vec<Spanned<String>>>>,
+    /// Torque about the centre of mass [N·m]: 3 expressions in 3D, the one about `z` in 2D
+    /// (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque: Option<Spanned<Vec<Spanned<String>>>>,
 }
 
 /// `[initial]`: how the run starts, instead of at rest in the straight (or polyline, or

@@ -80,6 +80,24 @@ impl<const D: usize> Setup<D> {
         statics::solve_system(system, &state.r, &params, stop)
     }
 
+    /// Refuses a start from the equilibrium (at rest) when a rigid body is given a velocity
+    /// or an angular velocity, which that start would drop.
+    fn bodies_at_rest(&self) -> Result<(), ScenarioError> {
+        let Built { system, state } = &self.problem;
+        for ((name, _), b) in system.bodies().iter().zip(&state.bodies) {
+            if b.velocity.norm() > 0.0 || b.omega.norm() > 0.0 {
+                return Err(ScenarioError::Invalid {
+                    key: "initial.equilibrium".into(),
+                    origin: super::Origin::Scenario(self.initial.path().to_path_buf()),
+                    reason: format!(
+                        "= true starts every body at rest at its rest pose, but body \"{name}\" is given a velocity or angular velocity: remove them, or start from the given positions"
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Starts the simulation at `t = 0`. With `initial.equilibrium` and `from_equilibrium`,
     /// from the static equilibrium with `[initial]`'s displacement and velocity applied on
     /// it; the second value then says how the equilibrium was found (for reports). A
@@ -93,8 +111,12 @@ impl<const D: usize> Setup<D> {
         let mut report = None;
         let mut start_state = None;
         if from_equilibrium && self.initial.equilibrium {
+            self.bodies_at_rest()?;
             let eq = self.equilibrium(false, stop).map_err(StartError::Statics)?;
-            start_state = Some(self.initial.apply(&self.problem.system, &eq.state.r)?);
+            let mut state = self.initial.apply(&self.problem.system, &eq.state.r)?;
+            // The rigid bodies start at their rest poses.
+            state.bodies.clone_from(&eq.state.bodies);
+            start_state = Some(state);
             report = Some(format!(
                 "{} ({} steps, {} Newton iterations), residual {:.3e} N, {}",
                 eq.path.name(),

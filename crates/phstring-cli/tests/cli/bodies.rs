@@ -1,0 +1,434 @@
+//! Rigid bodies end to end: the hook block example against the compound pendulum and the
+//! conservation of angular momentum about the vertical, `bodies.csv` with a wrench port,
+//! resume, `check`, and the commands that refuse bodies.
+
+use std::path::Path;
+
+use crate::{phstring, run_with, summary, temp_dir};
+
+/// A CSV row: its fields as numbers (text as NaN) and as text.
+type Row = (Vec<f64>, Vec<String>);
+
+/// The rows of a CSV file: header, then each row's fields (numbers parsed, text as NaN) and
+/// its text fields.
+fn table(p: &Path) -> (Vec<String>, Vec<Row>) {
+    let mut r = csv::Reader::from_path(p).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|x| {
+            let x = x.unwrap();
+            let nums = x.iter().map(|f| f.parse().unwrap_or(f64::NAN)).collect();
+            (nums, x.iter().map(String::from).collect())
+        })
+        .collect();
+    (header, rows)
+}
+
+type M3 = [[f64; 3]; 3];
+
+/// The rotation matrix of the unit quaternion `(w, x, y, z)`.
+fn rotation(q: &[f64]) -> M3 {
+    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+fn mul(a: &M3, v: &[f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|i| (0..3).map(|j| a[i][j] * v[j]).sum())
+}
+
+/// `R diag(j) Rᵀ ω`: the angular momentum [kg·m²/s] of principal moments `j` turned by `r`.
+fn spin(r: &M3, j: &[f64; 3], w: &[f64; 3]) -> [f64; 3] {
+    let rt: M3 = [0, 1, 2].map(|i| [0, 1, 2].map(|k| r[k][i]));
+    let body = mul(&rt, w);
+    mul(r, &[j[0] * body[0], j[1] * body[1], j[2] * body[2]])
+}
+
+/// The hook block example (`examples/hook_block_3d.toml`, 2000 steps of 10 ms):
+///
+/// * the energy balance of every step is at round-off: `|balance_error| ≤ 1e-12 |Ĥ(0)|`
+///   (measured: 4.7e-10 J of 1.3e6 J, 3.6e-16);
+/// * the swing period is that of the whole suspension as one rigid compound pendulum about
+///   the trolley, `T = 2π √(I_O / (g Σ m d))` (hook, beam, the hoist rope as a rod, the
+///   slings as rods; 9.756 s), to 0.5 %: the beam's yaw turns its pitch inertia (15037.5
+///   kg·m² → 75 kg·m² at 90°, which would make 9.733 s: 0.24 %), the amplitude of 4° adds
+///   θ₀²/16 = 3e-4, the ropes' stretch 2e-4, the hook's swing against the beam about 1e-4
+///   (measured 9.7550 s, 0.014 % short);
+/// * the beam twists: it turns about the vertical by more than half of `ω₀ T` (measured:
+///   0.94 rad of 1.0), and gravity and the trolley exert no torque about the trolley's
+///   vertical, so the angular momentum `L_z` of the bodies changes only by what the strings
+///   carry: `|ΔL_z| ≤ R √m_s (√(2 T_s(t)) + √(2 T_s(0)))` (Cauchy–Schwarz in the mass
+///   matrix; `m_s` the strings' mass, `R` the largest distance of a body point from the
+///   axis, `T_s` the strings' kinetic energy, the total of `energy.csv` less the bodies').
+#[test]
+fn hook_block_swings_at_the_compound_pendulum_period_and_twists() {
+    let out = temp_dir("hook-block");
+    let o = run_with(
+        "examples/hook_block_3d.toml",
+        &out,
+        &["output.plots=false", "output.animation=false"],
+        &[],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, energy) = table(&out.join("energy.csv"));
+    let h0 = energy[0].0[3].abs();
+    for (row, _) in &energy {
+        assert!(
+            row[5].abs() <= 1e-12 * h0,
+            "balance error {} at t = {}",
+            row[5],
+            row[0]
+        );
+    }
+    let s = summary(&out);
+    assert!(
+        s["max_relative_balance_error"].as_f64().unwrap() <= s["balance_bound"].as_f64().unwrap()
+    );
+
+    let (_, rows) = table(&out.join("bodies.csv"));
+    assert_eq!(rows.len(), 2 * energy.len());
+    let hook: Vec<&Vec<f64>> = rows
+        .iter()
+        .filter(|r| r.1[1] == "hook")
+        .map(|r| &r.0)
+        .collect();
+    let beam: Vec<&Vec<f64>> = rows
+        .iter()
+        .filter(|r| r.1[1] == "beam")
+        .map(|r| &r.0)
+        .collect();
+
+    // Swing: the zero crossings of the beam's x (it starts at rest at x < 0).
+    let mut crossings = Vec::new();
+    for w in beam.windows(2) {
+        let (a, b) = (w[0][2], w[1][2]);
+        if (a < 0.0) != (b < 0.0) {
+            crossings.push(w[0][0] + (w[1][0] - w[0][0]) * (-a) / (b - a));
+        }
+    }
+    assert_eq!(crossings.len(), 4, "{crossings:?}");
+    let measured = 2.0 * (crossings[3] - crossings[0]) / 3.0;
+    let g = 9.81;
+    let dz = (16.0f64 - 2.7 * 2.7).sqrt();
+    let (d_hook, d_beam) = (20.4, 20.8 + dz + 0.15);
+    // The hoist rope (2.3 kg/m over its reference length) as a rod from the trolley to
+    // 20 m, each sling (1 kg/m) as a rod from (0.3, 20.8) to (3, 20.8 + dz).
+    let m_rope = 2.3 * 19.990764266908684;
+    let m_sling = 3.9973417677244636;
+    let (a, b) = ([0.3, 20.8], [3.0, 20.8 + dz]);
+    let rod = (a[0] * a[0] + a[1] * a[1])
+        + (a[0] * (b[0] - a[0]) + a[1] * (b[1] - a[1]))
+        + ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)) / 3.0;
+    let i_o = 600.0 * d_hook * d_hook
+        + 50.0
+        + 5000.0 * d_beam * d_beam
+        + 15037.5
+        + m_rope * 20.0 * 20.0 / 3.0
+        + 2.0 * m_sling * rod;
+    let moment =
+        600.0 * d_hook + 5000.0 * d_beam + m_rope * 10.0 + 2.0 * m_sling * (a[1] + b[1]) / 2.0;
+    let closed = 2.0 * std::f64::consts::PI * (i_o / (g * moment)).sqrt();
+    assert!(
+        (measured / closed - 1.0).abs() < 5e-3,
+        "swing period {measured} s, compound pendulum {closed} s"
+    );
+
+    // Twist: the beam's yaw (its x axis in the horizontal plane), unwrapped.
+    let mut yaw = 0.0;
+    let mut last = 0.0;
+    for r in &beam {
+        let e1 = mul(&rotation(&r[5..9]), &[1.0, 0.0, 0.0]);
+        let a = e1[1].atan2(e1[0]);
+        let d = (a - last + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+            - std::f64::consts::PI;
+        yaw += d;
+        last = a;
+    }
+    assert!(yaw > 0.5 * 0.05 * 20.0, "the beam turned {yaw} rad");
+
+    // L_z of the bodies against the strings' share.
+    let bodies = [
+        ("hook", 600.0, [40.0, 50.0, 26.0]),
+        ("beam", 5000.0, [75.0, 15037.5, 15037.5]),
+    ];
+    let points: [Vec<[f64; 3]>; 2] = [
+        vec![[0.0, 0.0, 0.4], [-0.3, 0.0, -0.4], [0.3, 0.0, -0.4]],
+        vec![[-3.0, 0.0, 0.15], [3.0, 0.0, 0.15]],
+    ];
+    let m_s = m_rope + 2.0 * m_sling;
+    let mut lz = Vec::new();
+    let mut t_s = Vec::new();
+    let mut radius: f64 = 0.0;
+    for (k, (e, _)) in energy.iter().enumerate() {
+        let (mut l, mut kin) = (0.0, 0.0);
+        for (b, r) in [hook[k], beam[k]].into_iter().enumerate() {
+            let (_, m, j) = bodies[b];
+            assert_eq!(r[0], e[0]);
+            let (x, v, w) = (
+                [r[2], r[3], r[4]],
+                [r[9], r[10], r[11]],
+                [r[12], r[13], r[14]],
+            );
+            let rot = rotation(&r[5..9]);
+            let s = spin(&rot, &j, &w);
+            l += m * (x[0] * v[1] - x[1] * v[0]) + s[2];
+            kin += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+                + 0.5 * (w[0] * s[0] + w[1] * s[1] + w[2] * s[2]);
+            for p in &points[b] {
+                let q = mul(&rot, p);
+                radius = radius.max((x[0] + q[0]).hypot(x[1] + q[1]));
+            }
+        }
+        lz.push(l);
+        t_s.push((e[1] - kin).max(0.0));
+    }
+    for k in 0..lz.len() {
+        let bound = radius * m_s.sqrt() * ((2.0 * t_s[k]).sqrt() + (2.0 * t_s[0]).sqrt());
+        assert!(
+            (lz[k] - lz[0]).abs() <= bound,
+            "L_z {} vs {} at t = {}: more than the strings' {bound}",
+            lz[k],
+            lz[0],
+            energy[k].0[0]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A 1 t box on a 10 m steel rope in 2D, pushed by its wrench port.
+const PUSHED_BOX: &str = r#"
+dimension = 2
+
+[[node]]
+name = "top"
+position = [0.0, 0.0]
+
+[bodies.box]
+mass = 1000.0
+inertia = [100.0, 100.0, 200.0]
+position = [0.0, -10.5]
+points = { hook = [0.0, 0.5] }
+wrench = { force = ["2000*sin(t)", "0"], torque = ["500"] }
+
+[materials.rope]
+law = "tension_only_linear"
+ea = 1.0e8
+rho_a = 1.5
+
+[[string]]
+name = "rope"
+path = ["top", "box.hook"]
+elements = 8
+material = "rope"
+
+[body_force]
+gravity = [0.0, -9.81]
+
+[[boundary]]
+node = "top"
+fixed = true
+
+[time]
+h = 0.01
+end = 2.0
+
+[output]
+plots = false
+animation = false
+vtk = false
+"#;
+
+/// `bodies.csv` of a body with a wrench port: the header with the port's columns, one row
+/// per step (and `t = 0`), a unit quaternion, the inputs of each step at its mid time
+/// (`2000 sin(t − h/2)` N, 500 N·m about z, to 1e-12 relative), and the supplied energy of
+/// `energy.csv` equal to the sum of the port's mean power times `h` (to 1e-12 of the work).
+#[test]
+fn bodies_csv_has_the_wrench_port_and_its_work_is_the_supplied_energy() {
+    let dir = temp_dir("pushed-box");
+    let scenario = dir.join("box.toml");
+    std::fs::write(&scenario, PUSHED_BOX).unwrap();
+    let out = dir.join("out");
+    let o = run_with(scenario.to_str().unwrap(), &out, &[], &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (header, rows) = table(&out.join("bodies.csv"));
+    assert_eq!(
+        header.join(","),
+        "t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz,power"
+    );
+    assert_eq!(rows.len(), 201);
+    let h = 0.01;
+    let mut work = 0.0;
+    for (k, (r, text)) in rows.iter().enumerate() {
+        assert_eq!(text[1], "box");
+        let norm = r[5..9].iter().map(|q| q * q).sum::<f64>();
+        assert!((norm - 1.0).abs() < 1e-14, "|q|² = {norm}");
+        // In 2D: z, the quaternion's x and y and the angular velocity's x and y are 0.
+        assert_eq!([r[4], r[6], r[7], r[12], r[13]], [0.0; 5]);
+        if k == 0 {
+            assert_eq!(&r[15..22], &[0.0; 7]);
+            continue;
+        }
+        let f = 2000.0 * (r[0] - 0.5 * h).sin();
+        assert!((r[15] - f).abs() <= 1e-12 * 2000.0, "fx {} vs {f}", r[15]);
+        assert_eq!(&r[16..20], &[0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(r[20], 500.0);
+        work += r[21] * h;
+    }
+    let (_, energy) = table(&out.join("energy.csv"));
+    let supplied = energy.last().unwrap().0[4];
+    assert!(work.abs() > 1.0, "the port did work: {work} J");
+    assert!(
+        (supplied - work).abs() <= 1e-12 * work.abs(),
+        "supplied {supplied} J, port work {work} J"
+    );
+    let s = summary(&out);
+    assert_eq!(s["bodies"][0]["name"], "box");
+    let last = rows.last().unwrap();
+    assert_eq!(s["bodies"][0]["position"][0].as_f64().unwrap(), last.0[2]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A run stopped after 150 steps and resumed from its checkpoint writes the same
+/// `bodies.csv` (and the same final bodies in `summary.json`) as an uninterrupted one.
+#[test]
+fn a_resumed_run_writes_the_bodies_of_an_uninterrupted_one() {
+    let dir = temp_dir("bodies-resume");
+    let sets = ["time.end=4", "output.plots=false", "output.animation=false"];
+    let scenario = "examples/hook_block_3d.toml";
+    let whole = dir.join("whole");
+    let o = run_with(scenario, &whole, &sets, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let parts = dir.join("parts");
+    let first = run_with(scenario, &parts, &sets, &["--stop-after-steps", "150"]);
+    assert_eq!(
+        first.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let cp = parts.join("checkpoint.json");
+    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    let read = |d: &Path| std::fs::read_to_string(d.join("bodies.csv")).unwrap();
+    assert_eq!(read(&whole).lines().count(), 1 + 2 * 401);
+    assert_eq!(read(&whole), read(&parts));
+    assert_eq!(summary(&whole)["bodies"], summary(&parts)["bodies"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `check` describes each body: mass, weight, inertia, its points and what holds them.
+#[test]
+fn check_describes_the_bodies() {
+    let o = phstring(&["check", "examples/hook_block_3d.toml"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for line in [
+        "body:      hook: 600 kg, weight [0, 0, -5886] N, inertia [[40, 0, 0], [0, 50, 0], [0, 0, 26]] kg·m²",
+        "body:      beam: 5000 kg, weight [0, 0, -49050] N",
+        "point:     hook.top (node 1) at [0, 0, 0.4] m in body axes",
+        "holds string hoist",
+        "point:     beam.right (node 5) at [3, 0, 0.15] m in body axes",
+        "holds string sling_right",
+    ] {
+        assert!(text.contains(line), "missing {line:?} in\n{text}");
+    }
+}
+
+/// The commands that do not cover rigid bodies yet refuse with the library's message,
+/// naming the first body; an equilibrium start refuses a body given a velocity (it would
+/// start at rest).
+#[test]
+fn modes_linearize_fmu_and_error_control_refuse_bodies() {
+    let dir = temp_dir("bodies-refused");
+    let e = "examples/hook_block_3d.toml";
+    let o = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let hook = "rigid body 0 ('hook'): ";
+    let cases: [(Vec<String>, String); 5] = [
+        (
+            vec!["modes".into(), e.into(), "--out".into(), o("m")],
+            format!("{hook}the modal analysis does not cover"),
+        ),
+        (
+            vec!["linearize".into(), e.into(), "--out".into(), o("l")],
+            format!("{hook}the linear model does not cover"),
+        ),
+        (
+            vec!["fmu".into(), e.into(), "-o".into(), o("x.fmu")],
+            format!("{hook}the FMU export does not cover"),
+        ),
+        (
+            vec!["run".into(), e.into(), "--out".into(), o("r"), "--set".into(), "time.rtol=1e-6".into(), "--set".into(), "time.atol=1e-6".into()],
+            format!("{hook}error control (rtol, atol) does not cover"),
+        ),
+        (
+            vec!["run".into(), e.into(), "--out".into(), o("q"), "--set".into(), "initial.equilibrium=true".into()],
+            "`initial.equilibrium` = true starts every body at rest at its rest pose, but body \"beam\" is given a velocity or angular velocity".into(),
+        ),
+    ];
+    for (args, says) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = phstring(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(&says), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `statics` finds the hook block's rest state (the library's statics with bodies) and
+/// writes it; a run from that equilibrium (the beam's twist removed) stays there: every
+/// body speed stays below 1e-9 m/s and 1e-9 rad/s over 0.5 s (the statics tolerance of
+/// 4.3e-6 N over stiffnesses of 1e6 N/m and more leaves offsets of ~4e-12 m, at most
+/// ~4e-10 m/s at the ropes' ~100 rad/s).
+#[test]
+fn statics_and_an_equilibrium_start_take_bodies() {
+    let dir = temp_dir("bodies-statics");
+    let e = "examples/hook_block_3d.toml";
+    let s = dir.join("s");
+    let o = phstring(&["statics", e, "--out", s.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let vtp = std::fs::read_to_string(s.join("equilibrium.vtp")).unwrap();
+    assert!(vtp.contains("reaction_x"));
+    let r = dir.join("r");
+    let sets = [
+        "initial.equilibrium=true",
+        "bodies.beam.angular_velocity=[0.0, 0.0, 0.0]",
+        "time.end=0.5",
+        "output.plots=false",
+        "output.animation=false",
+    ];
+    let o = run_with(e, &r, &sets, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, rows) = table(&r.join("bodies.csv"));
+    assert_eq!(rows.len(), 2 * 51);
+    for (row, _) in &rows {
+        let speed = row[9..12].iter().map(|v| v * v).sum::<f64>().sqrt();
+        let spin = row[12..15].iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!(
+            speed < 1e-9 && spin < 1e-9,
+            "t = {}: {speed} m/s, {spin} rad/s",
+            row[0]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
