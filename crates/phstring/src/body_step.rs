@@ -307,7 +307,7 @@ pub(crate) fn prescribe<const D: usize, M>(
 
 /// `Q m P`: a body's 3×3 block as a `D×D` block between slots of kinds `row` and `col`
 /// (0: `Δx` or force, 1: `w` or torque).
-pub(crate) fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
+fn slot_block<const D: usize>(m: &Mat3, row: usize, col: usize) -> Block<D> {
     // In 2D the rotation slot's first component is the z component.
     let pick = |kind: usize, k: usize| {
         if D == 2 && kind == 1 {
@@ -487,27 +487,40 @@ impl<const D: usize> BodyStep<'_, D> {
             let Some(j) = jac.as_deref_mut() else {
                 continue;
             };
-            let slots = j.border.slots;
-            let at = |s: usize, t: usize| (2 * b + s) * slots + 2 * b + t;
-            for (s, row_scale) in [(0, 1.0), (1, inv_rg)] {
-                for t in 0..2 {
-                    j.border.own[at(s, t)] += slot_block::<D>(&(out.jac[s][t] * row_scale), s, t);
-                }
-            }
-            if D == 2 {
-                j.border.own[at(1, 1)][(1, 1)] = 1.0;
-            }
-            couple(sys, b, &points, &dw_rows, inv_rg, j);
+            add_body_blocks(sys, b, &out.jac, (&points, &dw_rows, inv_rg), j);
         }
         scale2
     }
+}
+
+/// Adds body `b`'s own blocks `blocks` (3×3, rows force and torque, columns `Δx` and `w`;
+/// the torque row scaled by `inv_rg`, the inverse radius of gyration) to the border of `j`,
+/// the 2D placeholder's identity, and its couplings to its neighbours ([`couple`]).
+pub(crate) fn add_body_blocks<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    b: usize,
+    blocks: &[[Mat3; 2]; 2],
+    (points, dw_rows, inv_rg): (&[Vec<PointStep>], &[Mat3], f64),
+    j: &mut BlockJacobian<D>,
+) {
+    let slots = j.border.slots;
+    let at = |s: usize, t: usize| (2 * b + s) * slots + 2 * b + t;
+    for (s, row_scale) in [(0, 1.0), (1, inv_rg)] {
+        for t in 0..2 {
+            j.border.own[at(s, t)] += slot_block::<D>(&(blocks[s][t] * row_scale), s, t);
+        }
+    }
+    if D == 2 {
+        j.border.own[at(1, 1)][(1, 1)] = 1.0;
+    }
+    couple(sys, b, points, dw_rows, inv_rg, j);
 }
 
 /// The blocks between body `b`'s rows and the nodes next to its attached nodes (and the
 /// bodies those are fixed to), and between those nodes' rows and body `b`'s slots: `points`
 /// per body and attachment, `dw_rows[k]` the torque row's `∂/∂R_k` (before the scaling by
 /// `inv_rg`, the inverse radius of gyration).
-pub(crate) fn couple<const D: usize, M>(
+fn couple<const D: usize, M>(
     sys: &PhSystem<D, M>,
     b: usize,
     points: &[Vec<PointStep>],

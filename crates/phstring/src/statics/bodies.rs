@@ -19,7 +19,7 @@ use crate::assembly::free_dofs;
 use crate::body::{
     BodyState, Mat3, PointStep, Turn, Vec3, cayley_quaternion, embed, project, skew,
 };
-use crate::body_step::{couple, embed_block, rotation_slot, slot_block, unknowns};
+use crate::body_step::{add_body_blocks, embed_block, rotation_slot, unknowns};
 use crate::linsolve::BlockJacobian;
 use crate::system::{PhSystem, Vector};
 
@@ -150,17 +150,7 @@ impl<const D: usize> BodyTerms<'_, D> {
                 [jb[0][0] + Mat3::identity() * (shift * model.mass), jb[0][1]],
                 [rt * jb[1][0], rt * jb[1][1] + model.inertia * shift],
             ];
-            let slots = j.border.slots;
-            let at = |s: usize, t: usize| (2 * b + s) * slots + 2 * b + t;
-            for (s, row_scale) in [(0, 1.0), (1, inv_rg)] {
-                for t in 0..2 {
-                    j.border.own[at(s, t)] += slot_block::<D>(&(blocks[s][t] * row_scale), s, t);
-                }
-            }
-            if D == 2 {
-                j.border.own[at(1, 1)][(1, 1)] = 1.0;
-            }
-            couple(sys, b, &points, &dw_rows, inv_rg, j);
+            add_body_blocks(sys, b, &blocks, (&points, &dw_rows, inv_rg), j);
         }
         scale2
     }
