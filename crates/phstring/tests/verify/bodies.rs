@@ -437,42 +437,15 @@ fn buoy_rises_at_the_closed_form_terminal_speed() {
     let (m, vol, cda) = (1000.0, 2.0, 1.5);
     let (rho_line, len) = (1.0, 2.0);
     let centre = Vector3::new(0.0, 0.0, -100.0);
-    let mut nb = NetworkBuilder::<3, Material>::new();
-    let top = nb.node(Vector::<3>::new(0.0, 0.0, -101.0));
-    let bottom = nb.node(Vector::<3>::new(0.0, 0.0, -101.0 - len));
-    let spec = StringSpec {
-        name: "line".into(),
-        material: Material::tension_only_linear(1e7),
-        rho_a: rho_line,
-        mass: MassMatrix::Consistent,
-        body_force: Vector::<3>::new(0.0, 0.0, -rho_line * g),
-        prestretch: 1.0,
+    let hydro = BodyHydro {
+        volume: vol,
+        centre_of_buoyancy: Vector3::new(0.0, 0.0, 0.3),
+        cda,
+        ca: 0.5,
+        ..Default::default()
     };
-    nb.string(spec, &[top, bottom], 2).unwrap();
-    let net = nb
-        .build(Boundary::default(), Vec::new())
-        .unwrap()
-        .with_water(water)
-        .with_body(RigidBody {
-            name: "buoy".into(),
-            mass: m,
-            inertia: nalgebra::Matrix3::from_diagonal_element(400.0),
-            weight: Vector::<3>::new(0.0, 0.0, -m * g),
-            attachments: vec![Attachment {
-                node: top,
-                point: Vector::<3>::new(0.0, 0.0, -1.0),
-            }],
-            initial: BodyState::at_rest(centre, UnitQuaternion::identity()),
-            wrench: None,
-            hydro: Some(BodyHydro {
-                volume: vol,
-                centre_of_buoyancy: Vector3::new(0.0, 0.0, 0.3),
-                cda,
-                ca: 0.5,
-                ..Default::default()
-            }),
-            motion: None,
-        });
+    let pennant = (rho_line, len, 1.0);
+    let net = buoy_on_pennant(water, (m, 400.0), centre, pennant, hydro);
     let mut sim = Simulation::new(net, params()).unwrap();
     let mut worst = 0.0f64;
     let mut dissipated = 0.0;
@@ -671,41 +644,13 @@ fn floater_heaves_at_the_closed_form_frequency() {
     let z_eq = -rho_line * len * g / k;
     let lift = 0.3;
     let centre = Vector3::new(0.0, 0.0, lift);
-    let mut nb = NetworkBuilder::<3, Material>::new();
-    let top = nb.node(Vector::<3>::new(0.0, 0.0, lift - 2.0));
-    let bottom = nb.node(Vector::<3>::new(0.0, 0.0, lift - 2.0 - len));
-    let spec = StringSpec {
-        name: "pennant".into(),
-        material: Material::tension_only_linear(1e7),
-        rho_a: rho_line,
-        mass: MassMatrix::Consistent,
-        body_force: Vector::<3>::new(0.0, 0.0, -rho_line * g),
-        prestretch: 1.0,
+    let hydro = BodyHydro {
+        volume: vol,
+        ca,
+        waterplane_area: area,
+        ..Default::default()
     };
-    nb.string(spec, &[top, bottom], 2).unwrap();
-    let net = nb
-        .build(Boundary::default(), Vec::new())
-        .unwrap()
-        .with_water(water)
-        .with_body(RigidBody {
-            name: "buoy".into(),
-            mass: m,
-            inertia: nalgebra::Matrix3::from_diagonal_element(5e4),
-            weight: Vector::<3>::new(0.0, 0.0, -m * g),
-            attachments: vec![Attachment {
-                node: top,
-                point: Vector::<3>::new(0.0, 0.0, -2.0),
-            }],
-            initial: BodyState::at_rest(centre, UnitQuaternion::identity()),
-            wrench: None,
-            hydro: Some(BodyHydro {
-                volume: vol,
-                ca,
-                waterplane_area: area,
-                ..Default::default()
-            }),
-            motion: None,
-        });
+    let net = buoy_on_pennant(water, (m, 5e4), centre, (rho_line, len, 2.0), hydro);
     let mut sim = Simulation::new(net, StepParams::default()).unwrap();
     let omega = (k / (m + ca * rho * vol + rho_line * len)).sqrt();
     let period = 2.0 * std::f64::consts::PI / omega;
@@ -802,4 +747,47 @@ fn dg4_body_port_reports_the_steps_mean() {
         (port_energy - supplied).abs() <= 1e-12 * supplied.abs(),
         "port {port_energy} J against supplied {supplied} J"
     );
+}
+
+/// A buoy (`mass` [kg], moment of inertia `inertia` [kg·m²] about every axis) centred at
+/// `centre` [m], at rest, in `water`, with `hydro`, and a pennant below it (`rho_line` [kg/m],
+/// `len` [m], two elements, no hydrodynamics) hanging from the body point `below` [m] under
+/// its centre.
+fn buoy_on_pennant(
+    water: phstring::Water<3>,
+    (mass, inertia): (f64, f64),
+    centre: Vector3<f64>,
+    (rho_line, len, below): (f64, f64, f64),
+    hydro: phstring::BodyHydro,
+) -> Network<3, Material> {
+    let g = water.gravity;
+    let mut nb = NetworkBuilder::<3, Material>::new();
+    let top = nb.node(Vector::<3>::new(centre.x, centre.y, centre.z - below));
+    let bottom = nb.node(Vector::<3>::new(centre.x, centre.y, centre.z - below - len));
+    let spec = StringSpec {
+        name: "pennant".into(),
+        material: Material::tension_only_linear(1e7),
+        rho_a: rho_line,
+        mass: MassMatrix::Consistent,
+        body_force: Vector::<3>::new(0.0, 0.0, -rho_line * g),
+        prestretch: 1.0,
+    };
+    nb.string(spec, &[top, bottom], 2).unwrap();
+    nb.build(Boundary::default(), Vec::new())
+        .unwrap()
+        .with_water(water)
+        .with_body(RigidBody {
+            name: "buoy".into(),
+            mass,
+            inertia: nalgebra::Matrix3::from_diagonal_element(inertia),
+            weight: Vector::<3>::new(0.0, 0.0, -mass * g),
+            attachments: vec![Attachment {
+                node: top,
+                point: Vector::<3>::new(0.0, 0.0, -below),
+            }],
+            initial: BodyState::at_rest(centre, UnitQuaternion::identity()),
+            wrench: None,
+            hydro: Some(hydro),
+            motion: None,
+        })
 }
