@@ -100,6 +100,62 @@ pub(crate) fn port_samples<const D: usize, M>(
     supplied
 }
 
+/// The step of each of body `model`'s points under `turn`: its attachments in order, then its
+/// centre of buoyancy and its waterline point where it has them (the rows of [`water_rows`]
+/// follow the attachments' in the same order).
+fn point_steps(model: &crate::body::BodyModel, turn: &Turn) -> Vec<PointStep> {
+    let cb = model.buoyancy.map(|(_, s)| s);
+    let wl = model.waterplane.map(|(_, s, _)| s);
+    model
+        .attachments
+        .iter()
+        .map(|(_, s)| s)
+        .chain(cb.as_ref())
+        .chain(wl.as_ref())
+        .map(|s| turn.point(s))
+        .collect()
+}
+
+/// Appends to `rows` the water's point rows of a body over a step from `st` with increment
+/// `dx` [m]: the buoyancy (a constant force at the centre of buoyancy, a row that asks the
+/// body for `−F_b`) and the waterplane's heave restoring at the waterline point (the last of
+/// `points`, from [`point_steps`]).
+fn water_rows(
+    model: &crate::body::BodyModel,
+    st: &BodyState,
+    dx: &Vec3,
+    points: &[PointStep],
+    rows: &mut Vec<NodeRow>,
+) {
+    if let Some((f, _)) = model.buoyancy {
+        rows.push(NodeRow {
+            res: -f,
+            diag: Mat3::zeros(),
+        });
+    }
+    if let Some(p) = points.last().filter(|_| model.waterplane.is_some()) {
+        rows.extend(model.waterplane_row(st, dx, &p.moved));
+    }
+}
+
+/// [`crate::body::BodyModel::drag_step`] in the current of `water` at the body's mid-step
+/// centre; zero without water or drag.
+fn drag_in<const D: usize>(
+    model: &crate::body::BodyModel,
+    water: Option<&crate::water::WaterModel<D>>,
+    st: &BodyState,
+    h: f64,
+    dx: &Vec3,
+) -> (Vec3, Mat3, f64, f64) {
+    match water {
+        Some(water) if model.drag.is_some() => {
+            let flow = current_at::<D>(water, st, dx);
+            model.drag_step(h, dx, (&flow.0, &flow.1, &flow.2))
+        }
+        _ => (Vec3::zeros(), Mat3::zeros(), 0.0, 0.0),
+    }
+}
+
 /// The wrench [N, N·m] a prescribed motion exerts over a step (the body's rows at the
 /// solution, with the hold's impulse), and the energy it supplies [J]: the wrench's work over
 /// `(Δx, R_n w)` and the kinetic energy the hold of the velocities adds.
@@ -113,16 +169,7 @@ fn reaction_wrench<const D: usize>(
     held: &BodyState,
 ) -> (Vec3, Vec3, f64) {
     let turn = Turn::new(&st.orientation, w);
-    let cb = model.buoyancy.map(|(_, s)| s);
-    let wl = model.waterplane.map(|(_, s, _)| s);
-    let points: Vec<PointStep> = model
-        .attachments
-        .iter()
-        .map(|(_, s)| s)
-        .chain(cb.as_ref())
-        .chain(wl.as_ref())
-        .map(|s| turn.point(s))
-        .collect();
+    let points = point_steps(model, &turn);
     let mut rows: Vec<NodeRow> = model
         .attachments
         .iter()
@@ -131,27 +178,12 @@ fn reaction_wrench<const D: usize>(
             diag: Mat3::zeros(),
         })
         .collect();
-    if let Some((f, _)) = model.buoyancy {
-        rows.push(NodeRow {
-            res: -f,
-            diag: Mat3::zeros(),
-        });
-    }
-    if let Some(p) = points.last().filter(|_| model.waterplane.is_some()) {
-        rows.extend(model.waterplane_row(st, dx, &p.moved));
-    }
+    water_rows(model, st, dx, &points, &mut rows);
     let mut dw = vec![Mat3::zeros(); rows.len()];
     let zero = Vec3::zeros();
     // The drag acts as on a free body (its work is in the water's shares), so the reaction
     // is the motion's own force.
-    let f_drag = match water {
-        Some(water) if model.drag.is_some() => {
-            let flow = current_at::<D>(water, st, dx);
-            model.drag_step(h, dx, (&flow.0, &flow.1, &flow.2)).0
-        }
-        _ => Vec3::zeros(),
-    };
-    let applied = model.weight + f_drag;
+    let applied = model.weight + drag_in(model, water, st, h, dx).0;
     let out = model.rows(
         st,
         h,
@@ -229,15 +261,11 @@ pub(crate) fn drag_work<const D: usize, M>(
     h: f64,
     slots: &[Vector<D>],
 ) -> (f64, f64) {
-    let Some(water) = sys.water.as_deref() else {
-        return (0.0, 0.0);
-    };
+    let water = sys.water.as_deref();
     let (mut dissipated, mut supplied) = (0.0, 0.0);
     for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
         if model.drag.is_some() {
-            let dx = unknowns(slots, b).0;
-            let flow = current_at::<D>(water, st, &dx);
-            let (_, _, d, s) = model.drag_step(h, &dx, (&flow.0, &flow.1, &flow.2));
+            let (_, _, d, s) = drag_in(model, water, st, h, &unknowns(slots, b).0);
             dissipated += d;
             supplied += s;
         }
@@ -391,22 +419,11 @@ impl<const D: usize> BodyStep<'_, D> {
             .enumerate()
             .map(|(b, (_, st))| Turn::new(&st.orientation, &unknowns(self.slots, b).1))
             .collect();
-        // The attachments' point steps, then the centre of buoyancy's.
         let points: Vec<Vec<PointStep>> = sys
             .bodies
             .iter()
             .zip(&turns)
-            .map(|(m, t)| {
-                let cb = m.buoyancy.map(|(_, s)| s);
-                let wl = m.waterplane.map(|(_, s, _)| s);
-                m.attachments
-                    .iter()
-                    .map(|(_, s)| s)
-                    .chain(cb.as_ref())
-                    .chain(wl.as_ref())
-                    .map(|s| t.point(s))
-                    .collect()
-            })
+            .map(|(m, t)| point_steps(m, t))
             .collect();
         let mut scale2 = 0.0;
         for (b, (model, st)) in sys.bodies.iter().zip(self.states).enumerate() {
@@ -433,28 +450,10 @@ impl<const D: usize> BodyStep<'_, D> {
                         .map_or(Mat3::zeros(), |j| embed_block(&j.diag[node])),
                 })
                 .collect();
-            // The buoyancy: a constant force at the centre of buoyancy (a row that asks the
-            // body for −F_b and does not depend on the increment).
-            if let Some((f, _)) = model.buoyancy {
-                rows.push(NodeRow {
-                    res: -f,
-                    diag: Mat3::zeros(),
-                });
-            }
-            // The waterplane's heave restoring at the waterline point (last in `points`).
-            if let Some(p) = points[b].last().filter(|_| model.waterplane.is_some()) {
-                rows.extend(model.waterplane_row(st, &dx, &p.moved));
-            }
+            water_rows(model, st, &dx, &points[b], &mut rows);
             let mut dw_rows = vec![Mat3::zeros(); rows.len()];
             let (f_port, torque) = self.wrenches.get(b).copied().unwrap_or_default();
-            let (f_drag, d_drag) = match sys.water.as_deref() {
-                Some(water) if model.drag.is_some() => {
-                    let flow = current_at::<D>(water, st, &dx);
-                    let (f, df, _, _) = model.drag_step(self.h, &dx, (&flow.0, &flow.1, &flow.2));
-                    (f, df)
-                }
-                _ => (Vec3::zeros(), Mat3::zeros()),
-            };
+            let (f_drag, d_drag, _, _) = drag_in(model, sys.water.as_deref(), st, self.h, &dx);
             let force = model.weight + f_port + f_drag;
             let applied = (&force, &torque);
             let mut out = model.rows(
