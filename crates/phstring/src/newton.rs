@@ -608,7 +608,7 @@ fn solve_range<const D: usize, P: NewtonProblem<D>>(
             &ws.jac.diag[range.clone()],
             &ws.jac.off[range.start..range.end - 1],
         );
-        if block_thomas(diag, off, &mut ws.thomas, &mut ws.dir[range.clone()]).is_err() {
+        if block_thomas(diag, off, &mut ws.thomas, &mut ws.dir[range.clone()], None).is_err() {
             break;
         }
         stats.local_iterations += 1;

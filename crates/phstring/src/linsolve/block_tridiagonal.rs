@@ -35,7 +35,8 @@ impl<const D: usize> BlockTridiagonal<D> {
 
 /// Solves the block-tridiagonal system with diagonal blocks `diag[i]` and couplings
 /// `off[i] = [∂R_i/∂x_{i+1}, ∂R_{i+1}/∂x_i]`, overwriting `rhs`; `c` is workspace of at least
-/// `diag.len()` blocks.
+/// `diag.len()` blocks, and `keep`, when given (as long), receives the pivots' inverses for
+/// a later solve with the same factors.
 ///
 /// Twisted ("burn at both ends") block Thomas: the chain is eliminated from both ends towards
 /// the middle node at once, which halves the length of the dependent chain of small
@@ -45,6 +46,7 @@ pub(crate) fn block_thomas<const D: usize>(
     off: &[[Block<D>; 2]],
     c: &mut [Block<D>],
     rhs: &mut [SVector<f64, D>],
+    mut keep: Option<&mut [Block<D>]>,
 ) -> Result<(), LinearSolveError> {
     let n = rhs.len();
     if n == 0 {
@@ -69,6 +71,9 @@ pub(crate) fn block_thomas<const D: usize>(
             b -= l * rhs[i - 1];
         }
         let inv_d = d.try_inverse().ok_or(singular(i))?;
+        if let Some(k) = keep.as_deref_mut() {
+            k[i] = inv_d;
+        }
         rhs[i] = inv_d * b;
         c[i] = inv_d * off[i][0];
         // For even n the bottom sweep has one node fewer than the top one.
@@ -81,6 +86,9 @@ pub(crate) fn block_thomas<const D: usize>(
                 f -= u * rhs[j + 1];
             }
             let inv_e = e.try_inverse().ok_or(singular(j))?;
+            if let Some(k) = keep.as_deref_mut() {
+                k[j] = inv_e;
+            }
             rhs[j] = inv_e * f;
             c[j] = inv_e * off[j - 1][1];
         }
@@ -98,7 +106,11 @@ pub(crate) fn block_thomas<const D: usize>(
         d -= u * c[m + 1];
         b -= u * rhs[m + 1];
     }
-    rhs[m] = d.try_inverse().ok_or(singular(m))? * b;
+    let inv_m = d.try_inverse().ok_or(singular(m))?;
+    if let Some(k) = keep {
+        k[m] = inv_m;
+    }
+    rhs[m] = inv_m * b;
     // Back substitution outwards: x_i = y_i − C_i x_{i+1}, x_j = z_j − G_j x_{j−1}.
     let mut finite = rhs[m].iter().all(|v| v.is_finite());
     for k in (0..m).rev() {
@@ -128,12 +140,8 @@ impl<const D: usize> LinearSolver<D> for BlockTridiagonal<D> {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError> {
-        if self.inv.is_empty() {
-            return block_thomas(&jac.diag, &jac.off, &mut self.c, rhs);
-        }
-        // Keep the pivots: invert them from the factors, then solve with them.
-        factor_kept(&jac.diag, &jac.off, &mut self.c, &mut self.inv)?;
-        self.solve_again(jac, rhs)
+        let keep = (self.inv.len() == rhs.len()).then_some(&mut self.inv[..]);
+        block_thomas(&jac.diag, &jac.off, &mut self.c, rhs, keep)
     }
     fn name(&self) -> &'static str {
         "block_tridiagonal"
@@ -192,46 +200,4 @@ impl<const D: usize> LinearSolver<D> for BlockTridiagonal<D> {
             None => Ok(()),
         }
     }
-}
-
-/// The twisted block Thomas factorization of [`block_thomas`] without a right-hand side: the
-/// couplings `c` and the pivots' inverses `inv`.
-fn factor_kept<const D: usize>(
-    diag: &[Block<D>],
-    off: &[[Block<D>; 2]],
-    c: &mut [Block<D>],
-    inv: &mut [Block<D>],
-) -> Result<(), LinearSolveError> {
-    let n = diag.len();
-    if n == 0 {
-        return Ok(());
-    }
-    let singular = |i| LinearSolveError::Singular { block: i };
-    let m = n / 2;
-    for k in 0..m {
-        let (i, j) = (k, n - 1 - k);
-        let mut d = diag[i];
-        if i > 0 {
-            d -= off[i - 1][1] * c[i - 1];
-        }
-        inv[i] = d.try_inverse().ok_or(singular(i))?;
-        c[i] = inv[i] * off[i][0];
-        if j > m {
-            let mut e = diag[j];
-            if j + 1 < n {
-                e -= off[j][0] * c[j + 1];
-            }
-            inv[j] = e.try_inverse().ok_or(singular(j))?;
-            c[j] = inv[j] * off[j - 1][1];
-        }
-    }
-    let mut d = diag[m];
-    if m > 0 {
-        d -= off[m - 1][1] * c[m - 1];
-    }
-    if m + 1 < n {
-        d -= off[m][0] * c[m + 1];
-    }
-    inv[m] = d.try_inverse().ok_or(singular(m))?;
-    Ok(())
 }
