@@ -47,13 +47,8 @@ pub(crate) fn fill_attachments<const D: usize, M>(
 }
 
 /// The predicted slots of a step of `h` [s]: `Δx = h V_n`, `w = h Ω_n`.
-pub(crate) fn predict<const D: usize, M>(
-    sys: &PhSystem<D, M>,
-    states: &[BodyState],
-    h: f64,
-    slots: &mut [Vector<D>],
-) {
-    for (b, st) in states.iter().enumerate().take(sys.bodies.len()) {
+pub(crate) fn predict<const D: usize>(states: &[BodyState], h: f64, slots: &mut [Vector<D>]) {
+    for (b, st) in states.iter().enumerate() {
         slots[2 * b] = project(&(st.velocity * h));
         slots[2 * b + 1] = rotation_slot::<D>(&(st.omega * h));
     }

@@ -1341,7 +1341,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 let v_mid = &self.run.v_mid[n..];
                 crate::body_step::predict_mid(states, h, v_mid, &mut self.x[n..]);
             } else {
-                crate::body_step::predict(&self.sys, states, h, &mut self.x[n..]);
+                crate::body_step::predict(states, h, &mut self.x[n..]);
             }
             crate::body_step::prescribe(&self.sys, states, t_next, &mut self.x[n..]).map_err(
                 |b| StepError::NonFinite {

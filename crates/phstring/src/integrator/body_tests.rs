@@ -150,7 +150,7 @@ fn check<const D: usize>(scheme: Scheme) {
     let h = 0.01;
     let mut x: Vec<Vector<D>> = state.v.iter().map(|v| v * h).collect();
     x.resize(n + slots, Vector::zeros());
-    predict(&sys, &state.bodies, h, &mut x[n..]);
+    predict(&state.bodies, h, &mut x[n..]);
     for (i, xi) in x.iter_mut().enumerate() {
         for k in 0..D {
             xi[k] += 1e-3 * ((i * 7 + k * 3) as f64).sin();
