@@ -39,8 +39,12 @@
 
 mod bodies;
 mod guess;
+mod mooring;
 
 pub use guess::catenary_guess;
+pub use mooring::{
+    BodyStiffness, MooringError, OffsetPoint, body_dofs, body_stiffness, offset_curve,
+};
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -314,6 +318,9 @@ struct StaticEquations<'a, const D: usize, M> {
     offsets: Vec<Vector<D>>,
     /// With bodies: the nodes' displacements with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
+    /// Per body, whether it is held at its reference pose (its slots stay zero and its force
+    /// and moment balance is left out); empty when none is.
+    held: Vec<bool>,
 }
 
 /// A strain outside the law's domain during the equilibrium iteration.
@@ -358,7 +365,9 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
                 },
                 jac_shift: self.jac_shift,
             };
-            (s2 + terms.terms(sys, res, jac.as_deref_mut()), k2)
+            let s2 = s2 + terms.terms(sys, res, jac.as_deref_mut());
+            bodies::hold(&self.held, n, &x[n..], res, jac.as_deref_mut());
+            (s2, k2)
         };
         for &i in &sys.constrained {
             for k in 0..D {
@@ -413,6 +422,7 @@ impl<'a, const D: usize, M: StoredEnergy> StaticEquations<'a, D, M> {
             offsets: vec![Vector::zeros(); if sys.bodies.is_empty() { 0 } else { n }],
             ports: bodies::ports_at_rest(sys),
             nodes_x: Vec::with_capacity(if sys.bodies.is_empty() { 0 } else { n }),
+            held: Vec::new(),
         }
     }
 
@@ -702,7 +712,7 @@ pub fn solve_system<const D: usize, M: StoredEnergy>(
     params: &StaticsParams,
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
-    solve_posed(sys, r_start, &sys.body_start, params, stop)
+    solve_posed(sys, r_start, &sys.body_start, &[], params, stop)
 }
 
 /// [`solve_system`] from the node positions and the rigid bodies' poses of `start` (its
@@ -723,14 +733,41 @@ pub fn solve_from<const D: usize, M: StoredEnergy>(
         .into());
     }
     bodies::check_poses(sys, &start.bodies)?;
-    solve_posed(sys, &start.r, &start.bodies, params, stop)
+    solve_posed(sys, &start.r, &start.bodies, &[], params, stop)
 }
 
-/// [`solve_system`] from node positions `r_start` [m] and body poses `poses`.
+/// [`solve_from`] with the rigid bodies marked in `held` (one flag per body) held at their
+/// poses in `start`, as supports hold nodes: the nodes fixed to a held body stay at its
+/// points, its force and moment balance is left out, and the reactions at those nodes are
+/// the forces it exerts on them. A body displaced from its equilibrium and held there gives
+/// the restoring force of its strings (a mooring's offset–tension curve,
+/// [`offset_curve`]).
+pub fn solve_held<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    start: &State<D>,
+    held: &[bool],
+    params: &StaticsParams,
+    stop: Option<&AtomicBool>,
+) -> Result<Equilibrium<D>, StaticsError> {
+    if start.bodies.len() != sys.bodies.len() || held.len() != sys.bodies.len() {
+        return Err(SetupError::StateSize {
+            what: "rigid bodies (start poses and held flags)",
+            got: start.bodies.len().min(held.len()),
+            expected: sys.bodies.len(),
+        }
+        .into());
+    }
+    bodies::check_poses(sys, &start.bodies)?;
+    solve_posed(sys, &start.r, &start.bodies, held, params, stop)
+}
+
+/// [`solve_system`] from node positions `r_start` [m] and body poses `poses`, the bodies
+/// flagged in `held` held there (none if it is empty).
 fn solve_posed<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r_start: &[Vector<D>],
     poses: &[BodyState],
+    held: &[bool],
     params: &StaticsParams,
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
@@ -742,12 +779,15 @@ fn solve_posed<const D: usize, M: StoredEnergy>(
         }
         .into());
     }
-    if let Some((index, name)) = bodies::loose_body(sys) {
+    if let Some((index, name)) = bodies::loose_body(sys, held) {
         return Err(StaticsError::LooseBody { index, name });
     }
     // Not yet in statics: the water on a body and a body's prescribed motion.
+    let is_held = |b: usize| held.get(b).copied().unwrap_or(false);
     for (index, model) in sys.bodies.iter().enumerate() {
-        let what = if model.motion.is_some() {
+        let what = if is_held(index) {
+            None
+        } else if model.motion.is_some() {
             Some("a prescribed motion")
         } else if model.buoyancy.is_some() || model.drag.is_some() || model.waterplane.is_some() {
             Some("hydrodynamics (buoyancy, drag, waterplane)")
@@ -773,7 +813,7 @@ fn solve_posed<const D: usize, M: StoredEnergy>(
             r0[*node] = crate::body::project(&st.point(s));
         }
     }
-    let eq = solve_without_feedback(sys, &r0, poses, params, stop)?;
+    let eq = solve_without_feedback(sys, &r0, (poses, held), params, stop)?;
     let checked = if params.open_loop {
         &[][..]
     } else {
@@ -803,12 +843,17 @@ fn solve_posed<const D: usize, M: StoredEnergy>(
 fn solve_without_feedback<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     r_start: &[Vector<D>],
-    poses: &[BodyState],
+    (poses, held): (&[BodyState], &[bool]),
     params: &StaticsParams,
     stop: Option<&AtomicBool>,
 ) -> Result<Equilibrium<D>, StaticsError> {
     let f = static_load(sys);
-    let free_motions = free_translations(sys);
+    // A held body holds the structure as a support does.
+    let free_motions = if held.contains(&true) {
+        Vec::new()
+    } else {
+        free_translations(sys)
+    };
     let ports = bodies::ports_at_rest(sys);
     for &k in &free_motions {
         // The loads on the nodes and on the bodies (weights and ports).
@@ -824,13 +869,14 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
             return Err(StaticsError::UnderConstrained { axis: AXES[k], net });
         }
     }
-    if let Some((index, name, axis)) = bodies::free_spin(sys) {
+    if let Some((index, name, axis)) = bodies::free_spin(sys, held) {
         return Err(StaticsError::FreeSpin { index, name, axis });
     }
     let slots = 2 * sys.bodies.len();
     let solver = make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?;
     let ws = NewtonWorkspace::<D>::with_slots(&sys.mesh, slots);
     let mut eq = StaticEquations::new(sys, r_start, &f, poses);
+    eq.held = held.to_vec();
     eq.jac_shift =
         JAC_SHIFT * initial_shift(sys, r_start, &f) / (sys.mesh.n_elements() as f64).powi(2);
     let mut s = Search {
@@ -1316,7 +1362,14 @@ fn stable_at<const D: usize, M: StoredEnergy>(
         let k = tangent_or_released(eq, u);
         return positive_definite(eq.sys, &k);
     }
-    stable_with_bodies(eq.sys, &eq.positions(u), &eq.body_poses(u), eq.release)
+    let held = eq.held.clone();
+    stable_with_bodies(
+        eq.sys,
+        &eq.positions(u),
+        &eq.body_poses(u),
+        eq.release,
+        &held,
+    )
 }
 
 /// [`stable_at`] with rigid bodies, at node positions `r` [m] and body poses `poses`: the
@@ -1326,10 +1379,12 @@ fn stable_with_bodies<const D: usize, M: StoredEnergy>(
     r: &[Vector<D>],
     poses: &[BodyState],
     release: bool,
+    held: &[bool],
 ) -> bool {
     let f = static_load(sys);
     let mut eq = StaticEquations::new(sys, r, &f, poses);
     eq.release = release;
+    eq.held = held.to_vec();
     eq.drag = false;
     let x = vec![Vector::<D>::zeros(); eq.unknowns()];
     let mut res = x.clone();
@@ -1518,7 +1573,7 @@ fn finish<const D: usize, M: StoredEnergy>(
     let stable = if sys.bodies.is_empty() {
         positive_definite(sys, &tangent_blocks(sys, &state.r))
     } else {
-        stable_with_bodies(sys, &state.r, &state.bodies, false)
+        stable_with_bodies(sys, &state.r, &state.bodies, false, &eq.held)
     };
     Equilibrium {
         stable,
@@ -1549,6 +1604,8 @@ fn ordinal(n: usize) -> String {
 
 #[cfg(test)]
 mod body_tests;
+#[cfg(test)]
+mod mooring_tests;
 
 #[cfg(test)]
 mod tests {

@@ -254,41 +254,86 @@ pub(super) fn check_poses<const D: usize, M>(
     Ok(())
 }
 
-/// The first body whose attachment points all lie on one line through its centre of mass
-/// (in 3D; in 2D, all at the centre): it can turn about that line with no string resisting,
+/// The first body not flagged in `held` whose attachment points all lie on one line through
+/// its centre of mass (in 3D; in 2D, all at the centre): it can turn about that line with no string resisting,
 /// so no rest state holds that turn. Returns `(index, name, the line's direction in body
 /// axes)` (`x` when every point is at the centre).
 pub(super) fn free_spin<const D: usize, M>(
     sys: &PhSystem<D, M>,
+    held: &[bool],
 ) -> Option<(usize, String, [f64; 3])> {
-    sys.bodies.iter().enumerate().find_map(|(b, m)| {
-        let far = m
-            .attachments
-            .iter()
-            .map(|(_, s)| *s)
-            .max_by(|a, c| a.norm().total_cmp(&c.norm()))?;
-        let length = far.norm();
-        let axis = if length > 0.0 {
-            far / length
-        } else {
-            Vec3::x()
-        };
-        let on_line = m
-            .attachments
-            .iter()
-            .all(|(_, s)| s.cross(&axis).norm() <= 1e-9 * length);
-        let free = if D == 3 { on_line } else { length == 0.0 };
-        free.then(|| (b, sys.body_names[b].clone(), [axis.x, axis.y, axis.z]))
-    })
+    let free = |b: &usize| !held.get(*b).copied().unwrap_or(false);
+    sys.bodies
+        .iter()
+        .enumerate()
+        .filter(|(b, _)| free(b))
+        .find_map(|(b, m)| {
+            let far = m
+                .attachments
+                .iter()
+                .map(|(_, s)| *s)
+                .max_by(|a, c| a.norm().total_cmp(&c.norm()))?;
+            let length = far.norm();
+            let axis = if length > 0.0 {
+                far / length
+            } else {
+                Vec3::x()
+            };
+            let on_line = m
+                .attachments
+                .iter()
+                .all(|(_, s)| s.cross(&axis).norm() <= 1e-9 * length);
+            let free = if D == 3 { on_line } else { length == 0.0 };
+            free.then(|| (b, sys.body_names[b].clone(), [axis.x, axis.y, axis.z]))
+        })
 }
 
-/// The first body fixed to no node: `(index, name)`. Nothing holds it (its tangent is
-/// singular), so the statics refuse it.
-pub(super) fn loose_body<const D: usize, M>(sys: &PhSystem<D, M>) -> Option<(usize, String)> {
+/// The first body fixed to no node and not flagged in `held`: `(index, name)`. Nothing
+/// holds it (its tangent is singular), so the statics refuse it.
+pub(super) fn loose_body<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    held: &[bool],
+) -> Option<(usize, String)> {
     sys.bodies
         .iter()
         .zip(&sys.body_names)
         .enumerate()
-        .find(|(_, (m, _))| m.attachments.is_empty())
+        .find(|(b, (m, _))| m.attachments.is_empty() && !held.get(*b).copied().unwrap_or(false))
         .map(|(b, (_, name))| (b, name.clone()))
+}
+
+/// Holds the bodies flagged in `held` at their reference poses: their rows become their
+/// slots `slots` (so that Newton keeps them at zero) and their blocks the identity,
+/// decoupled from the nodes and the other bodies (a held slot never moves, so the blocks
+/// that multiply it do not matter).
+pub(super) fn hold<const D: usize>(
+    held: &[bool],
+    n: usize,
+    slots: &[Vector<D>],
+    res: &mut [Vector<D>],
+    jac: Option<&mut BlockJacobian<D>>,
+) {
+    let is_held = |s: usize| held.get(s / 2).copied().unwrap_or(false);
+    for s in (0..slots.len()).filter(|&s| is_held(s)) {
+        res[n + s] = slots[s];
+    }
+    let Some(j) = jac else {
+        return;
+    };
+    let m = j.border.slots;
+    for s in 0..m {
+        for t in 0..m {
+            if is_held(s) || is_held(t) {
+                j.border.own[s * m + t] = if s == t {
+                    crate::linsolve::Block::<D>::identity()
+                } else {
+                    crate::linsolve::Block::<D>::zeros()
+                };
+            }
+        }
+    }
+    for link in j.border.links.iter_mut().filter(|l| is_held(l.1)) {
+        link.2.fill(0.0);
+        link.3.fill(0.0);
+    }
 }
