@@ -65,6 +65,10 @@ enum Command {
     /// The lowest natural frequencies and mode shapes about the static equilibrium
     /// (modes.csv, ParaView frames, plot, summary.json).
     Modes(commands::modes::ModesArgs),
+    /// A rigid body's mooring about the static equilibrium: its restoring stiffness matrix
+    /// (the strings condensed onto its pose) and its offset–tension curve along one degree of
+    /// freedom (stiffness.csv, offset.csv, summary.json).
+    Mooring(commands::mooring::MooringArgs),
     /// Validate a scenario file (or a MoorDyn deck: with the table of what each deck entry
     /// became) and print what would run.
     Check(commands::check::CheckArgs),
@@ -123,13 +127,14 @@ fn error_text(e: &anyhow::Error) -> String {
 }
 /// Runs the command of `cli`.
 fn dispatch(cli: Cli) -> Result<()> {
-    use commands::{check, fmu, linearize, modes, paper, run, statics, sweep};
+    use commands::{check, fmu, linearize, modes, mooring, paper, run, statics, sweep};
     match cli.command {
         Command::Paper(a) => paper::paper(&a.out, a.force, cli.quiet),
         Command::Run(a) => run::run(a, cli.quiet),
         Command::Check(a) => check::check(&a),
         Command::Fmu(a) => fmu::fmu(a),
         Command::Modes(a) => modes::modes(a),
+        Command::Mooring(a) => mooring::mooring(a),
         Command::Linearize(a) => linearize::linearize(a),
         Command::Statics(a) => statics::statics(a),
         Command::Sweep(a) => sweep::sweep(a, cli.quiet),

@@ -1193,7 +1193,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
 
     /// The nodes with a fixed or moving component (the supports, each a velocity port), in
     /// increasing order: the constrained nodes less those fixed to rigid bodies.
-    pub(crate) fn support_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+    pub fn support_nodes(&self) -> impl Iterator<Item = usize> + '_ {
         self.constrained
             .iter()
             .copied()
@@ -1214,6 +1214,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 ),
             }),
         }
+    }
+
+    /// The nodes fixed to rigid body `b`, in its attachment order (empty if there is no
+    /// body `b`).
+    pub fn body_attachments(&self, b: usize) -> Vec<usize> {
+        self.bodies
+            .get(b)
+            .map(|m| m.attachments.iter().map(|a| a.0).collect())
+            .unwrap_or_default()
     }
 
     /// Whether rigid body `b` has a wrench port (a force and torque input).

@@ -6,6 +6,7 @@ pub mod common;
 pub mod fmu;
 pub mod linearize;
 pub mod modes;
+pub mod mooring;
 pub mod paper;
 pub mod run;
 pub mod statics;

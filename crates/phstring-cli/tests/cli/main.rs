@@ -14,6 +14,7 @@ mod hardening_cli;
 mod hardening_io;
 mod interrupt;
 mod moordyn;
+mod mooring;
 mod network;
 mod out_folder;
 mod reliability;

@@ -5,6 +5,8 @@
 //! * [`statics`]: the equilibrium (`phstring statics`);
 //! * [`modes`]: the natural modes about it (`phstring modes`);
 //! * [`linearize`]: the linear model (`phstring linearize`);
+//! * [`mooring`]: a rigid body's mooring stiffness and offset–tension curve (`phstring
+//!   mooring`);
 //! * [`sweep`]: many runs over varied parameters (`phstring sweep`);
 //! * [`campaign`]: the extremes of a run's lines and a sweep's campaign table;
 //! * [`outdir`]: preparing and locking an output folder;
@@ -14,6 +16,7 @@ pub mod campaign;
 pub mod ends;
 pub mod linearize;
 pub mod modes;
+pub mod mooring;
 pub mod outdir;
 pub mod run;
 pub mod statics;

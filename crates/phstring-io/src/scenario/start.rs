@@ -67,7 +67,14 @@ impl<const D: usize> Setup<D> {
         open_loop: bool,
         stop: Option<&AtomicBool>,
     ) -> Result<Equilibrium<D>, StaticsError> {
-        let params = StaticsParams {
+        let Built { system, state } = &self.problem;
+        statics::solve_system(system, &state.r, &self.statics_params(open_loop), stop)
+    }
+
+    /// The statics' settings of [`Self::equilibrium`]: the scenario's Newton settings (with
+    /// the statics' iteration limit) and linear solver.
+    pub fn statics_params(&self, open_loop: bool) -> StaticsParams {
+        StaticsParams {
             newton: phstring::NewtonParams {
                 max_iter: StaticsParams::default().newton.max_iter,
                 ..self.settings.step.newton
@@ -75,9 +82,7 @@ impl<const D: usize> Setup<D> {
             solver: self.settings.step.solver,
             open_loop,
             ..Default::default()
-        };
-        let Built { system, state } = &self.problem;
-        statics::solve_system(system, &state.r, &params, stop)
+        }
     }
 
     /// Refuses a start from the equilibrium (at rest) when a rigid body is given a velocity
