@@ -18,6 +18,8 @@ use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::system::{PhSystem, Vector};
 
+mod bodies;
+
 /// Largest number of free components solved by the dense decomposition.
 pub const DENSE_LIMIT: usize = 1500;
 
@@ -30,6 +32,8 @@ pub enum Character {
     Transverse,
     /// In between.
     Mixed,
+    /// Rigid bodies hold at least half of the mode's kinetic energy.
+    Body,
 }
 
 impl Character {
@@ -39,6 +43,7 @@ impl Character {
             Character::Longitudinal => "longitudinal",
             Character::Transverse => "transverse",
             Character::Mixed => "mixed",
+            Character::Body => "body",
         }
     }
 }
@@ -52,8 +57,11 @@ pub struct Mode<const D: usize> {
     pub shape: Vec<Vector<D>>,
     /// Share of the mode's kinetic energy along the string's local tangent, in `[0, 1]`.
     pub axial_share: f64,
-    /// Longitudinal, transverse or mixed.
+    /// Longitudinal, transverse, mixed or a body's.
     pub character: Character,
+    /// Per rigid body, its translation [kg^-½] and its small turn about the space axes
+    /// [rad·m^-1·kg^-½] in the mode (same normalization as `shape`); empty without bodies.
+    pub bodies: Vec<(crate::body::Vec3, crate::body::Vec3)>,
 }
 
 impl<const D: usize> Mode<D> {
@@ -89,6 +97,16 @@ pub enum ModesError {
     /// Nothing is free.
     #[error("no free position components: nothing can vibrate")]
     NoFreeDofs,
+    /// Too many coordinates for the dense solve that takes rigid bodies.
+    #[error(
+        "the modal analysis with rigid bodies is solved dense, up to {limit} coordinates, and this model has {size}: use fewer elements"
+    )]
+    TooLarge {
+        /// Coordinates (free components and the bodies' translations and turns).
+        size: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// The eigensolver failed.
     #[error(transparent)]
     Eigen(#[from] EigenError),
@@ -98,7 +116,8 @@ pub enum ModesError {
 }
 
 /// The `count` lowest natural modes about the rest state at positions `r` [m] (at most the
-/// number of free components). `solver` is used by Lanczos for large problems.
+/// number of free components). `solver` is used by Lanczos for large problems. With rigid
+/// bodies, use [`modes_with_bodies`].
 ///
 /// `stop`, when given and set, ends the computation with [`ModesError::Interrupted`]:
 /// Lanczos between two of its steps; the dense decomposition (at most [`DENSE_LIMIT`] free
@@ -111,7 +130,9 @@ pub fn modes<const D: usize, M: StoredEnergy>(
     stop: Option<&AtomicBool>,
 ) -> Result<Modes<D>, ModesError> {
     let stopped = || stop.is_some_and(|s| s.load(Ordering::Relaxed));
-    sys.refuse_bodies("the modal analysis")?;
+    if !sys.bodies.is_empty() {
+        return modes_with_bodies(sys, r, &sys.body_start, count, stop);
+    }
     let kb = tangent_blocks(sys, r);
     if !positive_definite(sys, &kb) {
         return Err(ModesError::NotStable);
@@ -190,24 +211,13 @@ pub fn modes<const D: usize, M: StoredEnergy>(
         .zip(vectors)
         .map(|(&lambda, x)| {
             let shape = expand(&x);
-            let (mut axial, mut total) = (0.0, 0.0);
-            for ((phi, t), m) in shape.iter().zip(&tangents).zip(&node_mass) {
-                axial += m * t.dot(phi).powi(2);
-                total += m * phi.norm_squared();
-            }
-            let axial_share = if total > 0.0 { axial / total } else { 0.0 };
-            let character = if axial_share >= 0.9 {
-                Character::Longitudinal
-            } else if axial_share <= 0.1 {
-                Character::Transverse
-            } else {
-                Character::Mixed
-            };
+            let (axial_share, character) = classify(&shape, &tangents, &node_mass);
             Mode {
                 omega: lambda.max(0.0).sqrt(),
                 shape,
                 axial_share,
                 character,
+                bodies: Vec::new(),
             }
         })
         .collect();
@@ -216,6 +226,60 @@ pub fn modes<const D: usize, M: StoredEnergy>(
         method,
         solves,
     })
+}
+
+/// The `count` lowest natural modes of a system with rigid bodies about the rest state of
+/// node positions `r` [m] and body poses `poses` (an equilibrium's `state.bodies`), on the
+/// free components and each body's translation and turn (docs/method.md §22, "Modes with
+/// rigid bodies"). Solved dense (at most [`DENSE_LIMIT`] coordinates, else
+/// [`ModesError::TooLarge`]); `stop` is checked before and after.
+pub fn modes_with_bodies<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+    poses: &[crate::body::BodyState],
+    count: usize,
+    stop: Option<&AtomicBool>,
+) -> Result<Modes<D>, ModesError> {
+    let stopped = || stop.is_some_and(|s| s.load(Ordering::Relaxed));
+    if poses.len() != sys.bodies.len() {
+        return Err(SetupError::StateSize {
+            what: "rigid bodies' poses",
+            got: poses.len(),
+            expected: sys.bodies.len(),
+        }
+        .into());
+    }
+    if stopped() {
+        return Err(ModesError::Interrupted);
+    }
+    let found = bodies::modes_with_bodies(sys, r, poses, count)?;
+    if stopped() {
+        return Err(ModesError::Interrupted);
+    }
+    Ok(found)
+}
+
+/// The share of a mode's kinetic energy along the strings' tangents (lumped node masses)
+/// and its character.
+fn classify<const D: usize>(
+    shape: &[Vector<D>],
+    tangents: &[Vector<D>],
+    node_mass: &[f64],
+) -> (f64, Character) {
+    let (mut axial, mut total) = (0.0, 0.0);
+    for ((phi, t), m) in shape.iter().zip(tangents).zip(node_mass) {
+        axial += m * t.dot(phi).powi(2);
+        total += m * phi.norm_squared();
+    }
+    let axial_share = if total > 0.0 { axial / total } else { 0.0 };
+    let character = if axial_share >= 0.9 {
+        Character::Longitudinal
+    } else if axial_share <= 0.1 {
+        Character::Transverse
+    } else {
+        Character::Mixed
+    };
+    (axial_share, character)
 }
 
 /// `blocks` with the rows and columns of fixed components zeroed and, if `unit`, 1 on

@@ -1392,6 +1392,47 @@ fn stable_with_bodies<const D: usize, M: StoredEnergy>(
     eq.evaluate(&x, &mut res, Some(&mut j)).is_ok() && bodies::positive_definite(sys, &j)
 }
 
+/// One entry `(row, column, value)` of a sparse matrix.
+pub(crate) type Entry = faer::sparse::Triplet<usize, usize, f64>;
+
+/// The number of coordinates of a rigid body in the modal analysis: its translation and its
+/// turn (3 + 3 in 3D, 2 + 1 in 2D).
+pub(crate) fn body_coordinates(dim: usize) -> usize {
+    if dim == 2 { 3 } else { 6 }
+}
+
+/// The potential's Hessian at the rest state of node positions `r` [m] and body poses
+/// `poses` (without the current's drag), on the free components (numbered by
+/// [`crate::assembly::free_dofs`], `n` of them) and then per body its translation [m] and
+/// its turn scaled by its radius of gyration `ρ w` [m] (`w` the body-axes Cayley vector;
+/// [`body_coordinates`] per body): `(n + coordinates, triplets)`. `None` if a strain is
+/// off its law's domain.
+pub(crate) fn body_hessian<const D: usize, M: StoredEnergy>(
+    sys: &PhSystem<D, M>,
+    r: &[Vector<D>],
+    poses: &[BodyState],
+) -> Option<(usize, Vec<Entry>)> {
+    let f = static_load(sys);
+    let mut eq = StaticEquations::new(sys, r, &f, poses);
+    eq.drag = false;
+    let x = vec![Vector::<D>::zeros(); eq.unknowns()];
+    let mut res = x.clone();
+    let mut j = BlockJacobian::with_slots(&sys.mesh, 2 * sys.bodies.len());
+    eq.evaluate(&x, &mut res, Some(&mut j)).ok()?;
+    let (_, n) = crate::assembly::free_dofs(sys);
+    let per = body_coordinates(D);
+    let slot_dof = |s: usize, k: usize| {
+        let base = n + (s / 2) * per;
+        match (s % 2, D) {
+            (0, _) => Some(base + k),
+            (_, 3) => Some(base + 3 + k),
+            (_, _) => (k == 0).then_some(base + 2),
+        }
+    };
+    let t = bodies::hessian_triplets(sys, &j, slot_dof);
+    Some((n + per * sys.bodies.len(), t))
+}
+
 /// The tangent stiffness at `r₀ + u`, of the released laws while `eq.release` is set; the
 /// potential's only (without the current's drag). Without bodies.
 fn tangent_or_released<const D: usize, M: StoredEnergy>(

@@ -358,16 +358,12 @@ fn check_describes_the_bodies() {
 /// naming the first body; an equilibrium start refuses a body given a velocity (it would
 /// start at rest).
 #[test]
-fn modes_linearize_fmu_and_error_control_refuse_bodies() {
+fn linearize_fmu_and_error_control_refuse_bodies() {
     let dir = temp_dir("bodies-refused");
     let e = "examples/hook_block_3d.toml";
     let o = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let hook = "rigid body 0 ('hook'): ";
-    let cases: [(Vec<String>, String); 5] = [
-        (
-            vec!["modes".into(), e.into(), "--out".into(), o("m")],
-            format!("{hook}the modal analysis does not cover"),
-        ),
+    let cases: [(Vec<String>, String); 4] = [
         (
             vec!["linearize".into(), e.into(), "--out".into(), o("l")],
             format!("{hook}the linear model does not cover"),

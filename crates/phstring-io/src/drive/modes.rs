@@ -9,7 +9,8 @@
 //! * `modes.png` / `.svg`: the equilibrium and up to four scaled mode shapes (the snapshot
 //!   labelled `t = k s` is mode `k`; the x–y plane in 3D);
 //! * `summary.json`: method, solves, frequencies, the equilibrium path and the scale, the
-//!   count asked for and a warning if fewer modes exist.
+//!   count asked for and a warning if fewer modes exist; with rigid bodies, each mode's
+//!   motion of each body.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -63,8 +64,14 @@ pub struct ModeInfo {
     pub omega_rad_s: f64,
     /// Frequency [Hz].
     pub frequency_hz: f64,
-    /// `longitudinal`, `transverse` or `mixed`.
+    /// `longitudinal`, `transverse`, `mixed` or `body` (rigid bodies hold at least half of
+    /// its kinetic energy).
     pub character: &'static str,
+    /// Per rigid body, its motion in the mode (same normalization as the shapes): the
+    /// translation `[x, y, z]` [kg^-½] and the turn about the space axes `[rx, ry, rz]`
+    /// [rad·m^-1·kg^-½]; absent without bodies.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<[f64; 6]>,
 }
 
 /// `summary.json` of `phstring modes`.
@@ -126,8 +133,15 @@ fn modes_dim<const D: usize>(
     let eq = v.equilibrium(true, stop)?;
     let sys = &v.problem.system;
     let r = &eq.state.r;
-    let found = modes::modes(sys, r, count, v.settings.step.solver, stop)?;
+    let bodies = sys.bodies().len();
+    let found = if bodies == 0 {
+        modes::modes(sys, r, count, v.settings.step.solver, stop)?
+    } else {
+        modes::modes_with_bodies(sys, r, &eq.state.bodies, count, stop)?
+    };
     let (_, free) = phstring::linear::free_dofs(sys);
+    // Each rigid body adds its translation and its turn.
+    let free = free + bodies * if D == 3 { 6 } else { 3 };
     let warnings = fewer_modes("--count", count, free, found.modes.len())
         .into_iter()
         .collect();
@@ -163,6 +177,11 @@ fn modes_dim<const D: usize>(
             omega_rad_s: m.omega,
             frequency_hz: m.hertz(),
             character: m.character.name(),
+            bodies: m
+                .bodies
+                .iter()
+                .map(|(x, w)| [x.x, x.y, x.z, w.x, w.y, w.z])
+                .collect(),
         });
     }
     let amax = |m: &modes::Mode<D>| m.shape.iter().map(|p| p.norm()).fold(0.0, f64::max);

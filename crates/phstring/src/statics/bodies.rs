@@ -165,10 +165,25 @@ pub(super) fn positive_definite<const D: usize, M>(
     sys: &PhSystem<D, M>,
     j: &BlockJacobian<D>,
 ) -> bool {
-    let (dof, n_free) = free_dofs(sys);
+    let (_, n_free) = free_dofs(sys);
+    let total = n_free + j.border.slots * D;
+    let t = hessian_triplets(sys, j, |s, k| Some(n_free + s * D + k));
+    match SparseColMat::try_new_from_triplets(total, total, &t) {
+        Ok(k) => k.sp_cholesky(Side::Lower).is_ok(),
+        Err(_) => false,
+    }
+}
+
+/// The triplets of the potential's Hessian of [`positive_definite`] on the free components
+/// (numbered by [`free_dofs`]) and the slot components numbered by `slot_dof(slot,
+/// component)` (`None`: left out), the rotation columns divided by the radius of gyration.
+pub(super) fn hessian_triplets<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    j: &BlockJacobian<D>,
+    slot_dof: impl Fn(usize, usize) -> Option<usize>,
+) -> Vec<Triplet<usize, usize, f64>> {
+    let (dof, _) = free_dofs(sys);
     let slots = j.border.slots;
-    let total = n_free + slots * D;
-    let slot_dof = |s: usize, k: usize| n_free + s * D + k;
     let col_scale = |s: usize| {
         if s % 2 == 1 {
             1.0 / sys.bodies[s / 2].gyration()
@@ -200,24 +215,17 @@ pub(super) fn positive_definite<const D: usize, M>(
         for c in 0..slots {
             let blk = &j.border.own[s * slots + c];
             for (k, m) in (0..D).flat_map(|k| (0..D).map(move |m| (k, m))) {
-                push(
-                    Some(slot_dof(s, k)),
-                    Some(slot_dof(c, m)),
-                    blk[(k, m)] * col_scale(c),
-                );
+                push(slot_dof(s, k), slot_dof(c, m), blk[(k, m)] * col_scale(c));
             }
         }
     }
     for &(i, s, row, col) in &j.border.links {
         for (k, m) in (0..D).flat_map(|k| (0..D).map(move |m| (k, m))) {
-            push(Some(slot_dof(s, k)), node(i, m), row[(k, m)]);
-            push(node(i, k), Some(slot_dof(s, m)), col[(k, m)] * col_scale(s));
+            push(slot_dof(s, k), node(i, m), row[(k, m)]);
+            push(node(i, k), slot_dof(s, m), col[(k, m)] * col_scale(s));
         }
     }
-    match SparseColMat::try_new_from_triplets(total, total, &t) {
-        Ok(k) => k.sp_cholesky(Side::Lower).is_ok(),
-        Err(_) => false,
-    }
+    t
 }
 
 /// Checks start poses `poses` (one per body): finite, and in 2D in the plane `z = 0` turned
