@@ -11,6 +11,9 @@ use crate::material::StoredEnergy;
 use crate::system::{Law, PhSystem, Vector, element_mass};
 
 pub use crate::assembly::{free_dofs, mass_blocks, positive_definite, restrict, tangent_blocks};
+pub use bodies::{BodiesLinearError, reduced_model_with_bodies};
+
+mod bodies;
 
 /// The triplets of `R_v` on the free DOFs `dof` (`n` of them) at positions `r` [m], placed
 /// at rows and columns `n …` (the velocity block of both the reduced and the full model).

@@ -18,7 +18,7 @@ use crate::linsolve::{BlockJacobian, SolverKind, make_solver};
 use crate::material::StoredEnergy;
 use crate::system::{PhSystem, Vector};
 
-mod bodies;
+pub(crate) mod bodies;
 
 /// Largest number of free components solved by the dense decomposition.
 pub const DENSE_LIMIT: usize = 1500;

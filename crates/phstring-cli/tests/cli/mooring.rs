@@ -296,3 +296,102 @@ fn cable_robot_modes_are_the_platform_on_its_stiffness() {
     }
     assert_ne!(modes[6]["character"], "body");
 }
+
+/// A MatrixMarket coordinate file (`linearize`'s `FORM/NAME.mtx`) as a dense matrix.
+fn read_mtx(p: &std::path::Path) -> nalgebra::DMatrix<f64> {
+    let text = std::fs::read_to_string(p).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('%'));
+    let dims: Vec<usize> = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let mut m = nalgebra::DMatrix::zeros(dims[0], dims[1]);
+    for l in lines {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        let (r, c): (usize, usize) = (f[0].parse().unwrap(), f[1].parse().unwrap());
+        m[(r - 1, c - 1)] += f[2].parse::<f64>().unwrap();
+    }
+    m
+}
+
+/// `phstring linearize` with a rigid body (the cable robot with a wrench port on its
+/// platform): the reduced form only, with the platform's force and torque as inputs and its
+/// velocity and angular velocity as outputs; its static gain `K⁻¹ B` from the platform's
+/// wrench to its translation and turn is the compliance `K_b⁻¹` of `phstring mooring`'s
+/// stiffness to 1e-6 of each column (measured: 1.2e-11; two routes to the same Schur
+/// complement, dense here and by bordered solves there).
+#[test]
+fn cable_robot_linear_model_has_the_mooring_compliance() {
+    let out = temp_dir("robot-linear");
+    let l = out.join("l");
+    let wrench = "bodies.platform.wrench={force=[\"0\",\"0\",\"0\"]}";
+    let o = phstring(&[
+        "linearize",
+        ROBOT,
+        "--set",
+        wrench,
+        "--out",
+        l.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(l.join("manifest.json")).unwrap()).unwrap();
+    let names: Vec<&str> = m["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "F[platform].x",
+            "F[platform].y",
+            "F[platform].z",
+            "T[platform].x",
+            "T[platform].y",
+            "T[platform].z"
+        ]
+    );
+    assert_eq!(m["outputs"][5]["name"], "w[platform].z");
+    assert_eq!(m["outputs"][5]["body"], "platform");
+    assert!(m["forms"]["full"].is_null() && m["stable"] == true);
+    let q = read_mtx(&l.join("reduced/Q.mtx"));
+    let b = read_mtx(&l.join("reduced/B.mtx"));
+    let n = q.nrows() / 2;
+    // 8 cables × 3 interior nodes × 3 components, and the platform's 6.
+    assert_eq!(n, 78);
+    let k = q.view((0, 0), (n, n)).into_owned();
+    let bq = b.view((n, 0), (n, 6)).into_owned();
+    let x = k.lu().solve(&bq).unwrap();
+    let md = out.join("m");
+    let o = phstring(&[
+        "mooring",
+        ROBOT,
+        "--max",
+        "0.005",
+        "--steps",
+        "1",
+        "--out",
+        md.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&md);
+    let kb = nalgebra::DMatrix::from_fn(6, 6, |i, j| s["stiffness"][i][j].as_f64().unwrap());
+    let compliance = kb.try_inverse().unwrap();
+    // The platform's coordinates are the last six: translation, then ρ w (w = turn here,
+    // the platform level): the gyration radius √(tr J / m).
+    let rho = ((1.13 + 1.13 + 1.67) / 40.0f64).sqrt();
+    let mut worst = 0.0f64;
+    for c in 0..6 {
+        let scale = compliance.column(c).abs().max();
+        for r in 0..6 {
+            let got = x[(n - 6 + r, c)] / if r < 3 { 1.0 } else { rho };
+            worst = worst.max((got - compliance[(r, c)]).abs() / scale);
+        }
+    }
+    eprintln!("static gain against the compliance: {worst:.2e}");
+    assert!(worst <= 1e-6, "{worst}");
+}

@@ -97,10 +97,15 @@ fn check_positions(cp: &CheckpointFile, nodes: usize, d: usize) -> Result<(), Ex
 /// One input or output of the model.
 #[derive(Debug, Clone, Serialize)]
 pub struct PortEntry {
-    /// Name, e.g. `F[30].y` (input) or `v[30].y` (output).
+    /// Name, e.g. `F[30].y` (input) or `v[30].y` (output); a rigid body's `F[hook].x`,
+    /// `T[hook].z` (torque) and `v[hook].x`, `w[hook].z` (angular velocity).
     pub name: String,
-    /// Node index.
-    pub node: usize,
+    /// Node index (absent for a rigid body's port).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node: Option<usize>,
+    /// The rigid body (absent for a node's port).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub body: Option<String>,
     /// Component `x`, `y` or `z`.
     pub component: &'static str,
     /// Unit.
@@ -204,9 +209,9 @@ fn linearize_dim<const D: usize>(
     stop: Option<&AtomicBool>,
 ) -> Result<Manifest, ExportError> {
     let sys = &v.problem.system;
-    // Also at a checkpoint's state, which needs no statics: the linear model has no bodies.
-    sys.refuse_bodies("the linear model")
-        .map_err(StaticsError::from)?;
+    if !sys.bodies().is_empty() {
+        return linearize_bodies(file, v, at, modal, out, stop);
+    }
     let (r, time, source) = match at {
         LinearizeAt::Equilibrium => {
             let eq = v.equilibrium(true, stop)?;
@@ -271,12 +276,7 @@ fn linearize_dim<const D: usize>(
         let _ = writeln!(pos, "{i},{},{},{}", c(0), c(1), c(2));
     }
     write(out, LINEAR_AT_FILE, pos.as_bytes())?;
-    let entry = |p: &ForcePort, sym: &str, unit: &'static str| PortEntry {
-        name: format!("{sym}[{}].{}", p.node, AXES[p.component]),
-        node: p.node,
-        component: AXES[p.component],
-        unit,
-    };
+    let entry = |p: &ForcePort, sym: &str, unit: &'static str| node_entry(p, sym, unit);
     let manifest = Manifest {
         format: "phstring-linear-ph-1",
         scenario: file.path.display().to_string(),
@@ -301,6 +301,117 @@ fn linearize_dim<const D: usize>(
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// The manifest entry of node port `p` as `sym` (`F` or `v`) in `unit`.
+fn node_entry(p: &ForcePort, sym: &str, unit: &'static str) -> PortEntry {
+    PortEntry {
+        name: format!("{sym}[{}].{}", p.node, AXES[p.component]),
+        node: Some(p.node),
+        body: None,
+        component: AXES[p.component],
+        unit,
+    }
+}
+
+const BODY_EQUATIONS: &str = "x = (q, v): q the free position components and per rigid body its translation and its turn times its radius of gyration (rho w, w the body-axes Cayley vector), v their rates: E = diag(I, M), J = [[0, I], [-I, 0]], R = diag(0, R_v), Q = diag(K, I), so M q'' + R_v q' + K q = B u; inputs: the node force ports, then each body wrench's force and torque (space axes)";
+
+/// [`linearize_dim`] with rigid bodies: the reduced form about the equilibrium only.
+fn linearize_bodies<const D: usize>(
+    file: &ScenarioFile,
+    v: &Setup<D>,
+    at: &LinearizeAt,
+    modal: Option<usize>,
+    out: &Path,
+    stop: Option<&AtomicBool>,
+) -> Result<Manifest, ExportError> {
+    let sys = &v.problem.system;
+    if !matches!(at, LinearizeAt::Equilibrium) {
+        return Err(ExportError::Mismatch(
+            "the linear model with rigid bodies is taken about the static equilibrium only, not at a checkpoint's state (yet): drop --at".into(),
+        ));
+    }
+    if modal.is_some() {
+        return Err(ExportError::Mismatch(
+            "the modal form (--modes) does not cover rigid bodies yet: drop --modes (the reduced form has the bodies)".into(),
+        ));
+    }
+    let eq = v.equilibrium(true, stop)?;
+    let ports = force_ports(sys);
+    let names: Vec<&str> = sys.bodies().iter().map(|b| b.0).collect();
+    let wrenches: Vec<usize> = (0..names.len())
+        .filter(|&b| sys.body_has_wrench(b))
+        .collect();
+    let model = phstring::linear::reduced_model_with_bodies(
+        sys,
+        &eq.state.r,
+        &eq.state.bodies,
+        &ports,
+        &wrenches,
+    )
+    .map_err(|e| ExportError::Mismatch(e.to_string()))?;
+    if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+        return Err(StaticsError::Interrupted.into());
+    }
+    let mut forms = std::collections::BTreeMap::new();
+    forms.insert(
+        "reduced",
+        write_form(out, "reduced", &model, BODY_EQUATIONS)?,
+    );
+    let mut pos = String::from("node,x,y,z\n");
+    for (i, p) in eq.state.r.iter().enumerate() {
+        let c = |k: usize| if k < D { num(p[k]) } else { "0".into() };
+        let _ = writeln!(pos, "{i},{},{},{}", c(0), c(1), c(2));
+    }
+    write(out, LINEAR_AT_FILE, pos.as_bytes())?;
+    let body_entries = |force: (&str, &'static str), turn: (&str, &'static str)| {
+        let turns: &[&'static str] = if D == 3 { &AXES } else { &AXES[2..] };
+        let mut all = Vec::new();
+        for &b in &wrenches {
+            let n = names[b];
+            let at = |(sym, unit): (&str, &'static str), a: &'static str| PortEntry {
+                name: format!("{sym}[{n}].{a}"),
+                node: None,
+                body: Some(n.to_string()),
+                component: a,
+                unit,
+            };
+            all.extend(AXES[..D].iter().map(|a| at(force, a)));
+            all.extend(turns.iter().map(|a| at(turn, a)));
+        }
+        all
+    };
+    let inputs = ports
+        .iter()
+        .map(|p| node_entry(p, "F", "N"))
+        .chain(body_entries(("F", "N"), ("T", "N·m")))
+        .collect();
+    let outputs = ports
+        .iter()
+        .map(|p| node_entry(p, "v", "m/s"))
+        .chain(body_entries(("v", "m/s"), ("w", "rad/s")))
+        .collect();
+    let manifest = Manifest {
+        format: "phstring-linear-ph-1",
+        scenario: file.path.display().to_string(),
+        dimension: D,
+        nodes: sys.mesh().n_nodes(),
+        elements: sys.mesh().n_elements(),
+        model: "E x' = (J - R) Q x + B u, y = B^T Q x, H = 1/2 x^T E^T Q x",
+        inputs,
+        outputs,
+        linearized_at: "equilibrium".into(),
+        time: 0.0,
+        static_residual: eq.residual,
+        stable: eq.stable,
+        positions: LINEAR_AT_FILE,
+        requested_modes: None,
+        warnings: vec!["with rigid bodies only the reduced form is written (the full mixed form does not cover them yet)".into()],
+        forms,
+    };
+    let json = serde_json::to_string_pretty(&manifest).expect("plain data serializes");
+    write(out, MANIFEST_FILE, json.as_bytes())?;
+    Ok(manifest)
+}
 
 fn write(out: &Path, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
     let path = out.join(name);

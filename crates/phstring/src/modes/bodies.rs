@@ -17,14 +17,14 @@ use crate::system::{PhSystem, Vector};
 /// How each node moves with the coordinates: per node, `(coordinate, its column of the
 /// node's displacement)` pairs (a free component: its unit vector; a node fixed to a body:
 /// the columns of `[I, −[a×] R₀/ρ]`, `a` its arm at the rest pose).
-type NodeMap<const D: usize> = Vec<Vec<(usize, Vector<D>)>>;
+pub(crate) type NodeMap<const D: usize> = Vec<Vec<(usize, Vector<D>)>>;
 
 /// The unit vector along axis `k`.
 fn unit<const D: usize>(k: usize) -> Vector<D> {
     Vector::<D>::from_fn(|i, _| if i == k { 1.0 } else { 0.0 })
 }
 
-fn node_map<const D: usize, M>(
+pub(crate) fn node_map<const D: usize, M>(
     sys: &PhSystem<D, M>,
     poses: &[BodyState],
     n_free: usize,
@@ -59,13 +59,23 @@ fn node_map<const D: usize, M>(
 
 /// The strings' mass matrix [kg] (and the point masses') on the coordinates of `map` (`size`
 /// of them).
-fn mass<const D: usize, M: StoredEnergy>(
+pub(crate) fn strings_mass<const D: usize, M: StoredEnergy>(
     sys: &PhSystem<D, M>,
     map: &NodeMap<D>,
     size: usize,
 ) -> Mat<f64> {
-    let mb = mass_blocks(sys);
     let mut m = Mat::<f64>::zeros(size, size);
+    add_through(&mut m, map, &mass_blocks(sys), &sys.mesh);
+    m
+}
+
+/// Adds the node-block matrix `blocks` (over `mesh`) carried through `map` to `m`.
+pub(crate) fn add_through<const D: usize>(
+    m: &mut Mat<f64>,
+    map: &NodeMap<D>,
+    blocks: &crate::linsolve::BlockJacobian<D>,
+    mesh: &crate::mesh::Mesh,
+) {
     let mut add = |a: usize, b: usize, blk: &crate::linsolve::Block<D>| {
         for &(r, u) in &map[a] {
             for &(c, v) in &map[b] {
@@ -73,19 +83,22 @@ fn mass<const D: usize, M: StoredEnergy>(
             }
         }
     };
-    for (i, d) in mb.diag.iter().enumerate() {
+    for (i, d) in blocks.diag.iter().enumerate() {
         add(i, i, d);
     }
-    for (&[a, b], off) in sys.mesh.elements().iter().zip(&mb.off) {
+    for (&[a, b], off) in mesh.elements().iter().zip(&blocks.off) {
         add(a, b, &off[0]);
         add(b, a, &off[1]);
     }
-    m
 }
 
 /// Each body's mass (with its added mass) on its translation and its inertia over `ρ²` on
 /// its scaled turn, on the `size` coordinates.
-fn body_mass<const D: usize, M>(sys: &PhSystem<D, M>, n_free: usize, size: usize) -> Mat<f64> {
+pub(crate) fn body_mass<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    n_free: usize,
+    size: usize,
+) -> Mat<f64> {
     let mut m = Mat::<f64>::zeros(size, size);
     let per = body_coordinates(D);
     for (b, model) in sys.bodies.iter().enumerate() {
@@ -132,7 +145,7 @@ pub(super) fn modes_with_bodies<const D: usize, M: StoredEnergy>(
         return Err(ModesError::NotStable);
     }
     let map = node_map(sys, poses, n_free);
-    let m = mass(sys, &map, size);
+    let m = strings_mass(sys, &map, size);
     let bm = body_mass(sys, n_free, size);
     let (values, vecs) = eigen::dense_generalized(&k, &(&m + &bm))?;
     let tangents = node_tangents(sys, r);

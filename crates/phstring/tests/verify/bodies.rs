@@ -369,6 +369,73 @@ fn compound_pendulum_modes_match_the_closed_form() {
     assert!(found.modes[2].omega > 100.0, "{}", found.modes[2].omega);
 }
 
+/// The reduced linear model with the compound pendulum's body and its wrench port
+/// (`linear::reduced_model_with_bodies`): `J = −Jᵀ`, `R = 0` (no damping), `Eᵀ Q`
+/// symmetric; its static gain `K⁻¹ B` from the body's horizontal force and its torque to the
+/// body's displacement and turn equals the compliance `K_b⁻¹` of the body's mooring
+/// stiffness (`statics::body_stiffness`, the Schur complement by the bordered solves) to
+/// 1e-10 (measured: 5e-16); and `Bᵀ` reads the body's velocity and angular velocity.
+#[test]
+fn linear_model_with_a_body_has_the_mooring_compliance() {
+    let (m, j, d, l, g): (f64, f64, f64, f64, f64) = (2000.0, 1500.0, 1.5, 10.0, 9.81);
+    let (net, _) = compound_pendulum((m, j, d, l, g), (0.0, 0.0));
+    let (sys, start) = phstring::PhSystem::new(net).unwrap();
+    let params = phstring::statics::StaticsParams::default();
+    let eq = phstring::statics::solve_system(&sys, &start.r, &params, None).unwrap();
+    let lin =
+        phstring::linear::reduced_model_with_bodies(&sys, &eq.state.r, &eq.state.bodies, &[], &[0])
+            .unwrap();
+    let dense = |a: &faer::sparse::SparseColMat<usize, f64>| a.as_ref().to_dense();
+    let (jm, e, q, r, b) = (
+        dense(&lin.j),
+        dense(&lin.e),
+        dense(&lin.q),
+        dense(&lin.r),
+        dense(&lin.b),
+    );
+    let size = jm.nrows();
+    let n = size / 2;
+    let eq_t = e.transpose() * &q;
+    for a in 0..size {
+        for c in 0..size {
+            assert_eq!(jm[(a, c)], -jm[(c, a)]);
+            assert!((eq_t[(a, c)] - eq_t[(c, a)]).abs() <= 1e-9 * eq_t[(a, a)].abs().max(1.0));
+            assert_eq!(r[(a, c)], 0.0);
+        }
+    }
+    assert_eq!(b.ncols(), 3);
+    assert_eq!(lin.states[n - 1], "q[block].rho_wz");
+    // K⁻¹ B on the position coordinates.
+    let k = q.submatrix(0, 0, n, n).to_owned();
+    let bq = b.submatrix(n, 0, n, 3).to_owned();
+    let x = faer::linalg::solvers::Solve::solve(&k.partial_piv_lu(), &bq);
+    let kb = phstring::statics::body_stiffness(&sys, &eq, 0, &params).unwrap();
+    let compliance = kb.matrix.try_inverse().unwrap();
+    let rho = (j / m).sqrt() * 3f64.sqrt();
+    let mut worst = 0.0f64;
+    for col in 0..3 {
+        // Columns: force x, force y, torque z; rows: x, y, turn (ρ w / ρ).
+        let got = [x[(n - 3, col)], x[(n - 2, col)], x[(n - 1, col)] / rho];
+        for row in 0..3 {
+            let want = compliance[(row, col)];
+            let scale = compliance.column(col).abs().max();
+            worst = worst.max((got[row] - want).abs() / scale);
+        }
+    }
+    eprintln!("static gain against the compliance: {worst:.2e}");
+    assert!(worst <= 1e-10, "{worst}");
+    // Bᵀ reads the body's velocity and angular velocity: a state whose body coordinates
+    // move at (1, 2, 3ρ) m/s gives (1, 2, 3).
+    let mut v = faer::Mat::<f64>::zeros(size, 1);
+    v[(2 * n - 3, 0)] = 1.0;
+    v[(2 * n - 2, 0)] = 2.0;
+    v[(2 * n - 1, 0)] = 3.0 * rho;
+    let y = b.transpose() * &v;
+    for (k, want) in [1.0, 2.0, 3.0].iter().enumerate() {
+        assert!((y[(k, 0)] - want).abs() <= 1e-12, "{k}: {}", y[(k, 0)]);
+    }
+}
+
 /// Runs the compound pendulum (`m` [kg], `j` [kg·m²], `d`, `l` [m], `g` [m/s²]) from string
 /// angle `th1` and body angle `th2` [rad] at rest for four periods `period` [s] with `scheme`
 /// and step `h` [s]; returns the angular frequency [rad/s] of the string angle measured between
