@@ -255,20 +255,7 @@ fn mooring_refuses_what_does_not_fit() {
 #[test]
 fn cable_robot_modes_are_the_platform_on_its_stiffness() {
     let out = temp_dir("robot-modes");
-    let m_dir = out.join("m");
-    let o = phstring(&[
-        "mooring",
-        ROBOT,
-        "--max",
-        "0.005",
-        "--steps",
-        "1",
-        "--out",
-        m_dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s = summary(&m_dir);
-    let k = nalgebra::DMatrix::from_fn(6, 6, |i, j| s["stiffness"][i][j].as_f64().unwrap());
+    let k = robot_stiffness_by_cli(&out.join("m"));
     let mass = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![
         40.0, 40.0, 40.0, 1.13, 1.13, 1.67,
     ]));
@@ -366,20 +353,7 @@ fn cable_robot_linear_model_has_the_mooring_compliance() {
     let k = q.view((0, 0), (n, n)).into_owned();
     let bq = b.view((n, 0), (n, 6)).into_owned();
     let x = k.lu().solve(&bq).unwrap();
-    let md = out.join("m");
-    let o = phstring(&[
-        "mooring",
-        ROBOT,
-        "--max",
-        "0.005",
-        "--steps",
-        "1",
-        "--out",
-        md.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s = summary(&md);
-    let kb = nalgebra::DMatrix::from_fn(6, 6, |i, j| s["stiffness"][i][j].as_f64().unwrap());
+    let kb = robot_stiffness_by_cli(&out.join("m"));
     let compliance = kb.try_inverse().unwrap();
     // The platform's coordinates are the last six: translation, then ρ w (w = turn here,
     // the platform level): the gyration radius √(tr J / m).
@@ -394,4 +368,21 @@ fn cable_robot_linear_model_has_the_mooring_compliance() {
     }
     eprintln!("static gain against the compliance: {worst:.2e}");
     assert!(worst <= 1e-6, "{worst}");
+}
+
+/// The cable robot's 6 × 6 stiffness by `phstring mooring` (into `dir`).
+fn robot_stiffness_by_cli(dir: &std::path::Path) -> nalgebra::DMatrix<f64> {
+    let o = phstring(&[
+        "mooring",
+        ROBOT,
+        "--max",
+        "0.005",
+        "--steps",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(dir);
+    nalgebra::DMatrix::from_fn(6, 6, |i, j| s["stiffness"][i][j].as_f64().unwrap())
 }

@@ -270,12 +270,7 @@ fn linearize_dim<const D: usize>(
             forms.insert(name, write_form(out, name, &model, eqs)?);
         }
     }
-    let mut pos = String::from("node,x,y,z\n");
-    for (i, p) in r.iter().enumerate() {
-        let c = |k: usize| if k < D { num(p[k]) } else { "0".into() };
-        let _ = writeln!(pos, "{i},{},{},{}", c(0), c(1), c(2));
-    }
-    write(out, LINEAR_AT_FILE, pos.as_bytes())?;
+    write_positions(out, &r)?;
     let entry = |p: &ForcePort, sym: &str, unit: &'static str| node_entry(p, sym, unit);
     let manifest = Manifest {
         format: "phstring-linear-ph-1",
@@ -301,6 +296,16 @@ fn linearize_dim<const D: usize>(
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Writes the positions linearized at (`LINEAR_AT_FILE`: `node,x,y,z` [m]).
+fn write_positions<const D: usize>(out: &Path, r: &[Vector<D>]) -> Result<(), OutputError> {
+    let mut pos = String::from("node,x,y,z\n");
+    for (i, p) in r.iter().enumerate() {
+        let c = |k: usize| if k < D { num(p[k]) } else { "0".into() };
+        let _ = writeln!(pos, "{i},{},{},{}", c(0), c(1), c(2));
+    }
+    write(out, LINEAR_AT_FILE, pos.as_bytes())
+}
 
 /// The manifest entry of node port `p` as `sym` (`F` or `v`) in `unit`.
 fn node_entry(p: &ForcePort, sym: &str, unit: &'static str) -> PortEntry {
@@ -357,12 +362,7 @@ fn linearize_bodies<const D: usize>(
         "reduced",
         write_form(out, "reduced", &model, BODY_EQUATIONS)?,
     );
-    let mut pos = String::from("node,x,y,z\n");
-    for (i, p) in eq.state.r.iter().enumerate() {
-        let c = |k: usize| if k < D { num(p[k]) } else { "0".into() };
-        let _ = writeln!(pos, "{i},{},{},{}", c(0), c(1), c(2));
-    }
-    write(out, LINEAR_AT_FILE, pos.as_bytes())?;
+    write_positions(out, &eq.state.r)?;
     let body_entries = |force: (&str, &'static str), turn: (&str, &'static str)| {
         let turns: &[&'static str] = if D == 3 { &AXES } else { &AXES[2..] };
         let mut all = Vec::new();
