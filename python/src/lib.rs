@@ -231,6 +231,72 @@ impl Simulation {
             .collect()
     }
 
+    /// Holds the wrench port of rigid body `body` (its index in file order, or its name) at
+    /// `force` [N] (`d` components, space axes) and `torque` [N·m] (3 components in 3D, the
+    /// one about `z` in 2D) from the next step on, until set again (zero-order hold); `None`
+    /// for both returns it to the scenario's `wrench` (or to none). A body without a
+    /// `wrench` in the scenario gets one. Its work enters `energies["supplied"]`.
+    #[pyo3(signature = (body, force, torque=None))]
+    fn set_body_wrench(
+        &self,
+        body: &Bound<'_, PyAny>,
+        force: Option<Vec<f64>>,
+        torque: Option<Vec<f64>>,
+    ) -> PyResult<()> {
+        let mut guard = self.lock();
+        let b = each!(&*guard, s => body_index(s, body))?;
+        let d = each!(&*guard, s => x_dim(&s.state().r[..]));
+        let turns = if d == 2 { 1 } else { 3 };
+        let held = match (force, torque) {
+            (None, None) => each!(&mut *guard, s => s.release_body_wrench(b)),
+            (force, torque) => {
+                let f = wrench_vector(b, "force", force, d, 0)?;
+                let t = wrench_vector(b, "torque", torque, turns, 3 - turns)?;
+                each!(&mut *guard, s => s.set_body_wrench(b, f, t))
+            }
+        };
+        held.map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// Returns the wrench port of rigid body `body` (index or name) to the scenario's from
+    /// the next step on (as `set_body_wrench(body, None)`).
+    fn release_body_wrench(&self, body: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut guard = self.lock();
+        let b = each!(&*guard, s => body_index(s, body))?;
+        each!(&mut *guard, s => s.release_body_wrench(b))
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// The rigid bodies, in file order, as a list of dicts: `name`; at the current time
+    /// `position` [m] (centre of mass), `orientation` (unit quaternion `[w, x, y, z]`, body
+    /// axes to space), `velocity` [m/s] and `angular_velocity` [rad/s] (space axes), NumPy
+    /// arrays of 3 (in 2D `z`, `x`, `y` parts 0); and the wrench port's sample of the last
+    /// step (zero before the first step and without a port): `force` [N] and `torque` [N·m]
+    /// (space axes, at the step's mid time) and `power` [W], its mean power `F·v + τ·ω`
+    /// over the step, positive into the body.
+    #[getter]
+    fn body_ports<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let rows: Vec<BodyRow> = each!(&*self.lock(), s => body_rows(s));
+        rows.into_iter()
+            .map(|(name, x, q, v, w, f, t, power)| {
+                let d = PyDict::new(py);
+                d.set_item("name", name)?;
+                for (key, a) in [
+                    ("position", x.to_vec()),
+                    ("orientation", q.to_vec()),
+                    ("velocity", v.to_vec()),
+                    ("angular_velocity", w.to_vec()),
+                    ("force", f.to_vec()),
+                    ("torque", t.to_vec()),
+                ] {
+                    d.set_item(key, PyArray1::from_vec(py, a))?;
+                }
+                d.set_item("power", power)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
     /// The complete dynamic state, to continue from with [`Simulation::restore`] (bit for
     /// bit as if the run had not stopped). Held inputs (`set_input`) are not part of it.
     fn checkpoint(&self) -> Checkpoint {
@@ -311,6 +377,109 @@ impl Simulation {
         }
         Ok(d)
     }
+}
+
+/// One rigid body for [`Simulation::body_ports`]: name, position [m], quaternion
+/// `[w, x, y, z]`, velocity [m/s], angular velocity [rad/s], port force [N], torque [N·m]
+/// and mean power [W].
+type BodyRow = (
+    String,
+    [f64; 3],
+    [f64; 4],
+    [f64; 3],
+    [f64; 3],
+    [f64; 3],
+    [f64; 3],
+    f64,
+);
+
+/// The rigid bodies of `sim` as [`BodyRow`]s, in file order.
+fn body_rows<const D: usize>(sim: &Sim<D, Material>) -> Vec<BodyRow> {
+    let names = sim.system().bodies();
+    let ports = sim.body_ports();
+    sim.state()
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(b, st)| {
+            let q = st.orientation.quaternion();
+            let (f, t, p) = ports.get(b).map_or(([0.0; 3], [0.0; 3], 0.0), |p| {
+                (p.force.into(), p.torque.into(), p.mean_power)
+            });
+            (
+                names.get(b).map_or_else(String::new, |n| n.0.to_string()),
+                st.position.into(),
+                [q.w, q.i, q.j, q.k],
+                st.velocity.into(),
+                st.omega_space().into(),
+                f,
+                t,
+                p,
+            )
+        })
+        .collect()
+}
+
+/// The index of rigid body `body` of `sim`: an index (in file order) or a name; refused
+/// with the bodies there are.
+fn body_index<const D: usize>(sim: &Sim<D, Material>, body: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let names: Vec<&str> = sim.system().bodies().into_iter().map(|b| b.0).collect();
+    let known = || {
+        if names.is_empty() {
+            "the scenario has no rigid bodies".to_string()
+        } else {
+            format!(
+                "the bodies are {} (0 … {})",
+                names.join(", "),
+                names.len() - 1
+            )
+        }
+    };
+    if let Ok(name) = body.extract::<String>() {
+        return names.iter().position(|n| *n == name).ok_or_else(|| {
+            PyValueError::new_err(format!("no rigid body named {name:?}: {}", known()))
+        });
+    }
+    let i: usize = body
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("a body is an index or a name, got {body}")))?;
+    if i >= names.len() {
+        return Err(PyValueError::new_err(format!(
+            "no rigid body {i}: {}",
+            known()
+        )));
+    }
+    Ok(i)
+}
+
+/// The force or torque (`what`) of body `b`'s wrench from Python: `n` finite components,
+/// placed from component `first` of a 3-vector (a 2D torque is about `z`); `None` is zero.
+fn wrench_vector(
+    b: usize,
+    what: &str,
+    v: Option<Vec<f64>>,
+    n: usize,
+    first: usize,
+) -> PyResult<phstring::body::Vec3> {
+    let mut out = phstring::body::Vec3::zeros();
+    let Some(v) = v else {
+        return Ok(out);
+    };
+    if v.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "the {what} of body {b} needs {n} components, got {}",
+            v.len()
+        )));
+    }
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(PyValueError::new_err(format!(
+            "the {what} of body {b} must be finite, got {x}"
+        )));
+    }
+    for (i, x) in v.iter().enumerate() {
+        out[first + i] = *x;
+    }
+    Ok(out)
 }
 
 /// A simulation's complete dynamic state ([`Simulation::checkpoint`]).

@@ -16,7 +16,8 @@
 //! written next to its place and renamed into it when complete, and a file beyond
 //! [`MAX_BYTES`] is refused. Strings are drawn in their group's colour (as in the
 //! configuration plot), springs thin and grey, point masses as black dots growing with the
-//! mass. Every failure is an `Err(reason)` for the caller to report as a warning: the
+//! mass, rigid bodies as the boxes of their inertia with their body axes
+//! ([`crate::body_shape`]) at their poses read back from `bodies.csv`. Every failure is an `Err(reason)` for the caller to report as a warning: the
 //! animation never fails a run.
 
 use std::borrow::Cow;
@@ -29,9 +30,10 @@ use plotters::coord::CoordTranslate;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use crate::files::{ANIMATION_FILE, POSITIONS_FILE, temp_path};
-use crate::plot::{self, AxisStyle, MASS_COLOR, Topology};
-use crate::scene::Scene;
+use crate::body_shape::read_poses;
+use crate::files::{ANIMATION_FILE, BODIES_FILE, POSITIONS_FILE, temp_path};
+use crate::plot::{self, AxisStyle, BODY_AXIS_COLORS, BODY_COLOR, MASS_COLOR, Topology};
+use crate::scene::{BodyOutline, Scene};
 
 /// Width of the animation [px].
 pub const ANIMATION_WIDTH: u32 = 480;
@@ -365,18 +367,22 @@ impl Palette {
 /// buffers frames are read into.
 fn frames_box(
     reader: &mut BufReader<File>,
-    frames: &[(u64, f64)],
+    (frames, bodies): (&[(u64, f64)], &[Vec<BodyOutline>]),
     (n_nodes, scene): (usize, &Scene),
     stop: Option<&AtomicBool>,
     (xy, raw): (&mut Vec<[f64; 2]>, &mut Vec<[f64; 3]>),
 ) -> Result<(f64, f64, f64, f64), String> {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for &(offset, _) in frames {
+    for (k, &(offset, _)) in frames.iter().enumerate() {
         if stopped(stop) {
             return Err("stop requested".into());
         }
         read_frame(reader, (offset, n_nodes), scene, (xy, raw))?;
-        for p in xy.iter() {
+        let outlines = bodies.get(k).map_or(&[][..], Vec::as_slice);
+        let corners = outlines
+            .iter()
+            .flat_map(|o| o.edges.iter().chain(&o.axes).flatten());
+        for p in xy.iter().chain(corners) {
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
                 hi[k] = hi[k].max(p[k]);
@@ -387,6 +393,39 @@ fn frames_box(
     let data_box = plot::padded_box(plot::with_water(corners, scene.water.as_ref()).into_iter());
     plot::check_box(data_box)?;
     Ok(data_box)
+}
+
+/// The drawings of the rigid bodies of `scene` at each of the `frames` (offsets and times),
+/// their poses read back from `dir/bodies.csv` at the frames' times (the nearest rows:
+/// the same time unless `output.row_stride` thins them); empty without bodies or in the
+/// view of one plane per line.
+fn frame_bodies(
+    dir: &Path,
+    scene: &Scene,
+    frames: &[(u64, f64)],
+) -> Result<Vec<Vec<BodyOutline>>, String> {
+    if scene.bodies.is_empty() || scene.lines.is_some() {
+        return Ok(Vec::new());
+    }
+    let times: Vec<f64> = frames.iter().map(|f| f.1).collect();
+    let poses = read_poses(&dir.join(BODIES_FILE), scene.bodies.len(), &times)?;
+    let outline = |pose: &Vec<_>| {
+        scene
+            .bodies
+            .iter()
+            .zip(pose)
+            .filter_map(|(b, p)| scene.body_outline(b, p))
+            .filter(|o| {
+                o.edges
+                    .iter()
+                    .chain(&o.axes)
+                    .flatten()
+                    .flatten()
+                    .all(|x| x.is_finite())
+            })
+            .collect()
+    };
+    Ok(poses.iter().map(outline).collect())
 }
 
 /// The background of every frame, `w × h` RGB pixels: the title, the axes of `data_box`
@@ -443,14 +482,15 @@ struct Picture<'a> {
 
 impl Picture<'_> {
     /// Draws the time label `t` [s], the elements (springs under strings), the nodes on the
-    /// seabed (`grounded`, triangles) and the point masses at the node positions `xy` [m]
-    /// onto `rgb` (`w × h` RGB pixels, holding the background).
+    /// seabed (`grounded`, triangles) and the point masses at the node positions `xy` [m],
+    /// and the rigid bodies `bodies`, onto `rgb` (`w × h` RGB pixels, holding the
+    /// background).
     fn draw(
         &self,
         rgb: &mut [u8],
         (w, h): (u32, u32),
         t: f64,
-        (xy, grounded): (&[[f64; 2]], Option<&[usize]>),
+        (xy, grounded, bodies): (&[[f64; 2]], Option<&[usize]>, &[BodyOutline]),
     ) -> Result<(), String> {
         let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
         let label = format!("t = {} s", plot::format_plain(t));
@@ -492,6 +532,18 @@ impl Picture<'_> {
             root.draw(&Circle::new((self.to_px)(xy[node]), r, MASS_COLOR.filled()))
                 .map_err(plot::err)?;
         }
+        let colored = bodies.iter().flat_map(|o| {
+            let edges = o.edges.iter().map(|s| (s, BODY_COLOR));
+            edges.chain(o.axes.iter().zip(BODY_AXIS_COLORS))
+        });
+        for ([a, b], color) in colored {
+            let line = vec![(self.to_px)(*a), (self.to_px)(*b)];
+            root.draw(&PathElement::new(
+                line,
+                ShapeStyle::from(&color).stroke_width(1),
+            ))
+            .map_err(plot::err)?;
+        }
         root.present().map_err(plot::err)?;
         Ok(())
     }
@@ -521,12 +573,13 @@ fn write_to(
         .check(n_nodes)
         .map_err(|e| format!("the network does not fit positions.csv: {e}"))?;
     let frames = index.pick(MAX_FRAMES);
+    let bodies = frame_bodies(dir, scene, &frames)?;
 
     // Fixed axes: the bounding box of every frame drawn.
     let (mut xy, mut raw) = (Vec::with_capacity(n_nodes), Vec::with_capacity(n_nodes));
     let data_box = frames_box(
         &mut reader,
-        &frames,
+        (&frames, &bodies),
         (n_nodes, scene),
         stop,
         (&mut xy, &mut raw),
@@ -542,6 +595,10 @@ fn write_to(
     }
     if scene.contact.is_some() {
         exact.push(plot::GROUNDED);
+    }
+    if !bodies.is_empty() {
+        exact.push(BODY_COLOR);
+        exact.extend(BODY_AXIS_COLORS);
     }
     let palette = Palette::new(&exact);
     let m_max = topology.masses.iter().map(|m| m.1).fold(0.0, f64::max);
@@ -577,7 +634,8 @@ fn write_to(
         read_frame(&mut reader, (offset, n_nodes), scene, (&mut xy, &mut raw))?;
         rgb.copy_from_slice(&background);
         let grounded = scene.contact.as_ref().map(|c| c.grounded(&raw));
-        picture.draw(&mut rgb, (w, h), t, (&xy, grounded.as_deref()))?;
+        let outlines = bodies.get(k).map_or(&[][..], Vec::as_slice);
+        picture.draw(&mut rgb, (w, h), t, (&xy, grounded.as_deref(), outlines))?;
         for (i, px) in rgb.chunks_exact(3).enumerate() {
             indices[i] = palette.index(px[0], px[1], px[2]);
         }

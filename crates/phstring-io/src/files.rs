@@ -258,6 +258,9 @@ pub fn is_channel_table(name: &str) -> bool {
 pub const PARAVIEW_DIR: &str = "paraview";
 /// The ParaView collection in [`PARAVIEW_DIR`] (frames are [`frame_name`]).
 pub const PVD_FILE: &str = "string.pvd";
+/// The ParaView collection of the rigid bodies in [`PARAVIEW_DIR`] (runs with bodies; frames
+/// are [`body_frame_name`], at the steps of [`PVD_FILE`]'s).
+pub const BODIES_PVD_FILE: &str = "bodies.pvd";
 /// Run sub-folders of `phstring paper`.
 pub const PAPER_RUN_DIRS: &[&str] = &["dg", "mp"];
 /// Figure sub-folder of `phstring paper`.
@@ -294,6 +297,11 @@ pub const LOCK_FILE: &str = ".phstring.lock";
 /// Name of the ParaView frame of step `step`.
 pub fn frame_name(step: usize) -> String {
     format!("frame_{step:06}.vtp")
+}
+
+/// Name of the ParaView frame of the rigid bodies at step `step`.
+pub fn body_frame_name(step: usize) -> String {
+    format!("bodies_{step:06}.vtp")
 }
 
 /// Name of the ParaView frame of mode `number` (1-based) of `phstring modes`.

@@ -18,6 +18,7 @@
 //!    preparation); nothing below imports them.
 
 pub mod animation;
+pub mod body_shape;
 pub mod channels;
 pub mod checkpoint;
 pub mod drive;

@@ -255,7 +255,57 @@ pub fn network_plot_in(
     if !scene.grounded.is_empty() {
         mark_grounded(&mut fig, topology, snapshots, &scene.grounded);
     }
+    draw_bodies(&mut fig, scene, snapshots.len());
     write_both(stem, &fig)
+}
+
+/// The colour of the rigid bodies' boxes.
+pub(crate) const BODY_COLOR: RGBColor = RGBColor(90, 60, 30);
+/// The colours of the body axes `x`, `y`, `z`.
+pub(crate) const BODY_AXIS_COLORS: [RGBColor; 3] = [
+    RGBColor(220, 30, 30),
+    RGBColor(20, 150, 40),
+    RGBColor(30, 60, 220),
+];
+
+/// Adds to `fig` the rigid bodies of `scene` at each of its `n` snapshots (box edges and
+/// body axes, faded by age like the strings) and their legend entry; nothing without
+/// bodies or their poses, or in the view of one plane per line.
+fn draw_bodies(fig: &mut ConfigFigure<'_>, scene: &Scene, n: usize) {
+    let curve = |seg: &[[f64; 2]; 2], color: RGBColor| Curve {
+        label: String::new(),
+        points: seg.iter().map(|p| (p[0], p[1])).collect(),
+        color,
+        width: 1,
+        dashed: false,
+    };
+    for (k, poses) in scene.body_poses.iter().enumerate().take(n) {
+        let f = snapshot_shade(k, n);
+        for (b, pose) in scene.bodies.iter().zip(poses) {
+            let Some(o) = scene.body_outline(b, pose) else {
+                continue;
+            };
+            let finite = |s: &&[[f64; 2]; 2]| s.iter().all(finite);
+            let edges = o.edges.iter().filter(finite);
+            fig.outlines
+                .extend(edges.map(|s| curve(s, fade(BODY_COLOR, f))));
+            for (s, c) in o.axes.iter().zip(BODY_AXIS_COLORS) {
+                if finite(&s) {
+                    fig.outlines.push(curve(s, fade(c, f)));
+                }
+            }
+        }
+    }
+    if !fig.outlines.is_empty() {
+        fig.entries.push(LegendEntry {
+            label: "rigid bodies (axes x, y, z: red, green, blue)".into(),
+            color: BODY_COLOR,
+            dashed: false,
+            marker: false,
+            line: true,
+            triangle: false,
+        });
+    }
 }
 
 /// The colour of the markers of nodes on the seabed.
@@ -652,6 +702,7 @@ fn chain_figure<'a>(
         labels: Scene::default().axis_labels(),
         water: None,
         grounded: Vec::new(),
+        outlines: Vec::new(),
     }
 }
 
@@ -683,6 +734,7 @@ fn network_figure<'a>(
         labels: Scene::default().axis_labels(),
         water: None,
         grounded: Vec::new(),
+        outlines: Vec::new(),
     }
 }
 
@@ -1680,6 +1732,8 @@ struct ConfigFigure<'a> {
     water: Option<WaterLines>,
     /// Nodes on the seabed `(x, y)` [m], drawn as triangles over the curves.
     grounded: Vec<(f64, f64)>,
+    /// The rigid bodies' edges and axes, drawn over the curves without node markers.
+    outlines: Vec<Curve>,
 }
 
 /// The data box `(x0, x1, y0, y1)` of `points` in m, padded by 6 % of its larger span (a
@@ -1712,6 +1766,7 @@ impl ConfigFigure<'_> {
         let pts = self
             .curves
             .iter()
+            .chain(&self.outlines)
             .flat_map(|c| c.points.iter().copied())
             .chain(self.dots.iter().map(|d| (d.x, d.y)));
         if self.water.is_none() {
@@ -1743,6 +1798,7 @@ impl Figure for ConfigFigure<'_> {
             draw_water(&mut chart, w, (xr.start, xr.end), (yr.start, yr.end))?;
         }
         draw_curves(&mut chart, &self.curves, self.markers, raster)?;
+        draw_curves(&mut chart, &self.outlines, false, raster)?;
         if !self.grounded.is_empty() {
             chart
                 .draw_series(

@@ -15,10 +15,16 @@
 //! In water, the nodes on the seabed at a snapshot ([`Grounded`], the core's seabed contact
 //! test) are marked, and each string's grounded length at the last snapshot is written in
 //! the legend.
+//!
+//! Rigid bodies are drawn as the boxes of their inertia with their body axes
+//! ([`crate::body_shape`], [`Scene::body_outline`]), projected like the nodes; the view of
+//! one plane per line leaves them out (a body lies in no single string's plane).
 
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
+
+use crate::body_shape::{BOX_EDGES, BodyBox, BodyPose};
 
 /// How a configuration is drawn: the plane of a 3D run and the water behind it.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -36,6 +42,22 @@ pub struct Scene {
     /// The seabed contact test of the run, for frames read back from `positions.csv` (the
     /// animation); `None`: no seabed, or not known.
     pub contact: Option<ContactTest>,
+    /// The rigid bodies' boxes, in body order (empty: no bodies drawn); see
+    /// [`crate::body_shape`].
+    pub bodies: Vec<BodyBox>,
+    /// The bodies' poses at each configuration snapshot, in snapshot order (empty: not
+    /// known; the animation reads its own from `bodies.csv`).
+    pub body_poses: Vec<Vec<BodyPose>>,
+}
+
+/// A rigid body as drawn in the plane [m]: the box's 12 edges and the body axes `x`, `y`,
+/// `z` from the centre of mass, each as its two end points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyOutline {
+    /// The box's edges.
+    pub edges: [[[f64; 2]; 2]; 12],
+    /// The body axes `x`, `y`, `z`.
+    pub axes: [[[f64; 2]; 2]; 3],
 }
 
 /// The nodes in contact with the seabed at one configuration snapshot (penetration > 0,
@@ -193,6 +215,20 @@ impl Scene {
             (_, [x]) => [*x, 0.0],
             _ => [0.0, 0.0],
         }
+    }
+
+    /// The drawing of body `b` at `pose` in the plane ([`Self::plane`]); `None` in the view
+    /// of one plane per line, where a body belongs to no string's plane and is not drawn.
+    pub fn body_outline(&self, b: &BodyBox, pose: &BodyPose) -> Option<BodyOutline> {
+        if self.lines.is_some() {
+            return None;
+        }
+        let c = b.corners(pose).map(|p| self.plane(&p));
+        let f = b.frame(pose).map(|p| self.plane(&p));
+        Some(BodyOutline {
+            edges: BOX_EDGES.map(|[i, j]| [c[i], c[j]]),
+            axes: [[f[0], f[1]], [f[0], f[2]], [f[0], f[3]]],
+        })
     }
 
     /// The direction in the drawing of the model direction `v` (not normalized).

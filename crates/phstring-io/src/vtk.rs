@@ -204,6 +204,78 @@ pub fn write_vtp_frame(path: &Path, data: &FrameData<'_>) -> Result<(), VtkError
         data: Attributes { point, cell },
         ..Default::default()
     };
+    write_piece(path, piece)
+}
+
+/// Writes the rigid bodies `boxes` at their `poses` (same order) as an XML PolyData `.vtp`
+/// file (see [`crate::body_shape`]): per body, its 8 box corners then its centre of mass and
+/// the tips of its body axes `x`, `y`, `z` (12 points); its 3 axis lines (line cells) and its
+/// 6 box faces (quadrilateral polygon cells). Cell data (lines of every body first, then the
+/// faces, as VTK orders cells): `body`, the body's index, and `axis`, 1, 2, 3 for the axis
+/// lines `x`, `y`, `z` and 0 for the faces. Non-finite poses are refused.
+pub fn write_vtp_bodies(
+    path: &Path,
+    boxes: &[crate::body_shape::BodyBox],
+    poses: &[crate::body_shape::BodyPose],
+) -> Result<(), VtkError> {
+    use crate::body_shape::BOX_FACES;
+    if boxes.len() != poses.len() {
+        return Err(VtkError::Input {
+            path: path.to_path_buf(),
+            message: format!("{} poses for {} bodies", poses.len(), boxes.len()),
+        });
+    }
+    let (mut coords, mut lines, mut polys) = (Vec::<f64>::new(), Vec::<u64>::new(), Vec::new());
+    for (bx, pose) in boxes.iter().zip(poses) {
+        let mut flat = pose.position.iter().chain(&pose.orientation);
+        if let Some(x) = flat.find(|x| !x.is_finite()) {
+            return Err(VtkError::Input {
+                path: path.to_path_buf(),
+                message: format!("body {} has a non-finite pose value {x}", bx.name),
+            });
+        }
+        let first = (coords.len() / 3) as u64;
+        coords.extend(bx.corners(pose).iter().chain(&bx.frame(pose)).flatten());
+        let centre = first + 8;
+        lines.extend((1..=3).flat_map(|k| [centre, centre + k]));
+        polys.extend(BOX_FACES.iter().flatten().map(|&i| first + i as u64));
+    }
+    let n = boxes.len();
+    let index = |b: usize| i32::try_from(b).unwrap_or(i32::MAX);
+    let body: Vec<i32> = (0..n)
+        .flat_map(|b| [index(b); 3])
+        .chain((0..n).flat_map(|b| [index(b); 6]))
+        .collect();
+    let axis: Vec<i32> = (0..n)
+        .flat_map(|_| [1, 2, 3])
+        .chain(std::iter::repeat_n(0, 6 * n))
+        .collect();
+    let piece = PolyDataPiece {
+        points: coords.into(),
+        lines: Some(VertexNumbers::XML {
+            connectivity: lines,
+            offsets: (1..=3 * n as u64).map(|k| 2 * k).collect(),
+        }),
+        polys: Some(VertexNumbers::XML {
+            connectivity: polys,
+            offsets: (1..=6 * n as u64).map(|k| 4 * k).collect(),
+        }),
+        data: Attributes {
+            point: Vec::new(),
+            cell: vec![
+                Attribute::scalars("body", 1).with_data(body),
+                Attribute::scalars("axis", 1).with_data(axis),
+            ],
+        },
+        ..Default::default()
+    };
+    write_piece(path, piece)
+}
+
+/// Writes `piece` as an XML PolyData file at `path`, formatted in memory first: an I/O error
+/// (a full disk) is reported as such, not as the formatter's error, and a failed write
+/// leaves no partial file.
+fn write_piece(path: &Path, piece: PolyDataPiece) -> Result<(), VtkError> {
     let vtk = Vtk {
         version: Version::new_xml(1, 0),
         title: String::new(),
@@ -211,8 +283,6 @@ pub fn write_vtp_frame(path: &Path, data: &FrameData<'_>) -> Result<(), VtkError
         data: DataSet::inline(piece),
         file_path: None,
     };
-    // Formatted in memory, then written: an I/O error (a full disk) is reported as such,
-    // not as the formatter's error, and a failed write leaves no partial file.
     let mut bytes = Vec::new();
     vtk.write_xml(&mut bytes).map_err(|e| VtkError::Vtk {
         path: path.to_path_buf(),
@@ -539,6 +609,80 @@ mod tests {
         assert_eq!(names, ["C", "S"]);
         assert_eq!(array(&piece.data.cell, "S"), s);
         assert_eq!(array(&piece.data.cell, "C")[2], 1.02);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Two bodies: the hook block (600 kg, 40, 50, 26 kg·m², a 0.6 × 0.4 × 0.8 m box) at
+    /// (1, 2, 3) m unturned and a 1 t cube; the file has 12 points, 3 lines and 6
+    /// quadrilaterals per body, the hook's first corner at (0.7, 1.8, 2.6) m and its
+    /// axis tips 0.6 m out, and faces whose corners span the box.
+    #[test]
+    fn vtp_bodies_round_trip() {
+        use crate::body_shape::{BodyBox, BodyPose};
+        let dir = temp_dir("bodies");
+        let path = dir.join("bodies_000000.vtp");
+        let diag = |a: f64, b: f64, c: f64| [[a, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]];
+        let boxes = [
+            BodyBox::new("hook", 600.0, diag(40.0, 50.0, 26.0), 3),
+            BodyBox::new("cube", 1000.0, diag(150.0, 150.0, 150.0), 3),
+        ];
+        let rest = |p: [f64; 3]| BodyPose {
+            position: p,
+            orientation: [1.0, 0.0, 0.0, 0.0],
+        };
+        write_vtp_bodies(&path, &boxes, &[rest([1.0, 2.0, 3.0]), rest([0.0; 3])]).unwrap();
+        let piece = poly_piece(Vtk::import(&path).unwrap());
+        assert_eq!(piece.num_points(), 24);
+        assert_eq!(piece.num_lines(), 6);
+        assert_eq!(piece.num_polys(), 12);
+        assert_eq!(piece.num_cells(), 18);
+        let pts = piece.points.cast_into::<f64>().unwrap();
+        let point = |i: usize| [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]];
+        // Corner 0 of the hook is the centre minus every half side, whatever the axes' order.
+        for (k, want) in [0.7, 1.8, 2.6].into_iter().enumerate() {
+            assert!((point(0)[k] - want).abs() < 1e-14, "{:?}", point(0));
+        }
+        assert_eq!(point(8), [1.0, 2.0, 3.0]);
+        for (k, tip) in [[1.6, 2.0, 3.0], [1.0, 2.6, 3.0], [1.0, 2.0, 3.6]]
+            .iter()
+            .enumerate()
+        {
+            let p = point(9 + k);
+            assert!((0..3).all(|i| (p[i] - tip[i]).abs() < 1e-14), "{p:?}");
+        }
+        // The cube of 150 kg·m² at 1 t: side sqrt(6 · 150 / 1000) m, corner 12 at −side/2.
+        let half = 0.5 * 0.9f64.sqrt();
+        assert!(
+            point(12).iter().all(|x| (x + half).abs() < 1e-14),
+            "{:?}",
+            point(12)
+        );
+        let (conn, offs) = match piece.polys.clone().unwrap() {
+            VertexNumbers::XML {
+                connectivity,
+                offsets,
+            } => (connectivity, offsets),
+            VertexNumbers::Legacy { .. } => panic!("legacy topology"),
+        };
+        assert_eq!(offs.last(), Some(&48));
+        // The first face of the second body uses its own corners 12..20.
+        assert!(conn[24..28].iter().all(|&i| (12..20).contains(&i)));
+        let body = array(&piece.data.cell, "body");
+        let axis = array(&piece.data.cell, "axis");
+        assert_eq!(body[..6], [0.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
+        assert_eq!(body[6..12], [0.0; 6]);
+        assert_eq!(axis[..6], [1.0, 2.0, 3.0, 1.0, 2.0, 3.0]);
+        assert!(axis[6..].iter().all(|&a| a == 0.0));
+        let mut bad = rest([f64::NAN, 0.0, 0.0]);
+        let e = write_vtp_bodies(&path, &boxes[..1], &[bad]).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("body hook has a non-finite pose value NaN"),
+            "{e}"
+        );
+        bad.position[0] = 0.0;
+        let e = write_vtp_bodies(&path, &boxes, &[bad]).unwrap_err();
+        assert!(e.to_string().contains("1 poses for 2 bodies"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 

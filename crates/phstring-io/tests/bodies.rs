@@ -305,3 +305,28 @@ fn a_failing_wrench_expression_names_its_key() {
         "`bodies.box.wrench.force` component x \"sqrt(0.5 - t)\" at t = 0.505 s: operand out of domain (at \"sqrt(0.5 - t)\", characters 0..13)"
     );
 }
+
+/// `wrench = { external = true }` is a port a front end alone drives: the body has a wrench
+/// port (zero force and torque at `t = 0`), and its component says it is external; without
+/// the key, a wrench is not.
+#[test]
+fn an_external_wrench_is_a_port_of_the_front_end() {
+    let text = BOX.replace("[time]", "[bodies.box.wrench]\nexternal = true\n\n[time]");
+    let phstring::ByDim::D3(s) = validate(&text).unwrap() else {
+        panic!("not 3D")
+    };
+    assert!(s.problem.system.body_has_wrench(0));
+    assert!(s.components.bodies[0].wrench_external);
+    let text = BOX.replace(
+        "[time]",
+        "[bodies.box.wrench]\nforce = [\"1e3\", \"0\", \"0\"]\n\n[time]",
+    );
+    let phstring::ByDim::D3(s) = validate(&text).unwrap() else {
+        panic!("not 3D")
+    };
+    assert!(s.problem.system.body_has_wrench(0));
+    assert!(!s.components.bodies[0].wrench_external);
+    let bad = BOX.replace("[time]", "[bodies.box.wrench]\nexternal = 1\n\n[time]");
+    let err = refused(&bad);
+    assert!(err.contains("external"), "{err}");
+}

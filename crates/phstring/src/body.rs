@@ -279,6 +279,9 @@ pub(crate) struct BodyModel {
     pub wrench: Option<BodyWrench>,
     /// The body's own mass [kg] (`mass` has the added mass too).
     pub dry_mass: f64,
+    /// The body's own inertia tensor about its centre of mass in body axes [kg·m²], as
+    /// given (`inertia` has the added inertia too, and in 2D only its `z` moment).
+    pub dry_inertia: Mat3,
     /// The buoyancy force [N] (space axes) and its point (body axes).
     pub buoyancy: Option<(Vec3, Vec3)>,
     /// Drag at the centre of mass: linear [N·s/m], quadratic `½ ρ_w C_d A` [kg/m], and the
@@ -473,6 +476,7 @@ impl BodyModel {
             attachments,
             wrench: body.wrench.clone(),
             dry_mass: body.mass,
+            dry_inertia: body.inertia,
             buoyancy,
             drag,
             waterplane,
@@ -822,6 +826,7 @@ mod tests {
             attachments: vec![],
             wrench: None,
             dry_mass: 2000.0,
+            dry_inertia: inertia,
             buoyancy: None,
             drag: None,
             waterplane: None,

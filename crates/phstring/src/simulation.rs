@@ -639,6 +639,16 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn body_ports(&self) -> &[crate::body::BodyPortSample] {
         &self.body_ports
     }
+    /// The rigid bodies' own masses [kg] and inertia tensors about their centres of mass in
+    /// body axes [kg·m²] (as given, without the water's added mass and inertia), in body
+    /// order.
+    pub fn body_inertias(&self) -> Vec<(f64, crate::body::Mat3)> {
+        self.sys
+            .bodies
+            .iter()
+            .map(|b| (b.dry_mass, b.dry_inertia))
+            .collect()
+    }
     /// Cumulative supplied energy `Σ h û·ŷ` [J].
     pub fn supplied_energy(&self) -> f64 {
         self.run.supplied_total

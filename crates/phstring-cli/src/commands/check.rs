@@ -276,7 +276,7 @@ fn describe_bodies(out: &mut String, bodies: &[phstring_io::scenario::BodyCompon
                 p.attached.join(", ")
             );
         }
-        if !b.wrench_force.is_empty() || !b.wrench_torque.is_empty() {
+        if !b.wrench_force.is_empty() || !b.wrench_torque.is_empty() || b.wrench_external {
             let list = |l: &[String]| {
                 let v: Vec<String> = l.iter().map(|e| clip(e).into_owned()).collect();
                 if v.is_empty() {
@@ -287,10 +287,15 @@ fn describe_bodies(out: &mut String, bodies: &[phstring_io::scenario::BodyCompon
             };
             let _ = writeln!(
                 out,
-                "  wrench:    {}: force {} N, torque {} N·m (space axes; velocity and angular velocity out)",
+                "  wrench:    {}: force {} N, torque {} N·m (space axes; velocity and angular velocity out){}",
                 b.name,
                 list(&b.wrench_force),
-                list(&b.wrench_torque)
+                list(&b.wrench_torque),
+                if b.wrench_external {
+                    "; external: an input of a front end, starting at these values"
+                } else {
+                    ""
+                }
             );
         }
     }

@@ -333,6 +333,10 @@ fn a_resumed_run_writes_the_bodies_of_an_uninterrupted_one() {
     assert_eq!(read(&whole).lines().count(), 1 + 2 * 401);
     assert_eq!(read(&whole), read(&parts));
     assert_eq!(summary(&whole)["bodies"], summary(&parts)["bodies"]);
+    // The bodies' ParaView collection continues after the checkpoint's frames.
+    let pvd = |d: &Path| std::fs::read_to_string(d.join("paraview/bodies.pvd")).unwrap();
+    assert_eq!(pvd(&whole), pvd(&parts));
+    assert_eq!(pvd(&whole).matches("<DataSet").count(), 9);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -427,4 +431,58 @@ fn statics_and_an_equilibrium_start_take_bodies() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The hook block example drawn (0.5 s, a frame every 10 steps): `configuration` has the
+/// legend entry of the bodies and, at the last snapshot (full colour), the 12 edges of each
+/// of the two boxes; `animation.gif` is written; `paraview/bodies.pvd` lists one bodies frame
+/// per strings frame (steps 0, 10, …, 50), each with 12 points, 3 lines and 6 faces per body.
+#[test]
+fn hook_block_bodies_are_drawn_in_plots_animation_and_paraview() {
+    let out = temp_dir("hook-block-drawn");
+    let o = run_with(
+        "examples/hook_block_3d.toml",
+        &out,
+        &["time.end=0.5", "output.stride=10"],
+        &[],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let plots: Vec<&str> = s["plots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|p| p.as_str())
+        .collect();
+    assert!(
+        plots.contains(&"configuration") && plots.contains(&"animation"),
+        "{plots:?}"
+    );
+    assert!(
+        s["warnings"].as_array().unwrap().is_empty(),
+        "{}",
+        s["warnings"]
+    );
+    let svg = std::fs::read_to_string(out.join("configuration.svg")).unwrap();
+    assert!(svg.contains("rigid bodies"), "no legend entry");
+    // The last snapshot's edges in the full body colour, plus the legend's line.
+    assert_eq!(svg.matches("stroke=\"#5A3C1E\"").count(), 2 * 12 + 1);
+    assert!(out.join("animation.gif").is_file());
+    let pvd = std::fs::read_to_string(out.join("paraview/bodies.pvd")).unwrap();
+    let strings = std::fs::read_to_string(out.join("paraview/string.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 6);
+    assert_eq!(strings.matches("<DataSet").count(), 6);
+    for step in [0, 10, 20, 30, 40, 50] {
+        let name = format!("bodies_{step:06}.vtp");
+        assert!(pvd.contains(&name), "{name} not listed");
+        let vtp = std::fs::read_to_string(out.join("paraview").join(&name)).unwrap();
+        for count in [
+            "NumberOfPoints=\"24\"",
+            "NumberOfLines=\"6\"",
+            "NumberOfPolys=\"12\"",
+        ] {
+            assert!(vtp.contains(count), "{name} lacks {count}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
 }

@@ -179,3 +179,30 @@ pub fn scene(file: &ScenarioFile, writers: &crate::output::Writers) -> Scene {
     }
     scene
 }
+
+/// Adds the rigid bodies of `sim` to `scene` (their boxes, [`crate::body_shape`]) with their
+/// poses at the configuration `snapshots` read back from `dir/bodies.csv`; returns the
+/// warning if those cannot be read (the bodies are then left out of the configuration
+/// plot). Nothing for a run without bodies.
+pub fn add_bodies<const D: usize>(
+    scene: &mut Scene,
+    sim: &phstring::Simulation<D, Material>,
+    dir: &std::path::Path,
+    snapshots: &[(f64, Vec<[f64; 2]>)],
+) -> Option<String> {
+    scene.bodies = crate::body_shape::BodyBox::of(sim);
+    if scene.bodies.is_empty() || snapshots.is_empty() {
+        return None;
+    }
+    let times: Vec<f64> = snapshots.iter().map(|s| s.0).collect();
+    let path = dir.join(crate::files::BODIES_FILE);
+    match crate::body_shape::read_poses(&path, scene.bodies.len(), &times) {
+        Ok(poses) => {
+            scene.body_poses = poses;
+            None
+        }
+        Err(e) => Some(format!(
+            "rigid bodies not drawn in the configuration plot: {e}"
+        )),
+    }
+}

@@ -5,7 +5,8 @@
 //! command with `--force`):
 //!
 //! ```text
-//! DIR/  RUN_FILES, paraview/ (string.pvd, frame_NNNNNN.vtp)    a run
+//! DIR/  RUN_FILES, paraview/ (string.pvd, frame_NNNNNN.vtp,    a run
+//!       bodies.pvd, bodies_NNNNNN.vtp)
 //!       dg/, mp/ (each a run folder), figures/ (PAPER_FIGURES)  phstring paper
 //!       sweep.csv, run_NNN/ (each a run folder)                 phstring sweep
 //!       .phstring.lock                                          the lock (never removed)
@@ -16,18 +17,25 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use crate::files::{
-    CAMPAIGN_TABLE, FIGURES_DIR, LOCK_FILE, PAPER_FIGURES, PAPER_RUN_DIRS, PARAVIEW_DIR, PVD_FILE,
-    RUN_FILES, RUN_ID_FILE, SWEEP_TABLE, case_dir_name, frame_name, is_channel_table,
-    is_own_temp_file,
+    BODIES_PVD_FILE, CAMPAIGN_TABLE, FIGURES_DIR, LOCK_FILE, PAPER_FIGURES, PAPER_RUN_DIRS,
+    PARAVIEW_DIR, PVD_FILE, RUN_FILES, RUN_ID_FILE, SWEEP_TABLE, body_frame_name, case_dir_name,
+    frame_name, is_channel_table, is_own_temp_file,
 };
 
-/// Whether `name` is exactly a name that [`frame_name`] gives.
+/// Whether `name` is exactly a name that [`frame_name`] or [`body_frame_name`] gives.
 fn is_frame_name(name: &str) -> bool {
-    name.strip_prefix("frame_")
-        .and_then(|s| s.strip_suffix(".vtp"))
-        .filter(|d| d.bytes().all(|b| b.is_ascii_digit()))
-        .and_then(|d| d.parse::<usize>().ok())
-        .is_some_and(|n| frame_name(n) == name)
+    [
+        ("frame_", frame_name as fn(usize) -> String),
+        ("bodies_", body_frame_name),
+    ]
+    .iter()
+    .any(|(prefix, named)| {
+        name.strip_prefix(prefix)
+            .and_then(|s| s.strip_suffix(".vtp"))
+            .filter(|d| d.bytes().all(|b| b.is_ascii_digit()))
+            .and_then(|d| d.parse::<usize>().ok())
+            .is_some_and(|n| named(n) == name)
+    })
 }
 
 /// Whether `name` is exactly a name that [`run_dir_name`] or [`case_dir_name`] gives.
@@ -87,8 +95,11 @@ fn classify(folder: Folder, name: &str) -> Option<Entry> {
             }
         }),
         Folder::Run => run(name),
-        Folder::Paraview => (name == PVD_FILE || is_own_temp_file(name) || is_frame_name(name))
-            .then_some(Entry::File),
+        Folder::Paraview => (name == PVD_FILE
+            || name == BODIES_PVD_FILE
+            || is_own_temp_file(name)
+            || is_frame_name(name))
+        .then_some(Entry::File),
         Folder::Figures => PAPER_FIGURES.contains(&name).then_some(Entry::File),
     }
 }
@@ -360,6 +371,9 @@ mod tests {
         assert!(!is_frame_name("frame_0000001.vtp"));
         assert!(!is_frame_name("frame_.vtp"));
         assert!(!is_frame_name("frame_+00001.vtp"));
+        assert!(is_frame_name("bodies_000040.vtp"));
+        assert!(!is_frame_name("bodies_40.vtp"));
+        assert!(!is_frame_name("bodies.vtp"));
         assert!(is_run_dir_name("run_000"));
         assert!(is_run_dir_name("run_1234"));
         assert!(!is_run_dir_name("run_"));

@@ -540,6 +540,12 @@ fn run_dim<const D: usize>(
     // The summary is on disk before the plots, whatever happens to them.
     write_summary(out, &info)?;
     let mut scene = super::ends::scene(file, &writers);
+    info.warnings.extend(super::ends::add_bodies(
+        &mut scene,
+        &sim,
+        out,
+        writers.snapshots(),
+    ));
     if ctx.settings.output.plots {
         draw(&ctx, (&writers, &scene), &mut info, opts.stop.as_deref())?;
     }

@@ -25,11 +25,12 @@ use std::time::{Duration, Instant};
 use phstring::{Energies, Law, Material, PortKind, Simulation, StepReport};
 
 use self::csv::{Csv, PendingCsv};
+use crate::body_shape::{BodyBox, BodyPose};
 use crate::checkpoint::OutputState;
 use crate::files::{
-    BODIES_FILE, ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR, POINT_MASSES_FILE,
-    PORTS_FILE, POSITIONS_FILE, PVD_FILE, elements_header, energy_header, frame_name, headers, num,
-    remove_stale_temp_files,
+    BODIES_FILE, BODIES_PVD_FILE, ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR,
+    POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE, PVD_FILE, body_frame_name, elements_header,
+    energy_header, frame_name, headers, num, remove_stale_temp_files,
 };
 use crate::plot::{GroupDrawing, PlotError, Topology};
 use crate::text::sanitize_text;
@@ -510,6 +511,9 @@ pub struct Writers {
     channels: Option<Csv>,
     channel_model: Option<ChannelTable>,
     pvd: Option<PvdWriter>,
+    /// The rigid bodies' collection (`paraview/bodies.pvd`; runs with bodies), a frame at
+    /// every frame of `pvd`.
+    body_pvd: Option<PvdWriter>,
     /// The collection file must be written again before it is whole (a resume continues
     /// it after the checkpoint's frames); frames are listed as they are written.
     pvd_dirty: bool,
@@ -574,6 +578,8 @@ impl Writers {
         } else {
             None
         };
+        let body_pvd = (vtk_frames && !sim.system().bodies().is_empty())
+            .then(|| PvdWriter::new(&dir.join(PARAVIEW_DIR).join(BODIES_PVD_FILE)));
         let mut w = Self {
             dir: dir.to_path_buf(),
             water,
@@ -586,6 +592,7 @@ impl Writers {
             channels: None,
             channel_model: None,
             pvd,
+            body_pvd,
             pvd_dirty: false,
             stride,
             snapshot_times,
@@ -703,6 +710,7 @@ impl Writers {
             }
             p.end_record()?;
         }
+        self.body_frame(sim)?;
         if let Some(pvd) = &mut self.pvd {
             let pad = |v: &phstring::Vector<D>| {
                 let mut a = [0.0; 3];
@@ -766,6 +774,43 @@ impl Writers {
             self.pvd_dirty = false;
             self.frames += 1;
             self.frames_hash = frames_hash_add(self.frames_hash, t, &name);
+        }
+        Ok(())
+    }
+
+    /// Writes the rigid bodies' ParaView frame of the step of `sim` ([`vtk::write_vtp_bodies`])
+    /// and lists it in `paraview/bodies.pvd` (runs with bodies and ParaView frames; a frame
+    /// the collection cannot list is removed, as the strings' are).
+    fn body_frame<const D: usize>(
+        &mut self,
+        sim: &Simulation<D, Material>,
+    ) -> Result<(), OutputError> {
+        let Some(pvd) = &mut self.body_pvd else {
+            return Ok(());
+        };
+        let boxes = BodyBox::of(sim);
+        let poses: Vec<BodyPose> = sim
+            .state()
+            .bodies
+            .iter()
+            .map(|st| {
+                let q = st.orientation.quaternion();
+                BodyPose {
+                    position: st.position.into(),
+                    orientation: [q.w, q.i, q.j, q.k],
+                }
+            })
+            .collect();
+        let name = body_frame_name(sim.steps());
+        let path = self.dir.join(PARAVIEW_DIR).join(&name);
+        vtk::write_vtp_bodies(&path, &boxes, &poses)
+            .inspect_err(|_| self.paraview_failed = true)?;
+        pvd.add(sim.time(), &name);
+        if let Err(e) = pvd.write() {
+            pvd.discard_pending();
+            self.paraview_failed = true;
+            let _ = std::fs::remove_file(&path);
+            return Err(e.into());
         }
         Ok(())
     }
@@ -897,6 +942,21 @@ impl Writers {
         } else {
             None
         };
+        let body_pvd = if vtk_frames && state.bodies_bytes.is_some() {
+            let path = dir.join(PARAVIEW_DIR).join(BODIES_PVD_FILE);
+            let p = PvdWriter::resume(&path, state.frames, |_, _| {}).map_err(|e| {
+                OutputError::Mismatch {
+                    path: path.clone(),
+                    reason: format!(
+                        "it does not list the checkpoint's {} frames ({e})",
+                        state.frames
+                    ),
+                }
+            })?;
+            Some(p)
+        } else {
+            None
+        };
         // Check every file before any is cut back.
         check_header(&dir.join(ENERGY_FILE), &energy_header(D, water))?;
         let energy = PendingCsv::open(dir.join(ENERGY_FILE), state.energy_bytes)?;
@@ -933,6 +993,7 @@ impl Writers {
             channels,
             channel_model: None,
             pvd,
+            body_pvd,
             pvd_dirty: true,
             stride,
             snapshot_times,
@@ -1127,10 +1188,10 @@ impl Writers {
         if let Some(c) = &mut self.channels {
             c.flush()?;
         }
-        if let Some(pvd) = &mut self.pvd
-            && self.pvd_dirty
-        {
-            pvd.write().inspect_err(|_| self.paraview_failed = true)?;
+        if self.pvd_dirty {
+            for pvd in [&mut self.pvd, &mut self.body_pvd].into_iter().flatten() {
+                pvd.write().inspect_err(|_| self.paraview_failed = true)?;
+            }
             self.pvd_dirty = false;
         }
         self.last_flush = Instant::now();
@@ -1157,6 +1218,9 @@ impl Writers {
         .collect();
         if self.paraview_failed {
             files.push(format!("{PARAVIEW_DIR}/{PVD_FILE}"));
+            if self.body_pvd.is_some() {
+                files.push(format!("{PARAVIEW_DIR}/{BODIES_PVD_FILE}"));
+            }
         }
         files
     }
@@ -1179,11 +1243,12 @@ impl Writers {
         if let Some(c) = &mut self.channels {
             let _ = c.flush();
         }
-        if let Some(pvd) = &mut self.pvd
-            && self.pvd_dirty
-            && pvd.write().is_err()
-        {
-            self.paraview_failed = true;
+        if self.pvd_dirty {
+            for pvd in [&mut self.pvd, &mut self.body_pvd].into_iter().flatten() {
+                if pvd.write().is_err() {
+                    self.paraview_failed = true;
+                }
+            }
         }
         self.incomplete_files()
     }

@@ -391,7 +391,7 @@ impl ScenarioFile {
                 continue;
             };
             let key = format!("bodies.{}.wrench", clip(name));
-            let WrenchSpec { force, torque } = w.get_ref();
+            let WrenchSpec { force, torque, .. } = w.get_ref();
             let turns = if D == 2 { 1 } else { 3 };
             let force = self.wrench_exprs(&format!("{key}.force"), force.as_ref(), D, t_check)?;
             let torque =
@@ -470,6 +470,9 @@ fn body_component<const D: usize>(
         points,
         wrench_force: texts(wrench.and_then(|w| w.force.as_ref())),
         wrench_torque: texts(wrench.and_then(|w| w.torque.as_ref())),
+        wrench_external: wrench
+            .and_then(|w| w.external.as_ref())
+            .is_some_and(|x| *x.get_ref()),
     }
 }
 

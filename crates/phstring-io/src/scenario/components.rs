@@ -56,6 +56,10 @@ pub struct BodyComponent {
     /// none).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub wrench_torque: Vec<String>,
+    /// The wrench port is an input of a front end (`wrench.external = true`), which sets its
+    /// force and torque.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub wrench_external: bool,
 }
 
 /// An attachment point of a rigid body: a mesh node that moves with the body.

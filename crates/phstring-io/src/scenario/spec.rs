@@ -484,6 +484,10 @@ pub struct WrenchSpec {
     /// (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub torque: Option<Spanned<Vec<Spanned<String>>>>,
+    /// `external = true`: the force and torque are inputs of a front end, which start at the
+    /// expressions' values at `t = 0` (default `false`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<Spanned<bool>>,
 }
 
 /// `[initial]`: how the run starts, instead of at rest in the straight (or polyline, or
