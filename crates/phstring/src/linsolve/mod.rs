@@ -129,7 +129,8 @@ impl<const D: usize> BlockJacobian<D> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SolverKind {
     /// Block-tridiagonal for chain meshes, [`NetworkSolver`] otherwise (measured 3× faster than
-    /// [`SparseLu`] on a 100-string net).
+    /// [`SparseLu`] on a 100-string net); with rigid bodies' slots, [`make_border_solver`]
+    /// picks [`NetworkSolver`] for a chain too (it takes the slots into its junction system).
     #[default]
     Auto,
     /// [`BlockTridiagonal`] (fails at setup for a mesh that is not a chain).
