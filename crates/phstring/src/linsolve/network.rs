@@ -314,9 +314,8 @@ fn decompose(mesh: &Mesh, forced: &[usize]) -> Decomposition {
 
 /// Appends the border's pairs to the reduced system's `pairs` (junction rows `0..nj` by
 /// `junction_index`, slot `s` at row `nj + s`): one per distinct `[node, slot]` link, then one
-/// per distinct slot pair. Returns the links'
-/// pairs (sorted by `[node, slot]`) and, per slot block `(s, t)` (row-major), its pair and
-/// half.
+/// per distinct slot pair. Returns the links' pairs (sorted by `[node, slot]`) and, per slot
+/// block `(s, t)` (row-major), its pair and half.
 #[allow(clippy::type_complexity)]
 fn border_pairs(
     border: &BorderPattern,
