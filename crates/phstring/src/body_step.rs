@@ -7,7 +7,7 @@
 //! are forces [N] in Newton's norm.
 
 use crate::body::{BodyState, Mat3, NodeRow, PointStep, Turn, Vec3, embed, project};
-use crate::linsolve::{Block, BlockJacobian};
+use crate::linsolve::{Block, BlockJacobian, BorderPattern};
 use crate::system::{PhSystem, Vector};
 
 /// `(Δx, w)` of body `b` from the slots `slots` (the Newton vector after the nodes).
@@ -508,6 +508,31 @@ pub(crate) fn add_body_blocks<const D: usize, M>(
         j.border.own[at(1, 1)][(1, 1)] = 1.0;
     }
     couple(sys, b, points, dw_rows, inv_rg, j);
+}
+
+/// Where the bodies' border of the step's Newton matrix may have nonzero blocks (the blocks
+/// [`add_body_blocks`] and [`couple`] fill): each body's two slots with each other, with the
+/// nodes next to its attached nodes, and with the slots of the bodies those nodes are fixed
+/// to.
+pub(crate) fn border_pattern<const D: usize, M>(sys: &PhSystem<D, M>) -> BorderPattern {
+    let mut pattern = BorderPattern {
+        slots: 2 * sys.bodies.len(),
+        ..Default::default()
+    };
+    for (b, links) in sys.body_links.iter().enumerate() {
+        pattern.pairs.push([2 * b, 2 * b + 1]);
+        for &(_, other, _) in links.iter().flatten() {
+            match sys.attached.get(other).copied().flatten() {
+                Some((b2, _)) => {
+                    for (s, t) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                        pattern.pairs.push([2 * b + s, 2 * b2 + t]);
+                    }
+                }
+                None => pattern.links.extend([[other, 2 * b], [other, 2 * b + 1]]),
+            }
+        }
+    }
+    pattern
 }
 
 /// The blocks between body `b`'s rows and the nodes next to its attached nodes (and the

@@ -43,6 +43,16 @@ pub enum SetupError {
         /// Number of nodes in the mesh.
         n_nodes: usize,
     },
+    /// A slot index (an unknown after the nodes, two per rigid body) is not in `0..slots`.
+    #[error("{what} refers to slot {slot}, but there are slots 0..{slots}")]
+    SlotOutOfRange {
+        /// Where the index appeared.
+        what: &'static str,
+        /// The bad index.
+        slot: usize,
+        /// Number of slots.
+        slots: usize,
+    },
     /// An element connects a node to itself.
     #[error("element {element} connects node {node} to itself")]
     DegenerateElement {
@@ -248,6 +258,24 @@ pub enum LinearSolveError {
     /// The sparse LU backend reported an error.
     #[error("sparse LU failed: {0}")]
     Sparse(String),
+    /// A nonzero block `(row, col)` (unknowns: the nodes, then the slots) lies outside the
+    /// pattern the solver analysed at construction.
+    #[error("the Newton matrix has a nonzero block ({row}, {col}) outside the solver's pattern")]
+    OutsidePattern {
+        /// Row of the block (unknown index).
+        row: usize,
+        /// Column of the block (unknown index).
+        col: usize,
+    },
+    /// The Newton matrix or vector has another number of unknowns than the solver was built
+    /// for.
+    #[error("the Newton system has {found} unknowns, the solver was built for {expected}")]
+    Unknowns {
+        /// Unknowns (nodes and slots) the solver was built for.
+        expected: usize,
+        /// Unknowns of the system given.
+        found: usize,
+    },
 }
 
 impl StepError {

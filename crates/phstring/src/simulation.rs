@@ -445,7 +445,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     .into(),
             });
         }
-        let solver = crate::linsolve::make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?;
+        let border = crate::body_step::border_pattern(&sys);
+        let solver = crate::linsolve::make_border_solver::<D>(params.solver, &sys.mesh, &border)?;
         let mut ports: Vec<PortSample<D>> = sys
             .boundary
             .loads

@@ -6,6 +6,11 @@
 //! [`SparseLu`] (faer's sparse LU, any mesh) and [`NetworkSolver`] (block Thomas along the
 //! strings between junction nodes, sparse LU on the junctions; any mesh). All analyse the
 //! mesh once at construction and refactor new values at every call without allocating.
+//!
+//! The rigid bodies' slots ([`Border`]) join the network solver's reduced junction system
+//! as junctions of their own ([`NetworkSolver::with_border`], O(1) work per body); the other
+//! two solvers take them by a Schur complement ([`Bordered`], one more O(N) sweep per slot
+//! component).
 
 mod block_lu;
 mod block_tridiagonal;
@@ -50,6 +55,21 @@ pub struct Border<const D: usize> {
     /// Couplings of a slot with a node: `(node, slot, ∂R_slot/∂x_node, ∂R_node/∂u_slot)`;
     /// a pair may appear more than once (the blocks add).
     pub links: Vec<(usize, usize, Block<D>, Block<D>)>,
+}
+
+/// Where a [`Border`] may have nonzero blocks, known before the first assembly: a solver that
+/// takes the slots into its own elimination ([`NetworkSolver::with_border`]) analyses it once.
+/// Every slot's diagonal block may be nonzero; the blocks not listed must stay zero.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct BorderPattern {
+    /// Number of slots.
+    pub slots: usize,
+    /// `[node, slot]`: the blocks `∂R_slot/∂x_node` and `∂R_node/∂u_slot` may be nonzero
+    /// (repeats allowed).
+    pub links: Vec<[usize; 2]>,
+    /// `[s, t]`, `s ≠ t`: the blocks `∂R_s/∂u_t` and `∂R_t/∂u_s` may be nonzero (repeats and
+    /// either order allowed).
+    pub pairs: Vec<[usize; 2]>,
 }
 
 impl<const D: usize> BlockJacobian<D> {
@@ -109,7 +129,8 @@ impl<const D: usize> BlockJacobian<D> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SolverKind {
     /// Block-tridiagonal for chain meshes, [`NetworkSolver`] otherwise (measured 3× faster than
-    /// [`SparseLu`] on a 100-string net).
+    /// [`SparseLu`] on a 100-string net); with rigid bodies' slots, [`make_border_solver`]
+    /// picks [`NetworkSolver`] for a chain too (it takes the slots into its junction system).
     #[default]
     Auto,
     /// [`BlockTridiagonal`] (fails at setup for a mesh that is not a chain).
@@ -170,6 +191,28 @@ pub fn make_bordered_solver<const D: usize>(
     } else {
         Box::new(Bordered::new(inner, mesh.n_nodes(), slots))
     })
+}
+
+/// Builds the solver `kind` for `mesh` with the slots of `border` (the rigid bodies'): the
+/// network solver (`Auto` or `Network`, chain or not) takes the slots into its reduced
+/// junction system ([`NetworkSolver::with_border`]); `BlockTridiagonal` and `SparseLu` solve
+/// the nodes inside a [`Bordered`] solver. Without slots, as [`make_solver`].
+pub fn make_border_solver<const D: usize>(
+    kind: SolverKind,
+    mesh: &Mesh,
+    border: &BorderPattern,
+) -> Result<Box<dyn LinearSolver<D>>, SetupError> {
+    match kind {
+        _ if border.slots == 0 => make_solver::<D>(kind, mesh),
+        SolverKind::Auto | SolverKind::Network => Ok(Box::new(NetworkSolver::with_border(
+            mesh,
+            border,
+            JunctionLu::Block,
+        )?)),
+        SolverKind::BlockTridiagonal | SolverKind::SparseLu => {
+            make_bordered_solver::<D>(kind, mesh, border.slots)
+        }
+    }
 }
 
 /// Builds the solver `kind` for `mesh`.

@@ -9,6 +9,11 @@
 //! a sparse LU whose symbolic analysis was done at construction ([`super::block_lu`] by
 //! default, faer's scalar sparse LU on request), and the interior nodes are recovered by
 //! back substitution.
+//!
+//! With a border (the rigid bodies' slots, [`NetworkSolver::with_border`]), the slots are
+//! unknowns of the reduced system too, and every node a slot couples with is made a junction
+//! (docs/method.md §22): a body costs a few blocks of the reduced system, not a sweep of the
+//! strings per slot component as in [`super::Bordered`].
 
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::lu::LuSymbolicParams;
@@ -16,8 +21,8 @@ use nalgebra::SVector;
 
 use super::block_lu::{BlockLu, Slot};
 use super::sparse_lu::FaerBlockLu;
-use super::{Block, BlockJacobian, LinearSolver};
-use crate::error::LinearSolveError;
+use super::{Block, BlockJacobian, BorderPattern, LinearSolver};
+use crate::error::{LinearSolveError, SetupError};
 use crate::mesh::Mesh;
 
 /// Which sparse LU factors the reduced junction system of a [`NetworkSolver`].
@@ -73,11 +78,12 @@ enum Reduced<const D: usize> {
 }
 
 /// The reduced junction system as a scalar CSC matrix for faer's sparse LU: `D²` slots per
-/// junction diagonal block, then `2·D²` per non-loop segment (blocks `(start, end)` and
-/// `(end, start)`).
+/// diagonal block (junctions, then border slots), then `2·D²` per pair (blocks `(a, b)` and
+/// `(b, a)`; the non-loop segments' `(start, end)` first).
 struct FaerReduced {
     lu: FaerBlockLu,
-    n_junctions: usize,
+    /// Rows of the reduced system, in blocks.
+    n_blocks: usize,
 }
 
 impl<const D: usize> Reduced<D> {
@@ -89,28 +95,36 @@ impl<const D: usize> Reduced<D> {
         }
     }
 
-    /// Adds the coupling blocks `[(start, end), (end, start)]` of non-loop segment
-    /// `coupling`.
+    /// Adds the blocks `[(a, b), (b, a)]` of pair `[a, b]` number `pair` (the non-loop
+    /// segments' pairs first, numbered as their `coupling`, then the border's).
     #[inline]
-    fn add_coupling(&mut self, coupling: usize, blocks: &[Block<D>; 2]) {
+    fn add_coupling(&mut self, pair: usize, blocks: &[Block<D>; 2]) {
+        self.add_half(pair, 0, &blocks[0]);
+        self.add_half(pair, 1, &blocks[1]);
+    }
+
+    /// Adds `blk` to block `(a, b)` (`half = 0`) or `(b, a)` (`half = 1`) of pair `[a, b]`
+    /// number `pair`.
+    #[inline]
+    fn add_half(&mut self, pair: usize, half: usize, blk: &Block<D>) {
         match self {
-            Reduced::Block { lu, slots } => {
-                let [s0, s1] = slots[coupling];
-                lu.add(s0, &blocks[0]);
-                lu.add(s1, &blocks[1]);
-            }
-            Reduced::Faer(red) => {
-                let dd = D * D;
-                for (h, blk) in blocks.iter().enumerate() {
-                    red.lu.add((red.n_junctions + 2 * coupling + h) * dd, blk);
-                }
-            }
+            Reduced::Block { lu, slots } => lu.add(slots[pair][half], blk),
+            Reduced::Faer(red) => red.lu.add((red.n_blocks + 2 * pair + half) * D * D, blk),
+        }
+    }
+
+    /// Adds `blk` to the diagonal block of row `r` of the reduced system.
+    #[inline]
+    fn add_diag(&mut self, r: usize, blk: &Block<D>) {
+        match self {
+            Reduced::Block { lu, .. } => lu.add_diag(r, blk),
+            Reduced::Faer(red) => red.lu.add(r * D * D, blk),
         }
     }
 }
 
 impl FaerReduced {
-    /// The reduced system of `nj` junction blocks and the coupling blocks of `pairs`, with
+    /// The reduced system of `nj` diagonal blocks and the coupling blocks of `pairs`, with
     /// its symbolic simplicial LU.
     fn new<const D: usize>(nj: usize, pairs: &[[usize; 2]]) -> Self {
         let params = LuSymbolicParams {
@@ -119,7 +133,7 @@ impl FaerReduced {
         };
         Self {
             lu: FaerBlockLu::new::<D>(nj, pairs, params, true),
-            n_junctions: nj,
+            n_blocks: nj,
         }
     }
 }
@@ -148,6 +162,13 @@ impl FaerReduced {
 /// pivoting between blocks, which is safe for the mass-dominated Newton matrices of the time
 /// stepper; [`super::SparseLu`] is the oracle.
 ///
+/// **Border** ([`NetworkSolver::with_border`]): the slots of a [`super::Border`] (unknowns
+/// `n_nodes..`, the rigid bodies') are rows of the reduced system after the junctions, with
+/// the blocks of the [`BorderPattern`] between them and the nodes they couple with, which
+/// the decomposition makes junctions. The segments' elimination is unchanged (no slot
+/// couples with an interior node), so the border adds `O(1)` blocks per body to the reduced
+/// system and nothing to the sweeps along the strings.
+///
 /// All workspace is allocated in [`NetworkSolver::new`]; [`LinearSolver::solve`] does not
 /// allocate (faer's dense kernels keep one thread-local work space, sized by a warm-up in
 /// the construction; a solver moved to another thread sizes it there in its first solve).
@@ -170,6 +191,19 @@ pub struct NetworkSolver<const D: usize> {
     /// Schur-complemented junction diagonal blocks (indexed like `junctions`).
     jdiag: Vec<Block<D>>,
     reduced: Option<Reduced<D>>,
+    /// Number of nodes.
+    n_nodes: usize,
+    /// Number of border slots.
+    n_slots: usize,
+    /// The Newton vector's index of each row of the reduced system: the junctions, then the
+    /// slots.
+    rows: Vec<usize>,
+    /// Per `[node, slot]` of the border's pattern (sorted, distinct), its pair in the reduced
+    /// system.
+    link_pairs: Vec<([usize; 2], usize)>,
+    /// Per slot block `(s, t)`, `s ≠ t` (row-major, `slots²`), its pair and half in the
+    /// reduced system, if in the pattern.
+    own_pairs: Vec<Option<(usize, usize)>>,
     /// With [`LinearSolver::keep_factors`]: per interior node (indexed like
     /// `interior_nodes`) its pivot's inverse `D'_k⁻¹` and the junction coupling `r` before its
     /// elimination, for [`LinearSolver::solve_again`]; empty otherwise.
@@ -194,7 +228,8 @@ struct Decomposition {
     path_elements: Vec<(usize, bool)>,
 }
 
-fn decompose(mesh: &Mesh) -> Decomposition {
+/// The decomposition of `mesh` with the nodes `forced` (and the default ones) junctions.
+fn decompose(mesh: &Mesh, forced: &[usize]) -> Decomposition {
     let n = mesh.n_nodes();
     let els = mesh.elements();
     // Incidence lists in CSR form: elements of node v are inc[start[v]..start[v + 1]].
@@ -221,6 +256,9 @@ fn decompose(mesh: &Mesh) -> Decomposition {
             !(i.len() == 2 && other(i[0], v) != other(i[1], v))
         })
         .collect();
+    for &v in forced {
+        is_junction[v] = true;
+    }
     let mut d = Decomposition {
         is_junction: Vec::new(),
         segments: Vec::new(),
@@ -274,6 +312,48 @@ fn decompose(mesh: &Mesh) -> Decomposition {
     d
 }
 
+/// Appends the border's pairs to the reduced system's `pairs` (junction rows `0..nj` by
+/// `junction_index`, slot `s` at row `nj + s`): one per distinct `[node, slot]` link, then one
+/// per distinct slot pair. Returns the links' pairs (sorted by `[node, slot]`) and, per slot
+/// block `(s, t)` (row-major), its pair and half.
+#[allow(clippy::type_complexity)]
+fn border_pairs(
+    border: &BorderPattern,
+    junction_index: &[usize],
+    pairs: &mut Vec<[usize; 2]>,
+) -> (Vec<([usize; 2], usize)>, Vec<Option<(usize, usize)>>) {
+    let m = border.slots;
+    let nj = junction_index
+        .iter()
+        .filter(|&&r| r != NOT_A_JUNCTION)
+        .count();
+    let mut links = border.links.clone();
+    links.sort_unstable();
+    links.dedup();
+    let link_pairs = links
+        .into_iter()
+        .map(|[node, slot]| {
+            pairs.push([junction_index[node], nj + slot]);
+            ([node, slot], pairs.len() - 1)
+        })
+        .collect();
+    let mut own: Vec<[usize; 2]> = border
+        .pairs
+        .iter()
+        .filter(|[s, t]| s != t)
+        .map(|&[s, t]| [s.min(t), s.max(t)])
+        .collect();
+    own.sort_unstable();
+    own.dedup();
+    let mut own_pairs = vec![None; m * m];
+    for [s, t] in own {
+        pairs.push([nj + s, nj + t]);
+        own_pairs[s * m + t] = Some((pairs.len() - 1, 0));
+        own_pairs[t * m + s] = Some((pairs.len() - 1, 1));
+    }
+    (link_pairs, own_pairs)
+}
+
 impl<const D: usize> NetworkSolver<D> {
     /// Decomposes `mesh` into junctions and segments and analyses the sparsity pattern of
     /// the reduced junction system, factored by [`JunctionLu::Block`] (no allocation per
@@ -285,11 +365,51 @@ impl<const D: usize> NetworkSolver<D> {
     /// As [`NetworkSolver::new`], with the factorization `junction_lu` of the reduced
     /// junction system.
     pub fn with_junction_lu(mesh: &Mesh, junction_lu: JunctionLu) -> Self {
-        let mut dec = decompose(mesh);
-        let junctions: Vec<usize> = (0..mesh.n_nodes())
-            .filter(|&v| dec.is_junction[v])
-            .collect();
-        let mut junction_index = vec![NOT_A_JUNCTION; mesh.n_nodes()];
+        Self::build(mesh, &BorderPattern::default(), junction_lu)
+    }
+
+    /// The solver of the Newton matrix of `mesh` bordered by the slots of `border` (unknowns
+    /// after the nodes, two per rigid body): the slots are rows of the reduced system, the
+    /// nodes they couple with junctions. An index of `border` out of range is an error.
+    pub fn with_border(
+        mesh: &Mesh,
+        border: &BorderPattern,
+        junction_lu: JunctionLu,
+    ) -> Result<Self, SetupError> {
+        let (n, m) = (mesh.n_nodes(), border.slots);
+        for &[node, slot] in &border.links {
+            if node >= n {
+                return Err(SetupError::NodeOutOfRange {
+                    what: "a link of the linear solver's border",
+                    node,
+                    n_nodes: n,
+                });
+            }
+            if slot >= m {
+                return Err(SetupError::SlotOutOfRange {
+                    what: "a link of the linear solver's border",
+                    slot,
+                    slots: m,
+                });
+            }
+        }
+        if let Some(&slot) = border.pairs.iter().flatten().find(|&&s| s >= m) {
+            return Err(SetupError::SlotOutOfRange {
+                what: "a slot pair of the linear solver's border",
+                slot,
+                slots: m,
+            });
+        }
+        Ok(Self::build(mesh, border, junction_lu))
+    }
+
+    /// [`NetworkSolver::with_border`] for a `border` whose indices are in range.
+    fn build(mesh: &Mesh, border: &BorderPattern, junction_lu: JunctionLu) -> Self {
+        let (n, m) = (mesh.n_nodes(), border.slots);
+        let forced: Vec<usize> = border.links.iter().map(|&[node, _]| node).collect();
+        let mut dec = decompose(mesh, &forced);
+        let junctions: Vec<usize> = (0..n).filter(|&v| dec.is_junction[v]).collect();
+        let mut junction_index = vec![NOT_A_JUNCTION; n];
         for (r, &j) in junctions.iter().enumerate() {
             junction_index[j] = r;
         }
@@ -303,19 +423,22 @@ impl<const D: usize> NetworkSolver<D> {
                 pairs.push([a, b]);
             }
         }
-        let reduced = (nj > 0).then(|| match junction_lu {
+        let (link_pairs, own_pairs) = border_pairs(border, &junction_index, &mut pairs);
+        let n_red = nj + m;
+        let reduced = (n_red > 0).then(|| match junction_lu {
             JunctionLu::Block => {
-                let lu = BlockLu::new(nj, &pairs);
+                let lu = BlockLu::new(n_red, &pairs);
                 let slots = pairs
                     .iter()
                     .map(|&[a, b]| [lu.slot(a, b), lu.slot(b, a)])
                     .collect();
                 Reduced::Block { lu, slots }
             }
-            JunctionLu::Simplicial => Reduced::Faer(FaerReduced::new::<D>(nj, &pairs)),
+            JunctionLu::Simplicial => Reduced::Faer(FaerReduced::new::<D>(n_red, &pairs)),
         });
         let n_int = dec.interior_nodes.len();
         Self {
+            rows: junctions.iter().copied().chain(n..n + m).collect(),
             junctions,
             junction_index,
             segments: dec.segments,
@@ -324,6 +447,10 @@ impl<const D: usize> NetworkSolver<D> {
             cg: vec![[Block::zeros(); 2]; n_int],
             jdiag: vec![Block::zeros(); nj],
             reduced,
+            n_nodes: n,
+            n_slots: m,
+            link_pairs,
+            own_pairs,
             kept: Vec::new(),
         }
     }
@@ -512,6 +639,7 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError> {
+        self.check_unknowns(jac, rhs)?;
         // The reduced system is moved out while the segments write into it.
         let mut reduced = self.reduced.take();
         let result = self.solve_with(&mut reduced, jac, rhs);
@@ -529,6 +657,7 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
         jac: &BlockJacobian<D>,
         rhs: &mut [SVector<f64, D>],
     ) -> Result<(), LinearSolveError> {
+        self.check_unknowns(jac, rhs)?;
         let kept_all = self.kept.len() == self.interior_nodes.len();
         let Some(Reduced::Block { lu, .. }) = self.reduced.as_mut().filter(|_| kept_all) else {
             return self.solve(jac, rhs);
@@ -570,8 +699,8 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
                 rhs[j1] -= bo * yp;
             }
         }
-        lu.solve_indexed(rhs, &self.junctions);
-        for &j in &self.junctions {
+        lu.solve_indexed(rhs, &self.rows);
+        for &j in &self.rows {
             if !finite(&rhs[j]) {
                 return Err(LinearSolveError::Singular { block: j });
             }
@@ -584,6 +713,71 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
 }
 
 impl<const D: usize> NetworkSolver<D> {
+    /// Adds the border's blocks of `jac` to the reduced system: the slots' own blocks and
+    /// their links with the (junction) nodes. A nonzero block outside the pattern is an
+    /// error.
+    fn add_border(
+        &self,
+        red: &mut Reduced<D>,
+        jac: &BlockJacobian<D>,
+    ) -> Result<(), LinearSolveError> {
+        let (n, m, nj) = (self.n_nodes, self.n_slots, self.junctions.len());
+        if m == 0 {
+            return Ok(());
+        }
+        for (st, (blk, pair)) in jac.border.own.iter().zip(&self.own_pairs).enumerate() {
+            let (s, t) = (st / m, st % m);
+            match pair {
+                _ if s == t => red.add_diag(nj + s, blk),
+                Some((p, half)) => red.add_half(*p, *half, blk),
+                None if blk.iter().any(|&v| v != 0.0) => {
+                    return Err(LinearSolveError::OutsidePattern {
+                        row: n + s,
+                        col: n + t,
+                    });
+                }
+                None => {}
+            }
+        }
+        for (node, slot, row, col) in &jac.border.links {
+            let key = [*node, *slot];
+            let at = self
+                .link_pairs
+                .binary_search_by_key(&key, |&(k, _)| k)
+                .map_err(|_| LinearSolveError::OutsidePattern {
+                    row: n + slot,
+                    col: *node,
+                })?;
+            // Pair `[node, slot]`: block (node, slot) is ∂R_node/∂u_slot, (slot, node) the row.
+            red.add_coupling(self.link_pairs[at].1, &[*col, *row]);
+        }
+        Ok(())
+    }
+
+    /// `Err` unless `jac` has the nodes and slots the solver was built for and `rhs` at
+    /// least as many entries (without slots, `jac`'s border is not read).
+    fn check_unknowns(
+        &self,
+        jac: &BlockJacobian<D>,
+        rhs: &[SVector<f64, D>],
+    ) -> Result<(), LinearSolveError> {
+        let (n, m) = (self.n_nodes, self.n_slots);
+        let slots = if m == 0 { 0 } else { jac.border.slots };
+        let found = if jac.diag.len() == n && slots == m {
+            rhs.len().min(n + m)
+        } else {
+            jac.diag.len() + slots
+        };
+        if found == n + m {
+            Ok(())
+        } else {
+            Err(LinearSolveError::Unknowns {
+                expected: n + m,
+                found,
+            })
+        }
+    }
+
     fn solve_with(
         &mut self,
         reduced: &mut Option<Reduced<D>>,
@@ -612,29 +806,28 @@ impl<const D: usize> NetworkSolver<D> {
                 red.add_coupling(self.segments[s].coupling, &blocks);
             }
         }
+        for (r, blk) in self.jdiag.iter().enumerate() {
+            red.add_diag(r, blk);
+        }
+        self.add_border(red, jac)?;
         match red {
             Reduced::Block { lu, .. } => {
-                for (r, blk) in self.jdiag.iter().enumerate() {
-                    lu.add_diag(r, blk);
-                }
                 lu.factor().map_err(|r| LinearSolveError::Singular {
-                    block: self.junctions[r],
+                    block: self.rows[r],
                 })?;
-                lu.solve_indexed(rhs, &self.junctions);
+                lu.solve_indexed(rhs, &self.rows);
             }
             Reduced::Faer(red) => {
-                let dd = D * D;
-                for (r, (blk, &j)) in self.jdiag.iter().zip(&self.junctions).enumerate() {
-                    red.lu.add(r * dd, blk);
+                for (r, &j) in self.rows.iter().enumerate() {
                     red.lu.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
                 }
                 red.lu.factor_and_solve()?;
-                for (r, &j) in self.junctions.iter().enumerate() {
+                for (r, &j) in self.rows.iter().enumerate() {
                     rhs[j].copy_from_slice(&red.lu.rhs[r * D..(r + 1) * D]);
                 }
             }
         }
-        for &j in &self.junctions {
+        for &j in &self.rows {
             if !finite(&rhs[j]) {
                 return Err(LinearSolveError::Singular { block: j });
             }
@@ -974,6 +1167,209 @@ mod tests {
         let jac = random_jac::<2>(&m, &mut Rng(3));
         let mut x = vec![SVector::<f64, 2>::repeat(1.0); m.n_nodes()];
         s.solve(&jac, &mut x).unwrap();
+    }
+
+    /// A border of `m` slots on `mesh`: links of slot pairs `[2b, 2b + 1]` with `nodes`
+    /// (body `b` takes `nodes[b]`), the slots of a body paired, bodies 0 and 1 paired.
+    fn border_on(nodes: &[&[usize]]) -> BorderPattern {
+        let m = 2 * nodes.len();
+        let mut pattern = BorderPattern {
+            slots: m,
+            ..Default::default()
+        };
+        for (b, ns) in nodes.iter().enumerate() {
+            pattern.pairs.push([2 * b + 1, 2 * b]);
+            for &v in ns.iter() {
+                pattern
+                    .links
+                    .extend([[v, 2 * b], [v, 2 * b + 1], [v, 2 * b]]);
+            }
+        }
+        if nodes.len() > 1 {
+            pattern.pairs.extend([[0, 3], [1, 2]]);
+        }
+        pattern
+    }
+
+    /// `random_jac` with random border blocks on `pattern` (the slots' diagonal blocks
+    /// dominant, as a body's mass), each link given in two parts that add.
+    fn random_bordered<const D: usize>(
+        mesh: &Mesh,
+        pattern: &BorderPattern,
+        rng: &mut Rng,
+    ) -> BlockJacobian<D> {
+        let mut jac = random_jac::<D>(mesh, rng);
+        let m = pattern.slots;
+        jac.border = super::super::Border {
+            slots: m,
+            own: vec![Block::zeros(); m * m],
+            links: Vec::new(),
+        };
+        let big = 8.0 * D as f64;
+        for s in 0..m {
+            jac.border.own[s * m + s] = Block::from_fn(|_, _| rng.sym()) + Block::identity() * big;
+        }
+        for &[s, t] in &pattern.pairs {
+            jac.border.own[s * m + t] = Block::from_fn(|_, _| rng.sym());
+            jac.border.own[t * m + s] = Block::from_fn(|_, _| rng.sym());
+        }
+        for &[node, slot] in &pattern.links {
+            let (row, col) = (
+                Block::from_fn(|_, _| rng.sym()),
+                Block::from_fn(|_, _| rng.sym()),
+            );
+            jac.border.links.push((node, slot, row * 0.5, col * 0.5));
+            jac.border.links.push((node, slot, row * 0.5, col * 0.5));
+        }
+        jac
+    }
+
+    /// The dense matrix of a bordered `jac` (nodes, then slots).
+    fn dense_bordered<const D: usize>(mesh: &Mesh, jac: &BlockJacobian<D>) -> DMatrix<f64> {
+        let (n, m) = (mesh.n_nodes(), jac.border.slots);
+        let mut full = DMatrix::zeros((n + m) * D, (n + m) * D);
+        full.view_mut((0, 0), (n * D, n * D))
+            .copy_from(&dense(mesh, jac));
+        let mut add = |i: usize, j: usize, b: &Block<D>| {
+            let mut v = full.view_mut((i * D, j * D), (D, D));
+            v += b;
+        };
+        for s in 0..m {
+            for t in 0..m {
+                add(n + s, n + t, &jac.border.own[s * m + t]);
+            }
+        }
+        for &(node, slot, row, col) in &jac.border.links {
+            add(n + slot, node, &row);
+            add(node, n + slot, &col);
+        }
+        full
+    }
+
+    /// The network solver with the border `pattern` on `mesh` (both junction LUs, and its
+    /// `solve_again`) against a dense LU of the whole matrix and the bordered sparse LU.
+    fn check_border<const D: usize>(mesh: &Mesh, pattern: &BorderPattern, seed: u64) {
+        let mut rng = Rng(seed);
+        let (n, m) = (mesh.n_nodes(), pattern.slots);
+        let mut nets = [JunctionLu::Block, JunctionLu::Simplicial]
+            .map(|k| NetworkSolver::<D>::with_border(mesh, pattern, k).unwrap());
+        nets[0].keep_factors();
+        let mut schur = crate::linsolve::Bordered::<D>::new(Box::new(SparseLu::new(mesh)), n, m);
+        for _ in 0..3 {
+            let jac = random_bordered::<D>(mesh, pattern, &mut rng);
+            let full = dense_bordered(mesh, &jac);
+            let lu = full.clone().lu();
+            for again in [false, true] {
+                let b = random_rhs::<D>(n + m, &mut rng);
+                let bf = flat(&b);
+                let x_dense = lu.solve(&bf).unwrap();
+                let mut x_schur = b.clone();
+                schur.solve(&jac, &mut x_schur).unwrap();
+                let diff = (&flat(&x_schur) - &x_dense).norm() / x_dense.norm();
+                assert!(
+                    diff <= 1e-10,
+                    "D = {D}: bordered sparse LU vs dense {diff:e}"
+                );
+                for (k, net) in nets.iter_mut().enumerate() {
+                    let mut x = b.clone();
+                    if again && k == 0 {
+                        net.solve_again(&jac, &mut x).unwrap();
+                    } else {
+                        net.solve(&jac, &mut x).unwrap();
+                    }
+                    let x = flat(&x);
+                    let diff = (&x - &x_dense).norm() / x_dense.norm();
+                    assert!(
+                        diff <= 1e-10,
+                        "D = {D}, {k}, again {again}: vs dense {diff:e}"
+                    );
+                    let res = (&full * &x - &bf).norm() / bf.norm();
+                    assert!(res <= 1e-10, "D = {D}: residual {res:e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn border_slots_join_the_reduced_system_and_match_a_dense_solve() {
+        // A chain with a body at its end node's neighbour and one on an interior node.
+        let m = chain(30);
+        let p = border_on(&[&[29], &[12, 13]]);
+        let s = NetworkSolver::<3>::with_border(&m, &p, JunctionLu::Block).unwrap();
+        // Ends 0, 30 and the linked nodes 12, 13, 29: four segments.
+        assert_eq!((s.n_junctions(), s.n_segments()), (5, 4));
+        for v in [12, 13, 29] {
+            assert!(s.is_junction(v), "node {v}");
+        }
+        for (mesh, p, seed) in [
+            (m, p, 100),
+            (star(3, 15), border_on(&[&[15, 30, 45]]), 110),
+            (star(4, 6), border_on(&[&[0, 3], &[9], &[20]]), 120),
+            (ring(12), border_on(&[&[4, 9]]), 130),
+            (lollipop(), border_on(&[&[14], &[3]]), 140),
+            (grid_net(4, 3, 3, 1), border_on(&[&[1, 7, 20]]), 150),
+        ] {
+            check_border::<1>(&mesh, &p, seed);
+            check_border::<2>(&mesh, &p, seed + 1);
+            check_border::<3>(&mesh, &p, seed + 2);
+        }
+    }
+
+    #[test]
+    fn border_outside_its_pattern_is_reported() {
+        let m = star(3, 4);
+        let n = m.n_nodes();
+        let p = border_on(&[&[4], &[8]]);
+        let mut s = NetworkSolver::<2>::with_border(&m, &p, JunctionLu::Block).unwrap();
+        let mut rng = Rng(7);
+        let rhs = random_rhs::<2>(n + 4, &mut rng);
+        // Slot 0 with slot 2: not paired.
+        let mut jac = random_bordered::<2>(&m, &p, &mut rng);
+        jac.border.own[2] = Block::identity();
+        let err = s.solve(&jac, &mut rhs.clone());
+        assert_eq!(
+            err,
+            Err(LinearSolveError::OutsidePattern { row: n, col: n + 2 })
+        );
+        // Slot 3 with node 5.
+        let mut jac = random_bordered::<2>(&m, &p, &mut rng);
+        jac.border
+            .links
+            .push((5, 3, Block::identity(), Block::identity()));
+        let err = s.solve(&jac, &mut rhs.clone());
+        assert_eq!(
+            err,
+            Err(LinearSolveError::OutsidePattern { row: n + 3, col: 5 })
+        );
+        // A system without the slots.
+        let jac = random_jac::<2>(&m, &mut rng);
+        let err = s.solve(&jac, &mut rhs.clone());
+        let expected = n + 4;
+        assert_eq!(err, Err(LinearSolveError::Unknowns { expected, found: n }));
+        // The solver recovers.
+        let jac = random_bordered::<2>(&m, &p, &mut rng);
+        s.solve(&jac, &mut rhs.clone()).unwrap();
+        // Indices out of range at construction.
+        let bad = BorderPattern {
+            slots: 2,
+            links: vec![[n, 0]],
+            pairs: vec![],
+        };
+        let err = NetworkSolver::<2>::with_border(&m, &bad, JunctionLu::Block).unwrap_err();
+        assert!(
+            matches!(err, SetupError::NodeOutOfRange { node, .. } if node == n),
+            "{err:?}"
+        );
+        let bad = BorderPattern {
+            slots: 2,
+            links: vec![],
+            pairs: vec![[0, 2]],
+        };
+        let err = NetworkSolver::<2>::with_border(&m, &bad, JunctionLu::Block).unwrap_err();
+        assert!(
+            matches!(err, SetupError::SlotOutOfRange { slot: 2, .. }),
+            "{err:?}"
+        );
     }
 
     #[test]
