@@ -432,3 +432,132 @@ fn statics_and_an_equilibrium_start_take_bodies() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A 2D crane vessel (500 t, 40 m³ of it submerged, a 20 m² waterplane, 30 m² drag area)
+/// held by a prescribed motion, heaving `1.5 sin(0.6 t)` m and rolling `2 sin(0.6 t)` deg,
+/// with a 30 m wire (EA 1e8 N, 8 kg/m) from a point 10 m off its centre down to a 2 t clump
+/// of 0.25 m³ in 150 m of sea water.
+const HEAVING_VESSEL: &str = r#"
+dimension = 2
+
+[[node]]
+name = "clump"
+position = [10.0, -32.0]
+
+[bodies.vessel]
+mass = 5.0e5
+inertia = [1.0e7, 1.0e7, 4.0e7]
+position = [0.0, 0.0]
+points = { crane = [10.0, -2.0] }
+volume = 40.0
+centre_of_buoyancy = [0.0, -1.0]
+cda = 30.0
+waterplane_area = 20.0
+waterline = [0.0, 0.0]
+motion = { position = ["0", "1.5*sin(0.6*t)"], orientation = ["2*sin(0.6*t)"] }
+
+[materials.wire]
+law = "tension_only_linear"
+ea = 1.0e8
+rho_a = 8.0
+
+[[string]]
+name = "wire"
+path = ["vessel.crane", "clump"]
+elements = 10
+material = "wire"
+
+[[point_mass]]
+node = "clump"
+kg = 2000.0
+volume = 0.25
+cda = 0.5
+
+[body_force]
+gravity = [0.0, -9.81]
+
+[water]
+density = 1025.0
+
+[time]
+h = 0.01
+end = 4.0
+
+[output]
+plots = false
+animation = false
+vtk = false
+"#;
+
+/// A prescribed body's run: `bodies.csv` has the port's columns (the reaction force and
+/// torque of every step and the motion's mean power), every step's energy balance closes to
+/// 1e-9 of the largest energy, and the motion's work `Σ power · h` is the run's supplied
+/// energy to 1e-9 of the largest energy (the clump's wire the only other port-free part).
+/// The body follows the motion: its height is `1.5 sin(0.6 t)` to 1e-12 m. `check` lists the
+/// motion and the vessel's weight in water `(5e5 − 1025 · 40) · 9.81 = 4 502 790 N`.
+#[test]
+fn a_prescribed_body_reports_its_reaction_and_its_work_is_supplied() {
+    let dir = temp_dir("heaving-vessel");
+    let scenario = dir.join("vessel.toml");
+    std::fs::write(&scenario, HEAVING_VESSEL).unwrap();
+    let out = dir.join("out");
+    let o = run_with(scenario.to_str().unwrap(), &out, &[], &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (header, rows) = table(&out.join("bodies.csv"));
+    assert_eq!(
+        header.join(","),
+        "t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz,power"
+    );
+    let (eh, energy) = table(&out.join("energy.csv"));
+    let col = |name: &str| eh.iter().position(|h| h == name).unwrap();
+    let scale = energy
+        .iter()
+        .map(|(r, _)| {
+            r[col("hamiltonian")]
+                .abs()
+                .max(r[col("supplied_energy")].abs())
+        })
+        .fold(0.0, f64::max);
+    for (r, _) in &energy {
+        assert!(
+            r[col("balance_error")].abs() <= 1e-9 * scale,
+            "t = {}: {}",
+            r[0],
+            r[col("balance_error")]
+        );
+    }
+    let h = 0.01;
+    let (mut work, mut lift) = (0.0, 0.0f64);
+    for (r, _) in &rows {
+        assert!(
+            (r[3] - 1.5 * (0.6 * r[0]).sin()).abs() < 1e-12,
+            "t = {}: y = {}",
+            r[0],
+            r[3]
+        );
+        work += r[21] * h;
+        lift = lift.max(r[16].abs());
+    }
+    let supplied = energy.last().unwrap().0[col("supplied_energy")];
+    println!(
+        "motion's work {work} J, supplied {supplied} J, largest energy {scale} J, largest reaction {lift} N"
+    );
+    assert!(work.abs() > 1e3, "the motion did work: {work} J");
+    assert!(
+        (supplied - work).abs() <= 1e-9 * scale,
+        "supplied {supplied} J, motion's work {work} J"
+    );
+    // The reaction holds the vessel's weight in water and the clump's: of order 4.5 MN.
+    assert!(lift > 4.0e6 && lift < 6.0e6, "{lift}");
+    let o = phstring(&["check", scenario.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for line in [
+        "motion:    vessel: prescribed [0, 1.5*sin(0.6*t), 2*sin(0.6*t)]",
+        "in water:  body vessel: volume 40 m³ at [0, -1] m (body axes), CdA = 30 m²",
+        "weight in water 4502790 N",
+    ] {
+        assert!(text.contains(line), "missing {line:?} in\n{text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
