@@ -137,7 +137,7 @@ fn points_text(members: &[(u32, [f64; 3])], origin: &Vector3<f64>) -> String {
 /// MoorDyn has it) and a translational drag area; added mass and rotational drag are
 /// refused (or dropped with `--ignore bodies`).
 fn free_body(m: &mut Mapper, b: &Body, members: &[(u32, [f64; 3])]) -> Result<String, DeckError> {
-    if !(b.mass > 0.0) {
+    if b.mass <= 0.0 {
         return m.unmappable(
             b.line,
             format!(
@@ -151,7 +151,7 @@ fn free_body(m: &mut Mapper, b: &Body, members: &[(u32, [f64; 3])]) -> Result<St
         [x, y, z] => [x, y, z],
         _ => [0.0; 3],
     };
-    if inertia.iter().any(|i| !(*i > 0.0)) {
+    if inertia.iter().any(|i| *i <= 0.0) {
         return m.unmappable(
             b.line,
             format!("free body {} has the moments of inertia I = {inertia:?} kg·m²: each must be positive", b.id),
@@ -276,7 +276,7 @@ fn coupled_body(
     m.converted(b.line, format!("coupled body {} carries 1 kg and 1 kg·m² (MoorDyn's coupled body has no mass; phstring's prescribed body needs one, which enters only its reaction)", b.id));
     match m.motion {
         Some(mv) if mv.points.is_none() => {
-            if m.coupled_bodies.len() > 0 {
+            if !m.coupled_bodies.is_empty() {
                 return m.unmappable(
                     b.line,
                     format!("body {} is a second coupled body, but --motion gives one platform table (one rigid motion)", b.id),
