@@ -330,3 +330,151 @@ fn an_external_wrench_is_a_port_of_the_front_end() {
     let err = refused(&bad);
     assert!(err.contains("external"), "{err}");
 }
+
+/// The points line of [`BOX`], the last key of its body table.
+const POINTS: &str = "points = { left = [-1.0, 0.0, 0.25], right = [1.0, 0.0, 0.25] }";
+
+/// Each refusal of a body's water keys and prescribed motion names its key, where the value
+/// is and what is wrong with it (`dry`: without `[water]`; the others in sea water).
+#[test]
+fn water_and_motion_errors_name_the_key_and_position() {
+    let wet = |keys: &str| format!("{POINTS}\n{keys}\n\n[water]\ndensity = 1025.0");
+    let dry = |keys: &str| format!("{POINTS}\n{keys}");
+    // (replacement of the points line, the value to locate, key, message part)
+    let cases: Vec<(String, &str, &str, &str)> = vec![
+        (
+            dry("volume = 2.5"),
+            "2.5",
+            "bodies.box.volume",
+            "is a water term of a rigid body, but the scenario has no [water] table",
+        ),
+        (
+            wet("cda = -1.5"),
+            "-1.5",
+            "bodies.box.cda",
+            "must be at least 0 and finite, got -1.5",
+        ),
+        (
+            wet("volume = 2.5\ncentre_of_buoyancy = [0.0, 0.1]"),
+            "[0.0, 0.1]",
+            "bodies.box.centre_of_buoyancy",
+            "must have 3 components (dimension = 3), got 2",
+        ),
+        (
+            wet("waterline = [0.0, 0.0, 1.5]"),
+            "[0.0, 0.0, 1.5]",
+            "bodies.box.waterline",
+            "needs a positive `waterplane_area` of the same body (it is 0)",
+        ),
+        (
+            wet("added_inertia = [1.0, -2.0, 3.0]"),
+            "[1.0, -2.0, 3.0]",
+            "bodies.box.added_inertia",
+            "has the moment -2 kg·m²: each must be at least 0 and finite",
+        ),
+        (
+            wet("ca = 0.5"),
+            "0.5\n",
+            "bodies.box.ca",
+            "= 0.5 is a coefficient on the displaced mass ρ_w V, but the body's `volume` is 0",
+        ),
+        (
+            dry("motion = { position = [\"0\", \"0\"] }"),
+            "[\"0\", \"0\"]",
+            "bodies.box.motion.position",
+            "must have 3 expressions, got 2",
+        ),
+        (
+            dry("motion = { position = [\"0\", \"0\", \"-10.25 + 1/(t - t)\"] }"),
+            "\"-10.25 + 1/(t - t)\"",
+            "bodies.box.motion.position.2",
+            "division by zero",
+        ),
+        (
+            dry("motion = { position = [\"0\", \"0\", \"-10.25\"] }"),
+            "[0.5, 0.0, 0.0]",
+            "bodies.box.velocity",
+            "is given, but the body has a prescribed motion, which takes no a velocity (the motion gives it): remove `velocity`",
+        ),
+        (
+            dry(
+                "motion = { position = [\"0\", \"0\", \"-10.25\"] }\nmotion_table = \"vessel.csv\"",
+            ),
+            "\"vessel.csv\"",
+            "bodies.box.motion_table",
+            "and `motion` both prescribe the body's motion: give one of them",
+        ),
+    ];
+    for (to, at, key, part) in &cases {
+        let text = BOX.replacen(POINTS, to, 1);
+        let err = validate(&text)
+            .err()
+            .unwrap_or_else(|| panic!("{key}: accepted"));
+        let origin = format!("box.toml:{}", pos(&text, at));
+        assert!(
+            err.contains(&format!("`{key}`")) && err.contains(part) && err.starts_with(&origin),
+            "{key}: {err}\n(expected at {origin}: {part})"
+        );
+    }
+}
+
+/// [`BOX`] at rest, in sea water, with every water term, heaving `0.5 sin t` m and turning
+/// `10 t` deg about z by a prescribed motion.
+fn prescribed_box() -> String {
+    BOX.replace("velocity = [0.5, 0.0, 0.0]\n", "")
+        .replace("angular_velocity = [0.0, 0.0, 0.2]\n", "")
+        .replace(
+            POINTS,
+            &format!(
+                "{POINTS}\nvolume = 1.2\ncentre_of_buoyancy = [0.0, 0.0, 0.1]\ncda = 2.0\nlinear_drag = 50.0\nca = 0.8\nadded_inertia = [10.0, 20.0, 30.0]\nwaterplane_area = 1.5\nwaterline = [0.0, 0.0, 0.5]\nmotion = {{ position = [\"0\", \"0\", \"-10.25 + 0.5*sin(t)\"], orientation = [\"0\", \"0\", \"10*t\"] }}\n\n[water]\ndensity = 1025.0"
+            ),
+        )
+}
+
+/// The prescribed box builds: the library's body has the water terms as given (`ca`,
+/// `added_inertia`, the points in body axes) and a motion; it starts at the motion's pose and
+/// rates at `t = 0` (0.5 m/s up, 10°/s = 0.17453 rad/s about z, to the backward difference's
+/// 1e-8), its points moving with it (`V + ω × R s`: point left at (−1, 0, 0.25) m moves at
+/// (0, −0.17453, 0.5) m/s); `summary.json`'s components list the water terms and the
+/// motion's expressions. A motion that does not start at `position` is refused, naming both.
+#[test]
+fn a_prescribed_wet_body_starts_with_its_motion() {
+    let text = prescribed_box();
+    let phstring::ByDim::D3(s) = validate(&text).unwrap() else {
+        panic!("not 3D")
+    };
+    let sys = &s.problem.system;
+    assert!(sys.body_has_motion(0) && !sys.body_has_wrench(0));
+    let st = &s.problem.state;
+    let b = &st.bodies[0];
+    let rate = 10.0_f64.to_radians();
+    assert!(
+        (b.velocity - phstring::body::Vec3::new(0.0, 0.0, 0.5)).norm() < 1e-8,
+        "{:?}",
+        b.velocity
+    );
+    assert!((b.omega_space() - phstring::body::Vec3::new(0.0, 0.0, rate)).norm() < 1e-8);
+    let v = st.v[2];
+    assert!(
+        (v - phstring::Vector::<3>::new(0.0, -rate, 0.5)).norm() < 1e-8,
+        "{v:?}"
+    );
+    let c = &s.components.bodies[0];
+    let w = c.water.as_ref().unwrap();
+    assert_eq!(
+        (w.volume, w.cda, w.linear_drag, w.ca, w.waterplane_area),
+        (1.2, 2.0, 50.0, 0.8, 1.5)
+    );
+    assert_eq!(w.centre_of_buoyancy, vec![0.0, 0.0, 0.1]);
+    assert_eq!(w.added_inertia, vec![10.0, 20.0, 30.0]);
+    assert_eq!(
+        c.motion,
+        vec!["0", "0", "-10.25 + 0.5*sin(t)", "0", "0", "10*t"]
+    );
+    let off = text.replace("-10.25 + 0.5*sin(t)", "-10.0 + 0.5*sin(t)");
+    let err = refused(&off);
+    assert!(
+        err.contains("`bodies.box.position` = [0, 0, -10.25] m, but the body's prescribed motion (`bodies.box.motion`) starts at [0, 0, -10] m"),
+        "{err}"
+    );
+}

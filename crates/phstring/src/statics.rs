@@ -364,9 +364,10 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StaticEquations<'_, D
                     &[]
                 },
                 jac_shift: self.jac_shift,
+                drag: self.drag,
             };
             let s2 = s2 + terms.terms(sys, res, jac.as_deref_mut());
-            bodies::hold(&self.held, n, &x[n..], res, jac.as_deref_mut());
+            bodies::hold_flagged(&self.held, n, &x[n..], res, jac.as_deref_mut());
             (s2, k2)
         };
         for &i in &sys.constrained {
@@ -782,30 +783,9 @@ fn solve_posed<const D: usize, M: StoredEnergy>(
     if let Some((index, name)) = bodies::loose_body(sys, held) {
         return Err(StaticsError::LooseBody { index, name });
     }
-    // Not yet in statics: the water on a body and a body's prescribed motion.
-    let is_held = |b: usize| held.get(b).copied().unwrap_or(false);
-    for (index, model) in sys.bodies.iter().enumerate() {
-        let what = if is_held(index) {
-            None
-        } else if model.motion.is_some() {
-            Some("a prescribed motion")
-        } else if model.buoyancy.is_some() || model.drag.is_some() || model.waterplane.is_some() {
-            Some("hydrodynamics (buoyancy, drag, waterplane)")
-        } else {
-            None
-        };
-        if let Some(what) = what {
-            return Err(SetupError::Body {
-                index,
-                name: sys.body_names[index].clone(),
-                problem: format!(
-                    "statics does not cover a body with {what} yet: run the dynamics from a \
-                     hand-placed start instead"
-                ),
-            }
-            .into());
-        }
-    }
+    // A body with a prescribed motion is held at its pose at t = 0.
+    let poses = bodies::held_poses(sys, poses);
+    let poses = &poses[..];
     // The attached nodes start at their bodies' points.
     let mut r0 = r_start.to_vec();
     for (model, st) in sys.bodies.iter().zip(poses) {
@@ -861,6 +841,7 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
             .bodies
             .iter()
             .zip(&ports)
+            .filter(|(m, _)| m.motion.is_none())
             .map(|(m, p)| (m.weight + p.0)[k]);
         let loads: Vec<f64> = f.iter().map(|v| v[k]).chain(on_bodies).collect();
         let net: f64 = loads.iter().sum();
@@ -1481,8 +1462,15 @@ fn free_translations<const D: usize, M>(sys: &PhSystem<D, M>) -> Vec<usize> {
             .as_deref()
             .is_some_and(|w| k == D - 1 || w.bed.as_ref().is_some_and(|b| b.holds(k)))
     };
-    // A node fixed to a rigid body holds nothing: the body moves it.
-    let on_body = |i: usize| sys.attached.get(i).copied().flatten().is_some();
+    // A node fixed to a free rigid body holds nothing: the body moves it (a body with a
+    // prescribed motion holds its nodes).
+    let on_body = |i: usize| {
+        sys.attached
+            .get(i)
+            .copied()
+            .flatten()
+            .is_some_and(|(b, _)| sys.bodies[b].motion.is_none())
+    };
     (0..D)
         .filter(|&k| {
             let held = (0..sys.free.len()).any(|i| !sys.free[i][k] && !on_body(i));
@@ -1645,6 +1633,8 @@ fn ordinal(n: usize) -> String {
 
 #[cfg(test)]
 mod body_tests;
+#[cfg(test)]
+mod buoy_tests;
 #[cfg(test)]
 mod mooring_tests;
 

@@ -1225,6 +1225,12 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .unwrap_or_default()
     }
 
+    /// Whether rigid body `b` has a prescribed motion (its port's output is the reaction
+    /// wrench).
+    pub fn body_has_motion(&self, b: usize) -> bool {
+        self.bodies.get(b).is_some_and(|m| m.motion.is_some())
+    }
+
     /// Whether rigid body `b` has a wrench port (a force and torque input).
     pub fn body_has_wrench(&self, b: usize) -> bool {
         self.bodies.get(b).is_some_and(|m| m.wrench.is_some())

@@ -276,6 +276,15 @@ fn describe_bodies(out: &mut String, bodies: &[phstring_io::scenario::BodyCompon
                 p.attached.join(", ")
             );
         }
+        if !b.motion.is_empty() {
+            let list: Vec<String> = b.motion.iter().map(|e| clip(e).into_owned()).collect();
+            let _ = writeln!(
+                out,
+                "  motion:    {}: prescribed [{}] (position m, then angles deg; or a table of x, y, z m, roll, pitch, yaw rad), reaction force and torque out",
+                b.name,
+                list.join(", ")
+            );
+        }
         if !b.wrench_force.is_empty() || !b.wrench_torque.is_empty() || b.wrench_external {
             let list = |l: &[String]| {
                 let v: Vec<String> = l.iter().map(|e| clip(e).into_owned()).collect();
@@ -405,6 +414,25 @@ fn describe_water<const D: usize>(out: &mut String, p: &phstring::Network<D, phs
             num(ph.cda),
             num(ph.ca),
             num((mass - w.density * ph.volume) * w.gravity)
+        );
+    }
+    for b in &p.bodies {
+        let Some(h) = &b.hydro else { continue };
+        let wet = (b.mass - w.density * h.volume) * w.gravity;
+        let _ = writeln!(
+            out,
+            "  in water:  body {}: volume {} m³ at {} m (body axes), CdA = {} m², linear drag {} N·s/m, Ca = {}, added inertia {} kg·m², waterplane {} m² at {} m, weight in water {} N{}",
+            b.name,
+            num(h.volume),
+            nums(&h.centre_of_buoyancy.as_slice()[..D.min(3)]),
+            num(h.cda),
+            num(h.linear_drag),
+            num(h.ca),
+            nums(h.added_inertia.as_slice()),
+            num(h.waterplane_area),
+            nums(&h.waterline.as_slice()[..D.min(3)]),
+            num(wet),
+            if wet < 0.0 { " (it floats)" } else { "" }
         );
     }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use phstring::testing::catenary_on_seabed;
 
-use crate::{phstring, run_with, summary, temp_dir};
+use crate::{phstring, run_with, summary, temp_dir, workspace_root};
 
 const CHAIN: &str = "examples/moordyn/chain_shallow_v1.dat";
 const SPAR: &str = "examples/moordyn/spar_oc3_v2.dat";
@@ -729,4 +729,56 @@ fn a_per_point_motion_table_moves_each_coupled_point() {
         "{}",
         stderr(&o)
     );
+}
+
+/// The spar deck with its three fairleads on a free body (BODIES): a 200 t buoy of 400 m³
+/// 60 m down, held down by the lines. `check` prints what the body and its points became;
+/// `statics` finds the rest state, where the lines carry the buoy's net buoyancy: the
+/// forces the body exerts on its three points (the last nodes of `equilibrium.csv`) add up
+/// to `ρ_w g V − m g = 2 059 396.5 N` upwards to 1e-6 of it, and to zero across.
+#[test]
+fn a_deck_with_a_free_body_maps_and_finds_its_equilibrium() {
+    let dir = temp_dir("deck-body");
+    let deck = std::fs::read_to_string(workspace_root().join(SPAR))
+        .unwrap()
+        .replace("4   Vessel      5.2       0.0       -70.0", "4   Body1       5.2       0.0       -10.0")
+        .replace("5   Vessel     -2.6       4.5033    -70.0", "5   Body1      -2.6       4.5033    -10.0")
+        .replace("6   Vessel     -2.6      -4.5033    -70.0", "6   Body1      -2.6      -4.5033    -10.0")
+        .replace(
+            "---------------------- LINES",
+            "---------------------- BODIES ----------------------\n\
+             ID  Attachment  X0   Y0   Z0    r0  p0  y0  Mass   CG   I             Volume  CdA   Ca\n\
+             (#) (word)      (m)  (m)  (m)  (deg)(deg)(deg)(kg) (m)  (kg-m^2)      (m^3)   (m^2) (-)\n\
+             1   Free        0    0    -60   0   0   0   2.0e5  0    1e6|1e6|5e5   400     20|0  0\n\
+             ---------------------- LINES",
+        );
+    let path = dir.join("buoy.dat");
+    std::fs::write(&path, deck).unwrap();
+    let p = path.to_str().unwrap();
+    let o = phstring(&["check", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for expected in [
+        "[bodies.body1]: a free rigid body of 200000 kg",
+        "body point body1.p4 of [bodies.body1]",
+        "body:      body1: 200000 kg",
+        "in water:  body body1: volume 400 m³",
+    ] {
+        assert!(text.contains(expected), "missing {expected:?} in\n{text}");
+    }
+    let st = dir.join("statics");
+    let o = phstring(&["statics", p, "--out", st.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = equilibrium(&st);
+    assert_eq!(rows.len(), 3 + 3 * 19 + 3);
+    let pull: [f64; 3] =
+        std::array::from_fn(|k| rows[rows.len() - 3..].iter().map(|r| r[3 + k]).sum());
+    let net = RHO_W * G * 400.0 - 2.0e5 * G;
+    println!("the body's pull on its points {pull:?} N, net buoyancy {net} N");
+    assert!((pull[2] - net).abs() <= 1e-6 * net, "{pull:?} vs {net}");
+    assert!(
+        pull[0].abs() <= 1e-6 * net && pull[1].abs() <= 1e-6 * net,
+        "{pull:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

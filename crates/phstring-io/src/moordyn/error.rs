@@ -142,6 +142,19 @@ pub enum DeckError {
         /// The text found.
         text: String,
     },
+    /// A body type (BODIES `Attachment` column) that is none of MoorDyn's.
+    #[error(
+        "{file}:{line}: body type `{}` is not one of Fixed/Fix/Anchor, Vessel/Coupled, Free, CoupledPinned/VesselPinned/Pinned",
+        shown(text)
+    )]
+    UnknownBodyKind {
+        /// File name.
+        file: String,
+        /// Line.
+        line: usize,
+        /// The text found.
+        text: String,
+    },
     /// A line end that names neither a point (`3`, `P3`, `Point3`, `C3`) nor a rod end
     /// (`R1A`, `Rod2B`).
     #[error(

@@ -4,6 +4,8 @@
 //! (the scenario's `[deck]` table). Anything the mapping does not support is refused with
 //! the deck's line before any text is made; docs/moordyn.md has the full table.
 
+mod bodies;
+
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -21,7 +23,8 @@ pub enum Feature {
     BendingStiffness,
     /// ROD TYPES / RODS sections.
     Rods,
-    /// BODIES section.
+    /// What phstring's rigid bodies do not take of a deck's body: rotational or per-axis
+    /// drag, added-mass coefficients, the mass or water terms of a point fixed to a body.
     Bodies,
     /// FAILURE section (MoorDyn-F).
     Failure,
@@ -211,6 +214,13 @@ struct Mapper<'d> {
     vessels: Vec<String>,
     /// The OUTPUTS channels that are written (`output.channels`).
     channels: Vec<String>,
+    /// The points on bodies: per point id, its node reference (`bodyN.pK`, or `pointK` on a
+    /// fixed body) and its place [m].
+    placed: BTreeMap<u32, (String, [f64; 3])>,
+    /// Per free or coupled body id, its points on lines: id and deck coordinates [m].
+    members: BTreeMap<u32, Vec<(u32, [f64; 3])>>,
+    /// The coupled bodies mapped (ids).
+    coupled_bodies: Vec<u32>,
     rows: Vec<MapRow>,
     record: DeckSpec,
     /// The scenario text, table by table.
@@ -428,6 +438,9 @@ pub fn map_driven(
         motion,
         vessels: Vec::new(),
         channels: Vec::new(),
+        placed: BTreeMap::new(),
+        members: BTreeMap::new(),
+        coupled_bodies: Vec::new(),
         rows: Vec::new(),
         record: DeckSpec {
             path: deck.file.clone(),
@@ -449,6 +462,7 @@ pub fn map_driven(
     }
     let materials = materials(&mut m)?;
     points(&mut m, settings.depth)?;
+    bodies::bodies(&mut m)?;
     platform(&mut m)?;
     lines(&mut m, &materials)?;
     outputs(&mut m)?;
@@ -807,7 +821,16 @@ fn points(m: &mut Mapper, depth: Option<f64>) -> Result<(), DeckError> {
         }
         match p.kind {
             PointKind::Body(n) => {
-                return m.refuse(p.line, format!("{entry}, attached to body {n}"));
+                let on_line = m.deck.lines.iter().any(|l| {
+                    l.attach_a == Attachment::Point(p.id) || l.attach_b == Attachment::Point(p.id)
+                });
+                let became = if on_line {
+                    bodies::body_point(m, p, n)?
+                } else {
+                    "nothing (no line is attached to it)".to_string()
+                };
+                m.row(p.line, entry, became);
+                continue;
             }
             PointKind::Turbine(n) => {
                 return m.refuse(p.line, format!("{entry}, attached to turbine {n}"));
@@ -867,6 +890,9 @@ fn platform(m: &mut Mapper) -> Result<(), DeckError> {
     let Some(mv) = m.motion else {
         return Ok(());
     };
+    if m.vessels.is_empty() && !m.coupled_bodies.is_empty() {
+        return Ok(());
+    }
     if m.vessels.is_empty() {
         return m.unmappable(
             1,
@@ -952,7 +978,13 @@ fn free_point(m: &mut Mapper, p: &super::Point, name: &str) -> Result<String, De
 /// The point a line end is attached to, or a refusal for a rod end.
 fn end_point(m: &Mapper, line: &super::Line, end: Attachment) -> Result<super::Point, DeckError> {
     match end {
-        Attachment::Point(id) => Ok(m.deck.points[id as usize - 1].clone()),
+        Attachment::Point(id) => {
+            let mut p = m.deck.points[id as usize - 1].clone();
+            if let Some((_, at)) = m.placed.get(&id) {
+                p.position = *at;
+            }
+            Ok(p)
+        }
         Attachment::Rod(n, e) => m.refuse(
             line.line,
             format!("line {} attached to end {e:?} of rod {n}", line.id),
@@ -1076,7 +1108,13 @@ fn line_material(
 fn string_text(m: &mut Mapper, l: &super::Line, shape: &Shape, material: &str, ends: [u32; 2]) {
     let n = shape.nodes.len() - 1;
     let _ = writeln!(m.text, "# {}: line {}", m.at(l.line), l.id);
-    let mut path = vec![q(&format!("point{}", ends[0]))];
+    let node = |id: u32| {
+        m.placed
+            .get(&id)
+            .map_or_else(|| format!("point{id}"), |(name, _)| name.clone())
+    };
+    let (first, last) = (node(ends[0]), node(ends[1]));
+    let mut path = vec![q(&first)];
     for (j, p) in shape.nodes.iter().enumerate().take(n).skip(1) {
         let name = format!("line{}_{j}", l.id);
         let _ = write!(
@@ -1089,7 +1127,7 @@ fn string_text(m: &mut Mapper, l: &super::Line, shape: &Shape, material: &str, e
         );
         path.push(q(&name));
     }
-    path.push(q(&format!("point{}", ends[1])));
+    path.push(q(&last));
     let _ = write!(
         m.text,
         "\n[[string]]\nname = \"line{}\"\npath = [{}]\nelements = 1\nmaterial = {}\n",

@@ -344,12 +344,6 @@ fn unsupported_features_are_refused_with_their_line() {
             "section `RODS`",
         ),
         (
-            section("BODIES"),
-            "BODIES",
-            Some(Feature::Bodies),
-            "section `BODIES`",
-        ),
-        (
             section("FAILURE"),
             "FAILURE",
             Some(Feature::Failure),
@@ -408,12 +402,6 @@ fn unsupported_features_are_refused_with_their_line() {
             "WaterKinematicsMode",
             Some(Feature::UnknownOptions),
             "option `WaterKinematicsMode`",
-        ),
-        (
-            with_row("4   Vessel      5.2", "4   Body1       5.2"),
-            "4   Body1",
-            None,
-            "point 4 (Body1), attached to body 1",
         ),
         (
             with_row("4   Vessel      5.2", "4   Turbine2    5.2"),
@@ -669,5 +657,212 @@ fn moordyn_f_friction_options_map_to_axial_friction_and_static_scale() {
     assert!(
         message.contains("deck.dat:19") && message.contains("both FrictionCoefficient and mu_kT"),
         "{message}"
+    );
+}
+
+/// The spar deck with its three fairleads on a free body: a 200 t buoy (400 m³, drag area
+/// 20 m² in translation only) 60 m down, its centre of gravity 1 m above its reference point.
+fn buoy_deck(body_row: &str) -> String {
+    SPAR_V2
+        .replace(
+            "4   Vessel      5.2       0.0       -70.0",
+            "4   Body1       5.2       0.0       -10.0",
+        )
+        .replace(
+            "5   Vessel     -2.6       4.5033    -70.0",
+            "5   Body1      -2.6       4.5033    -10.0",
+        )
+        .replace(
+            "6   Vessel     -2.6      -4.5033    -70.0",
+            "6   Body1      -2.6      -4.5033    -10.0",
+        )
+        .replace(
+            "---------------------- LINES",
+            &format!(
+                "---------------------- BODIES ----------------------\n\
+                 ID  Attachment  X0   Y0   Z0    r0  p0  y0  Mass   CG   I             Volume  CdA   Ca\n\
+                 (#) (word)      (m)  (m)  (m)  (deg)(deg)(deg)(kg) (m)  (kg-m^2)      (m^3)   (m^2) (-)\n\
+                 {body_row}\n---------------------- LINES"
+            ),
+        )
+}
+
+const FREE_BUOY: &str =
+    "1   Free        0    0    -60   0   0   90  2.0e5  1.0  1e6|1e6|5e5   400     20|0  0";
+
+/// A free body maps onto `[bodies.body1]`: its mass and inertia, its centre at
+/// `X0 + R CG` (the CG 1 m up the body's z, which the yaw of 90° keeps vertical), the
+/// orientation in degrees, its points relative to the centre (`p − CG`), the volume and the
+/// translational drag area (a conversion with its caveat); the lines end at the body's
+/// points, placed at `X0 + R p` (point 4 at (5.2, 0, −10) in body axes turned 90° about z:
+/// (0, 5.2, −70)); `check` rows say what the body and its points became, and the scenario
+/// validates.
+#[test]
+fn a_free_body_maps_onto_a_rigid_body() {
+    let text = buoy_deck(FREE_BUOY);
+    let (m, file) = mapped(&text, &[]);
+    let s = &file.scenario;
+    let b = s.bodies["body1"].get_ref();
+    assert_eq!(*b.mass.get_ref(), 2.0e5);
+    assert_eq!(b.inertia.get_ref(), &vec![1e6, 1e6, 5e5]);
+    assert_eq!(b.position.get_ref(), &vec![0.0, 0.0, -59.0]);
+    assert_eq!(
+        b.orientation.as_ref().unwrap().get_ref(),
+        &vec![0.0, 0.0, 90.0]
+    );
+    let p4 = b.points.get_ref()["p4"].get_ref();
+    assert_eq!(p4, &vec![5.2, 0.0, -11.0]);
+    assert_eq!(opt(&b.volume), Some(400.0));
+    assert_eq!(opt(&b.cda), Some(20.0));
+    assert!(b.ca.is_none() && b.motion.is_none());
+    let line1 = s.string[0].get_ref().path.get_ref();
+    assert_eq!(
+        line1.last().unwrap().get_ref(),
+        &scenario::NodeRef::Name("body1.p4".into())
+    );
+    // The last interior node of line 1 lies between the anchor and (0, 5.2, −70).
+    let fair = [0.0, 5.2, -70.0];
+    let anchor = [853.87, 0.0, -320.0];
+    let last_interior = s
+        .node
+        .iter()
+        .find(|n| n.get_ref().name.get_ref() == "line1_19")
+        .unwrap()
+        .get_ref()
+        .position
+        .get_ref()
+        .clone();
+    let chord = |a: &[f64], b: &[f64]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+    assert!(chord(&last_interior, &fair) < chord(&last_interior, &anchor));
+    assert!((chord(&last_interior, &fair) - 902.2 / 20.0).abs() < 1e-6 * 902.2);
+    assert!(
+        m.record
+            .converted
+            .iter()
+            .any(|c| c.contains("CdA = 20 m² of body 1"))
+    );
+    let row = |needle: &str| {
+        m.rows
+            .iter()
+            .find(|r| r.entry.contains(needle))
+            .unwrap_or_else(|| panic!("no row {needle}"))
+            .became
+            .clone()
+    };
+    assert!(row("body 1 (Free)").starts_with("[bodies.body1]: a free rigid body of 200000 kg"));
+    assert_eq!(
+        row("point 4 (Body1)"),
+        "body point body1.p4 of [bodies.body1]"
+    );
+    file.setup().unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// A coupled body without `--motion` is a prescribed body held at its deck pose (constant
+/// motion expressions, 1 kg and 1 kg·m², listed as conversions); a fixed body's points are
+/// fixed supports at `X0 + R p`.
+#[test]
+fn coupled_and_fixed_bodies_map_onto_a_held_body_and_supports() {
+    let coupled = buoy_deck(
+        "1   Coupled     0    0    -60   0   0   0   0      0    0             0       0     0",
+    );
+    let (m, file) = mapped(&coupled, &[]);
+    let b = file.scenario.bodies["body1"].get_ref();
+    let motion = b.motion.as_ref().unwrap().get_ref();
+    let texts: Vec<&str> = motion
+        .position
+        .get_ref()
+        .iter()
+        .map(|e| e.get_ref().as_str())
+        .collect();
+    assert_eq!(texts, ["0.0", "0.0", "-60.0"]);
+    assert_eq!(*b.mass.get_ref(), 1.0);
+    assert_eq!(
+        b.points.get_ref()["p5"].get_ref(),
+        &vec![-2.6, 4.5033, -10.0]
+    );
+    assert!(
+        m.record
+            .converted
+            .iter()
+            .any(|c| c.contains("coupled body 1 is held at its deck pose"))
+    );
+    file.setup().unwrap_or_else(|e| panic!("{e}"));
+    let fixed = buoy_deck(
+        "1   Fixed       0    0    -60   0   0   0   0      0    0             0       0     0",
+    );
+    let (m, file) = mapped(&fixed, &[]);
+    assert!(file.scenario.bodies.is_empty());
+    let p4 = file
+        .scenario
+        .node
+        .iter()
+        .find(|n| n.get_ref().name.get_ref() == "point4")
+        .unwrap();
+    assert_eq!(p4.get_ref().position.get_ref(), &vec![5.2, 0.0, -70.0]);
+    assert!(
+        m.rows
+            .iter()
+            .any(|r| r.entry == "body 1 (Fixed)" && r.became.contains("fixed supports"))
+    );
+    file.setup().unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// What the body model does not take is refused at the body's (or point's) line: one drag
+/// area for all six degrees of freedom (rotational drag), added mass, a pinned body (no
+/// `--ignore`), a point on a body the deck lacks, a free body without mass; with
+/// `--ignore bodies` the drag and added mass are dropped and listed.
+#[test]
+fn body_features_the_model_lacks_are_refused_with_their_line() {
+    let cases: Vec<(String, &str, Option<Feature>, &str)> = vec![
+        (
+            buoy_deck(&FREE_BUOY.replace("20|0", "20")),
+            "1   Free",
+            Some(Feature::Bodies),
+            "the rotational drag of body 1 (CdA = 20",
+        ),
+        (
+            buoy_deck(&FREE_BUOY.replace("20|0  0", "20|0  0.8")),
+            "1   Free",
+            Some(Feature::Bodies),
+            "the added-mass coefficients Ca = 0.8 of body 1",
+        ),
+        (
+            buoy_deck(&FREE_BUOY.replace("Free    ", "Pinned  ")),
+            "1   Pinned",
+            None,
+            "body 1 (Pinned), coupled in translation and free to turn",
+        ),
+    ];
+    for (text, needle, feature, what) in &cases {
+        let line = line_of(text, needle);
+        let e = refused(text);
+        assert!(
+            e.starts_with(&format!("deck.dat:{line}: ")),
+            "{needle}: {e}"
+        );
+        assert!(e.contains(what), "{needle}: {e}");
+        match feature {
+            Some(f) => {
+                assert!(e.contains(&format!("`--ignore {}`", f.word())), "{e}");
+                let (m, file) = mapped(text, &[*f]);
+                assert_eq!(m.record.ignored.len(), 1, "{needle}");
+                file.setup().unwrap_or_else(|e| panic!("{e}"));
+            }
+            None => assert!(!e.contains("--ignore"), "{e}"),
+        }
+    }
+    let missing = buoy_deck(FREE_BUOY).replace("6   Body1", "6   Body2");
+    let e = refused(&missing);
+    let line = line_of(&missing, "6   Body2");
+    assert!(
+        e.starts_with(&format!("deck.dat:{line}: "))
+            && e.contains("point 6 (Body2) is attached to body 2, but the deck has 1 bodies"),
+        "{e}"
+    );
+    let massless = buoy_deck(&FREE_BUOY.replace("2.0e5", "0    "));
+    let e = refused(&massless);
+    assert!(
+        e.contains("free body 1 has Mass 0 kg: phstring's bodies need a positive mass"),
+        "{e}"
     );
 }

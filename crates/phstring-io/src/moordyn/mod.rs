@@ -10,7 +10,7 @@
 //! read; see [`Version`] for how the two are told apart and `docs/moordyn.md` for the
 //! format as read.
 //!
-//! Sections this reader does not read (rods, bodies, failures, …) are listed in
+//! Sections this reader does not read (rods, failures, …) are listed in
 //! [`Deck::sections_present`] with their line numbers, so that a later step can refuse
 //! them with `deck.dat:LINE`.
 
@@ -157,6 +157,52 @@ pub struct Point {
     pub line: usize,
 }
 
+/// What a body is attached to (the BODIES `Attachment` column).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BodyKind {
+    /// Fixed in space (`Fixed`, `Fix`, `Anchor`).
+    Fixed,
+    /// Moved by the coupled program (`Vessel`, `Coupled`, `Ves`, `Cpld`, a number after the
+    /// word ignored).
+    Coupled,
+    /// Free: moved by the forces on it (`Free`).
+    Free,
+    /// Coupled in translation, free to turn (`CoupledPinned`, `VesselPinned`, `Pinned`).
+    Pinned,
+}
+
+/// One row of the BODIES section (v2): `ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG* I*
+/// Volume CdA* Ca*`; the starred columns take one value or several separated by `|`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Body {
+    /// Id, 1, 2, 3, … in file order.
+    pub id: u32,
+    /// What the body is attached to.
+    pub kind: BodyKind,
+    /// The attachment word as written.
+    pub kind_text: String,
+    /// The body's reference point [m] (`X0 Y0 Z0`) and orientation [deg] (`r0 p0 y0`,
+    /// `R = Rx(r0) Ry(p0) Rz(y0)`).
+    pub pose: [f64; 6],
+    /// Mass [kg] (`Mass`).
+    pub mass: f64,
+    /// Centre of gravity relative to the reference point, body axes [m] (`CG`): one value
+    /// (along z) or three (`x|y|z`), as written.
+    pub cg: Vec<f64>,
+    /// Moments of inertia about the centre of gravity, body axes [kg·m²] (`I`): one value
+    /// (all three) or three (`Ix|Iy|Iz`), as written.
+    pub inertia: Vec<f64>,
+    /// Displaced volume [m³] (`Volume`).
+    pub volume: f64,
+    /// Drag areas [m²] (`CdA`): 1, 2, 3 or 6 values, as written (MoorDyn: one for all six
+    /// degrees of freedom; translation|rotation; per axis for both; per degree of freedom).
+    pub cda: Vec<f64>,
+    /// Added-mass coefficients [-] (`Ca`): 1, 3 or 6 values, as written.
+    pub ca: Vec<f64>,
+    /// 1-based line in the file.
+    pub line: usize,
+}
+
 /// Which end of a rod a line is attached to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RodEnd {
@@ -221,7 +267,7 @@ pub enum SectionKind {
     Outputs,
     /// `ROD TYPES`, `ROD DICTIONARY` (not read).
     RodTypes,
-    /// `BODIES`, `BODY LIST`, `BODY PROPERTIES` (not read).
+    /// `BODIES`, `BODY LIST`, `BODY PROPERTIES` (read).
     Bodies,
     /// `RODS`, `ROD LIST`, `ROD PROPERTIES` (not read).
     Rods,
@@ -245,6 +291,7 @@ impl SectionKind {
             SectionKind::LineTypes
                 | SectionKind::Points
                 | SectionKind::Lines
+                | SectionKind::Bodies
                 | SectionKind::Options
                 | SectionKind::Outputs
         )
@@ -286,6 +333,8 @@ pub struct Deck {
     pub points: Vec<Point>,
     /// Lines in file order (ids 1, 2, 3, …).
     pub lines: Vec<Line>,
+    /// Bodies in file order (ids 1, 2, 3, …; v2 BODIES).
+    pub bodies: Vec<Body>,
     /// Options, raw, with typed getters.
     pub options: Options,
     /// Output channels in order.
@@ -365,6 +414,10 @@ pub fn parse(text: &str, file: &str) -> Result<Deck, DeckError> {
         }
         None => Vec::new(),
     };
+    let bodies = match block(SectionKind::Bodies) {
+        Some(b) => tables::bodies(file, tables::table(file, b)?.1)?,
+        None => Vec::new(),
+    };
     let options = match block(SectionKind::Options) {
         Some(b) => options::read_options(file, &b.rows)?,
         None => options::read_options(file, &[])?,
@@ -380,6 +433,7 @@ pub fn parse(text: &str, file: &str) -> Result<Deck, DeckError> {
         line_types,
         points,
         lines,
+        bodies,
         options,
         outputs,
         sections_present: sections,

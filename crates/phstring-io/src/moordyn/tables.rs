@@ -4,7 +4,8 @@ use super::error::DeckError;
 use super::layout::{Block, Row, count, is_number, number};
 use super::options::looks_numeric;
 use super::{
-    Attachment, Line, LineType, LineValue, OutputChannel, Point, PointKind, RodEnd, Version,
+    Attachment, Body, BodyKind, Line, LineType, LineValue, OutputChannel, Point, PointKind, RodEnd,
+    Version,
 };
 
 /// A MoorDyn-F v1 count line at the top of a table (`3  NLines  - number of lines`):
@@ -377,6 +378,97 @@ pub(super) fn points(file: &str, rows: &[Row]) -> Result<Vec<Point>, DeckError> 
             force,
             cda: r.num(tail, "CdA")?,
             ca: r.num(tail + 1, "Ca")?,
+            line: row.line,
+        });
+    }
+    Ok(out)
+}
+
+/// The body type of the BODIES `Attachment` column; see [`BodyKind`].
+fn body_kind(text: &str) -> Option<BodyKind> {
+    let (letters, _, rest) = decompose(text);
+    let pinned = |w: &str| {
+        w.strip_suffix("PINNED")
+            .is_some_and(|head| ["", "COUPLED", "VESSEL", "CPLD", "VES"].contains(&head))
+    };
+    match (letters.as_str(), rest.to_ascii_uppercase().as_str()) {
+        ("FIXED" | "FIX" | "ANCHOR", "") => Some(BodyKind::Fixed),
+        ("VESSEL" | "VES" | "COUPLED" | "CPLD", "") => Some(BodyKind::Coupled),
+        ("FREE", "") => Some(BodyKind::Free),
+        (w, "") if pinned(w) => Some(BodyKind::Pinned),
+        _ => None,
+    }
+}
+
+/// A starred BODIES column (`CG`, `I`, `CdA`, `Ca`): numbers separated by `|`, as many as
+/// one of `counts` allows.
+fn bar_values(
+    r: &Fields,
+    i: usize,
+    field: &'static str,
+    counts: &[usize],
+) -> Result<Vec<f64>, DeckError> {
+    let text = r.f[i];
+    let values: Option<Vec<f64>> = text.split('|').map(number).collect();
+    match values {
+        Some(v) if counts.contains(&v.len()) => Ok(v),
+        _ => Err(DeckError::NotANumber {
+            file: r.file.to_string(),
+            line: r.line,
+            field,
+            text: text.to_string(),
+        }),
+    }
+}
+
+/// Reads the BODIES rows (v2): `ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG* I* Volume CdA*
+/// Ca*` (14 fields); ids run 1, 2, 3, ….
+pub(super) fn bodies(file: &str, rows: &[Row]) -> Result<Vec<Body>, DeckError> {
+    let mut out = Vec::with_capacity(rows.len());
+    for row in rows {
+        let r = Fields {
+            file,
+            line: row.line,
+            f: row.fields(),
+        };
+        if r.f.len() != 14 {
+            return Err(r.wrong_count(
+                "BODIES",
+                "14 (ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca)",
+            ));
+        }
+        let id = r.count(0, "ID")?;
+        let expected = out.len() as u32 + 1;
+        if id != expected {
+            return Err(DeckError::OutOfSequence {
+                file: file.to_string(),
+                line: row.line,
+                table: "BODIES",
+                found: id,
+                expected,
+            });
+        }
+        let kind = body_kind(r.f[1]).ok_or_else(|| DeckError::UnknownBodyKind {
+            file: file.to_string(),
+            line: row.line,
+            text: r.f[1].to_string(),
+        })?;
+        let names = ["X0", "Y0", "Z0", "r0", "p0", "y0"];
+        let mut pose = [0.0; 6];
+        for (k, name) in names.iter().enumerate() {
+            pose[k] = r.num(2 + k, name)?;
+        }
+        out.push(Body {
+            id,
+            kind,
+            kind_text: r.f[1].to_string(),
+            pose,
+            mass: r.num(8, "Mass")?,
+            cg: bar_values(&r, 9, "CG", &[1, 3])?,
+            inertia: bar_values(&r, 10, "I", &[1, 3])?,
+            volume: r.num(11, "Volume")?,
+            cda: bar_values(&r, 12, "CdA", &[1, 2, 3, 6])?,
+            ca: bar_values(&r, 13, "Ca", &[1, 3, 6])?,
             line: row.line,
         });
     }

@@ -529,7 +529,6 @@ fn unsupported_sections_are_listed_with_their_lines() {
         listed,
         [
             (SectionKind::RodTypes, "ROD TYPES", at("--- ROD TYPES")),
-            (SectionKind::Bodies, "BODIES", at("--- BODIES")),
             (SectionKind::Rods, "RODS", at("--- RODS")),
             (SectionKind::Failure, "FAILURE", at("--- FAILURE")),
             (SectionKind::Control, "CONTROL", at("--- CONTROL")),
@@ -546,15 +545,17 @@ fn unsupported_sections_are_listed_with_their_lines() {
             ),
         ]
     );
-    // The rest of the deck is read as usual.
+    // The rest of the deck is read as usual, the BODIES section with it (one coupled body).
     assert_eq!(d.lines.len(), 1);
     assert_eq!(
         d.sections_present
             .iter()
             .filter(|s| s.kind.is_read())
             .count(),
-        5
+        6
     );
+    assert_eq!(d.bodies.len(), 1);
+    assert_eq!(d.bodies[0].kind, BodyKind::Coupled);
 }
 
 #[test]
@@ -783,5 +784,67 @@ proptest! {
         if let Err(e) = parse(&text, "m.dat") {
             prop_assert!(e.to_string().starts_with("m.dat"), "{}", e);
         }
+    }
+}
+
+/// The BODIES rows: the attachment words (any case, a number after `Vessel` ignored,
+/// the pinned forms), the pose, and the starred columns with one or several `|`-separated
+/// values kept as written; a row of the wrong width, a starred column with a value count
+/// MoorDyn does not take, an unknown word and an id out of sequence are refused at their
+/// line.
+#[test]
+fn bodies_are_read_with_their_starred_columns() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
+    let with = |rows: &str| {
+        base.replace(
+            "--- OPTIONS ---",
+            &format!("--- BODIES ---\nID Att X0 Y0 Z0 r0 p0 y0 M CG I V CdA Ca\n(#) (-) (m) (m) (m) (deg) (deg) (deg) (kg) (m) (kgm2) (m3) (m2) (-)\n{rows}\n--- OPTIONS ---"),
+        )
+    };
+    let text = with(
+        "1 free 1 2 -30 0 5 90 2e5 0.5|0|1 1e6|2e6|3e6 400 20|0 0\n2 Vessel1 0 0 0 0 0 0 0 0 0 0 0 0\n3 FIX 0 0 -50 0 0 0 0 -2 1e3 0 1|2|3|4|5|6 0|0|0\n4 CoupledPinned 0 0 0 0 0 0 0 0 0 0 0 0",
+    );
+    let d = deck(&text);
+    assert_eq!(d.bodies.len(), 4);
+    let b = &d.bodies[0];
+    assert_eq!(
+        (b.id, b.kind, b.kind_text.as_str()),
+        (1, BodyKind::Free, "free")
+    );
+    assert_eq!(b.pose, [1.0, 2.0, -30.0, 0.0, 5.0, 90.0]);
+    assert_eq!((b.mass, b.volume), (2e5, 400.0));
+    assert_eq!(b.cg, vec![0.5, 0.0, 1.0]);
+    assert_eq!(b.inertia, vec![1e6, 2e6, 3e6]);
+    assert_eq!((b.cda.clone(), b.ca.clone()), (vec![20.0, 0.0], vec![0.0]));
+    assert_eq!(b.line, line_of(&text, "1 free"));
+    assert_eq!(d.bodies[1].kind, BodyKind::Coupled);
+    assert_eq!(d.bodies[2].kind, BodyKind::Fixed);
+    assert_eq!(d.bodies[2].cg, vec![-2.0]);
+    assert_eq!(d.bodies[2].cda, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    assert_eq!(d.bodies[3].kind, BodyKind::Pinned);
+    let cases = [
+        (
+            "1 free 0 0 0 0 0 0 1 0 1 0 0",
+            "a BODIES row needs 14 (ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca) fields, this one has 13",
+        ),
+        ("1 free 0 0 0 0 0 0 1 0|1 1 0 0 0", "CG `0|1`"),
+        ("1 free 0 0 0 0 0 0 1 0 1 0 1|2|3|4 0", "CdA `1|2|3|4`"),
+        (
+            "1 floating 0 0 0 0 0 0 1 0 1 0 0 0",
+            "body type `floating` is not one of",
+        ),
+        (
+            "2 free 0 0 0 0 0 0 1 0 1 0 0 0",
+            "BODIES id 2 is out of sequence",
+        ),
+    ];
+    for (row, says) in cases {
+        let text = with(row);
+        let e = err(&text);
+        let line = line_of(&text, row);
+        assert!(
+            e.starts_with(&format!("deck.dat:{line}: ")) && e.contains(says),
+            "{row}: {e}"
+        );
     }
 }

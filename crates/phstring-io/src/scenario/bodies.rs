@@ -14,6 +14,8 @@ use phstring::body::{Mat3, Vec3};
 use phstring::{Attachment, BodyState, BodyWrench, Material, NetworkBuilder, RigidBody, Vector};
 use toml::Spanned;
 
+use super::body_motion::MotionSource;
+use super::body_water::BodyWaterComponent;
 use super::components::{BodyComponent, BodyPointComponent, Components, NamedNode};
 use super::expr::{Expr, eval_or_record_at};
 use super::refs::Nodes;
@@ -29,6 +31,9 @@ pub(super) struct BodyDraft<const D: usize> {
     /// Per attachment (in the order of `body.attachments`): the node's initial position [m]
     /// and velocity [m/s], and its name `"BODY.POINT"`.
     pub starts: Vec<(Vector<D>, Vector<D>, String)>,
+    /// Its prescribed motion, attached by [`ScenarioFile::body_wrenches`] with the run's
+    /// record of expression failures.
+    pub motion: Option<MotionSource>,
 }
 
 /// `v` as a 3-vector (`z = 0` in 2D).
@@ -71,7 +76,7 @@ impl ScenarioFile {
                 ));
             }
             let spec = spec.get_ref();
-            let (mut body, omega) = self.body::<D>(&key, name, spec, gravity)?;
+            let (mut body, omega, motion) = self.body::<D>(&key, name, spec, gravity)?;
             let (report, starts, points) = self.points(&key, spec, &mut body, &omega, b)?;
             for (p, &(_, node, _)) in starts.iter().zip(&points) {
                 components.nodes.push(NamedNode {
@@ -81,22 +86,29 @@ impl ScenarioFile {
                 });
             }
             nodes.add_body(name, points.iter().map(|&(p, n, _)| (p, n)).collect());
-            components.bodies.push(body_component(&body, spec, report));
-            drafts.push(BodyDraft { body, starts });
+            let mut component = body_component(&body, spec, report);
+            component.motion = motion.as_ref().map_or_else(Vec::new, MotionSource::texts);
+            components.bodies.push(component);
+            drafts.push(BodyDraft {
+                body,
+                starts,
+                motion,
+            });
         }
         nodes.n_nodes = b.n_nodes();
         Ok(drafts)
     }
 
-    /// Body `name` (at `key`) without its points: mass, weight, inertia and initial state;
-    /// also its initial angular velocity in space axes [rad/s].
+    /// Body `name` (at `key`) without its points: mass, weight, inertia, water terms and
+    /// initial state (a prescribed motion's at `t = 0`); also its initial angular velocity in
+    /// space axes [rad/s] and its prescribed motion.
     fn body<const D: usize>(
         &self,
         key: &str,
         name: &str,
         spec: &BodySpec,
         gravity: Vector<D>,
-    ) -> Result<(RigidBody<D>, Vec3), ScenarioError> {
+    ) -> Result<(RigidBody<D>, Vec3, Option<MotionSource>), ScenarioError> {
         let k = |f: &str| format!("{key}.{f}");
         let mass = self.positive(&k("mass"), &spec.mass)?;
         let weight = gravity * mass;
@@ -130,7 +142,18 @@ impl ScenarioFile {
         let rot = phstring::signal::rotation(angles.x * deg, angles.y * deg, angles.z * deg);
         let orientation =
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
-        let initial = BodyState::new(position, velocity, orientation, rates);
+        let hydro = self.body_hydro::<D>(key, spec)?;
+        let motion = self.body_motion_source::<D>(key, spec, self.first_mid_time())?;
+        let (initial, rates) = match &motion {
+            None => (
+                BodyState::new(position, velocity, orientation, rates),
+                rates,
+            ),
+            Some(m) => {
+                let (x, q, v, w) = self.motion_start::<D>(key, spec, m, &position, &orientation)?;
+                (BodyState::new(x, v, q, w), w)
+            }
+        };
         let body = RigidBody {
             name: name.to_string(),
             mass,
@@ -139,10 +162,10 @@ impl ScenarioFile {
             attachments: Vec::new(),
             initial,
             wrench: None,
-            hydro: None,
+            hydro,
             motion: None,
         };
-        Ok((body, rates))
+        Ok((body, rates, motion))
     }
 
     /// `bodies.NAME.inertia` (`key`): the principal moments `[Ixx, Iyy, Izz]` or the entries
@@ -199,7 +222,7 @@ impl ScenarioFile {
 
     /// An orientation [deg] or angular velocity [rad/s] at `key` with `n` components (3 in
     /// 3D, 1 in 2D: about `z`), as a 3-vector; zero when absent.
-    fn turn_vector(
+    pub(super) fn turn_vector(
         &self,
         key: &str,
         v: Option<&Spanned<Vec<f64>>>,
@@ -387,6 +410,9 @@ impl ScenarioFile {
     ) -> Result<(), ScenarioError> {
         let t_check = self.first_mid_time();
         for ((name, spec), draft) in file_order(&self.scenario.bodies).into_iter().zip(drafts) {
+            if let Some(m) = &draft.motion {
+                draft.body.motion = Some(m.motion::<D>(slot));
+            }
             let Some(w) = &spec.get_ref().wrench else {
                 continue;
             };
@@ -473,6 +499,8 @@ fn body_component<const D: usize>(
         wrench_external: wrench
             .and_then(|w| w.external.as_ref())
             .is_some_and(|x| *x.get_ref()),
+        water: body.hydro.as_ref().map(|h| BodyWaterComponent::of(h, D)),
+        motion: Vec::new(),
     }
 }
 

@@ -60,6 +60,13 @@ pub struct BodyComponent {
     /// force and torque.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub wrench_external: bool,
+    /// Its water terms (none: the body feels no water).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub water: Option<super::body_water::BodyWaterComponent>,
+    /// Its prescribed motion: the expressions of the position [m] and of the angles [deg]
+    /// (`motion`), or `["table FILE"]` (`motion_table`); empty: the body moves freely.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub motion: Vec<String>,
 }
 
 /// An attachment point of a rigid body: a mesh node that moves with the body.

@@ -15,6 +15,8 @@
 mod attach;
 mod bathymetry;
 mod bodies;
+mod body_motion;
+mod body_water;
 mod components;
 mod expr;
 mod initial;
@@ -40,6 +42,7 @@ use phstring::{
 };
 use toml::Spanned;
 
+pub use body_water::BodyWaterComponent;
 pub use components::{
     BodyComponent, BodyPointComponent, Components, LoadComponent, MotionComponent, NamedNode,
     PointMassComponent, SpringComponent, StringComponent, SupportComponent,
@@ -53,9 +56,9 @@ pub use rounding::ROUNDING_FACTOR;
 pub use settings::MAX_STEPS;
 pub use single::MAX_ELEMENTS;
 pub use spec::{
-    BodyForceSpec, BodySpec, BoundarySpec, DeckSpec, FixedSpec, FmuSpec, Geometry, InitialSpec,
-    MaterialSpec, MeshSpec, NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario, SpringSpec,
-    StringPathSpec, TimeSpec, WrenchSpec,
+    BodyForceSpec, BodyMotionSpec, BodySpec, BoundarySpec, DeckSpec, FixedSpec, FmuSpec, Geometry,
+    InitialSpec, MaterialSpec, MeshSpec, NewtonSpec, NodeSpec, OutputSpec, PointMassSpec, Scenario,
+    SpringSpec, StringPathSpec, TimeSpec, WrenchSpec,
 };
 pub use start::{AnyRunning, AnySetup, Built, Running, Setup, StartError};
 

@@ -470,6 +470,57 @@ pub struct BodySpec {
     /// A wrench port: force and torque in space axes as expressions of `t` [s].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wrench: Option<Spanned<WrenchSpec>>,
+    /// Displaced volume [m³] in `[water]`: buoyancy `ρ_w g V` at the centre of buoyancy
+    /// (MoorDyn's body `Volume`; default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<Spanned<f64>>,
+    /// Centre of buoyancy in body axes relative to the centre of mass [m] (default: the
+    /// centre of mass).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_of_buoyancy: Option<Spanned<Vec<f64>>>,
+    /// Drag coefficient times area `CdA` [m²] of the quadratic drag at the centre of mass
+    /// (MoorDyn's body `CdA`; default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cda: Option<Spanned<f64>>,
+    /// Linear drag coefficient [N·s/m] at the centre of mass (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linear_drag: Option<Spanned<f64>>,
+    /// Added-mass coefficient `Ca` on `ρ_w V`, the same in every direction (MoorDyn's body
+    /// `Ca`; default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ca: Option<Spanned<f64>>,
+    /// Added moments of inertia about the body axes [kg·m²]: 3 in 3D, the one about `z` in
+    /// 2D (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_inertia: Option<Spanned<Vec<f64>>>,
+    /// Waterplane area `A_w` [m²] of a floater: heave restoring `ρ_w g A_w` at `waterline`
+    /// (default 0: submerged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub waterplane_area: Option<Spanned<f64>>,
+    /// The waterline point in body axes relative to the centre of mass [m] (default: the
+    /// centre of mass).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub waterline: Option<Spanned<Vec<f64>>>,
+    /// A prescribed motion of the whole body: absolute pose as expressions of `t` [s].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<Spanned<BodyMotionSpec>>,
+    /// A prescribed motion from a table file of seven columns `t, x, y, z, roll, pitch,
+    /// yaw` [s, m, rad] (a `[[platform]]` table; dimension 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion_table: Option<Spanned<String>>,
+}
+
+/// `motion = { position = […], orientation = […] }` of a body: its absolute pose as
+/// expressions of `t` [s].
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyMotionSpec {
+    /// Position of the centre of mass [m], one expression per component.
+    pub position: Spanned<Vec<Spanned<String>>>,
+    /// Orientation [deg]: `[roll, pitch, yaw]` (`R = Rx Ry Rz`) in 3D, the angle about `z`
+    /// in 2D (default: the body's constant `orientation`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<Spanned<Vec<Spanned<String>>>>,
 }
 
 /// `wrench = { force = […], torque = […] }` of a body: expressions of `t` [s] in space axes,

@@ -89,14 +89,21 @@ impl<const D: usize> Setup<D> {
     /// or an angular velocity, which that start would drop.
     fn bodies_at_rest(&self) -> Result<(), ScenarioError> {
         let Built { system, state } = &self.problem;
-        for ((name, _), b) in system.bodies().iter().zip(&state.bodies) {
+        for (i, ((name, _), b)) in system.bodies().iter().zip(&state.bodies).enumerate() {
             if b.velocity.norm() > 0.0 || b.omega.norm() > 0.0 {
+                let reason = if system.body_has_motion(i) {
+                    format!(
+                        "= true starts every body at rest, but the prescribed motion of body \"{name}\" moves at t = 0: start its motion at rest (zero rates at t = 0), or start from the given positions"
+                    )
+                } else {
+                    format!(
+                        "= true starts every body at rest at its rest pose, but body \"{name}\" is given a velocity or angular velocity: remove them, or start from the given positions"
+                    )
+                };
                 return Err(ScenarioError::Invalid {
                     key: "initial.equilibrium".into(),
                     origin: super::Origin::Scenario(self.initial.path().to_path_buf()),
-                    reason: format!(
-                        "= true starts every body at rest at its rest pose, but body \"{name}\" is given a velocity or angular velocity: remove them, or start from the given positions"
-                    ),
+                    reason,
                 });
             }
         }

@@ -109,7 +109,7 @@ impl ScenarioFile {
 
     /// Reads the table that `key` names, with `columns` columns; errors name the key and the
     /// file's line.
-    fn scenario_table(
+    pub(super) fn scenario_table(
         &self,
         key: &str,
         file: &toml::Spanned<String>,

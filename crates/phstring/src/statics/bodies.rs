@@ -19,7 +19,7 @@ use crate::assembly::free_dofs;
 use crate::body::{
     BodyState, Mat3, PointStep, Turn, Vec3, cayley_quaternion, embed, project, skew,
 };
-use crate::body_step::{add_body_blocks, embed_block, rotation_slot, unknowns};
+use crate::body_step::{add_body_blocks, current_at, embed_block, rotation_slot, unknowns};
 use crate::linsolve::BlockJacobian;
 use crate::system::{PhSystem, Vector};
 
@@ -39,6 +39,18 @@ pub(super) struct BodyTerms<'a, const D: usize> {
     pub anchor: &'a [Vector<D>],
     /// Shift of the Newton matrix only [1/s²].
     pub jac_shift: f64,
+    /// Whether the current's drag on the bodies at rest is in (it is left out where the
+    /// potential's stiffness alone is wanted).
+    pub drag: bool,
+}
+
+/// A point row of a body at rest: the point in body axes [m], its step under the turn, the
+/// row `R` [N] (the force the body must exert there, so it feels `−R`) and `∂R/∂r` [N/m].
+struct PointRow {
+    point: Vec3,
+    step: PointStep,
+    res: Vec3,
+    diag: Mat3,
 }
 
 /// The wrench ports' force [N] and torque [N·m] at `t = 0`, per body.
@@ -101,6 +113,10 @@ impl<const D: usize> BodyTerms<'_, D> {
             .collect();
         let mut scale2 = 0.0;
         for (b, model) in sys.bodies.iter().enumerate() {
+            if model.motion.is_some() {
+                hold(sys, b, res, jac.as_deref_mut());
+                continue;
+            }
             let (dx, w) = unknowns(self.slots, b);
             let turn = &turns[b];
             let rt = turn.rot.transpose();
@@ -113,22 +129,42 @@ impl<const D: usize> BodyTerms<'_, D> {
             // Unscaled blocks, the moment row in space axes.
             let mut jb = [[Mat3::zeros(); 2]; 2];
             let mut dw_rows = Vec::with_capacity(points[b].len());
-            for (&(node, s), p) in model.attachments.iter().zip(&points[b]) {
-                let rk = embed(&res[node]);
-                let arm = turn.rot * s + p.moved;
+            let attached = model
+                .attachments
+                .iter()
+                .zip(&points[b])
+                .map(|(&(node, s), p)| PointRow {
+                    point: s,
+                    step: *p,
+                    res: embed(&res[node]),
+                    diag: jac
+                        .as_deref()
+                        .map_or(Mat3::zeros(), |j| embed_block(&j.diag[node])),
+                });
+            let water = self.water_rows(sys, model, &self.poses[b], turn, &dx);
+            let n_att = model.attachments.len();
+            for (k, row) in attached.chain(water).enumerate() {
+                let (rk, p) = (row.res, &row.step);
+                let arm = turn.rot * row.point + p.moved;
                 let m = arm.cross(&rk);
                 force += rk;
                 moment += m;
+                // An attached node's row is counted with the nodes', a water row here.
+                if k >= n_att {
+                    scale2 += rk.norm_squared();
+                }
                 scale2 += (m * inv_rg).norm_squared();
                 let ak = skew(&arm);
-                dw_rows.push(rt * ak);
-                if let Some(j) = jac.as_deref() {
-                    // R_k moves with the node, the arm with w.
-                    let k = embed_block(&j.diag[node]);
-                    jb[0][0] += k;
-                    jb[0][1] += k * p.dw;
-                    jb[1][0] += ak * k;
-                    jb[1][1] += ak * k * p.dw - skew(&rk) * p.dw;
+                if k < n_att {
+                    dw_rows.push(rt * ak);
+                }
+                if jac.is_some() {
+                    // R_k moves with the point, the arm with w.
+                    let kk = row.diag;
+                    jb[0][0] += kk;
+                    jb[0][1] += kk * p.dw;
+                    jb[1][0] += ak * kk;
+                    jb[1][1] += ak * kk * p.dw - skew(&rk) * p.dw;
                 }
             }
             let mut spin = rt * moment;
@@ -152,7 +188,122 @@ impl<const D: usize> BodyTerms<'_, D> {
             ];
             add_body_blocks(sys, b, &blocks, (&points, &dw_rows, inv_rg), j);
         }
+        if let Some(j) = jac {
+            unlink_held(sys, j);
+        }
         scale2
+    }
+}
+
+impl<const D: usize> BodyTerms<'_, D> {
+    /// The water's point rows of body `model` at rest at the pose `(x₀ + δx, R₀ cay(w))`
+    /// (`pose` the reference, `turn` the turn by `w`, `dx` = `δx`): the buoyancy at the centre
+    /// of buoyancy (a load, `R = −λ F_b`), the waterplane's heave restoring at the waterline
+    /// point (`R = k z_w e_z`, `∂R/∂r = k e_z e_zᵀ`, the gradient of `½ k z_w²`, not scaled by
+    /// `λ`: a stiffness) and, with `drag`, the current's steady drag at the centre of mass
+    /// (a load, `F = (c + c_q √(|u|² + δ²)) u` at rest, `u` the current there, with its
+    /// derivative by the height where the current varies with it).
+    fn water_rows<M>(
+        &self,
+        sys: &PhSystem<D, M>,
+        model: &crate::body::BodyModel,
+        pose: &BodyState,
+        turn: &Turn,
+        dx: &Vec3,
+    ) -> Vec<PointRow> {
+        let mut rows = Vec::new();
+        let lambda = self.lambda;
+        if let Some((f, s)) = model.buoyancy {
+            rows.push(PointRow {
+                point: s,
+                step: turn.point(&s),
+                res: -f * lambda,
+                diag: Mat3::zeros(),
+            });
+        }
+        if let Some((k, s, up)) = model.waterplane {
+            let step = turn.point(&s);
+            let z = (pose.position + dx + turn.rot * s + step.moved).dot(&up);
+            rows.push(PointRow {
+                point: s,
+                step,
+                res: up * (k * z),
+                diag: up * up.transpose() * k,
+            });
+        }
+        if let Some(water) = sys
+            .water
+            .as_deref()
+            .filter(|_| self.drag && model.drag.is_some())
+        {
+            let at_rest = BodyState::at_rest(pose.position + dx, pose.orientation);
+            let flow = current_at::<D>(water, &at_rest, &Vec3::zeros());
+            // At rest (a step of infinite length with no increment), as for the points' drag:
+            // the position enters the mid-step height with weight ½.
+            let (f, df, _, _) =
+                model.drag_step(f64::INFINITY, &Vec3::zeros(), (&flow.0, &flow.1, &flow.2));
+            let centre = Vec3::zeros();
+            rows.push(PointRow {
+                point: centre,
+                step: turn.point(&centre),
+                res: -f * lambda,
+                diag: -df * (2.0 * lambda),
+            });
+        }
+        rows
+    }
+}
+
+/// Body `b`, which a prescribed motion holds at its reference pose (its pose at `t = 0`):
+/// its rows are its slots themselves (`δx = 0`, `w = 0`), with unit blocks scaled by the
+/// stiffness of its attached nodes, and no couplings, so that Newton never moves it; the
+/// attached nodes are masked as held nodes (their reactions are the body's pull on them).
+fn hold<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    b: usize,
+    res: &mut [Vector<D>],
+    jac: Option<&mut BlockJacobian<D>>,
+) {
+    let n = sys.mesh.n_nodes();
+    res[n + 2 * b] = Vector::zeros();
+    res[n + 2 * b + 1] = Vector::zeros();
+    let Some(j) = jac else { return };
+    let model = &sys.bodies[b];
+    let stiff: f64 = model
+        .attachments
+        .iter()
+        .map(|&(node, _)| j.diag[node].trace().abs() / D as f64)
+        .sum();
+    let scale = if stiff > 0.0 && stiff.is_finite() {
+        stiff
+    } else {
+        1.0
+    };
+    let slots = j.border.slots;
+    for s in 0..2 {
+        let at = (2 * b + s) * slots + 2 * b + s;
+        j.border.own[at] = crate::linsolve::Block::<D>::identity() * scale;
+    }
+}
+
+/// Removes the couplings of the other bodies' rows to the slots of the bodies that a
+/// prescribed motion holds (they multiply increments that are zero, and the stability check
+/// reads one triangle of the tangent).
+pub(super) fn unlink_held<const D: usize, M>(sys: &PhSystem<D, M>, j: &mut BlockJacobian<D>) {
+    let slots = j.border.slots;
+    for (b2, m) in sys.bodies.iter().enumerate() {
+        if m.motion.is_none() {
+            continue;
+        }
+        for row in 0..slots {
+            if row / 2 == b2 {
+                continue;
+            }
+            for t in 0..2 {
+                j.border.own[row * slots + 2 * b2 + t] = crate::linsolve::Block::<D>::zeros();
+                j.border.own[(2 * b2 + t) * slots + row] = crate::linsolve::Block::<D>::zeros();
+            }
+        }
     }
 }
 
@@ -228,6 +379,25 @@ pub(super) fn hessian_triplets<const D: usize, M>(
     t
 }
 
+/// The start poses `poses` with each body that a prescribed motion moves at its pose at
+/// `t = 0` (at rest), where the statics hold it.
+pub(super) fn held_poses<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    poses: &[BodyState],
+) -> Vec<BodyState> {
+    sys.bodies
+        .iter()
+        .zip(poses)
+        .map(|(m, st)| match &m.motion {
+            Some(motion) => {
+                let (x, q) = (motion.pose)(0.0);
+                BodyState::at_rest(x, q)
+            }
+            None => *st,
+        })
+        .collect()
+}
+
 /// Checks start poses `poses` (one per body): finite, and in 2D in the plane `z = 0` turned
 /// about `z` only.
 pub(super) fn check_poses<const D: usize, M>(
@@ -270,7 +440,8 @@ pub(super) fn free_spin<const D: usize, M>(
     sys: &PhSystem<D, M>,
     held: &[bool],
 ) -> Option<(usize, String, [f64; 3])> {
-    let free = |b: &usize| !held.get(*b).copied().unwrap_or(false);
+    let free =
+        |b: &usize| !held.get(*b).copied().unwrap_or(false) && sys.bodies[*b].motion.is_none();
     sys.bodies
         .iter()
         .enumerate()
@@ -306,7 +477,11 @@ pub(super) fn loose_body<const D: usize, M>(
         .iter()
         .zip(&sys.body_names)
         .enumerate()
-        .find(|(b, (m, _))| m.attachments.is_empty() && !held.get(*b).copied().unwrap_or(false))
+        .find(|(b, (m, _))| {
+            m.attachments.is_empty()
+                && m.motion.is_none()
+                && !held.get(*b).copied().unwrap_or(false)
+        })
         .map(|(b, (_, name))| (b, name.clone()))
 }
 
@@ -314,7 +489,7 @@ pub(super) fn loose_body<const D: usize, M>(
 /// slots `slots` (so that Newton keeps them at zero) and their blocks the identity,
 /// decoupled from the nodes and the other bodies (a held slot never moves, so the blocks
 /// that multiply it do not matter).
-pub(super) fn hold<const D: usize>(
+pub(super) fn hold_flagged<const D: usize>(
     held: &[bool],
     n: usize,
     slots: &[Vector<D>],

@@ -5,9 +5,10 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::*;
-use crate::body::{Attachment, BodyWrench, RigidBody};
+use crate::body::{Attachment, BodyHydro, BodyWrench, RigidBody};
 use crate::network::{NetworkBuilder, StringSpec};
 use crate::system::MassMatrix;
+use crate::water::{Current, Water};
 use crate::{Boundary, Material};
 
 const G: f64 = 9.81;
@@ -39,8 +40,11 @@ fn vd<const D: usize>(v: &Vector3<f64>) -> Vector<D> {
 
 /// Body A (2 t) hangs from supports by 2-element ropes; body B (500 kg) hangs from A by
 /// one-element ropes (body to body) and a 2-element rope; A carries a wrench port. Both
-/// start turned. 3D: three ropes each; 2D: two each.
-fn two_bodies<const D: usize>() -> (PhSystem<D, Material>, State<D>) {
+/// start turned. 3D: three ropes each; 2D: two each. `wet`: in sea water with a current that
+/// grows with height (0.2 to 1.1 m/s from 8 m below B to 2 m above A, along x and y), A
+/// with all water terms (1.2 m³ with its centre of buoyancy off the centre, drag, a 3 m²
+/// waterplane at a point off its axes), B with buoyancy and drag only.
+fn two_bodies<const D: usize>(wet: bool) -> (PhSystem<D, Material>, State<D>) {
     let turn = |a: f64, b: f64, c: f64| {
         if D == 3 {
             UnitQuaternion::from_euler_angles(a, b, c)
@@ -116,10 +120,32 @@ fn two_bodies<const D: usize>() -> (PhSystem<D, Material>, State<D>) {
         hydro: None,
         motion: None,
     };
-    let net = net
-        .with_body(body("a", 2000.0, xa, qa, att_a, Some(wrench)))
-        .with_body(body("b", 500.0, xb, qb, att_b, None));
-    PhSystem::new(net).unwrap()
+    let (mut a, mut b) = (
+        body("a", 2000.0, xa, qa, att_a, Some(wrench)),
+        body("b", 500.0, xb, qb, att_b, None),
+    );
+    let mut net = net;
+    if wet {
+        let v = |x: f64, y: f64| Vector::<D>::from_fn(|k, _| [x, y, 0.0][k]);
+        let profile = Current::Profile(vec![(-12.0, v(0.2, -0.1)), (2.0, v(1.1, 0.4))]);
+        net = net.with_water(Water::new(1025.0).with_current(profile));
+        a.hydro = Some(BodyHydro {
+            volume: 1.2,
+            centre_of_buoyancy: plane(Vector3::new(0.1, -0.05, 0.3)),
+            cda: 1.5,
+            linear_drag: 200.0,
+            ca: 0.5,
+            added_inertia: Vector3::new(30.0, 40.0, 50.0),
+            waterplane_area: 3.0,
+            waterline: plane(Vector3::new(0.2, 0.1, 0.25)),
+        });
+        b.hydro = Some(BodyHydro {
+            volume: 0.2,
+            cda: 0.6,
+            ..Default::default()
+        });
+    }
+    PhSystem::new(net.with_body(a).with_body(b)).unwrap()
 }
 
 /// A deterministic spread of values in `[-1, 1]`.
@@ -134,8 +160,8 @@ fn spread(i: usize) -> f64 {
 /// component or slot, on the rows of the free components and slots, to 1e-6 of the
 /// column's size (measured: 5.3e-9 in 3D over 24 columns, 6.1e-10 in 2D over 12; without
 /// the arm's turn in the moment's tangent, 1.4 and 1.5e-2).
-fn jacobian_matches_finite_differences<const D: usize>() {
-    let (sys, init) = two_bodies::<D>();
+fn jacobian_matches_finite_differences<const D: usize>(wet: bool) {
+    let (sys, init) = two_bodies::<D>(wet);
     let f = static_load(&sys);
     let mut eq = StaticEquations::new(&sys, &init.r, &f, &init.bodies);
     eq.lambda = 0.7;
@@ -233,12 +259,22 @@ fn jacobian_matches_finite_differences<const D: usize>() {
 
 #[test]
 fn body_statics_jacobian_matches_finite_differences_3d() {
-    jacobian_matches_finite_differences::<3>();
+    jacobian_matches_finite_differences::<3>(false);
 }
 
 #[test]
 fn body_statics_jacobian_matches_finite_differences_2d() {
-    jacobian_matches_finite_differences::<2>();
+    jacobian_matches_finite_differences::<2>(false);
+}
+
+/// The same with the water on the bodies: buoyancy at an off-centre centre of buoyancy, a
+/// waterplane at a point off the axes (its stiffness is not scaled by the load factor) and
+/// the drag in a current that changes with height (its derivative by the height), to the
+/// same 1e-6 of the column's size.
+#[test]
+fn body_statics_jacobian_in_water_matches_finite_differences() {
+    jacobian_matches_finite_differences::<3>(true);
+    jacobian_matches_finite_differences::<2>(true);
 }
 
 /// A body fixed to no node is refused by name.
@@ -315,7 +351,7 @@ fn body_on_free_strings_is_under_constrained() {
 /// A start pose out of the plane of a 2D network is refused by the body's name.
 #[test]
 fn start_pose_out_of_the_plane_is_refused() {
-    let (sys, init) = two_bodies::<2>();
+    let (sys, init) = two_bodies::<2>(false);
     let mut start = init.clone();
     start.bodies[1].orientation = UnitQuaternion::from_euler_angles(0.1, 0.0, 0.4);
     let err = solve_from(&sys, &start, &StaticsParams::default(), None).unwrap_err();

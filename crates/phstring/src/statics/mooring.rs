@@ -116,6 +116,13 @@ pub fn body_stiffness<const D: usize, M: StoredEnergy>(
         name: sys.body_names[body].clone(),
         why,
     };
+    if sys.bodies[body].motion.is_some() {
+        return Err(singular(
+            "its pose is prescribed (a motion), and the statics hold it there: the stiffness \
+             of a prescribed body is not available yet (give it no motion for the analysis)"
+                .into(),
+        ));
+    }
     let n = sys.mesh.n_nodes();
     let slots = 2 * count;
     let f = static_load(sys);
