@@ -83,6 +83,22 @@ impl Fields<'_, '_> {
             text: self.f[i].to_string(),
         })
     }
+    /// The `ID` field (the first), which must number this row `previous + 1` of `table`
+    /// (`previous` rows read before it).
+    fn in_sequence(&self, table: &'static str, previous: usize) -> Result<u32, DeckError> {
+        let id = self.count(0, "ID")?;
+        let expected = previous as u32 + 1;
+        if id != expected {
+            return Err(DeckError::OutOfSequence {
+                file: self.file.to_string(),
+                line: self.line,
+                table,
+                found: id,
+                expected,
+            });
+        }
+        Ok(id)
+    }
     /// Field `i` as a count (≥ 1).
     fn count(&self, i: usize, field: &'static str) -> Result<u32, DeckError> {
         count(self.f[i]).ok_or_else(|| DeckError::NotACount {
@@ -345,17 +361,7 @@ pub(super) fn points(file: &str, rows: &[Row]) -> Result<Vec<Point>, DeckError> 
                 "9 (ID Attachment X Y Z Mass Volume CdA Ca) or 12 (with FX FY FZ after Volume)",
             ));
         }
-        let id = r.count(0, "ID")?;
-        let expected = out.len() as u32 + 1;
-        if id != expected {
-            return Err(DeckError::OutOfSequence {
-                file: file.to_string(),
-                line: row.line,
-                table: "POINTS",
-                found: id,
-                expected,
-            });
-        }
+        let id = r.in_sequence("POINTS", out.len())?;
         let kind = point_kind(r.f[1]).ok_or_else(|| DeckError::UnknownPointKind {
             file: file.to_string(),
             line: row.line,
@@ -437,17 +443,7 @@ pub(super) fn bodies(file: &str, rows: &[Row]) -> Result<Vec<Body>, DeckError> {
                 "14 (ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca)",
             ));
         }
-        let id = r.count(0, "ID")?;
-        let expected = out.len() as u32 + 1;
-        if id != expected {
-            return Err(DeckError::OutOfSequence {
-                file: file.to_string(),
-                line: row.line,
-                table: "BODIES",
-                found: id,
-                expected,
-            });
-        }
+        let id = r.in_sequence("BODIES", out.len())?;
         let kind = body_kind(r.f[1]).ok_or_else(|| DeckError::UnknownBodyKind {
             file: file.to_string(),
             line: row.line,
@@ -517,17 +513,7 @@ pub(super) fn lines(
                 },
             ));
         }
-        let id = r.count(0, "ID")?;
-        let expected = out.len() as u32 + 1;
-        if id != expected {
-            return Err(DeckError::OutOfSequence {
-                file: file.to_string(),
-                line: row.line,
-                table: "LINES",
-                found: id,
-                expected,
-            });
-        }
+        let id = r.in_sequence("LINES", out.len())?;
         if !types.iter().any(|t| t.name == r.f[1]) {
             return Err(DeckError::UnknownLineType {
                 file: file.to_string(),
