@@ -319,7 +319,8 @@ struct StaticEquations<'a, const D: usize, M> {
     /// With bodies: the nodes' displacements with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
     /// Per body, whether it is held at its reference pose (its slots stay zero and its force
-    /// and moment balance is left out); empty when none is.
+    /// and moment balance is left out): a body with a prescribed motion always, others as
+    /// a caller asks ([`Self::hold`]).
     held: Vec<bool>,
 }
 
@@ -423,7 +424,15 @@ impl<'a, const D: usize, M: StoredEnergy> StaticEquations<'a, D, M> {
             offsets: vec![Vector::zeros(); if sys.bodies.is_empty() { 0 } else { n }],
             ports: bodies::ports_at_rest(sys),
             nodes_x: Vec::with_capacity(if sys.bodies.is_empty() { 0 } else { n }),
-            held: Vec::new(),
+            held: sys.bodies.iter().map(|m| m.motion.is_some()).collect(),
+        }
+    }
+
+    /// Also holds the bodies flagged in `held` (one flag per body; an empty slice holds
+    /// none).
+    fn hold(&mut self, held: &[bool]) {
+        for (h, &x) in self.held.iter_mut().zip(held) {
+            *h |= x;
         }
     }
 
@@ -857,7 +866,7 @@ fn solve_without_feedback<const D: usize, M: StoredEnergy>(
     let solver = make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?;
     let ws = NewtonWorkspace::<D>::with_slots(&sys.mesh, slots);
     let mut eq = StaticEquations::new(sys, r_start, &f, poses);
-    eq.held = held.to_vec();
+    eq.hold(held);
     eq.jac_shift =
         JAC_SHIFT * initial_shift(sys, r_start, &f) / (sys.mesh.n_elements() as f64).powi(2);
     let mut s = Search {
@@ -1365,7 +1374,7 @@ fn stable_with_bodies<const D: usize, M: StoredEnergy>(
     let f = static_load(sys);
     let mut eq = StaticEquations::new(sys, r, &f, poses);
     eq.release = release;
-    eq.held = held.to_vec();
+    eq.hold(held);
     eq.drag = false;
     let x = vec![Vector::<D>::zeros(); eq.unknowns()];
     let mut res = x.clone();

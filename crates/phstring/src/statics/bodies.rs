@@ -114,7 +114,7 @@ impl<const D: usize> BodyTerms<'_, D> {
         let mut scale2 = 0.0;
         for (b, model) in sys.bodies.iter().enumerate() {
             if model.motion.is_some() {
-                hold(sys, b, res, jac.as_deref_mut());
+                // Held at its pose ([`hold_flagged`] writes its rows).
                 continue;
             }
             let (dx, w) = unknowns(self.slots, b);
@@ -188,9 +188,6 @@ impl<const D: usize> BodyTerms<'_, D> {
             ];
             add_body_blocks(sys, b, &blocks, (&points, &dw_rows, inv_rg), j);
         }
-        if let Some(j) = jac {
-            unlink_held(sys, j);
-        }
         scale2
     }
 }
@@ -251,59 +248,6 @@ impl<const D: usize> BodyTerms<'_, D> {
             });
         }
         rows
-    }
-}
-
-/// Body `b`, which a prescribed motion holds at its reference pose (its pose at `t = 0`):
-/// its rows are its slots themselves (`δx = 0`, `w = 0`), with unit blocks scaled by the
-/// stiffness of its attached nodes, and no couplings, so that Newton never moves it; the
-/// attached nodes are masked as held nodes (their reactions are the body's pull on them).
-fn hold<const D: usize, M>(
-    sys: &PhSystem<D, M>,
-    b: usize,
-    res: &mut [Vector<D>],
-    jac: Option<&mut BlockJacobian<D>>,
-) {
-    let n = sys.mesh.n_nodes();
-    res[n + 2 * b] = Vector::zeros();
-    res[n + 2 * b + 1] = Vector::zeros();
-    let Some(j) = jac else { return };
-    let model = &sys.bodies[b];
-    let stiff: f64 = model
-        .attachments
-        .iter()
-        .map(|&(node, _)| j.diag[node].trace().abs() / D as f64)
-        .sum();
-    let scale = if stiff > 0.0 && stiff.is_finite() {
-        stiff
-    } else {
-        1.0
-    };
-    let slots = j.border.slots;
-    for s in 0..2 {
-        let at = (2 * b + s) * slots + 2 * b + s;
-        j.border.own[at] = crate::linsolve::Block::<D>::identity() * scale;
-    }
-}
-
-/// Removes the couplings of the other bodies' rows to the slots of the bodies that a
-/// prescribed motion holds (they multiply increments that are zero, and the stability check
-/// reads one triangle of the tangent).
-pub(super) fn unlink_held<const D: usize, M>(sys: &PhSystem<D, M>, j: &mut BlockJacobian<D>) {
-    let slots = j.border.slots;
-    for (b2, m) in sys.bodies.iter().enumerate() {
-        if m.motion.is_none() {
-            continue;
-        }
-        for row in 0..slots {
-            if row / 2 == b2 {
-                continue;
-            }
-            for t in 0..2 {
-                j.border.own[row * slots + 2 * b2 + t] = crate::linsolve::Block::<D>::zeros();
-                j.border.own[(2 * b2 + t) * slots + row] = crate::linsolve::Block::<D>::zeros();
-            }
-        }
     }
 }
 
@@ -485,10 +429,11 @@ pub(super) fn loose_body<const D: usize, M>(
         .map(|(b, (_, name))| (b, name.clone()))
 }
 
-/// Holds the bodies flagged in `held` at their reference poses: their rows become their
+/// Holds the bodies flagged in `held` (those a prescribed motion holds at its pose at
+/// `t = 0`, and those a caller holds) at their reference poses: their rows become their
 /// slots `slots` (so that Newton keeps them at zero) and their blocks the identity,
 /// decoupled from the nodes and the other bodies (a held slot never moves, so the blocks
-/// that multiply it do not matter).
+/// that multiply it do not matter, and the stability check reads one triangle).
 pub(super) fn hold_flagged<const D: usize>(
     held: &[bool],
     n: usize,
