@@ -336,22 +336,33 @@ def test_a_3d_network_with_a_moving_fairlead(tmp_path):
     assert np.abs(res["balance_error"]).max() <= 1e-12 * np.abs(res["H"]).max()
 
 
-def test_a_buoy_on_the_mooring_line_two_way_coupled(tmp_path):
+def test_a_buoy_on_the_mooring_line_coupled_against_the_same_buoy_in_one_step(tmp_path):
     """examples/fmu/buoy_master.py: the buoy sets the fairlead, the line's pull acts on the
-    buoy. The FMU's balance holds, the line receives sum(R_new * dz) (up to the held
-    velocity's impact energies at the ramps' corners), and the
-    explicit coupling's defect (the buoy used R_old) stays a few % of the work exchanged."""
+    buoy one communication step late, against examples/fmu/buoy_monolithic.toml, the same buoy
+    as a rigid body in the line's exact step. Both balances hold to rounding; the line
+    receives sum(R_new . dr) (up to the held velocity's impact energies at the ramps'
+    corners); the coupled buoy follows the monolithic one to a few mm at H = 0.01 s and moves
+    away from it as H grows, and the explicit coupling's energy defect (the buoy used R_old)
+    grows with H."""
     fmu = buoy_master.build_fmu(BIN, tmp_path / "mooring.fmu")
-    r = buoy_master.coupled(fmu, t_end=10.0, comm_step=0.01)
-    heave = r["z"] - r["z"][0]
-    assert 0.3 < np.abs(heave).max() < 1.5  # m: driven by a 0.5 m wave near resonance
-    assert 1e4 < r["R"].min() and r["R"].max() < 4e4  # N: the line pulls, never goes slack
+    exact = buoy_master.monolithic(BIN, tmp_path / "monolithic", t_end=10.0)
+    assert np.nanmax(np.abs(exact["balance_error"])) <= 1e-13 * np.abs(exact["hamiltonian"]).max()
+    assert 0.3 < np.abs(exact["z"]).max() < 1.5  # m: driven by a 0.5 m wave near resonance
+    runs = {H: buoy_master.coupled(fmu, t_end=10.0, comm_step=H) for H in (0.01, 0.02)}
+    r = runs[0.01]
     assert np.abs(r["balance_error"]).max() <= 1e-12 * np.abs(r["H"]).max()
-    received = np.sum(r["R"][1:] * np.diff(r["z"]))
+    pull = np.hypot(r["Rx"], r["Ry"])
+    assert 1e4 < pull.min() and pull.max() < 4e4  # N: the line pulls, never goes slack
+    received = np.sum(r["Rx"][1:] * np.diff(r["x"]) + r["Ry"][1:] * np.diff(r["z"]))
     # The work of the pull over the fairlead's path, up to the kinetic energy the held
     # velocity imposes beyond its impulse's work where the ramps' slope changes (of order
     # ½ m |Δs|², m ≤ ρA l = 20 kg the fairlead's mass).
-    slopes = np.concatenate([[0.0], np.diff(r["z"]) / 0.01])
-    assert abs(received - r["supplied"][-1]) <= 20.0 * np.sum(np.diff(slopes) ** 2)
+    kinks = sum(np.sum(np.diff(np.concatenate([[0.0], np.diff(r[k]) / 0.01])) ** 2) for k in ("x", "z"))
+    assert abs(received - r["supplied"][-1]) <= 20.0 * kinks
+    off = {H: buoy_master.compare(c, exact) for H, c in runs.items()}
+    assert off[0.01][1] < 5e-3  # m of heave, against a 0.76 m amplitude
+    assert off[0.02][1] > 2.0 * off[0.01][1]  # the coupling's error shrinks with H
+    defect = {H: abs(c["work_buoy"][-1] - c["supplied"][-1]) for H, c in runs.items()}
     exchanged = np.abs(r["supplied"]).max()
-    assert abs(r["work_buoy"][-1] - r["supplied"][-1]) < 0.1 * exchanged
+    assert defect[0.01] < 0.02 * exchanged
+    assert defect[0.02] > defect[0.01]

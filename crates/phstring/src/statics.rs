@@ -224,11 +224,12 @@ pub enum StaticsError {
         /// Its name.
         name: String,
     },
-    /// A rigid body's attachment points all lie on one line through its centre of mass, so
-    /// it can turn about that line with nothing to resist (a block on a single string in
-    /// 3D; in 2D, every point at the centre).
+    /// A rigid body's attachment points (and the points where its water acts at an offset:
+    /// its centre of buoyancy, its waterline point) all lie on one line through its centre
+    /// of mass, so it can turn about that line with nothing to resist (a block on a single
+    /// string in 3D; in 2D, every point at the centre).
     #[error(
-        "no equilibrium: rigid body {index} ('{name}') has all its attachment points on one line through its centre of mass (direction {axis:?} in body axes), so nothing holds its turn about that line; attach a string off that line"
+        "no equilibrium: rigid body {index} ('{name}') has all its attachment points on one line through its centre of mass (direction {axis:?} in body axes), so nothing holds its turn about that line; attach a string off that line (or, in water, give it a centre of buoyancy off that line)"
     )]
     FreeSpin {
         /// Index of the body.

@@ -376,10 +376,12 @@ pub(super) fn check_poses<const D: usize, M>(
     Ok(())
 }
 
-/// The first body not flagged in `held` whose attachment points all lie on one line through
-/// its centre of mass (in 3D; in 2D, all at the centre): it can turn about that line with no string resisting,
-/// so no rest state holds that turn. Returns `(index, name, the line's direction in body
-/// axes)` (`x` when every point is at the centre).
+/// The first body not flagged in `held` whose attachment points, with the points where its
+/// water acts at an offset (the centre of buoyancy of a body with a volume, the waterline
+/// point of a floater), all lie on one line through its centre of mass (in 3D; in 2D, all at
+/// the centre): it can turn about that line with nothing resisting, so no rest state holds
+/// that turn. Returns `(index, name, the line's direction in body axes)` (`x` when every
+/// point is at the centre).
 pub(super) fn free_spin<const D: usize, M>(
     sys: &PhSystem<D, M>,
     held: &[bool],
@@ -391,10 +393,12 @@ pub(super) fn free_spin<const D: usize, M>(
         .enumerate()
         .filter(|(b, _)| free(b))
         .find_map(|(b, m)| {
-            let far = m
-                .attachments
+            let mut points: Vec<Vec3> = m.attachments.iter().map(|(_, s)| *s).collect();
+            points.extend(m.buoyancy.map(|(_, at)| at));
+            points.extend(m.waterplane.map(|(_, at, _)| at));
+            let far = points
                 .iter()
-                .map(|(_, s)| *s)
+                .copied()
                 .max_by(|a, c| a.norm().total_cmp(&c.norm()))?;
             let length = far.norm();
             let axis = if length > 0.0 {
@@ -402,10 +406,9 @@ pub(super) fn free_spin<const D: usize, M>(
             } else {
                 Vec3::x()
             };
-            let on_line = m
-                .attachments
+            let on_line = points
                 .iter()
-                .all(|(_, s)| s.cross(&axis).norm() <= 1e-9 * length);
+                .all(|s| s.cross(&axis).norm() <= 1e-9 * length);
             let free = if D == 3 { on_line } else { length == 0.0 };
             free.then(|| (b, sys.body_names[b].clone(), [axis.x, axis.y, axis.z]))
         })
