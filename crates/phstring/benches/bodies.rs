@@ -93,6 +93,7 @@ fn run(n_el: usize, with_body: bool) -> (f64, f64) {
             wrench: None,
             hydro: None,
             motion: None,
+            feedback: None,
         });
     }
     let params = StepParams {

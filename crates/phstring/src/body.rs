@@ -202,6 +202,9 @@ pub struct RigidBody<const D: usize> {
     pub hydro: Option<BodyHydro>,
     /// A prescribed motion; `None`: the body moves freely.
     pub motion: Option<BodyMotion>,
+    /// A feedback law on the wrench port (PD on the pose, damping injection; docs/method.md
+    /// §22), applied besides the port's force and torque signals; `None`: none.
+    pub feedback: Option<crate::body_feedback::BodyFeedback>,
 }
 
 /// `3×3` skew matrix `â` with `â b = a × b`.
@@ -292,6 +295,8 @@ pub(crate) struct BodyModel {
     pub waterplane: Option<(f64, Vec3, Vec3)>,
     /// The prescribed motion.
     pub motion: Option<BodyMotion>,
+    /// The feedback law on the wrench port (in 2D with the out-of-plane gains zeroed).
+    pub feedback: Option<crate::body_feedback::BodyFeedback>,
 }
 
 /// The row of an attachment node that a body's equations need: its residual `R_k` [N] and
@@ -419,6 +424,11 @@ impl BodyModel {
                 inertia.as_slice()
             )));
         }
+        if let Some((gain, value)) = body.feedback.as_ref().and_then(|f| f.bad_gain()) {
+            return Err(fail(format!(
+                "feedback gain {gain} must be ≥ 0 and finite, got {value}"
+            )));
+        }
         let st = &body.initial;
         let finite = |v: &Vec3| v.iter().all(|x| x.is_finite());
         if !(finite(&st.position)
@@ -481,6 +491,10 @@ impl BodyModel {
             drag,
             waterplane,
             motion: body.motion.clone(),
+            feedback: body
+                .feedback
+                .as_ref()
+                .map(|f| if D == 2 { f.planar() } else { f.clone() }),
         })
     }
 
@@ -638,6 +652,11 @@ fn check_motion<const D: usize>(
     let Some(m) = &body.motion else {
         return Ok(());
     };
+    if body.feedback.is_some() {
+        return Err(fail(
+            "a body with a prescribed motion takes no feedback law (its port is the motion)".into(),
+        ));
+    }
     if body.wrench.is_some() {
         return Err(fail(
             "a body with a prescribed motion takes no wrench port (its port is the motion)".into(),
@@ -831,6 +850,7 @@ mod tests {
             drag: None,
             waterplane: None,
             motion: None,
+            feedback: None,
         }
     }
 

@@ -7,6 +7,7 @@
 //! are forces [N] in Newton's norm.
 
 use crate::body::{BodyState, Mat3, NodeRow, PointStep, Turn, Vec3, embed, project};
+use crate::body_feedback::{FeedbackTarget, FeedbackWrench};
 use crate::linsolve::{Block, BlockJacobian, BorderPattern};
 use crate::system::{PhSystem, Vector};
 
@@ -56,7 +57,8 @@ pub(crate) fn predict<const D: usize>(states: &[BodyState], h: f64, slots: &mut 
 
 /// The bodies' port samples of a step of `h` [s] with slots `slots`, into `out`; returns the
 /// energy they supplied [J]. A wrench port's inputs are `wrenches` (force [N], torque [N·m]
-/// per body); a prescribed motion's output is the reaction wrench, formed from the attached
+/// per body) plus its feedback law's wrench against `targets` (per body, the law's reference
+/// at the mid time; `None` without a law); a prescribed motion's output is the reaction wrench, formed from the attached
 /// nodes' residuals `reaction` (as the Newton solve left them) and the states `next` the step
 /// ends in (velocities held), with the impulse and the kinetic energy of the hold.
 #[allow(clippy::too_many_arguments)]
@@ -65,7 +67,7 @@ pub(crate) fn port_samples<const D: usize, M>(
     states: &[BodyState],
     h: f64,
     slots: &[Vector<D>],
-    wrenches: &[(Vec3, Vec3)],
+    (wrenches, targets): (&[(Vec3, Vec3)], &[Option<FeedbackTarget>]),
     reaction: &[Vector<D>],
     next: &[BodyState],
     out: &mut [crate::body::BodyPortSample],
@@ -80,7 +82,11 @@ pub(crate) fn port_samples<const D: usize, M>(
             reaction_wrench(model, water, st, h, (&dx, &w), reaction, &next[b])
         } else {
             // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
-            let (force, torque) = wrenches[b];
+            let (mut force, mut torque) = wrenches[b];
+            if let Some(fb) = feedback_at::<D>(model, targets, b, st, h, (&dx, &w)) {
+                force += fb.force;
+                torque += fb.torque;
+            }
             (force, torque, force.dot(&dx) + torque.dot(&turned))
         };
         supplied += work;
@@ -93,6 +99,27 @@ pub(crate) fn port_samples<const D: usize, M>(
         };
     }
     supplied
+}
+
+/// Body `b`'s feedback wrench over a step of `h` [s] from `st` with unknowns `(Δx, w)`
+/// against its reference in `targets` (in 2D in the plane: the force's `z` and the torque's
+/// `x`, `y` dropped); `None` without a law.
+pub(crate) fn feedback_at<const D: usize>(
+    model: &crate::body::BodyModel,
+    targets: &[Option<FeedbackTarget>],
+    b: usize,
+    st: &BodyState,
+    h: f64,
+    (dx, w): (&Vec3, &Vec3),
+) -> Option<FeedbackWrench> {
+    let (law, target) = (model.feedback.as_ref()?, targets.get(b)?.as_ref()?);
+    let mut out = law.wrench(target, (&st.position, &st.orientation), h, (dx, w));
+    if D == 2 {
+        out.force.z = 0.0;
+        out.torque.x = 0.0;
+        out.torque.y = 0.0;
+    }
+    Some(out)
 }
 
 /// The step of each of body `model`'s points under `turn`: its attachments in order, then its
@@ -394,6 +421,8 @@ pub(crate) struct BodyStep<'a, const D: usize> {
     pub slots: &'a [Vector<D>],
     /// Per body, the wrench port's force [N] and torque [N·m] at the mid time.
     pub wrenches: &'a [(Vec3, Vec3)],
+    /// Per body, its feedback law's reference at the mid time (`None`, or empty: no law).
+    pub targets: &'a [Option<FeedbackTarget>],
 }
 
 impl<const D: usize> BodyStep<'_, D> {
@@ -447,7 +476,12 @@ impl<const D: usize> BodyStep<'_, D> {
                 .collect();
             water_rows(model, st, &dx, &points[b], &mut rows);
             let mut dw_rows = vec![Mat3::zeros(); rows.len()];
-            let (f_port, torque) = self.wrenches.get(b).copied().unwrap_or_default();
+            let (mut f_port, mut torque) = self.wrenches.get(b).copied().unwrap_or_default();
+            let fb = feedback_at::<D>(model, self.targets, b, st, self.h, (&dx, &w));
+            if let Some(fb) = &fb {
+                f_port += fb.force;
+                torque += fb.torque;
+            }
             let (f_drag, d_drag, _, _) = drag_in(model, sys.water.as_deref(), st, self.h, &dx);
             let force = model.weight + f_port + f_drag;
             let applied = (&force, &torque);
@@ -462,6 +496,13 @@ impl<const D: usize> BodyStep<'_, D> {
                 &mut dw_rows,
             );
             out.jac[0][0] -= d_drag;
+            if let Some(fb) = &fb {
+                // Force row `… − F`, torque row `… − (I − ½ŵ) R_nᵀ τ` (the factor's own
+                // derivative is in `rows`).
+                out.jac[0][0] -= fb.d_force;
+                let half = Mat3::identity() - crate::body::skew(&w) * 0.5;
+                out.jac[1][1] -= half * turns[b].rot.transpose() * fb.d_torque;
+            }
             let inv_rg = 1.0 / model.gyration();
             res[n + 2 * b] = project(&out.force);
             res[n + 2 * b + 1] = rotation_slot::<D>(&(out.torque * inv_rg));

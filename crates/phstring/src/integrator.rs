@@ -220,6 +220,8 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub bodies: &'a [crate::body::BodyState],
     /// Per body, its wrench port's force [N] and torque [N·m] at `t_mid` (empty: none).
     pub wrenches: &'a [(crate::body::Vec3, crate::body::Vec3)],
+    /// Per body, its feedback law's reference at `t_mid` (empty or `None`: no law).
+    pub targets: &'a [Option<crate::body_feedback::FeedbackTarget>],
     /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
     /// What the water did over the step at the increment of the last evaluation when that
@@ -257,6 +259,7 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             measure: true,
             bodies: &state.bodies,
             wrenches: &[],
+            targets: &[],
             nodes_x: Vec::new(),
             work: None,
         }
@@ -325,6 +328,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             h: self.h,
             slots: &x[n..],
             wrenches: self.wrenches,
+            targets: self.targets,
         };
         let out = if self.measure {
             self.evaluate_range::<true>(&xt, res, jac, 0..n, Some(&step))
@@ -1055,6 +1059,7 @@ mod tests {
             measure: true,
             bodies: &state.bodies,
             wrenches: &[],
+            targets: &[],
             nodes_x: Vec::new(),
             work: None,
         };

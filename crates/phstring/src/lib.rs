@@ -71,6 +71,7 @@ pub mod assembly;
 pub mod bathymetry;
 pub mod benchmarks;
 pub mod body;
+pub mod body_feedback;
 mod body_step;
 pub mod boundary;
 pub mod catenary;
@@ -99,6 +100,7 @@ pub use bathymetry::Bathymetry;
 pub use body::{
     Attachment, BodyHydro, BodyMotion, BodyPortSample, BodyState, BodyWrench, RigidBody,
 };
+pub use body_feedback::{BodyFeedback, FeedbackTarget};
 pub use boundary::{
     Boundary, FeedbackLoad, Fixed, ForceFn, Motion, NodalLoad, PathFn, PdLaw, PortKind, PortLaw,
     PortSample, PositionFn, PositionRamp, RateFn,

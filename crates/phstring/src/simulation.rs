@@ -220,6 +220,9 @@ pub struct Simulation<const D: usize, M> {
     bodies_next: Vec<crate::body::BodyState>,
     /// Per body, its wrench port's force [N] and torque [N·m] at the current step's mid time.
     body_wrenches: Vec<(crate::body::Vec3, crate::body::Vec3)>,
+    /// Per body, its feedback law's reference at the current step's mid time (`None`: no
+    /// law).
+    body_targets: Vec<Option<crate::body_feedback::FeedbackTarget>>,
     /// The bodies' wrench port samples of the last step, and of the one before (put back
     /// if a step fails after they were formed).
     body_ports: Vec<crate::body::BodyPortSample>,
@@ -488,6 +491,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             newton_ws: NewtonWorkspace::with_slots(&sys.mesh, slots),
             bodies_next: Vec::with_capacity(sys.bodies.len()),
             body_wrenches: vec![Default::default(); sys.bodies.len()],
+            body_targets: vec![None; sys.bodies.len()],
             body_ports: vec![Default::default(); sys.bodies.len()],
             body_ports_prev: vec![Default::default(); sys.bodies.len()],
             held_wrenches: Vec::new(),
@@ -1287,6 +1291,16 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 });
             }
             self.body_wrenches[b] = (f, tau);
+            let target = model.feedback.as_ref().map(|law| law.target(t_mid));
+            if target.is_some_and(|g| !g.is_finite()) {
+                return Err(StepError::NonFinite {
+                    step: step_no,
+                    t,
+                    what: "rigid body's feedback reference (at the body's first attached node)",
+                    node: model.attachments.first().map_or(0, |a| a.0),
+                });
+            }
+            self.body_targets[b] = target;
         }
         // A feedback law that is not finite at the start of the step (a failing reference
         // expression) fails the step at once, like a load, rather than through Newton.
@@ -1382,6 +1396,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &mut self.reaction,
         );
         eqs.wrenches = &self.body_wrenches;
+        eqs.targets = &self.body_targets;
         let result = newton::solve(
             &mut eqs,
             &mut self.x,
@@ -1739,7 +1754,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 &self.run.state.bodies,
                 h,
                 &self.x[n..],
-                &self.body_wrenches,
+                (&self.body_wrenches, &self.body_targets),
                 &self.reaction,
                 &self.bodies_next,
                 &mut self.body_ports,

@@ -255,6 +255,21 @@ pub enum StaticsError {
         /// Magnitude of its force on the free components there [N].
         force: f64,
     },
+    /// A rigid body's feedback law pushes at the equilibrium found without it (statics leave
+    /// feedback laws out, as for nodes: taken at rest at `t = 0`, it must vanish there).
+    #[error(
+        "rigid body {index} ('{name}') has a feedback law that pushes with {force:.6e} N and turns with {torque:.6e} N·m at rest at the equilibrium found without it: statics leave feedback laws out, so at t = 0 its reference pose must be the equilibrium pose and its reference velocities 0 (or use proportional gains 0: damping injection)"
+    )]
+    BodyFeedback {
+        /// Index of the body.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// Magnitude of the law's force at rest [N].
+        force: f64,
+        /// Magnitude of the law's torque at rest [N·m].
+        torque: f64,
+    },
 }
 
 /// What every path of a failed equilibrium solve ended with.
@@ -804,6 +819,9 @@ fn solve_posed<const D: usize, M: StoredEnergy>(
         }
     }
     let eq = solve_without_feedback(sys, &r0, (poses, held), params, stop)?;
+    if !params.open_loop {
+        bodies::check_feedback_at_rest(sys, &eq, held)?;
+    }
     let checked = if params.open_loop {
         &[][..]
     } else {

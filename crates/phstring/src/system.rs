@@ -1236,6 +1236,11 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         self.bodies.get(b).is_some_and(|m| m.wrench.is_some())
     }
 
+    /// Whether body `b` has a feedback law on its wrench port (docs/method.md §22).
+    pub fn body_has_feedback(&self, b: usize) -> bool {
+        self.bodies.get(b).is_some_and(|m| m.feedback.is_some())
+    }
+
     /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])` (their own mass,
     /// without the added mass).
     pub fn bodies(&self) -> Vec<(&str, f64)> {

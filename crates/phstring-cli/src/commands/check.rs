@@ -248,7 +248,7 @@ fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
 }
 
 /// The rigid bodies: mass, weight, inertia, initial pose, each point with what attaches
-/// there, and the wrench port.
+/// there, the feedback law and the wrench port.
 fn describe_bodies(out: &mut String, bodies: &[phstring_io::scenario::BodyComponent]) {
     use std::fmt::Write;
     for b in bodies {
@@ -281,6 +281,15 @@ fn describe_bodies(out: &mut String, bodies: &[phstring_io::scenario::BodyCompon
             let _ = writeln!(
                 out,
                 "  motion:    {}: prescribed [{}] (position m, then angles deg; or a table of x, y, z m, roll, pitch, yaw rad), reaction force and torque out",
+                b.name,
+                list.join(", ")
+            );
+        }
+        if !b.feedback.is_empty() {
+            let list: Vec<String> = b.feedback.iter().map(|e| clip(e).into_owned()).collect();
+            let _ = writeln!(
+                out,
+                "  feedback:  {}: PD on the pose, {} (gains per space axis; reference position m, then angles deg; force and torque at the mid-step, velocity and angular velocity out)",
                 b.name,
                 list.join(", ")
             );

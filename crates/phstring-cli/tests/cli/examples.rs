@@ -110,6 +110,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("damping_injection", 2, 622, 10, 21),
         ("pd_tip_tracking", 2, 1200, 5, 26),
         ("hook_block_3d", 3, 2000, 50, 21),
+        ("hook_block_antisway_3d", 3, 2000, 50, 21),
         ("cable_robot_3d", 3, 2000, 25, 40),
         ("spar_buoy_3d", 3, 1600, 10, 123),
     ];

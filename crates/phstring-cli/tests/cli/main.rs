@@ -3,6 +3,7 @@
 mod accuracy;
 mod balance;
 mod bodies;
+mod body_feedback;
 mod broken;
 mod campaign;
 mod control;

@@ -10,11 +10,13 @@ use super::csv::Csv;
 use super::{OutputError, check_finite};
 use crate::files::{BODIES_FILE, bodies_header};
 
-/// Whether any body of `sim` has a wrench port or a prescribed motion (then `bodies.csv` has
-/// the port's columns: the input wrench, or the motion's reaction wrench).
+/// Whether any body of `sim` has a wrench port, a feedback law or a prescribed motion (then
+/// `bodies.csv` has the port's columns: the input wrench with the feedback's, or the motion's
+/// reaction wrench).
 pub(super) fn any_wrench<const D: usize>(sim: &Simulation<D, Material>) -> bool {
     let sys = sim.system();
-    (0..sys.bodies().len()).any(|b| sys.body_has_wrench(b) || sys.body_has_motion(b))
+    (0..sys.bodies().len())
+        .any(|b| sys.body_has_wrench(b) || sys.body_has_feedback(b) || sys.body_has_motion(b))
 }
 
 /// Creates `bodies.csv` in `dir` for a run with bodies (`None` without) and writes the rows

@@ -34,6 +34,9 @@ pub(super) struct BodyDraft<const D: usize> {
     /// Its prescribed motion, attached by [`ScenarioFile::body_wrenches`] with the run's
     /// record of expression failures.
     pub motion: Option<MotionSource>,
+    /// Its feedback law, attached by [`ScenarioFile::body_wrenches`] with the run's record
+    /// of expression failures.
+    pub feedback: Option<super::body_feedback::FeedbackSource>,
 }
 
 /// `v` as a 3-vector (`z = 0` in 2D).
@@ -77,6 +80,7 @@ impl ScenarioFile {
             }
             let spec = spec.get_ref();
             let (mut body, omega, motion) = self.body::<D>(&key, name, spec, gravity)?;
+            let feedback = self.feedback_of::<D>(&key, spec, &body, motion.is_some())?;
             let (report, starts, points) = self.points(&key, spec, &mut body, &omega, b)?;
             for (p, &(_, node, _)) in starts.iter().zip(&points) {
                 components.nodes.push(NamedNode {
@@ -88,15 +92,47 @@ impl ScenarioFile {
             nodes.add_body(name, points.iter().map(|&(p, n, _)| (p, n)).collect());
             let mut component = body_component(&body, spec, report);
             component.motion = motion.as_ref().map_or_else(Vec::new, MotionSource::texts);
+            component.feedback = feedback.as_ref().map_or_else(Vec::new, |f| f.texts());
             components.bodies.push(component);
             drafts.push(BodyDraft {
                 body,
                 starts,
                 motion,
+                feedback,
             });
         }
         nodes.n_nodes = b.n_nodes();
         Ok(drafts)
+    }
+
+    /// The feedback of body `body` (at `key`, `spec`), refused beside a prescribed motion
+    /// (`moved`); `None` without `feedback`.
+    fn feedback_of<const D: usize>(
+        &self,
+        key: &str,
+        spec: &BodySpec,
+        body: &RigidBody<D>,
+        moved: bool,
+    ) -> Result<Option<super::body_feedback::FeedbackSource>, ScenarioError> {
+        let Some(f) = &spec.feedback else {
+            return Ok(None);
+        };
+        if moved {
+            return Err(self.invalid(
+                &format!("{key}.feedback"),
+                f.span(),
+                "is given, but the body has a prescribed motion, which takes no feedback law (its port is the motion): remove `feedback`",
+            ));
+        }
+        let turns = if D == 2 { 1 } else { 3 };
+        let angles = self.turn_vector(
+            &format!("{key}.orientation"),
+            spec.orientation.as_ref(),
+            turns,
+        )?;
+        let pose = (&body.initial.position, &angles);
+        self.body_feedback_source::<D>(key, f, pose, self.first_mid_time())
+            .map(Some)
     }
 
     /// Body `name` (at `key`) without its points: mass, weight, inertia, water terms and
@@ -164,6 +200,7 @@ impl ScenarioFile {
             wrench: None,
             hydro,
             motion: None,
+            feedback: None,
         };
         Ok((body, rates, motion))
     }
@@ -413,6 +450,9 @@ impl ScenarioFile {
             if let Some(m) = &draft.motion {
                 draft.body.motion = Some(m.motion::<D>(slot));
             }
+            if let Some(f) = &draft.feedback {
+                draft.body.feedback = Some(f.law::<D>(slot));
+            }
             let Some(w) = &spec.get_ref().wrench else {
                 continue;
             };
@@ -501,6 +541,7 @@ fn body_component<const D: usize>(
             .is_some_and(|x| *x.get_ref()),
         water: body.hydro.as_ref().map(|h| BodyWaterComponent::of(h, D)),
         motion: Vec::new(),
+        feedback: Vec::new(),
     }
 }
 

@@ -67,6 +67,10 @@ pub struct BodyComponent {
     /// (`motion`), or `["table FILE"]` (`motion_table`); empty: the body moves freely.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub motion: Vec<String>,
+    /// Its feedback law (`feedback`): the gains per space axis, then the reference's
+    /// expressions (position [m], angles [deg]); empty: none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub feedback: Vec<String>,
 }
 
 /// An attachment point of a rigid body: a mesh node that moves with the body.

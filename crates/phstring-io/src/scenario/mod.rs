@@ -15,6 +15,7 @@
 mod attach;
 mod bathymetry;
 mod bodies;
+mod body_feedback;
 mod body_motion;
 mod body_water;
 mod components;

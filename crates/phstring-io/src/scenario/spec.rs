@@ -508,6 +508,37 @@ pub struct BodySpec {
     /// yaw` [s, m, rad] (a `[[platform]]` table; dimension 3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion_table: Option<Spanned<String>>,
+    /// A feedback law on the wrench port: PD on the pose with damping.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedback: Option<Spanned<BodyFeedbackSpec>>,
+}
+
+/// `feedback = { … }` of a body: the force `kp (x_ref − x) − kd (v − v_ref)` at the centre
+/// of mass and the torque of a rotational spring `kp_turn` to the reference orientation with
+/// the damping `−kd_turn (ω − ω_ref)`, gains per space axis, evaluated at the mid-step.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyFeedbackSpec {
+    /// Translational proportional gain [N/m]: one number, or `d` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kp: Option<Spanned<GainSpec>>,
+    /// Translational derivative gain [N·s/m]: one number, or `d` (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd: Option<Spanned<GainSpec>>,
+    /// Rotational proportional gain [N·m/rad]: one number, or 3 in 3D (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kp_turn: Option<Spanned<GainSpec>>,
+    /// Rotational derivative gain [N·m·s/rad]: one number, or 3 in 3D (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd_turn: Option<Spanned<GainSpec>>,
+    /// Reference position of the centre of mass [m], one expression of `t` [s] per
+    /// component (default: the initial position).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<Spanned<Vec<Spanned<String>>>>,
+    /// Reference orientation [deg]: `[roll, pitch, yaw]` (`R = Rx Ry Rz`) in 3D, the angle
+    /// about `z` in 2D, expressions of `t` (default: the initial orientation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<Spanned<Vec<Spanned<String>>>>,
 }
 
 /// `motion = { position = […], orientation = […] }` of a body: its absolute pose as

@@ -3,7 +3,7 @@
 //! a second body hangs from the first by a one-element rope (body–body blocks), a rope
 //! from it ends at a partly fixed node, and a load acts on an attached node; both bodies
 //! feel buoyancy off their centre, a waterplane's heave restoring, drag in a sheared current
-//! and added mass.
+//! and added mass; the first is under PD feedback on its pose.
 
 use crate::body::{Attachment, RigidBody};
 use crate::body::{BodyState, Mat3, Vec3, project};
@@ -127,13 +127,32 @@ fn check<const D: usize>(scheme: Scheme) {
             waterline: planar(Vec3::new(-0.2, 0.5, 0.3)),
         }),
         motion: None,
+        feedback: None,
+    };
+    // Body a under PD on its pose (a reference off its pose, moving), so that the feedback's
+    // blocks are in the Jacobian too.
+    let feedback = crate::body_feedback::BodyFeedback {
+        kp: Vec3::new(2e4, 3e4, 1e4),
+        kd: Vec3::new(3e3, 1e3, 2e3),
+        kp_turn: Vec3::new(4e3, 6e3, 5e3),
+        kd_turn: Vec3::new(600.0, 400.0, 900.0),
+        reference: std::sync::Arc::new(move |t| {
+            let x = planar(Vec3::new(0.2 * t, -10.3, 0.4));
+            (x, q(0.3, 0.1, -0.6 + t))
+        }),
+        reference_rate: std::sync::Arc::new(move |_| {
+            (planar(Vec3::new(0.2, 0.0, 0.0)), Vec3::new(0.0, 0.0, 1.0))
+        }),
     };
     let net = net
-        .with_body(body(
-            "a",
-            vec![att(na, top_a), att(nab, bot_a), att(nside, side_a)],
-            sa,
-        ))
+        .with_body(RigidBody {
+            feedback: Some(feedback),
+            ..body(
+                "a",
+                vec![att(na, top_a), att(nab, bot_a), att(nside, side_a)],
+                sa,
+            )
+        })
         .with_body(body("b", vec![att(nb_top, top_b)], sb));
     // Water with a current that turns and grows with height, so that the drag's dependence
     // on the mid-step height is in the Jacobian too.
@@ -168,6 +187,13 @@ fn check<const D: usize>(scheme: Scheme) {
     ); 2];
     let mut eqs = StepEquations::new(&sys, scheme, h, &state, 0.3, &f_ext, &mut reaction);
     eqs.wrenches = &wrenches;
+    let targets: Vec<_> = sys
+        .bodies
+        .iter()
+        .map(|m| m.feedback.as_ref().map(|f| f.target(0.3)))
+        .collect();
+    assert!(targets[0].is_some());
+    eqs.targets = &targets;
     let mut res = vec![Vector::<D>::zeros(); n + slots];
     let mut jac = BlockJacobian::<D>::with_slots(sys.mesh(), slots);
     eqs.evaluate(&x, &mut res, Some(&mut jac)).unwrap();

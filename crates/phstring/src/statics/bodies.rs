@@ -468,3 +468,41 @@ pub(super) fn hold_flagged<const D: usize>(
         link.3.fill(0.0);
     }
 }
+
+/// Checks that the feedback law of each body not in `held` exerts no wrench at rest at the
+/// equilibrium `eq` (its reference at `t = 0`, zero velocities): the force within the
+/// equilibrium's tolerance, the torque within it times the body's radius of gyration (the
+/// scaling of the torque rows). Statics leave the laws out (docs/method.md §22).
+pub(crate) fn check_feedback_at_rest<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    eq: &crate::statics::Equilibrium<D>,
+    held: &[bool],
+) -> Result<(), crate::statics::StaticsError> {
+    let tol = eq.tolerance.max(1e-9 * eq.force_scale);
+    for (b, (model, st)) in sys.bodies.iter().zip(&eq.state.bodies).enumerate() {
+        if held.get(b).copied().unwrap_or(false) {
+            continue;
+        }
+        let Some(law) = &model.feedback else {
+            continue;
+        };
+        let targets = [Some(law.target(0.0))];
+        let zero = Vec3::zeros();
+        let Some(w) =
+            crate::body_step::feedback_at::<D>(model, &targets, 0, st, 1.0, (&zero, &zero))
+        else {
+            continue;
+        };
+        let (force, torque) = (w.force.norm(), w.torque.norm());
+        // NaN fails too.
+        if !(force <= tol && torque <= tol * model.gyration()) {
+            return Err(crate::statics::StaticsError::BodyFeedback {
+                index: b,
+                name: sys.body_names[b].clone(),
+                force,
+                torque,
+            });
+        }
+    }
+    Ok(())
+}

@@ -119,6 +119,7 @@ fn two_bodies<const D: usize>(wet: bool) -> (PhSystem<D, Material>, State<D>) {
         wrench,
         hydro: None,
         motion: None,
+        feedback: None,
     };
     let (mut a, mut b) = (
         body("a", 2000.0, xa, qa, att_a, Some(wrench)),
@@ -297,6 +298,7 @@ fn loose_body_is_refused_by_name() {
         wrench: None,
         hydro: None,
         motion: None,
+        feedback: None,
     });
     let (sys, init) = PhSystem::new(net).unwrap();
     let err = solve_system(&sys, &init.r, &StaticsParams::default(), None).unwrap_err();
@@ -332,6 +334,7 @@ fn body_on_free_strings_is_under_constrained() {
         wrench: None,
         hydro: None,
         motion: None,
+        feedback: None,
     });
     let (sys, init) = PhSystem::new(net).unwrap();
     let err = solve_system(&sys, &init.r, &StaticsParams::default(), None).unwrap_err();
@@ -395,6 +398,7 @@ fn free_spin_about_the_attachment_line_is_refused() {
             wrench: None,
             hydro: None,
             motion: None,
+            feedback: None,
         });
         let (sys, init) = PhSystem::new(net).unwrap();
         solve_system(&sys, &init.r, &StaticsParams::default(), None)

@@ -97,6 +97,7 @@ fn moored_buoy(
                 ..Default::default()
             }),
             motion: None,
+            feedback: None,
         });
     let (sys, init) = PhSystem::new(net).unwrap();
     (sys, init, anchors)
@@ -252,6 +253,7 @@ fn a_prescribed_body_is_held_at_its_pose_at_t_zero() {
         wrench: None,
         hydro: None,
         motion: Some(motion),
+        feedback: None,
     });
     let (sys, mut init) = PhSystem::new(net).unwrap();
     // Start the rope's other nodes off the plumb line: the statics must bring them back.

@@ -92,6 +92,7 @@ fn spar(n_el: usize) -> (PhSystem<3, Material>, State<3>) {
         wrench: None,
         hydro: None,
         motion: None,
+        feedback: None,
     };
     PhSystem::new(net.with_body(spar)).unwrap()
 }
@@ -330,6 +331,7 @@ fn stiffness_in_2d_matches_central_differences() {
         wrench: None,
         hydro: None,
         motion: None,
+        feedback: None,
     };
     let (sys, start) = PhSystem::new(net.with_body(block)).unwrap();
     let params = StaticsParams::default();

@@ -134,6 +134,7 @@ fn two_boxes<const D: usize>(wrench: Option<BodyWrench>) -> Network<D, Material>
         wrench,
         hydro: None,
         motion: None,
+        feedback: None,
     };
     net.with_body(body("a", ma, ja, att_a, sa, wrench))
         .with_body(body("b", mb, jb, att_b, sb, None))
@@ -318,6 +319,7 @@ fn compound_pendulum(
         wrench: None,
         hydro: None,
         motion: None,
+        feedback: None,
     };
     (net.with_body(body), end)
 }
@@ -711,6 +713,7 @@ fn prescribed_vessel(wet: bool) {
             pose: std::sync::Arc::new(pose),
             twist: std::sync::Arc::new(twist),
         }),
+        feedback: None,
     });
     let params = StepParams {
         h: 0.01,
@@ -913,6 +916,7 @@ fn buoy_on_pennant(
             wrench: None,
             hydro: Some(hydro),
             motion: None,
+            feedback: None,
         })
 }
 
@@ -1036,6 +1040,7 @@ fn body_on_a_chain_matches_the_bordered_chain_solve() {
             wrench: None,
             hydro: None,
             motion: None,
+            feedback: None,
         })
     };
     assert!(net().mesh.is_chain());

@@ -91,6 +91,7 @@ fn hung_body<const D: usize>(
         wrench: None,
         hydro: None,
         motion: None,
+        feedback: None,
     };
     (net.with_body(body), ends)
 }

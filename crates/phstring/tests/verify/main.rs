@@ -5,6 +5,7 @@ mod accuracy;
 mod bathymetry;
 mod bodies;
 mod bodies_statics;
+mod body_feedback;
 mod common;
 mod damping;
 mod elimination;
