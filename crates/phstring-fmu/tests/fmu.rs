@@ -1298,9 +1298,7 @@ mod bodies {
     fn library_run<const D: usize>(text: &str) -> Simulation<D, Material> {
         let file = parse(text, Path::new("scenario.toml"), &[]).unwrap();
         let v = file.validate::<D>().unwrap();
-        let setup = v
-            .map_problem(|p| phstring_io::scenario::Built::new(p))
-            .unwrap();
+        let setup = v.map_problem(phstring_io::scenario::Built::new).unwrap();
         setup.start(true, None).unwrap().0.problem
     }
 
