@@ -14,7 +14,10 @@ use phstring_io::scenario::{Setup, StartError};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FmuError;
-use crate::model::{Causality, ModelSpec, Quantity};
+use crate::model::{BodyValue, Causality, ModelSpec, Quantity};
+
+/// A rigid body's wrench: force [N] and torque [N·m], space axes.
+type Wrench = ([f64; 3], [f64; 3]);
 
 /// FMI status of a call (`fmi2Status`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -113,6 +116,11 @@ impl Stepper {
     fn set_load_force(&mut self, load: usize, force: [f64; 3]) -> Result<(), InputError> {
         by_dim!(&mut self.0, s => s.set_load_force(load, Vector::from_fn(|i, _| force[i])))
     }
+    /// Holds body `body`'s wrench port at `force` [N] and `torque` [N·m] (space axes).
+    fn set_body_wrench(&mut self, body: usize, (force, torque): Wrench) -> Result<(), InputError> {
+        let (f, t) = (force.into(), torque.into());
+        by_dim!(&mut self.0, s => s.set_body_wrench(body, f, t))
+    }
     /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
     fn set_motion_target(
         &mut self,
@@ -141,6 +149,11 @@ fn value<const D: usize>(sim: &Simulation<D, Material>, q: Quantity) -> f64 {
         Quantity::PortOutput { port, component } => sim.ports()[port].output[component],
         Quantity::PortInput { port, component } => sim.ports()[port].input[component],
         Quantity::NodePosition { node, component } => sim.state().r[node][component],
+        Quantity::Body {
+            body,
+            what,
+            component,
+        } => body_value(sim, body, what, component),
         Quantity::Hamiltonian => e.hamiltonian(),
         Quantity::Kinetic => e.kinetic,
         Quantity::Potential => e.potential(),
@@ -151,7 +164,38 @@ fn value<const D: usize>(sim: &Simulation<D, Material>, q: Quantity) -> f64 {
         Quantity::BalanceError
         | Quantity::Parameter(_)
         | Quantity::LoadForce { .. }
-        | Quantity::MotionPosition { .. } => f64::NAN,
+        | Quantity::MotionPosition { .. }
+        | Quantity::BodyForce { .. }
+        | Quantity::BodyTorque { .. } => f64::NAN,
+    }
+}
+
+/// Component `component` of value `what` of rigid body `body` of `sim` (NaN if there is no
+/// such body).
+fn body_value<const D: usize>(
+    sim: &Simulation<D, Material>,
+    body: usize,
+    what: BodyValue,
+    component: usize,
+) -> f64 {
+    let (Some(st), Some(port)) = (sim.state().bodies.get(body), sim.body_ports().get(body)) else {
+        return f64::NAN;
+    };
+    let q = st.orientation.quaternion();
+    match what {
+        BodyValue::Position => st.position[component],
+        BodyValue::Orientation => [q.w, q.i, q.j, q.k][component],
+        // The angle of a turn about z, from the quaternion's rotation matrix entries
+        // (either sign of the quaternion gives the same angle).
+        BodyValue::Angle => {
+            (2.0 * (q.w * q.k + q.i * q.j)).atan2(1.0 - 2.0 * (q.j * q.j + q.k * q.k))
+        }
+        BodyValue::Velocity => st.velocity[component],
+        BodyValue::AngularVelocity => st.omega_space()[component],
+        BodyValue::MidVelocity => port.velocity[component],
+        BodyValue::MidAngularVelocity => port.omega[component],
+        BodyValue::ReactionForce => port.force[component],
+        BodyValue::ReactionTorque => port.torque[component],
     }
 }
 
@@ -292,9 +336,18 @@ fn time_tol(h: f64, t: f64) -> f64 {
     1e-9 * h + 8.0 * f64::EPSILON * t.abs()
 }
 
-/// Whether `q` is read from the simulation's port samples.
+/// Whether `q` is read from the simulation's port samples (the string's ports and the
+/// bodies' wrench ports).
 fn is_port(q: Quantity) -> bool {
-    matches!(q, Quantity::PortOutput { .. } | Quantity::PortInput { .. })
+    use BodyValue::*;
+    match q {
+        Quantity::PortOutput { .. } | Quantity::PortInput { .. } => true,
+        Quantity::Body { what, .. } => matches!(
+            what,
+            MidVelocity | MidAngularVelocity | ReactionForce | ReactionTorque
+        ),
+        _ => false,
+    }
 }
 
 /// A failed call: its status and the message logged.
@@ -581,6 +634,10 @@ impl Instance {
         for (&load, u) in &forces {
             system.hold_load_force(load, Vector::<D>::from_fn(|i, _| u[i]))?;
         }
+        let wrenches = input_wrenches(&self.spec, values);
+        for (&body, (f, t)) in &wrenches {
+            system.hold_body_wrench(body, (*f).into(), (*t).into())?;
+        }
         // Until the first step, the support rests where the scenario starts it.
         let mut rests = Vec::new();
         for (motion, _) in input_positions(&self.spec, values) {
@@ -593,8 +650,8 @@ impl Instance {
             system.hold_motion(motion, rest)?;
             rests.push((motion, rest));
         }
-        // With `initial.equilibrium`, the equilibrium under the load inputs as set now (the
-        // supports at their scenario positions).
+        // With `initial.equilibrium`, the equilibrium under the load and wrench inputs as set
+        // now (the supports at their scenario positions).
         let (v, _) = v.start(equilibrium, None).map_err(|e| match e {
             StartError::Setup(e) => FmuError::Setup(e),
             e => FmuError::Equilibrium { cause: Box::new(e) },
@@ -603,6 +660,9 @@ impl Instance {
         // The simulation holds the same inputs from here on (its signals do not change).
         for (&load, u) in &forces {
             sim.set_load_force(load, Vector::<D>::from_fn(|i, _| u[i]))?;
+        }
+        for (&body, (f, t)) in &wrenches {
+            sim.set_body_wrench(body, (*f).into(), (*t).into())?;
         }
         for (motion, rest) in rests {
             sim.set_motion_ramp(motion, rest)?;
@@ -977,6 +1037,24 @@ fn input_forces(spec: &ModelSpec, values: &[f64]) -> BTreeMap<usize, [f64; 3]> {
     forces
 }
 
+/// Per body whose wrench port is an input: the force [N] and torque [N·m] its variables in
+/// `values` (by value reference) hold it at, components that are not variables 0.
+fn input_wrenches(spec: &ModelSpec, values: &[f64]) -> BTreeMap<usize, Wrench> {
+    let mut wrenches = BTreeMap::<usize, Wrench>::new();
+    for (vr, var) in spec.variables.iter().enumerate() {
+        match var.quantity {
+            Quantity::BodyForce { body, component } => {
+                wrenches.entry(body).or_default().0[component] = values[vr];
+            }
+            Quantity::BodyTorque { body, component } => {
+                wrenches.entry(body).or_default().1[component] = values[vr];
+            }
+            _ => {}
+        }
+    }
+    wrenches
+}
+
 /// Per motion that is an input: its index and the position [m] its variable in `values`
 /// (by value reference) asks for.
 fn input_positions(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
@@ -990,8 +1068,8 @@ fn input_positions(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
 }
 
 /// Holds the inputs of `spec` (values `values`, by value reference) over the communication
-/// step from the simulation's time to `target` [s]: load forces at their values, motions on
-/// a ramp from where they are to their values.
+/// step from the simulation's time to `target` [s]: load forces and body wrenches at their
+/// values, motions on a ramp from where they are to their values.
 fn hold_inputs(
     spec: &ModelSpec,
     values: &[f64],
@@ -1000,6 +1078,9 @@ fn hold_inputs(
 ) -> Result<(), InputError> {
     for (load, u) in input_forces(spec, values) {
         live.stepper.set_load_force(load, u)?;
+    }
+    for (body, wrench) in input_wrenches(spec, values) {
+        live.stepper.set_body_wrench(body, wrench)?;
     }
     for (motion, x) in input_positions(spec, values) {
         live.stepper.set_motion_target(motion, x, target)?;

@@ -5,6 +5,8 @@
 //! value references agree; the GUID is a hash of that list and the scenario text, and the
 //! library refuses an instance whose GUID does not match.
 
+mod bodies;
+
 use phstring::{Material, PortKind, Simulation};
 use phstring_io::checkpoint::fnv1a64_hex;
 use phstring_io::scenario::{Components, Scenario, ScenarioError, ScenarioFile, Setup, Validated};
@@ -61,6 +63,31 @@ pub enum Quantity {
         /// Component.
         component: usize,
     },
+    /// Component `component` of the force [N] (space axes, at the centre of mass) of the
+    /// wrench port of rigid body `body` (an input).
+    BodyForce {
+        /// Body index (file order).
+        body: usize,
+        /// Component (0 = x).
+        component: usize,
+    },
+    /// Component `component` of the torque [N·m] (space axes) of the wrench port of rigid
+    /// body `body` (an input; in 2D only `z`, component 2).
+    BodyTorque {
+        /// Body index (file order).
+        body: usize,
+        /// Component (0 = x).
+        component: usize,
+    },
+    /// A value of rigid body `body`'s state or of its port sample (an output).
+    Body {
+        /// Body index (file order).
+        body: usize,
+        /// Which value.
+        what: BodyValue,
+        /// Component (0 = x; for [`BodyValue::Orientation`] 0 = w, 1 = x, 2 = y, 3 = z).
+        component: usize,
+    },
     /// `Ĥ` [J].
     Hamiltonian,
     /// `T̂` [J].
@@ -76,6 +103,32 @@ pub enum Quantity {
     BalanceError,
 }
 
+/// Which value of a rigid body an output is (docs/method.md §22).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BodyValue {
+    /// Position of the centre of mass [m].
+    Position,
+    /// Orientation, body axes to space, as the unit quaternion `(w, x, y, z)` (3D).
+    Orientation,
+    /// Angle of the body axes about `z` [rad], in `(−π, π]` (2D).
+    Angle,
+    /// Velocity of the centre of mass [m/s].
+    Velocity,
+    /// Angular velocity [rad/s], space axes.
+    AngularVelocity,
+    /// The wrench port's output over the last internal step: the mid-step velocity
+    /// `Δx/h` [m/s].
+    MidVelocity,
+    /// The wrench port's output over the last internal step: the mid-step angular velocity
+    /// [rad/s], space axes.
+    MidAngularVelocity,
+    /// A prescribed motion's reaction force over the last internal step [N], space axes: the
+    /// force the motion exerts on the body.
+    ReactionForce,
+    /// A prescribed motion's reaction torque over the last internal step [N·m], space axes.
+    ReactionTorque,
+}
+
 /// One FMI scalar variable (all are `Real`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Variable {
@@ -83,7 +136,7 @@ pub struct Variable {
     pub name: String,
     /// Causality.
     pub causality: Causality,
-    /// Unit symbol: `N`, `m`, `m/s`, `J`, `kg/m`, `s`.
+    /// Unit symbol: `N`, `m`, `m/s`, `J`, `kg/m`, `s`, `N.m`, `rad`, `rad/s`, `1`.
     pub unit: &'static str,
     /// Description shown by tools.
     pub description: String,
@@ -110,6 +163,8 @@ pub struct ModelSpec {
     pub model_name: String,
     /// Spatial dimension.
     pub dimension: usize,
+    /// The rigid bodies' names, in file order (body `b` is `body{b}.*`).
+    pub bodies: Vec<String>,
     /// The variables; a variable's value reference is its index.
     pub variables: Vec<Variable>,
     /// The parameters, in the order of their variables.
@@ -134,19 +189,13 @@ impl ModelSpec {
 
     /// The variables of the FMU of `file` in `D` dimensions: parameters, inputs, outputs.
     fn of<const D: usize>(file: &ScenarioFile, v: Setup<D>) -> Result<Self, ScenarioError> {
-        // Its variables do not carry rigid bodies yet (their states and wrench ports).
-        v.problem
-            .system
-            .refuse_bodies("the FMU export")
-            .map_err(|cause| ScenarioError::Setup {
-                path: file.path.clone(),
-                with_sets: false,
-                cause,
-            })?;
         let (mut vars, parameters) = parameter_variables(&file.scenario);
-        // Inputs: external loads, then external motions.
+        // Inputs: external loads, then external motions, then external body wrenches.
         vars.extend(load_inputs(file, &v)?);
         vars.extend(motion_inputs(&v));
+        vars.extend(bodies::wrench_inputs(file, &v)?);
+        let body_vars = bodies::outputs(&v);
+        let body_names = v.components.bodies.iter().map(|b| b.name.clone()).collect();
         // Outputs: the ports (one simulation is set up to learn them), energies, nodes.
         let boundary = v.problem.system.boundary();
         let (loads, feedback) = (boundary.loads.len(), boundary.feedback.len());
@@ -171,10 +220,12 @@ impl ModelSpec {
         vars.extend(port_outputs(&sim, loads, feedback, &components));
         vars.extend(energy_outputs());
         vars.extend(node_outputs::<D>(&fmu_nodes, &components));
+        vars.extend(body_vars);
         let model_name = file.scenario.title.clone();
         let mut spec = Self {
             model_name: model_name.unwrap_or_else(|| file.path.display().to_string()),
             dimension: D,
+            bodies: body_names,
             variables: vars,
             parameters,
             t_end,
@@ -222,6 +273,19 @@ impl ModelSpec {
         self.variables.len() as u32
     }
 
+    /// The model's one-line description: the dimension and the rigid bodies by name.
+    fn description(&self) -> String {
+        let bodies = match self.bodies.len() {
+            0 => String::new(),
+            1 => format!(" with the rigid body {}", self.bodies[0]),
+            _ => format!(" with the rigid bodies {}", self.bodies.join(", ")),
+        };
+        format!(
+            "Port-Hamiltonian string{bodies} (dimension {}): exact energy balance through its ports",
+            self.dimension
+        )
+    }
+
     /// The model description in FMI 3.0 (`v3`) or 2.0.
     fn describe(&self, v3: bool, model_identifier: &str) -> String {
         let mut x = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -233,10 +297,7 @@ impl ModelSpec {
             "<fmiModelDescription fmiVersion=\"{version}\" modelName=\"{}\" {token}=\"{}\" description=\"{}\" generationTool=\"phstring {}\" variableNamingConvention=\"flat\"{extra}>\n",
             escape(&self.model_name),
             self.guid,
-            escape(&format!(
-                "Port-Hamiltonian string (dimension {}): exact energy balance through its ports",
-                self.dimension
-            )),
+            escape(&self.description()),
             env!("CARGO_PKG_VERSION")
         ));
         let capabilities = match v3 {
@@ -617,13 +678,17 @@ fn node_outputs<const D: usize>(nodes: &[usize], c: &Components) -> Vec<Variable
 }
 
 /// The units used, with their SI base-unit exponents.
-const UNITS: [(&str, &str); 6] = [
+const UNITS: [(&str, &str); 10] = [
     ("N", "kg=\"1\" m=\"1\" s=\"-2\""),
     ("m", "m=\"1\""),
     ("m/s", "m=\"1\" s=\"-1\""),
     ("J", "kg=\"1\" m=\"2\" s=\"-2\""),
     ("kg/m", "kg=\"1\" m=\"-1\""),
     ("s", "s=\"1\""),
+    ("N.m", "kg=\"1\" m=\"2\" s=\"-2\""),
+    ("rad", "rad=\"1\""),
+    ("rad/s", "s=\"-1\" rad=\"1\""),
+    ("1", ""),
 ];
 
 /// The log categories the FMU reports under.

@@ -1250,3 +1250,472 @@ mod handles_and_threads {
         }
     }
 }
+
+mod bodies {
+    //! Rigid bodies in the FMU: their wrench ports as inputs, their states and port samples
+    //! as outputs, against the library's run of the same scenario.
+
+    use super::*;
+    use phstring_fmu::model::{BodyValue, Quantity};
+
+    /// examples/fmu/hook_block.toml: a 2 t hook block on two slings, its wrench an input.
+    fn hook_block_text() -> String {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/fmu/hook_block.toml");
+        std::fs::read_to_string(path).expect("examples/fmu/hook_block.toml")
+    }
+
+    /// examples/hook_block_3d.toml with the hook's wrench an input starting at `wrench`
+    /// (force and torque expressions, 3 each).
+    fn hook_block_3d_text(force: [&str; 3], torque: [&str; 3]) -> String {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/hook_block_3d.toml");
+        let text = std::fs::read_to_string(path).expect("examples/hook_block_3d.toml");
+        let q = |e: [&str; 3]| format!("[\"{}\", \"{}\", \"{}\"]", e[0], e[1], e[2]);
+        let wrench = format!(
+            "wrench = {{ force = {}, torque = {}, external = true }}\n",
+            q(force),
+            q(torque)
+        );
+        let anchor = "points = { top = [0.0, 0.0, 0.4], left = [-0.3, 0.0, -0.4], right = [0.3, 0.0, -0.4] }\n";
+        assert!(text.contains(anchor));
+        text.replacen(anchor, &format!("{anchor}{wrench}"), 1)
+    }
+
+    /// The hook block with its wrench's expressions `force` (2) and `torque` (1) [N, N·m];
+    /// an FMU input if `external`.
+    fn hook_block_with(force: [&str; 2], torque: &str, external: bool) -> String {
+        let old = "wrench = { force = [\"0\", \"0\"], torque = [\"0\"], external = true }";
+        let text = hook_block_text();
+        assert!(text.contains(old));
+        let new = format!(
+            "wrench = {{ force = [\"{}\", \"{}\"], torque = [\"{torque}\"], external = {external} }}",
+            force[0], force[1]
+        );
+        text.replace(old, &new)
+    }
+
+    /// The library's simulation of `text` (2D), started as `phstring run` starts it (at the
+    /// equilibrium of `initial.equilibrium`).
+    fn library_run<const D: usize>(text: &str) -> Simulation<D, Material> {
+        let file = parse(text, Path::new("scenario.toml"), &[]).unwrap();
+        let v = file.validate::<D>().unwrap();
+        let setup = v.map_problem(phstring_io::scenario::Built::new).unwrap();
+        setup.start(true, None).unwrap().0.problem
+    }
+
+    fn names(spec: &ModelSpec) -> Vec<(&str, Causality, &'static str)> {
+        let body = |v: &&phstring_fmu::model::Variable| v.name.starts_with("body");
+        let vars = spec.variables.iter().filter(body);
+        vars.map(|v| (v.name.as_str(), v.causality, v.unit))
+            .collect()
+    }
+
+    /// The variables of a 2D body: the wrench's force and torque inputs (starting at the
+    /// expressions at t = 0), pose, velocities and the port's mid-step velocities; the units
+    /// and their definitions in both model descriptions.
+    #[test]
+    fn variables_of_a_2d_hook_block() {
+        use Causality::*;
+        let spec = spec_of(&hook_block_with(["1.5e3 + t", "-200"], "30", true));
+        assert_eq!(
+            names(&spec),
+            [
+                ("body0.F.x", Input, "N"),
+                ("body0.F.y", Input, "N"),
+                ("body0.M.z", Input, "N.m"),
+                ("body0.r.x", Output, "m"),
+                ("body0.r.y", Output, "m"),
+                ("body0.theta", Output, "rad"),
+                ("body0.v.x", Output, "m/s"),
+                ("body0.v.y", Output, "m/s"),
+                ("body0.w.z", Output, "rad/s"),
+                ("body0.vmid.x", Output, "m/s"),
+                ("body0.vmid.y", Output, "m/s"),
+                ("body0.wmid.z", Output, "rad/s"),
+            ]
+        );
+        let start = |name: &str| {
+            spec.variables
+                .iter()
+                .find(|v| v.name == name)
+                .unwrap()
+                .start
+        };
+        assert_eq!(start("body0.F.x"), Some(1.5e3));
+        assert_eq!(start("body0.F.y"), Some(-200.0));
+        assert_eq!(start("body0.M.z"), Some(30.0));
+        let torque = spec
+            .variables
+            .iter()
+            .find(|v| v.name == "body0.M.z")
+            .unwrap();
+        assert_eq!(
+            torque.quantity,
+            Quantity::BodyTorque {
+                body: 0,
+                component: 2
+            }
+        );
+        assert!(
+            torque.description.contains("\"hook\""),
+            "{}",
+            torque.description
+        );
+        for xml in [
+            spec.model_description("hook"),
+            spec.model_description_fmi3("hook"),
+        ] {
+            for unit in ["N.m", "rad", "rad/s"] {
+                assert!(xml.contains(&format!("<Unit name=\"{unit}\">")), "{unit}");
+            }
+            assert!(xml.contains("with the rigid body hook (dimension 2)"));
+        }
+        // Without `external` the wrench is no input, but its port's outputs are there.
+        let spec = spec_of(&hook_block_with(["0", "0"], "0", false));
+        assert!(names(&spec).iter().all(|(_, c, _)| *c == Output));
+        assert!(names(&spec).iter().any(|(n, ..)| *n == "body0.wmid.z"));
+    }
+
+    /// The variables of two 3D bodies: the hook's wrench inputs (3 + 3), the quaternion; the
+    /// beam (no port) has its state only.
+    #[test]
+    fn variables_of_a_3d_hook_block_and_beam() {
+        use Causality::*;
+        let spec = spec_of(&hook_block_3d_text(["0", "0", "0"], ["0", "0", "0"]));
+        let all = names(&spec);
+        let inputs: Vec<&str> = all.iter().filter(|v| v.1 == Input).map(|v| v.0).collect();
+        assert_eq!(
+            inputs,
+            [
+                "body0.F.x",
+                "body0.F.y",
+                "body0.F.z",
+                "body0.M.x",
+                "body0.M.y",
+                "body0.M.z"
+            ]
+        );
+        let beam: Vec<&str> = all
+            .iter()
+            .map(|v| v.0)
+            .filter(|n| n.starts_with("body1."))
+            .collect();
+        assert_eq!(
+            beam,
+            [
+                "body1.r.x",
+                "body1.r.y",
+                "body1.r.z",
+                "body1.q.w",
+                "body1.q.x",
+                "body1.q.y",
+                "body1.q.z",
+                "body1.v.x",
+                "body1.v.y",
+                "body1.v.z",
+                "body1.w.x",
+                "body1.w.y",
+                "body1.w.z"
+            ]
+        );
+        assert!(all.contains(&("body0.wmid.y", Output, "rad/s")));
+        assert!(all.contains(&("body0.q.w", Output, "1")));
+        // The beam starts turned 4° about y: q = (cos 2°, 0, sin 2°, 0).
+        let (mut inst, _) = instance(&hook_block_3d_text(["0", "0", "0"], ["0", "0", "0"]));
+        initialize(&mut inst);
+        let half = 2f64.to_radians();
+        assert!((get(&mut inst, "body1.q.w") - half.cos()).abs() <= 1e-15);
+        assert!((get(&mut inst, "body1.q.y") - half.sin()).abs() <= 1e-15);
+        assert_eq!(get(&mut inst, "body1.w.z"), 0.05);
+    }
+
+    /// A constant wrench held by the master over communication steps of five internal steps
+    /// is `phstring run` of the same wrench as expressions, switched on after `t = 0` (both
+    /// started at the equilibrium without it, the FMU's inputs starting at the expressions'
+    /// zero): every body output and the energies agree to 1e-12 relative, and the balance
+    /// holds to round-off of the block's potential energy (~1e5 J).
+    #[test]
+    fn a_held_wrench_is_the_run_of_the_same_wrench_as_expressions() {
+        let (f, tau) = (["3000*(t > 0)", "-1000*(t > 0)"], "200*(t > 0)");
+        let (mut inst, _) = instance(&hook_block_with(f, tau, true));
+        initialize(&mut inst);
+        let mut sim = library_run::<2>(&hook_block_with(f, tau, false));
+        let close = |a: f64, b: f64, scale: f64| (a - b).abs() <= 1e-12 * scale.max(b.abs());
+        let start = ["body0.r.x", "body0.r.y", "body0.theta"].map(|n| get(&mut inst, n));
+        let h_comm = 0.05;
+        for n in 0..40 {
+            let t = n as f64 * h_comm;
+            assert_eq!(set(&mut inst, "body0.F.x", 3000.0), Status::Ok);
+            assert_eq!(set(&mut inst, "body0.F.y", -1000.0), Status::Ok);
+            assert_eq!(set(&mut inst, "body0.M.z", 200.0), Status::Ok);
+            assert_eq!(inst.do_step(t, h_comm), Status::Ok, "step {n}");
+            while sim.time() < t + h_comm - 1e-12 {
+                sim.step_until(t + h_comm).unwrap();
+            }
+            let (st, port) = (&sim.state().bodies[0], &sim.body_ports()[0]);
+            let pairs = [
+                ("body0.r.x", st.position.x, 1.0),
+                ("body0.r.y", st.position.y, 1.0),
+                ("body0.v.x", st.velocity.x, 1e-3),
+                ("body0.w.z", st.omega_space().z, 1e-3),
+                ("body0.vmid.x", port.velocity.x, 1e-3),
+                ("body0.wmid.z", port.omega.z, 1e-3),
+                ("H", sim.energies().hamiltonian(), 1e5),
+                ("T", sim.energies().kinetic, 1e5),
+                ("supplied", sim.supplied_energy(), 1e5),
+            ];
+            for (name, run, scale) in pairs {
+                let fmu = get(&mut inst, name);
+                assert!(close(fmu, run, scale), "step {n}: {name} {fmu} vs {run}");
+            }
+            assert!(
+                get(&mut inst, "balance_error").abs() <= 1e-12 * 1e5,
+                "step {n}"
+            );
+        }
+        // The angle is the quaternion's.
+        let q = sim.state().bodies[0].orientation;
+        assert!(close(
+            get(&mut inst, "body0.theta"),
+            q.angle() * q.axis().map_or(1.0, |a| a.z),
+            1.0
+        ));
+        // The block moved: the slings' V holds it sideways, so 3 kN move it by millimetres.
+        let x = get(&mut inst, "body0.r.x");
+        assert!(1e-3 < x - start[0] && x - start[0] < 0.1, "{x}");
+        // Then communication steps of one internal step each: the wrench's work over them is
+        // (20.2), F·Δx + τ Σ w_n with the steps' Cayley vectors w_n = h·wmid.z (in 2D R_n w is
+        // w), to round-off.
+        let before = ["body0.r.x", "body0.r.y", "supplied"].map(|n| get(&mut inst, n));
+        let mut turns = 0.0;
+        for n in 0..50 {
+            let t = 2.0 + n as f64 * 0.01;
+            set(&mut inst, "body0.F.x", 3000.0);
+            set(&mut inst, "body0.F.y", -1000.0);
+            set(&mut inst, "body0.M.z", 200.0);
+            assert_eq!(inst.do_step(t, 0.01), Status::Ok);
+            turns += 0.01 * get(&mut inst, "body0.wmid.z");
+        }
+        let after = ["body0.r.x", "body0.r.y", "supplied"].map(|n| get(&mut inst, n));
+        let work =
+            3000.0 * (after[0] - before[0]) - 1000.0 * (after[1] - before[1]) + 200.0 * turns;
+        let supplied = after[2] - before[2];
+        assert!(work.abs() > 1e-3, "{work}");
+        // Round-off of ~50 products of 1e3 N and 1e-4 m, and of the sums near 16 J.
+        assert!((supplied - work).abs() <= 1e-11, "{supplied} vs {work}");
+    }
+
+    /// With `initial.equilibrium`, the FMU starts at rest at the equilibrium under the wrench
+    /// inputs set before initialization ends (held on the system for the statics): the
+    /// library's start under the same wrench as expressions, to 1e-12 m, and it stays there
+    /// under those inputs (the statics' residual, 1e-6 N on 2e4 N, leaves µm/s at most).
+    #[test]
+    fn an_equilibrium_start_is_under_the_wrench_inputs() {
+        let (mut inst, _) = instance(&hook_block_text());
+        assert_eq!(set(&mut inst, "body0.F.x", 4000.0), Status::Ok);
+        assert_eq!(set(&mut inst, "body0.F.y", -1000.0), Status::Ok);
+        initialize(&mut inst);
+        let sim = library_run::<2>(&hook_block_with(["4000", "-1000"], "0", false));
+        let at = sim.state().bodies[0].position;
+        let x = get(&mut inst, "body0.r.x");
+        assert!((x - at.x).abs() <= 1e-12, "{x} vs {}", at.x);
+        assert!((get(&mut inst, "body0.r.y") - at.y).abs() <= 1e-12);
+        // Under 4 kN the block stands 1e-3 m and more off its rest without a force.
+        let free = library_run::<2>(&hook_block_text()).state().bodies[0].position;
+        assert!((x - free.x).abs() > 1e-3, "{x} vs {}", free.x);
+        for n in 0..20 {
+            assert_eq!(inst.do_step(n as f64 * 0.01, 0.01), Status::Ok);
+        }
+        assert!(get(&mut inst, "body0.v.x").abs() < 1e-5);
+        assert!(get(&mut inst, "T") < 1e-6, "{}", get(&mut inst, "T"));
+    }
+
+    /// A 3D hook block and beam with a constant force and torque on the hook from the
+    /// master: the run of the same wrench to 1e-12, the balance to round-off, unit
+    /// quaternions.
+    #[test]
+    fn a_3d_wrench_input_is_the_run() {
+        let (force, torque) = (["500", "-300", "2000"], ["0", "0", "150"]);
+        let text = hook_block_3d_text(force, torque);
+        let (mut inst, _) = instance(&text);
+        initialize(&mut inst);
+        let mut sim = library_run::<3>(&text.replace("external = true", "external = false"));
+        for n in 0..10 {
+            let t = n as f64 * 0.02;
+            for (name, x) in [
+                ("F.x", 500.0),
+                ("F.y", -300.0),
+                ("F.z", 2000.0),
+                ("M.z", 150.0),
+            ] {
+                assert_eq!(set(&mut inst, &format!("body0.{name}"), x), Status::Ok);
+            }
+            assert_eq!(inst.do_step(t, 0.02), Status::Ok);
+            while sim.time() < t + 0.02 - 1e-12 {
+                sim.step_until(t + 0.02).unwrap();
+            }
+        }
+        let b = &sim.state().bodies;
+        let q = b[0].orientation.quaternion();
+        let pairs = [
+            ("body0.r.z", b[0].position.z, 10.0),
+            ("body0.q.z", q.k, 1.0),
+            ("body1.w.z", b[1].omega_space().z, 0.05),
+            ("body0.wmid.z", sim.body_ports()[0].omega.z, 0.05),
+            ("H", sim.energies().hamiltonian(), 1e6),
+        ];
+        for (name, run, scale) in pairs {
+            let fmu = get(&mut inst, name);
+            assert!((fmu - run).abs() <= 1e-12 * scale, "{name} {fmu} vs {run}");
+        }
+        let norm: f64 = ["w", "x", "y", "z"]
+            .iter()
+            .map(|c| get(&mut inst, &format!("body0.q.{c}")).powi(2))
+            .sum();
+        assert!((norm - 1.0).abs() <= 1e-14, "{norm}");
+        // H ~ 1.2e6 J (5.6 t at ~21 m): the balance to round-off.
+        assert!(get(&mut inst, "balance_error").abs() <= 1e-12 * 1.2e6);
+        assert!(get(&mut inst, "supplied").abs() > 0.0);
+    }
+
+    /// The hook block hanging from a crab whose motion is prescribed: the crab's outputs are
+    /// the reaction force and torque of its motion, the library's to 1e-12, the balance to
+    /// round-off; and the reaction carries the suspension's weight on average.
+    #[test]
+    fn a_prescribed_body_reports_its_reaction() {
+        let text = hook_block_text()
+            .replace("[[node]]\nname = \"left\"\nposition = [-3.0, 0.0]\n\n", "")
+            .replace("[[node]]\nname = \"right\"\nposition = [3.0, 0.0]\n\n", "")
+            .replace(
+                "[materials.sling]",
+                "[bodies.crab]\nmass = 500.0\ninertia = [0.0, 0.0, 50.0]\nposition = [0.0, 0.0]\npoints = { left = [-3.0, 0.0], right = [3.0, 0.0] }\nmotion = { position = [\"0.5*(1 - cos(t))\", \"0\"] }\n\n[materials.sling]",
+            )
+            .replace("path = [\"left\"", "path = [\"crab.left\"")
+            .replace("path = [\"right\"", "path = [\"crab.right\"")
+            .replace("[[boundary]]\nnode = \"left\"\nfixed = true                           # its reaction (support0.R) is an output\n\n", "")
+            .replace("[[boundary]]\nnode = \"right\"\nfixed = true                           # support1.R\n\n", "")
+            // The crab starts moving: the block from its given pose (near its rest).
+            .replace("equilibrium = true", "equilibrium = false");
+        let spec = spec_of(&text);
+        let crab: Vec<&str> = names(&spec)
+            .into_iter()
+            .map(|v| v.0)
+            .filter(|n| n.starts_with("body1."))
+            .collect();
+        assert_eq!(
+            crab,
+            [
+                "body1.r.x",
+                "body1.r.y",
+                "body1.theta",
+                "body1.v.x",
+                "body1.v.y",
+                "body1.w.z",
+                "body1.RF.x",
+                "body1.RF.y",
+                "body1.RM.z"
+            ]
+        );
+        let (mut inst, log) = instance(&text);
+        assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization(), Status::Ok);
+        let init = inst.exit_initialization();
+        assert_eq!(init, Status::Ok, "{}", last_message(&log));
+        let mut sim = library_run::<2>(&text.replace("external = true", "external = false"));
+        let mut mean_ry = 0.0;
+        let steps = 100;
+        for n in 0..steps {
+            let t = n as f64 * 0.01;
+            assert_eq!(inst.do_step(t, 0.01), Status::Ok);
+            sim.step().unwrap();
+            let port = &sim.body_ports()[1];
+            for (name, run) in [
+                ("body1.RF.x", port.force.x),
+                ("body1.RF.y", port.force.y),
+                ("body1.RM.z", port.torque.z),
+            ] {
+                let fmu = get(&mut inst, name);
+                assert!((fmu - run).abs() <= 1e-12 * 3e4, "{name} {fmu} vs {run}");
+            }
+            mean_ry += get(&mut inst, "body1.RF.y") / steps as f64;
+        }
+        // The crab moves 0.5 (1 − cos t) m: at t = 1 s it is at 0.23 m.
+        assert!((get(&mut inst, "body1.r.x") - 0.5 * (1.0 - 1f64.cos())).abs() <= 1e-12);
+        // Over 1 s the motion holds the crab, the slings and the block (500 + 2·5.86·2 +
+        // 2000 kg, 24.75 kN) up to their mean vertical acceleration: the block's bounce from
+        // its start near rest averages out, the crab moves sideways only.
+        let weight = (500.0 + 2.0 * 5.86 * 2.0 + 2000.0) * 9.81;
+        assert!(
+            (mean_ry - weight).abs() <= 1e-3 * weight,
+            "{mean_ry} vs {weight}"
+        );
+        let h = get(&mut inst, "H").abs();
+        assert!(get(&mut inst, "balance_error").abs() <= 1e-12 * h.max(1e5));
+    }
+
+    /// A saved state carries the bodies (the checkpoint's poses and velocities, the ports'
+    /// samples): restored, in the same and in another instance through its serialized
+    /// form, it continues bit for bit, and serves the body port outputs of the saved point.
+    #[test]
+    fn saved_states_with_bodies_continue_bit_for_bit() {
+        let text = hook_block_text();
+        let (mut a, _) = instance(&text);
+        initialize(&mut a);
+        let outputs = [
+            "H",
+            "body0.r.x",
+            "body0.theta",
+            "body0.w.z",
+            "body0.vmid.y",
+            "balance_error",
+        ];
+        let run = |inst: &mut Instance, from: usize, to: usize| -> Vec<u64> {
+            let mut bits = Vec::new();
+            for n in from..to {
+                let t = n as f64 * 0.02;
+                set(inst, "body0.F.x", 2000.0 * (t * 1.3).sin());
+                set(inst, "body0.M.z", 100.0 * (t * 0.7).cos());
+                assert_eq!(inst.do_step(t, 0.02), Status::Ok);
+                bits.extend(outputs.iter().map(|o| get(inst, o).to_bits()));
+            }
+            bits
+        };
+        run(&mut a, 0, 20);
+        let vmid = get(&mut a, "body0.vmid.x");
+        assert!(vmid.abs() > 1e-3, "the block moves: {vmid}");
+        let saved = a.save().unwrap();
+        let first = run(&mut a, 20, 50);
+        assert_eq!(a.restore(&saved), Status::Ok);
+        assert_eq!(get(&mut a, "body0.vmid.x").to_bits(), vmid.to_bits());
+        assert_eq!(run(&mut a, 20, 50), first);
+        let bytes = saved.to_bytes().unwrap();
+        let back = phstring_fmu::instance::Saved::from_bytes(&bytes).unwrap();
+        let (mut b, _) = instance(&text);
+        initialize(&mut b);
+        assert_eq!(b.restore(&back), Status::Ok);
+        assert_eq!(get(&mut b, "body0.vmid.x").to_bits(), vmid.to_bits());
+        assert_eq!(run(&mut b, 20, 50), first);
+        let q = |v: &phstring_fmu::model::Variable| {
+            matches!(
+                v.quantity,
+                Quantity::Body {
+                    what: BodyValue::Angle,
+                    ..
+                }
+            )
+        };
+        assert!(b.spec().variables.iter().any(q));
+    }
+
+    /// A wrench expression that is not finite at t = 0 cannot be an input's start value: the
+    /// error names the body's key.
+    #[test]
+    fn a_start_wrench_that_is_not_finite_is_refused_by_its_key() {
+        let text = hook_block_with(["1/t", "0"], "0", true);
+        let file = parse(&text, Path::new("scenario.toml"), &[]).unwrap();
+        let err = ModelSpec::new(&file).unwrap_err().to_string();
+        assert!(
+            err.contains("bodies.hook.wrench") && err.contains("body0.F.x"),
+            "{err}"
+        );
+    }
+}

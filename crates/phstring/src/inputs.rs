@@ -12,7 +12,8 @@
 //!   accounted as for any prescribed motion (docs/method.md §14).
 //!
 //! Before a run, [`NodalLoad::hold`] and [`Motion::hold`] hold the same inputs on the
-//! boundary conditions of a problem, e.g. to find a starting equilibrium under them.
+//! boundary conditions of a problem, e.g. to find a starting equilibrium under them, and
+//! [`PhSystem::hold_body_wrench`] a rigid body's wrench on a built system.
 //!
 //! Loads are numbered in the order of [`Boundary::loads`](crate::Boundary::loads) (load `k`
 //! is port `k` of [`Simulation::ports`]), motions in the order of
@@ -175,6 +176,43 @@ impl<const D: usize, M> PhSystem<D, M> {
         }
         check_ramp(&ramp, motion)?;
         self.boundary.motions[motion].hold(ramp);
+        Ok(())
+    }
+
+    /// Holds body `body`'s wrench port at `force` [N] and `torque` [N·m] (space axes, at the
+    /// centre of mass) before a simulation starts (a starting equilibrium under an input: the
+    /// statics take the port's wrench at `t = 0`); a body without a wrench port gets one. A
+    /// simulation started from it registers the input with [`Simulation::set_body_wrench`]
+    /// (whose release then returns to this held wrench, not to the scenario's). Refused
+    /// (nothing changes) for an unknown body, a body whose motion is prescribed, or a
+    /// non-finite component.
+    pub fn hold_body_wrench(
+        &mut self,
+        body: usize,
+        force: crate::body::Vec3,
+        torque: crate::body::Vec3,
+    ) -> Result<(), InputError> {
+        let count = self.bodies.len();
+        let model = self
+            .bodies
+            .get_mut(body)
+            .ok_or(InputError::NoSuchBody { body, count })?;
+        if model.motion.is_some() {
+            return Err(InputError::BodyWrench {
+                body,
+                why: "its motion is prescribed".into(),
+            });
+        }
+        if let Some(x) = force.iter().chain(&torque).find(|x| !x.is_finite()) {
+            return Err(InputError::BodyWrench {
+                body,
+                why: format!("a component is {}", Num(*x)),
+            });
+        }
+        model.wrench = Some(crate::body::BodyWrench {
+            force: Arc::new(move |_t| force),
+            torque: Arc::new(move |_t| torque),
+        });
         Ok(())
     }
 }

@@ -1241,6 +1241,20 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         self.bodies.get(b).is_some_and(|m| m.feedback.is_some())
     }
 
+    /// Rigid body `b`'s wrench port at time `t` [s]: its force [N] and torque [N·m] in space
+    /// axes at the centre of mass (in 2D the force's `z` and the torque's `x`, `y` are 0);
+    /// `None` if there is no body `b` or it has no wrench port.
+    pub fn body_wrench_at(
+        &self,
+        b: usize,
+        t: f64,
+    ) -> Option<(crate::body::Vec3, crate::body::Vec3)> {
+        self.bodies
+            .get(b)
+            .filter(|m| m.wrench.is_some())
+            .map(|m| m.wrench_at::<D>(t))
+    }
+
     /// The rigid bodies (docs/method.md §22), as `(name, mass [kg])` (their own mass,
     /// without the added mass).
     pub fn bodies(&self) -> Vec<(&str, f64)> {

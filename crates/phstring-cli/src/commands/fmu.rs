@@ -121,7 +121,7 @@ pub fn fmu(args: FmuArgs) -> Result<()> {
     );
     if count(C::Input) == 0 {
         say!(
-            "  no inputs: mark a [[boundary]] table's force or position with external = true to make it one"
+            "  no inputs: mark a [[boundary]] table's force or position, or a body's wrench, with external = true to make it one"
         );
     }
     for v in &spec.variables {
