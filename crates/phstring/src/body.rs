@@ -581,6 +581,24 @@ impl BodyModel {
         }
     }
 
+    /// The mass matrix at rest in the orientation `rot` (`R₀`) on the centre's displacement
+    /// (space axes) and the Cayley vector `w` (body axes), blocks
+    /// `[[R₀ 𝕄_tt R₀ᵀ, R₀ 𝕄_tr], [𝕄_rt R₀ᵀ, 𝕄_rr]]` [kg, kg·m, kg·m²]: `[[m I, 0], [0, J]]`
+    /// without an added-mass matrix (the kinetic energy `½ ξ·𝕄ξ` with `ξ = (R₀ᵀ ẋ, ẇ)`).
+    pub fn rest_mass(&self, rot: &Mat3) -> [[Mat3; 2]; 2] {
+        match &self.kirchhoff {
+            Some(mm) => {
+                let [[tt, tr], [rt, rr]] = added_mass::blocks(mm);
+                let rt_t = rot.transpose();
+                [[rot * tt * rt_t, rot * tr], [rt * rt_t, rr]]
+            }
+            None => [
+                [Mat3::identity() * self.mass, Mat3::zeros()],
+                [Mat3::zeros(), self.inertia],
+            ],
+        }
+    }
+
     /// Linear momentum in space axes `m V` [kg·m/s]; in the Kirchhoff form `R P`, `P` the
     /// translation rows of `𝕄 ξ` (the Kirchhoff impulse).
     pub fn linear_momentum(&self, st: &BodyState) -> Vec3 {
