@@ -746,18 +746,7 @@ fn added<const D: usize>(
     check_added_mass(&nalgebra::DMatrix::from_fn(n, n, |r, c| {
         a[(idx[r], idx[c])]
     }))?;
-    Ok(match added_mass::total::<D>(&a, m, j) {
-        Ok((at, ar)) => (at, ar, None),
-        Err(mm) => {
-            let [[tt, _], [_, rr]] = added_mass::blocks(&mm);
-            let mean = if D == 2 {
-                0.5 * (tt[(0, 0)] + tt[(1, 1)])
-            } else {
-                tt.trace() / 3.0
-            };
-            (mean - m, rr - j, Some(mm))
-        }
-    })
+    Ok(added_mass::total::<D>(&a, m, j))
 }
 
 /// Checks a body's prescribed motion against its initial state `st` (pose and rate at

@@ -87,18 +87,22 @@ pub(crate) fn blocks(m: &Mat6) -> [[Mat3; 2]; 2] {
 }
 
 /// How a body's added-mass matrix `a` (symmetrized) enters the step of a `D`-dimensional
-/// network, with the body's mass `m` [kg] and inertia `j` [kg·m²] (body axes): `Ok((a_t, a_r))`
-/// when its translation block is isotropic (`a_t I`) and uncoupled from the rotation, which
-/// then adds `a_t` to the mass and `a_r` to the inertia as `C_a` and the added inertia do;
-/// `Err(𝕄)` otherwise, the body's total mass matrix `𝕄 = diag(m I, J) + A` (in 2D the plane's
-/// `(x, y, θ)` entries of `a`, with `z` and the turns about `x`, `y` kept uncoupled).
-pub(crate) fn total<const D: usize>(a: &Mat6, m: f64, j: &Mat3) -> Result<(f64, Mat3), Mat6> {
+/// network, with the body's mass `m` [kg] and inertia `j` [kg·m²] (body axes): the added mass
+/// on its translation [kg], its added inertia [kg·m²] (body axes; in 2D its `z` moment), and
+/// `None` when the translation block is isotropic (`a_t I`) and uncoupled from the rotation,
+/// which then adds `a_t` to the mass and the rotation block to the inertia as `C_a` and the
+/// added inertia do; otherwise the body's total mass matrix `𝕄 = diag(m I, J) + A` (in 2D the
+/// plane's `(x, y, θ)` entries of `a`, with `z` and the turns about `x`, `y` kept uncoupled),
+/// with the mean of the translational diagonal and the rotation block as the first two (the
+/// body's scales).
+pub(crate) fn total<const D: usize>(a: &Mat6, m: f64, j: &Mat3) -> (f64, Mat3, Option<Mat6>) {
     let a = (a + a.transpose()) * 0.5;
     let mut mm = Mat6::zeros();
     if D == 2 {
         let [x, y, t] = PLANE;
+        let za = Mat3::from_diagonal(&Vec3::new(0.0, 0.0, a[(t, t)]));
         if a[(x, x)] == a[(y, y)] && a[(x, y)] == 0.0 && a[(x, t)] == 0.0 && a[(y, t)] == 0.0 {
-            return Ok((a[(x, x)], Mat3::identity() * a[(t, t)]));
+            return (a[(x, x)], za, None);
         }
         let jz = j[(2, 2)] + a[(t, t)];
         for k in 0..3 {
@@ -112,17 +116,17 @@ pub(crate) fn total<const D: usize>(a: &Mat6, m: f64, j: &Mat3) -> Result<(f64, 
             mm[(r, 5)] = a[(ar, t)];
             mm[(5, r)] = a[(ar, t)];
         }
-        return Err(mm);
+        return (0.5 * (a[(x, x)] + a[(y, y)]), za, Some(mm));
     }
-    let [[tt, tr], _] = blocks(&a);
+    let [[tt, tr], [_, rr]] = blocks(&a);
     let iso = tt[(0, 0)];
     if tt == Mat3::identity() * iso && tr == Mat3::zeros() {
-        return Ok((iso, blocks(&a)[1][1]));
+        return (iso, rr, None);
     }
     mm.fixed_view_mut::<3, 3>(0, 0)
         .copy_from(&(Mat3::identity() * m));
     mm.fixed_view_mut::<3, 3>(3, 3).copy_from(j);
-    Err(mm + a)
+    (tt.trace() / 3.0, rr, Some(mm + a))
 }
 
 /// The body-axes velocities `ξ = (Rᵀ V, Ω)` [m/s, rad/s] of state `st`.
@@ -246,7 +250,7 @@ mod tests {
     fn diagonal_body(a: Mat6) -> BodyModel {
         let j = Mat3::from_diagonal(&Vec3::new(4e5, 4e5, 5e4));
         let m = 2e4;
-        let mm = total::<3>(&a, m, &j).expect_err("coupled or anisotropic");
+        let mm = total::<3>(&a, m, &j).2.expect("coupled or anisotropic");
         BodyModel {
             mass: mm.fixed_view::<3, 3>(0, 0).trace() / 3.0,
             inertia: blocks(&mm)[1][1],
@@ -289,16 +293,13 @@ mod tests {
         let mut a = Mat6::from_diagonal(&nalgebra::Vector6::new(7e3, 7e3, 7e3, 1e5, 2e5, 3e4));
         a[(3, 4)] = 1e4;
         a[(4, 3)] = 1e4;
-        let (at, ar) = total::<3>(&a, 2e4, &j).expect("isotropic");
-        assert_eq!(at, 7e3);
-        assert_eq!(ar, blocks(&a)[1][1]);
+        let (at, ar, none) = total::<3>(&a, 2e4, &j);
+        assert_eq!((at, ar, none), (7e3, blocks(&a)[1][1], None));
         a[(2, 2)] = 6e3;
-        assert!(total::<3>(&a, 2e4, &j).is_err());
+        assert!(total::<3>(&a, 2e4, &j).2.is_some());
         // In 2D only (x, y, θ) counts: z differs, still isotropic in the plane.
-        assert_eq!(
-            total::<2>(&a, 2e4, &j).map(|(m, r)| (m, r[(2, 2)])),
-            Ok((7e3, 3e4))
-        );
+        let (at, ar, none) = total::<2>(&a, 2e4, &j);
+        assert_eq!((at, ar[(2, 2)], none), (7e3, 3e4, None));
     }
 
     /// The rows with attachments and a torque, and the Kirchhoff inertia's couplings, against
