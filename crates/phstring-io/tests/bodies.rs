@@ -334,6 +334,16 @@ fn an_external_wrench_is_a_port_of_the_front_end() {
 /// The points line of [`BOX`], the last key of its body table.
 const POINTS: &str = "points = { left = [-1.0, 0.0, 0.25], right = [1.0, 0.0, 0.25] }";
 
+/// A 6×6 added-mass matrix (kg, kg·m, kg·m²) with a surge–pitch coupling, as TOML rows.
+const ADDED_MASS: &str = "[4e3, 0, 0, 0, -500, 0], [0, 4e3, 0, 0, 0, 0], [0, 0, 1e3, 0, 0, 0], \
+     [0, 0, 0, 800, 0, 0], [-500, 0, 0, 0, 800, 0], [0, 0, 0, 0, 0, 300]";
+/// [`ADDED_MASS`] with its coupling unequal across the diagonal.
+const SKEWED_ADDED_MASS: &str = "[4e3, 0, 0, 0, -600, 0], [0, 4e3, 0, 0, 0, 0], \
+     [0, 0, 1e3, 0, 0, 0], [0, 0, 0, 800, 0, 0], [-500, 0, 0, 0, 800, 0], [0, 0, 0, 0, 0, 300]";
+/// [`ADDED_MASS`] with a coupling too large for its diagonal (`500 × 500 > 4e3 × 20`).
+const INDEFINITE_ADDED_MASS: &str = "[4e3, 0, 0, 0, -500, 0], [0, 4e3, 0, 0, 0, 0], \
+     [0, 0, 1e3, 0, 0, 0], [0, 0, 0, 800, 0, 0], [-500, 0, 0, 0, 20, 0], [0, 0, 0, 0, 0, 300]";
+
 /// Each refusal of a body's water keys and prescribed motion names its key, where the value
 /// is and what is wrong with it (`dry`: without `[water]`; the others in sea water).
 #[test]
@@ -371,6 +381,30 @@ fn water_and_motion_errors_name_the_key_and_position() {
             "[1.0, -2.0, 3.0]",
             "bodies.box.added_inertia",
             "has the moment -2 kg·m²: each must be at least 0 and finite",
+        ),
+        (
+            wet("added_mass = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]"),
+            "[[1.0, 0.0, 0.0]",
+            "bodies.box.added_mass",
+            "must be 6 rows of 6 in dimension 3",
+        ),
+        (
+            wet(&format!("added_mass = [{}]", SKEWED_ADDED_MASS)),
+            "[[4e3",
+            "bodies.box.added_mass",
+            "added mass is not symmetric: entry (row 1, column 5) = -600 but (row 5, column 1) = -500",
+        ),
+        (
+            wet(&format!("added_mass = [{}]", INDEFINITE_ADDED_MASS)),
+            "[[4e3",
+            "bodies.box.added_mass",
+            "added mass is not positive semi-definite: eigenvalue",
+        ),
+        (
+            wet(&format!("ca = 0.0\nadded_mass = [{}]", ADDED_MASS)),
+            "[[4e3",
+            "bodies.box.added_mass",
+            "is given beside `ca` of the same body",
         ),
         (
             wet("ca = 0.5"),
@@ -476,5 +510,50 @@ fn a_prescribed_wet_body_starts_with_its_motion() {
     assert!(
         err.contains("`bodies.box.position` = [0, 0, -10.25] m, but the body's prescribed motion (`bodies.box.motion`) starts at [0, 0, -10] m"),
         "{err}"
+    );
+}
+
+/// An accepted `added_mass` reaches the body's report as given (3D: the 6×6; the kinetic
+/// energy of the started state is then the Kirchhoff form's `½ ξ·(M_RB + A) ξ`, which with
+/// the box's surge of 0.5 m/s and yaw of 0.2 rad/s adds `½ A₁₁ u² + ½ A₆₆ Ω²` = 500 + 6 J
+/// beside the box's own kinetic energy).
+#[test]
+fn an_added_mass_matrix_is_taken_as_given() {
+    let dry = BOX.replacen(
+        POINTS,
+        &format!("{POINTS}\nvolume = 1.0\n\n[water]\ndensity = 1025.0"),
+        1,
+    );
+    let wet = BOX.replacen(
+        POINTS,
+        &format!(
+            "{POINTS}\nvolume = 1.0\nadded_mass = [{ADDED_MASS}]\n\n[water]\ndensity = 1025.0"
+        ),
+        1,
+    );
+    let energy = |text: &str| {
+        let phstring::ByDim::D3(s) = validate(text).unwrap() else {
+            panic!("not 3D")
+        };
+        let sys = &s.problem.system;
+        let rows = s.components.bodies[0]
+            .water
+            .as_ref()
+            .and_then(|w| w.added_mass.clone());
+        (sys.energies(&s.problem.state).kinetic, rows)
+    };
+    let (e_dry, none) = energy(&dry);
+    let (e_wet, rows) = energy(&wet);
+    assert!(none.is_none());
+    let rows = rows.unwrap();
+    assert_eq!(rows.len(), 6);
+    assert_eq!(
+        (rows[0][4], rows[4][0], rows[5][5]),
+        (-500.0, -500.0, 300.0)
+    );
+    let extra = 0.5 * 4e3 * 0.25 + 0.5 * 300.0 * 0.04;
+    assert!(
+        ((e_wet - e_dry) / extra - 1.0).abs() < 1e-12,
+        "{e_wet} − {e_dry} against {extra}"
     );
 }

@@ -22,6 +22,9 @@ use crate::boundary::Boundary;
 use crate::error::SetupError;
 use crate::mesh::Mesh;
 
+mod added_mass;
+pub use added_mass::{Mat6, check_added_mass};
+
 /// A nodal vector in `R^D`.
 type Vector<const D: usize> = nalgebra::SVector<f64, D>;
 
@@ -170,6 +173,12 @@ pub struct BodyHydro {
     /// Added moments of inertia about the body axes [kg·m²] (≥ 0), added to the inertia's
     /// diagonal.
     pub added_inertia: Vec3,
+    /// The full added-mass matrix `A` in body axes about the centre of mass (translation x,
+    /// y, z, then rotation about x, y, z; kg, kg·m, kg·m²), symmetric positive semi-definite,
+    /// constant in body axes: the kinetic energy is `½ ξ·(M_RB + A) ξ` with `ξ = (Rᵀ V, Ω)`.
+    /// In 2D only its `(x, y, θ_z)` entries (rows and columns 0, 1, 5) count. Not together
+    /// with `ca` or `added_inertia` (both must be 0). `None`: no matrix.
+    pub added_mass: Option<Mat6>,
     /// Waterplane area `A_w` [m²] (≥ 0) of a floater: the displaced volume is
     /// `V − A_w z_w` with `z_w` the height of the waterline point above the free surface
     /// (`z = 0`), so that besides `ρ_w g V` the heave restoring force `−ρ_w g A_w z_w` acts at
@@ -297,6 +306,11 @@ pub(crate) struct BodyModel {
     pub motion: Option<BodyMotion>,
     /// The feedback law on the wrench port (in 2D with the out-of-plane gains zeroed).
     pub feedback: Option<crate::body_feedback::BodyFeedback>,
+    /// The total mass matrix `𝕄 = M_RB + A` [kg, kg·m, kg·m²] (body axes, about the centre of
+    /// mass) of a body whose added mass is not isotropic in translation or couples translation
+    /// and rotation: its step takes the Kirchhoff form (`mass` and `inertia` are then only its
+    /// scales: the mean translational mass and the rotation block). `None`: `mass`, `inertia`.
+    pub kirchhoff: Option<Mat6>,
 }
 
 /// The row of an attachment node that a body's equations need: its residual `R_k` [N] and
@@ -403,9 +417,10 @@ impl BodyModel {
             ));
         }
         let rho = water.map_or(0.0, |w| w.density);
-        let added = Mat3::from_diagonal(&hydro.added_inertia);
+        let (added_mass, added, kirchhoff) =
+            added::<D>(&hydro, body.mass, &body.inertia, rho).map_err(&fail)?;
         let inertia = if D == 2 {
-            Mat3::identity() * (body.inertia[(2, 2)] + hydro.added_inertia.z)
+            Mat3::identity() * (body.inertia[(2, 2)] + added[(2, 2)])
         } else {
             body.inertia + added
         };
@@ -480,7 +495,7 @@ impl BodyModel {
             (k, embed_point::<D>(&hydro.waterline), up)
         });
         Ok(Self {
-            mass: body.mass + hydro.ca * rho * hydro.volume,
+            mass: body.mass + added_mass,
             inertia,
             weight,
             attachments,
@@ -495,11 +510,18 @@ impl BodyModel {
                 .feedback
                 .as_ref()
                 .map(|f| if D == 2 { f.planar() } else { f.clone() }),
+            kirchhoff,
         })
     }
 
-    /// Kinetic energy `½ m |V|² + ½ Π·J⁻¹Π` [J].
+    /// Kinetic energy `½ m |V|² + ½ Π·J⁻¹Π` [J]; in the Kirchhoff form `½ ξ·𝕄ξ`,
+    /// `ξ = (Rᵀ V, Ω)`.
     pub fn kinetic(&self, st: &BodyState) -> f64 {
+        if let Some(mm) = &self.kirchhoff {
+            let (u, om) = added_mass::body_velocity(st);
+            let (p, pi) = added_mass::momenta(mm, st);
+            return 0.5 * (u.dot(&p) + om.dot(&pi));
+        }
         0.5 * self.mass * st.velocity.norm_squared()
             + 0.5 * st.omega.dot(&(self.inertia * st.omega))
     }
@@ -564,23 +586,91 @@ impl BodyModel {
         (self.inertia.trace() / self.mass).sqrt()
     }
 
-    /// Angular momentum in body axes `Π = J Ω` [kg·m²/s].
+    /// Angular momentum about the centre of mass in body axes `Π = J Ω` [kg·m²/s]; in the
+    /// Kirchhoff form the rotation rows of `𝕄 ξ` (the Kirchhoff angular impulse).
     pub fn momentum(&self, st: &BodyState) -> Vec3 {
-        self.inertia * st.omega
+        match &self.kirchhoff {
+            Some(mm) => added_mass::momenta(mm, st).1,
+            None => self.inertia * st.omega,
+        }
+    }
+
+    /// The mass matrix at rest in the orientation `rot` (`R₀`) on the centre's displacement
+    /// (space axes) and the Cayley vector `w` (body axes), blocks
+    /// `[[R₀ 𝕄_tt R₀ᵀ, R₀ 𝕄_tr], [𝕄_rt R₀ᵀ, 𝕄_rr]]` [kg, kg·m, kg·m²]: `[[m I, 0], [0, J]]`
+    /// without an added-mass matrix (the kinetic energy `½ ξ·𝕄ξ` with `ξ = (R₀ᵀ ẋ, ẇ)`).
+    pub fn rest_mass(&self, rot: &Mat3) -> [[Mat3; 2]; 2] {
+        match &self.kirchhoff {
+            Some(mm) => {
+                let [[tt, tr], [rt, rr]] = added_mass::blocks(mm);
+                let rt_t = rot.transpose();
+                [[rot * tt * rt_t, rot * tr], [rt * rt_t, rr]]
+            }
+            None => [
+                [Mat3::identity() * self.mass, Mat3::zeros()],
+                [Mat3::zeros(), self.inertia],
+            ],
+        }
+    }
+
+    /// Linear momentum in space axes `m V` [kg·m/s]; in the Kirchhoff form `R P`, `P` the
+    /// translation rows of `𝕄 ξ` (the Kirchhoff impulse).
+    pub fn linear_momentum(&self, st: &BodyState) -> Vec3 {
+        match &self.kirchhoff {
+            Some(mm) => st
+                .orientation
+                .transform_vector(&added_mass::momenta(mm, st).0),
+            None => st.velocity * self.mass,
+        }
     }
 
     /// The state after a step of size `h` [s] with increment `dx` [m] and Cayley vector `w`.
     pub fn advance(&self, st: &BodyState, h: f64, dx: &Vec3, w: &Vec3) -> BodyState {
         let inv_h = 1.0 / h;
+        // Renormalized: the unit product's norm would random-walk at round-off.
+        let orientation = UnitQuaternion::new_normalize(
+            st.orientation.into_inner() * cayley_quaternion(w).into_inner(),
+        );
+        let velocity = match &self.kirchhoff {
+            // The body-axes velocity's midpoint rule (docs/method.md eq. (22.8)).
+            Some(_) => {
+                let turn = Turn::new(&st.orientation, w);
+                added_mass::next_velocity(st, h, (&turn, &orientation), dx, w)
+            }
+            None => dx * (2.0 * inv_h) - st.velocity,
+        };
         BodyState {
             position: st.position + dx,
-            velocity: dx * (2.0 * inv_h) - st.velocity,
-            // Renormalized: the unit product's norm would random-walk at round-off.
-            orientation: UnitQuaternion::new_normalize(
-                st.orientation.into_inner() * cayley_quaternion(w).into_inner(),
-            ),
+            velocity,
+            orientation,
             omega: w * (2.0 * inv_h) - st.omega,
         }
+    }
+
+    /// The inertia part of the step rows (force [N] in space axes, torque [N·m] in the body
+    /// axes of `R_n`) for a step of `h` [s] from `st` with unknowns `dx` [m], `w` and its turn
+    /// `turn`, and their Jacobian: `m (V_{n+1} − V_n)/h` and
+    /// `(Π_{n+1} − Π_n)/h + Ω_{n+½} × Π_{n+½}`, or the Kirchhoff form (docs/method.md
+    /// eq. (22.9)).
+    pub fn inertia_rows(
+        &self,
+        st: &BodyState,
+        h: f64,
+        (dx, w): (&Vec3, &Vec3),
+        turn: &Turn,
+    ) -> (Vec3, Vec3, [[Mat3; 2]; 2]) {
+        if let Some(mm) = &self.kirchhoff {
+            return added_mass::inertia_rows(mm, st, h, (dx, w), turn);
+        }
+        let inv_h = 1.0 / h;
+        let f = (dx * inv_h - st.velocity) * (2.0 * inv_h * self.mass);
+        let pm = self.inertia * w * inv_h;
+        let t = (pm - self.momentum(st)) * (2.0 * inv_h) + (w * inv_h).cross(&pm);
+        let mut jac = [[Mat3::zeros(); 2]; 2];
+        jac[0][0] = Mat3::identity() * (2.0 * inv_h * inv_h * self.mass);
+        jac[1][1] = self.inertia * (2.0 * inv_h * inv_h)
+            + (skew(w) * self.inertia - skew(&(self.inertia * w))) * (inv_h * inv_h);
+        (f, t, jac)
     }
 
     /// The step equations of a step of size `h` [s] from `st` with unknowns `dx` [m], `w`,
@@ -600,11 +690,11 @@ impl BodyModel {
         (force, torque): (&Vec3, &Vec3),
         dw_rows: &mut [Mat3],
     ) -> BodyRows {
-        let inv_h = 1.0 / h;
         let eye = Mat3::identity();
         let rt = turn.rot.transpose();
         // Force: m (V_{n+1} − V_n)/h − F + Σ R_k.
-        let mut f = (dx * inv_h - st.velocity) * (2.0 * inv_h * self.mass) - force;
+        let (f_in, t_in, mut jac) = self.inertia_rows(st, h, (dx, w), turn);
+        let mut f = f_in - force;
         // τ̃ = Σ s̄_k × (R_nᵀ(−R_k)) + R_nᵀ τ: the torque in body axes.
         let mut tau = rt * torque;
         for (row, p) in rows.iter().zip(points) {
@@ -612,14 +702,9 @@ impl BodyModel {
             tau -= p.mean.cross(&(rt * row.res));
         }
         // Torque: (Π_{n+1} − Π_n)/h + Ω×Π_{n+½} − (I − ½ŵ) τ̃.
-        let pm = self.inertia * w * inv_h;
         let half = eye - skew(w) * 0.5;
-        let t = (pm - self.momentum(st)) * (2.0 * inv_h) + (w * inv_h).cross(&pm) - half * tau;
-        let mut jac = [[Mat3::zeros(); 2]; 2];
-        jac[0][0] = eye * (2.0 * inv_h * inv_h * self.mass);
-        jac[1][1] = self.inertia * (2.0 * inv_h * inv_h)
-            + (skew(w) * self.inertia - skew(&(self.inertia * w))) * (inv_h * inv_h)
-            - skew(&tau) * 0.5;
+        let t = t_in - half * tau;
+        jac[1][1] -= skew(&tau) * 0.5;
         for (k, (row, p)) in rows.iter().zip(points).enumerate() {
             // ∂torque/∂R_k = (I − ½ŵ) [s̄×] R_nᵀ.
             let wk = half * skew(&p.mean) * rt;
@@ -640,6 +725,42 @@ impl BodyModel {
             jac,
         }
     }
+}
+
+/// A body's added mass from `hydro`, for a body of mass `m` [kg] and inertia `j` [kg·m²]
+/// (body axes) in water of density `rho` [kg/m³]: the added mass on its translation [kg], its
+/// added inertia [kg·m²] (body axes; in 2D its `z` moment) and, for an added-mass matrix that
+/// is not isotropic in translation or couples translation and rotation, the body's total mass
+/// matrix of the Kirchhoff form (the first two are then its scales: the mean of the
+/// translational diagonal, the rotation block).
+fn added<const D: usize>(
+    hydro: &BodyHydro,
+    m: f64,
+    j: &Mat3,
+    rho: f64,
+) -> Result<(f64, Mat3, Option<Mat6>), String> {
+    let Some(a) = hydro.added_mass else {
+        let ai = Mat3::from_diagonal(&hydro.added_inertia);
+        return Ok((hydro.ca * rho * hydro.volume, ai, None));
+    };
+    if hydro.ca != 0.0 || hydro.added_inertia != Vec3::zeros() {
+        return Err(format!(
+            "an added-mass matrix is not taken together with Ca ({}) or added inertia ({:?} \
+             kg·m²): give them in the matrix",
+            hydro.ca,
+            hydro.added_inertia.as_slice()
+        ));
+    }
+    let idx: Vec<usize> = if D == 2 {
+        added_mass::PLANE.to_vec()
+    } else {
+        (0..6).collect()
+    };
+    let n = idx.len();
+    check_added_mass(&nalgebra::DMatrix::from_fn(n, n, |r, c| {
+        a[(idx[r], idx[c])]
+    }))?;
+    Ok(added_mass::total::<D>(&a, m, j))
 }
 
 /// Checks a body's prescribed motion against its initial state `st` (pose and rate at
@@ -836,7 +957,7 @@ mod tests {
 
     /// A body of 2 t, a 2 m × 1 m × 0.5 m box (principal moments 208, 708, 833 kg·m²), in
     /// gravity.
-    fn box_body() -> BodyModel {
+    pub(super) fn box_body() -> BodyModel {
         let inertia = Mat3::from_diagonal(&Vec3::new(208.3, 708.3, 833.3));
         BodyModel {
             mass: 2000.0,
@@ -851,15 +972,16 @@ mod tests {
             waterplane: None,
             motion: None,
             feedback: None,
+            kirchhoff: None,
         }
     }
 
     /// An attachment at body point `s` whose node residual is `R_k = K Δa_k + r`.
-    type Spring = (Vec3, Mat3, Vec3);
+    pub(super) type Spring = (Vec3, Mat3, Vec3);
 
     /// The body's rows at `u = (Δx, w)` with attachments `springs` and a space torque
     /// `torque` [N·m].
-    fn rows_at(
+    pub(super) fn rows_at(
         body: &BodyModel,
         st: &BodyState,
         h: f64,
@@ -895,7 +1017,7 @@ mod tests {
         (res, jac)
     }
 
-    fn spinning(omega: Vec3) -> BodyState {
+    pub(super) fn spinning(omega: Vec3) -> BodyState {
         let q = UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1);
         let (x, v) = (Vec3::new(1.0, 2.0, -3.0), Vec3::new(0.5, -0.2, 0.1));
         BodyState::new(x, v, q, omega)
@@ -940,7 +1062,7 @@ mod tests {
     /// residual of 1e-13 of the momenta's rate `(m|V| + |Π|)/h` (and the weight), then one
     /// more iteration, which takes the residual to round-off (the balances hold to the
     /// residual).
-    fn step_free(body: &BodyModel, st: &BodyState, h: f64) -> BodyState {
+    pub(super) fn step_free(body: &BodyModel, st: &BodyState, h: f64) -> BodyState {
         let mut u = SVector::<f64, 6>::zeros();
         u.fixed_rows_mut::<3>(0).copy_from(&(st.velocity * h));
         u.fixed_rows_mut::<3>(3).copy_from(&(st.omega * h));
@@ -960,8 +1082,8 @@ mod tests {
         panic!("no convergence");
     }
 
-    fn angular_momentum(body: &BodyModel, st: &BodyState) -> Vec3 {
-        let orbital = st.position.cross(&(st.velocity * body.mass));
+    pub(super) fn angular_momentum(body: &BodyModel, st: &BodyState) -> Vec3 {
+        let orbital = st.position.cross(&body.linear_momentum(st));
         orbital + st.orientation.transform_vector(&body.momentum(st))
     }
 

@@ -223,7 +223,10 @@ fn reaction_wrench<const D: usize>(
     let work = force.dot(dx) + torque.dot(&st.orientation.transform_vector(w));
     let hold = model.kinetic(held) - model.kinetic(&raw);
     // The hold's impulse belongs to the reaction, so that the momentum balance is whole.
-    let impulse = (held.velocity - raw.velocity) * (model.mass / h);
+    let impulse = match model.kirchhoff {
+        Some(_) => (model.linear_momentum(held) - model.linear_momentum(&raw)) / h,
+        None => (held.velocity - raw.velocity) * (model.mass / h),
+    };
     let spin = held
         .orientation
         .transform_vector(&(model.momentum(held) - model.momentum(&raw)))
@@ -506,8 +509,16 @@ impl<const D: usize> BodyStep<'_, D> {
             let inv_rg = 1.0 / model.gyration();
             res[n + 2 * b] = project(&out.force);
             res[n + 2 * b + 1] = rotation_slot::<D>(&(out.torque * inv_rg));
-            let inertia = (dx / self.h - st.velocity) * (2.0 * model.mass / self.h);
-            let spin = (model.inertia * w / self.h - model.momentum(st)) * (2.0 / self.h * inv_rg);
+            let (inertia, spin) = match model.kirchhoff {
+                Some(_) => {
+                    let (f, t, _) = model.inertia_rows(st, self.h, (&dx, &w), &turns[b]);
+                    (f, t * inv_rg)
+                }
+                None => (
+                    (dx / self.h - st.velocity) * (2.0 * model.mass / self.h),
+                    (model.inertia * w / self.h - model.momentum(st)) * (2.0 / self.h * inv_rg),
+                ),
+            };
             scale2 += inertia.norm_squared()
                 + model.weight.norm_squared()
                 + f_port.norm_squared()

@@ -98,7 +98,8 @@ pub mod water;
 
 pub use bathymetry::Bathymetry;
 pub use body::{
-    Attachment, BodyHydro, BodyMotion, BodyPortSample, BodyState, BodyWrench, RigidBody,
+    Attachment, BodyHydro, BodyMotion, BodyPortSample, BodyState, BodyWrench, Mat6, RigidBody,
+    check_added_mass,
 };
 pub use body_feedback::{BodyFeedback, FeedbackTarget};
 pub use boundary::{

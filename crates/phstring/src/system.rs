@@ -1175,17 +1175,18 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             p += state.v[i] * m;
         }
         for (model, st) in self.bodies.iter().zip(&state.bodies) {
-            p += crate::body::project::<D>(&st.velocity) * model.mass;
+            p += crate::body::project::<D>(&model.linear_momentum(st));
         }
         p
     }
 
-    /// The rigid bodies' angular momenta about the origin, `x × m V + R Π` [kg·m²/s], summed
-    /// (3-vector; in 2D only `z` is non-zero).
+    /// The rigid bodies' angular momenta about the origin, `x × p + R Π` [kg·m²/s], summed
+    /// (`p = m V`, or the Kirchhoff impulses `p = R P` and `Π` of an added-mass matrix;
+    /// 3-vector; in 2D only `z` is non-zero).
     fn bodies_angular_momentum(&self, state: &State<D>) -> crate::body::Vec3 {
         let mut l = crate::body::Vec3::zeros();
         for (model, st) in self.bodies.iter().zip(&state.bodies) {
-            l += st.position.cross(&(st.velocity * model.mass))
+            l += st.position.cross(&model.linear_momentum(st))
                 + st.orientation.transform_vector(&model.momentum(st));
         }
         l

@@ -428,9 +428,30 @@ fn describe_water<const D: usize>(out: &mut String, p: &phstring::Network<D, phs
     for b in &p.bodies {
         let Some(h) = &b.hydro else { continue };
         let wet = (b.mass - w.density * h.volume) * w.gravity;
+        // The added-mass matrix's diagonal and its largest off-diagonal entry (the plane's
+        // x, y, θ in 2D).
+        let matrix = h.added_mass.map_or(String::new(), |a| {
+            let idx: Vec<usize> = if D == 2 {
+                vec![0, 1, 5]
+            } else {
+                (0..6).collect()
+            };
+            let diag: Vec<f64> = idx.iter().map(|&k| a[(k, k)]).collect();
+            let off = idx
+                .iter()
+                .flat_map(|&r| idx.iter().map(move |&c| (r, c)))
+                .filter(|(r, c)| r != c)
+                .map(|(r, c)| a[(r, c)].abs())
+                .fold(0.0, f64::max);
+            format!(
+                ", added-mass matrix diagonal {} (kg, kg·m²), largest coupling {}",
+                nums(&diag),
+                num(off)
+            )
+        });
         let _ = writeln!(
             out,
-            "  in water:  body {}: volume {} m³ at {} m (body axes), CdA = {} m², linear drag {} N·s/m, Ca = {}, added inertia {} kg·m², waterplane {} m² at {} m, weight in water {} N{}",
+            "  in water:  body {}: volume {} m³ at {} m (body axes), CdA = {} m², linear drag {} N·s/m, Ca = {}, added inertia {} kg·m²{matrix}, waterplane {} m² at {} m, weight in water {} N{}",
             b.name,
             num(h.volume),
             nums(&h.centre_of_buoyancy.as_slice()[..D.min(3)]),

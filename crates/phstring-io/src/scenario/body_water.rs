@@ -1,9 +1,10 @@
 //! The water terms of a rigid body (`volume`, `centre_of_buoyancy`, `cda`, `linear_drag`,
-//! `ca`, `added_inertia`, `waterplane_area`, `waterline` of `[bodies.NAME]`, docs/scenario.md
+//! `ca`, `added_inertia`, `added_mass`, `waterplane_area`, `waterline` of `[bodies.NAME]`,
+//! docs/scenario.md
 //! "Rigid bodies"): the library's [`BodyHydro`] (docs/method.md §22), with the names and
 //! meanings of MoorDyn's body columns where it has them.
 
-use phstring::body::{BodyHydro, Vec3};
+use phstring::body::{BodyHydro, Mat6, Vec3};
 use toml::Spanned;
 
 use super::spec::BodySpec;
@@ -26,6 +27,10 @@ pub struct BodyWaterComponent {
     pub ca: f64,
     /// Added moments of inertia about the body axes [kg·m²] (`x`, `y`, `z`).
     pub added_inertia: Vec<f64>,
+    /// The full added-mass matrix in body axes (rows of 6 in 3D, of 3 in 2D: `x`, `y`, `θ`;
+    /// kg, kg·m, kg·m²), when given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub added_mass: Option<Vec<Vec<f64>>>,
     /// Waterplane area [m²] (0: submerged).
     pub waterplane_area: f64,
     /// The waterline point in body axes relative to the centre of mass [m].
@@ -42,6 +47,16 @@ impl BodyWaterComponent {
             linear_drag: h.linear_drag,
             ca: h.ca,
             added_inertia: h.added_inertia.as_slice().to_vec(),
+            added_mass: h.added_mass.map(|a| {
+                let idx: Vec<usize> = if d == 2 {
+                    vec![0, 1, 5]
+                } else {
+                    (0..6).collect()
+                };
+                idx.iter()
+                    .map(|&r| idx.iter().map(|&c| a[(r, c)]).collect())
+                    .collect()
+            }),
             waterplane_area: h.waterplane_area,
             waterline: h.waterline.as_slice()[..d].to_vec(),
         }
@@ -83,6 +98,7 @@ impl ScenarioFile {
                     .iter()
                     .filter_map(|(f, v)| v.as_ref().map(|v| (*f, v.span()))),
             )
+            .chain(spec.added_mass.as_ref().map(|v| ("added_mass", v.span())))
             .min_by_key(|(_, span)| span.start);
         let Some((f, span)) = first else {
             return Ok(None);
@@ -105,6 +121,7 @@ impl ScenarioFile {
             ca: ca?,
             added_inertia: self
                 .added_inertia::<D>(&k("added_inertia"), spec.added_inertia.as_ref())?,
+            added_mass: self.added_mass::<D>(&k("added_mass"), spec)?,
             waterplane_area: waterplane_area?,
             waterline: self.body_axes_point::<D>(&k("waterline"), spec.waterline.as_ref())?,
         };
@@ -159,6 +176,68 @@ impl ScenarioFile {
             None => Ok(Vec3::zeros()),
             Some(v) => Ok(embed(self.vector::<D>(key, v)?.as_slice())),
         }
+    }
+
+    /// `added_mass` at `key` of body `spec`: a 6×6 matrix in 3D, the 3×3 `(x, y, θ)` in 2D
+    /// placed at rows and columns 0, 1, 5 of the library's 6×6, checked by
+    /// [`phstring::check_added_mass`] (finite, symmetric, positive semi-definite), and not
+    /// beside `ca` or `added_inertia`; `None` when absent.
+    fn added_mass<const D: usize>(
+        &self,
+        key: &str,
+        spec: &BodySpec,
+    ) -> Result<Option<Mat6>, ScenarioError> {
+        let Some(v) = &spec.added_mass else {
+            return Ok(None);
+        };
+        let rows = v.get_ref();
+        let n = if D == 2 { 3 } else { 6 };
+        if rows.len() != n || rows.iter().any(|r| r.len() != n) {
+            let shape: Vec<String> = rows.iter().map(|r| r.len().to_string()).collect();
+            return Err(self.invalid(
+                key,
+                v.span(),
+                format!(
+                    "must be {n} rows of {n} in dimension {D} ({}), got {} rows of [{}]",
+                    if D == 2 {
+                        "x, y, θ; kg, kg·m, kg·m²"
+                    } else {
+                        "translation x, y, z, then rotation about x, y, z; kg, kg·m, kg·m²"
+                    },
+                    rows.len(),
+                    shape.join(", ")
+                ),
+            ));
+        }
+        let a = nalgebra::DMatrix::from_fn(n, n, |r, c| rows[r][c]);
+        phstring::check_added_mass(&a).map_err(|e| self.invalid(key, v.span(), e))?;
+        let beside = [
+            ("ca", spec.ca.is_some()),
+            ("added_inertia", spec.added_inertia.is_some()),
+        ];
+        if let Some((f, _)) = beside.into_iter().find(|(_, given)| *given) {
+            return Err(self.invalid(
+                key,
+                v.span(),
+                format!(
+                    "is given beside `{f}` of the same body: give the whole added mass in the \
+                     matrix (the translational `Ca ρ_w V` on its first diagonal entries, the \
+                     added inertia on the rotational ones)"
+                ),
+            ));
+        }
+        let idx: Vec<usize> = if D == 2 {
+            vec![0, 1, 5]
+        } else {
+            (0..6).collect()
+        };
+        let mut m = Mat6::zeros();
+        for (r, &ir) in idx.iter().enumerate() {
+            for (c, &ic) in idx.iter().enumerate() {
+                m[(ir, ic)] = a[(r, c)];
+            }
+        }
+        Ok(Some(m))
     }
 
     /// `added_inertia` at `key`: 3 moments about the body axes in 3D, the one about `z` in

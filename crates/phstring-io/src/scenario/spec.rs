@@ -493,6 +493,12 @@ pub struct BodySpec {
     /// 2D (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub added_inertia: Option<Spanned<Vec<f64>>>,
+    /// The full added-mass matrix in body axes about the centre of mass: 6 rows of 6 in 3D
+    /// (translation x, y, z, then rotation about x, y, z; kg, kg·m, kg·m²), 3 rows of 3 in
+    /// 2D (x, y, θ); symmetric positive semi-definite. Not together with `ca` or
+    /// `added_inertia` (default: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_mass: Option<Spanned<Vec<Vec<f64>>>>,
     /// Waterplane area `A_w` [m²] of a floater: heave restoring `ρ_w g A_w` at `waterline`
     /// (default 0: submerged).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -3,7 +3,9 @@
 //! a second body hangs from the first by a one-element rope (body–body blocks), a rope
 //! from it ends at a partly fixed node, and a load acts on an attached node; both bodies
 //! feel buoyancy off their centre, a waterplane's heave restoring, drag in a sheared current
-//! and added mass; the first is under PD feedback on its pose.
+//! and added mass (the first `C_a` and added inertia, the second a full matrix with
+//! translation–rotation couplings, the Kirchhoff form); the first is under PD feedback on
+//! its pose.
 
 use crate::body::{Attachment, RigidBody};
 use crate::body::{BodyState, Mat3, Vec3, project};
@@ -123,6 +125,7 @@ fn check<const D: usize>(scheme: Scheme) {
             linear_drag: 300.0,
             ca: 0.8,
             added_inertia: Vec3::new(20.0, 30.0, 40.0),
+            added_mass: None,
             waterplane_area: 3.0,
             waterline: planar(Vec3::new(-0.2, 0.5, 0.3)),
         }),
@@ -153,7 +156,7 @@ fn check<const D: usize>(scheme: Scheme) {
                 sa,
             )
         })
-        .with_body(body("b", vec![att(nb_top, top_b)], sb));
+        .with_body(coupled(body("b", vec![att(nb_top, top_b)], sb)));
     // Water with a current that turns and grows with height, so that the drag's dependence
     // on the mid-step height is in the Jacobian too.
     let profile = vec![
@@ -233,6 +236,32 @@ fn check<const D: usize>(scheme: Scheme) {
             }
         }
     }
+}
+
+/// `body` with a full added-mass matrix (kg, kg·m, kg·m²; diagonally dominant, so positive
+/// definite) in place of its `C_a` and added inertia: unequal translational entries, and
+/// couplings among the plane's `(x, y, θ_z)` and between translation and rotation out of it.
+fn coupled<const D: usize>(mut body: RigidBody<D>) -> RigidBody<D> {
+    let mut a = crate::body::Mat6::from_diagonal(&nalgebra::Vector6::new(
+        400.0, 700.0, 300.0, 60.0, 80.0, 90.0,
+    ));
+    for (r, c, x) in [
+        (0, 1, 100.0),
+        (0, 5, 30.0),
+        (1, 5, -20.0),
+        (0, 4, -50.0),
+        (1, 3, 40.0),
+    ] {
+        a[(r, c)] = x;
+        a[(c, r)] = x;
+    }
+    body.hydro = body.hydro.map(|h| crate::body::BodyHydro {
+        ca: 0.0,
+        added_inertia: Vec3::zeros(),
+        added_mass: Some(a),
+        ..h
+    });
+    body
 }
 
 #[test]

@@ -54,7 +54,7 @@ pub fn reduced_model_with_bodies<const D: usize, M: StoredEnergy>(
     let (n, tk) = body_hessian(sys, r, poses).ok_or(BodiesLinearError::Strain)?;
     let (dof, n_free) = crate::assembly::free_dofs(sys);
     let map = node_map(sys, poses, n_free);
-    let m = strings_mass(sys, &map, n) + body_mass(sys, n_free, n);
+    let m = strings_mass(sys, &map, n) + body_mass(sys, poses, n_free, n);
     let mut te = Vec::new();
     identity_triplets(n, 0, 0, 1.0, &mut te);
     dense_triplets(&m, n, &mut te);

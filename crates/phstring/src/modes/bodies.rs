@@ -92,10 +92,12 @@ pub(crate) fn add_through<const D: usize>(
     }
 }
 
-/// Each body's mass (with its added mass) on its translation and its inertia over `ρ²` on
-/// its scaled turn, on the `size` coordinates.
+/// Each body's mass matrix at its rest pose `poses` (with its added mass, and an added-mass
+/// matrix's couplings, [`crate::body::BodyModel::rest_mass`]) on its translation and its
+/// scaled turn `ρ w` (the turn's rows and columns divided by `ρ`), on the `size` coordinates.
 pub(crate) fn body_mass<const D: usize, M>(
     sys: &PhSystem<D, M>,
+    poses: &[BodyState],
     n_free: usize,
     size: usize,
 ) -> Mat<f64> {
@@ -103,18 +105,23 @@ pub(crate) fn body_mass<const D: usize, M>(
     let per = body_coordinates(D);
     for (b, model) in sys.bodies.iter().enumerate() {
         let base = n_free + b * per;
-        let rho2 = model.gyration().powi(2);
-        for k in 0..D {
-            m[(base + k, base + k)] += model.mass;
-        }
-        if D == 3 {
-            for r in 0..3 {
-                for c in 0..3 {
-                    m[(base + 3 + r, base + 3 + c)] += model.inertia[(r, c)] / rho2;
-                }
-            }
+        let rho = model.gyration();
+        let rot: Mat3 = poses[b].orientation.to_rotation_matrix().into_inner();
+        let blocks = model.rest_mass(&rot);
+        // The coordinates of the body: translation components, then turn components, as
+        // (index among the body's coordinates, index in the 3-vector, row scale).
+        let coords: Vec<(usize, usize, usize, f64)> = if D == 3 {
+            (0..3)
+                .map(|k| (k, 0, k, 1.0))
+                .chain((0..3).map(|k| (3 + k, 1, k, 1.0 / rho)))
+                .collect()
         } else {
-            m[(base + 2, base + 2)] += model.inertia[(2, 2)] / rho2;
+            vec![(0, 0, 0, 1.0), (1, 0, 1, 1.0), (2, 1, 2, 1.0 / rho)]
+        };
+        for &(i, bi, ki, si) in &coords {
+            for &(j, bj, kj, sj) in &coords {
+                m[(base + i, base + j)] += blocks[bi][bj][(ki, kj)] * si * sj;
+            }
         }
     }
     m
@@ -146,7 +153,7 @@ pub(super) fn modes_with_bodies<const D: usize, M: StoredEnergy>(
     }
     let map = node_map(sys, poses, n_free);
     let m = strings_mass(sys, &map, size);
-    let bm = body_mass(sys, n_free, size);
+    let bm = body_mass(sys, poses, n_free, size);
     let (values, vecs) = eigen::dense_generalized(&k, &(&m + &bm))?;
     let tangents = node_tangents(sys, r);
     let node_mass = lumped_mass(sys);

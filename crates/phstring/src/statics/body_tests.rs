@@ -137,6 +137,7 @@ fn two_bodies<const D: usize>(wet: bool) -> (PhSystem<D, Material>, State<D>) {
             linear_drag: 200.0,
             ca: 0.5,
             added_inertia: Vector3::new(30.0, 40.0, 50.0),
+            added_mass: None,
             waterplane_area: 3.0,
             waterline: plane(Vector3::new(0.2, 0.1, 0.25)),
         });
