@@ -1023,30 +1023,34 @@ mod tests {
         BodyState::new(x, v, q, omega)
     }
 
-    #[test]
-    fn body_jacobian_matches_finite_differences() {
-        let body = box_body();
-        let st = spinning(Vec3::new(0.4, -1.3, 0.8));
+    /// The springs and torque of the Jacobian checks: two points at `arms` (body axes) on
+    /// anisotropic springs with forces, and a torque [N·m].
+    pub(super) fn jacobian_loads(arms: [Vec3; 2]) -> ([Spring; 2], Vec3) {
         let k1 = Mat3::new(3e5, 1e4, 0.0, 2e4, 2e5, -1e4, 0.0, 3e4, 4e5);
         let springs = [
-            (Vec3::new(1.0, 0.5, -0.25), k1, Vec3::new(-1e4, 2e3, 5e4)),
-            (
-                Vec3::new(-1.0, -0.5, 0.25),
-                Mat3::identity() * 1e5,
-                Vec3::new(3e3, -4e4, 1e4),
-            ),
+            (arms[0], k1, Vec3::new(-1e4, 2e3, 5e4)),
+            (arms[1], Mat3::identity() * 1e5, Vec3::new(3e3, -4e4, 1e4)),
         ];
-        let torque = Vec3::new(300.0, -200.0, 100.0);
-        let h = 0.01;
-        let u = SVector::<f64, 6>::from_column_slice(&[0.004, -0.002, 0.001, 0.05, -0.08, 0.03]);
-        let (_, jac) = rows_at(&body, &st, h, &u, &springs, &torque);
+        (springs, Vec3::new(300.0, -200.0, 100.0))
+    }
+
+    /// Asserts that the Jacobian of `body`'s step rows from `st` over `h` [s] at the slots
+    /// `u` (with `springs` and `torque`) equals their central differences, column by column.
+    pub(super) fn assert_rows_jacobian(
+        body: &BodyModel,
+        st: &BodyState,
+        h: f64,
+        u: &SVector<f64, 6>,
+        (springs, torque): (&[Spring], &Vec3),
+    ) {
+        let (_, jac) = rows_at(body, st, h, u, springs, torque);
         let eps = 1e-6;
         for c in 0..6 {
-            let (mut up, mut dn) = (u, u);
+            let (mut up, mut dn) = (*u, *u);
             up[c] += eps;
             dn[c] -= eps;
-            let fd = (rows_at(&body, &st, h, &up, &springs, &torque).0
-                - rows_at(&body, &st, h, &dn, &springs, &torque).0)
+            let fd = (rows_at(body, st, h, &up, springs, torque).0
+                - rows_at(body, st, h, &dn, springs, torque).0)
                 / (2.0 * eps);
             let err = (fd - jac.column(c)).norm();
             // Central differences: truncation O(eps²), rounding ~ε|R|/eps ≈ 1e-10·1e6.
@@ -1056,6 +1060,16 @@ mod tests {
                 jac.column(c)
             );
         }
+    }
+
+    #[test]
+    fn body_jacobian_matches_finite_differences() {
+        let body = box_body();
+        let st = spinning(Vec3::new(0.4, -1.3, 0.8));
+        let (springs, torque) =
+            jacobian_loads([Vec3::new(1.0, 0.5, -0.25), Vec3::new(-1.0, -0.5, 0.25)]);
+        let u = SVector::<f64, 6>::from_column_slice(&[0.004, -0.002, 0.001, 0.05, -0.08, 0.03]);
+        assert_rows_jacobian(&body, &st, 0.01, &u, (&springs, &torque));
     }
 
     /// Steps a free body (no attachments, no torque) by `h` [s]: Newton on `(Δx, w)` to a

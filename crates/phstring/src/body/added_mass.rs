@@ -229,7 +229,9 @@ mod tests {
     //! finite differences, the exact energy and momenta over 1e4 steps, uniform acceleration
     //! along a body axis, and the Munk moment of a body moving across its axes.
 
-    use super::super::tests::{Spring, box_body, rows_at, spinning, step_free};
+    use super::super::tests::{
+        Spring, assert_rows_jacobian, box_body, jacobian_loads, rows_at, spinning, step_free,
+    };
     use super::super::{BodyModel, UnitQuaternion};
     use super::*;
     use nalgebra::SVector;
@@ -311,34 +313,10 @@ mod tests {
             ..spar()
         };
         let st = spinning(Vec3::new(0.4, -1.3, 0.8));
-        let k1 = Mat3::new(3e5, 1e4, 0.0, 2e4, 2e5, -1e4, 0.0, 3e4, 4e5);
-        let springs: [Spring; 2] = [
-            (Vec3::new(1.0, 0.5, -0.25), k1, Vec3::new(-1e4, 2e3, 5e4)),
-            (
-                Vec3::new(-1.0, -0.5, 3.0),
-                Mat3::identity() * 1e5,
-                Vec3::new(3e3, -4e4, 1e4),
-            ),
-        ];
-        let torque = Vec3::new(300.0, -200.0, 100.0);
-        let h = 0.01;
+        let (springs, torque) =
+            jacobian_loads([Vec3::new(1.0, 0.5, -0.25), Vec3::new(-1.0, -0.5, 3.0)]);
         let u = SVector::<f64, 6>::from_column_slice(&[0.04, -0.02, 0.01, 0.05, -0.08, 0.03]);
-        let (_, jac) = rows_at(&body, &st, h, &u, &springs, &torque);
-        let eps = 1e-6;
-        for c in 0..6 {
-            let (mut up, mut dn) = (u, u);
-            up[c] += eps;
-            dn[c] -= eps;
-            let fd = (rows_at(&body, &st, h, &up, &springs, &torque).0
-                - rows_at(&body, &st, h, &dn, &springs, &torque).0)
-                / (2.0 * eps);
-            let err = (fd - jac.column(c)).norm();
-            assert!(
-                err <= 1e-5 * fd.norm().max(1.0),
-                "column {c}: fd {fd} vs {}",
-                jac.column(c)
-            );
-        }
+        assert_rows_jacobian(&body, &st, 0.01, &u, (&springs, &torque));
     }
 
     /// A free body with the spar's coupled added mass, tumbling and drifting, over 1e4 steps

@@ -426,3 +426,69 @@ fn free_spin_about_the_attachment_line_is_refused() {
     let held = hook(&[s, Vector3::new(-0.1, 0.2, 0.4)]).unwrap();
     assert!(held.stable);
 }
+
+/// A 2D buoy (2 t, 2.5 m³) pulled down at its centre of mass by one rope to an anchor 20 m
+/// below and 5 m aside: no string holds its turn, its centre of buoyancy 0.5 m above the
+/// centre does. The statics take it (not a free spin) and find it upright, its net uplift
+/// `(ρ_w V − m) g` along the rope.
+#[test]
+fn a_centre_of_buoyancy_off_the_centre_holds_a_buoys_turn() {
+    let mut nb = NetworkBuilder::<2, Material>::new();
+    let anchor = nb.node(Vector::<2>::new(-5.0, -20.0));
+    let fair = nb.node(Vector::<2>::new(0.0, 0.0));
+    nb.string(rope::<2>("rope"), &[anchor, fair], 4).unwrap();
+    let mut held = Boundary::default();
+    held.fixed.push(crate::Fixed::node(anchor));
+    let (mass, volume) = (2000.0, 2.5);
+    let hydro = |cob: Vector3<f64>| BodyHydro {
+        volume,
+        centre_of_buoyancy: cob,
+        ..Default::default()
+    };
+    let solve = |cob: Vector3<f64>| {
+        let net = nb
+            .clone()
+            .build(held.clone(), Vec::new())
+            .unwrap()
+            .with_water(Water::<2>::new(1025.0).with_gravity(G))
+            .with_body(RigidBody {
+                name: "buoy".into(),
+                mass,
+                inertia: box_inertia(mass, (1.5, 1.5, 1.5)),
+                weight: Vector::<2>::new(0.0, -mass * G),
+                attachments: vec![Attachment {
+                    node: fair,
+                    point: Vector::<2>::zeros(),
+                }],
+                initial: BodyState::at_rest(Vector3::zeros(), UnitQuaternion::identity()),
+                wrench: None,
+                hydro: Some(hydro(cob)),
+                motion: None,
+                feedback: None,
+            });
+        let (sys, init) = PhSystem::new(net).unwrap();
+        solve_system(&sys, &init.r, &StaticsParams::default(), None)
+    };
+    let err = solve(Vector3::zeros()).unwrap_err();
+    assert!(matches!(err, StaticsError::FreeSpin { .. }), "{err}");
+    let eq = solve(Vector3::new(0.0, 0.5, 0.0)).unwrap();
+    assert!(eq.stable);
+    let pose = &eq.state.bodies[0];
+    // The buoyancy's moment about the centre vanishes only when the buoy is upright.
+    assert!(
+        pose.orientation.angle() < 1e-9,
+        "turned by {}",
+        pose.orientation.angle()
+    );
+    let uplift = (1025.0 * volume - mass) * G;
+    let pull = eq.reactions[fair];
+    assert!(
+        (pull.norm() - uplift).abs() < 1e-6 * uplift,
+        "{pull} vs {uplift}"
+    );
+    let along = eq.state.r[fair] - eq.state.r[anchor];
+    assert!(
+        pull.normalize().perp(&along.normalize()).abs() < 1e-6,
+        "{pull} along {along}"
+    );
+}
