@@ -230,7 +230,7 @@ mod tests {
     //! along a body axis, and the Munk moment of a body moving across its axes.
 
     use super::super::tests::{
-        Spring, assert_rows_jacobian, box_body, jacobian_loads, rows_at, spinning, step_free,
+        assert_rows_jacobian, box_body, jacobian_loads, spinning, step_free,
     };
     use super::super::{BodyModel, UnitQuaternion};
     use super::*;
