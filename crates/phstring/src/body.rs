@@ -185,8 +185,16 @@ pub struct BodyHydro {
     /// that point, with the potential `½ ρ_w g A_w z_w²` in `Ĥ`. 0: a submerged body.
     pub waterplane_area: f64,
     /// The waterline point in body axes [m] (where `z_w` is measured and the restoring force
-    /// acts).
+    /// acts): the centroid of the waterplane.
     pub waterline: Vec3,
+    /// The waterplane's second moments of area about the body's `x` and `y` axes through the
+    /// waterline point [m⁴] (≥ 0; in 2D only the first counts, about the out-of-plane axis):
+    /// the roll and pitch restoring `ρ_w g I` [N·m/rad] of a floater, beyond the buoyancy's
+    /// own (its centre of buoyancy above or below the centre of mass). The area is then
+    /// carried at four points of the waterplane (two in 2D) with these moments, each with
+    /// its share of the heave term's potential, so the heave restoring is unchanged. Zero:
+    /// the heave term alone; without a waterplane area they do nothing.
+    pub waterplane_moments: [f64; 2],
 }
 
 /// A rigid body of a network.
@@ -214,6 +222,45 @@ pub struct RigidBody<const D: usize> {
     /// A feedback law on the wrench port (PD on the pose, damping injection; docs/method.md
     /// §22), applied besides the port's force and torque signals; `None`: none.
     pub feedback: Option<crate::body_feedback::BodyFeedback>,
+}
+
+/// The waterplane points of a floater with heave stiffness `k = ρ_w g A_w` [N/m] (`up` the
+/// vertical unit vector): the waterline point alone, or, with second moments, points about it
+/// along the body's `x` and `y` axes (two each in 3D, two along `x` in 2D) sharing `k`, placed
+/// so that `Σ k_i s_i s_iᵀ` has the moments `ρ_w g I` (their centroid stays the waterline point).
+fn waterplane_points<const D: usize>(
+    k: f64,
+    hydro: &BodyHydro,
+    up: Vec3,
+) -> Vec<(f64, Vec3, Vec3)> {
+    let centre = embed_point::<D>(&hydro.waterline);
+    let area = hydro.waterplane_area;
+    let [i_x, i_y] = hydro.waterplane_moments;
+    if D == 2 {
+        if i_x <= 0.0 {
+            return vec![(k, centre, up)];
+        }
+        // Two halves at ±d along x: A d² = I.
+        let d = (i_x / area).sqrt();
+        return [-d, d]
+            .iter()
+            .map(|&x| (0.5 * k, centre + Vec3::new(x, 0.0, 0.0), up))
+            .collect();
+    }
+    if i_x <= 0.0 && i_y <= 0.0 {
+        return vec![(k, centre, up)];
+    }
+    // Four quarters at ±d_x along x and ±d_y along y: A d²/2 = I about the other axis.
+    let (dx, dy) = ((2.0 * i_y / area).sqrt(), (2.0 * i_x / area).sqrt());
+    [
+        Vec3::new(dx, 0.0, 0.0),
+        Vec3::new(-dx, 0.0, 0.0),
+        Vec3::new(0.0, dy, 0.0),
+        Vec3::new(0.0, -dy, 0.0),
+    ]
+    .iter()
+    .map(|off| (0.25 * k, centre + off, up))
+    .collect()
 }
 
 /// `3×3` skew matrix `â` with `â b = a × b`.
@@ -299,9 +346,10 @@ pub(crate) struct BodyModel {
     /// Drag at the centre of mass: linear [N·s/m], quadratic `½ ρ_w C_d A` [kg/m], and the
     /// smoothing speed `δ` [m/s] of `|v_r|`.
     pub drag: Option<(f64, f64, f64)>,
-    /// Heave restoring: the stiffness `ρ_w g A_w` [N/m], its point (body axes) and the
-    /// vertical unit vector.
-    pub waterplane: Option<(f64, Vec3, Vec3)>,
+    /// Heave (and roll and pitch) restoring: per waterplane point its stiffness
+    /// `ρ_w g A_i` [N/m], the point (body axes) and the vertical unit vector; empty without
+    /// a waterplane.
+    pub waterplane: Vec<(f64, Vec3, Vec3)>,
     /// The prescribed motion.
     pub motion: Option<BodyMotion>,
     /// The feedback law on the wrench port (in 2D with the out-of-plane gains zeroed).
@@ -404,6 +452,8 @@ impl BodyModel {
             ("added inertia y [kg·m²]", hydro.added_inertia.y),
             ("added inertia z [kg·m²]", hydro.added_inertia.z),
             ("waterplane area [m²]", hydro.waterplane_area),
+            ("waterplane moment x [m⁴]", hydro.waterplane_moments[0]),
+            ("waterplane moment y [m⁴]", hydro.waterplane_moments[1]),
         ] {
             if !(v >= 0.0 && v.is_finite()) {
                 return Err(fail(format!("{what} must be ≥ 0 and finite, got {v}")));
@@ -490,10 +540,12 @@ impl BodyModel {
         let drag = water
             .filter(|_| hydro.cda > 0.0 || hydro.linear_drag > 0.0)
             .map(|w| (hydro.linear_drag, 0.5 * rho * hydro.cda, w.drag_smoothing));
-        let waterplane = water.filter(|_| hydro.waterplane_area > 0.0).map(|w| {
-            let k = w.density * w.gravity * hydro.waterplane_area;
-            (k, embed_point::<D>(&hydro.waterline), up)
-        });
+        let waterplane = water
+            .filter(|_| hydro.waterplane_area > 0.0)
+            .map_or_else(Vec::new, |w| {
+                let k = w.density * w.gravity * hydro.waterplane_area;
+                waterplane_points::<D>(k, &hydro, up)
+            });
         Ok(Self {
             mass: body.mass + added_mass,
             inertia,
@@ -534,26 +586,29 @@ impl BodyModel {
     /// The buoyancy's potential `−F_b·(x + R s_b)` and the waterplane's `½ k z_w²` [J].
     pub fn buoyancy_potential(&self, st: &BodyState) -> f64 {
         let point = self.buoyancy.map_or(0.0, |(f, s)| -f.dot(&st.point(&s)));
-        let plane = self.waterplane.map_or(0.0, |(k, s, up)| {
-            let z = st.point(&s).dot(&up);
-            0.5 * k * z * z
-        });
+        let plane: f64 = self
+            .waterplane
+            .iter()
+            .map(|(k, s, up)| {
+                let z = st.point(s).dot(up);
+                0.5 * k * z * z
+            })
+            .sum();
         point + plane
     }
 
     /// The waterplane's restoring point over a step from `st` whose point moves by `moved`
     /// beyond the centre's `dx`: the row `R = −F` that asks the body for its negative, with
     /// `F = −k z̄ e_z` at the mean height `z̄` (the exact discrete gradient of `½ k z²`), and
-    /// `∂R/∂Δa = ½ k e_z e_zᵀ`. `None` without a waterplane.
-    pub fn waterplane_row(&self, st: &BodyState, dx: &Vec3, moved: &Vec3) -> Option<NodeRow> {
-        self.waterplane.map(|(k, s, up)| {
-            let z0 = st.point(&s).dot(&up);
-            let z_mean = z0 + 0.5 * (dx + moved).dot(&up);
-            NodeRow {
-                res: up * (k * z_mean),
-                diag: up * up.transpose() * (0.5 * k),
-            }
-        })
+    /// `∂R/∂Δa = ½ k e_z e_zᵀ`, for waterplane point `i` of [`Self::waterplane`].
+    pub fn waterplane_row(&self, i: usize, st: &BodyState, dx: &Vec3, moved: &Vec3) -> NodeRow {
+        let (k, s, up) = self.waterplane[i];
+        let z0 = st.point(&s).dot(&up);
+        let z_mean = z0 + 0.5 * (dx + moved).dot(&up);
+        NodeRow {
+            res: up * (k * z_mean),
+            diag: up * up.transpose() * (0.5 * k),
+        }
     }
 
     /// The drag at the centre of mass over a step of `h` [s] with increment `dx` [m], in a
@@ -969,7 +1024,7 @@ mod tests {
             dry_inertia: inertia,
             buoyancy: None,
             drag: None,
-            waterplane: None,
+            waterplane: Vec::new(),
             motion: None,
             feedback: None,
             kirchhoff: None,

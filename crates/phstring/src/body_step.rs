@@ -123,25 +123,24 @@ pub(crate) fn feedback_at<const D: usize>(
 }
 
 /// The step of each of body `model`'s points under `turn`: its attachments in order, then its
-/// centre of buoyancy and its waterline point where it has them (the rows of [`water_rows`]
+/// centre of buoyancy and its waterplane points where it has them (the rows of [`water_rows`]
 /// follow the attachments' in the same order).
 fn point_steps(model: &crate::body::BodyModel, turn: &Turn) -> Vec<PointStep> {
     let cb = model.buoyancy.map(|(_, s)| s);
-    let wl = model.waterplane.map(|(_, s, _)| s);
     model
         .attachments
         .iter()
         .map(|(_, s)| s)
         .chain(cb.as_ref())
-        .chain(wl.as_ref())
+        .chain(model.waterplane.iter().map(|(_, s, _)| s))
         .map(|s| turn.point(s))
         .collect()
 }
 
 /// Appends to `rows` the water's point rows of a body over a step from `st` with increment
 /// `dx` [m]: the buoyancy (a constant force at the centre of buoyancy, a row that asks the
-/// body for `−F_b`) and the waterplane's heave restoring at the waterline point (the last of
-/// `points`, from [`point_steps`]).
+/// body for `−F_b`) and the waterplane's restoring at its points (the last of `points`, from
+/// [`point_steps`]).
 fn water_rows(
     model: &crate::body::BodyModel,
     st: &BodyState,
@@ -155,8 +154,9 @@ fn water_rows(
             diag: Mat3::zeros(),
         });
     }
-    if let Some(p) = points.last().filter(|_| model.waterplane.is_some()) {
-        rows.extend(model.waterplane_row(st, dx, &p.moved));
+    let first = points.len() - model.waterplane.len();
+    for (i, p) in points[first..].iter().enumerate() {
+        rows.push(model.waterplane_row(i, st, dx, &p.moved));
     }
 }
 
@@ -524,10 +524,10 @@ impl<const D: usize> BodyStep<'_, D> {
                 + f_port.norm_squared()
                 + f_drag.norm_squared()
                 + model.buoyancy.map_or(0.0, |(f, _)| f.norm_squared())
-                + rows
-                    .last()
-                    .filter(|_| model.waterplane.is_some())
-                    .map_or(0.0, |r| r.res.norm_squared())
+                + rows[rows.len() - model.waterplane.len()..]
+                    .iter()
+                    .map(|r| r.res.norm_squared())
+                    .sum::<f64>()
                 + (torque * inv_rg).norm_squared()
                 + spin.norm_squared();
             let Some(j) = jac.as_deref_mut() else {

@@ -449,9 +449,13 @@ fn describe_water<const D: usize>(out: &mut String, p: &phstring::Network<D, phs
                 num(off)
             )
         });
+        let moments = match h.waterplane_moments {
+            [0.0, 0.0] => String::new(),
+            m => format!(" with moments {} m⁴", nums(&m[..D.min(3) - 1])),
+        };
         let _ = writeln!(
             out,
-            "  in water:  body {}: volume {} m³ at {} m (body axes), CdA = {} m², linear drag {} N·s/m, Ca = {}, added inertia {} kg·m²{matrix}, waterplane {} m² at {} m, weight in water {} N{}",
+            "  in water:  body {}: volume {} m³ at {} m (body axes), CdA = {} m², linear drag {} N·s/m, Ca = {}, added inertia {} kg·m²{matrix}, waterplane {} m² at {} m{moments}, weight in water {} N{}",
             b.name,
             num(h.volume),
             nums(&h.centre_of_buoyancy.as_slice()[..D.min(3)]),

@@ -386,3 +386,53 @@ fn robot_stiffness_by_cli(dir: &std::path::Path) -> nalgebra::DMatrix<f64> {
     let s = summary(dir);
     nalgebra::DMatrix::from_fn(6, 6, |i, j| s["stiffness"][i][j].as_f64().unwrap())
 }
+
+/// The spar example's waterplane moments (`waterplane_moments = [87.62, 87.62]` m⁴, π r⁴/4
+/// of its 6.5 m waterline) add exactly their hydrostatic restoring `ρ_w g I` to the roll and
+/// pitch stiffness of `phstring mooring` and nothing to heave: against the same spar with
+/// the moments set to zero. `check` names them.
+#[test]
+fn spar_waterplane_moments_add_their_roll_and_pitch_restoring() {
+    const SPAR: &str = "examples/spar_buoy_3d.toml";
+    let stiffness = |name: &str, sets: &[&str]| {
+        let dir = temp_dir(name);
+        let mut args = vec![
+            "mooring",
+            SPAR,
+            "--steps",
+            "1",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let o = phstring(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s = summary(&dir);
+        let _ = std::fs::remove_dir_all(&dir);
+        nalgebra::DMatrix::from_fn(6, 6, |i, j| s["stiffness"][i][j].as_f64().unwrap())
+    };
+    let with = stiffness("spar-moments", &[]);
+    let without = stiffness(
+        "spar-no-moments",
+        &["bodies.spar.waterplane_moments=[0, 0]"],
+    );
+    let restoring = 1025.0 * 9.81 * 87.62; // N·m/rad: ρ_w g I, the example's water and g
+    let d = &with - &without;
+    for k in [3, 4] {
+        assert!(
+            (d[(k, k)] - restoring).abs() <= 1e-5 * restoring,
+            "{} vs {restoring}",
+            d[(k, k)]
+        );
+    }
+    // Heave and the rest: the same equilibrium, so the same to the solves' rounding.
+    let mut rest = d.clone();
+    rest[(3, 3)] = 0.0;
+    rest[(4, 4)] = 0.0;
+    assert!(rest.abs().max() <= 1e-6 * with[(2, 2)], "{d}");
+    let o = phstring(&["check", SPAR]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("with moments [87.62, 87.62] m⁴"), "{text}");
+}

@@ -1,5 +1,6 @@
 //! The water terms of a rigid body (`volume`, `centre_of_buoyancy`, `cda`, `linear_drag`,
-//! `ca`, `added_inertia`, `added_mass`, `waterplane_area`, `waterline` of `[bodies.NAME]`,
+//! `ca`, `added_inertia`, `added_mass`, `waterplane_area`, `waterline`, `waterplane_moments`
+//! of `[bodies.NAME]`,
 //! docs/scenario.md
 //! "Rigid bodies"): the library's [`BodyHydro`] (docs/method.md §22), with the names and
 //! meanings of MoorDyn's body columns where it has them.
@@ -35,6 +36,8 @@ pub struct BodyWaterComponent {
     pub waterplane_area: f64,
     /// The waterline point in body axes relative to the centre of mass [m].
     pub waterline: Vec<f64>,
+    /// The waterplane's second moments of area [m⁴]: about `x` and `y` in 3D, one in 2D.
+    pub waterplane_moments: Vec<f64>,
 }
 
 impl BodyWaterComponent {
@@ -59,6 +62,7 @@ impl BodyWaterComponent {
             }),
             waterplane_area: h.waterplane_area,
             waterline: h.waterline.as_slice()[..d].to_vec(),
+            waterplane_moments: h.waterplane_moments[..d - 1].to_vec(),
         }
     }
 }
@@ -99,6 +103,11 @@ impl ScenarioFile {
                     .filter_map(|(f, v)| v.as_ref().map(|v| (*f, v.span()))),
             )
             .chain(spec.added_mass.as_ref().map(|v| ("added_mass", v.span())))
+            .chain(
+                spec.waterplane_moments
+                    .as_ref()
+                    .map(|v| ("waterplane_moments", v.span())),
+            )
             .min_by_key(|(_, span)| span.start);
         let Some((f, span)) = first else {
             return Ok(None);
@@ -124,6 +133,10 @@ impl ScenarioFile {
             added_mass: self.added_mass::<D>(&k("added_mass"), spec)?,
             waterplane_area: waterplane_area?,
             waterline: self.body_axes_point::<D>(&k("waterline"), spec.waterline.as_ref())?,
+            waterplane_moments: self.waterplane_moments::<D>(
+                &k("waterplane_moments"),
+                spec.waterplane_moments.as_ref(),
+            )?,
         };
         let needs = [
             (
@@ -135,6 +148,12 @@ impl ScenarioFile {
             (
                 "waterline",
                 &spec.waterline,
+                h.waterplane_area,
+                "waterplane_area",
+            ),
+            (
+                "waterplane_moments",
+                &spec.waterplane_moments,
                 h.waterplane_area,
                 "waterplane_area",
             ),
@@ -164,6 +183,32 @@ impl ScenarioFile {
             ));
         }
         Ok(Some(h))
+    }
+
+    /// `waterplane_moments` at `key`: `D − 1` numbers, each ≥ 0 and finite (`[I_x, I_y]` in
+    /// 3D, `[I]` in 2D, stored as the first); zero when absent.
+    fn waterplane_moments<const D: usize>(
+        &self,
+        key: &str,
+        v: Option<&Spanned<Vec<f64>>>,
+    ) -> Result<[f64; 2], ScenarioError> {
+        let Some(v) = v else {
+            return Ok([0.0, 0.0]);
+        };
+        let m = v.get_ref();
+        if m.len() != D - 1 || m.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+            let what = if D == 2 {
+                "[I], the second moment of the waterline about the out-of-plane axis"
+            } else {
+                "[I_x, I_y], the waterplane's second moments about the body's x and y axes"
+            };
+            return Err(self.invalid(
+                key,
+                v.span(),
+                format!("must be {what} [m⁴], each ≥ 0 and finite, got {:?}", m),
+            ));
+        }
+        Ok([m[0], m.get(1).copied().unwrap_or(0.0)])
     }
 
     /// A point in body axes at `key` (`d` finite components), as a 3-vector; zero when absent.

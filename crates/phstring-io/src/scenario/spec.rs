@@ -507,6 +507,11 @@ pub struct BodySpec {
     /// centre of mass).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub waterline: Option<Spanned<Vec<f64>>>,
+    /// The waterplane's second moments of area about the body's `x` and `y` axes through
+    /// the waterline point [m⁴]: `[I_x, I_y]` in 3D, `[I]` in 2D (default: none, the heave
+    /// restoring alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub waterplane_moments: Option<Spanned<Vec<f64>>>,
     /// A prescribed motion of the whole body: absolute pose as expressions of `t` [s].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion: Option<Spanned<BodyMotionSpec>>,

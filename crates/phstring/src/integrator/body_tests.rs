@@ -128,6 +128,7 @@ fn check<const D: usize>(scheme: Scheme) {
             added_mass: None,
             waterplane_area: 3.0,
             waterline: planar(Vec3::new(-0.2, 0.5, 0.3)),
+            waterplane_moments: [0.9, 1.4],
         }),
         motion: None,
         feedback: None,

@@ -218,7 +218,7 @@ impl<const D: usize> BodyTerms<'_, D> {
                 diag: Mat3::zeros(),
             });
         }
-        if let Some((k, s, up)) = model.waterplane {
+        for &(k, s, up) in &model.waterplane {
             let step = turn.point(&s);
             let z = (pose.position + dx + turn.rot * s + step.moved).dot(&up);
             rows.push(PointRow {
@@ -395,7 +395,7 @@ pub(super) fn free_spin<const D: usize, M>(
         .find_map(|(b, m)| {
             let mut points: Vec<Vec3> = m.attachments.iter().map(|(_, s)| *s).collect();
             points.extend(m.buoyancy.map(|(_, at)| at));
-            points.extend(m.waterplane.map(|(_, at, _)| at));
+            points.extend(m.waterplane.iter().map(|(_, at, _)| *at));
             let far = points
                 .iter()
                 .copied()

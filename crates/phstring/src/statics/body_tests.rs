@@ -140,6 +140,7 @@ fn two_bodies<const D: usize>(wet: bool) -> (PhSystem<D, Material>, State<D>) {
             added_mass: None,
             waterplane_area: 3.0,
             waterline: plane(Vector3::new(0.2, 0.1, 0.25)),
+            waterplane_moments: [0.9, 1.4],
         });
         b.hydro = Some(BodyHydro {
             volume: 0.2,

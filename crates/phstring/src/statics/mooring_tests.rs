@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, UnitQuaternion, Vector3};
 
 use super::*;
-use crate::body::{Attachment, RigidBody};
+use crate::body::{Attachment, BodyHydro, RigidBody};
 use crate::catenary::{Catenary, Line};
 use crate::network::{NetworkBuilder, StringSpec};
 use crate::system::MassMatrix;
@@ -38,6 +38,11 @@ fn wet_weight() -> f64 {
 /// A spar (7466 t, the OC3 inertia) on three chains of `n_el` elements each at 0°, 120° and
 /// 240°, in 320 m of water on a stiff seabed; the spar's water terms are its net uplift.
 fn spar(n_el: usize) -> (PhSystem<3, Material>, State<3>) {
+    spar_with(n_el, None)
+}
+
+/// [`spar`] with the body's water terms `hydro`.
+fn spar_with(n_el: usize, water_terms: Option<BodyHydro>) -> (PhSystem<3, Material>, State<3>) {
     let mut nb = NetworkBuilder::<3, Material>::new();
     let mut atts = Vec::new();
     let mut held = Boundary::default();
@@ -90,7 +95,7 @@ fn spar(n_el: usize) -> (PhSystem<3, Material>, State<3>) {
         attachments: atts,
         initial: BodyState::at_rest(centre, UnitQuaternion::identity()),
         wrench: None,
-        hydro: None,
+        hydro: water_terms,
         motion: None,
         feedback: None,
     };
@@ -359,4 +364,40 @@ fn stiffness_in_2d_matches_central_differences() {
     let asym = (&k.matrix - k.matrix.transpose()).abs().max() / k.matrix.abs().max();
     eprintln!("2D: {} worst {worst:.3e}, asymmetry {asym:.3e}", k.matrix);
     assert!(asym <= 1e-6, "{}", k.matrix);
+}
+
+/// The spar with a 6.5 m waterplane (33.18 m²) at the surface, with and without its second
+/// moments `I = π r⁴/4` about x and y: the roll and pitch stiffness grow by exactly `ρ_w g I`
+/// (the waterplane's hydrostatic restoring), heave and the rest do not change (the points
+/// carry the area's share at the same height, so the equilibrium is the same).
+#[test]
+fn waterplane_moments_add_their_hydrostatic_roll_and_pitch_stiffness() {
+    let radius: f64 = 3.25;
+    let area = std::f64::consts::PI * radius * radius;
+    let moment = std::f64::consts::PI * radius.powi(4) / 4.0;
+    let stiffness = |moments: [f64; 2]| {
+        let hydro = BodyHydro {
+            waterplane_area: area,
+            waterline: Vector3::new(0.0, 0.0, CENTRE_DEPTH),
+            waterplane_moments: moments,
+            ..Default::default()
+        };
+        let (sys, start) = spar_with(30, Some(hydro));
+        let eq = equilibrium(&sys, &start);
+        body_stiffness(&sys, &eq, 0, &StaticsParams::default())
+            .unwrap()
+            .matrix
+    };
+    let plain = stiffness([0.0, 0.0]);
+    let with = stiffness([moment, 1.5 * moment]);
+    let rho_g = 1025.0 * crate::water::STANDARD_GRAVITY;
+    let mut expected = DMatrix::<f64>::zeros(6, 6);
+    expected[(3, 3)] = rho_g * moment;
+    expected[(4, 4)] = rho_g * 1.5 * moment;
+    let scale = plain.abs().max();
+    let err = (&with - &plain - &expected).abs().max();
+    // Two Schur complements of the same tangent but for the waterplane's rows: rounding of
+    // the condensed 1e9-scale entries.
+    assert!(err <= 1e-9 * scale, "{err} of {scale}: {}", &with - &plain);
+    assert!(expected[(3, 3)] > 1e3 * 1e-9 * scale);
 }
