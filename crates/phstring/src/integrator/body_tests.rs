@@ -28,7 +28,12 @@ fn embed_inv<const D: usize>(p: &Vec3) -> Vector<D> {
     project(p)
 }
 
-fn check<const D: usize>(scheme: Scheme) {
+/// The check on the network above, its bodies' orientations turned and the trial point
+/// perturbed by `seed` (numbers in [−1, 1], cycled).
+fn check<const D: usize>(scheme: Scheme, seed: &[f64]) {
+    let mut it = seed.iter().copied().cycle();
+    let mut next = move || it.next().unwrap_or(0.0);
+    let turns: Vec<f64> = (0..6).map(|_| 0.5 * next()).collect();
     let planar = |p: Vec3| if D == 2 { Vec3::new(p.x, p.y, 0.0) } else { p };
     let q = |a: f64, b: f64, c: f64| {
         if D == 2 {
@@ -41,7 +46,7 @@ fn check<const D: usize>(scheme: Scheme) {
     let sa = BodyState::new(
         planar(Vec3::new(0.0, -10.0, 0.5)),
         planar(Vec3::new(0.3, -0.2, 0.4)),
-        q(0.1, -0.2, 0.3),
+        q(0.1 + turns[0], -0.2 + turns[1], 0.3 + turns[2]),
         if D == 2 {
             Vec3::new(0.0, 0.0, -0.5)
         } else {
@@ -51,7 +56,7 @@ fn check<const D: usize>(scheme: Scheme) {
     let sb = BodyState::new(
         planar(Vec3::new(1.0, -14.0, -0.3)),
         planar(Vec3::new(-0.1, 0.2, 0.3)),
-        q(-0.2, 0.1, -0.4),
+        q(-0.2 + turns[3], 0.1 + turns[4], -0.4 + turns[5]),
         Vec3::new(0.0, 0.0, 0.7),
     );
     let (top_a, bot_a, side_a) = (
@@ -174,9 +179,9 @@ fn check<const D: usize>(scheme: Scheme) {
     let mut x: Vec<Vector<D>> = state.v.iter().map(|v| v * h).collect();
     x.resize(n + slots, Vector::zeros());
     predict(&state.bodies, h, &mut x[n..]);
-    for (i, xi) in x.iter_mut().enumerate() {
+    for xi in x.iter_mut() {
         for k in 0..D {
-            xi[k] += 1e-3 * ((i * 7 + k * 3) as f64).sin();
+            xi[k] += 1e-3 * next();
         }
     }
     if D == 2 {
@@ -265,15 +270,18 @@ fn coupled<const D: usize>(mut body: RigidBody<D>) -> RigidBody<D> {
     body
 }
 
-#[test]
-fn jacobian_with_bodies_matches_finite_differences_3d() {
-    check::<3>(Scheme::DiscreteGradient);
-    check::<3>(Scheme::Midpoint);
-}
-
-#[test]
-fn jacobian_with_bodies_matches_finite_differences_2d() {
-    check::<2>(Scheme::DiscreteGradient);
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(6))]
+    /// The bodies turned anywhere within ±0.5 rad of the base poses and the trial point
+    /// perturbed by up to 1 mm per component.
+    #[test]
+    fn jacobian_with_bodies_matches_finite_differences(
+        seed in proptest::collection::vec(-1.0f64..1.0, 16..64)
+    ) {
+        check::<3>(Scheme::DiscreteGradient, &seed);
+        check::<3>(Scheme::Midpoint, &seed);
+        check::<2>(Scheme::DiscreteGradient, &seed);
+    }
 }
 
 /// The step's Newton matrix with bodies `jac` (its border filled by the step, in the pattern
