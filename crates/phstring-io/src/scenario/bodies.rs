@@ -483,7 +483,7 @@ impl ScenarioFile {
 
     /// The `n` expressions of `t` at `key` (none given: no expressions, the signal is zero),
     /// each valid at `t_check` [s].
-    fn wrench_exprs(
+    pub(super) fn wrench_exprs(
         &self,
         key: &str,
         list: Option<&Spanned<Vec<Spanned<String>>>>,

@@ -109,11 +109,13 @@ impl ScenarioFile {
             Expr::new(&format!("{x}"), t_check).unwrap_or_else(|_| unreachable!("a number"))
         };
         let position = match &f.position {
-            Some(p) => self.reference_exprs(&format!("{fkey}.position"), p, D, t_check)?,
+            Some(p) => self.wrench_exprs(&format!("{fkey}.position"), Some(p), D, t_check)?,
             None => (0..D).map(|k| constant(position[k])).collect(),
         };
         let angle_exprs = match &f.orientation {
-            Some(o) => self.reference_exprs(&format!("{fkey}.orientation"), o, turns, t_check)?,
+            Some(o) => {
+                self.wrench_exprs(&format!("{fkey}.orientation"), Some(o), turns, t_check)?
+            }
             None => Vec::new(),
         };
         Ok(FeedbackSource {
@@ -169,30 +171,5 @@ impl ScenarioFile {
             out[first + k] = *x;
         }
         Ok(out)
-    }
-
-    /// `n` expressions of `t` at `key`, each valid at `t_check` [s].
-    fn reference_exprs(
-        &self,
-        key: &str,
-        list: &toml::Spanned<Vec<toml::Spanned<String>>>,
-        n: usize,
-        t_check: f64,
-    ) -> Result<Vec<Expr>, ScenarioError> {
-        if list.get_ref().len() != n {
-            return Err(self.invalid(
-                key,
-                list.span(),
-                format!("must have {n} expressions, got {}", list.get_ref().len()),
-            ));
-        }
-        list.get_ref()
-            .iter()
-            .enumerate()
-            .map(|(i, e)| {
-                Expr::new(e.get_ref(), t_check)
-                    .map_err(|m| self.invalid(&format!("{key}.{i}"), e.span(), m))
-            })
-            .collect()
     }
 }
