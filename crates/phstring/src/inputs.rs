@@ -192,23 +192,7 @@ impl<const D: usize, M> PhSystem<D, M> {
         force: crate::body::Vec3,
         torque: crate::body::Vec3,
     ) -> Result<(), InputError> {
-        let count = self.bodies.len();
-        let model = self
-            .bodies
-            .get_mut(body)
-            .ok_or(InputError::NoSuchBody { body, count })?;
-        if model.motion.is_some() {
-            return Err(InputError::BodyWrench {
-                body,
-                why: "its motion is prescribed".into(),
-            });
-        }
-        if let Some(x) = force.iter().chain(&torque).find(|x| !x.is_finite()) {
-            return Err(InputError::BodyWrench {
-                body,
-                why: format!("a component is {}", Num(*x)),
-            });
-        }
+        let model = wrench_target(&mut self.bodies, body, &force, &torque)?;
         model.wrench = Some(crate::body::BodyWrench {
             force: Arc::new(move |_t| force),
             torque: Arc::new(move |_t| torque),
@@ -379,21 +363,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     ) -> Result<(), InputError> {
         let (models, held) = self.bodies_and_held();
         let count = models.len();
-        let model = models
-            .get_mut(body)
-            .ok_or(InputError::NoSuchBody { body, count })?;
-        if model.motion.is_some() {
-            return Err(InputError::BodyWrench {
-                body,
-                why: "its motion is prescribed".into(),
-            });
-        }
-        if let Some(x) = force.iter().chain(&torque).find(|x| !x.is_finite()) {
-            return Err(InputError::BodyWrench {
-                body,
-                why: format!("a component is {}", Num(*x)),
-            });
-        }
+        let model = wrench_target(models, body, &force, &torque)?;
         if held.len() < count {
             held.resize(count, None);
         }
@@ -422,6 +392,33 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         Ok(())
     }
+}
+
+/// Body `body` of `models`, if a wrench `(force, torque)` may be held on it: it exists, its
+/// motion is not prescribed, and every component is finite.
+fn wrench_target<'a>(
+    models: &'a mut [crate::body::BodyModel],
+    body: usize,
+    force: &crate::body::Vec3,
+    torque: &crate::body::Vec3,
+) -> Result<&'a mut crate::body::BodyModel, InputError> {
+    let count = models.len();
+    let model = models
+        .get_mut(body)
+        .ok_or(InputError::NoSuchBody { body, count })?;
+    if model.motion.is_some() {
+        return Err(InputError::BodyWrench {
+            body,
+            why: "its motion is prescribed".into(),
+        });
+    }
+    if let Some(x) = force.iter().chain(torque).find(|x| !x.is_finite()) {
+        return Err(InputError::BodyWrench {
+            body,
+            why: format!("a component is {}", Num(*x)),
+        });
+    }
+    Ok(model)
 }
 
 #[cfg(test)]
