@@ -71,6 +71,16 @@ pub enum SetupError {
         /// What is wrong, with the value.
         problem: String,
     },
+    /// A winch's definition or its string is not usable.
+    #[error("winch {index} ('{name}'): {problem}")]
+    Winch {
+        /// Index of the winch.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// What is wrong, with the value.
+        problem: String,
+    },
     /// A value that must be positive and finite is not.
     #[error("{what}{} must be positive and finite, got {}", index.map(|i| format!(" [{i}]")).unwrap_or_default(), Num(*value))]
     NonPositive {
@@ -285,7 +295,9 @@ impl StepError {
         !(self.is_input_failure()
             || matches!(
                 self,
-                StepError::StepSizeTooSmall { .. } | StepError::Interrupted { .. }
+                StepError::StepSizeTooSmall { .. }
+                    | StepError::Interrupted { .. }
+                    | StepError::Winch { .. }
             ))
     }
 
@@ -439,6 +451,22 @@ pub enum StepError {
         residual: f64,
         /// Newton's force scale of the step [N].
         force_scale: f64,
+    },
+    /// A winch cannot follow its payout (docs/method.md §23): its drum is empty, it hauled
+    /// in all but half an element, or its payout is not finite. Not retried with a smaller
+    /// step.
+    #[error("step {step} (t = {t0} s): winch '{winch}' stops at t = {t1} s: {problem}", t0 = Num(*t), t1 = Num(*at))]
+    Winch {
+        /// Step index.
+        step: usize,
+        /// Start time of the step [s].
+        t: f64,
+        /// The time whose payout it cannot follow [s].
+        at: f64,
+        /// The winch's name.
+        winch: String,
+        /// What limit the payout meets, with the values.
+        problem: String,
     },
     /// The linear solve failed.
     #[error("step {step} (t = {t0} s): {cause}", t0 = Num(*t))]

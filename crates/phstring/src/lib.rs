@@ -95,6 +95,7 @@ pub mod system;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod water;
+pub mod winch;
 
 pub use bathymetry::Bathymetry;
 pub use body::{
@@ -123,7 +124,8 @@ pub use observe::{
 pub use signal::{PlatformPath, PlatformState, SampleError, Sampled};
 pub use simulation::{
     Checkpoint, CheckpointFit, FlatCheckpoint, Predictor, Simulation, StepControl, StepParams,
-    estimated_memory_bytes, estimated_seconds_per_iteration, estimated_seconds_per_step,
+    WinchSample, estimated_memory_bytes, estimated_seconds_per_iteration,
+    estimated_seconds_per_step,
 };
 pub use system::{
     Damping, ElementGroup, Energies, Law, MassMatrix, Network, PhSystem, PointMass, Problem, State,
@@ -133,3 +135,4 @@ pub use water::{
     AxialFriction, Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed,
     SeabedSurface, Water, WaterWork,
 };
+pub use winch::{PayoutFn, Winch, WinchState};

@@ -163,6 +163,54 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
         Ok(self.groups.len() - 1)
     }
 
+    /// Adds a string as [`Self::string`] does, paid out by a winch whose drum is `path[0]`
+    /// (docs/method.md §23): before its first element, `reserve` elements of the first
+    /// span's element length lie on the drum, their nodes at the drum point. Returns the
+    /// group index; the group's elements start with the reserve.
+    pub fn string_on_drum(
+        &mut self,
+        spec: StringSpec<D, M>,
+        path: &[usize],
+        elements_per_span: usize,
+        reserve: usize,
+    ) -> Result<usize, SetupError> {
+        if path.len() < 2 || elements_per_span == 0 {
+            return Err(SetupError::NoElements);
+        }
+        for &p in path {
+            self.check_node("string path", p)?;
+        }
+        let drum = self.r[path[0]];
+        let span = (self.r[path[1]] - drum).norm();
+        let l = span / elements_per_span as f64 / spec.prestretch;
+        let before = (self.r.len(), self.elements.len(), self.lengths.len());
+        let mut on_drum = vec![path[0]];
+        for _ in 0..reserve {
+            let next = self.node(drum);
+            self.elements.push([on_drum[on_drum.len() - 1], next]);
+            self.lengths.push(l);
+            on_drum.push(next);
+        }
+        let mut rest = path.to_vec();
+        rest[0] = on_drum[on_drum.len() - 1];
+        match self.string(spec, &rest, elements_per_span) {
+            Ok(g) => {
+                self.groups[g].elements.start = before.1;
+                on_drum.pop();
+                on_drum.extend_from_slice(&self.paths[g]);
+                self.paths[g] = on_drum;
+                Ok(g)
+            }
+            Err(e) => {
+                // A refused string leaves the builder as it was.
+                self.r.truncate(before.0);
+                self.elements.truncate(before.1);
+                self.lengths.truncate(before.2);
+                Err(e)
+            }
+        }
+    }
+
     /// Adds a linear spring (massless) between nodes `a` and `b`, stiffness `k` [N/m], rest
     /// length `rest` [m] (≥ 0). Returns the group index.
     pub fn spring(
@@ -257,6 +305,7 @@ impl<const D: usize, M: Clone> NetworkBuilder<D, M> {
             water: None,
             hydro: Default::default(),
             bodies: Vec::new(),
+            winches: Vec::new(),
         })
     }
 }

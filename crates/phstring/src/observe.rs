@@ -48,13 +48,17 @@ pub struct StepReport {
     /// Energies at `t_{n+1}` [J].
     pub after: Energies,
     /// Energy supplied in this step [J]: through the ports, `h û_{n+½}·ŷ_{n+½}`, and by the
-    /// current through the drag (`water.current_supplied`, docs/method.md §21).
+    /// current through the drag (`water.current_supplied`, docs/method.md §21), and by the
+    /// winches (`winch`, §23).
     pub supplied: f64,
     /// Energy dissipated in this step `D_n ≥ 0` [J]: the damping of docs/method.md §18 and the
     /// water's drag, seabed damping and friction (§21); 0 without any.
     pub dissipated: f64,
     /// The water's shares of `supplied` and `dissipated` (all 0 without water).
     pub water: crate::water::WaterWork,
+    /// The winches' share of `supplied` [J] (docs/method.md §23): the energy their payout
+    /// changes bring in (negative: take out); 0 without winches.
+    pub winch: f64,
     /// Energy-balance error `Ĥ_{n+1} − Ĥ_n − h û·ŷ + D_n` [J].
     pub balance_error: f64,
     /// The step's energy scale [J]: the magnitudes of the energy terms at both ends of the

@@ -18,7 +18,9 @@ use crate::system::{Energies, Network, PhSystem, State, Vector};
 use crate::water::WaterWork;
 
 mod checkpoint;
+mod winch;
 pub use checkpoint::{Checkpoint, CheckpointFit, FlatCheckpoint};
+pub use winch::WinchSample;
 
 /// Parameters of the time stepper.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -229,6 +231,10 @@ pub struct Simulation<const D: usize, M> {
     body_ports_prev: Vec<crate::body::BodyPortSample>,
     /// Per body with a held wrench (inputs), the wrench port it had before.
     held_wrenches: Vec<Option<Option<crate::body::BodyWrench>>>,
+    /// Per winch, the payout [m] and the energy it supplied [J] in the last step.
+    winch_step: Vec<(f64, f64)>,
+    /// Per winch, the work of its drum node's reaction in the current step [J].
+    winch_work: Vec<f64>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -358,6 +364,31 @@ impl HeldVelocities {
     }
 }
 
+/// Refuses the step parameters a run with winches does not take yet: the fourth-order
+/// composition and error control (docs/method.md §23).
+fn check_winch_params<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    params: &StepParams,
+) -> Result<(), SetupError> {
+    let Some(m) = sys.winches.first() else {
+        return Ok(());
+    };
+    let what = if params.scheme == Scheme::DiscreteGradient4 {
+        "the fourth-order scheme dg4"
+    } else if params.control.error_control() {
+        "error control (rtol, atol)"
+    } else {
+        return Ok(());
+    };
+    Err(SetupError::Winch {
+        index: 0,
+        name: m.name.clone(),
+        problem: format!(
+            "{what} does not cover winches yet: run with the scheme dg (the step size is then controlled for solvability)"
+        ),
+    })
+}
+
 /// Refuses step parameters out of range (step size, tolerances, step-size control).
 fn check_params(params: &StepParams) -> Result<(), SetupError> {
     if !(params.h > 0.0 && params.h.is_finite()) {
@@ -448,6 +479,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     .into(),
             });
         }
+        check_winch_params(&sys, &params)?;
+        let mut sys = sys;
+        let winch_start = sys.winch_start.clone();
+        sys.place_winches(&winch_start);
         let border = crate::body_step::border_pattern(&sys);
         let solver = crate::linsolve::make_border_solver::<D>(params.solver, &sys.mesh, &border)?;
         let mut ports: Vec<PortSample<D>> = sys
@@ -479,6 +514,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         check_gains(&sys, &state, params.h)?;
         let mut state = state;
         let held = HeldVelocities::new(&sys, &mut state)?;
+        // A drum node starts with its payout's rate (docs/method.md §23).
+        for (m, ws) in sys.winches.iter().zip(&winch_start) {
+            state.v[m.drum_node(ws)] = m.path(ws, 0.0).1;
+        }
         let energies = sys.energies(&state);
         if !energies.hamiltonian().is_finite() {
             return Err(SetupError::DerivedNotFinite {
@@ -495,9 +534,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             body_ports: vec![Default::default(); sys.bodies.len()],
             body_ports_prev: vec![Default::default(); sys.bodies.len()],
             held_wrenches: Vec::new(),
+            winch_step: vec![(0.0, 0.0); winch_start.len()],
+            winch_work: vec![0.0; winch_start.len()],
             sys,
             params,
-            run: Checkpoint::start(state, params.h),
+            run: Checkpoint {
+                winches: winch_start,
+                ..Checkpoint::start(state, params.h)
+            },
             energies,
             x: vec![Vector::zeros(); n + slots],
             f_ext: vec![Vector::zeros(); n],
@@ -600,8 +644,16 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub fn restore(&mut self, cp: Checkpoint<D>) -> Result<(), SetupError> {
         let (n, n_el) = (self.run.state.r.len(), self.run.state.c.len());
         cp.check_sizes(n, n_el, self.sys.bodies.len())?;
-        self.energies = self.sys.energies(&cp.state);
+        self.check_winch_states(&cp.winches)
+            .map_err(|problem| SetupError::Winch {
+                index: 0,
+                name: "checkpoint".into(),
+                problem,
+            })?;
         self.run = cp;
+        let states = self.run.winches.clone();
+        self.sys.place_winches(&states);
+        self.energies = self.sys.energies(&self.run.state);
         Ok(())
     }
 
@@ -620,6 +672,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     fn restore_from(&mut self, b: &Backup<D>) {
         if let Some(run) = &b.run {
             self.run.clone_from(run);
+            if !self.sys.winches.is_empty() {
+                let states = self.run.winches.clone();
+                self.sys.place_winches(&states);
+            }
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
@@ -1211,6 +1267,31 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         t_next: f64,
         step_no: usize,
     ) -> Result<StepReport, StepError> {
+        if self.sys.winches.is_empty() {
+            return self.try_dg(t, h, t_next, step_no);
+        }
+        // The winches (docs/method.md §23): their drum nodes move with the payout inside
+        // the step; after it, their velocities are held and the strings cut.
+        let before: Vec<f64> = self.run.winches.iter().map(|w| w.payout).collect();
+        let start = self.energies;
+        let mut report = self.try_dg(t, h, t_next, step_no)?;
+        let changes = self.winch_after(t_next, &before);
+        self.run.supplied_total += changes;
+        report.before = start;
+        report.after = self.energies;
+        report.supplied += changes;
+        report.winch = self.winch_work.iter().sum::<f64>() + changes;
+        Ok(report)
+    }
+
+    /// One discrete-gradient (or midpoint) step from `t` by `h` to `t_next`.
+    fn try_dg(
+        &mut self,
+        t: f64,
+        h: f64,
+        t_next: f64,
+        step_no: usize,
+    ) -> Result<StepReport, StepError> {
         let at = StepAt {
             step: step_no,
             t,
@@ -1256,6 +1337,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             supplied,
             dissipated,
             water,
+            winch: 0.0,
             balance_error,
             energy_scale,
         })
@@ -1358,6 +1440,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 });
             }
             self.x[m.node][m.component] = target - self.run.state.r[m.node][m.component];
+        }
+        if !self.sys.winches.is_empty() {
+            self.winch_prescribe(at)?;
         }
         if !self.sys.bodies.is_empty() {
             let n = self.sys.mesh.n_nodes();
@@ -1619,7 +1704,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     .body_ports
                     .iter()
                     .map(|p| p.mean_power.abs())
-                    .sum::<f64>());
+                    .sum::<f64>())
+            + self.winch_work.iter().map(|w| w.abs()).sum::<f64>();
         // The work the strain-rounding floor of Newton's test may leave undone, as a scale
         // (its rounding is ε times this, docs/method.md eq. (9.6)).
         let strain_work = newton::ROUNDOFF_STRAIN * stats.strain_scale * newton::norm(&self.x);
@@ -1742,7 +1828,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let beyond = m * dvi.dot(&(raw(j) + dvj * 0.5 - x[i] * inv_h));
             self.ports[port].mean_power += beyond * inv_h;
         }
-        let nodes = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
+        let mut nodes = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
+        if !self.sys.winches.is_empty() {
+            nodes += self.winch_reaction_work();
+        }
         if self.sys.bodies.is_empty() {
             return nodes;
         }

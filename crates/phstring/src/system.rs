@@ -298,6 +298,9 @@ pub struct Network<const D: usize, M> {
     /// Rigid bodies (docs/method.md §22); their initial states are theirs, the attached
     /// nodes' initial positions and velocities must agree with them.
     pub bodies: Vec<RigidBody<D>>,
+    /// Winches (docs/method.md §23), each paying out one string from a drum at its first
+    /// node.
+    pub winches: Vec<crate::winch::Winch>,
 }
 
 impl<const D: usize, M> Network<D, M> {
@@ -320,6 +323,11 @@ impl<const D: usize, M> Network<D, M> {
     /// The network with the rigid body `body`.
     pub fn with_body(mut self, body: RigidBody<D>) -> Self {
         self.bodies.push(body);
+        self
+    }
+    /// The network with the winch `winch`.
+    pub fn with_winch(mut self, winch: crate::winch::Winch) -> Self {
+        self.winches.push(winch);
         self
     }
 }
@@ -345,6 +353,7 @@ impl<const D: usize, M> From<Problem<D, M>> for Network<D, M> {
             water: None,
             hydro: Hydrodynamics::default(),
             bodies: Vec::new(),
+            winches: Vec::new(),
         }
     }
 }
@@ -378,6 +387,12 @@ pub struct PhSystem<const D: usize, M> {
     pub(crate) attached: Vec<Option<(usize, usize)>>,
     /// The bodies' initial states as the network gave them (the start of the statics).
     pub(crate) body_start: Vec<BodyState>,
+    /// Winches (docs/method.md §23) with their starting states.
+    pub(crate) winches: Vec<crate::winch::WinchModel<D>>,
+    pub(crate) winch_start: Vec<crate::winch::WinchState>,
+    /// Per node: whether a winch may hold it (its string's nodes but the last); such nodes
+    /// are not support ports.
+    pub(crate) winch_node: Vec<bool>,
 }
 
 /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
@@ -760,6 +775,65 @@ fn attach_water<const D: usize, M>(
     Ok(Some(Box::new(model)))
 }
 
+/// Checks the winches (docs/method.md §23): no water or rigid bodies with them yet, and the
+/// checks of [`crate::winch::attach`], with the nodes that carry a support, load, port, point
+/// mass or body attachment claimed.
+#[allow(clippy::too_many_arguments)]
+fn attach_winches<const D: usize, M>(
+    winches: &[crate::winch::Winch],
+    mesh: &Mesh,
+    groups: &[ElementGroup<D, M>],
+    boundary: &Boundary<D>,
+    point_masses: &[PointMass<D>],
+    bodies: &[RigidBody<D>],
+    water: Option<&Water<D>>,
+    initial: &State<D>,
+) -> Result<Vec<(crate::winch::WinchModel<D>, crate::winch::WinchState)>, SetupError> {
+    let Some(first) = winches.first() else {
+        return Ok(Vec::new());
+    };
+    let refuse = |problem: &str| SetupError::Winch {
+        index: 0,
+        name: first.name.clone(),
+        problem: problem.into(),
+    };
+    if water.is_some() {
+        return Err(refuse("winches in water are not supported yet"));
+    }
+    if !bodies.is_empty() {
+        return Err(refuse(
+            "winches together with rigid bodies are not supported yet",
+        ));
+    }
+    let mut claimed = vec![false; mesh.n_nodes()];
+    let nodes = boundary
+        .fixed
+        .iter()
+        .map(|f| f.node)
+        .chain(boundary.motions.iter().map(|m| m.node))
+        .chain(boundary.loads.iter().map(|l| l.node))
+        .chain(boundary.feedback.iter().map(|f| f.node))
+        .chain(point_masses.iter().map(|p| p.node));
+    for i in nodes {
+        if let Some(c) = claimed.get_mut(i) {
+            *c = true;
+        }
+    }
+    let info: Vec<_> = groups
+        .iter()
+        .map(|g| {
+            (
+                g.elements.clone(),
+                g.body_force,
+                matches!(g.law, Law::String(_)),
+            )
+        })
+        .collect();
+    crate::winch::attach(winches, mesh, &info, (&initial.r, &initial.v), |i| {
+        claimed[i]
+    })
+}
+
 /// Refuses nodal body forces that are not finite or whose squares overflow.
 fn check_body_forces<const D: usize>(f_body: &[Vector<D>]) -> Result<(), SetupError> {
     if let Some((i, f)) = f_body
@@ -800,10 +874,24 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             water,
             hydro,
             bodies,
+            winches,
         } = problem.into();
         let mut groups = groups;
         let mut initial = initial;
         check_groups(&mesh, &groups)?;
+        let winch_data = attach_winches(
+            &winches,
+            &mesh,
+            &groups,
+            &boundary,
+            &point_masses,
+            &bodies,
+            water.as_ref(),
+            &initial,
+        )?;
+        for (m, ws) in &winch_data {
+            groups[m.group].elements.start = m.drum_element(ws);
+        }
         check_initial(&mesh, &groups, &initial)?;
         let n = mesh.n_nodes();
         let mut free = free_components(&boundary, &initial, n)?;
@@ -818,7 +906,6 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             &initial.v,
         )?;
         initial.bodies.clone_from(&rigid.states);
-        let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
         for (e, &l) in mesh.lengths().iter().enumerate() {
             if !l.is_finite() {
                 return Err(SetupError::DerivedNotFinite {
@@ -830,6 +917,24 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let (mut f_body, mut node_mass) = distributed_loads(&mesh, &groups);
         let mut point_mass = add_point_masses(&point_masses, &mut f_body, &mut node_mass)?;
         let water = attach_water(water.as_ref(), &hydro, &mesh, &mut groups, &mut point_mass)?;
+        let mut winch_node = vec![false; n];
+        let (mut winch_models, mut winch_start) = (Vec::new(), Vec::new());
+        for (m, ws) in winch_data {
+            m.place(
+                &ws,
+                &mesh,
+                &mut groups[m.group].elements,
+                &mut f_body,
+                &mut free,
+                true,
+            );
+            for &i in &m.nodes[..m.nodes.len() - 1] {
+                winch_node[i] = true;
+            }
+            winch_models.push(m);
+            winch_start.push(ws);
+        }
+        let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
         check_body_forces(&f_body)?;
         if let Some(node) = (0..n).find(|&i| free[i].iter().any(|&f| f) && node_mass[i] <= 0.0) {
             return Err(SetupError::MasslessNode { node });
@@ -849,6 +954,9 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             body_links: rigid.links,
             attached: rigid.attached,
             body_start: rigid.states,
+            winches: winch_models,
+            winch_start,
+            winch_node,
         };
         sys.check_initial_energies(&initial)?;
         Ok((sys, initial))
@@ -1199,6 +1307,51 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .iter()
             .copied()
             .filter(|&i| self.attached.get(i).is_none_or(|a| a.is_none()))
+            .filter(|&i| !self.winch_node.get(i).copied().unwrap_or(false))
+    }
+
+    /// The winches' names and their strings' element groups, in order.
+    pub fn winches(&self) -> Vec<(&str, usize)> {
+        self.winches
+            .iter()
+            .map(|w| (w.name.as_str(), w.group))
+            .collect()
+    }
+
+    /// The winches' states at `t = 0`.
+    pub fn winch_start(&self) -> &[crate::winch::WinchState] {
+        &self.winch_start
+    }
+
+    /// Per winch: the mesh index of its drum node and of its drum element in `states`.
+    pub fn winch_layout(&self, states: &[crate::winch::WinchState]) -> Vec<(usize, usize)> {
+        self.winches
+            .iter()
+            .zip(states)
+            .map(|(m, ws)| (m.drum_node(ws), m.drum_element(ws)))
+            .collect()
+    }
+
+    /// Puts the winches' states into the system: each string's group range, reference
+    /// lengths, held nodes and body forces; the constrained sets are rebuilt where a node
+    /// came off or went onto a drum.
+    pub(crate) fn place_winches(&mut self, states: &[crate::winch::WinchState]) {
+        let mut moved = false;
+        for (m, ws) in self.winches.iter().zip(states) {
+            let range = &mut self.groups[m.group].elements;
+            moved |= m.place(
+                ws,
+                &self.mesh,
+                range,
+                &mut self.f_body,
+                &mut self.free,
+                false,
+            );
+        }
+        if moved {
+            (self.constrained, self.constrained_elements) =
+                constrained_sets(&self.mesh, &self.free);
+        }
     }
 
     /// Refuses an analysis (`what`: "statics", "modes", …) that does not cover rigid bodies

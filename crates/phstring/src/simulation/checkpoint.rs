@@ -38,6 +38,7 @@ use crate::error::SetupError;
 use crate::material::StoredEnergy;
 use crate::system::{State, Vector};
 use crate::water::WaterWork;
+use crate::winch::WinchState;
 
 use super::{Simulation, StepParams};
 
@@ -82,6 +83,8 @@ pub struct Checkpoint<const D: usize> {
     /// The water's shares of `supplied_total` and `dissipated_total` [J] (docs/method.md
     /// §21): drag, the current's work, seabed damping, friction; all zero without water.
     pub water: WaterWork,
+    /// The winches' states (docs/method.md §23), one per winch; empty without winches.
+    pub winches: Vec<WinchState>,
 }
 
 impl<const D: usize> Checkpoint<D> {
@@ -107,6 +110,7 @@ impl<const D: usize> Checkpoint<D> {
             acc_history: Default::default(),
             err_prev: 1.0,
             water: WaterWork::default(),
+            winches: Vec::new(),
         }
     }
 
@@ -135,6 +139,7 @@ impl<const D: usize> Checkpoint<D> {
             acc_history,
             err_prev,
             water: _,
+            winches: _,
         } = self;
         for (what, got, expected) in [
             ("positions", state.r.len(), n),
@@ -209,6 +214,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
             acc_history: Default::default(),
             err_prev: 0.0,
             water: WaterWork::default(),
+            winches: Vec::new(),
         };
         c.clone_from(self);
         c
@@ -233,6 +239,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
             acc_history,
             err_prev,
             water,
+            winches,
         } = self;
         state.clone_from(&source.state);
         *t_base = source.t_base;
@@ -250,6 +257,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
         acc_history.clone_from(&source.acc_history);
         *err_prev = source.err_prev;
         *water = source.water;
+        winches.clone_from(&source.winches);
     }
 }
 
@@ -314,6 +322,13 @@ pub struct FlatCheckpoint {
         serde(default, skip_serializing_if = "WaterWork::is_zero")
     )]
     pub water: WaterWork,
+    /// The winches' states, one per winch: written only when there are winches, empty when
+    /// missing.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Vec::is_empty")
+    )]
+    pub winches: Vec<WinchState>,
 }
 
 /// Numbers per rigid body in [`FlatCheckpoint::bodies`].
@@ -390,6 +405,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             acc_history,
             err_prev,
             water,
+            winches,
         } = cp;
         Self {
             r: flat(r),
@@ -415,6 +431,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             err_prev: *err_prev,
             total_newton: *total_newton,
             water: *water,
+            winches: winches.clone(),
         }
     }
 }
@@ -472,6 +489,7 @@ impl FlatCheckpoint {
             err_prev,
             total_newton,
             water,
+            winches,
         } = self;
         Checkpoint {
             state: State {
@@ -500,6 +518,7 @@ impl FlatCheckpoint {
             },
             err_prev,
             water,
+            winches,
         }
     }
 
@@ -531,7 +550,14 @@ impl FlatCheckpoint {
             err_prev,
             total_newton: _,
             water,
+            winches,
         } = self;
+        if winches.iter().any(|w| {
+            let numbers = [w.stretch, w.payout_cut, w.behind_cut, w.payout, w.energy];
+            !(numbers.iter().chain(&w.origin).chain(&w.direction)).all(|x| x.is_finite())
+        }) {
+            return Some("sim.winches");
+        }
         let arrays: [(&'static str, &[f64]); 6] = [
             ("sim.r", r),
             ("sim.v", v),
@@ -604,7 +630,9 @@ impl FlatCheckpoint {
             err_prev,
             total_newton,
             water,
+            winches,
         } = self;
+        sim.check_winch_states(winches)?;
         let (n, n_el) = (
             sim.system().mesh().n_nodes(),
             sim.system().mesh().n_elements(),

@@ -23,3 +23,4 @@ mod reduction;
 mod solvers;
 mod statics;
 mod water;
+mod winch;

@@ -1,0 +1,488 @@
+//! Winches: a string paid out from, or hauled in onto, a drum at its first node
+//! (docs/method.md §23).
+//!
+//! A winch owns the first elements of one string (one element group whose elements run in
+//! a chain along its path). The elements still on the drum are *parked*: outside the group's
+//! range, so that they carry no mass, weight or stress, with their nodes held at the drum
+//! point. The first element off the drum, the *drum element*, has a variable reference
+//! length; every other element of the string keeps the string's element length `L`. When
+//! the drum element's length leaves `[L/2, 3L/2]`, one element is brought off the drum
+//! (paying out) or put back on it (hauling in), so the string's node identities never
+//! change. This module holds the plain data and the state transfers; the step that books
+//! their energy is in the simulation.
+
+use crate::error::SetupError;
+use crate::mesh::Mesh;
+use nalgebra::SVector;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// A winch's paid-out length [m] as a function of time `t` [s]: the length paid out since
+/// `t = 0` (negative: hauled in), 0 at `t = 0`.
+pub type PayoutFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
+
+/// A winch at the first node of a string (the drum), paying the string out or hauling it
+/// in as a prescribed payout of time.
+#[derive(Clone)]
+pub struct Winch {
+    /// Name for outputs and messages.
+    pub name: String,
+    /// The element group (a string) it pays out. Its elements run in a chain along its path,
+    /// all of one reference length `L`; the path's first node is the drum.
+    pub group: usize,
+    /// How many of the group's first elements start on the drum (parked: their nodes at
+    /// the drum point): the cable the drum can pay out beyond the starting length is
+    /// `reserve · L` [m] (plus half an element).
+    pub reserve: usize,
+    /// The paid-out length [m] since `t = 0` as a function of `t` [s] (negative: hauled
+    /// in). It must be 0 at `t = 0`.
+    pub payout: PayoutFn,
+}
+
+impl std::fmt::Debug for Winch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Winch")
+            .field("name", &self.name)
+            .field("group", &self.group)
+            .field("reserve", &self.reserve)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The state of one winch: which element of its string is the drum element, the straight
+/// path its first node (the drum node) follows since the last cut, and the energy the winch
+/// has supplied so far.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct WinchState {
+    /// Index of the drum element within the string (0 = its first element): the elements
+    /// before it are on the drum.
+    pub drum: usize,
+    /// Where the drum node was at the last cut [m] (`x, y, z`; `z` unused in 2D).
+    pub origin: [f64; 3],
+    /// The unit direction out of the drum along which the drum node moves (`x, y, z`).
+    pub direction: [f64; 3],
+    /// The stretch `λ` of the drum element at the last cut: the drum node moves `λ` metres
+    /// per metre paid out.
+    pub stretch: f64,
+    /// The payout [m] at the last cut.
+    pub payout_cut: f64,
+    /// The reference length [m] between the drum node and the drum point at the last cut
+    /// (the cable in the model that is still on the drum, drawn straight behind it).
+    pub behind_cut: f64,
+    /// The payout [m] the state was brought to.
+    pub payout: f64,
+    /// Energy [J] the winch has supplied to the system since `t = 0` (negative: taken).
+    pub energy: f64,
+}
+
+impl WinchState {
+    /// The reference length [m] between the drum node and the drum point at `payout`.
+    pub fn behind(&self, payout: f64) -> f64 {
+        self.behind_cut - (payout - self.payout_cut)
+    }
+}
+
+/// A winch as the system keeps it: its string's elements and nodes, the string's element
+/// length, the drum point and the string's body force.
+#[derive(Clone)]
+pub(crate) struct WinchModel<const D: usize> {
+    /// Name for outputs and messages.
+    pub name: String,
+    /// Its element group.
+    pub group: usize,
+    /// The group's elements, parked ones included.
+    pub elements: Range<usize>,
+    /// The string's nodes along its path: element `elements.start + j` is
+    /// `[nodes[j], nodes[j + 1]]`.
+    pub nodes: Vec<usize>,
+    /// The string's element length `L` [m].
+    pub l: f64,
+    /// The drum point [m].
+    pub drum_point: SVector<f64, D>,
+    /// The string's body force per unit reference length [N/m].
+    pub body_force: SVector<f64, D>,
+    /// The payout function.
+    pub payout: PayoutFn,
+}
+
+impl<const D: usize> std::fmt::Debug for WinchModel<D> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WinchModel")
+            .field("name", &self.name)
+            .field("group", &self.group)
+            .field("elements", &self.elements)
+            .field("l", &self.l)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Why a winch cannot follow its payout.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WinchLimit {
+    /// The payout function is not finite.
+    NotFinite(f64),
+    /// The payout asks for more cable than the drum holds.
+    Empty {
+        /// The payout asked for [m].
+        payout: f64,
+        /// The most the drum can pay out [m].
+        capacity: f64,
+    },
+    /// The payout hauls in more than the string has off the drum (half an element stays).
+    HauledIn {
+        /// The payout asked for [m].
+        payout: f64,
+        /// The least payout the string allows [m].
+        least: f64,
+    },
+}
+
+impl std::fmt::Display for WinchLimit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotFinite(p) => write!(f, "its payout is not finite ({p})"),
+            Self::Empty { payout, capacity } => write!(
+                f,
+                "its payout {payout} m is more than the drum holds ({capacity} m: give the winch a larger reserve)"
+            ),
+            Self::HauledIn { payout, least } => write!(
+                f,
+                "its payout {payout} m hauls in more than the string has off the drum (the least payout is {least} m: half an element stays off the drum)"
+            ),
+        }
+    }
+}
+
+/// What a cut changed, with the values before, for undoing it (in reverse order).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Touched<const D: usize> {
+    /// Nodes whose position or velocity changed: `(node, r, v)` before.
+    pub nodes: Vec<(usize, SVector<f64, D>, SVector<f64, D>)>,
+    /// Elements whose strain changed: `(element, C)` before.
+    pub elements: Vec<(usize, f64)>,
+}
+
+/// The first `D` components of `a`.
+fn vec_of<const D: usize>(a: &[f64; 3]) -> SVector<f64, D> {
+    SVector::<f64, D>::from_fn(|k, _| a[k])
+}
+
+/// `v` as three components (`z = 0` in 2D).
+fn arr_of<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
+    let mut a = [0.0; 3];
+    for k in 0..D {
+        a[k] = v[k];
+    }
+    a
+}
+
+impl<const D: usize> WinchModel<D> {
+    /// The drum element's mesh index in `ws`.
+    pub fn drum_element(&self, ws: &WinchState) -> usize {
+        self.elements.start + ws.drum
+    }
+
+    /// The drum node of `ws`.
+    pub fn drum_node(&self, ws: &WinchState) -> usize {
+        self.nodes[ws.drum]
+    }
+
+    /// The string's reference length off the drum [m] at `payout` (the part beyond the
+    /// drum point).
+    pub fn length_off(&self, ws: &WinchState, payout: f64) -> f64 {
+        (self.elements.len() - ws.drum) as f64 * self.l - ws.behind(payout)
+    }
+
+    /// Checks that the winch in `ws` can follow the payout `payout` [m] without running
+    /// out of parked elements or hauling in all but half an element.
+    pub fn check(&self, ws: &WinchState, payout: f64) -> Result<(), WinchLimit> {
+        if !payout.is_finite() {
+            return Err(WinchLimit::NotFinite(payout));
+        }
+        let capacity = ws.payout_cut + ws.behind_cut + ws.drum as f64 * self.l;
+        if payout > capacity {
+            return Err(WinchLimit::Empty { payout, capacity });
+        }
+        let least = payout - self.length_off(ws, payout) + 0.5 * self.l;
+        if payout < least {
+            return Err(WinchLimit::HauledIn { payout, least });
+        }
+        Ok(())
+    }
+
+    /// The drum node's position [m] and velocity [m/s] at time `t` [s] on the path of `ws`:
+    /// `origin + direction λ (p(t) − p_cut)`, the velocity from a central difference of `p`.
+    pub fn path(&self, ws: &WinchState, t: f64) -> (SVector<f64, D>, SVector<f64, D>) {
+        let dir = vec_of::<D>(&ws.direction) * ws.stretch;
+        let p = (self.payout)(t);
+        let dt = 1e-6 * t.abs().max(1.0);
+        let rate = ((self.payout)(t + dt) - (self.payout)(t - dt)) / (2.0 * dt);
+        (
+            vec_of::<D>(&ws.origin) + dir * (p - ws.payout_cut),
+            dir * rate,
+        )
+    }
+
+    /// Starts a new path for the drum node at its position `r` with the direction and
+    /// stretch of the drum element (whose other node is at `r_next`, strain `c`).
+    fn new_path(
+        &self,
+        ws: &mut WinchState,
+        r: SVector<f64, D>,
+        r_next: SVector<f64, D>,
+        c: f64,
+        behind: f64,
+    ) {
+        let chord = r_next - r;
+        let n = chord.norm();
+        let dir = if n > 0.0 {
+            chord / n
+        } else {
+            vec_of::<D>(&ws.direction)
+        };
+        ws.origin = arr_of(&r);
+        ws.direction = arr_of(&dir);
+        ws.stretch = c.max(0.0).sqrt();
+        ws.payout_cut = ws.payout;
+        ws.behind_cut = behind;
+    }
+
+    /// Brings `ws` to `payout` [m] after a step and cuts where the drum node has left its
+    /// band: out past the drum point (paying out), an element comes off the drum, its new
+    /// drum node `L λ` behind the old one on the path, with the old strain; more than an
+    /// element behind the drum point (hauling in), the drum element goes onto the drum (its
+    /// first node parked at the drum point at rest) and the next node becomes the drum
+    /// node, on a new path along its element. A new drum node moves with the payout rate
+    /// `rate` [m/s] along its path. Records what changed in `touched`.
+    pub fn cut(
+        &self,
+        ws: &mut WinchState,
+        (payout, rate): (f64, f64),
+        (r, v, c): (&mut [SVector<f64, D>], &mut [SVector<f64, D>], &mut [f64]),
+        touched: &mut Touched<D>,
+    ) {
+        ws.payout = payout;
+        let l = self.l;
+        let last = self.elements.len() - 1;
+        let along = |ws: &WinchState| vec_of::<D>(&ws.direction) * (ws.stretch * rate);
+        while ws.behind(payout) < 0.0 && ws.drum > 0 {
+            let (a, b) = (self.nodes[ws.drum - 1], self.nodes[ws.drum]);
+            let e = self.drum_element(ws);
+            touched.nodes.push((a, r[a], v[a]));
+            touched.elements.push((e - 1, c[e - 1]));
+            // The new element has the drum element's strain, and its chord fits it.
+            let dir = vec_of::<D>(&ws.direction);
+            r[a] = r[b] - dir * (c[e].max(0.0).sqrt() * l);
+            c[e - 1] = c[e];
+            let behind = ws.behind(payout) + l;
+            ws.drum -= 1;
+            self.new_path(ws, r[a], r[b], c[e - 1], behind);
+            v[a] = along(ws);
+        }
+        while ws.behind(payout) > l && ws.drum < last {
+            let (a, b, n) = (
+                self.nodes[ws.drum],
+                self.nodes[ws.drum + 1],
+                self.nodes[ws.drum + 2],
+            );
+            let e = self.drum_element(ws);
+            touched.nodes.push((a, r[a], v[a]));
+            touched.nodes.push((b, r[b], v[b]));
+            touched.elements.push((e, c[e]));
+            let behind = ws.behind(payout) - l;
+            r[a] = self.drum_point;
+            v[a] = SVector::zeros();
+            c[e] = 0.0;
+            ws.drum += 1;
+            self.new_path(ws, r[b], r[n], c[e + 1], behind);
+            v[b] = along(ws);
+        }
+    }
+
+    /// Puts `ws` into the system's data: the group's range (the drum element first), which
+    /// nodes are held (those on the drum and the drum node) and the body forces of the
+    /// string's nodes. Returns whether the set of held nodes changed (then the constrained
+    /// sets need rebuilding). Without `always`, nothing is done where the drum element has
+    /// not changed.
+    pub fn place(
+        &self,
+        ws: &WinchState,
+        mesh: &Mesh,
+        range: &mut Range<usize>,
+        f_body: &mut [SVector<f64, D>],
+        free: &mut [[bool; D]],
+        always: bool,
+    ) -> bool {
+        let first = self.elements.start + ws.drum;
+        let moved = range.start != first;
+        if !(moved || always) {
+            return false;
+        }
+        *range = first..self.elements.end;
+        let n_el = self.elements.len();
+        let lengths = mesh.lengths();
+        let half = |j: usize| -> SVector<f64, D> {
+            if j >= ws.drum && j < n_el {
+                self.body_force * (0.5 * lengths[self.elements.start + j])
+            } else {
+                SVector::zeros()
+            }
+        };
+        for (j, &i) in self.nodes[..n_el].iter().enumerate() {
+            let before = if j > 0 { half(j - 1) } else { SVector::zeros() };
+            f_body[i] = before + half(j);
+            free[i] = [j > ws.drum; D];
+        }
+        true
+    }
+}
+
+/// Checks the winches of a network and returns their models with their starting states:
+/// each winch's group a string whose elements run in a chain of one reference length, its
+/// first `reserve` elements (and no more than all but one) at the drum point, no other
+/// element, support, load or port at its nodes but the last, and the payout 0 at `t = 0`.
+/// `body_force` and `is_string` are the groups' body forces and kinds; `claimed(i)` tells
+/// whether node `i` carries a support, load, port, point mass or body.
+pub(crate) fn attach<const D: usize>(
+    winches: &[Winch],
+    mesh: &Mesh,
+    groups: &[(Range<usize>, SVector<f64, D>, bool)],
+    (r, v): (&[SVector<f64, D>], &[SVector<f64, D>]),
+    claimed: impl Fn(usize) -> bool,
+) -> Result<Vec<(WinchModel<D>, WinchState)>, SetupError> {
+    let problem = |k: usize, w: &Winch, problem: String| SetupError::Winch {
+        index: k,
+        name: w.name.clone(),
+        problem,
+    };
+    let mut degree = vec![0usize; mesh.n_nodes()];
+    for &[a, b] in mesh.elements() {
+        degree[a] += 1;
+        degree[b] += 1;
+    }
+    let mut used = vec![false; groups.len()];
+    let mut out = Vec::with_capacity(winches.len());
+    for (k, w) in winches.iter().enumerate() {
+        let Some((range, body_force, is_string)) = groups.get(w.group) else {
+            return Err(problem(
+                k,
+                w,
+                format!("its string (group {}) does not exist", w.group),
+            ));
+        };
+        if !is_string {
+            return Err(problem(k, w, "its group is a spring, not a string".into()));
+        }
+        if std::mem::replace(&mut used[w.group], true) {
+            return Err(problem(
+                k,
+                w,
+                "another winch already pays out its string".into(),
+            ));
+        }
+        let els = &mesh.elements()[range.clone()];
+        let mut nodes = vec![els[0][0]];
+        for (j, &[a, b]) in els.iter().enumerate() {
+            if a != nodes[j] {
+                return Err(problem(
+                    k,
+                    w,
+                    format!(
+                        "its string's element {j} does not start where element {} ends",
+                        j.saturating_sub(1)
+                    ),
+                ));
+            }
+            nodes.push(b);
+        }
+        let l = mesh.lengths()[range.start];
+        if let Some(j) = (0..els.len()).find(|&j| {
+            let lj = mesh.lengths()[range.start + j];
+            (lj - l).abs() > 1e-9 * l
+        }) {
+            return Err(problem(
+                k,
+                w,
+                format!(
+                    "its string's elements must share one reference length, but element {j} has {} m and the first {l} m",
+                    mesh.lengths()[range.start + j]
+                ),
+            ));
+        }
+        if w.reserve >= els.len() {
+            return Err(problem(
+                k,
+                w,
+                format!(
+                    "its reserve of {} elements leaves none of the string's {} off the drum",
+                    w.reserve,
+                    els.len()
+                ),
+            ));
+        }
+        let drum_point = r[nodes[0]];
+        if let Some(j) = (1..=w.reserve).find(|&j| r[nodes[j]] != drum_point) {
+            return Err(problem(
+                k,
+                w,
+                format!(
+                    "node {j} of its string is on the drum (within the reserve) but not at the drum point"
+                ),
+            ));
+        }
+        if let Some(j) = (0..=w.reserve).find(|&j| v[nodes[j]] != SVector::<f64, D>::zeros()) {
+            return Err(problem(
+                k,
+                w,
+                format!("node {j} of its string is on the drum but does not start at rest"),
+            ));
+        }
+        let last = nodes.len() - 1;
+        for (j, &i) in nodes[..last].iter().enumerate() {
+            let own = if j == 0 { 1 } else { 2 };
+            if degree[i] != own || claimed(i) {
+                return Err(problem(
+                    k,
+                    w,
+                    format!(
+                        "node {j} of its string (mesh node {i}) carries something else (an element of another string, a support, a load, a port, a point mass or a body): only the string's last node may"
+                    ),
+                ));
+            }
+        }
+        let p0 = (w.payout)(0.0);
+        if p0 != 0.0 {
+            return Err(problem(
+                k,
+                w,
+                format!("its payout at t = 0 is {p0} m, not 0"),
+            ));
+        }
+        let dn = nodes[w.reserve];
+        let chord = r[nodes[w.reserve + 1]] - r[dn];
+        let stretch = chord.norm() / l;
+        let state = WinchState {
+            drum: w.reserve,
+            origin: arr_of(&r[dn]),
+            direction: arr_of(&(chord / chord.norm())),
+            stretch,
+            payout_cut: 0.0,
+            behind_cut: 0.0,
+            payout: 0.0,
+            energy: 0.0,
+        };
+        let model = WinchModel {
+            name: w.name.clone(),
+            group: w.group,
+            elements: range.clone(),
+            nodes,
+            l,
+            drum_point,
+            body_force: *body_force,
+            payout: w.payout.clone(),
+        };
+        out.push((model, state));
+    }
+    Ok(out)
+}

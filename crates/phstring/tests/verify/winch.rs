@@ -1,0 +1,221 @@
+//! Winches (docs/method.md §23): a payload hoisted and lowered on a steel wire rope paid out
+//! from or hauled onto a drum, against the exact discrete balance, the mass off the drum,
+//! and the static energies of the hanging rope before and after.
+
+use phstring::{
+    Boundary, MassMatrix, Material, Network, NetworkBuilder, PointMass, Simulation, State,
+    StepControl, StepParams, StringSpec, Vector, Winch,
+};
+use std::sync::Arc;
+
+const G: f64 = 9.81;
+/// A 32 mm six-strand steel wire rope: axial stiffness [N] and mass per metre [kg/m].
+const EA: f64 = 4.3e7;
+const RHO_A: f64 = 4.1;
+/// The payload [kg] and the element length [m].
+const PAYLOAD: f64 = 5000.0;
+const L: f64 = 1.0;
+
+/// Height below the drum [m] of the point at unstretched distance `s` [m] from the drum of
+/// a vertical rope of unstretched length `a` [m] hanging with the payload at its end, at
+/// rest: `y(s) = −(s + g((m + ρA a) s − ρA s²/2)/EA)`.
+fn hanging(s: f64, a: f64) -> f64 {
+    -(s + G * ((PAYLOAD + RHO_A * a) * s - 0.5 * RHO_A * s * s) / EA)
+}
+
+/// The static energy [J] of that rope and payload: the weight's potential and the strain
+/// energy `∫ T²/(2 EA) ds` with `T(s) = g (m + ρA (a − s))`.
+fn static_energy(a: f64) -> f64 {
+    let n = 20000;
+    let ds = a / n as f64;
+    let mut e = PAYLOAD * G * hanging(a, a);
+    for k in 0..n {
+        let s = (k as f64 + 0.5) * ds;
+        let t = G * (PAYLOAD + RHO_A * (a - s));
+        e += RHO_A * G * hanging(s, a) * ds + t * t / (2.0 * EA) * ds;
+    }
+    e
+}
+
+/// A 2D hoist: a drum at the origin, `n_el` elements of 1 m hanging below it with the
+/// payload at the end, `reserve` more on the drum, at rest in its static shape; the winch
+/// pays out `payout(t)`.
+fn hoist(
+    n_el: usize,
+    reserve: usize,
+    payout: impl Fn(f64) -> f64 + Send + Sync + 'static,
+) -> (Network<2, Material>, usize) {
+    let a = n_el as f64 * L;
+    let mut b = NetworkBuilder::<2, Material>::new();
+    let drum = b.node(Vector::<2>::zeros());
+    let hook = b.node(Vector::<2>::new(0.0, -a));
+    let spec = StringSpec {
+        name: "rope".into(),
+        material: Material::tension_only_linear(EA),
+        rho_a: RHO_A,
+        mass: MassMatrix::Consistent,
+        body_force: Vector::<2>::new(0.0, -RHO_A * G),
+        prestretch: 1.0,
+    };
+    let g = b
+        .string_on_drum(spec, &[drum, hook], n_el, reserve)
+        .unwrap();
+    let nodes = b.group_nodes(g).unwrap().to_vec();
+    let masses = vec![PointMass {
+        node: hook,
+        mass: PAYLOAD,
+        weight: Vector::<2>::new(0.0, -PAYLOAD * G),
+    }];
+    let mut net = b.build(Boundary::default(), masses).unwrap();
+    let mut r = net.initial.r.clone();
+    for (j, &i) in nodes[reserve..].iter().enumerate() {
+        r[i] = Vector::<2>::new(0.0, hanging(j as f64 * L, a));
+    }
+    net.initial = State::at_rest(&net.mesh, r);
+    net = net.with_winch(Winch {
+        name: "hoist".into(),
+        group: g,
+        reserve,
+        payout: Arc::new(payout),
+    });
+    (net, hook)
+}
+
+fn fixed_step(h: f64) -> StepParams {
+    StepParams {
+        h,
+        control: StepControl {
+            adaptive: false,
+            ..Default::default()
+        },
+        ..StepParams::default()
+    }
+}
+
+/// Smooth 0 → 1 over `[0, 1]`, at rest at both ends.
+fn smooth(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// Hoisting 5 t by 15 m in 30 s on 25 m of rope: every step's balance
+/// `Ĥₙ₊₁ − Ĥₙ = winch supply` holds to round-off through the fifteen elements that go onto
+/// the drum; the mass off the drum ends at `ρA · 10 m`; the payload ends at the static
+/// height of 10 m of rope; and what the winch supplied is the change of the static
+/// energy (payload and rope raised, stretch released) within the rope's and payload's
+/// kinetic scale.
+#[test]
+fn hoisting_a_payload_books_every_joule_through_the_drum() {
+    hoist_and_check(25, 5, 15.0);
+}
+
+/// Lowering the same payload by 15 m from 10 m of rope: fifteen elements come off the drum,
+/// and the same checks hold with the winch taking the energy.
+#[test]
+fn lowering_a_payload_books_every_joule_through_the_drum() {
+    hoist_and_check(10, 20, -15.0);
+}
+
+/// Runs `n_el` elements with `reserve` on the drum through a smooth hoist of `lift` [m]
+/// (negative: lowering) in 30 s and 2 s after, and makes the checks of the hoisting test.
+fn hoist_and_check(n_el: usize, reserve: usize, lift: f64) {
+    let time = 30.0;
+    let (net, hook) = hoist(n_el, reserve, move |t| -lift * smooth(t / time));
+    let h = 0.01;
+    let mut sim = Simulation::new(net, fixed_step(h)).unwrap_or_else(|e| panic!("{e}"));
+    let h0 = sim.energies().hamiltonian();
+    let (mut worst, mut winch_total, mut bounce) = (0.0_f64, 0.0, 0.0_f64);
+    let steps = (time / h).round() as usize + 200;
+    for _ in 0..steps {
+        let r = sim.step().unwrap_or_else(|e| panic!("{e}"));
+        let scale = r.before.magnitude + r.after.magnitude + r.winch.abs();
+        let balance = r.after.hamiltonian() - r.before.hamiltonian() - r.supplied + r.dissipated;
+        worst = worst.max(balance.abs() / scale);
+        winch_total += r.winch;
+        if r.t > time {
+            // After the move, the payload's axial bounce trades kinetic and strain energy:
+            // its largest kinetic energy is the energy of the bounce.
+            bounce = bounce.max(r.after.kinetic);
+        }
+        assert!(r.supplied == r.winch, "no port but the winch supplies");
+    }
+    let w = sim.winch_samples()[0];
+    let a = n_el as f64 * L - lift;
+    let y = sim.state().r[hook][1];
+    let de = sim.energies().hamiltonian() - h0;
+    // The model keeps the cable between the drum node and the drum point (`behind`, at
+    // most one element) drawn straight above the drum: its weight's potential and strain
+    // energy at the drum's tension are in Ĥ.
+    let cp = sim.checkpoint();
+    let behind = cp.winches[0].behind(w.payout);
+    let top = G * (PAYLOAD + RHO_A * a);
+    let stretch = 1.0 + top / EA;
+    let virtual_part =
+        RHO_A * G * stretch * behind * behind / 2.0 + top * top / (2.0 * EA) * behind;
+    // The drum node hangs where its last cut put it: on the string's stretch at that
+    // moment, which the payload's bounce sets; the string below hangs from there.
+    let (drum_node, _) = sim.system().winch_layout(&cp.winches)[0];
+    let offset = sim.state().r[drum_node][1] - stretch * behind;
+    let de_static = static_energy(a) + virtual_part + top * offset - static_energy(n_el as f64 * L);
+    eprintln!(
+        "balance/scale {worst:.1e}; behind the drum {behind:.4} m ({virtual_part:.2} J), drum node {offset:.2e} m off; payout {:.6} m, off the drum {:.6} m, mass {:.3} kg; hook at {y:.5} m (static {:.5}); winch {winch_total:.1} J = ΔĤ {de:.1} J, static ΔE {de_static:.1} J, kinetic now {:.2e} J",
+        w.payout,
+        w.length,
+        w.mass,
+        hanging(a, a),
+        sim.energies().kinetic
+    );
+    eprintln!("bounce energy {bounce:.3} J");
+    assert!(worst < 1e-12, "balance/scale {worst:e}");
+    assert!((w.payout + lift).abs() < 1e-12 && (w.length - a).abs() < 1e-9);
+    assert!((w.mass - RHO_A * a).abs() < 1e-9 * RHO_A * a);
+    assert!((w.energy - winch_total).abs() < 1e-9 * winch_total.abs());
+    assert!((de - winch_total).abs() < 1e-9 * winch_total.abs());
+    assert!(
+        lift * winch_total > 0.0,
+        "the winch supplies hoisting and takes lowering"
+    );
+    // What stays beyond the static change is the payload's axial bounce after the move (a
+    // few tenths of a millimetre, below a joule).
+    assert!((y - hanging(a, a)).abs() < 5e-4, "hook at {y}");
+    assert!(
+        (winch_total - de_static).abs() < 1.5 * bounce + 0.1,
+        "winch {winch_total} J against the static change {de_static} J"
+    );
+}
+
+/// A winch asked to pay out more than its drum holds stops the run with an error that
+/// names it, its payout and its capacity, at the first step that would need more, and
+/// without retrying smaller steps; the state stays the last good one.
+#[test]
+fn a_winch_that_runs_out_of_cable_stops_the_run_by_name() {
+    let (net, _) = hoist(10, 2, |t| 0.5 * t);
+    let mut sim = Simulation::new(
+        net,
+        StepParams {
+            h: 0.1,
+            ..StepParams::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let e = loop {
+        match sim.step() {
+            Ok(_) => continue,
+            Err(e) => break e,
+        }
+    };
+    let msg = e.to_string();
+    eprintln!("{msg}");
+    // Two parked elements of 1 m: 2 m paid out at 0.5 m/s take 4 s.
+    assert!(matches!(e, phstring::StepError::Winch { .. }), "{msg}");
+    assert!(
+        msg.contains("winch 'hoist'") && msg.contains("more than the drum holds (2 m"),
+        "{msg}"
+    );
+    assert!(
+        (sim.time() - 4.0).abs() < 1e-9,
+        "stopped at t = {}",
+        sim.time()
+    );
+    assert_eq!(sim.rejected_steps(), 0);
+}
