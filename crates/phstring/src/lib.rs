@@ -135,4 +135,4 @@ pub use water::{
     AxialFriction, Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed,
     SeabedSurface, Water, WaterWork,
 };
-pub use winch::{PayoutFn, Winch, WinchState};
+pub use winch::{DrumFn, PayoutFn, Winch, WinchState};

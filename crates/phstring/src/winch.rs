@@ -21,6 +21,10 @@ use std::sync::Arc;
 /// `t = 0` (negative: hauled in), 0 at `t = 0`.
 pub type PayoutFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
 
+/// A moving drum's position [m] (`x, y, z`; `z` unused in 2D) as a function of time `t`
+/// [s], at the drum node's position at `t = 0`.
+pub type DrumFn = Arc<dyn Fn(f64) -> [f64; 3] + Send + Sync>;
+
 /// A winch at the first node of a string (the drum), paying the string out or hauling it
 /// in as a prescribed payout of time.
 #[derive(Clone)]
@@ -37,6 +41,9 @@ pub struct Winch {
     /// The paid-out length [m] since `t = 0` as a function of `t` [s] (negative: hauled
     /// in). It must be 0 at `t = 0`.
     pub payout: PayoutFn,
+    /// The drum's position as a function of time (a crane's trolley); `None`: the drum stays
+    /// at the first node's initial position.
+    pub drum_motion: Option<DrumFn>,
 }
 
 impl std::fmt::Debug for Winch {
@@ -58,7 +65,8 @@ pub struct WinchState {
     /// Index of the drum element within the string (0 = its first element): the elements
     /// before it are on the drum.
     pub drum: usize,
-    /// Where the drum node was at the last cut [m] (`x, y, z`; `z` unused in 2D).
+    /// Where the drum node was at the last cut [m], relative to the drum point then (`x, y,
+    /// z`; `z` unused in 2D).
     pub origin: [f64; 3],
     /// The unit direction out of the drum along which the drum node moves (`x, y, z`).
     pub direction: [f64; 3],
@@ -98,8 +106,10 @@ pub(crate) struct WinchModel<const D: usize> {
     pub nodes: Vec<usize>,
     /// The string's element length `L` [m].
     pub l: f64,
-    /// The drum point [m].
+    /// The drum point at `t = 0` [m].
     pub drum_point: SVector<f64, D>,
+    /// The drum's motion; `None`: it stays at `drum_point`.
+    pub drum_motion: Option<DrumFn>,
     /// The string's body force per unit reference length [N/m].
     pub body_force: SVector<f64, D>,
     /// The payout function.
@@ -211,16 +221,30 @@ impl<const D: usize> WinchModel<D> {
         Ok(())
     }
 
+    /// The drum point [m] and its velocity [m/s] at time `t` [s] (a central difference).
+    pub fn drum_at(&self, t: f64) -> (SVector<f64, D>, SVector<f64, D>) {
+        match &self.drum_motion {
+            None => (self.drum_point, SVector::zeros()),
+            Some(m) => {
+                let dt = 1e-6 * t.abs().max(1.0);
+                let (a, b) = (vec_of::<D>(&m(t - dt)), vec_of::<D>(&m(t + dt)));
+                (vec_of::<D>(&m(t)), (b - a) / (2.0 * dt))
+            }
+        }
+    }
+
     /// The drum node's position [m] and velocity [m/s] at time `t` [s] on the path of `ws`:
-    /// `origin + direction λ (p(t) − p_cut)`, the velocity from a central difference of `p`.
+    /// `X(t) + origin + direction λ (p(t) − p_cut)`, `X` the drum point, the velocity from
+    /// central differences of `X` and `p`.
     pub fn path(&self, ws: &WinchState, t: f64) -> (SVector<f64, D>, SVector<f64, D>) {
         let dir = vec_of::<D>(&ws.direction) * ws.stretch;
         let p = (self.payout)(t);
         let dt = 1e-6 * t.abs().max(1.0);
         let rate = ((self.payout)(t + dt) - (self.payout)(t - dt)) / (2.0 * dt);
+        let (x, xdot) = self.drum_at(t);
         (
-            vec_of::<D>(&ws.origin) + dir * (p - ws.payout_cut),
-            dir * rate,
+            x + vec_of::<D>(&ws.origin) + dir * (p - ws.payout_cut),
+            xdot + dir * rate,
         )
     }
 
@@ -229,10 +253,9 @@ impl<const D: usize> WinchModel<D> {
     fn new_path(
         &self,
         ws: &mut WinchState,
-        r: SVector<f64, D>,
-        r_next: SVector<f64, D>,
-        c: f64,
-        behind: f64,
+        (r, r_next): (SVector<f64, D>, SVector<f64, D>),
+        (c, behind): (f64, f64),
+        drum: SVector<f64, D>,
     ) {
         let chord = r_next - r;
         let n = chord.norm();
@@ -241,7 +264,7 @@ impl<const D: usize> WinchModel<D> {
         } else {
             vec_of::<D>(&ws.direction)
         };
-        ws.origin = arr_of(&r);
+        ws.origin = arr_of(&(r - drum));
         ws.direction = arr_of(&dir);
         ws.stretch = c.max(0.0).sqrt();
         ws.payout_cut = ws.payout;
@@ -258,14 +281,15 @@ impl<const D: usize> WinchModel<D> {
     pub fn cut(
         &self,
         ws: &mut WinchState,
-        (payout, rate): (f64, f64),
+        (t, payout, rate): (f64, f64, f64),
         (r, v, c): (&mut [SVector<f64, D>], &mut [SVector<f64, D>], &mut [f64]),
         touched: &mut Touched<D>,
     ) {
         ws.payout = payout;
         let l = self.l;
         let last = self.elements.len() - 1;
-        let along = |ws: &WinchState| vec_of::<D>(&ws.direction) * (ws.stretch * rate);
+        let (drum, drum_v) = self.drum_at(t);
+        let along = |ws: &WinchState| drum_v + vec_of::<D>(&ws.direction) * (ws.stretch * rate);
         while ws.behind(payout) < 0.0 && ws.drum > 0 {
             let (a, b) = (self.nodes[ws.drum - 1], self.nodes[ws.drum]);
             let e = self.drum_element(ws);
@@ -277,7 +301,7 @@ impl<const D: usize> WinchModel<D> {
             c[e - 1] = c[e];
             let behind = ws.behind(payout) + l;
             ws.drum -= 1;
-            self.new_path(ws, r[a], r[b], c[e - 1], behind);
+            self.new_path(ws, (r[a], r[b]), (c[e - 1], behind), drum);
             v[a] = along(ws);
         }
         while ws.behind(payout) > l && ws.drum < last {
@@ -291,11 +315,11 @@ impl<const D: usize> WinchModel<D> {
             touched.nodes.push((b, r[b], v[b]));
             touched.elements.push((e, c[e]));
             let behind = ws.behind(payout) - l;
-            r[a] = self.drum_point;
+            r[a] = drum;
             v[a] = SVector::zeros();
             c[e] = 0.0;
             ws.drum += 1;
-            self.new_path(ws, r[b], r[n], c[e + 1], behind);
+            self.new_path(ws, (r[b], r[n]), (c[e + 1], behind), drum);
             v[b] = along(ws);
         }
     }
@@ -459,12 +483,26 @@ pub(crate) fn attach<const D: usize>(
                 format!("its payout at t = 0 is {p0} m, not 0"),
             ));
         }
+        if let Some(m) = &w.drum_motion {
+            let x0 = vec_of::<D>(&m(0.0));
+            if (x0 - drum_point).norm() > 1e-9 * drum_point.norm().max(1.0) {
+                return Err(problem(
+                    k,
+                    w,
+                    format!(
+                        "its drum motion starts at {:?} m, not at its drum node {:?} m",
+                        x0.as_slice(),
+                        drum_point.as_slice()
+                    ),
+                ));
+            }
+        }
         let dn = nodes[w.reserve];
         let chord = r[nodes[w.reserve + 1]] - r[dn];
         let stretch = chord.norm() / l;
         let state = WinchState {
             drum: w.reserve,
-            origin: arr_of(&r[dn]),
+            origin: [0.0; 3],
             direction: arr_of(&(chord / chord.norm())),
             stretch,
             payout_cut: 0.0,
@@ -481,6 +519,7 @@ pub(crate) fn attach<const D: usize>(
             drum_point,
             body_force: *body_force,
             payout: w.payout.clone(),
+            drum_motion: w.drum_motion.clone(),
         };
         out.push((model, state));
     }

@@ -140,7 +140,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             state.v[a] = m.path(ws, t).1;
             let mut touched = Touched::default();
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
-            m.cut(ws, (payout, rate), parts, &mut touched);
+            m.cut(ws, (t, payout, rate), parts, &mut touched);
             let states = self.run.winches.clone();
             self.sys.place_winches(&states);
             let after = self.sys.energies(&self.run.state);
