@@ -99,7 +99,7 @@ pub mod water;
 pub use bathymetry::Bathymetry;
 pub use body::{
     Attachment, BodyHydro, BodyMotion, BodyPortSample, BodyState, BodyWrench, Mat6, RigidBody,
-    check_added_mass,
+    added_mass_about_centre, check_added_mass,
 };
 pub use body_feedback::{BodyFeedback, FeedbackTarget};
 pub use boundary::{
