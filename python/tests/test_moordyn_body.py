@@ -16,6 +16,8 @@ importable or `PHSTRING_BIN` (the phstring binary) is not set.
   `Ca`, against each other and the closed form `2 pi sqrt((m + A_z + m_n)/k)`. Both schemes'
   period errors at the 5 ms step are below 1e-4; the test asks for 1e-3.
 * **Six `Ca` values** are refused by both codes (MoorDyn reads 1 or 3).
+* **Three or six `CdA` values**: MoorDyn reads the first as 0 (a sinking body turned so
+  that its x axis is vertical meets no drag), and phstring's mapping reads them so.
 """
 
 import math
@@ -186,3 +188,62 @@ def test_six_added_mass_coefficients_are_refused_by_both(tmp_path):
     r = subprocess.run([os.environ["PHSTRING_BIN"], "check", str(deck)], capture_output=True, text=True)
     assert r.returncode != 0
     assert "MoorDyn reads 1 (all three axes) or 3" in r.stderr, r.stderr
+
+
+SINKER = """--- MoorDyn input ---
+a sinking body
+---------------------- LINE TYPES ----------------------
+Name    Diam  MassDen  EA   BA/-zeta  EI  Cd  Ca  CdAx  CaAx
+(-)     (m)   (kg/m)   (N)  (N-s)     (-) (-) (-) (-)   (-)
+chain   0.1   100.0    5e8  0         0   1.2 1   0.4   0
+---------------------- BODIES ----------------------
+ID  Attachment  X0  Y0  Z0    r0  p0  y0  Mass   CG  I    Volume  CdA  Ca
+(#) (word)      (m) (m) (m)  (deg)(deg)(deg)(kg) (m) (kg-m^2) (m^3) (m^2) (-)
+1   Free        0   0   -60   0   90  0   2.0e5  0   1e6  100     {cda}  0
+---------------------- POINTS ----------------------
+ID  Attachment  X   Y   Z      Mass  Volume  CdA  Ca
+(#) (word)      (m) (m) (m)    (kg)  (m^3)   (m^2) (-)
+1   Fixed       100 0   -100   0     0       0    0
+2   Fixed       0   0   -100   0     0       0    0
+---------------------- LINES ----------------------
+ID  LineType  AttachA  AttachB  UnstrLen  NumSegs  Outputs
+(#) (name)    (#)      (#)      (m)       (-)      (-)
+1   chain     1        2        100       5        -
+---------------------- OPTIONS ----------------------
+0.001    dtM
+9.80665  g
+1025     rho
+200      WtrDpth
+0        TmaxIC
+---------------------- END ----------------------
+"""
+
+
+def test_moordyn_reads_the_first_of_three_or_six_drag_areas_as_zero(tmp_path):
+    """A 200 t body of 100 m^3 pitched 90 deg (its x axis vertical) sinks for 3 s: with `CdA`
+    = `5|0` it meets drag, with `5|5|5` and `5|5|5|0|0|0` it falls as without any, at
+    `a = (rho_w V - m) g / m` (MoorDyn drops the first value, the x area). phstring's mapping
+    reads them alike and refuses the unequal areas `[0, 5, 5]`, naming them."""
+    a = (RHO_W * 100.0 - 2.0e5) * 9.80665 / 2.0e5
+    for cda, dragged in [("5|0", True), ("5|5|5", False), ("5|5|5|0|0|0", False)]:
+        path = tmp_path / "sinker.dat"
+        path.write_text(SINKER.format(cda=cda))
+        md = MoorDyn(path)
+        try:
+            while md.t < 3.0 - 0.0005:
+                md.step(0.01)
+            vz = moordyn.GetBodyVel(md.body)[2]
+        finally:
+            md.close()
+        print(f"CdA {cda}: vz {vz:.6f} m/s after 3 s, without drag {a * 3.0:.6f} m/s")
+        if dragged:
+            assert vz > 0.9 * a * 3.0
+        else:
+            assert abs(vz / (a * 3.0) - 1.0) < 1e-9
+    deck = write_deck(tmp_path, "per_axis", "1.0", "0").read_text().replace(
+        "400     0    0", "400     5|5|5|0|0|0    0")
+    (tmp_path / "per_axis.dat").write_text(deck)
+    r = subprocess.run([os.environ["PHSTRING_BIN"], "check", str(tmp_path / "per_axis.dat")],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "which MoorDyn reads as [0.0, 5.0, 5.0] m² along the body axes" in r.stderr, r.stderr

@@ -811,8 +811,8 @@ fn coupled_and_fixed_bodies_map_onto_a_held_body_and_supports() {
 /// one drag area for all six degrees of freedom (rotational drag, which phstring's body
 /// lacks), six per-degree-of-freedom drag areas whose first MoorDyn reads as 0 (per-axis
 /// drag), a pinned body (no `--ignore`: phstring cannot prescribe the translation alone),
-/// six `Ca` values (MoorDyn refuses them), a point on a body the deck lacks, a free body
-/// without mass; with `--ignore bodies` the drag is dropped and listed.
+/// six `Ca` values (MoorDyn refuses them) or a negative one, a point on a body the deck
+/// lacks, a free body without mass; with `--ignore bodies` the drag is dropped and listed.
 #[test]
 fn body_features_the_model_lacks_are_refused_with_their_line() {
     let cases: Vec<(String, &str, Option<Feature>, &str)> = vec![
@@ -839,6 +839,12 @@ fn body_features_the_model_lacks_are_refused_with_their_line() {
             "1   Free",
             None,
             "body 1 has 6 added-mass coefficients Ca = 1|1|1|1|1|1: MoorDyn reads 1 (all three axes) or 3",
+        ),
+        (
+            buoy_deck(&FREE_BUOY.replace("20|0  0", "20|0  0.8|-0.5|0.8")),
+            "1   Free",
+            None,
+            "body 1 has a negative added-mass coefficient Ca = 0.8|-0.5|0.8",
         ),
     ];
     for (text, needle, feature, what) in &cases {
