@@ -23,7 +23,7 @@ use crate::error::SetupError;
 use crate::mesh::Mesh;
 
 mod added_mass;
-pub use added_mass::{Mat6, check_added_mass};
+pub use added_mass::{Mat6, added_mass_about_centre, check_added_mass};
 
 /// A nodal vector in `R^D`.
 type Vector<const D: usize> = nalgebra::SVector<f64, D>;

@@ -100,7 +100,7 @@ pub mod winch;
 pub use bathymetry::Bathymetry;
 pub use body::{
     Attachment, BodyHydro, BodyMotion, BodyPortSample, BodyState, BodyWrench, Mat6, RigidBody,
-    check_added_mass,
+    added_mass_about_centre, check_added_mass,
 };
 pub use body_feedback::{BodyFeedback, FeedbackTarget};
 pub use boundary::{

@@ -24,7 +24,7 @@ pub enum Feature {
     /// ROD TYPES / RODS sections.
     Rods,
     /// What phstring's rigid bodies do not take of a deck's body: rotational or per-axis
-    /// drag, added-mass coefficients, the mass or water terms of a point fixed to a body.
+    /// drag, the mass or water terms of a point fixed to a body.
     Bodies,
     /// FAILURE section (MoorDyn-F).
     Failure,
@@ -462,7 +462,7 @@ pub fn map_driven(
     }
     let materials = materials(&mut m)?;
     points(&mut m, settings.depth)?;
-    bodies::bodies(&mut m)?;
+    bodies::bodies(&mut m, settings.density)?;
     platform(&mut m)?;
     lines(&mut m, &materials)?;
     outputs(&mut m)?;

@@ -807,10 +807,12 @@ fn coupled_and_fixed_bodies_map_onto_a_held_body_and_supports() {
     file.setup().unwrap_or_else(|e| panic!("{e}"));
 }
 
-/// What the body model does not take is refused at the body's (or point's) line: one drag
-/// area for all six degrees of freedom (rotational drag), added mass, a pinned body (no
-/// `--ignore`), a point on a body the deck lacks, a free body without mass; with
-/// `--ignore bodies` the drag and added mass are dropped and listed.
+/// What the body model does not take is refused at the body's (or point's) line, saying why:
+/// one drag area for all six degrees of freedom (rotational drag, which phstring's body
+/// lacks), six per-degree-of-freedom drag areas whose first MoorDyn reads as 0 (per-axis
+/// drag), a pinned body (no `--ignore`: phstring cannot prescribe the translation alone),
+/// six `Ca` values (MoorDyn refuses them) or a negative one, a point on a body the deck
+/// lacks, a free body without mass; with `--ignore bodies` the drag is dropped and listed.
 #[test]
 fn body_features_the_model_lacks_are_refused_with_their_line() {
     let cases: Vec<(String, &str, Option<Feature>, &str)> = vec![
@@ -818,19 +820,31 @@ fn body_features_the_model_lacks_are_refused_with_their_line() {
             buoy_deck(&FREE_BUOY.replace("20|0", "20")),
             "1   Free",
             Some(Feature::Bodies),
-            "the rotational drag of body 1 (CdA = 20",
+            "the rotational drag of body 1 (CdA = 20, which MoorDyn reads as the rotational drag areas [20.0, 20.0, 20.0]",
         ),
         (
-            buoy_deck(&FREE_BUOY.replace("20|0  0", "20|0  0.8")),
+            buoy_deck(&FREE_BUOY.replace("20|0", "20|20|20|0|0|0")),
             "1   Free",
             Some(Feature::Bodies),
-            "the added-mass coefficients Ca = 0.8 of body 1",
+            "which MoorDyn reads as [0.0, 20.0, 20.0] m² along the body axes; MoorDyn 2.7.2 reads the first of 6 CdA values as 0",
         ),
         (
             buoy_deck(&FREE_BUOY.replace("Free    ", "Pinned  ")),
             "1   Pinned",
             None,
             "body 1 (Pinned), coupled in translation and free to turn",
+        ),
+        (
+            buoy_deck(&FREE_BUOY.replace("20|0  0", "20|0  1|1|1|1|1|1")),
+            "1   Free",
+            None,
+            "body 1 has 6 added-mass coefficients Ca = 1|1|1|1|1|1: MoorDyn reads 1 (all three axes) or 3",
+        ),
+        (
+            buoy_deck(&FREE_BUOY.replace("20|0  0", "20|0  0.8|-0.5|0.8")),
+            "1   Free",
+            None,
+            "body 1 has a negative added-mass coefficient Ca = 0.8|-0.5|0.8",
         ),
     ];
     for (text, needle, feature, what) in &cases {
@@ -851,6 +865,16 @@ fn body_features_the_model_lacks_are_refused_with_their_line() {
             None => assert!(!e.contains("--ignore"), "{e}"),
         }
     }
+    let rotational = refused(&buoy_deck(&FREE_BUOY.replace("20|0", "20")));
+    assert!(
+        rotational.contains("phstring's body has no rotational quadratic drag"),
+        "{rotational}"
+    );
+    let pinned = refused(&buoy_deck(&FREE_BUOY.replace("Free    ", "Pinned  ")));
+    assert!(
+        pinned.contains("cannot hold the translation and leave the rotation free"),
+        "{pinned}"
+    );
     let missing = buoy_deck(FREE_BUOY).replace("6   Body1", "6   Body2");
     let e = refused(&missing);
     let line = line_of(&missing, "6   Body2");
@@ -864,5 +888,186 @@ fn body_features_the_model_lacks_are_refused_with_their_line() {
     assert!(
         e.contains("free body 1 has Mass 0 kg: phstring's bodies need a positive mass"),
         "{e}"
+    );
+}
+
+/// The buoy with its centre of gravity off the reference point along all three axes and a
+/// `Ca` per axis.
+const CA_BUOY: &str = "1   Free        0    0    -60   0   0   90  2.0e5  0.5|-0.3|1.0  1e6|1e6|5e5   400     20|0  0.8|0.6|0.4";
+
+/// A body's `Ca` becomes MoorDyn's added mass `ρ_w V Ca_i` along the body axes at the
+/// reference point, moved to the centre of mass with the lever `CG` = (0.5, −0.3, 1.0) m:
+/// the blocks `[[a, a ĉ], [ĉᵀ a, ĉᵀ a ĉ]]`, here entry by entry as worked by hand
+/// (`ρ_w` = 1025 kg/m³, V = 400 m³); `check` says what it became and lists the conversion.
+/// With one `Ca` and the CG at the reference point it is the scalar `ca`. The deck then runs:
+/// 50 steps from its layout move and turn the body and keep the energy balance to rounding.
+#[test]
+fn a_body_added_mass_maps_about_the_centre_of_mass_and_runs() {
+    let (m, file) = mapped(&buoy_deck(CA_BUOY), &[]);
+    let b = file.scenario.bodies["body1"].get_ref();
+    assert!(b.ca.is_none());
+    let a = b.added_mass.as_ref().expect("a 6×6 added mass").get_ref();
+    let (a1, a2, a3) = (
+        1025.0 * 400.0 * 0.8,
+        1025.0 * 400.0 * 0.6,
+        1025.0 * 400.0 * 0.4,
+    );
+    let hand = [
+        [a1, 0.0, 0.0, 0.0, -a1, -0.3 * a1],
+        [0.0, a2, 0.0, a2, 0.0, -0.5 * a2],
+        [0.0, 0.0, a3, 0.3 * a3, 0.5 * a3, 0.0],
+        [0.0, a2, 0.3 * a3, a2 + 0.09 * a3, 0.15 * a3, -0.5 * a2],
+        [-a1, 0.0, 0.5 * a3, 0.15 * a3, a1 + 0.25 * a3, 0.3 * a1],
+        [
+            -0.3 * a1,
+            -0.5 * a2,
+            0.0,
+            -0.5 * a2,
+            0.3 * a1,
+            0.09 * a1 + 0.25 * a2,
+        ],
+    ];
+    assert_eq!(a.len(), 6);
+    for (r, (row, want)) in a.iter().zip(hand).enumerate() {
+        for (c, (x, y)) in row.iter().zip(want).enumerate() {
+            assert!((x - y).abs() <= 1e-12 * a1, "({r}, {c}): {x} vs {y} kg");
+        }
+    }
+    let row = m
+        .rows
+        .iter()
+        .find(|r| r.entry == "body 1 (Free)")
+        .unwrap()
+        .became
+        .clone();
+    assert!(
+        row.contains("added mass ρ_w V Ca = [328000.0, 246000.0, 164000.0] kg along the body axes at the reference point, moved to the centre of mass (added_mass, 6×6, with the lever CG = [0.5, -0.3, 1.0] m)"),
+        "{row}"
+    );
+    assert!(
+        m.record
+            .converted
+            .iter()
+            .any(|c| c.contains("Ca = 0.8|0.6|0.4 of body 1: MoorDyn's added mass")),
+        "{:?}",
+        m.record.converted
+    );
+    // One Ca, the CG at the reference point: the scalar key.
+    let scalar = CA_BUOY
+        .replace("0.5|-0.3|1.0", "0")
+        .replace("0.8|0.6|0.4", "0.8");
+    let (_, iso) = mapped(&buoy_deck(&scalar), &[]);
+    let b = iso.scenario.bodies["body1"].get_ref();
+    assert_eq!(opt(&b.ca), Some(0.8));
+    assert!(b.added_mass.is_none());
+
+    let setup = file.setup().unwrap_or_else(|e| panic!("{e}"));
+    let phstring::ByDim::D3(setup) = setup else {
+        panic!("a deck is 3D")
+    };
+    // From the deck's layout (not its equilibrium), so that the lines pull the body off
+    // its pose and turn it (the CG is off its points' centre).
+    let (mut run, _) = setup.start(false, None).unwrap_or_else(|e| panic!("{e}"));
+    let sim = &mut run.problem;
+    let x0 = sim.state().bodies[0].position;
+    let h0 = sim.energies().hamiltonian();
+    let mut scale: f64 = 0.0;
+    for _ in 0..50 {
+        let r = sim.step().unwrap_or_else(|e| panic!("{e}"));
+        scale = scale.max(r.energy_scale);
+    }
+    // Ĥ_n − Ĥ_0 + Σ D − Σ S = 0 to rounding: 50 steps' errors of ε times the energy scale.
+    let drift = sim.energies().hamiltonian() - h0 + sim.dissipated_energy() - sim.supplied_energy();
+    let moved = (sim.state().bodies[0].position - x0).norm();
+    let turned = sim.state().bodies[0].omega.norm();
+    println!(
+        "body moved {moved:e} m, turns at {turned:e} rad/s; balance drift {drift:e} J of {scale:e} J"
+    );
+    assert!(
+        moved > 1e-4 && turned > 1e-6,
+        "{moved:e} m, {turned:e} rad/s"
+    );
+    assert!(drift.abs() < 1e-10 * scale, "{drift:e} J of {scale:e} J");
+}
+
+/// A buoyant 200 t body (400 m³) held down by one vertical tether of 50 m with EA = 1e8 N
+/// (one segment, 1 kg/m, no drag or damping: a linear spring `k = EA/L` = 2e6 N/m, taut
+/// throughout), its centre of gravity 1 m above its reference point and the tether 5 m
+/// below it. Started 0.53 m below its equilibrium, it heaves undamped with the period
+/// `2π √((m + A_z + m_n)/k)` (`m_n` = 25 kg, the tether's lumped half on the body point;
+/// `A_z = ρ_w V Ca_z`): with `Ca` = 0 and with `0.3|0.6|1.0` (the z value counts; the CG
+/// offset along z couples no rotation into heave), each within 1e-3 of the closed form and
+/// their ratio within 1e-3 of `√((m + A_z + m_n)/(m + m_n))` — 1.75, the added mass's doing.
+/// (The scheme's period error at `h` = 5 ms is `(ωh)²/12` ≈ 2e-5; the turning points are
+/// interpolated linearly between steps.)
+#[test]
+fn the_heave_period_of_a_tethered_body_grows_with_its_added_mass() {
+    let deck = |ca: &str| {
+        format!(
+            "--- MoorDyn input ---\ntethered buoy\n\
+             ---------------------- LINE TYPES ----------------------\n\
+             Name    Diam  MassDen  EA   BA/-zeta  EI  Cd  Ca  CdAx  CaAx\n\
+             (-)     (m)   (kg/m)   (N)  (N-s)     (-) (-) (-) (-)   (-)\n\
+             tether  0.1   1.0      1e8  0         0   0   0   0     0\n\
+             ---------------------- BODIES ----------------------\n\
+             ID  Attachment  X0  Y0  Z0     r0  p0  y0  Mass   CG   I    Volume  CdA  Ca\n\
+             (#) (word)      (m) (m) (m)   (deg)(deg)(deg)(kg) (m)  (kg-m^2) (m^3) (m^2) (-)\n\
+             1   Free        0   0   -44.5  0   0   0   2.0e5  1.0  1e6  400     0    {ca}\n\
+             ---------------------- POINTS ----------------------\n\
+             ID  Attachment  X   Y   Z      Mass  Volume  CdA  Ca\n\
+             (#) (word)      (m) (m) (m)    (kg)  (m^3)   (m^2) (-)\n\
+             1   Fixed       0   0   -100   0     0       0    0\n\
+             2   Body1       0   0   -5     0     0       0    0\n\
+             ---------------------- LINES ----------------------\n\
+             ID  LineType  AttachA  AttachB  UnstrLen  NumSegs  Outputs\n\
+             (#) (name)    (#)      (#)      (m)       (-)      (-)\n\
+             1   tether    1        2        50        1        -\n\
+             ---------------------- OPTIONS ----------------------\n\
+             0.005    dtM\n9.80665  g\n1025     rho\n200      WtrDpth\n\
+             ---------------------- END ----------------------\n"
+        )
+    };
+    let (m, k, m_n) = (2.0e5, 1e8 / 50.0, 25.0);
+    let period = |ca: &str| -> f64 {
+        let (_, file) = mapped(&deck(ca), &[]);
+        let setup = file.setup().unwrap_or_else(|e| panic!("{e}"));
+        let phstring::ByDim::D3(setup) = setup else {
+            panic!("a deck is 3D")
+        };
+        // From the deck's pose (the tether 1 % stretched), not from the equilibrium.
+        let (mut run, _) = setup.start(false, None).unwrap_or_else(|e| panic!("{e}"));
+        let sim = &mut run.problem;
+        let mut turns = Vec::new();
+        let (mut t0, mut v0) = (0.0, 0.0);
+        while sim.time() < 8.0 {
+            sim.step().unwrap_or_else(|e| panic!("{e}"));
+            let (t1, v1) = (sim.time(), sim.state().bodies[0].velocity.z);
+            if v0 > 0.0 && v1 <= 0.0 || v0 < 0.0 && v1 >= 0.0 {
+                turns.push(t0 + (t1 - t0) * v0 / (v0 - v1));
+            }
+            (t0, v0) = (t1, v1);
+            let turned = sim.state().bodies[0].omega.norm();
+            assert!(turned < 1e-9, "heave turned the body: {turned:e} rad/s");
+        }
+        assert!(turns.len() >= 4, "{turns:?}");
+        2.0 * (turns[turns.len() - 1] - turns[0]) / (turns.len() - 1) as f64
+    };
+    let still = period("0");
+    let added = period("0.3|0.6|1.0");
+    let a_z = 1025.0 * 400.0 * 1.0;
+    let closed = |a: f64| 2.0 * std::f64::consts::PI * ((m + a + m_n) / k).sqrt();
+    println!(
+        "heave period {still} s without added mass (closed form {}), {added} s with (closed form {}), ratio {}",
+        closed(0.0),
+        closed(a_z),
+        added / still
+    );
+    assert!((still / closed(0.0) - 1.0).abs() < 1e-3, "{still} s");
+    assert!((added / closed(a_z) - 1.0).abs() < 1e-3, "{added} s");
+    let ratio = ((m + a_z + m_n) / (m + m_n)).sqrt();
+    assert!(
+        (added / still / ratio - 1.0).abs() < 1e-3,
+        "{}",
+        added / still
     );
 }

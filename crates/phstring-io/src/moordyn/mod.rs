@@ -195,9 +195,11 @@ pub struct Body {
     /// Displaced volume [m³] (`Volume`).
     pub volume: f64,
     /// Drag areas [m²] (`CdA`): 1, 2, 3 or 6 values, as written (MoorDyn: one for all six
-    /// degrees of freedom; translation|rotation; per axis for both; per degree of freedom).
+    /// degrees of freedom; translation|rotation; per axis for both; per degree of freedom;
+    /// MoorDyn 2.7.2 reads the first of 3 or 6 values as 0).
     pub cda: Vec<f64>,
-    /// Added-mass coefficients [-] (`Ca`): 1, 3 or 6 values, as written.
+    /// Added-mass coefficients [-] (`Ca`): 1, 3 or 6 values, as written (MoorDyn reads 1 or
+    /// 3, translational; the mapping refuses 6).
     pub ca: Vec<f64>,
     /// 1-based line in the file.
     pub line: usize,

@@ -86,6 +86,19 @@ pub(crate) fn blocks(m: &Mat6) -> [[Mat3; 2]; 2] {
     [[b(0, 0), b(0, 1)], [b(1, 0), b(1, 1)]]
 }
 
+/// An added-mass matrix `a_o` given about a body point `O` [kg, kg·m, kg·m²] (body axes,
+/// ordered as [`Mat6`]) moved to the centre of mass `C`, which lies at `c` [m] from `O` in
+/// body axes (MoorDyn's `CG`): `A_C = Tᵀ A_O T` with `T = [[I, ĉ], [0, I]]`, the map of the
+/// body-axes velocities about `C` onto those about `O` (`u_O = u_C + Ω × (O − C) =
+/// u_C + ĉ Ω`, `Ω` unchanged), so that the kinetic energy `½ ξ·A ξ` is the same. Returned
+/// exactly symmetric (the mean of the product and its transpose).
+pub fn added_mass_about_centre(a_o: &Mat6, c: &Vec3) -> Mat6 {
+    let mut t = Mat6::identity();
+    t.fixed_view_mut::<3, 3>(0, 3).copy_from(&skew(c));
+    let a = t.transpose() * a_o * t;
+    (a + a.transpose()) * 0.5
+}
+
 /// How a body's added-mass matrix `a` (symmetrized) enters the step of a `D`-dimensional
 /// network, with the body's mass `m` [kg] and inertia `j` [kg·m²] (body axes): the added mass
 /// on its translation [kg], its added inertia [kg·m²] (body axes; in 2D its `z` moment), and
@@ -285,6 +298,50 @@ mod tests {
         assert!(e.contains("not positive semi-definite"), "{e}");
         let e = check_added_mass(&nalgebra::DMatrix::zeros(6, 5)).unwrap_err();
         assert!(e.contains("6×5"), "{e}");
+    }
+
+    /// Moving a translational added mass from a reference point to the centre of mass:
+    /// MoorDyn's `ρ_w V Ca_i` (400 m³, Ca 0.8|0.6|0.4) about a point 0.5, −0.3, 1.0 m from
+    /// the centre gives the blocks `[[a, a ĉ], [ĉᵀ a, ĉᵀ a ĉ]]`, entry by entry as worked by
+    /// hand; and the kinetic energy of any motion is the same about either point, with the
+    /// reference point's velocity from the rigid-body formula `u_O = u_C + Ω × (O − C)`.
+    #[test]
+    fn added_mass_moves_to_the_centre_of_mass_with_its_lever() {
+        let (a1, a2, a3) = (
+            1025.0 * 400.0 * 0.8,
+            1025.0 * 400.0 * 0.6,
+            1025.0 * 400.0 * 0.4,
+        );
+        let a_o = Mat6::from_diagonal(&nalgebra::Vector6::new(a1, a2, a3, 0.0, 0.0, 0.0));
+        let c = Vec3::new(0.5, -0.3, 1.0);
+        let a = added_mass_about_centre(&a_o, &c);
+        let tol = 1e-12 * a1;
+        #[rustfmt::skip]
+        let hand = Mat6::from_row_slice(&[
+            a1, 0.0, 0.0, 0.0, -a1, -0.3 * a1,
+            0.0, a2, 0.0, a2, 0.0, -0.5 * a2,
+            0.0, 0.0, a3, 0.3 * a3, 0.5 * a3, 0.0,
+            0.0, a2, 0.3 * a3, a2 + 0.09 * a3, 0.15 * a3, -0.5 * a2,
+            -a1, 0.0, 0.5 * a3, 0.15 * a3, a1 + 0.25 * a3, 0.3 * a1,
+            -0.3 * a1, -0.5 * a2, 0.0, -0.5 * a2, 0.3 * a1, 0.09 * a1 + 0.25 * a2,
+        ]);
+        assert!((a - hand).amax() < tol, "{a}\n{hand}");
+        assert_eq!(a, a.transpose());
+        let dm = nalgebra::DMatrix::from_fn(6, 6, |r, k| a[(r, k)]);
+        assert_eq!(check_added_mass(&dm), Ok(()));
+        for (u, om) in [
+            (Vec3::new(0.3, -1.2, 0.7), Vec3::new(0.05, 0.2, -0.1)),
+            (Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0)),
+            (Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.4, 0.0)),
+        ] {
+            let xi = SVector::<f64, 6>::new(u.x, u.y, u.z, om.x, om.y, om.z);
+            let u_o = u + om.cross(&(-c));
+            let xi_o = SVector::<f64, 6>::new(u_o.x, u_o.y, u_o.z, om.x, om.y, om.z);
+            let (t_c, t_o) = (0.5 * xi.dot(&(a * xi)), 0.5 * xi_o.dot(&(a_o * xi_o)));
+            assert!((t_c - t_o).abs() < 1e-12 * t_o, "{t_c} vs {t_o} J");
+        }
+        // Without an offset nothing moves.
+        assert_eq!(added_mass_about_centre(&a_o, &Vec3::zeros()), a_o);
     }
 
     /// An isotropic translational block without coupling folds into the mass and inertia

@@ -1,13 +1,14 @@
 //! The BODIES of a deck (docs/moordyn.md, "Bodies"): a free body becomes a `[bodies.bodyN]`
-//! with its mass, inertia, pose, volume and drag area; a coupled body a prescribed one (held
-//! at its deck pose, or moved by a `--motion` platform table); a fixed body's points fixed
+//! with its mass, inertia, pose, volume, drag area and added mass (MoorDyn's about the
+//! reference point, moved to the centre of mass); a coupled body a prescribed one (held at
+//! its deck pose, or moved by a `--motion` platform table); a fixed body's points fixed
 //! supports. Its points (`BodyN` in POINTS) are the body's points `bodyN.pK` (or, on a fixed
-//! body, nodes `pointK`), placed at `X0 + R p`. What the body model does not take (rotational
-//! drag, added mass, pinned bodies) is refused with the deck's line.
+//! body, nodes `pointK`), placed at `X0 + R p`. What the body model does not take
+//! (rotational or per-axis drag, pinned bodies) is refused with the deck's line.
 
 use std::fmt::Write as _;
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use super::{Feature, Mapper, f, q};
 use crate::moordyn::error::DeckError;
@@ -79,7 +80,7 @@ pub(super) fn body_point(m: &mut Mapper, p: &Point, n: u32) -> Result<String, De
         BodyKind::Pinned => m.refuse(
             body.line,
             format!(
-                "body {n} ({}), coupled in translation and free to turn (phstring's bodies are free or prescribed as a whole)",
+                "body {n} ({}), coupled in translation and free to turn: MoorDyn moves its reference point with the vessel and turns it under the moments about that point; phstring's body is free, or prescribed as a whole (`motion` and `motion_table` give the whole pose, and without an orientation it keeps its own), so it cannot hold the translation and leave the rotation free",
                 body.kind_text
             ),
         ),
@@ -92,9 +93,10 @@ pub(super) fn body_point(m: &mut Mapper, p: &Point, n: u32) -> Result<String, De
     }
 }
 
-/// The free and coupled bodies that hold points on lines: one `[bodies.bodyN]` each; the
-/// others a row saying what they became.
-pub(super) fn bodies(m: &mut Mapper) -> Result<(), DeckError> {
+/// The free and coupled bodies that hold points on lines: one `[bodies.bodyN]` each (a free
+/// body's added mass with the water's density `rho_w` [kg/m³]); the others a row saying
+/// what they became.
+pub(super) fn bodies(m: &mut Mapper, rho_w: f64) -> Result<(), DeckError> {
     let list = m.deck.bodies.clone();
     for b in &list {
         let entry = format!("body {} ({})", b.id, b.kind_text);
@@ -112,7 +114,7 @@ pub(super) fn bodies(m: &mut Mapper) -> Result<(), DeckError> {
             continue;
         }
         let became = match b.kind {
-            BodyKind::Free => free_body(m, b, &members)?,
+            BodyKind::Free => free_body(m, b, &members, rho_w)?,
             _ => coupled_body(m, b, &members)?,
         };
         m.row(b.line, entry, became);
@@ -134,9 +136,15 @@ fn points_text(members: &[(u32, [f64; 3])], origin: &Vector3<f64>) -> String {
 
 /// A free body: mass, inertia about the centre of gravity, its pose (the centre at
 /// `X0 + R CG`), its points relative to the centre, its volume (buoyancy at the centre, as
-/// MoorDyn has it) and a translational drag area; added mass and rotational drag are
-/// refused (or dropped with `--ignore bodies`).
-fn free_body(m: &mut Mapper, b: &Body, members: &[(u32, [f64; 3])]) -> Result<String, DeckError> {
+/// MoorDyn has it), a translational drag area and its added mass in water of density
+/// `rho_w` [kg/m³] ([`added_mass`]); rotational and per-axis drag are refused (or dropped
+/// with `--ignore bodies`).
+fn free_body(
+    m: &mut Mapper,
+    b: &Body,
+    members: &[(u32, [f64; 3])],
+    rho_w: f64,
+) -> Result<String, DeckError> {
     if b.mass <= 0.0 {
         return m.unmappable(
             b.line,
@@ -164,18 +172,7 @@ fn free_body(m: &mut Mapper, b: &Body, members: &[(u32, [f64; 3])]) -> Result<St
         );
     }
     let cda = drag_area(m, b)?;
-    if b.ca.iter().any(|c| *c != 0.0) {
-        let ca: Vec<String> = b.ca.iter().map(|c| c.to_string()).collect();
-        m.unsupported(
-            b.line,
-            format!(
-                "the added-mass coefficients Ca = {} of body {} (phstring's body takes a translational Ca and added moments of inertia, not MoorDyn's six coefficients on ρ_w V)",
-                ca.join("|"),
-                b.id
-            ),
-            Feature::Bodies,
-        )?;
-    }
+    let added = added_mass(m, b, rho_w)?;
     let (x0, rot) = frame(b);
     let c = cg(b);
     let centre = x0 + rot * c;
@@ -203,11 +200,15 @@ fn free_body(m: &mut Mapper, b: &Body, members: &[(u32, [f64; 3])]) -> Result<St
     }
     if cda > 0.0 {
         let _ = writeln!(m.text, "cda = {}", f(cda));
-        m.converted(b.line, format!("CdA = {cda} m² of body {}: MoorDyn's body drag is ½ρ_w CdA |v_i| v_i per axis at the reference point, phstring's ½ρ_w CdA |v| v at the centre of mass: equal for a motion along one axis with the centre of gravity at the reference point", b.id));
+        m.converted(b.line, format!("CdA = {cda} m² of body {}: MoorDyn's body drag is ½ρ_w CdA |v_r| v_r at the reference point (v_r the reference point's velocity relative to the water), phstring's the same at the centre of mass: equal when the centre of gravity is at the reference point or the body does not turn", b.id));
     }
+    let added = added.map_or_else(String::new, |a| {
+        let _ = writeln!(m.text, "{}", a.key);
+        format!(", {}", a.row)
+    });
     m.text.push('\n');
     Ok(format!(
-        "[bodies.body{}]: a free rigid body of {} kg, inertia {inertia:?} kg·m², centre at {:?} m (X0 + R CG), volume {} m³ (buoyancy at the centre of mass, as MoorDyn's), CdA {cda} m², points {}",
+        "[bodies.body{}]: a free rigid body of {} kg, inertia {inertia:?} kg·m², centre at {:?} m (X0 + R CG), volume {} m³ (buoyancy at the centre of mass, as MoorDyn's), CdA {cda} m²{added}, points {}",
         b.id,
         b.mass,
         [centre.x, centre.y, centre.z],
@@ -220,42 +221,136 @@ fn free_body(m: &mut Mapper, b: &Body, members: &[(u32, [f64; 3])]) -> Result<St
     ))
 }
 
-/// The translational drag area [m²] of body `b`'s `CdA` column (1, 2, 3 or 6 values:
-/// MoorDyn's one for all six degrees of freedom, translation|rotation, per axis for both,
-/// per degree of freedom): its rotational drag must be zero and its translational drag the
-/// same on every axis (else refused, or dropped with `--ignore bodies`).
+/// `values` as the deck writes them, `a|b|c`.
+fn joined(values: &[f64]) -> String {
+    let v: Vec<String> = values.iter().map(|c| c.to_string()).collect();
+    v.join("|")
+}
+
+/// The translational drag area [m²] of body `b`'s `CdA` column, read as MoorDyn 2.7.2 reads
+/// it (`MoorDyn::readBody`): one value for all six degrees of freedom; two, translation and
+/// rotation; three, per body axis for both; six, per degree of freedom; of three or six
+/// values the first (x) is read as 0 (its loop starts at the second value). Its rotational
+/// drag must be zero and its translational drag the same on every axis (else refused, or
+/// dropped with `--ignore bodies`).
 fn drag_area(m: &mut Mapper, b: &Body) -> Result<f64, DeckError> {
     let (t, r): ([f64; 3], [f64; 3]) = match b.cda[..] {
         [a] => ([a; 3], [a; 3]),
         [a, c] => ([a; 3], [c; 3]),
-        [x, y, z] => ([x, y, z], [x, y, z]),
-        [x, y, z, rx, ry, rz] => ([x, y, z], [rx, ry, rz]),
+        [_, y, z] => ([0.0, y, z], [0.0, y, z]),
+        [_, y, z, rx, ry, rz] => ([0.0, y, z], [rx, ry, rz]),
         _ => ([0.0; 3], [0.0; 3]),
     };
-    let written: Vec<String> = b.cda.iter().map(|c| c.to_string()).collect();
-    let written = written.join("|");
-    if t.iter().chain(&r).any(|c| *c < 0.0) {
+    let written = joined(&b.cda);
+    if b.cda.iter().any(|c| *c < 0.0) {
         return m.unmappable(
             b.line,
             format!("body {} has a negative drag area CdA = {written} m²", b.id),
         );
     }
+    let dropped = if b.cda.len() >= 3 && b.cda[0] != 0.0 {
+        format!(
+            "; MoorDyn 2.7.2 reads the first of {} CdA values as 0",
+            b.cda.len()
+        )
+    } else {
+        String::new()
+    };
     if r.iter().any(|c| *c != 0.0) {
         m.unsupported(
             b.line,
-            format!("the rotational drag of body {} (CdA = {written}: MoorDyn applies one value to all six degrees of freedom; give `CdA|0` for translational drag alone)", b.id),
+            format!(
+                "the rotational drag of body {} (CdA = {written}, which MoorDyn reads as the rotational drag areas {r:?}: the moment −½ρ_w R diag(CdA_r) Rᵀ |ω| ω about the reference point, ω the body's angular velocity{dropped}; phstring's body has no rotational quadratic drag, only the translational ½ρ_w CdA |v_r| v_r and a linear drag at the centre of mass; give `CdA|0` for translational drag alone)",
+                b.id
+            ),
             Feature::Bodies,
         )?;
     }
     if t.iter().any(|c| *c != t[0]) {
         m.unsupported(
             b.line,
-            format!("the per-axis drag areas CdA = {written} of body {} (phstring's body has one drag area for every direction)", b.id),
+            format!(
+                "the per-axis drag areas of body {} (CdA = {written}, which MoorDyn reads as {t:?} m² along the body axes{dropped}; phstring's body has one drag area for every direction)",
+                b.id
+            ),
             Feature::Bodies,
         )?;
         return Ok(0.0);
     }
     Ok(t[0])
+}
+
+/// What a free body's added mass became: the scenario's line (`ca = …` or the
+/// `added_mass` matrix) and the words of its `check` row.
+struct Added {
+    key: String,
+    row: String,
+}
+
+/// The added mass of free body `b` from its `Ca` column in water of density `rho_w`
+/// [kg/m³]. MoorDyn 2.7.2 (`Body::setup`) adds `ρ_w V Ca_i` [kg] to the translational
+/// diagonal of the body's mass matrix about its reference point in body axes, one value for
+/// the three axes or three per axis (`MoorDyn::readBody` refuses other counts; no rotational
+/// added mass comes from `Ca`). That matrix is moved to the centre of mass by the CG offset
+/// ([`phstring::added_mass_about_centre`]): `ca` when it is one value and the CG is at the
+/// reference point, else the 6×6 `added_mass`. `None`: no added mass (`Ca` 0, or no volume).
+fn added_mass(m: &mut Mapper, b: &Body, rho_w: f64) -> Result<Option<Added>, DeckError> {
+    let written = joined(&b.ca);
+    let ca = match b.ca[..] {
+        [a] => [a; 3],
+        [x, y, z] => [x, y, z],
+        _ => {
+            return m.unmappable(
+                b.line,
+                format!(
+                    "body {} has {} added-mass coefficients Ca = {written}: MoorDyn reads 1 (all three axes) or 3 (per body axis), translational only, and refuses this deck",
+                    b.id,
+                    b.ca.len()
+                ),
+            );
+        }
+    };
+    if ca.iter().any(|c| *c < 0.0) {
+        return m.unmappable(
+            b.line,
+            format!(
+                "body {} has a negative added-mass coefficient Ca = {written}",
+                b.id
+            ),
+        );
+    }
+    if ca == [0.0; 3] {
+        return Ok(None);
+    }
+    if b.volume == 0.0 {
+        m.converted(b.line, format!("Ca = {written} of body {} adds nothing: MoorDyn's body added mass is ρ_w V Ca, and its Volume is 0", b.id));
+        return Ok(None);
+    }
+    let a = ca.map(|c| rho_w * b.volume * c);
+    let c = cg(b);
+    m.converted(b.line, format!("Ca = {written} of body {}: MoorDyn's added mass ρ_w V Ca = {a:?} kg along the body axes at the reference point, moved to the centre of mass (the same kinetic energy); the motions agree while the body does not turn, and when it turns MoorDyn's body equations keep of the velocity terms only −M_tt ω×(ω×R CG), phstring's are those of the whole kinetic energy", b.id));
+    if ca[0] == ca[1] && ca[1] == ca[2] && c == Vector3::zeros() {
+        return Ok(Some(Added {
+            key: format!("ca = {}", f(ca[0])),
+            row: format!("added mass Ca ρ_w V = {} kg in every direction", a[0]),
+        }));
+    }
+    let a_o = Matrix6::from_diagonal(&Vector6::new(a[0], a[1], a[2], 0.0, 0.0, 0.0));
+    let a_c = phstring::added_mass_about_centre(&a_o, &c);
+    let rows: Vec<String> = a_c
+        .row_iter()
+        .map(|r| {
+            let v: Vec<String> = r.iter().map(|x| f(*x)).collect();
+            format!("    [{}],", v.join(", "))
+        })
+        .collect();
+    Ok(Some(Added {
+        key: format!("added_mass = [\n{}\n]", rows.join("\n")),
+        row: format!(
+            "added mass ρ_w V Ca = {a:?} kg along the body axes at the reference point, moved to the centre of mass (added_mass, 6×6, with the lever CG = {:?} m)",
+            [c.x, c.y, c.z]
+        ),
+    }))
 }
 
 /// A coupled body: a prescribed one, held at its deck pose or moved by the `--motion`
