@@ -59,6 +59,9 @@ pub struct OutputState {
     /// Bytes of `bodies.csv`, if written (runs with rigid bodies).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bodies_bytes: Option<u64>,
+    /// Bytes of `winches.csv`, if written (runs with winches).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub winches_bytes: Option<u64>,
     /// The channel table (`output.channels`), if written: its file name and bytes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channels: Option<(String, u64)>,

@@ -27,6 +27,18 @@ pub fn bodies_header(wrench: bool) -> String {
     h
 }
 
+/// The winches, one row per winch at every row of `energy.csv` (header:
+/// [`WINCHES_HEADER`]); written by runs with winches.
+pub const WINCHES_FILE: &str = "winches.csv";
+
+/// The header line of [`WINCHES_FILE`]: the time [s], the winch's name, the length paid out
+/// since `t = 0` `payout` [m] (negative: hauled in), the string's reference length off the
+/// drum `length` [m], the mean payout speed over the last step `speed` [m/s], the tension
+/// of the element at the drum `tension` [N], the mean power the winch supplied over the last
+/// step `power` [W] (negative: taken), the energy it supplied since `t = 0` `energy` [J]
+/// and the string's mass off the drum `mass` [kg].
+pub const WINCHES_HEADER: &str = "t,winch,payout,length,speed,tension,power,energy,mass";
+
 /// Energies, one row per step (header: [`headers`]).
 pub const ENERGY_FILE: &str = "energy.csv";
 /// Node positions, one row per node and frame (header: [`headers`]).
@@ -240,6 +252,7 @@ pub const RUN_FILES: &[&str] = &[
     COMPONENTS_FILE,
     SCENARIO_FILE,
     BODIES_FILE,
+    WINCHES_FILE,
 ];
 
 /// The channel table's file name when `output.channels_file` gives none.

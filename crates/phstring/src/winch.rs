@@ -446,22 +446,7 @@ pub(crate) fn attach<const D: usize>(
             ));
         }
         let drum_point = r[nodes[0]];
-        if let Some(j) = (1..=w.reserve).find(|&j| r[nodes[j]] != drum_point) {
-            return Err(problem(
-                k,
-                w,
-                format!(
-                    "node {j} of its string is on the drum (within the reserve) but not at the drum point"
-                ),
-            ));
-        }
-        if let Some(j) = (0..=w.reserve).find(|&j| v[nodes[j]] != SVector::<f64, D>::zeros()) {
-            return Err(problem(
-                k,
-                w,
-                format!("node {j} of its string is on the drum but does not start at rest"),
-            ));
-        }
+        check_start(w, &nodes, (r, v), drum_point).map_err(|p| problem(k, w, p))?;
         let last = nodes.len() - 1;
         for (j, &i) in nodes[..last].iter().enumerate() {
             let own = if j == 0 { 1 } else { 2 };
@@ -471,28 +456,6 @@ pub(crate) fn attach<const D: usize>(
                     w,
                     format!(
                         "node {j} of its string (mesh node {i}) carries something else (an element of another string, a support, a load, a port, a point mass or a body): only the string's last node may"
-                    ),
-                ));
-            }
-        }
-        let p0 = (w.payout)(0.0);
-        if p0 != 0.0 {
-            return Err(problem(
-                k,
-                w,
-                format!("its payout at t = 0 is {p0} m, not 0"),
-            ));
-        }
-        if let Some(m) = &w.drum_motion {
-            let x0 = vec_of::<D>(&m(0.0));
-            if (x0 - drum_point).norm() > 1e-9 * drum_point.norm().max(1.0) {
-                return Err(problem(
-                    k,
-                    w,
-                    format!(
-                        "its drum motion starts at {:?} m, not at its drum node {:?} m",
-                        x0.as_slice(),
-                        drum_point.as_slice()
                     ),
                 ));
             }
@@ -524,4 +487,39 @@ pub(crate) fn attach<const D: usize>(
         out.push((model, state));
     }
     Ok(out)
+}
+
+/// Checks how winch `w` starts on its string's `nodes`: its reserve's nodes at the drum point
+/// `drum_point` and at rest, the payout 0 at `t = 0`, a drum motion starting at the drum.
+fn check_start<const D: usize>(
+    w: &Winch,
+    nodes: &[usize],
+    (r, v): (&[SVector<f64, D>], &[SVector<f64, D>]),
+    drum_point: SVector<f64, D>,
+) -> Result<(), String> {
+    if let Some(j) = (1..=w.reserve).find(|&j| r[nodes[j]] != drum_point) {
+        return Err(format!(
+            "node {j} of its string is on the drum (within the reserve) but not at the drum point"
+        ));
+    }
+    if let Some(j) = (0..=w.reserve).find(|&j| v[nodes[j]] != SVector::<f64, D>::zeros()) {
+        return Err(format!(
+            "node {j} of its string is on the drum but does not start at rest"
+        ));
+    }
+    let p0 = (w.payout)(0.0);
+    if p0 != 0.0 {
+        return Err(format!("its payout at t = 0 is {p0} m, not 0"));
+    }
+    if let Some(m) = &w.drum_motion {
+        let x0 = vec_of::<D>(&m(0.0));
+        if (x0 - drum_point).norm() > 1e-9 * drum_point.norm().max(1.0) {
+            return Err(format!(
+                "its drum motion starts at {:?} m, not at its drum node {:?} m",
+                x0.as_slice(),
+                drum_point.as_slice()
+            ));
+        }
+    }
+    Ok(())
 }

@@ -229,6 +229,7 @@ fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
         )
     });
     describe_bodies(&mut out, &c.bodies);
+    describe_winches(&mut out, &c.winches, node);
     let steps = (s.t_end / s.step.h).round() as usize;
     let _ = writeln!(
         out,
@@ -245,6 +246,36 @@ fn describe<const D: usize>(file: &ScenarioFile, v: &Validated<D>) -> String {
         s.step.solver.name()
     );
     out
+}
+
+/// The winches' lines of `check`: each winch's string, drum, payout and reserve.
+fn describe_winches(
+    out: &mut String,
+    winches: &[phstring_io::scenario::WinchComponent],
+    node: impl Fn(usize) -> String,
+) {
+    list(out, winches, "winches", |w| {
+        let drum = if w.drum_position.is_empty() {
+            "a fixed drum".to_string()
+        } else {
+            let exprs: Vec<String> = w
+                .drum_position
+                .iter()
+                .map(|e| clip(e).into_owned())
+                .collect();
+            format!("the drum at [{}] m", exprs.join(", "))
+        };
+        format!(
+            "  winch:     {}: pays out string {} from {} ({drum}), payout = {} m, {} elements of {} m on the drum (can pay out {} m)",
+            w.name,
+            w.string,
+            node(w.drum_node),
+            clip(&w.payout),
+            w.reserve_elements,
+            num(w.element_length),
+            num(w.capacity)
+        )
+    });
 }
 
 /// The rigid bodies: mass, weight, inertia, initial pose, each point with what attaches

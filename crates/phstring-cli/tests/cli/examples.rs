@@ -95,6 +95,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("axial_rod_1d", 1, 500, 10, 51),
         ("steel_hoist", 2, 400, 10, 101),
         ("crane_2d", 2, 3600, 10, 41),
+        ("crane_hoisting_2d", 2, 4500, 10, 26),
         ("platform_3d", 3, 1500, 10, 50),
         ("net_3d", 3, 1000, 10, 1321),
         ("slack_wire", 2, 2000, 20, 161),

@@ -22,6 +22,7 @@ mod reliability;
 mod riser;
 mod statics;
 mod water;
+mod winch;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

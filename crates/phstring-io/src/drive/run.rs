@@ -284,6 +284,10 @@ pub struct RunInfo {
     /// summary written when the run starts); absent without bodies.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<BodySummary>,
+    /// The winches at the last completed step (at the start in the summary written when the
+    /// run starts); absent without winches.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub winches: Vec<WinchSummary>,
     /// Progress of the `time.settle` watch `(armed, since)`, carried in checkpoints.
     #[serde(skip)]
     pub settle_progress: (bool, Option<f64>),
@@ -339,6 +343,41 @@ pub struct BodySummary {
     pub angular_velocity: [f64; 3],
 }
 
+/// A winch at the last completed step (docs/method.md §23).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WinchSummary {
+    /// Name.
+    pub name: String,
+    /// Length paid out since `t = 0` [m] (negative: hauled in).
+    pub payout: f64,
+    /// The string's reference length off the drum [m].
+    pub length: f64,
+    /// Tension of the element at the drum [N].
+    pub tension: f64,
+    /// Energy the winch supplied since `t = 0` [J] (negative: taken), its share of
+    /// `supplied_energy`.
+    pub energy: f64,
+    /// The string's mass off the drum [kg].
+    pub mass: f64,
+}
+
+/// The winches of `sim` at its current state.
+fn winch_summaries<const D: usize>(sim: &Simulation<D, Material>) -> Vec<WinchSummary> {
+    sim.system()
+        .winches()
+        .into_iter()
+        .zip(sim.winch_samples())
+        .map(|((name, _), s)| WinchSummary {
+            name: name.to_string(),
+            payout: s.payout,
+            length: s.length,
+            tension: s.tension,
+            energy: s.energy,
+            mass: s.mass,
+        })
+        .collect()
+}
+
 /// The rigid bodies of `sim` with their current states.
 fn body_summaries<const D: usize>(sim: &Simulation<D, Material>) -> Vec<BodySummary> {
     sim.system()
@@ -368,6 +407,7 @@ fn record_end<const D: usize>(info: &mut RunInfo, sim: &Simulation<D, Material>)
     info.hamiltonian_final = sim.energies().hamiltonian();
     info.dissipated_energy = sim.dissipated_energy();
     info.bodies = body_summaries(sim);
+    info.winches = winch_summaries(sim);
 }
 
 /// Where and when a run with `time.settle` came to rest.
@@ -641,6 +681,7 @@ fn new_info<const D: usize>(
         lines: None,
         settled: None,
         bodies: body_summaries(sim),
+        winches: winch_summaries(sim),
         settle_progress: (false, None),
         time_loop_s: 0.0,
         resumed,

@@ -14,6 +14,7 @@ mod bodies;
 mod channels;
 mod csv;
 mod ends;
+mod winches;
 
 pub use channels::{ChannelString, ChannelTable};
 pub use ends::{EndForces, EndWater};
@@ -29,8 +30,8 @@ use crate::body_shape::{BodyBox, BodyPose};
 use crate::checkpoint::OutputState;
 use crate::files::{
     BODIES_FILE, BODIES_PVD_FILE, ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR,
-    POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE, PVD_FILE, body_frame_name, elements_header,
-    energy_header, frame_name, headers, num, remove_stale_temp_files,
+    POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE, PVD_FILE, WINCHES_FILE, body_frame_name,
+    elements_header, energy_header, frame_name, headers, num, remove_stale_temp_files,
 };
 use crate::plot::{GroupDrawing, PlotError, Topology};
 use crate::text::sanitize_text;
@@ -507,6 +508,8 @@ pub struct Writers {
     end_model: Option<EndForces>,
     /// `bodies.csv` (runs with rigid bodies).
     bodies: Option<Csv>,
+    /// `winches.csv` (runs with winches).
+    winches: Option<Csv>,
     /// The channel table (`output.channels`) and how its rows are computed.
     channels: Option<Csv>,
     channel_model: Option<ChannelTable>,
@@ -570,6 +573,7 @@ impl Writers {
         };
         let ports = Csv::create(dir.join(PORTS_FILE), &ports_header)?;
         let bodies = bodies::create(dir, sim)?;
+        let winches = winches::create(dir, sim)?;
         write_topology(dir, sim)?;
         let pvd = if vtk_frames {
             let pdir = dir.join(PARAVIEW_DIR);
@@ -589,6 +593,7 @@ impl Writers {
             ends: None,
             end_model: None,
             bodies,
+            winches,
             channels: None,
             channel_model: None,
             pvd,
@@ -902,6 +907,9 @@ impl Writers {
         if let Some(b) = &mut self.bodies {
             bodies::rows(b, sim, true)?;
         }
+        if let Some(w) = &mut self.winches {
+            winches::rows(w, sim)?;
+        }
         Ok(())
     }
 
@@ -973,6 +981,10 @@ impl Writers {
             Some(n) => Some(PendingCsv::open(dir.join(BODIES_FILE), n)?),
             None => None,
         };
+        let winches = match state.winches_bytes {
+            Some(n) => Some(PendingCsv::open(dir.join(WINCHES_FILE), n)?),
+            None => None,
+        };
         let channels = match &state.channels {
             Some((name, n)) => Some(PendingCsv::open(dir.join(name), *n)?),
             None => None,
@@ -980,6 +992,7 @@ impl Writers {
         let positions = positions.map(PendingCsv::commit).transpose()?;
         let ends = ends.map(PendingCsv::commit).transpose()?;
         let bodies = bodies.map(PendingCsv::commit).transpose()?;
+        let winches = winches.map(PendingCsv::commit).transpose()?;
         let channels = channels.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -990,6 +1003,7 @@ impl Writers {
             ends,
             end_model: None,
             bodies,
+            winches,
             channels,
             channel_model: None,
             pvd,
@@ -1028,6 +1042,10 @@ impl Writers {
             },
             bodies_bytes: match &mut self.bodies {
                 Some(b) => Some(b.len()?),
+                None => None,
+            },
+            winches_bytes: match &mut self.winches {
+                Some(w) => Some(w.len()?),
                 None => None,
             },
             channels: match &mut self.channels {
@@ -1185,6 +1203,9 @@ impl Writers {
         if let Some(b) = &mut self.bodies {
             b.flush()?;
         }
+        if let Some(w) = &mut self.winches {
+            w.flush()?;
+        }
         if let Some(c) = &mut self.channels {
             c.flush()?;
         }
@@ -1209,6 +1230,7 @@ impl Writers {
             Some(&self.ports),
             self.ends.as_ref(),
             self.bodies.as_ref(),
+            self.winches.as_ref(),
             self.channels.as_ref(),
         ]
         .into_iter()
@@ -1239,6 +1261,9 @@ impl Writers {
         }
         if let Some(b) = &mut self.bodies {
             let _ = b.flush();
+        }
+        if let Some(w) = &mut self.winches {
+            let _ = w.flush();
         }
         if let Some(c) = &mut self.channels {
             let _ = c.flush();

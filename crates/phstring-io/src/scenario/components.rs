@@ -29,6 +29,30 @@ pub struct Components {
     /// Rigid bodies, in file order (their points are also in `nodes`, as `"BODY.POINT"`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<BodyComponent>,
+    /// Winches, in file order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub winches: Vec<WinchComponent>,
+}
+
+/// A winch (`[[winch]]`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WinchComponent {
+    /// Name.
+    pub name: String,
+    /// The string it pays out.
+    pub string: String,
+    /// The drum's mesh node at `t = 0` (the string's first node off the drum).
+    pub drum_node: usize,
+    /// Elements parked on the drum at `t = 0`, before the string's own.
+    pub reserve_elements: usize,
+    /// The string's element length [m].
+    pub element_length: f64,
+    /// The most it can pay out from `t = 0` [m]: its reserve elements.
+    pub capacity: f64,
+    /// The payout expression [m].
+    pub payout: String,
+    /// The drum's position expressions [m], empty for a drum that stays.
+    pub drum_position: Vec<String>,
 }
 
 /// A rigid body (`[bodies.NAME]`).

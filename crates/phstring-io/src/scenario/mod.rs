@@ -32,6 +32,7 @@ mod spec;
 pub mod start;
 mod tables;
 mod water;
+mod winch;
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -46,7 +47,7 @@ use toml::Spanned;
 pub use body_water::BodyWaterComponent;
 pub use components::{
     BodyComponent, BodyPointComponent, Components, LoadComponent, MotionComponent, NamedNode,
-    PointMassComponent, SpringComponent, StringComponent, SupportComponent,
+    PointMassComponent, SpringComponent, StringComponent, SupportComponent, WinchComponent,
 };
 pub use expr::Expr;
 pub use initial::{InitialConditions, Net};
@@ -357,6 +358,8 @@ struct Skeleton<'s, const D: usize> {
     hydro: Vec<(usize, phstring::LineHydro)>,
     /// The rigid bodies (a network's), without their wrench ports yet.
     bodies: Vec<bodies::BodyDraft<D>>,
+    /// The strings that winches pay out (a network's).
+    winches: Vec<winch::WinchString>,
 }
 
 impl<const D: usize> Skeleton<'_, D> {
@@ -625,6 +628,7 @@ impl ScenarioFile {
             ));
         }
         let layout = self.layout()?;
+        self.check_winch_tables(layout == Layout::Network)?;
         let body = self.body_force::<D>()?;
         let mut skeleton = match layout {
             Layout::Single => self.single_string::<D>(&body)?,
@@ -641,9 +645,11 @@ impl ScenarioFile {
             self.check_spring_nodes(&skeleton, &parts.boundary, &point_masses)?;
         }
         let mut components = std::mem::take(&mut skeleton.components);
+        let winch_strings = std::mem::take(&mut skeleton.winches);
         let mut problem = skeleton
             .finish(parts.boundary, point_masses)
             .map_err(|cause| self.setup_error(cause))?;
+        problem = self.attach_winches(problem, &winch_strings, &mut components.winches)?;
         if let Some(water) = water {
             problem = line_hydro
                 .into_iter()

@@ -33,6 +33,22 @@ pub const MAX_NAME_BYTES: usize = 64;
 /// Where a name was first given: table kind, index and span.
 type FirstUse = (&'static str, usize, Range<usize>);
 
+/// A string as built: its group, the elements parked on a winch's drum before it, its
+/// first interior node and its winch.
+struct BuiltString {
+    group: usize,
+    parked: usize,
+    first_interior: usize,
+    winch: Option<super::winch::WinchString>,
+}
+
+/// What building the strings gives besides the mesh: the strings' hydrodynamics and the
+/// strings that winches pay out.
+struct StringsBuilt {
+    hydro: Vec<(usize, phstring::LineHydro)>,
+    winches: Vec<super::winch::WinchString>,
+}
+
 impl ScenarioFile {
     /// `name` (the value of `key`) if it is a valid name: 1 to [`MAX_NAME_BYTES`] ASCII
     /// letters, digits, `_` and `-`, starting with a letter or `_` (so that it cannot be
@@ -154,11 +170,12 @@ impl ScenarioFile {
         components: &mut Components,
         names: &mut HashMap<&'s str, FirstUse>,
         used: &mut [bool],
-    ) -> Result<Vec<(usize, phstring::LineHydro)>, ScenarioError> {
+    ) -> Result<StringsBuilt, ScenarioError> {
         let list = &self.scenario.string;
         self.at_most("string", list.len(), MAX_STRINGS)?;
         let mut total = 0usize;
         let mut hydro = Vec::new();
+        let mut winches = Vec::new();
         for (k, spec) in list.iter().enumerate() {
             let spec = spec.get_ref();
             let key = |f: &str| format!("string.{k}.{f}");
@@ -240,24 +257,29 @@ impl ScenarioFile {
                     *u = true;
                 }
             }
-            let first_interior = b.n_nodes();
             let body_force = body.on_string(cs.rho_a);
             self.string_scales(k, spec, &path, b, &cs, body)?;
-            let first_element = total;
-            let g = b
-                .string(
-                    StringSpec {
-                        name: name.to_string(),
-                        material: cs.material,
-                        rho_a: cs.rho_a,
-                        mass: cs.mass,
-                        body_force,
-                        prestretch,
-                    },
-                    &path,
-                    per_span,
-                )
-                .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
+            let (material, rho_a, mass) = (cs.material, cs.rho_a, cs.mass);
+            let name_owned = name.to_string();
+            let string_spec = StringSpec {
+                name: name_owned,
+                material,
+                rho_a,
+                mass,
+                body_force,
+                prestretch,
+            };
+            let built = self.build_string(
+                k,
+                b,
+                (&path, per_span, prestretch),
+                string_spec,
+                total + count,
+            )?;
+            winches.extend(built.winch);
+            let (g, first_interior, first_element) =
+                (built.group, built.first_interior, total + built.parked);
+            total += built.parked;
             b.set_damping(g, cs.damping)
                 .map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
             if let Some(h) = cs.hydro {
@@ -286,7 +308,65 @@ impl ScenarioFile {
             nodes.add_string(name, along);
             nodes.n_nodes = b.n_nodes();
         }
-        Ok(hydro)
+        Ok(StringsBuilt { hydro, winches })
+    }
+
+    /// Builds string `k` (`spec`) along `path` in `b`, on its winch's drum if one pays it
+    /// out (`before` elements come before the drum's).
+    fn build_string<const D: usize>(
+        &self,
+        k: usize,
+        b: &mut NetworkBuilder<D, Material>,
+        (path, per_span, prestretch): (&[usize], usize, f64),
+        spec: StringSpec<D, Material>,
+        before: usize,
+    ) -> Result<BuiltString, ScenarioError> {
+        // A winch's reserve: elements parked on its drum before the string's own.
+        let reserve = self.winch_reserve(&spec.name, (path, b), per_span, prestretch, before)?;
+        let parked = reserve.map_or(0, |r| r.1);
+        let first_interior = b.n_nodes() + parked;
+        let built = match reserve {
+            Some((_, r)) => b.string_on_drum(spec, path, per_span, r),
+            None => b.string(spec, path, per_span),
+        };
+        let group = built.map_err(|e| self.invalid(&format!("string.{k}"), 0..0, e.to_string()))?;
+        Ok(BuiltString {
+            group,
+            parked,
+            first_interior,
+            winch: reserve.map(|(winch, reserve)| super::winch::WinchString {
+                winch,
+                group,
+                reserve,
+            }),
+        })
+    }
+
+    /// The winch of string `name` (path `path` in `b`) and the elements parked on its drum,
+    /// if a winch pays it out; `before` elements come before them.
+    fn winch_reserve<const D: usize>(
+        &self,
+        name: &str,
+        (path, b): (&[usize], &NetworkBuilder<D, Material>),
+        per_span: usize,
+        prestretch: f64,
+        before: usize,
+    ) -> Result<Option<(usize, usize)>, ScenarioError> {
+        let Some((w, ws)) = self.winch_of(name) else {
+            return Ok(None);
+        };
+        let (a, c) = (b.position(path[0]), b.position(path[1]));
+        let span = a.zip(c).map_or(0.0, |(a, c)| (c - a).norm());
+        let l = span / per_span as f64 / prestretch;
+        let reserve = self.reserve_elements(w, ws, l)?;
+        if reserve > MAX_ELEMENTS - before {
+            return Err(self.invalid(
+                &format!("winch.{w}.reserve"),
+                ws.reserve.as_ref().map_or(0..0, |r| r.span()),
+                format!("asks for {reserve} elements on the drum: the strings and springs may have at most {MAX_ELEMENTS:.0e} elements in all"),
+            ));
+        }
+        Ok(Some((w, reserve)))
     }
 
     /// The mesh nodes of `string.{k}.path`: each resolved, consecutive ones different and
@@ -609,7 +689,7 @@ impl ScenarioFile {
         let bodies = self.body_points(&mut b, &mut nodes, &mut components, body.g())?;
         let mut used = vec![false; b.n_nodes()];
         let mut names = HashMap::new();
-        let hydro = self.strings(
+        let StringsBuilt { hydro, winches } = self.strings(
             &mut b,
             &mut nodes,
             &materials,
@@ -662,6 +742,7 @@ impl ScenarioFile {
             single_damping: phstring::Damping::NONE,
             hydro,
             bodies,
+            winches,
         })
     }
 

@@ -286,6 +286,7 @@ impl ScenarioFile {
             single_damping: cs.damping,
             hydro: cs.hydro.map(|h| (0, h)).into_iter().collect(),
             bodies: Vec::new(),
+            winches: Vec::new(),
         })
     }
 }

@@ -54,6 +54,9 @@ pub struct Scenario {
     /// Point masses at nodes (payloads, clump weights), one table each.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point_mass: Vec<PointMassSpec>,
+    /// Winches of a network (`[[winch]]`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub winch: Vec<Spanned<WinchSpec>>,
     /// Rigid bodies of a network (`[bodies.NAME]`), by name; strings attach to their points
     /// as `"NAME.POINT"` (dimension 2 or 3).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -420,6 +423,28 @@ pub struct ControlSpec {
     /// central difference of `reference`, or 0 without one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_velocity: Option<Spanned<Vec<Spanned<String>>>>,
+}
+
+/// A winch (`[[winch]]`): it pays out or hauls in a string of a network from a drum at the
+/// string's first path node (docs/method.md §23).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WinchSpec {
+    /// Name (for outputs and messages).
+    pub name: Spanned<String>,
+    /// Name of the `[[string]]` it pays out; its first path node is the drum.
+    pub string: Spanned<String>,
+    /// The length paid out since `t = 0` [m] (negative: hauled in), an expression of `t`
+    /// that is 0 at `t = 0`.
+    pub payout: Spanned<String>,
+    /// Cable on the drum [m] that it can pay out beyond the string's starting length
+    /// (default 0: it can only haul in); rounded up to whole elements.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reserve: Option<Spanned<f64>>,
+    /// The drum's position [m] as expressions of `t`, one per component (a crane's
+    /// trolley); at the drum node's position at `t = 0`. Default: the drum stays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drum_position: Option<Spanned<Vec<String>>>,
 }
 
 /// A point mass at a node; gravity (`body_force.gravity`) acts on it.

@@ -1,0 +1,183 @@
+//! `[[winch]]`: winches of a network, each paying out one `[[string]]` from a drum at its
+//! first path node (docs/method.md §23, docs/scenario.md).
+
+use std::sync::Arc;
+
+use phstring::{Material, Network, Winch};
+
+use super::components::WinchComponent;
+use super::expr::Expr;
+use super::spec::WinchSpec;
+use super::{ScenarioError, ScenarioFile};
+
+/// A winch's string as built: the winch's index in the file, its string's group and the
+/// elements parked on its drum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct WinchString {
+    pub winch: usize,
+    pub group: usize,
+    pub reserve: usize,
+}
+
+impl ScenarioFile {
+    /// The winch of string `name`, if one pays it out: its index and table.
+    pub(super) fn winch_of(&self, name: &str) -> Option<(usize, &WinchSpec)> {
+        self.scenario
+            .winch
+            .iter()
+            .enumerate()
+            .find(|(_, w)| w.get_ref().string.get_ref() == name)
+            .map(|(k, w)| (k, w.get_ref()))
+    }
+
+    /// Checks the `[[winch]]` tables before the strings are built: a network's, each
+    /// naming a `[[string]]` of the file that no other winch names.
+    pub(super) fn check_winch_tables(&self, network: bool) -> Result<(), ScenarioError> {
+        let s = &self.scenario;
+        for (k, w) in s.winch.iter().enumerate() {
+            let spec = w.get_ref();
+            let key = |f: &str| format!("winch.{k}.{f}");
+            if !network {
+                return Err(self.invalid(
+                    &key("string"),
+                    w.span(),
+                    "belongs to a network: a winch pays out a [[string]] from a drum at its first path node (a single-string scenario has none)",
+                ));
+            }
+            let name = spec.string.get_ref();
+            if !s
+                .string
+                .iter()
+                .any(|st| st.get_ref().name.get_ref() == name)
+            {
+                let known: Vec<&str> = s
+                    .string
+                    .iter()
+                    .map(|st| st.get_ref().name.get_ref().as_str())
+                    .collect();
+                return Err(self.invalid(
+                    &key("string"),
+                    spec.string.span(),
+                    format!(
+                        "= \"{}\" is not a [[string]] of this scenario (strings: {})",
+                        crate::text::clip(name),
+                        known.join(", ")
+                    ),
+                ));
+            }
+            if let Some(j) = (0..k).find(|&j| s.winch[j].get_ref().string.get_ref() == name) {
+                return Err(self.invalid(
+                    &key("string"),
+                    spec.string.span(),
+                    format!(
+                        "= \"{}\" is already paid out by winch.{j}: a string has one winch",
+                        crate::text::clip(name)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The elements winch `k` parks on its drum: its `reserve` [m] over the string's element
+    /// length `l` [m], rounded up.
+    pub(super) fn reserve_elements(
+        &self,
+        k: usize,
+        spec: &WinchSpec,
+        l: f64,
+    ) -> Result<usize, ScenarioError> {
+        let Some(r) = &spec.reserve else {
+            return Ok(0);
+        };
+        let m = *r.get_ref();
+        if !(m >= 0.0 && m.is_finite()) || m / l > 1e6 {
+            return Err(self.invalid(
+                &format!("winch.{k}.reserve"),
+                r.span(),
+                format!(
+                    "= {m} m must be at least 0 and finite, and at most a million elements of {l} m"
+                ),
+            ));
+        }
+        Ok((m / l - 1e-9).ceil().max(0.0) as usize)
+    }
+
+    /// The winches on `network` (their strings built as `strings`), with their payout and
+    /// drum expressions; their report entries into `report`.
+    pub(super) fn attach_winches<const D: usize>(
+        &self,
+        mut network: Network<D, Material>,
+        strings: &[WinchString],
+        report: &mut Vec<WinchComponent>,
+    ) -> Result<Network<D, Material>, ScenarioError> {
+        let t_check = self.first_mid_time();
+        for ws in strings {
+            let spec = self.scenario.winch[ws.winch].get_ref();
+            let key = |f: &str| format!("winch.{}.{f}", ws.winch);
+            let payout = Expr::new(spec.payout.get_ref(), t_check)
+                .map_err(|m| self.invalid(&key("payout"), spec.payout.span(), m))?;
+            let at_zero = payout.eval(0.0).unwrap_or(f64::NAN);
+            if at_zero != 0.0 {
+                return Err(self.invalid(
+                    &key("payout"),
+                    spec.payout.span(),
+                    format!(
+                        "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
+                    ),
+                ));
+            }
+            let mut drum = Vec::new();
+            if let Some(d) = &spec.drum_position {
+                if d.get_ref().len() != D {
+                    return Err(self.invalid(
+                        &key("drum_position"),
+                        d.span(),
+                        format!(
+                            "must have {D} expressions (dimension = {D}), got {}",
+                            d.get_ref().len()
+                        ),
+                    ));
+                }
+                for txt in d.get_ref() {
+                    drum.push(
+                        Expr::new(txt, t_check)
+                            .map_err(|m| self.invalid(&key("drum_position"), d.span(), m))?,
+                    );
+                }
+            }
+            let grp = &network.groups[ws.group];
+            let first = grp.elements.start;
+            let l = network.mesh.lengths()[first];
+            let drum_node = network.mesh.elements()[first + ws.reserve][0];
+            report.push(WinchComponent {
+                name: spec.name.get_ref().clone(),
+                string: spec.string.get_ref().clone(),
+                drum_node,
+                reserve_elements: ws.reserve,
+                element_length: l,
+                capacity: ws.reserve as f64 * l,
+                payout: spec.payout.get_ref().clone(),
+                drum_position: drum.iter().map(|e| e.text().to_string()).collect(),
+            });
+            let drum_motion: Option<phstring::DrumFn> = (!drum.is_empty()).then(|| {
+                let f: phstring::DrumFn = Arc::new(move |t| {
+                    let mut x = [0.0; 3];
+                    for (k, e) in drum.iter().enumerate() {
+                        x[k] = e.eval(t).unwrap_or(f64::NAN);
+                    }
+                    x
+                });
+                f
+            });
+            network = network.with_winch(Winch {
+                name: spec.name.get_ref().clone(),
+                group: ws.group,
+                reserve: ws.reserve,
+                payout: Arc::new(move |t| payout.eval(t).unwrap_or(f64::NAN)),
+                drum_motion,
+            });
+        }
+        Ok(network)
+    }
+}
