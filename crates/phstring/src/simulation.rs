@@ -235,6 +235,8 @@ pub struct Simulation<const D: usize, M> {
     winch_step: Vec<(f64, f64)>,
     /// Per winch, the work of its drum node's reaction in the current step [J].
     winch_work: Vec<f64>,
+    /// Per winch, its port in the last step: drum node, mid-step velocity, reaction.
+    winch_port: Vec<(usize, [f64; 3], [f64; 3])>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -536,6 +538,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             held_wrenches: Vec::new(),
             winch_step: vec![(0.0, 0.0); winch_start.len()],
             winch_work: vec![0.0; winch_start.len()],
+            winch_port: vec![(0, [0.0; 3], [0.0; 3]); winch_start.len()],
             sys,
             params,
             run: Checkpoint {
@@ -1830,7 +1833,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         let mut nodes = h * self.ports.iter().map(|p| p.power()).sum::<f64>();
         if !self.sys.winches.is_empty() {
-            nodes += self.winch_reaction_work();
+            nodes += self.winch_reaction_work(h);
         }
         if self.sys.bodies.is_empty() {
             return nodes;

@@ -775,7 +775,7 @@ fn attach_water<const D: usize, M>(
     Ok(Some(Box::new(model)))
 }
 
-/// Checks the winches (docs/method.md §23): no water or rigid bodies with them yet, and the
+/// Checks the winches (docs/method.md §23): no water with them yet, and the
 /// checks of [`crate::winch::attach`], with the nodes that carry a support, load, port, point
 /// mass or body attachment claimed.
 #[allow(clippy::too_many_arguments)]
@@ -785,7 +785,6 @@ fn attach_winches<const D: usize, M>(
     groups: &[ElementGroup<D, M>],
     boundary: &Boundary<D>,
     point_masses: &[PointMass<D>],
-    bodies: &[RigidBody<D>],
     water: Option<&Water<D>>,
     initial: &State<D>,
 ) -> Result<Vec<(crate::winch::WinchModel<D>, crate::winch::WinchState)>, SetupError> {
@@ -799,11 +798,6 @@ fn attach_winches<const D: usize, M>(
     };
     if water.is_some() {
         return Err(refuse("winches in water are not supported yet"));
-    }
-    if !bodies.is_empty() {
-        return Err(refuse(
-            "winches together with rigid bodies are not supported yet",
-        ));
     }
     let mut claimed = vec![false; mesh.n_nodes()];
     let nodes = boundary
@@ -885,7 +879,6 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             &groups,
             &boundary,
             &point_masses,
-            &bodies,
             water.as_ref(),
             &initial,
         )?;
@@ -1308,6 +1301,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .copied()
             .filter(|&i| self.attached.get(i).is_none_or(|a| a.is_none()))
             .filter(|&i| !self.winch_node.get(i).copied().unwrap_or(false))
+    }
+
+    /// The elements of group `g` including those parked on a winch's drum (which are not
+    /// in the group's active range, [`ElementGroup::elements`]).
+    pub fn group_span(&self, g: usize) -> Range<usize> {
+        match self.winches.iter().find(|w| w.group == g) {
+            Some(w) => w.elements.clone(),
+            None => self.groups[g].elements.clone(),
+        }
     }
 
     /// The winches' names and their strings' element groups, in order.

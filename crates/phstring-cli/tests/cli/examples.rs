@@ -113,6 +113,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("hook_block_3d", 3, 2000, 50, 21),
         ("hook_block_antisway_3d", 3, 2000, 50, 21),
         ("cable_robot_3d", 3, 2000, 25, 40),
+        ("cable_robot_winches_3d", 3, 2000, 25, 56),
         ("spar_buoy_3d", 3, 1600, 10, 123),
     ];
     let mut files: Vec<String> = std::fs::read_dir(workspace_root().join("examples"))

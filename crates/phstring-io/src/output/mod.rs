@@ -100,7 +100,7 @@ fn write_topology<const D: usize>(
             Law::String(_) => "string",
         };
         let name = csv_text(&group.name);
-        for e in group.elements.clone() {
+        for e in sys.group_span(g) {
             let [a, b] = sys.mesh().elements()[e];
             let l = sys.mesh().lengths()[e];
             csv.row(&format!("{e},{a},{b},{g},{kind},{},{name}", num(l)))?;
@@ -262,13 +262,13 @@ fn line_planes<const D: usize>(
     }
     let mut springs = false;
     let mut strings = Vec::new();
-    for group in sys.groups() {
+    for (g, group) in sys.groups().iter().enumerate() {
         if matches!(group.law, Law::Spring(_)) {
             springs = true;
             continue;
         }
         let mut path: Vec<usize> = Vec::new();
-        for e in group.elements.clone() {
+        for e in sys.group_span(g) {
             let [a, b] = sys.mesh().elements()[e];
             if path.last() != Some(&a) {
                 path.push(a);
@@ -901,6 +901,25 @@ impl Writers {
             ports.num(t_mid).field(k).field(p.node).field(kind);
             ports.nums(p.input.as_slice()).nums(p.output.as_slice());
             ports.nums(&[p.power()]).end_line()?;
+        }
+        // The winches' ports (docs/method.md §23) after the nodes', their power with the
+        // held velocity and the cuts.
+        let first = sim.ports().len();
+        for (w, ws) in sim.winch_samples().iter().enumerate() {
+            let (node, u, y) = ws.port;
+            check_finite(
+                &self.ports.path,
+                "winch port",
+                t_mid,
+                &[u[..D].to_vec(), y[..D].to_vec(), vec![ws.power]].concat(),
+            )?;
+            let ports = &mut self.ports;
+            ports.num(t_mid).field(first + w).field(node).field("winch");
+            ports
+                .nums(&u[..D])
+                .nums(&y[..D])
+                .nums(&[ws.power])
+                .end_line()?;
         }
         self.ports.end_record()?;
         self.end_row(sim, r.t, end_tensions)?;

@@ -40,14 +40,20 @@ pub(super) fn short_element_warnings<const D: usize>(
     single: bool,
 ) -> Vec<String> {
     let mut out = Vec::new();
-    for g in &net.groups {
+    for (k, g) in net.groups.iter().enumerate() {
         if matches!(g.law, Law::Spring(_)) {
             continue;
         }
         let mut count = 0;
         // The element with the smallest ratio ℓ / (ε X): (element, ℓ, X).
         let mut worst: Option<(usize, f64, f64)> = None;
-        for e in g.elements.clone() {
+        // The elements parked on a winch's drum are not counted (they lie at the drum).
+        let parked = net
+            .winches
+            .iter()
+            .find(|w| w.group == k)
+            .map_or(0, |w| w.reserve);
+        for e in g.elements.clone().skip(parked) {
             let [a, b] = net.mesh.elements()[e];
             let (ra, rb) = (&net.initial.r[a], &net.initial.r[b]);
             let size = ra.amax().max(rb.amax());

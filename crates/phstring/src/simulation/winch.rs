@@ -25,6 +25,10 @@ pub struct WinchSample {
     pub energy: f64,
     /// The string's mass off the drum [kg]: `ρA` times `length`.
     pub mass: f64,
+    /// The winch's port in the last step: the drum node then, its mid-step velocity `Δ/h`
+    /// [m/s] and the reaction force of the drum on it [N] (`x, y, z`; `z` 0 in 2D). Their
+    /// product is the port's work rate; `power` adds the held velocity and the cuts.
+    pub port: (usize, [f64; 3], [f64; 3]),
 }
 
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
@@ -68,7 +72,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             .iter()
             .zip(&self.run.winches)
             .zip(&self.winch_step)
-            .map(|((m, ws), &(moved, supplied))| {
+            .zip(&self.winch_port)
+            .map(|(((m, ws), &(moved, supplied)), &port)| {
                 let e = m.drum_element(ws);
                 let grp = &self.sys.groups[m.group];
                 let c = self.run.state.c[e];
@@ -81,6 +86,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     power: supplied / h,
                     energy: ws.energy,
                     mass: grp.rho_a * length,
+                    port,
                 }
             })
             .collect()
@@ -106,20 +112,28 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(())
     }
 
-    /// The work [J] of each drum node's reaction over the step just solved, into
-    /// `winch_work`; returns their sum.
-    pub(super) fn winch_reaction_work(&mut self) -> f64 {
+    /// The work [J] of each drum node's reaction over the step of size `h` [s] just solved,
+    /// into `winch_work` (and the port's values into `winch_port`); returns their sum.
+    pub(super) fn winch_reaction_work(&mut self, h: f64) -> f64 {
         let mut total = 0.0;
-        for ((m, ws), w) in self
+        let inv_h = 1.0 / h;
+        for (((m, ws), w), port) in self
             .sys
             .winches
             .iter()
             .zip(&self.run.winches)
             .zip(&mut self.winch_work)
+            .zip(&mut self.winch_port)
         {
             let a = m.drum_node(ws);
             *w = self.reaction[a].dot(&self.x[a]);
             total += *w;
+            let (mut u, mut y) = ([0.0; 3], [0.0; 3]);
+            for k in 0..D {
+                u[k] = self.x[a][k] * inv_h;
+                y[k] = self.reaction[a][k];
+            }
+            *port = (a, u, y);
         }
         total
     }
