@@ -258,6 +258,40 @@ impl Simulation {
         held.map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
+    /// Holds the payout speed of winch `winch` (its index in file order, or its name) at
+    /// `speed` [m/s] (negative: hauling in) from the current time on, its payout continuing
+    /// from where it is (zero-order hold), until set again; the scenario's `payout` does not
+    /// come back. Its energy enters `energies["supplied"]` (docs/method.md §23).
+    fn set_winch_speed(&self, winch: &Bound<'_, PyAny>, speed: f64) -> PyResult<()> {
+        let mut guard = self.lock();
+        let w = each!(&*guard, s => winch_index(s, winch))?;
+        each!(&mut *guard, s => s.set_winch_speed(w, speed))
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// The winches, in file order, as a list of dicts after the last step: `name`, `payout`
+    /// [m] (since t = 0, negative: hauled in), `length` [m] (reference length off the drum),
+    /// `speed` [m/s] (mean over the last step), `tension` [N] (at the drum), `power` [W]
+    /// (mean over the last step), `energy` [J] (supplied since t = 0) and `mass` [kg] (off
+    /// the drum).
+    #[getter]
+    fn winches<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let rows: Vec<(String, [f64; 7])> = each!(&*self.lock(), s => winch_rows(s));
+        rows.into_iter()
+            .map(|(name, v)| {
+                let d = PyDict::new(py);
+                d.set_item("name", name)?;
+                let keys = [
+                    "payout", "length", "speed", "tension", "power", "energy", "mass",
+                ];
+                for (key, x) in keys.into_iter().zip(v) {
+                    d.set_item(key, x)?;
+                }
+                Ok(d)
+            })
+            .collect()
+    }
+
     /// Returns the wrench port of rigid body `body` (index or name) to the scenario's from
     /// the next step on (as `set_body_wrench(body, None)`).
     fn release_body_wrench(&self, body: &Bound<'_, PyAny>) -> PyResult<()> {
@@ -392,6 +426,53 @@ type BodyRow = (
     [f64; 3],
     f64,
 );
+
+/// The winches of `sim`: name and `[payout, length, speed, tension, power, energy, mass]`.
+fn winch_rows<const D: usize>(sim: &Sim<D, Material>) -> Vec<(String, [f64; 7])> {
+    let names = sim.system().winches();
+    sim.winch_samples()
+        .iter()
+        .zip(names)
+        .map(|(w, (name, _))| {
+            let v = [
+                w.payout, w.length, w.speed, w.tension, w.power, w.energy, w.mass,
+            ];
+            (name.to_string(), v)
+        })
+        .collect()
+}
+
+/// The index of winch `winch` (an index or a name) of `sim`.
+fn winch_index<const D: usize>(
+    sim: &Sim<D, Material>,
+    winch: &Bound<'_, PyAny>,
+) -> PyResult<usize> {
+    let names: Vec<&str> = sim.system().winches().into_iter().map(|w| w.0).collect();
+    let known = || {
+        if names.is_empty() {
+            "the scenario has no winches".to_string()
+        } else {
+            format!(
+                "the winches are {} (0 … {})",
+                names.join(", "),
+                names.len() - 1
+            )
+        }
+    };
+    if let Ok(name) = winch.extract::<String>() {
+        return names
+            .iter()
+            .position(|n| *n == name)
+            .ok_or_else(|| PyValueError::new_err(format!("no winch named {name:?}: {}", known())));
+    }
+    let i: usize = winch.extract().map_err(|_| {
+        PyValueError::new_err(format!("a winch is an index or a name, got {winch}"))
+    })?;
+    if i >= names.len() {
+        return Err(PyValueError::new_err(format!("no winch {i}: {}", known())));
+    }
+    Ok(i)
+}
 
 /// The rigid bodies of `sim` as [`BodyRow`]s, in file order.
 fn body_rows<const D: usize>(sim: &Sim<D, Material>) -> Vec<BodyRow> {

@@ -11,6 +11,11 @@
 //!   [`Motion::velocity`] of the ramp (its slope, from the left) and the energy it supplies is
 //!   accounted as for any prescribed motion (docs/method.md §14).
 //!
+//! * A **payout speed** of a winch ([`Simulation::set_winch_speed`]): from the current time
+//!   on the winch pays out at that speed [m/s] (negative: hauls in), its payout continuing
+//!   from where it is (zero-order hold of the speed). Its energy is booked as for any payout
+//!   (docs/method.md §23).
+//!
 //! Before a run, [`NodalLoad::hold`] and [`Motion::hold`] hold the same inputs on the
 //! boundary conditions of a problem, e.g. to find a starting equilibrium under them, and
 //! [`PhSystem::hold_body_wrench`] a rigid body's wrench on a built system.
@@ -69,6 +74,22 @@ pub enum InputError {
         /// Which value (`position target`, `target time`, …).
         what: &'static str,
         /// The value given.
+        value: f64,
+    },
+    /// The winch index is not one of the problem's winches.
+    #[error("winch {winch} does not exist: the problem has {count} winches{}", range(*count))]
+    NoSuchWinch {
+        /// The index given.
+        winch: usize,
+        /// Number of winches.
+        count: usize,
+    },
+    /// A winch's held speed is not finite.
+    #[error("the payout speed of winch {winch} must be finite, got {} m/s", Num(*value))]
+    WinchSpeedNotFinite {
+        /// Winch index.
+        winch: usize,
+        /// The value given [m/s].
         value: f64,
     },
     /// The body index is not one of the problem's rigid bodies.
@@ -419,6 +440,28 @@ fn wrench_target<'a>(
         });
     }
     Ok(model)
+}
+
+impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
+    /// Holds winch `winch`'s payout speed at `speed` [m/s] (negative: hauling in) from the
+    /// current time on: its payout becomes `p_now + speed (t − t_now)`, continuing from the
+    /// payout it has reached, until set again; the scenario's payout does not come back.
+    /// Refused (nothing changes) for an unknown winch or a speed that is not finite.
+    pub fn set_winch_speed(&mut self, winch: usize, speed: f64) -> Result<(), InputError> {
+        let count = self.winch_count();
+        let p0 = self
+            .winch_payout(winch)
+            .ok_or(InputError::NoSuchWinch { winch, count })?;
+        let t0 = self.time();
+        if !speed.is_finite() {
+            return Err(InputError::WinchSpeedNotFinite {
+                winch,
+                value: speed,
+            });
+        }
+        self.set_winch_payout(winch, Arc::new(move |t| p0 + speed * (t - t0)));
+        Ok(())
+    }
 }
 
 #[cfg(test)]

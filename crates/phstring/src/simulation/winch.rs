@@ -64,6 +64,21 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(())
     }
 
+    /// The payout [m] winch `winch` has reached (`None`: no such winch).
+    pub(crate) fn winch_payout(&self, winch: usize) -> Option<f64> {
+        self.run.winches.get(winch).map(|w| w.payout)
+    }
+
+    /// The number of winches.
+    pub(crate) fn winch_count(&self) -> usize {
+        self.run.winches.len()
+    }
+
+    /// Replaces winch `winch`'s payout function (an index checked by the caller).
+    pub(crate) fn set_winch_payout(&mut self, winch: usize, payout: crate::winch::PayoutFn) {
+        self.sys.winches[winch].payout = payout;
+    }
+
     /// The winches' outputs after the last step.
     pub fn winch_samples(&self) -> Vec<WinchSample> {
         let h = self.run.h_cur;

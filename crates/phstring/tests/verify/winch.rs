@@ -268,3 +268,59 @@ fn a_moving_drum_hoists_and_the_payload_swings_from_the_drum_node() {
         "{mean} against {pendulum}"
     );
 }
+
+/// A payout speed held from outside (a controller, the FMU, a script): hauling in at
+/// 5 cm/s from t = 1 s and stopping at t = 3 s hauls in 0.1 m, continuing from the payout
+/// reached, with the balance exact on every step; the winch's energy is the static energy
+/// change of the 0.1 m lift within the payload's bounce after the two jerks.
+#[test]
+fn a_held_payout_speed_hauls_in_from_where_the_winch_is() {
+    let (net, _) = hoist(25, 0, |_| 0.0);
+    let mut sim = Simulation::new(net, fixed_step(0.01)).unwrap_or_else(|e| panic!("{e}"));
+    let h0 = sim.energies().hamiltonian();
+    let (mut worst, mut bounce) = (0.0_f64, 0.0_f64);
+    let mut run_to = |sim: &mut Simulation<2, Material>, t: f64, watch: bool| {
+        while sim.time() < t - 1e-9 {
+            let r = sim.step().unwrap_or_else(|e| panic!("{e}"));
+            let scale = r.before.magnitude + r.after.magnitude + r.winch.abs();
+            let balance =
+                r.after.hamiltonian() - r.before.hamiltonian() - r.supplied + r.dissipated;
+            worst = worst.max(balance.abs() / scale);
+            if watch {
+                bounce = bounce.max(r.after.kinetic);
+            }
+        }
+    };
+    run_to(&mut sim, 1.0, false);
+    assert!(matches!(
+        sim.set_winch_speed(1, -0.05),
+        Err(phstring::InputError::NoSuchWinch { winch: 1, count: 1 })
+    ));
+    sim.set_winch_speed(0, -0.05).unwrap();
+    run_to(&mut sim, 3.0, false);
+    sim.set_winch_speed(0, 0.0).unwrap();
+    run_to(&mut sim, 5.0, true);
+    let w = sim.winch_samples()[0];
+    let de = sim.energies().hamiltonian() - h0;
+    let a = 25.0 - 0.1;
+    let cp = sim.checkpoint();
+    let behind = cp.winches[0].behind(w.payout);
+    let top = G * (PAYLOAD + RHO_A * a);
+    let stretch = 1.0 + top / EA;
+    let virtual_part =
+        RHO_A * G * stretch * behind * behind / 2.0 + top * top / (2.0 * EA) * behind;
+    let (drum_node, _) = sim.system().winch_layout(&cp.winches)[0];
+    let offset = sim.state().r[drum_node][1] - stretch * behind;
+    let de_static = static_energy(a) + virtual_part + top * offset - static_energy(25.0);
+    eprintln!(
+        "payout {:.9} m, balance/scale {worst:.1e}, winch {:.2} J = ΔĤ {de:.2} J, static {de_static:.2} J, bounce {bounce:.2} J",
+        w.payout, w.energy
+    );
+    assert!((w.payout + 0.1).abs() < 1e-12);
+    assert!(worst < 1e-12);
+    assert!((w.energy - de).abs() < 1e-9 * de.abs());
+    assert!(
+        (de - de_static).abs() < 1.5 * bounce + 0.1,
+        "{de} against {de_static}"
+    );
+}
