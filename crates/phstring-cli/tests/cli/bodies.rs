@@ -311,24 +311,7 @@ fn a_resumed_run_writes_the_bodies_of_an_uninterrupted_one() {
     let dir = temp_dir("bodies-resume");
     let sets = ["time.end=4", "output.plots=false", "output.animation=false"];
     let scenario = "examples/hook_block_3d.toml";
-    let whole = dir.join("whole");
-    let o = run_with(scenario, &whole, &sets, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let parts = dir.join("parts");
-    let first = run_with(scenario, &parts, &sets, &["--stop-after-steps", "150"]);
-    assert_eq!(
-        first.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&first.stderr)
-    );
-    let cp = parts.join("checkpoint.json");
-    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
-    assert!(
-        second.status.success(),
-        "{}",
-        String::from_utf8_lossy(&second.stderr)
-    );
+    let (whole, parts) = crate::run_whole_and_resumed(scenario, &dir, &sets, 150);
     let read = |d: &Path| std::fs::read_to_string(d.join("bodies.csv")).unwrap();
     assert_eq!(read(&whole).lines().count(), 1 + 2 * 401);
     assert_eq!(read(&whole), read(&parts));

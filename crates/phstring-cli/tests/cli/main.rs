@@ -57,6 +57,48 @@ pub fn run_with(scenario: &str, out: &Path, sets: &[&str], extra: &[&str]) -> Ou
     phstring(&args)
 }
 
+/// Runs `scenario` with `sets` twice under `dir`: whole into `dir/whole`, and into
+/// `dir/parts` stopped after `steps` steps (exit code 130) and resumed from its checkpoint.
+/// Returns the two folders.
+pub fn run_whole_and_resumed(
+    scenario: &str,
+    dir: &Path,
+    sets: &[&str],
+    steps: usize,
+) -> (PathBuf, PathBuf) {
+    let whole = dir.join("whole");
+    let o = run_with(scenario, &whole, sets, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let parts = dir.join("parts");
+    let stop = steps.to_string();
+    let first = run_with(scenario, &parts, sets, &["--stop-after-steps", &stop]);
+    let err = String::from_utf8_lossy(&first.stderr);
+    assert_eq!(first.status.code(), Some(130), "{err}");
+    let cp = parts.join("checkpoint.json");
+    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    (whole, parts)
+}
+
+/// The rows of the CSV file `path` after its header, each field as a number (NaN where it
+/// is not one, e.g. a name).
+pub fn numeric_rows(path: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|x| x.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect()
+}
+
 /// The `summary.json` of the run in `dir`.
 pub fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()

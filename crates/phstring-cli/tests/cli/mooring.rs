@@ -181,16 +181,7 @@ fn cable_robot_follows_its_winches() {
     let out = temp_dir("robot-run");
     let o = run_with(ROBOT, &out, &[], &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = std::fs::read_to_string(out.join("bodies.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    let rows = crate::numeric_rows(&out.join("bodies.csv"));
     let (first, last) = (&rows[0], rows.last().unwrap());
     assert_eq!(last[0], 4.0);
     let dx = last[2] - first[2];

@@ -85,24 +85,7 @@ fn a_resumed_winch_run_writes_what_an_uninterrupted_one_writes() {
         "output.plots=false",
         "output.animation=false",
     ];
-    let whole = dir.join("whole");
-    let o = run_with(CRANE, &whole, &sets, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let parts = dir.join("parts");
-    let first = run_with(CRANE, &parts, &sets, &["--stop-after-steps", "1234"]);
-    assert_eq!(
-        first.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&first.stderr)
-    );
-    let cp = parts.join("checkpoint.json");
-    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
-    assert!(
-        second.status.success(),
-        "{}",
-        String::from_utf8_lossy(&second.stderr)
-    );
+    let (whole, parts) = crate::run_whole_and_resumed(CRANE, &dir, &sets, 1234);
     for f in ["winches.csv", "energy.csv"] {
         let read = |d: &Path| std::fs::read_to_string(d.join(f)).unwrap();
         assert_eq!(read(&whole), read(&parts), "{f} differs");
@@ -174,16 +157,7 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
 /// The final row of `bodies.csv` in `dir`: `(x, y, z, tilt [deg])` of the platform, and its
 /// first `z`.
 fn platform_end(dir: &Path) -> ([f64; 4], f64) {
-    let text = std::fs::read_to_string(dir.join("bodies.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    let rows = crate::numeric_rows(&dir.join("bodies.csv"));
     let last = rows.last().unwrap();
     assert_eq!(last[0], 4.0);
     let tilt = 2.0 * last[7].abs().asin().to_degrees();

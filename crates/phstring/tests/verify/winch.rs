@@ -37,6 +37,27 @@ fn static_energy(a: f64) -> f64 {
     e
 }
 
+/// The change of the static energy [J] from `a0` to `a` metres of rope off the drum as the
+/// model holds it at the end of a run of `sim`, with what it adds: the cable between the
+/// drum node and the drum point (`behind`, at most one element, drawn straight above the
+/// drum: its weight's potential and strain energy at the drum's tension are in `Ĥ`), and
+/// the drum node's offset from where that cable's static stretch puts it (its last cut put
+/// it on the string's stretch at that moment, which the payload's bounce sets; the string
+/// below hangs from there). Returns the change, `behind` [m], the cable's energy [J] and the
+/// offset [m].
+fn static_change(sim: &Simulation<2, Material>, a: f64, a0: f64) -> (f64, f64, f64, f64) {
+    let cp = sim.checkpoint();
+    let behind = cp.winches[0].behind(cp.winches[0].payout);
+    let top = G * (PAYLOAD + RHO_A * a);
+    let stretch = 1.0 + top / EA;
+    let virtual_part =
+        RHO_A * G * stretch * behind * behind / 2.0 + top * top / (2.0 * EA) * behind;
+    let (drum_node, _) = sim.system().winch_layout(&cp.winches)[0];
+    let offset = sim.state().r[drum_node][1] - stretch * behind;
+    let change = static_energy(a) + virtual_part + top * offset - static_energy(a0);
+    (change, behind, virtual_part, offset)
+}
+
 /// A 2D hoist: a drum at the origin, `n_el` elements of 1 m hanging below it with the
 /// payload at the end, `reserve` more on the drum, at rest in its static shape; the winch
 /// pays out `payout(t)`.
@@ -144,20 +165,7 @@ fn hoist_and_check(n_el: usize, reserve: usize, lift: f64) {
     let a = n_el as f64 * L - lift;
     let y = sim.state().r[hook][1];
     let de = sim.energies().hamiltonian() - h0;
-    // The model keeps the cable between the drum node and the drum point (`behind`, at
-    // most one element) drawn straight above the drum: its weight's potential and strain
-    // energy at the drum's tension are in Ĥ.
-    let cp = sim.checkpoint();
-    let behind = cp.winches[0].behind(w.payout);
-    let top = G * (PAYLOAD + RHO_A * a);
-    let stretch = 1.0 + top / EA;
-    let virtual_part =
-        RHO_A * G * stretch * behind * behind / 2.0 + top * top / (2.0 * EA) * behind;
-    // The drum node hangs where its last cut put it: on the string's stretch at that
-    // moment, which the payload's bounce sets; the string below hangs from there.
-    let (drum_node, _) = sim.system().winch_layout(&cp.winches)[0];
-    let offset = sim.state().r[drum_node][1] - stretch * behind;
-    let de_static = static_energy(a) + virtual_part + top * offset - static_energy(n_el as f64 * L);
+    let (de_static, behind, virtual_part, offset) = static_change(&sim, a, n_el as f64 * L);
     eprintln!(
         "balance/scale {worst:.1e}; behind the drum {behind:.4} m ({virtual_part:.2} J), drum node {offset:.2e} m off; payout {:.6} m, off the drum {:.6} m, mass {:.3} kg; hook at {y:.5} m (static {:.5}); winch {winch_total:.1} J = ΔĤ {de:.1} J, static ΔE {de_static:.1} J, kinetic now {:.2e} J",
         w.payout,
@@ -303,15 +311,7 @@ fn a_held_payout_speed_hauls_in_from_where_the_winch_is() {
     let w = sim.winch_samples()[0];
     let de = sim.energies().hamiltonian() - h0;
     let a = 25.0 - 0.1;
-    let cp = sim.checkpoint();
-    let behind = cp.winches[0].behind(w.payout);
-    let top = G * (PAYLOAD + RHO_A * a);
-    let stretch = 1.0 + top / EA;
-    let virtual_part =
-        RHO_A * G * stretch * behind * behind / 2.0 + top * top / (2.0 * EA) * behind;
-    let (drum_node, _) = sim.system().winch_layout(&cp.winches)[0];
-    let offset = sim.state().r[drum_node][1] - stretch * behind;
-    let de_static = static_energy(a) + virtual_part + top * offset - static_energy(25.0);
+    let (de_static, ..) = static_change(&sim, a, 25.0);
     eprintln!(
         "payout {:.9} m, balance/scale {worst:.1e}, winch {:.2} J = ΔĤ {de:.2} J, static {de_static:.2} J, bounce {bounce:.2} J",
         w.payout, w.energy
