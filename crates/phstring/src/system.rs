@@ -393,6 +393,9 @@ pub struct PhSystem<const D: usize, M> {
     /// Per node: whether a winch may hold it (its string's nodes but the last); such nodes
     /// are not support ports.
     pub(crate) winch_node: Vec<bool>,
+    /// The water and hydrodynamics as given, kept with winches to lump the water again
+    /// over the elements off the drums.
+    pub(crate) water_spec: Option<Box<(Water<D>, Hydrodynamics)>>,
 }
 
 /// Element mass-matrix coefficients `(m_diag, m_off)` [kg] of an element of reference length
@@ -775,7 +778,7 @@ fn attach_water<const D: usize, M>(
     Ok(Some(Box::new(model)))
 }
 
-/// Checks the winches (docs/method.md §23): no water with them yet, and the
+/// Checks the winches (docs/method.md §23): the
 /// checks of [`crate::winch::attach`], with the nodes that carry a support, load, port, point
 /// mass or body attachment claimed.
 #[allow(clippy::too_many_arguments)]
@@ -785,19 +788,10 @@ fn attach_winches<const D: usize, M>(
     groups: &[ElementGroup<D, M>],
     boundary: &Boundary<D>,
     point_masses: &[PointMass<D>],
-    water: Option<&Water<D>>,
     initial: &State<D>,
 ) -> Result<Vec<(crate::winch::WinchModel<D>, crate::winch::WinchState)>, SetupError> {
-    let Some(first) = winches.first() else {
+    if winches.is_empty() {
         return Ok(Vec::new());
-    };
-    let refuse = |problem: &str| SetupError::Winch {
-        index: 0,
-        name: first.name.clone(),
-        problem: problem.into(),
-    };
-    if water.is_some() {
-        return Err(refuse("winches in water are not supported yet"));
     }
     let mut claimed = vec![false; mesh.n_nodes()];
     let nodes = boundary
@@ -873,15 +867,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut groups = groups;
         let mut initial = initial;
         check_groups(&mesh, &groups)?;
-        let winch_data = attach_winches(
-            &winches,
-            &mesh,
-            &groups,
-            &boundary,
-            &point_masses,
-            water.as_ref(),
-            &initial,
-        )?;
+        let winch_data =
+            attach_winches(&winches, &mesh, &groups, &boundary, &point_masses, &initial)?;
         for (m, ws) in &winch_data {
             groups[m.group].elements.start = m.drum_element(ws);
         }
@@ -909,7 +896,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
         let (mut f_body, mut node_mass) = distributed_loads(&mesh, &groups);
         let mut point_mass = add_point_masses(&point_masses, &mut f_body, &mut node_mass)?;
-        let water = attach_water(water.as_ref(), &hydro, &mesh, &mut groups, &mut point_mass)?;
+        let water_model =
+            attach_water(water.as_ref(), &hydro, &mesh, &mut groups, &mut point_mass)?;
+        // With winches the lumped water is built again whenever an element comes off or
+        // goes onto a drum (docs/method.md §23).
+        let water_spec = match (&water, winch_data.is_empty()) {
+            (Some(w), false) => Some(Box::new((w.clone(), hydro.clone()))),
+            _ => None,
+        };
+        let water = water_model;
         let mut winch_node = vec![false; n];
         let (mut winch_models, mut winch_start) = (Vec::new(), Vec::new());
         for (m, ws) in winch_data {
@@ -950,6 +945,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             winches: winch_models,
             winch_start,
             winch_node,
+            water_spec,
         };
         sys.check_initial_energies(&initial)?;
         Ok((sys, initial))
@@ -1334,6 +1330,27 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .collect()
     }
 
+    /// Lumps the water again over the elements in the groups (after a winch changed them);
+    /// nothing without water. The water was checked when the system was built, so its
+    /// lumping cannot fail here; the added masses stay those of the start.
+    fn lump_water_again(&mut self) {
+        let Some(spec) = &self.water_spec else {
+            return;
+        };
+        let info: Vec<GroupInfo<'_>> = self
+            .groups
+            .iter()
+            .map(|g| GroupInfo {
+                is_string: matches!(g.law, Law::String(_)),
+                name: &g.name,
+                elements: g.elements.clone(),
+            })
+            .collect();
+        if let Ok((model, _, _)) = crate::water::build(&spec.0, &spec.1, &self.mesh, &info) {
+            self.water = Some(Box::new(model));
+        }
+    }
+
     /// Puts the winches' states into the system: each string's group range, reference
     /// lengths, held nodes and body forces; the constrained sets are rebuilt where a node
     /// came off or went onto a drum.
@@ -1353,6 +1370,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         if moved {
             (self.constrained, self.constrained_elements) =
                 constrained_sets(&self.mesh, &self.free);
+            self.lump_water_again();
         }
     }
 
