@@ -516,8 +516,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         check_gains(&sys, &state, params.h)?;
         let mut state = state;
         let held = HeldVelocities::new(&sys, &mut state)?;
-        // A drum node starts with its payout's rate (docs/method.md §23).
-        for (m, ws) in sys.winches.iter().zip(&winch_start) {
+        // A drum node's path runs along its element in the starting state, and the node
+        // starts with its payout's rate (docs/method.md §23).
+        let mut winch_start = winch_start;
+        for (m, ws) in sys.winches.iter().zip(&mut winch_start) {
+            m.align(ws, &state.r, &state.c, 0.0);
             state.v[m.drum_node(ws)] = m.path(ws, 0.0).1;
         }
         let energies = sys.energies(&state);

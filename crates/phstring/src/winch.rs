@@ -32,7 +32,7 @@ pub struct Winch {
     /// Name for outputs and messages.
     pub name: String,
     /// The element group (a string) it pays out. Its elements run in a chain along its path,
-    /// all of one reference length `L`; the path's first node is the drum.
+    /// all of one reference length `L` (to 1e-6); the path's first node is the drum.
     pub group: usize,
     /// How many of the group's first elements start on the drum (parked: their nodes at
     /// the drum point): the cable the drum can pay out beyond the starting length is
@@ -248,6 +248,17 @@ impl<const D: usize> WinchModel<D> {
         )
     }
 
+    /// Sets the drum node's path in `ws` along its element in the state `(r, c)` (its
+    /// direction and stretch there), from the drum node's position: how a run starts from a
+    /// state that is not the layout's (an equilibrium), so that the first element that comes
+    /// off the drum continues the string's own direction.
+    pub fn align(&self, ws: &mut WinchState, r: &[SVector<f64, D>], c: &[f64], t: f64) {
+        let (a, b) = (self.nodes[ws.drum], self.nodes[ws.drum + 1]);
+        let behind = ws.behind(ws.payout);
+        let drum = self.drum_at(t).0;
+        self.new_path(ws, (r[a], r[b]), (c[self.drum_element(ws)], behind), drum);
+    }
+
     /// Starts a new path for the drum node at its position `r` with the direction and
     /// stretch of the drum element (whose other node is at `r_next`, strain `c`).
     fn new_path(
@@ -423,7 +434,7 @@ pub(crate) fn attach<const D: usize>(
         let l = mesh.lengths()[range.start];
         if let Some(j) = (0..els.len()).find(|&j| {
             let lj = mesh.lengths()[range.start + j];
-            (lj - l).abs() > 1e-9 * l
+            (lj - l).abs() > 1e-6 * l
         }) {
             return Err(problem(
                 k,
