@@ -121,7 +121,8 @@ fn no_initial_table_is_the_state_of_before() {
 /// only the hanging lines (`mooring_line.toml`,
 /// `slack_wire.toml`, `spread_mooring_3d.toml`, `spread_mooring_platform.toml`,
 /// `chain_on_slope_2d.toml`) and the bodies held by lines (`cable_robot_3d.toml`,
-/// `spar_buoy_3d.toml`) ask for the equilibrium start (and no displacement or velocity).
+/// `cable_robot_winches_3d.toml`, `spar_buoy_3d.toml`) ask for the equilibrium start (and
+/// no displacement or velocity).
 #[test]
 fn examples_start_at_rest() {
     fn at_rest<const D: usize>(file: &ScenarioFile) {
@@ -133,6 +134,7 @@ fn examples_start_at_rest() {
             "spread_mooring_platform.toml",
             "chain_on_slope_2d.toml",
             "cable_robot_3d.toml",
+            "cable_robot_winches_3d.toml",
             "spar_buoy_3d.toml",
         ]
         .iter()
