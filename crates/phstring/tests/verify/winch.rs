@@ -325,7 +325,7 @@ fn a_held_payout_speed_hauls_in_from_where_the_winch_is() {
     );
 }
 
-/// The anchor-handling line: a vessel's drum 5 m above 55 m of water, 76 mm studless chain
+/// The anchor-handling line: a vessel's drum 5 m above 50 m of water, 76 mm studless chain
 /// (115 kg/m, EA = 5e8 N, drag, a seabed with damping) laid straight down 65 m and 130 m
 /// along the seabed to an anchor, five 5 m elements on the drum, paying out 20 m over 20 s.
 /// Returns the network and the chain's group.
@@ -378,10 +378,10 @@ fn anchor_line() -> (Network<2, Material>, usize) {
 }
 
 /// Anchor handling: a vessel's winch 5 m above the water pays out 20 m of 76 mm studless
-/// chain (115 kg/m, EA = 5e8 N) that runs down 55 m of water to a flat seabed and along it
-/// to an anchor, with drag and seabed damping; it starts from its straight layout and swings
-/// and snaps into its catenary meanwhile (the drum tension ranges 0–0.2 MN, the drag takes
-/// 0.27 MJ). The water is lumped again over the elements
+/// chain (115 kg/m, EA = 5e8 N) that runs down 5 m of air and 50 m of water to a flat
+/// seabed and along it to an anchor, with drag and seabed damping; it starts from its
+/// straight layout and swings and snaps into its catenary meanwhile (the drum tension
+/// ranges 0–0.2 MN, the drag takes 0.27 MJ). The water is lumped again over the elements
 /// that come off the drum, and every step's balance (winch, drag, current, seabed damping)
 /// holds to round-off; the chain paid out after it has settled (t = 2 s) lands on the seabed
 /// (the grounded length grows by more than half of it), and lowering it, the winch takes
