@@ -736,6 +736,19 @@ fn add_point_masses<const D: usize>(
     Ok(point_mass)
 }
 
+/// What the water's lumping needs of each group: whether it is a string, its name and its
+/// (active) elements.
+fn group_info<const D: usize, M>(groups: &[ElementGroup<D, M>]) -> Vec<GroupInfo<'_>> {
+    groups
+        .iter()
+        .map(|g| GroupInfo {
+            is_string: matches!(g.law, Law::String(_)),
+            name: &g.name,
+            elements: g.elements.clone(),
+        })
+        .collect()
+}
+
 /// Validates the water and the hydrodynamics (none without water), adds the lines' added
 /// masses to their groups' `ρA` and the points' to `point_mass`, and returns the lumped model.
 fn attach_water<const D: usize, M>(
@@ -752,14 +765,7 @@ fn attach_water<const D: usize, M>(
             Err(SetupError::HydroWithoutWater)
         };
     };
-    let info: Vec<GroupInfo<'_>> = groups
-        .iter()
-        .map(|g| GroupInfo {
-            is_string: matches!(g.law, Law::String(_)),
-            name: &g.name,
-            elements: g.elements.clone(),
-        })
-        .collect();
+    let info = group_info(groups);
     let (model, added_rho_a, added_point) = crate::water::build(water, hydro, mesh, &info)?;
     for (g, add) in groups.iter_mut().zip(added_rho_a) {
         g.rho_a += add;
@@ -1337,15 +1343,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let Some(spec) = &self.water_spec else {
             return;
         };
-        let info: Vec<GroupInfo<'_>> = self
-            .groups
-            .iter()
-            .map(|g| GroupInfo {
-                is_string: matches!(g.law, Law::String(_)),
-                name: &g.name,
-                elements: g.elements.clone(),
-            })
-            .collect();
+        let info = group_info(&self.groups);
         if let Ok((model, _, _)) = crate::water::build(&spec.0, &spec.1, &self.mesh, &info) {
             self.water = Some(Box::new(model));
         }

@@ -55,23 +55,8 @@ fn dg4_and_error_control_run_with_exact_balance() {
 fn error_control_resumes_bit_for_bit() {
     let dir = temp_dir("tol-resume");
     let sets = ["time.rtol=1e-6", "time.atol=1e-6"];
-    let whole = dir.join("whole");
-    assert!(run(&whole, &sets, &[]).status.success());
-    let parts = dir.join("parts");
-    let first = run(&parts, &sets, &["--stop-after-steps", "700"]);
-    assert_eq!(
-        first.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&first.stderr)
-    );
-    let cp = parts.join("checkpoint.json");
-    let second = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
-    assert!(
-        second.status.success(),
-        "{}",
-        String::from_utf8_lossy(&second.stderr)
-    );
+    let scenario = "examples/paper_pendulum.toml";
+    let (whole, parts) = crate::run_whole_and_resumed(scenario, &dir, &sets, 700);
     let read = |d: &Path| std::fs::read_to_string(d.join("energy.csv")).unwrap();
     assert_eq!(read(&whole), read(&parts));
 }
