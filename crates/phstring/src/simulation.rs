@@ -231,7 +231,8 @@ pub struct Simulation<const D: usize, M> {
     body_ports_prev: Vec<crate::body::BodyPortSample>,
     /// Per body with a held wrench (inputs), the wrench port it had before.
     held_wrenches: Vec<Option<Option<crate::body::BodyWrench>>>,
-    /// Per winch, the payout [m] and the energy it supplied [J] in the last step.
+    /// Per winch, the payout [m] and the energy it supplied [J] in the last step (during a
+    /// step, the payout it started from).
     winch_step: Vec<(f64, f64)>,
     /// Per winch, the work of its drum node's reaction in the current step [J].
     winch_work: Vec<f64>,
@@ -657,8 +658,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 problem,
             })?;
         self.run = cp;
-        let states = self.run.winches.clone();
-        self.sys.place_winches(&states);
+        self.sys.place_winches(&self.run.winches);
         self.energies = self.sys.energies(&self.run.state);
         Ok(())
     }
@@ -679,8 +679,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         if let Some(run) = &b.run {
             self.run.clone_from(run);
             if !self.sys.winches.is_empty() {
-                let states = self.run.winches.clone();
-                self.sys.place_winches(&states);
+                self.sys.place_winches(&self.run.winches);
             }
         }
         self.energies = b.energies;
@@ -1278,10 +1277,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         }
         // The winches (docs/method.md §23): their drum nodes move with the payout inside
         // the step; after it, their velocities are held and the strings cut.
-        let before: Vec<f64> = self.run.winches.iter().map(|w| w.payout).collect();
+        // Each winch's payout before the step, into its step record (no allocation).
+        for (s, w) in self.winch_step.iter_mut().zip(&self.run.winches) {
+            s.0 = w.payout;
+        }
         let start = self.energies;
         let mut report = self.try_dg(t, h, t_next, step_no)?;
-        let changes = self.winch_after(t_next, &before);
+        let changes = self.winch_after(t_next);
         self.run.supplied_total += changes;
         report.before = start;
         report.after = self.energies;

@@ -157,7 +157,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// payout rate and the string cut where the drum node has left its band, each change's
     /// energy `Ĥ(after) − Ĥ(before)` booked as the winch's supply with the step's reaction
     /// work. Returns the energy of the changes [J].
-    pub(super) fn winch_after(&mut self, t: f64, payout_before: &[f64]) -> f64 {
+    pub(super) fn winch_after(&mut self, t: f64) -> f64 {
         let mut total = 0.0;
         for k in 0..self.sys.winches.len() {
             let m = &self.sys.winches[k];
@@ -170,14 +170,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let mut touched = Touched::default();
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
             m.cut(ws, (t, payout, rate), parts, &mut touched);
-            let states = self.run.winches.clone();
-            self.sys.place_winches(&states);
+            self.sys.place_winches(&self.run.winches);
             let after = self.sys.energies(&self.run.state);
             let de = after.hamiltonian() - self.energies.hamiltonian();
             self.energies = after;
             let step = self.winch_work[k] + de;
             self.run.winches[k].energy += step;
-            self.winch_step[k] = (payout - payout_before[k], step);
+            let before = self.winch_step[k].0;
+            self.winch_step[k] = (payout - before, step);
             total += de;
         }
         total
