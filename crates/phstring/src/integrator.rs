@@ -222,6 +222,8 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub wrenches: &'a [(crate::body::Vec3, crate::body::Vec3)],
     /// Per body, its feedback law's reference at `t_mid` (empty or `None`: no law).
     pub targets: &'a [Option<crate::body_feedback::FeedbackTarget>],
+    /// The winch drums' data for the step (docs/method.md §23.6; empty: none).
+    pub drums: &'a [crate::winch_step::DrumStep<D>],
     /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
     nodes_x: Vec<Vector<D>>,
     /// What the water did over the step at the increment of the last evaluation when that
@@ -260,6 +262,7 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             bodies: &state.bodies,
             wrenches: &[],
             targets: &[],
+            drums: &[],
             nodes_x: Vec::new(),
             work: None,
         }
@@ -279,7 +282,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
     }
 
     fn chain(&self) -> bool {
-        self.sys.mesh.is_chain() && self.sys.bodies.is_empty()
+        self.sys.mesh.is_chain() && self.sys.bodies.is_empty() && self.drums.is_empty()
     }
 
     fn force_scale(&self) -> f64 {
@@ -297,7 +300,7 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
         jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
     ) -> Result<(), StrainError> {
-        if !self.sys.bodies.is_empty() {
+        if !(self.sys.bodies.is_empty() && self.drums.is_empty()) {
             return self.evaluate_with_bodies(x, res, jac);
         }
         // Two instances, so that the Newton iterations run a loop without the scale sums.
@@ -310,8 +313,9 @@ impl<const D: usize, M: StoredEnergy> NewtonProblem<D> for StepEquations<'_, D, 
 }
 
 impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
-    /// The full evaluation with rigid bodies: `x` holds the nodes' increments, then the
-    /// bodies' slots; the attached nodes' increments follow from the slots.
+    /// The full evaluation with rigid bodies or winch drums: `x` holds the nodes' increments,
+    /// then the bodies' and the drums' slots; the attached nodes' and the drum nodes'
+    /// increments follow from the slots.
     fn evaluate_with_bodies(
         &mut self,
         x: &[Vector<D>],
@@ -323,6 +327,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         xt.clear();
         xt.extend_from_slice(&x[..n]);
         crate::body_step::fill_attachments(self.sys, self.bodies, &x[n..], &mut xt);
+        crate::winch_step::fill_drums(self.drums, &x[n..], &mut xt);
         let step = crate::body_step::BodyStep {
             states: self.bodies,
             h: self.h,
@@ -582,7 +587,12 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         self.port_and_mass_terms::<MEASURE>(x, res, jac.as_deref_mut(), &nodes, &mut scale2);
         // Rigid bodies: their rows take the attached nodes' rows before those are masked.
         if let Some(step) = bodies {
-            let s2 = step.terms(sys, res, jac.as_deref_mut());
+            let mut s2 = step.terms(sys, res, jac.as_deref_mut());
+            // Winch drums: their rows take the drum nodes' rows likewise.
+            if !self.drums.is_empty() {
+                let j = jac.as_deref_mut();
+                s2 += crate::winch_step::terms(sys, self.drums, self.h, step.slots, res, j);
+            }
             if MEASURE {
                 scale2 += s2;
             }
@@ -1060,6 +1070,7 @@ mod tests {
             bodies: &state.bodies,
             wrenches: &[],
             targets: &[],
+            drums: &[],
             nodes_x: Vec::new(),
             work: None,
         };

@@ -96,6 +96,7 @@ pub mod system;
 pub mod testing;
 pub mod water;
 pub mod winch;
+mod winch_step;
 
 pub use bathymetry::Bathymetry;
 pub use body::{
@@ -135,4 +136,4 @@ pub use water::{
     AxialFriction, Current, Friction, Hydrodynamics, LineHydro, NodeContact, PointHydro, Seabed,
     SeabedSurface, Water, WaterWork,
 };
-pub use winch::{DrumFn, PayoutFn, Winch, WinchState};
+pub use winch::{DrumFn, DrumForceFn, PayoutFn, Winch, WinchDrum, WinchState};

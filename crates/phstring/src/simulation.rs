@@ -238,6 +238,12 @@ pub struct Simulation<const D: usize, M> {
     winch_work: Vec<f64>,
     /// Per winch, its port in the last step: drum node, mid-step velocity, reaction.
     winch_port: Vec<(usize, [f64; 3], [f64; 3])>,
+    /// The winch drums' data for the current step (docs/method.md §23.6).
+    drum_steps: Vec<crate::winch_step::DrumStep<D>>,
+    /// Per winch with a drum (else unused): its payout [m] and payout speed [m/s] at the end
+    /// of the current step, the energy its damping and brake dissipated in it [J] and the
+    /// energy its motor supplied in it [J].
+    drum_next: Vec<(f64, f64, f64, f64)>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -472,8 +478,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     fn start(sys: PhSystem<D, M>, state: State<D>, params: StepParams) -> Result<Self, SetupError> {
         let n_el = sys.mesh.n_elements();
         let n = sys.mesh.n_nodes();
-        let slots = 2 * sys.bodies.len();
-        if slots > 0 && params.control.error_control() {
+        let n_drums = sys.winches.iter().filter(|w| w.drum.is_some()).count();
+        let slots = 2 * sys.bodies.len() + n_drums;
+        if slots > n_drums && params.control.error_control() {
             return Err(SetupError::Body {
                 index: 0,
                 name: sys.body_names[0].clone(),
@@ -487,7 +494,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let winch_start = sys.winch_start.clone();
         sys.place_winches(&winch_start);
         let border = crate::body_step::border_pattern(&sys);
-        let solver = crate::linsolve::make_border_solver::<D>(params.solver, &sys.mesh, &border)?;
+        // A drum couples with whichever node its drum element reaches: the bordered solve
+        // takes any coupling (docs/method.md §23.6).
+        let solver = if n_drums > 0 {
+            crate::linsolve::make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?
+        } else {
+            crate::linsolve::make_border_solver::<D>(params.solver, &sys.mesh, &border)?
+        };
         let mut ports: Vec<PortSample<D>> = sys
             .boundary
             .loads
@@ -543,6 +556,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             winch_step: vec![(0.0, 0.0); winch_start.len()],
             winch_work: vec![0.0; winch_start.len()],
             winch_port: vec![(0, [0.0; 3], [0.0; 3]); winch_start.len()],
+            drum_steps: Vec::with_capacity(n_drums),
+            drum_next: vec![(0.0, 0.0, 0.0, 0.0); winch_start.len()],
             sys,
             params,
             run: Checkpoint {
@@ -659,7 +674,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             })?;
         self.run = cp;
         self.sys.place_winches(&self.run.winches);
-        self.energies = self.sys.energies(&self.run.state);
+        self.energies = self.with_drums(self.sys.energies(&self.run.state), false);
         Ok(())
     }
 
@@ -1320,6 +1335,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         } else {
             (ports, damped)
         };
+        // The winch drums' damping and brakes (docs/method.md §23.6).
+        let dissipated = if self.drum_steps.is_empty() {
+            dissipated
+        } else {
+            dissipated + self.drum_next.iter().map(|d| d.2).sum::<f64>()
+        };
         let before = self.energies;
         let (balance_error, energy_scale) =
             self.check_balance(&at, &stats, before, after, (supplied, dissipated), &water)?;
@@ -1490,6 +1511,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         );
         eqs.wrenches = &self.body_wrenches;
         eqs.targets = &self.body_targets;
+        eqs.drums = &self.drum_steps;
         let result = newton::solve(
             &mut eqs,
             &mut self.x,
@@ -1503,6 +1525,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let (nodes, slots) = self.x.split_at_mut(self.sys.mesh.n_nodes());
             let states = &self.run.state.bodies;
             crate::body_step::fill_attachments(&self.sys, states, slots, nodes);
+        }
+        if result.is_ok() && !self.drum_steps.is_empty() {
+            let (nodes, slots) = self.x.split_at_mut(self.sys.mesh.n_nodes());
+            crate::winch_step::fill_drums(&self.drum_steps, slots, nodes);
         }
         let dissipated = if result.is_ok() && self.sys.has_damping() {
             eqs.dissipated(&self.x)
@@ -1636,6 +1662,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
+        if !self.drum_steps.is_empty() {
+            self.drums_next(at)?;
+        }
         // The velocities the prescribed motions hold at the step's end.
         for (k, m) in self.sys.boundary.motions.iter().enumerate() {
             let v = m.velocity(t_next);
@@ -1667,6 +1696,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 &self.bodies_next,
             )
         };
+        let after = self.with_drums(after, true);
         if !(after.kinetic.is_finite() && after.internal.is_finite() && after.external.is_finite())
         {
             let node = self.non_finite_energy_node();
@@ -1776,7 +1806,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             crate::body_step::mid_velocities(states, h, &self.x[n..], v_mid);
         }
         std::mem::swap(&mut self.run.state.bodies, &mut self.bodies_next);
-        debug_assert_eq!(after, self.sys.energies(&self.run.state));
+        debug_assert_eq!(
+            after,
+            self.with_drums(self.sys.energies(&self.run.state), true)
+        );
         self.energies = after;
         self.run.supplied_total += supplied;
         self.run.dissipated_total += dissipated;

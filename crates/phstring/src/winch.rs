@@ -25,8 +25,61 @@ pub type PayoutFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
 /// [s], at the drum node's position at `t = 0`.
 pub type DrumFn = Arc<dyn Fn(f64) -> [f64; 3] + Send + Sync>;
 
+/// A drum's motor force [N] at the rope (the motor torque over the drum radius) as a function
+/// of time `t` [s]; positive hauls in.
+pub type DrumForceFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
+
+/// A winch drum whose payout is a state of the system rather than prescribed (docs/method.md
+/// §23.6): the payout `p` moves by the rope's pull against the drum's inertia, its motor, its
+/// damping and its brake, all inside the exact step. With `force = T_ref(t)` and a damping
+/// `d`, it is a tension controller: at steady state the drum pays out at `(T − T_ref)/d`, a
+/// proportional law of the payout speed on the tension error, with the inertia as its
+/// derivative part.
+#[derive(Clone)]
+pub struct WinchDrum {
+    /// The drum's inertia at the rope, `J/R²` [kg] (`J` the drum's and the motor's moment of
+    /// inertia [kg·m²], `R` the drum radius [m]); its kinetic energy `½ (J/R²) ṗ²` is part of
+    /// `Ĥ`. May be 0.
+    pub inertia: f64,
+    /// The motor's pull at the rope [N] as a function of time (hauling in positive): the
+    /// target tension of a tension controller, or a motor torque over the drum radius. It is
+    /// a port: its power is `−f ṗ`.
+    pub force: DrumForceFn,
+    /// Damping of the payout speed [N·s/m] (`≥ 0`): the force `−d ṗ` on the payout, a
+    /// resistance.
+    pub damping: f64,
+    /// A brake: the largest force it holds [N] and the slip speed [m/s] of its smoothed
+    /// Coulomb law `−F_b ṗ/√(ṗ² + s²)` (a resistance: the brake holds a pull `T < F_b` with a
+    /// creep of about `s T/√(F_b² − T²)` and slips above it).
+    pub brake: Option<(f64, f64)>,
+}
+
+impl std::fmt::Debug for WinchDrum {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WinchDrum")
+            .field("inertia", &self.inertia)
+            .field("damping", &self.damping)
+            .field("brake", &self.brake)
+            .finish_non_exhaustive()
+    }
+}
+
+impl WinchDrum {
+    /// The resistance's force on the payout [N] (opposing it) at the mid-step payout speed
+    /// `u` [m/s], and its derivative in `u` [N·s/m]: damping and brake.
+    pub fn resistance(&self, u: f64) -> (f64, f64) {
+        let (mut f, mut df) = (self.damping * u, self.damping);
+        if let Some((hold, slip)) = self.brake {
+            let root = (u * u + slip * slip).sqrt();
+            f += hold * u / root;
+            df += hold * slip * slip / (root * root * root);
+        }
+        (f, df)
+    }
+}
+
 /// A winch at the first node of a string (the drum), paying the string out or hauling it
-/// in as a prescribed payout of time.
+/// in as a prescribed payout of time, or with a drum of its own (`drum`).
 #[derive(Clone)]
 pub struct Winch {
     /// Name for outputs and messages.
@@ -44,6 +97,9 @@ pub struct Winch {
     /// The drum's position as a function of time (a crane's trolley); `None`: the drum stays
     /// at the first node's initial position.
     pub drum_motion: Option<DrumFn>,
+    /// A drum with dynamics (inertia, motor, damping, brake); `None`: the payout follows
+    /// `payout`, which is then unused with a drum.
+    pub drum: Option<WinchDrum>,
 }
 
 impl std::fmt::Debug for Winch {
@@ -82,6 +138,16 @@ pub struct WinchState {
     pub payout: f64,
     /// Energy [J] the winch has supplied to the system since `t = 0` (negative: taken).
     pub energy: f64,
+    /// The payout speed `ṗ` [m/s] at the state (a drum's state; with a prescribed payout, 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub speed: f64,
+    /// Energy [J] the drum's damping and brake have dissipated since `t = 0` (≥ 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub dissipated: f64,
+    /// Energy [J] the drum's motor has supplied since `t = 0` (negative: taken), part of
+    /// `energy`.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub motor: f64,
 }
 
 impl WinchState {
@@ -114,6 +180,9 @@ pub(crate) struct WinchModel<const D: usize> {
     pub body_force: SVector<f64, D>,
     /// The payout function.
     pub payout: PayoutFn,
+    /// The drum's dynamics and its slot in the Newton vector (after the nodes); `None`: the
+    /// payout is prescribed.
+    pub drum: Option<(WinchDrum, usize)>,
 }
 
 impl<const D: usize> std::fmt::Debug for WinchModel<D> {
@@ -237,15 +306,40 @@ impl<const D: usize> WinchModel<D> {
     /// `X(t) + origin + direction λ (p(t) − p_cut)`, `X` the drum point, the velocity from
     /// central differences of `X` and `p`.
     pub fn path(&self, ws: &WinchState, t: f64) -> (SVector<f64, D>, SVector<f64, D>) {
-        let dir = vec_of::<D>(&ws.direction) * ws.stretch;
-        let p = (self.payout)(t);
+        let (p, rate) = self.payout_at(ws, t);
+        self.path_at(ws, t, (p, rate))
+    }
+
+    /// The payout [m] and its rate [m/s] at time `t` [s]: the prescribed payout's (a central
+    /// difference), or with a drum its state's.
+    pub fn payout_at(&self, ws: &WinchState, t: f64) -> (f64, f64) {
+        if self.drum.is_some() {
+            return (ws.payout, ws.speed);
+        }
         let dt = 1e-6 * t.abs().max(1.0);
         let rate = ((self.payout)(t + dt) - (self.payout)(t - dt)) / (2.0 * dt);
+        ((self.payout)(t), rate)
+    }
+
+    /// The drum node's position [m] and velocity [m/s] on the path of `ws` at time `t` [s],
+    /// payout `p` [m] and payout rate `rate` [m/s].
+    pub fn path_at(
+        &self,
+        ws: &WinchState,
+        t: f64,
+        (p, rate): (f64, f64),
+    ) -> (SVector<f64, D>, SVector<f64, D>) {
+        let axis = self.axis(ws);
         let (x, xdot) = self.drum_at(t);
         (
-            x + vec_of::<D>(&ws.origin) + dir * (p - ws.payout_cut),
-            xdot + dir * rate,
+            x + vec_of::<D>(&ws.origin) + axis * (p - ws.payout_cut),
+            xdot + axis * rate,
         )
+    }
+
+    /// How far the drum node moves per metre paid out on the path of `ws`: `λ t̂` [m/m].
+    pub fn axis(&self, ws: &WinchState) -> SVector<f64, D> {
+        vec_of::<D>(&ws.direction) * ws.stretch
     }
 
     /// Sets the drum node's path in `ws` along its element in the state `(r, c)` (its
@@ -398,6 +492,7 @@ pub(crate) fn attach<const D: usize>(
     }
     let mut used = vec![false; groups.len()];
     let mut out = Vec::with_capacity(winches.len());
+    let mut n_drums = 0;
     for (k, w) in winches.iter().enumerate() {
         let Some((range, body_force, is_string)) = groups.get(w.group) else {
             return Err(problem(
@@ -483,7 +578,18 @@ pub(crate) fn attach<const D: usize>(
             behind_cut: 0.0,
             payout: 0.0,
             energy: 0.0,
+            speed: 0.0,
+            dissipated: 0.0,
+            motor: 0.0,
         };
+        let drum = match &w.drum {
+            None => None,
+            Some(d) => {
+                check_drum(d).map_err(|p| problem(k, w, p))?;
+                Some((d.clone(), n_drums))
+            }
+        };
+        n_drums += usize::from(drum.is_some());
         let model = WinchModel {
             name: w.name.clone(),
             group: w.group,
@@ -494,10 +600,36 @@ pub(crate) fn attach<const D: usize>(
             body_force: *body_force,
             payout: w.payout.clone(),
             drum_motion: w.drum_motion.clone(),
+            drum,
         };
         out.push((model, state));
     }
     Ok(out)
+}
+
+/// Checks a drum's constants: a finite inertia and damping `≥ 0`, a brake's holding force
+/// `≥ 0` and slip speed `> 0`, the motor force finite at `t = 0`.
+fn check_drum(d: &WinchDrum) -> Result<(), String> {
+    let bad = |what: &str, v: f64| Err(format!("its drum's {what} is {v}"));
+    if !(d.inertia.is_finite() && d.inertia >= 0.0) {
+        return bad("inertia (J/R², kg; must be ≥ 0)", d.inertia);
+    }
+    if !(d.damping.is_finite() && d.damping >= 0.0) {
+        return bad("damping (N·s/m; must be ≥ 0)", d.damping);
+    }
+    if let Some((hold, slip)) = d.brake {
+        if !(hold.is_finite() && hold >= 0.0) {
+            return bad("brake holding force (N; must be ≥ 0)", hold);
+        }
+        if !(slip.is_finite() && slip > 0.0) {
+            return bad("brake slip speed (m/s; must be > 0)", slip);
+        }
+    }
+    let f0 = (d.force)(0.0);
+    if !f0.is_finite() {
+        return bad("motor force at t = 0 (N)", f0);
+    }
+    Ok(())
 }
 
 /// Checks how winch `w` starts on its string's `nodes`: its reserve's nodes at the drum point
@@ -518,7 +650,11 @@ fn check_start<const D: usize>(
             "node {j} of its string is on the drum but does not start at rest"
         ));
     }
-    let p0 = (w.payout)(0.0);
+    let p0 = if w.drum.is_some() {
+        0.0
+    } else {
+        (w.payout)(0.0)
+    };
     if p0 != 0.0 {
         return Err(format!("its payout at t = 0 is {p0} m, not 0"));
     }

@@ -176,6 +176,7 @@ impl ScenarioFile {
                 reserve: ws.reserve,
                 payout: Arc::new(move |t| payout.eval(t).unwrap_or(f64::NAN)),
                 drum_motion,
+                drum: None,
             });
         }
         Ok(network)

@@ -6,7 +6,9 @@
 use super::{Simulation, StepAt};
 use crate::error::StepError;
 use crate::material::StoredEnergy;
+use crate::system::{Energies, Vector};
 use crate::winch::{Touched, WinchState};
+use crate::winch_step::DrumStep;
 
 /// One winch's output after a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -25,6 +27,12 @@ pub struct WinchSample {
     pub energy: f64,
     /// The string's mass off the drum [kg]: `ρA` times `length`.
     pub mass: f64,
+    /// Energy the drum's damping and brake have dissipated since `t = 0` [J] (0 without a
+    /// drum).
+    pub dissipated: f64,
+    /// Energy the drum's motor has supplied since `t = 0` [J] (negative: taken; part of
+    /// `energy`; 0 without a drum).
+    pub motor: f64,
     /// The winch's port in the last step: the drum node then, its mid-step velocity `Δ/h`
     /// [m/s] and the reaction force of the drum on it [N] (`x, y, z`; `z` 0 in 2D). Their
     /// product is the port's work rate; `power` adds the held velocity and the cuts.
@@ -101,16 +109,127 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     power: supplied / h,
                     energy: ws.energy,
                     mass: grp.rho_a * length,
+                    dissipated: ws.dissipated,
+                    motor: ws.motor,
                     port,
                 }
             })
             .collect()
     }
 
+    /// `e` with the drums' kinetic energy `½ λ² (J/R²) ṗ²` added to its kinetic energy and
+    /// magnitude: at the states' speeds, or with `next` at the current step's new ones.
+    pub(super) fn with_drums(&self, mut e: Energies, next: bool) -> Energies {
+        for (k, (m, ws)) in self.sys.winches.iter().zip(&self.run.winches).enumerate() {
+            let Some((drum, _)) = &m.drum else {
+                continue;
+            };
+            let speed = if next { self.drum_next[k].1 } else { ws.speed };
+            let u = ws.stretch * speed;
+            let t = 0.5 * drum.inertia * u * u;
+            e.kinetic += t;
+            e.magnitude += t;
+        }
+        e
+    }
+
+    /// The winch drums' data for the step `at` (docs/method.md §23.6) into `drum_steps`, with
+    /// their slots and drum nodes predicted at the drums' speeds; fails where a motor force
+    /// is not finite or a drum element reaches a node held by a rigid body.
+    fn drum_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
+        self.drum_steps.clear();
+        let n = self.sys.mesh.n_nodes();
+        let first = 2 * self.sys.bodies.len();
+        let t_mid = at.t + 0.5 * at.h;
+        for (k, (m, ws)) in self.sys.winches.iter().zip(&self.run.winches).enumerate() {
+            let Some((drum, j)) = &m.drum else {
+                continue;
+            };
+            let fail = |problem: String| StepError::Winch {
+                step: at.step,
+                t: at.t,
+                at: at.t_next,
+                winch: m.name.clone(),
+                problem,
+            };
+            let (a, other) = (m.drum_node(ws), m.nodes[ws.drum + 1]);
+            if self.sys.attached.get(other).copied().flatten().is_some() {
+                return Err(fail(format!(
+                    "its drum element reaches the node held by a rigid body (mesh node {other}): a drum with dynamics needs two elements off the drum"
+                )));
+            }
+            let force = (drum.force)(t_mid);
+            if !force.is_finite() {
+                return Err(fail(format!(
+                    "its motor force at t = {t_mid} s is {force} N (not finite)"
+                )));
+            }
+            let base = m.path_at(ws, at.t_next, (ws.payout, 0.0)).0 - self.run.state.r[a];
+            let (axis, stretch) = (m.axis(ws), ws.stretch);
+            let step = DrumStep {
+                winch: k,
+                slot: first + j,
+                node: a,
+                other,
+                element: m.drum_element(ws),
+                base,
+                axis,
+                stretch,
+                speed: ws.speed,
+                inertia: stretch * stretch * drum.inertia,
+                force: stretch * force,
+            };
+            let dp = ws.speed * at.h;
+            self.x[n + step.slot] = Vector::<D>::zeros();
+            self.x[n + step.slot][0] = dp;
+            self.x[a] = base + axis * dp;
+            self.drum_steps.push(step);
+        }
+        Ok(())
+    }
+
+    /// The drums' payouts and speeds at the end of the solved step `at` into `drum_next`;
+    /// fails where one is not finite or leaves the drum's range.
+    pub(super) fn drums_next(&mut self, at: &StepAt) -> Result<(), StepError> {
+        let n = self.sys.mesh.n_nodes();
+        for d in &self.drum_steps {
+            let (m, ws) = (&self.sys.winches[d.winch], &self.run.winches[d.winch]);
+            let dp = self.x[n + d.slot][0];
+            // A drum without inertia has no speed of its own: it takes the step's mean (the
+            // midpoint rule's `2Δp/h − ṗₙ` would alternate about it).
+            let u = dp / at.h;
+            let speed = if d.inertia > 0.0 {
+                2.0 * u - ws.speed
+            } else {
+                u
+            };
+            let next = (ws.payout + dp, speed);
+            let limit = if next.1.is_finite() {
+                m.check(ws, next.0)
+            } else {
+                Err(crate::winch::WinchLimit::NotFinite(next.1))
+            };
+            if let Err(limit) = limit {
+                return Err(StepError::Winch {
+                    step: at.step,
+                    t: at.t,
+                    at: at.t_next,
+                    winch: m.name.clone(),
+                    problem: limit.to_string(),
+                });
+            }
+            self.drum_next[d.winch] = (next.0, next.1, 0.0, 0.0);
+        }
+        Ok(())
+    }
+
     /// The drum nodes' increments of the step to `at.t_next` (their paths), after checking
-    /// that each winch can follow its payout there.
+    /// that each winch can follow its payout there; the drums' data for the step.
     pub(super) fn winch_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
         for (m, ws) in self.sys.winches.iter().zip(&self.run.winches) {
+            if m.drum.is_some() {
+                continue;
+            }
             let payout = (m.payout)(at.t_next);
             if let Err(limit) = m.check(ws, payout) {
                 return Err(StepError::Winch {
@@ -124,7 +243,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let a = m.drum_node(ws);
             self.x[a] = m.path(ws, at.t_next).0 - self.run.state.r[a];
         }
-        Ok(())
+        self.drum_prescribe(at)
     }
 
     /// The work [J] of each drum node's reaction over the step of size `h` [s] just solved,
@@ -132,17 +251,38 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub(super) fn winch_reaction_work(&mut self, h: f64) -> f64 {
         let mut total = 0.0;
         let inv_h = 1.0 / h;
-        for (((m, ws), w), port) in self
+        for ((m, ws), w) in self
             .sys
             .winches
             .iter()
             .zip(&self.run.winches)
             .zip(&mut self.winch_work)
-            .zip(&mut self.winch_port)
+            .filter(|((m, _), _)| m.drum.is_none())
         {
             let a = m.drum_node(ws);
             *w = self.reaction[a].dot(&self.x[a]);
             total += *w;
+        }
+        // A drum's own storage is in `Ĥ`: the winch supplies the reaction's work over the
+        // drum's motion and the motor's; the damping and brake dissipate.
+        let n = self.sys.mesh.n_nodes();
+        for d in &self.drum_steps {
+            let dp = self.x[n + d.slot][0];
+            let reaction = &self.reaction[d.node];
+            let (supply, loss, motor) = crate::winch_step::shares(&self.sys, d, dp, h, reaction);
+            total += supply;
+            self.winch_work[d.winch] = supply;
+            self.drum_next[d.winch].2 = loss;
+            self.drum_next[d.winch].3 = motor;
+        }
+        for ((m, ws), port) in self
+            .sys
+            .winches
+            .iter()
+            .zip(&self.run.winches)
+            .zip(&mut self.winch_port)
+        {
+            let a = m.drum_node(ws);
             let (mut u, mut y) = ([0.0; 3], [0.0; 3]);
             for k in 0..D {
                 u[k] = self.x[a][k] * inv_h;
@@ -159,19 +299,28 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// work. Returns the energy of the changes [J].
     pub(super) fn winch_after(&mut self, t: f64) -> f64 {
         let mut total = 0.0;
+        // The drums' new speeds first: `Ĥ` after the step has them all.
+        for d in &self.drum_steps {
+            let ws = &mut self.run.winches[d.winch];
+            ws.speed = self.drum_next[d.winch].1;
+            ws.dissipated += self.drum_next[d.winch].2;
+            ws.motor += self.drum_next[d.winch].3;
+        }
         for k in 0..self.sys.winches.len() {
             let m = &self.sys.winches[k];
             let ws = &mut self.run.winches[k];
-            let (payout, dt) = ((m.payout)(t), 1e-6 * t.abs().max(1.0));
-            let rate = ((m.payout)(t + dt) - (m.payout)(t - dt)) / (2.0 * dt);
+            let (payout, rate) = match &m.drum {
+                None => m.payout_at(ws, t),
+                Some(_) => (self.drum_next[k].0, ws.speed),
+            };
             let a = m.drum_node(ws);
             let state = &mut self.run.state;
-            state.v[a] = m.path(ws, t).1;
+            state.v[a] = m.path_at(ws, t, (payout, rate)).1;
             let mut touched = Touched::default();
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
             m.cut(ws, (t, payout, rate), parts, &mut touched);
             self.sys.place_winches(&self.run.winches);
-            let after = self.sys.energies(&self.run.state);
+            let after = self.with_drums(self.sys.energies(&self.run.state), false);
             let de = after.hamiltonian() - self.energies.hamiltonian();
             self.energies = after;
             let step = self.winch_work[k] + de;

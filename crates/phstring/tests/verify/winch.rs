@@ -99,6 +99,7 @@ fn hoist(
         reserve,
         payout: Arc::new(payout),
         drum_motion: None,
+        drum: None,
     });
     (net, hook)
 }
@@ -373,6 +374,7 @@ fn anchor_line() -> (Network<2, Material>, usize) {
             reserve: 5,
             payout: Arc::new(|t| 20.0 * smooth(t / 20.0)),
             drum_motion: None,
+            drum: None,
         });
     (net, g)
 }

@@ -1,0 +1,140 @@
+//! The winch drums' part of a step (docs/method.md §23.6): each drum's payout increment is
+//! an unknown of the Newton vector (a slot after the nodes and the rigid bodies' slots), the
+//! drum node's increment follows from it, and the drum's row balances the rope's pull against
+//! its inertia, motor, damping and brake.
+//!
+//! A drum's slot holds `(Δp, 0, …)`: the components after the first are placeholders whose
+//! rows are `u = 0`.
+
+use crate::linsolve::{Block, BlockJacobian};
+use crate::system::{PhSystem, Vector};
+use crate::winch::WinchDrum;
+
+/// One drum's data for a step, fixed before the Newton solve.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DrumStep<const D: usize> {
+    /// The winch's index.
+    pub winch: usize,
+    /// Its slot's index among the slots (after the nodes).
+    pub slot: usize,
+    /// The drum node and the drum element's other node.
+    pub node: usize,
+    pub other: usize,
+    /// The drum element.
+    pub element: usize,
+    /// The drum node's increment at `Δp = 0` [m] (the drum's own motion).
+    pub base: Vector<D>,
+    /// The drum node's increment per metre paid out, `λ t̂` [m/m].
+    pub axis: Vector<D>,
+    /// The stretch `λ` of the path: the rope passes over the drum at `λ ṗ`.
+    pub stretch: f64,
+    /// The payout speed at the step's start [m/s].
+    pub speed: f64,
+    /// The drum's inertia per unit payout, `λ² J/R²` [kg].
+    pub inertia: f64,
+    /// The motor's pull per unit payout at the mid time, `λ f(t_{n+½})` [N] (hauling in
+    /// positive).
+    pub force: f64,
+}
+
+/// The drum of winch `k` of `sys` (a winch with a drum).
+fn drum_of<const D: usize, M>(sys: &PhSystem<D, M>, k: usize) -> &WinchDrum {
+    match &sys.winches[k].drum {
+        Some((d, _)) => d,
+        None => unreachable!("a drum step belongs to a winch with a drum"),
+    }
+}
+
+/// The damping's and brake's force per unit payout (opposing it) at the mid-step payout
+/// speed `u` [m/s] of drum step `d`, and its derivative in `u`: the drum's law at the rope's
+/// speed over the drum, `λ u`.
+fn resistance<const D: usize, M>(sys: &PhSystem<D, M>, d: &DrumStep<D>, u: f64) -> (f64, f64) {
+    let (f, df) = drum_of(sys, d.winch).resistance(d.stretch * u);
+    (d.stretch * f, d.stretch * d.stretch * df)
+}
+
+/// Writes the drum nodes' increments `base + axis Δp` into `x` from the slots `slots`.
+pub(crate) fn fill_drums<const D: usize>(
+    drums: &[DrumStep<D>],
+    slots: &[Vector<D>],
+    x: &mut [Vector<D>],
+) {
+    for d in drums {
+        x[d.node] = d.base + d.axis * slots[d.slot][0];
+    }
+}
+
+/// The drums' rows into `res[n..]` (their own slots) and, with `jac`, their blocks; reads
+/// each drum node's row and diagonal block before they are masked. Returns the squares of
+/// the drums' own force terms (force scale).
+///
+/// Row: `g = m_d (2/h)(Δp/h − ṗ_n) + λ t̂·R_d + f + f_r(Δp/h)`, with `R_d` the drum node's
+/// residual (the rope's pull on the drum is `−λ t̂·R_d`), `f` the motor's pull and `f_r` the
+/// damping and brake.
+pub(crate) fn terms<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    drums: &[DrumStep<D>],
+    h: f64,
+    slots: &[Vector<D>],
+    res: &mut [Vector<D>],
+    mut jac: Option<&mut BlockJacobian<D>>,
+) -> f64 {
+    let n = sys.mesh.n_nodes();
+    let inv_h = 1.0 / h;
+    let mut scale2 = 0.0;
+    for d in drums {
+        let dp = slots[d.slot][0];
+        let u = dp * inv_h;
+        let (f_r, df_r) = resistance(sys, d, u);
+        let inertia = d.inertia * 2.0 * inv_h * (u - d.speed);
+        let pull = d.axis.dot(&res[d.node]);
+        let mut row = Vector::<D>::zeros();
+        row[0] = inertia + pull + d.force + f_r;
+        res[n + d.slot] = row;
+        let mi = d.inertia * 2.0 * inv_h;
+        scale2 += mi * mi * (u * u + d.speed * d.speed) + d.force * d.force + f_r * f_r;
+        let Some(j) = jac.as_deref_mut() else {
+            continue;
+        };
+        let slots_n = j.border.slots;
+        let mut own = Block::<D>::identity();
+        own[(0, 0)] =
+            d.inertia * 2.0 * inv_h * inv_h + d.axis.dot(&(j.diag[d.node] * d.axis)) + df_r * inv_h;
+        j.border.own[d.slot * slots_n + d.slot] = own;
+        let free = sys.free[d.other];
+        if !free.iter().any(|&f| f) {
+            continue;
+        }
+        // The drum element's blocks: ∂R_d/∂x_o and ∂R_o/∂x_d (the drum node is its first).
+        let (d_o, o_d) = (j.off[d.element][0], j.off[d.element][1]);
+        let along = d.axis.transpose() * d_o;
+        let across = o_d * d.axis;
+        let mut row_blk = Block::<D>::zeros();
+        let mut col_blk = Block::<D>::zeros();
+        for k in 0..D {
+            if free[k] {
+                row_blk[(0, k)] = along[k];
+                col_blk[(k, 0)] = across[k];
+            }
+        }
+        j.border.links.push((d.other, d.slot, row_blk, col_blk));
+    }
+    scale2
+}
+
+/// The drum's share of a solved step with payout increment `dp` [m] over `h` [s] and the drum
+/// node's residual (its reaction) `reaction` [N]: the energy the winch supplies (the reaction's
+/// work over the drum's own motion, `R·base`, and the motor's, `−f Δp`) and the energy the
+/// damping and brake dissipate, `f_r(Δp/h) Δp ≥ 0` [J]; and the motor's part of the supply,
+/// `−f Δp` [J].
+pub(crate) fn shares<const D: usize, M>(
+    sys: &PhSystem<D, M>,
+    d: &DrumStep<D>,
+    dp: f64,
+    h: f64,
+    reaction: &Vector<D>,
+) -> (f64, f64, f64) {
+    let (f_r, _) = resistance(sys, d, dp / h);
+    let motor = -d.force * dp;
+    (reaction.dot(&d.base) + motor, f_r * dp, motor)
+}
