@@ -35,9 +35,12 @@ pub const WINCHES_FILE: &str = "winches.csv";
 /// since `t = 0` `payout` [m] (negative: hauled in), the string's reference length off the
 /// drum `length` [m], the mean payout speed over the last step `speed` [m/s], the tension
 /// of the element at the drum `tension` [N], the mean power the winch supplied over the last
-/// step `power` [W] (negative: taken), the energy it supplied since `t = 0` `energy` [J]
-/// and the string's mass off the drum `mass` [kg].
-pub const WINCHES_HEADER: &str = "t,winch,payout,length,speed,tension,power,energy,mass";
+/// step `power` [W] (negative: taken), the energy it supplied since `t = 0` `energy` [J],
+/// the string's mass off the drum `mass` [kg], and for a drum with dynamics the energy its
+/// motor supplied `motor_energy` [J] (part of `energy`) and its damping and brake dissipated
+/// `drum_dissipated` [J] since `t = 0` (both 0 without).
+pub const WINCHES_HEADER: &str =
+    "t,winch,payout,length,speed,tension,power,energy,mass,motor_energy,drum_dissipated";
 
 /// Energies, one row per step (header: [`headers`]).
 pub const ENERGY_FILE: &str = "energy.csv";

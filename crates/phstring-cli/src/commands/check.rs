@@ -265,12 +265,15 @@ fn describe_winches(
                 .collect();
             format!("the drum at [{}] m", exprs.join(", "))
         };
+        let drive = match &w.drum {
+            Some(d) => format!("a drum with dynamics: {d}"),
+            None => format!("payout = {} m", clip(&w.payout)),
+        };
         format!(
-            "  winch:     {}: pays out string {} from {} ({drum}), payout = {} m, {} elements of {} m on the drum (can pay out {} m)",
+            "  winch:     {}: pays out string {} from {} ({drum}), {drive}, {} elements of {} m on the drum (can pay out {} m)",
             w.name,
             w.string,
             node(w.drum_node),
-            clip(&w.payout),
             w.reserve_elements,
             num(w.element_length),
             num(w.capacity)

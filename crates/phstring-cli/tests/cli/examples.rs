@@ -96,6 +96,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("steel_hoist", 2, 400, 10, 101),
         ("crane_2d", 2, 3600, 10, 41),
         ("crane_hoisting_2d", 2, 4500, 10, 26),
+        ("heave_compensated_winch_2d", 2, 6400, 10, 81),
         ("platform_3d", 3, 1500, 10, 50),
         ("net_3d", 3, 1000, 10, 1321),
         ("slack_wire", 2, 2000, 20, 161),

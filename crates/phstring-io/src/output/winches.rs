@@ -25,8 +25,9 @@ pub(super) fn create<const D: usize>(
 }
 
 /// Writes one row per winch of `sim` at its time: payout, length and mass off the drum,
-/// the last step's mean speed, the drum tension, the last step's mean power and the energy
-/// supplied so far (speed and power zero before the first step).
+/// the last step's mean speed, the drum tension, the last step's mean power, the energy
+/// supplied so far, and of a drum with dynamics the energy its motor supplied and its damping
+/// and brake dissipated so far (0 without) (speed and power zero before the first step).
 pub(super) fn rows<const D: usize>(
     csv: &mut Csv,
     sim: &Simulation<D, Material>,
@@ -35,7 +36,15 @@ pub(super) fn rows<const D: usize>(
     let names = sim.system().winches();
     for (w, s) in sim.winch_samples().iter().enumerate() {
         let values = [
-            s.payout, s.length, s.speed, s.tension, s.power, s.energy, s.mass,
+            s.payout,
+            s.length,
+            s.speed,
+            s.tension,
+            s.power,
+            s.energy,
+            s.mass,
+            s.motor,
+            s.dissipated,
         ];
         check_finite(&csv.path, "winch", t, &values)?;
         let name = names.get(w).map_or("", |(name, _)| name);

@@ -49,10 +49,12 @@ pub struct WinchComponent {
     pub element_length: f64,
     /// The most it can pay out from `t = 0` [m]: its reserve elements.
     pub capacity: f64,
-    /// The payout expression [m].
+    /// The payout expression [m] (empty with a drum with dynamics).
     pub payout: String,
     /// The drum's position expressions [m], empty for a drum that stays.
     pub drum_position: Vec<String>,
+    /// A drum with dynamics, described (`None`: the payout is prescribed).
+    pub drum: Option<String>,
 }
 
 /// A rigid body (`[bodies.NAME]`).

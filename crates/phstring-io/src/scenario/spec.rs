@@ -435,8 +435,13 @@ pub struct WinchSpec {
     /// Name of the `[[string]]` it pays out; its first path node is the drum.
     pub string: Spanned<String>,
     /// The length paid out since `t = 0` [m] (negative: hauled in), an expression of `t`
-    /// that is 0 at `t = 0`.
-    pub payout: Spanned<String>,
+    /// that is 0 at `t = 0`. Required without `drum`, refused with it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payout: Option<Spanned<String>>,
+    /// A drum with dynamics (`[winch.drum]`): the payout follows from the rope's pull against
+    /// the drum's inertia, motor, damping and brake.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drum: Option<Spanned<DrumSpec>>,
     /// Cable on the drum [m] that it can pay out beyond the string's starting length
     /// (default 0: it can only haul in); rounded up to whole elements.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -445,6 +450,35 @@ pub struct WinchSpec {
     /// trolley); at the drum node's position at `t = 0`. Default: the drum stays.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drum_position: Option<Spanned<Vec<String>>>,
+}
+
+/// A winch drum with dynamics (`[winch.drum]`, docs/method.md §23.6). Every key is optional;
+/// `inertia` and `torque` need `radius`, and `tension` and `torque` exclude each other.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DrumSpec {
+    /// The drum's (and motor's) moment of inertia `J` [kg·m²] (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<Spanned<f64>>,
+    /// The drum's radius `R` [m] where the rope leaves it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<Spanned<f64>>,
+    /// Target tension [N] as an expression of `t`: the motor pulls the rope with it (a
+    /// tension controller with `damping` as its gain).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tension: Option<Spanned<String>>,
+    /// Motor torque [N·m] as an expression of `t` (hauling in positive).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque: Option<Spanned<String>>,
+    /// Damping of the payout speed [N·s/m] (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<Spanned<f64>>,
+    /// The brake's holding force at the rope [N] (default: no brake).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brake: Option<Spanned<f64>>,
+    /// The brake's slip speed [m/s] (default 1e-3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brake_slip: Option<Spanned<f64>>,
 }
 
 /// A point mass at a node; gravity (`body_force.gravity`) acts on it.

@@ -2,12 +2,13 @@
 //! first path node (docs/method.md §23, docs/scenario.md).
 
 use std::sync::Arc;
+use toml::Spanned;
 
-use phstring::{Material, Network, Winch};
+use phstring::{Material, Network, Winch, WinchDrum};
 
 use super::components::WinchComponent;
 use super::expr::Expr;
-use super::spec::WinchSpec;
+use super::spec::{DrumSpec, WinchSpec};
 use super::{ScenarioError, ScenarioFile};
 
 /// A winch's string as built: the winch's index in the file, its string's group and the
@@ -115,18 +116,7 @@ impl ScenarioFile {
         for ws in strings {
             let spec = self.scenario.winch[ws.winch].get_ref();
             let key = |f: &str| format!("winch.{}.{f}", ws.winch);
-            let payout = Expr::new(spec.payout.get_ref(), t_check)
-                .map_err(|m| self.invalid(&key("payout"), spec.payout.span(), m))?;
-            let at_zero = payout.eval(0.0).unwrap_or(f64::NAN);
-            if at_zero != 0.0 {
-                return Err(self.invalid(
-                    &key("payout"),
-                    spec.payout.span(),
-                    format!(
-                        "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
-                    ),
-                ));
-            }
+            let (payout, dynamics) = self.winch_drive(ws.winch, spec)?;
             let mut drum = Vec::new();
             if let Some(d) = &spec.drum_position {
                 if d.get_ref().len() != D {
@@ -157,8 +147,11 @@ impl ScenarioFile {
                 reserve_elements: ws.reserve,
                 element_length: l,
                 capacity: ws.reserve as f64 * l,
-                payout: spec.payout.get_ref().clone(),
+                payout: payout
+                    .as_ref()
+                    .map_or(String::new(), |e| e.text().to_string()),
                 drum_position: drum.iter().map(|e| e.text().to_string()).collect(),
+                drum: dynamics.as_ref().map(|(_, text)| text.clone()),
             });
             let drum_motion: Option<phstring::DrumFn> = (!drum.is_empty()).then(|| {
                 let f: phstring::DrumFn = Arc::new(move |t| {
@@ -174,11 +167,137 @@ impl ScenarioFile {
                 name: spec.name.get_ref().clone(),
                 group: ws.group,
                 reserve: ws.reserve,
-                payout: Arc::new(move |t| payout.eval(t).unwrap_or(f64::NAN)),
+                payout: match payout {
+                    Some(p) => Arc::new(move |t| p.eval(t).unwrap_or(f64::NAN)),
+                    None => Arc::new(|_| 0.0),
+                },
                 drum_motion,
-                drum: None,
+                drum: dynamics.map(|(d, _)| d),
             });
         }
         Ok(network)
+    }
+
+    /// Winch `k`'s drive: its payout expression (checked 0 at `t = 0`), or its drum with
+    /// dynamics and a description of it; exactly one of the two.
+    #[allow(clippy::type_complexity)]
+    fn winch_drive(
+        &self,
+        k: usize,
+        spec: &WinchSpec,
+    ) -> Result<(Option<Expr>, Option<(WinchDrum, String)>), ScenarioError> {
+        let key = |f: &str| format!("winch.{k}.{f}");
+        let t_check = self.first_mid_time();
+        match (&spec.payout, &spec.drum) {
+            (Some(p), None) => {
+                let payout = Expr::new(p.get_ref(), t_check)
+                    .map_err(|m| self.invalid(&key("payout"), p.span(), m))?;
+                let at_zero = payout.eval(0.0).unwrap_or(f64::NAN);
+                if at_zero != 0.0 {
+                    return Err(self.invalid(
+                        &key("payout"),
+                        p.span(),
+                        format!(
+                            "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
+                        ),
+                    ));
+                }
+                Ok((Some(payout), None))
+            }
+            (None, Some(d)) => Ok((None, Some(self.drum_dynamics(k, d.get_ref())?))),
+            (Some(p), Some(_)) => Err(self.invalid(
+                &key("payout"),
+                p.span(),
+                "and [winch.drum] exclude each other: a drum with dynamics moves the payout itself",
+            )),
+            (None, None) => Err(self.invalid(
+                &key("payout"),
+                spec.name.span(),
+                "is missing: give the payout [m] as an expression of t, or a [winch.drum]",
+            )),
+        }
+    }
+
+    /// The drum of `[winch.drum]` of winch `k` and its description: `J/R²`, the motor's pull
+    /// (`tension`, or `torque/R`), damping and brake, each checked.
+    fn drum_dynamics(&self, k: usize, d: &DrumSpec) -> Result<(WinchDrum, String), ScenarioError> {
+        let key = |f: &str| format!("winch.{k}.drum.{f}");
+        let t_check = self.first_mid_time();
+        let value = |f: &str, v: &Option<Spanned<f64>>, positive: bool| {
+            let Some(v) = v else {
+                return Ok(None);
+            };
+            let x = *v.get_ref();
+            if !(x.is_finite() && (x > 0.0 || (!positive && x == 0.0))) {
+                let bound = if positive { "> 0" } else { "≥ 0" };
+                return Err(self.invalid(
+                    &key(f),
+                    v.span(),
+                    format!("= {x} must be finite and {bound}"),
+                ));
+            }
+            Ok(Some(x))
+        };
+        let radius = value("radius", &d.radius, true)?;
+        let needs_radius = |f: &str, span: std::ops::Range<usize>| {
+            radius.ok_or_else(|| {
+                self.invalid(
+                    &key(f),
+                    span,
+                    "needs the drum's radius (winch.drum.radius [m]) to act at the rope",
+                )
+            })
+        };
+        let inertia = match value("inertia", &d.inertia, false)? {
+            Some(j) => {
+                j / needs_radius("inertia", d.inertia.as_ref().map_or(0..0, |v| v.span()))?.powi(2)
+            }
+            None => 0.0,
+        };
+        let damping = value("damping", &d.damping, false)?.unwrap_or(0.0);
+        let brake = match value("brake", &d.brake, false)? {
+            Some(hold) => Some((
+                hold,
+                value("brake_slip", &d.brake_slip, true)?.unwrap_or(1e-3),
+            )),
+            None => None,
+        };
+        let mut text = vec![format!("inertia {inertia} kg at the rope")];
+        let force: phstring::DrumForceFn = match (&d.tension, &d.torque) {
+            (Some(_), Some(q)) => {
+                return Err(self.invalid(
+                    &key("torque"),
+                    q.span(),
+                    "and winch.drum.tension exclude each other (a tension controller's motor pulls with the target tension)",
+                ));
+            }
+            (Some(tn), None) => {
+                let e = Expr::new(tn.get_ref(), t_check)
+                    .map_err(|m| self.invalid(&key("tension"), tn.span(), m))?;
+                text.push(format!("motor pull (target tension) {} N", e.text()));
+                Arc::new(move |t| e.eval(t).unwrap_or(f64::NAN))
+            }
+            (None, Some(q)) => {
+                let r = needs_radius("torque", q.span())?;
+                let e = Expr::new(q.get_ref(), t_check)
+                    .map_err(|m| self.invalid(&key("torque"), q.span(), m))?;
+                text.push(format!("motor torque {} N·m over {r} m", e.text()));
+                Arc::new(move |t| e.eval(t).unwrap_or(f64::NAN) / r)
+            }
+            (None, None) => Arc::new(|_| 0.0),
+        };
+        if damping > 0.0 {
+            text.push(format!("damping {damping} N·s/m"));
+        }
+        if let Some((hold, slip)) = brake {
+            text.push(format!("brake {hold} N (slip {slip} m/s)"));
+        }
+        let drum = WinchDrum {
+            inertia,
+            force,
+            damping,
+            brake,
+        };
+        Ok((drum, text.join(", ")))
     }
 }
