@@ -2,7 +2,8 @@
 //! rope's pull against the drum's inertia, motor, damping and brake inside the exact step. A
 //! 5 t payload on a 32 mm steel wire rope released against a slipping brake, held by a
 //! tension controller, and hauled in by a motor torque: each against the rigid-rope law of
-//! motion, with the exact balance on every step and each mechanism's share.
+//! motion, with the exact balance on every step and each mechanism's share; and the statics
+//! at the length a winch has reached.
 
 use phstring::{
     Boundary, MassMatrix, Material, Network, NetworkBuilder, PointMass, Simulation, State,
@@ -273,4 +274,47 @@ fn a_motor_torque_hauls_in_against_the_drums_inertia() {
     );
     assert!(sim.energies().kinetic > drum_energy && drum_energy > 0.0);
     assert!((supplied + pull * w.payout).abs() < 2e-3 * (pull * w.payout).abs());
+}
+
+/// After the motor has hauled in 2.5 m, the system holds the winch's current mesh: its static
+/// equilibrium from the run's state hangs the payload below the drum node by the closed-form
+/// static length of the rope between them, `n L + g((m + ρA n L) n L − ρA (n L)²/2)/EA` with
+/// `n` elements off the drum node, to 1e-9 m, and the drum node's reaction carries the
+/// payload and that rope, `g (m + ρA n L)`.
+#[test]
+fn statics_at_the_length_a_winch_has_reached_hangs_the_closed_form_rope() {
+    let drum = WinchDrum {
+        inertia: 3000.0,
+        force: Arc::new(|_| 6.0e4),
+        damping: 0.0,
+        brake: None,
+    };
+    let (net, hook) = drum_hoist(drum);
+    let mut sim = Simulation::new(net, fixed_step(2e-3)).unwrap_or_else(|e| panic!("{e}"));
+    sim.run_until(2.0, &mut ())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let cp = sim.checkpoint();
+    let (drum_node, drum_element) = sim.system().winch_layout(&cp.winches)[0];
+    let g = sim.system().winches()[0].1;
+    let n = sim.system().group_span(g).end - drum_element;
+    let eq = phstring::statics::solve_from(
+        sim.system(),
+        sim.state(),
+        &phstring::statics::StaticsParams::default(),
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let a = n as f64 * L;
+    let hang = a + G * ((PAYLOAD + RHO_A * a) * a - 0.5 * RHO_A * a * a) / EA;
+    let r = &eq.state.r;
+    let drop = r[drum_node][1] - r[hook][1];
+    let lift = eq.reactions[drum_node][1];
+    eprintln!(
+        "statics at {n} elements off the drum node: payload {drop:.9} m below it (closed form {hang:.9} m), drum reaction {lift:.3} N (weight {:.3} N)",
+        weight(a)
+    );
+    assert!(cp.winches[0].payout < -2.0, "hauled in");
+    assert!((drop - hang).abs() < 1e-9, "{drop} against {hang}");
+    assert!((lift - weight(a)).abs() < 1e-9 * weight(a), "{lift} N");
+    assert!((r[drum_node][0] - r[hook][0]).abs() < 1e-12);
 }
