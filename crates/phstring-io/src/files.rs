@@ -205,14 +205,21 @@ pub const ENERGY_WATER_COLUMNS: [&str; 6] = [
 ];
 
 /// The header line of `energy.csv` in dimension `d`: that of [`headers`], followed by
-/// [`ENERGY_WATER_COLUMNS`] for a run in water (`water`).
-pub fn energy_header(d: usize, water: bool) -> String {
+/// [`ENERGY_WATER_COLUMNS`] for a run in water (`water`), then per winch `k` (in the
+/// scenario's order, `winches` of them) `winch{k}_supplied`, the energy it supplied since
+/// `t = 0` [J] (part of `supplied_energy`), and `winch{k}_dissipated`, the energy its drum's
+/// damping and brake dissipated [J] (part of `dissipated_energy`; 0 without a drum with
+/// dynamics).
+pub fn energy_header(d: usize, water: bool, winches: usize) -> String {
     let (mut energy, _, _) = headers(d);
     if water {
         for c in ENERGY_WATER_COLUMNS {
             energy.push(',');
             energy.push_str(c);
         }
+    }
+    for k in 0..winches {
+        energy.push_str(&format!(",winch{k}_supplied,winch{k}_dissipated"));
     }
     energy
 }
@@ -438,9 +445,9 @@ mod tests {
     fn a_dry_energy_header_is_the_old_one_and_water_appends_its_columns() {
         for d in 1..=3 {
             let dry = headers(d).0;
-            assert_eq!(energy_header(d, false), dry);
+            assert_eq!(energy_header(d, false, 0), dry);
             assert_eq!(
-                energy_header(d, true),
+                energy_header(d, true, 0),
                 format!("{dry},{}", ENERGY_WATER_COLUMNS.join(","))
             );
         }

@@ -329,7 +329,23 @@ pub fn read_history(
     let mut energies = Decimator::<4>::new(max_points);
     let mut increments = Decimator::<2>::new(max_points);
     let mut water = Decimator::<8>::new(max_points);
-    let mut wet = false;
+    // A run in water has the water columns after the 10 of a dry run (and a run with
+    // winches two per winch after those): told by the header.
+    let wet = {
+        use std::io::Read;
+        let mut header = String::new();
+        let file = File::open(path).map_err(|source| OutputError::Io {
+            path: path.to_path_buf(),
+            cause: source,
+        })?;
+        std::io::BufReader::new(file.take(4096))
+            .read_line(&mut header)
+            .map_err(|source| OutputError::Io {
+                path: path.to_path_buf(),
+                cause: source,
+            })?;
+        header.trim_end().split(',').any(|c| c == "buoyancy")
+    };
     let mut h0: Option<f64> = None;
     let mut prev_h: Option<f64> = None;
     let flow = rows_until(path, f, |number, row| {
@@ -355,10 +371,6 @@ pub fn read_history(
         };
         let v = [parse(0)?, parse(1)?, parse(2)?, parse(3)?];
         energies.push(v);
-        // A run in water writes its running totals after the 10 columns of a dry run.
-        if number == 2 {
-            wet = fields.len() >= 16;
-        }
         if wet {
             let start = *h0.get_or_insert(v[3]);
             let mut w = [v[0], v[3] - start, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];

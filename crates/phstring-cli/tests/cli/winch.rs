@@ -244,7 +244,8 @@ fn the_cable_robot_follows_its_winches_to_the_inverse_kinematics() {
 /// drift plus a sine at the heave's frequency, swings with the amplitude the rigid-rope law
 /// gives, `|iωm/(d + iω(m + I))|` times the vessel's heave speed (0.71), within 2 % (the rope's
 /// axial stretch and the payload's growing rope make the rest); the damping is the only
-/// dissipation and equals `drum_dissipated`, and `Ĥ(T) − Ĥ(0)` is the winch's energy less it.
+/// dissipation and equals `drum_dissipated`, and `Ĥ(T) − Ĥ(0)` is the winch's energy less it;
+/// `energy.csv` carries both in its winch columns.
 #[test]
 fn the_heave_compensating_winch_swings_its_payout_as_the_rigid_rope_law_asks() {
     let dir = temp_dir("winch-heave");
@@ -290,4 +291,17 @@ fn the_heave_compensating_winch_swings_its_payout_as_the_rigid_rope_law_asks() {
     assert!((swing - law).abs() < 0.02 * law, "{swing} against {law}");
     assert!((last[9] - dissipated).abs() < 1e-9 * dissipated && dissipated > 0.0);
     assert!((last[6] - dissipated - dh).abs() < 1e-9 * dh.abs());
+    // energy.csv carries the winch's supply and its drum's dissipation at every row.
+    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    let header: Vec<&str> = energy.lines().next().unwrap().split(',').collect();
+    assert_eq!(header[10..], ["winch0_supplied", "winch0_dissipated"]);
+    let e_last: Vec<f64> = energy
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!((e_last[10], e_last[11]), (last[6], last[9]));
+    assert_eq!(e_last[9], dissipated);
 }

@@ -840,7 +840,7 @@ fn resume_writers<const D: usize>(
         s.output.vtk,
         snapshot_times(s.t_end),
         cp.outputs,
-        sim.system().has_water(),
+        (sim.system().has_water(), sim.system().winches().len()),
     )?)
 }
 

@@ -500,6 +500,8 @@ pub struct Writers {
     dir: PathBuf,
     /// The run is in water: `energy.csv` has the water columns.
     water: bool,
+    /// The run's winches: `energy.csv` has two columns for each.
+    n_winches: usize,
     energy: Csv,
     positions: Option<Csv>,
     ports: Csv,
@@ -564,8 +566,9 @@ impl Writers {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         remove_stale_temp_files(dir);
         let water = sim.system().has_water();
+        let n_winches = sim.system().winches().len();
         let (_, positions_header, ports_header) = headers(D);
-        let energy = Csv::create(dir.join(ENERGY_FILE), &energy_header(D, water))?;
+        let energy = Csv::create(dir.join(ENERGY_FILE), &energy_header(D, water, n_winches))?;
         let positions = if positions {
             Some(Csv::create(dir.join(POSITIONS_FILE), &positions_header)?)
         } else {
@@ -587,6 +590,7 @@ impl Writers {
         let mut w = Self {
             dir: dir.to_path_buf(),
             water,
+            n_winches,
             energy,
             positions,
             ports,
@@ -625,6 +629,8 @@ impl Writers {
         } else {
             String::new()
         };
+        // The winches' running totals (zero at the start).
+        let wet = wet + &",0,0".repeat(n_winches);
         w.energy.row(&format!(
             "{},{},{},{},0,0,0,0,0,0{wet}",
             num(0.0),
@@ -890,6 +896,13 @@ impl Writers {
         e.num(values[0]).nums(&values[1..6]);
         e.field(r.newton_iterations).nums(&values[6..9]);
         e.nums(wet.as_ref().map_or(&[], |v| v.as_slice()));
+        if self.n_winches > 0 {
+            for w in sim.winch_samples() {
+                let v = [w.energy, w.dissipated];
+                check_finite(&e.path, "energy row value", r.t, &v)?;
+                e.nums(&v);
+            }
+        }
         e.end_line()?;
         e.end_record()?;
         for (k, p) in sim.ports().iter().enumerate() {
@@ -936,14 +949,14 @@ impl Writers {
     /// (files longer than recorded are cut back), to continue appending. The ParaView
     /// collection is read back from `paraview/string.pvd` and must list the checkpoint's
     /// frames; `energy.csv` must have the header of a run of dimension `D` in water
-    /// (`water`) or not, so that the rows appended have its columns.
+    /// (`water`) or not, with `winches` winches, so that the rows appended have its columns.
     pub fn resume<const D: usize>(
         dir: &Path,
         stride: usize,
         vtk_frames: bool,
         snapshot_times: Vec<f64>,
         state: OutputState,
-        water: bool,
+        (water, n_winches): (bool, usize),
     ) -> Result<Self, OutputError> {
         remove_stale_temp_files(dir);
         let pvd = if vtk_frames {
@@ -985,7 +998,7 @@ impl Writers {
             None
         };
         // Check every file before any is cut back.
-        check_header(&dir.join(ENERGY_FILE), &energy_header(D, water))?;
+        check_header(&dir.join(ENERGY_FILE), &energy_header(D, water, n_winches))?;
         let energy = PendingCsv::open(dir.join(ENERGY_FILE), state.energy_bytes)?;
         let ports = PendingCsv::open(dir.join(PORTS_FILE), state.ports_bytes)?;
         let positions = match state.positions_bytes {
@@ -1016,6 +1029,7 @@ impl Writers {
         Ok(Self {
             dir: dir.to_path_buf(),
             water,
+            n_winches,
             energy: energy.commit()?,
             positions,
             ports: ports.commit()?,
@@ -1452,11 +1466,11 @@ mod tests {
         // A resume checks the header: a dry one is refused, a wet one appends wet rows.
         let state = w.state().unwrap();
         drop(w);
-        let refused = Writers::resume::<2>(&dir, 10, true, vec![], state.clone(), false);
+        let refused = Writers::resume::<2>(&dir, 10, true, vec![], state.clone(), (false, 0));
         let e = refused.err().unwrap();
         assert!(matches!(e, OutputError::Mismatch { .. }), "{e}");
         assert!(e.to_string().contains("header"), "{e}");
-        let mut w = Writers::resume::<2>(&dir, 10, true, vec![], state, true).unwrap();
+        let mut w = Writers::resume::<2>(&dir, 10, true, vec![], state, (true, 0)).unwrap();
         let r = s.step().unwrap();
         w.step(&s, &r).unwrap();
         w.finish(&s).unwrap();
