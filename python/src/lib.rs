@@ -269,20 +269,40 @@ impl Simulation {
             .map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
+    /// Holds the motor pull of winch `winch`'s drum (its index in file order, or its name;
+    /// a winch with `[winch.drum]`) at `force` [N] at the rope (hauling in positive: a
+    /// tension controller's target tension) from the current time on, until set again
+    /// (docs/method.md §23.6).
+    fn set_winch_force(&self, winch: &Bound<'_, PyAny>, force: f64) -> PyResult<()> {
+        let mut guard = self.lock();
+        let w = each!(&*guard, s => winch_index(s, winch))?;
+        each!(&mut *guard, s => s.set_winch_force(w, force))
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
     /// The winches, in file order, as a list of dicts after the last step: `name`, `payout`
     /// [m] (since t = 0, negative: hauled in), `length` [m] (reference length off the drum),
     /// `speed` [m/s] (mean over the last step), `tension` [N] (at the drum), `power` [W]
-    /// (mean over the last step), `energy` [J] (supplied since t = 0) and `mass` [kg] (off
-    /// the drum).
+    /// (mean over the last step), `energy` [J] (supplied since t = 0), `mass` [kg] (off
+    /// the drum), and for a drum with dynamics `motor_energy` [J] (its motor's part of
+    /// `energy`) and `drum_dissipated` [J] (its damping and brake; both 0 without).
     #[getter]
     fn winches<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let rows: Vec<(String, [f64; 7])> = each!(&*self.lock(), s => winch_rows(s));
+        let rows: Vec<(String, [f64; 9])> = each!(&*self.lock(), s => winch_rows(s));
         rows.into_iter()
             .map(|(name, v)| {
                 let d = PyDict::new(py);
                 d.set_item("name", name)?;
                 let keys = [
-                    "payout", "length", "speed", "tension", "power", "energy", "mass",
+                    "payout",
+                    "length",
+                    "speed",
+                    "tension",
+                    "power",
+                    "energy",
+                    "mass",
+                    "motor_energy",
+                    "drum_dissipated",
                 ];
                 for (key, x) in keys.into_iter().zip(v) {
                     d.set_item(key, x)?;
@@ -427,15 +447,24 @@ type BodyRow = (
     f64,
 );
 
-/// The winches of `sim`: name and `[payout, length, speed, tension, power, energy, mass]`.
-fn winch_rows<const D: usize>(sim: &Sim<D, Material>) -> Vec<(String, [f64; 7])> {
+/// The winches of `sim`: name and `[payout, length, speed, tension, power, energy, mass,
+/// motor energy, drum dissipated]`.
+fn winch_rows<const D: usize>(sim: &Sim<D, Material>) -> Vec<(String, [f64; 9])> {
     let names = sim.system().winches();
     sim.winch_samples()
         .iter()
         .zip(names)
         .map(|(w, (name, _))| {
             let v = [
-                w.payout, w.length, w.speed, w.tension, w.power, w.energy, w.mass,
+                w.payout,
+                w.length,
+                w.speed,
+                w.tension,
+                w.power,
+                w.energy,
+                w.mass,
+                w.motor,
+                w.dissipated,
             ];
             (name.to_string(), v)
         })

@@ -92,6 +92,23 @@ pub enum InputError {
         /// The value given [m/s].
         value: f64,
     },
+    /// A winch input that does not fit its drive: a held payout speed for a drum with
+    /// dynamics (its payout is a state), or a motor pull for a prescribed payout.
+    #[error("winch {winch} {why}")]
+    WinchDrive {
+        /// Winch index.
+        winch: usize,
+        /// What does not fit.
+        why: &'static str,
+    },
+    /// A winch's held motor pull is not finite.
+    #[error("the motor pull of winch {winch} must be finite, got {} N", Num(*value))]
+    WinchForceNotFinite {
+        /// Winch index.
+        winch: usize,
+        /// The value given [N].
+        value: f64,
+    },
     /// The body index is not one of the problem's rigid bodies.
     #[error("body {body} does not exist: the problem has {count} rigid bodies{}", range(*count))]
     NoSuchBody {
@@ -446,12 +463,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Holds winch `winch`'s payout speed at `speed` [m/s] (negative: hauling in) from the
     /// current time on: its payout becomes `p_now + speed (t − t_now)`, continuing from the
     /// payout it has reached, until set again; the scenario's payout does not come back.
-    /// Refused (nothing changes) for an unknown winch or a speed that is not finite.
+    /// Refused (nothing changes) for an unknown winch, a speed that is not finite, or a
+    /// winch whose drum has dynamics (its payout is a state: hold its motor pull,
+    /// [`Self::set_winch_force`]).
     pub fn set_winch_speed(&mut self, winch: usize, speed: f64) -> Result<(), InputError> {
         let count = self.winch_count();
         let p0 = self
             .winch_payout(winch)
             .ok_or(InputError::NoSuchWinch { winch, count })?;
+        if self.winch_has_drum(winch) {
+            return Err(InputError::WinchDrive {
+                winch,
+                why: "has a drum with dynamics: its payout is a state, not an input (hold its motor pull instead)",
+            });
+        }
         let t0 = self.time();
         if !speed.is_finite() {
             return Err(InputError::WinchSpeedNotFinite {
@@ -460,6 +485,31 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             });
         }
         self.set_winch_payout(winch, Arc::new(move |t| p0 + speed * (t - t0)));
+        Ok(())
+    }
+
+    /// Holds the motor pull of winch `winch`'s drum at `force` [N] at the rope (hauling in
+    /// positive; a tension controller's target tension) from the current time on, until set
+    /// again; the scenario's pull does not come back. Refused (nothing changes) for an
+    /// unknown winch, a pull that is not finite, or a winch without a drum with dynamics.
+    pub fn set_winch_force(&mut self, winch: usize, force: f64) -> Result<(), InputError> {
+        let count = self.winch_count();
+        if winch >= count {
+            return Err(InputError::NoSuchWinch { winch, count });
+        }
+        if !self.winch_has_drum(winch) {
+            return Err(InputError::WinchDrive {
+                winch,
+                why: "has a prescribed payout, no drum with dynamics: hold its payout speed instead",
+            });
+        }
+        if !force.is_finite() {
+            return Err(InputError::WinchForceNotFinite {
+                winch,
+                value: force,
+            });
+        }
+        self.set_winch_drum_force(winch, Arc::new(move |_| force));
         Ok(())
     }
 }

@@ -87,6 +87,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.sys.winches[winch].payout = payout;
     }
 
+    /// Whether winch `winch` (an index checked by the caller) has a drum with dynamics.
+    pub(crate) fn winch_has_drum(&self, winch: usize) -> bool {
+        self.sys.winches[winch].drum.is_some()
+    }
+
+    /// Replaces the motor pull of winch `winch`'s drum (a winch with a drum, checked by the
+    /// caller).
+    pub(crate) fn set_winch_drum_force(&mut self, winch: usize, force: crate::DrumForceFn) {
+        if let Some((drum, _)) = &mut self.sys.winches[winch].drum {
+            drum.force = force;
+        }
+    }
+
     /// The winches' outputs after the last step.
     pub fn winch_samples(&self) -> Vec<WinchSample> {
         let h = self.run.h_cur;
