@@ -120,7 +120,7 @@ fn no_initial_table_is_the_state_of_before() {
 /// Every example still validates, at rest (but for the points of a moving rigid body);
 /// only the hanging lines (`mooring_line.toml`,
 /// `slack_wire.toml`, `spread_mooring_3d.toml`, `spread_mooring_platform.toml`,
-/// `chain_on_slope_2d.toml`) and the bodies held by lines (`cable_robot_3d.toml`,
+/// `chain_on_slope_2d.toml`, `anchor_handling_2d.toml`) and the bodies held by lines (`cable_robot_3d.toml`,
 /// `cable_robot_winches_3d.toml`, `spar_buoy_3d.toml`) ask for the equilibrium start (and
 /// no displacement or velocity).
 #[test]
@@ -136,6 +136,7 @@ fn examples_start_at_rest() {
             "cable_robot_3d.toml",
             "cable_robot_winches_3d.toml",
             "spar_buoy_3d.toml",
+            "anchor_handling_2d.toml",
         ]
         .iter()
         .any(|name| file.path.ends_with(name));

@@ -400,8 +400,16 @@ impl<const D: usize> WinchModel<D> {
             let e = self.drum_element(ws);
             touched.nodes.push((a, r[a], v[a]));
             touched.elements.push((e - 1, c[e - 1]));
-            // The new element has the drum element's strain, and its chord fits it.
-            let dir = vec_of::<D>(&ws.direction);
+            // The new element has the drum element's strain, and its chord fits it,
+            // continuing the drum element's chord (so that the string has no kink at the
+            // old drum node, which is free from now on).
+            let chord = r[self.nodes[ws.drum + 1]] - r[b];
+            let n = chord.norm();
+            let dir = if n > 0.0 {
+                chord / n
+            } else {
+                vec_of::<D>(&ws.direction)
+            };
             r[a] = r[b] - dir * (c[e].max(0.0).sqrt() * l);
             c[e - 1] = c[e];
             let behind = ws.behind(payout) + l;

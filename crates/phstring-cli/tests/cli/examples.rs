@@ -90,6 +90,7 @@ fn every_example_runs_and_writes_complete_outputs() {
     // (file, dimension, steps, stride, nodes)
     let cases = [
         ("paper_pendulum", 2, 100, 1, 31),
+        ("anchor_handling_2d", 2, 4500, 20, 84),
         ("taut_string", 2, 500, 5, 41),
         ("hoist_3d", 3, 400, 4, 21),
         ("axial_rod_1d", 1, 500, 10, 51),
