@@ -164,15 +164,6 @@ impl std::fmt::Display for WinchLimit {
     }
 }
 
-/// What a cut changed, with the values before, for undoing it (in reverse order).
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Touched<const D: usize> {
-    /// Nodes whose position or velocity changed: `(node, r, v)` before.
-    pub nodes: Vec<(usize, SVector<f64, D>, SVector<f64, D>)>,
-    /// Elements whose strain changed: `(element, C)` before.
-    pub elements: Vec<(usize, f64)>,
-}
-
 /// The first `D` components of `a`.
 fn vec_of<const D: usize>(a: &[f64; 3]) -> SVector<f64, D> {
     SVector::<f64, D>::from_fn(|k, _| a[k])
@@ -288,13 +279,12 @@ impl<const D: usize> WinchModel<D> {
     /// element behind the drum point (hauling in), the drum element goes onto the drum (its
     /// first node parked at the drum point at rest) and the next node becomes the drum
     /// node, on a new path along its element. A new drum node moves with the payout rate
-    /// `rate` [m/s] along its path. Records what changed in `touched`.
+    /// `rate` [m/s] along its path.
     pub fn cut(
         &self,
         ws: &mut WinchState,
         (t, payout, rate): (f64, f64, f64),
         (r, v, c): (&mut [SVector<f64, D>], &mut [SVector<f64, D>], &mut [f64]),
-        touched: &mut Touched<D>,
     ) {
         ws.payout = payout;
         let l = self.l;
@@ -304,8 +294,6 @@ impl<const D: usize> WinchModel<D> {
         while ws.behind(payout) < 0.0 && ws.drum > 0 {
             let (a, b) = (self.nodes[ws.drum - 1], self.nodes[ws.drum]);
             let e = self.drum_element(ws);
-            touched.nodes.push((a, r[a], v[a]));
-            touched.elements.push((e - 1, c[e - 1]));
             // The new element has the drum element's strain, and its chord fits it.
             let dir = vec_of::<D>(&ws.direction);
             r[a] = r[b] - dir * (c[e].max(0.0).sqrt() * l);
@@ -322,9 +310,6 @@ impl<const D: usize> WinchModel<D> {
                 self.nodes[ws.drum + 2],
             );
             let e = self.drum_element(ws);
-            touched.nodes.push((a, r[a], v[a]));
-            touched.nodes.push((b, r[b], v[b]));
-            touched.elements.push((e, c[e]));
             let behind = ws.behind(payout) - l;
             r[a] = drum;
             v[a] = SVector::zeros();

@@ -6,7 +6,7 @@
 use super::{Simulation, StepAt};
 use crate::error::StepError;
 use crate::material::StoredEnergy;
-use crate::winch::{Touched, WinchState};
+use crate::winch::WinchState;
 
 /// One winch's output after a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -167,9 +167,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let a = m.drum_node(ws);
             let state = &mut self.run.state;
             state.v[a] = m.path(ws, t).1;
-            let mut touched = Touched::default();
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
-            m.cut(ws, (t, payout, rate), parts, &mut touched);
+            m.cut(ws, (t, payout, rate), parts);
             self.sys.place_winches(&self.run.winches);
             let after = self.sys.energies(&self.run.state);
             let de = after.hamiltonian() - self.energies.hamiltonian();
