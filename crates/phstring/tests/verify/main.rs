@@ -24,3 +24,4 @@ mod solvers;
 mod statics;
 mod water;
 mod winch;
+mod winch_checks;
