@@ -391,3 +391,40 @@ fn winch_step_loop_does_not_allocate() {
     assert_eq!(between, 0, "steps between cuts allocated {between} times");
     assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
 }
+
+/// The same winch run in water (buoyancy, drag and added mass on the rope, 32 mm, drag
+/// coefficient 1.2): the steps between cuts allocate nothing. A cut step does: the water's
+/// lumped model is built again over the elements off the drum (docs/method.md §23, "In
+/// water"), a new model of its own vectors; the count is printed.
+#[test]
+fn winch_step_loop_in_water_allocates_only_at_cuts() {
+    let smooth = |x: f64| {
+        let x = x.clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    };
+    let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
+    let net = winch_hoist(20, 10, payout);
+    let group = net.groups.len() - 1;
+    let net = net
+        .with_water(phstring::Water::new(1025.0))
+        .with_line_hydro(
+            group,
+            phstring::LineHydro {
+                diameter: 0.032,
+                cd: 1.2,
+                ..Default::default()
+            },
+        );
+    let params = StepParams {
+        h: 0.01,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    sim.step().unwrap();
+    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
+    eprintln!(
+        "winch in water: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
+    );
+    assert!(cuts >= 4, "{cuts} cuts");
+    assert_eq!(between, 0, "steps between cuts allocated {between} times");
+}
