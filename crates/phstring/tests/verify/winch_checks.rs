@@ -47,9 +47,10 @@ fn taut_rope(
 
 /// Runs the taut rope with `n_el` elements at the constant payout speed `speed` [m/s] from
 /// `t = 0` with the Courant number `courant` (`h = courant · l / c`) to twice the echo
-/// time `2 SPAN / c`; returns the mean drum tension less `T0` [N] over the middle halves
-/// of the first and second echo intervals, and when the tension first crosses the middle
-/// between the two plateaus [s].
+/// time `2 SPAN / c`; returns the mean change of the drum tension from `T0` [N], counted
+/// positive toward the jump (a rise hauling in, a drop paying out), over the middle halves
+/// of the first and second echo intervals, when that change first crosses the middle
+/// between the two plateaus [s], and the stretch of the drum node's path at the end [–].
 fn sudden_start(n_el: usize, speed: f64, courant: f64) -> (f64, f64, f64, f64) {
     let c = (EA / RHO_A).sqrt();
     let echo = 2.0 * SPAN / c;
