@@ -5,7 +5,7 @@
 //! so that 1000 m are paid out at t = 1005 s (1010 elements off the drum at the end), with a
 //! fixed step `h` (`dg`, the default solver). `cargo bench -p phstring --bench winch` prints,
 //! per step size, the wall time, the ratio of simulated to wall time (the real-time
-//! factor), and the mean time of a step that ends with a cut (an element comes off the
+//! factor), and the median time of a step that ends with a cut (an element comes off the
 //! drum), of the step after it, and of the other steps, against the elements then off the
 //! drum.
 
@@ -112,18 +112,22 @@ fn main() {
         for k in 0..steps - 1 {
             cut[k] = drum_nodes[k + 1] != drum_nodes[k];
         }
-        let mean = |pick: &dyn Fn(usize) -> bool| {
-            let (s, n) = (0..steps - 1)
+        // The median step time of a class of steps (robust to the machine's hiccups) and
+        // how many steps it has.
+        let median = |pick: &dyn Fn(usize) -> bool| {
+            let mut t: Vec<f64> = (0..steps - 1)
                 .filter(|&k| pick(k))
-                .fold((0.0, 0), |(s, n), k| (s + times[k], n + 1));
-            (s / n.max(1) as f64, n)
+                .map(|k| times[k])
+                .collect();
+            t.sort_by(f64::total_cmp);
+            (t.get(t.len() / 2).copied().unwrap_or(f64::NAN), t.len())
         };
         let after = |k: usize| k > 0 && cut[k - 1];
-        let (t_cut, n_cut) = mean(&|k| cut[k]);
-        let (t_after, _) = mean(&after);
-        let (t_other, _) = mean(&|k| !(cut[k] || after(k)));
+        let (t_cut, n_cut) = median(&|k| cut[k]);
+        let (t_after, _) = median(&after);
+        let (t_other, _) = median(&|k| !(cut[k] || after(k)));
         let last = steps / 50;
-        let (t_late, _) = mean(&|k| k + last >= steps && !(cut[k] || after(k)));
+        let (t_late, _) = median(&|k| k + last >= steps && !(cut[k] || after(k)));
         println!(
             "{h:<6}  {steps:>6}  {wall:>8.2}  {:>16.0}  {n_cut:>4}  {:>14.2}  {:>16.3}  {:>5.3}  {:>5.3}  ({:.3})",
             end / wall,
