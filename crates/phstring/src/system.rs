@@ -650,18 +650,24 @@ fn check_port_nodes<const D: usize>(boundary: &Boundary<D>, n: usize) -> Result<
     Ok(())
 }
 
-/// The nodes with a fixed or prescribed component, and the elements touching them.
-fn constrained_sets<const D: usize>(mesh: &Mesh, free: &[[bool; D]]) -> (Vec<usize>, Vec<usize>) {
+/// The nodes with a fixed or prescribed component, and the elements touching them, into
+/// the two lists (emptied first; a refill within their capacity does not allocate).
+fn constrained_sets<const D: usize>(
+    mesh: &Mesh,
+    free: &[[bool; D]],
+    (constrained, constrained_elements): (&mut Vec<usize>, &mut Vec<usize>),
+) {
     let is_constrained = |i: usize| free[i].iter().any(|f| !f);
-    let constrained: Vec<usize> = (0..free.len()).filter(|&i| is_constrained(i)).collect();
-    let constrained_elements: Vec<usize> = mesh
-        .elements()
-        .iter()
-        .enumerate()
-        .filter(|(_, [a, b])| is_constrained(*a) || is_constrained(*b))
-        .map(|(e, _)| e)
-        .collect();
-    (constrained, constrained_elements)
+    constrained.clear();
+    constrained.extend((0..free.len()).filter(|&i| is_constrained(i)));
+    constrained_elements.clear();
+    constrained_elements.extend(
+        mesh.elements()
+            .iter()
+            .enumerate()
+            .filter(|(_, [a, b])| is_constrained(*a) || is_constrained(*b))
+            .map(|(e, _)| e),
+    );
 }
 
 /// The strings' body forces lumped to the nodes, `F_b` [N] per node, and the lumped mass
@@ -928,7 +934,14 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             winch_models.push(m);
             winch_start.push(ws);
         }
-        let (constrained, constrained_elements) = constrained_sets(&mesh, &free);
+        // With winches the sets are filled again after every cut: room for every node and
+        // element from the start, so that a cut does not allocate.
+        let (mut constrained, mut constrained_elements) = if winch_models.is_empty() {
+            (Vec::new(), Vec::new())
+        } else {
+            (Vec::with_capacity(n), Vec::with_capacity(mesh.n_elements()))
+        };
+        constrained_sets(&mesh, &free, (&mut constrained, &mut constrained_elements));
         check_body_forces(&f_body)?;
         if let Some(node) = (0..n).find(|&i| free[i].iter().any(|&f| f) && node_mass[i] <= 0.0) {
             return Err(SetupError::MasslessNode { node });
@@ -1366,8 +1379,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             );
         }
         if moved {
-            (self.constrained, self.constrained_elements) =
-                constrained_sets(&self.mesh, &self.free);
+            let sets = (&mut self.constrained, &mut self.constrained_elements);
+            constrained_sets(&self.mesh, &self.free, sets);
             self.lump_water_again();
         }
     }

@@ -233,15 +233,6 @@ impl std::fmt::Display for WinchLimit {
     }
 }
 
-/// What a cut changed, with the values before, for undoing it (in reverse order).
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Touched<const D: usize> {
-    /// Nodes whose position or velocity changed: `(node, r, v)` before.
-    pub nodes: Vec<(usize, SVector<f64, D>, SVector<f64, D>)>,
-    /// Elements whose strain changed: `(element, C)` before.
-    pub elements: Vec<(usize, f64)>,
-}
-
 /// The first `D` components of `a`.
 fn vec_of<const D: usize>(a: &[f64; 3]) -> SVector<f64, D> {
     SVector::<f64, D>::from_fn(|k, _| a[k])
@@ -382,24 +373,25 @@ impl<const D: usize> WinchModel<D> {
     /// element behind the drum point (hauling in), the drum element goes onto the drum (its
     /// first node parked at the drum point at rest) and the next node becomes the drum
     /// node, on a new path along its element. A new drum node moves with the payout rate
-    /// `rate` [m/s] along its path. Records what changed in `touched`.
+    /// `rate` [m/s] along its path.
     pub fn cut(
         &self,
         ws: &mut WinchState,
         (t, payout, rate): (f64, f64, f64),
         (r, v, c): (&mut [SVector<f64, D>], &mut [SVector<f64, D>], &mut [f64]),
-        touched: &mut Touched<D>,
     ) {
         ws.payout = payout;
         let l = self.l;
         let last = self.elements.len() - 1;
         let (drum, drum_v) = self.drum_at(t);
         let along = |ws: &WinchState| drum_v + vec_of::<D>(&ws.direction) * (ws.stretch * rate);
-        while ws.behind(payout) < 0.0 && ws.drum > 0 {
+        // The band `[−ε, L − ε]`, `ε = 1e-9 L`: a payout brought back to where a cut left the
+        // drum node (`b = L` up to rounding) puts the element back, so that paying out and
+        // hauling in the same length returns the mesh it started from.
+        let eps = 1e-9 * l;
+        while ws.behind(payout) < -eps && ws.drum > 0 {
             let (a, b) = (self.nodes[ws.drum - 1], self.nodes[ws.drum]);
             let e = self.drum_element(ws);
-            touched.nodes.push((a, r[a], v[a]));
-            touched.elements.push((e - 1, c[e - 1]));
             // The new element has the drum element's strain, and its chord fits it,
             // continuing the drum element's chord (so that the string has no kink at the
             // old drum node, which is free from now on).
@@ -417,16 +409,13 @@ impl<const D: usize> WinchModel<D> {
             self.new_path(ws, (r[a], r[b]), (c[e - 1], behind), drum);
             v[a] = along(ws);
         }
-        while ws.behind(payout) > l && ws.drum < last {
+        while ws.behind(payout) > l - eps && ws.drum < last {
             let (a, b, n) = (
                 self.nodes[ws.drum],
                 self.nodes[ws.drum + 1],
                 self.nodes[ws.drum + 2],
             );
             let e = self.drum_element(ws);
-            touched.nodes.push((a, r[a], v[a]));
-            touched.nodes.push((b, r[b], v[b]));
-            touched.elements.push((e, c[e]));
             let behind = ws.behind(payout) - l;
             r[a] = drum;
             v[a] = SVector::zeros();

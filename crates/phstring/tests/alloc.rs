@@ -289,3 +289,143 @@ fn network_solve_with_border_does_not_allocate() {
         "the bordered network solve allocated {count} times"
     );
 }
+
+/// A 2D hoist for the winch allocation tests: a 5 t payload on `n_el` elements of 1 m of
+/// 32 mm steel wire rope (EA = 4.3e7 N, 4.1 kg/m) hanging straight below a drum at the
+/// origin, `reserve` more elements on the drum, the winch paying out `payout(t)`.
+fn winch_hoist(
+    n_el: usize,
+    reserve: usize,
+    payout: impl Fn(f64) -> f64 + Send + Sync + 'static,
+) -> phstring::Network<2, phstring::Material> {
+    use phstring::{
+        Boundary, MassMatrix, Material, NetworkBuilder, PointMass, StringSpec, Vector, Winch,
+    };
+    let (g, ea, rho_a, payload) = (9.81, 4.3e7, 4.1, 5000.0);
+    let mut b = NetworkBuilder::<2, Material>::new();
+    let drum = b.node(Vector::<2>::zeros());
+    // The hook where the rope's static stretch puts it.
+    let a = n_el as f64;
+    let hook = b.node(Vector::<2>::new(
+        0.0,
+        -(a + g * (payload + 0.5 * rho_a * a) * a / ea),
+    ));
+    let spec = StringSpec {
+        name: "rope".into(),
+        material: Material::tension_only_linear(ea),
+        rho_a,
+        mass: MassMatrix::Consistent,
+        body_force: Vector::<2>::new(0.0, -rho_a * g),
+        prestretch: 1.0,
+    };
+    let group = b
+        .string_on_drum(spec, &[drum, hook], n_el, reserve)
+        .unwrap();
+    let masses = vec![PointMass {
+        node: hook,
+        mass: payload,
+        weight: Vector::<2>::new(0.0, -payload * g),
+    }];
+    b.build(Boundary::default(), masses)
+        .unwrap()
+        .with_winch(Winch {
+            name: "hoist".into(),
+            group,
+            reserve,
+            payout: std::sync::Arc::new(payout),
+            drum_motion: None,
+            drum: None,
+        })
+}
+
+/// Steps `sim` for `steps` steps and counts the allocations of the steps that end with a
+/// cut (the winch string's group range changes: an element came off or went onto the
+/// drum) and of the others: `(cuts, allocations in cut steps, allocations in the others)`.
+fn count_winch_allocations<M: phstring::StoredEnergy>(
+    sim: &mut Simulation<2, M>,
+    group: usize,
+    steps: usize,
+) -> (usize, usize, usize) {
+    let (mut cuts, mut at_cuts, mut between) = (0, 0, 0);
+    for _ in 0..steps {
+        let start = sim.system().groups()[group].elements.start;
+        let before = allocations();
+        sim.step().unwrap();
+        let n = allocations() - before;
+        if sim.system().groups()[group].elements.start != start {
+            cuts += 1;
+            at_cuts += n;
+        } else {
+            between += n;
+        }
+    }
+    (cuts, at_cuts, between)
+}
+
+/// A winch run steps without allocating, the steps that cut included: 20 m of rope under a
+/// 5 t payload, 3 m paid out in a smooth move of 3 s and hauled back in the same way,
+/// elements of 1 m coming off and going onto the drum (step-size control on).
+#[test]
+fn winch_step_loop_does_not_allocate() {
+    // Smooth 0 → 1 over [0, 1], at rest at both ends.
+    let smooth = |x: f64| {
+        let x = x.clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    };
+    // 3 m out over 3 s (at up to 1.5 m/s) and back in over t = 4…7 s.
+    let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
+    let net = winch_hoist(20, 10, payout);
+    let group = net.groups.len() - 1;
+    let params = StepParams {
+        h: 0.01,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    sim.step().unwrap();
+    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
+    eprintln!(
+        "winch: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
+    );
+    // Two elements come off the drum (the first, at p = 0+, in the warm-up step) and two go
+    // back on (the last stays off at p = 0, on the edge of its band: docs/method.md §23).
+    assert!(cuts >= 4, "{cuts} cuts");
+    assert_eq!(between, 0, "steps between cuts allocated {between} times");
+    assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
+}
+
+/// The same winch run in water (buoyancy, drag and added mass on the rope, 32 mm, drag
+/// coefficient 1.2): the steps between cuts allocate nothing. A cut step does: the water's
+/// lumped model is built again over the elements off the drum (docs/method.md §23, "In
+/// water"), a new model of its own vectors; the count is printed.
+#[test]
+fn winch_step_loop_in_water_allocates_only_at_cuts() {
+    let smooth = |x: f64| {
+        let x = x.clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    };
+    let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
+    let net = winch_hoist(20, 10, payout);
+    let group = net.groups.len() - 1;
+    let net = net
+        .with_water(phstring::Water::new(1025.0))
+        .with_line_hydro(
+            group,
+            phstring::LineHydro {
+                diameter: 0.032,
+                cd: 1.2,
+                ..Default::default()
+            },
+        );
+    let params = StepParams {
+        h: 0.01,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    sim.step().unwrap();
+    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
+    eprintln!(
+        "winch in water: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
+    );
+    assert!(cuts >= 4, "{cuts} cuts");
+    assert_eq!(between, 0, "steps between cuts allocated {between} times");
+}

@@ -7,7 +7,7 @@ use super::{Simulation, StepAt};
 use crate::error::StepError;
 use crate::material::StoredEnergy;
 use crate::system::{Energies, Vector};
-use crate::winch::{Touched, WinchState};
+use crate::winch::WinchState;
 use crate::winch_step::DrumStep;
 
 /// One winch's output after a step.
@@ -329,9 +329,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let a = m.drum_node(ws);
             let state = &mut self.run.state;
             state.v[a] = m.path_at(ws, t, (payout, rate)).1;
-            let mut touched = Touched::default();
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
-            m.cut(ws, (t, payout, rate), parts, &mut touched);
+            m.cut(ws, (t, payout, rate), parts);
             self.sys.place_winches(&self.run.winches);
             let after = self.with_drums(self.sys.energies(&self.run.state), false);
             let de = after.hamiltonian() - self.energies.hamiltonian();

@@ -24,4 +24,5 @@ mod solvers;
 mod statics;
 mod water;
 mod winch;
+mod winch_checks;
 mod winch_drum;

@@ -8,13 +8,13 @@ use phstring::{
 };
 use std::sync::Arc;
 
-const G: f64 = 9.81;
+pub(super) const G: f64 = 9.81;
 /// A 32 mm six-strand steel wire rope: axial stiffness [N] and mass per metre [kg/m].
-const EA: f64 = 4.3e7;
-const RHO_A: f64 = 4.1;
+pub(super) const EA: f64 = 4.3e7;
+pub(super) const RHO_A: f64 = 4.1;
 /// The payload [kg] and the element length [m].
-const PAYLOAD: f64 = 5000.0;
-const L: f64 = 1.0;
+pub(super) const PAYLOAD: f64 = 5000.0;
+pub(super) const L: f64 = 1.0;
 
 /// Height below the drum [m] of the point at unstretched distance `s` [m] from the drum of
 /// a vertical rope of unstretched length `a` [m] hanging with the payload at its end, at
@@ -61,7 +61,7 @@ fn static_change(sim: &Simulation<2, Material>, a: f64, a0: f64) -> (f64, f64, f
 /// A 2D hoist: a drum at the origin, `n_el` elements of 1 m hanging below it with the
 /// payload at the end, `reserve` more on the drum, at rest in its static shape; the winch
 /// pays out `payout(t)`.
-fn hoist(
+pub(super) fn hoist(
     n_el: usize,
     reserve: usize,
     payout: impl Fn(f64) -> f64 + Send + Sync + 'static,
@@ -104,7 +104,7 @@ fn hoist(
     (net, hook)
 }
 
-fn fixed_step(h: f64) -> StepParams {
+pub(super) fn fixed_step(h: f64) -> StepParams {
     StepParams {
         h,
         control: StepControl {
@@ -116,7 +116,7 @@ fn fixed_step(h: f64) -> StepParams {
 }
 
 /// Smooth 0 → 1 over `[0, 1]`, at rest at both ends.
-fn smooth(x: f64) -> f64 {
+pub(super) fn smooth(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
 }

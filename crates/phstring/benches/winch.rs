@@ -1,0 +1,143 @@
+//! The cost of a winch (docs/method.md §23): a 5 t payload lowered on a 32 mm steel wire
+//! rope (EA = 4.3e7 N, 4.1 kg/m, elements of 1 m) from a drum, 2D, in gravity. The rope
+//! starts with 10 m off the drum, hanging at rest in its static shape, and 1001 elements on
+//! the drum; the payout speed ramps linearly from 0 to 1 m/s over the first 10 s and holds,
+//! so that 1000 m are paid out at t = 1005 s (1010 elements off the drum at the end), with a
+//! fixed step `h` (`dg`, the default solver). `cargo bench -p phstring --bench winch` prints,
+//! per step size, the wall time, the ratio of simulated to wall time (the real-time
+//! factor), and the median time of a step that ends with a cut (an element comes off the
+//! drum), of the step after it and of the other steps (over the whole run, 510 elements
+//! off the drum at the median), and of the other steps of the last 2 % of the run (about
+//! 1000 elements off the drum).
+
+use phstring::{
+    Boundary, MassMatrix, Material, NetworkBuilder, PointMass, Simulation, State, StepControl,
+    StepParams, StringSpec, Vector, Winch,
+};
+use std::sync::Arc;
+use std::time::Instant;
+
+const G: f64 = 9.81;
+const EA: f64 = 4.3e7;
+const RHO_A: f64 = 4.1;
+const PAYLOAD: f64 = 5000.0;
+/// Rope off the drum at the start [m], elements on the drum, payout [m], speed [m/s] and
+/// the speed's ramp [s].
+const START: usize = 10;
+const RESERVE: usize = 1001;
+const PAYOUT: f64 = 1000.0;
+const SPEED: f64 = 1.0;
+const RAMP: f64 = 10.0;
+
+/// The paid-out length [m] at `t` [s]: the speed ramps linearly to `SPEED` over `RAMP`.
+fn payout(t: f64) -> f64 {
+    if t < RAMP {
+        SPEED * t * t / (2.0 * RAMP)
+    } else {
+        SPEED * (t - 0.5 * RAMP)
+    }
+}
+
+/// The lowering run with step `h` [s]: the simulation and the time the payout is done [s].
+fn setup(h: f64) -> (Simulation<2, Material>, f64) {
+    let a = START as f64;
+    // The static shape of the hanging rope below the drum, at unstretched distance `s`.
+    let hanging = |s: f64| -(s + G * ((PAYLOAD + RHO_A * a) * s - 0.5 * RHO_A * s * s) / EA);
+    let mut b = NetworkBuilder::<2, Material>::new();
+    let drum = b.node(Vector::<2>::zeros());
+    let hook = b.node(Vector::<2>::new(0.0, -a));
+    let spec = StringSpec {
+        name: "rope".into(),
+        material: Material::tension_only_linear(EA),
+        rho_a: RHO_A,
+        mass: MassMatrix::Consistent,
+        body_force: Vector::<2>::new(0.0, -RHO_A * G),
+        prestretch: 1.0,
+    };
+    let g = b
+        .string_on_drum(spec, &[drum, hook], START, RESERVE)
+        .unwrap();
+    let nodes = b.group_nodes(g).unwrap().to_vec();
+    let masses = vec![PointMass {
+        node: hook,
+        mass: PAYLOAD,
+        weight: Vector::<2>::new(0.0, -PAYLOAD * G),
+    }];
+    let mut net = b.build(Boundary::default(), masses).unwrap();
+    let mut r = net.initial.r.clone();
+    for (j, &i) in nodes[RESERVE..].iter().enumerate() {
+        r[i] = Vector::<2>::new(0.0, hanging(j as f64));
+    }
+    net.initial = State::at_rest(&net.mesh, r);
+    net = net.with_winch(Winch {
+        name: "lowering".into(),
+        group: g,
+        reserve: RESERVE,
+        payout: Arc::new(payout),
+        drum_motion: None,
+        drum: None,
+    });
+    let params = StepParams {
+        h,
+        control: StepControl {
+            adaptive: false,
+            ..Default::default()
+        },
+        ..StepParams::default()
+    };
+    let end = PAYOUT / SPEED + 0.5 * RAMP;
+    (Simulation::new(net, params).unwrap(), end)
+}
+
+fn main() {
+    println!(
+        "h [s]   steps   wall [s]  real-time factor  cuts  Newton it/step  ms per step: cut  after  other (at 1000 elements: other)"
+    );
+    for h in [0.05, 0.02] {
+        let (mut sim, end) = setup(h);
+        let steps = (end / h).round() as usize;
+        let mut times = Vec::with_capacity(steps);
+        let mut drum_nodes = Vec::with_capacity(steps);
+        let mut iterations = 0;
+        let t0 = Instant::now();
+        for _ in 0..steps {
+            let s = Instant::now();
+            iterations += sim.step().unwrap().newton_iterations;
+            times.push(s.elapsed().as_secs_f64());
+            drum_nodes.push(sim.winch_samples()[0].port.0);
+        }
+        let wall = t0.elapsed().as_secs_f64();
+        let w = sim.winch_samples()[0];
+        assert!((w.payout - PAYOUT).abs() < 1e-9, "payout {}", w.payout);
+        // Step k ends with a cut when the drum node of step k + 1 is another node.
+        let mut cut = vec![false; steps];
+        for k in 0..steps - 1 {
+            cut[k] = drum_nodes[k + 1] != drum_nodes[k];
+        }
+        // The median step time of a class of steps (robust to the machine's hiccups) and
+        // how many steps it has.
+        let median = |pick: &dyn Fn(usize) -> bool| {
+            let mut t: Vec<f64> = (0..steps - 1)
+                .filter(|&k| pick(k))
+                .map(|k| times[k])
+                .collect();
+            t.sort_by(f64::total_cmp);
+            (t.get(t.len() / 2).copied().unwrap_or(f64::NAN), t.len())
+        };
+        let after = |k: usize| k > 0 && cut[k - 1];
+        let (t_cut, n_cut) = median(&|k| cut[k]);
+        let (t_after, _) = median(&after);
+        let (t_other, _) = median(&|k| !(cut[k] || after(k)));
+        let last = steps / 50;
+        let (t_late, _) = median(&|k| k + last >= steps && !(cut[k] || after(k)));
+        println!(
+            "{h:<6}  {steps:>6}  {wall:>8.2}  {:>16.0}  {n_cut:>4}  {:>14.2}  {:>16.3}  {:>5.3}  {:>5.3}  ({:.3})",
+            end / wall,
+            iterations as f64 / steps as f64,
+            t_cut * 1e3,
+            t_after * 1e3,
+            t_other * 1e3,
+            t_late * 1e3
+        );
+    }
+}
