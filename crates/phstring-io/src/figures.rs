@@ -5,7 +5,10 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::files::{ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_SPLIT_STEM, FAIRLEAD_TENSION_STEM};
+use crate::files::{
+    ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_SPLIT_STEM, FAIRLEAD_TENSION_STEM, WINCH_LENGTH_STEM,
+    WINCH_TENSION_STEM, WINCHES_FILE,
+};
 use crate::history::{History, WaterHistory, read_topology};
 use crate::output::PLOT_POINTS;
 use crate::plot::{self, PlotError, Series, Topology};
@@ -195,6 +198,92 @@ pub fn fairlead_tension_plot(
     )
 }
 
+/// Per winch of `winches.csv` in `dir` (in the order they first appear), its name and its
+/// rows `(t, length off the drum, drum tension)`, at most about [`PLOT_POINTS`] each (every
+/// `k`-th row, and the last); `None` without the file.
+#[allow(clippy::type_complexity)]
+fn read_winches(dir: &Path) -> Result<Option<Vec<(String, Vec<[f64; 3]>)>>, String> {
+    let path = dir.join(WINCHES_FILE);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot read {}: {e}", path.display())),
+    };
+    let mut winches: Vec<(String, Vec<[f64; 3]>)> = Vec::new();
+    for (k, line) in text.lines().skip(1).enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        let num = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok());
+        let (Some(t), Some(length), Some(tension)) = (num(0), num(3), num(5)) else {
+            return Err(format!("{WINCHES_FILE} line {}: not a winch row", k + 2));
+        };
+        let name = f.get(1).copied().unwrap_or_default();
+        match winches.iter_mut().find(|(n, _)| n == name) {
+            Some((_, rows)) => rows.push([t, length, tension]),
+            None => winches.push((name.to_string(), vec![[t, length, tension]])),
+        }
+    }
+    for (_, rows) in &mut winches {
+        let every = rows.len().div_ceil(PLOT_POINTS).max(1);
+        let last = rows.last().copied();
+        let mut j = 0;
+        rows.retain(|_| {
+            j += 1;
+            (j - 1) % every == 0
+        });
+        if let Some(l) = last
+            && rows.last() != Some(&l)
+        {
+            rows.push(l);
+        }
+    }
+    Ok(Some(winches))
+}
+
+/// Draws each winch's string length off the drum ([`WINCH_LENGTH_STEM`]) or its tension at
+/// the drum ([`WINCH_TENSION_STEM`], `stem`) against time from `winches.csv` in `dir`.
+pub fn winch_plot(dir: &Path, stem: &str) -> Result<(), PlotError> {
+    let path = dir.join(stem);
+    let input = |message: String| PlotError::Input {
+        path: path.clone(),
+        message,
+    };
+    let winches = read_winches(dir)
+        .map_err(input)?
+        .ok_or_else(|| input(format!("{WINCHES_FILE} was not written")))?;
+    let (column, what, unit) = if stem == WINCH_LENGTH_STEM {
+        (1, "length off the drum", "length off the drum [m]")
+    } else {
+        (2, "tension at the drum", "tension at the drum [N]")
+    };
+    let columns: Vec<(Vec<f64>, Vec<f64>)> = winches
+        .iter()
+        .map(|(_, rows)| {
+            (
+                rows.iter().map(|r| r[0]).collect(),
+                rows.iter().map(|r| r[column]).collect(),
+            )
+        })
+        .collect();
+    let series: Vec<Series> = winches
+        .iter()
+        .zip(&columns)
+        .map(|((name, _), (t, y))| Series {
+            label: name,
+            x: t,
+            y,
+        })
+        .collect();
+    plot::series_plot(
+        &path,
+        &format!("winches: {what}"),
+        "t [s]",
+        unit,
+        &series,
+        false,
+        None,
+    )
+}
+
 /// Draws the `energy`, `configuration` (2D and 3D) and `increments` plots of a run into
 /// `dir`, and for a run in water the plot of where the energy went
 /// ([`energy_split_plot`]). A plot that cannot be drawn (degenerate or extreme ranges, an I/O error, a
@@ -202,7 +291,8 @@ pub fn fairlead_tension_plot(
 /// once `stop` is set, the remaining plots are skipped. `history = Err(reason)` (it could
 /// not be read, or reading it was stopped) skips all. The configuration is drawn in
 /// `scene` (its snapshots are in its plane, see [`Scene`]). With `end_tensions.csv` in
-/// `dir`, the fairlead tensions are drawn too ([`fairlead_tension_plot`]).
+/// `dir`, the fairlead tensions are drawn too ([`fairlead_tension_plot`]); with
+/// `winches.csv`, the winches' lengths off the drum and drum tensions ([`winch_plot`]).
 pub fn draw_plots(
     dir: &Path,
     dim: usize,
@@ -223,6 +313,9 @@ pub fn draw_plots(
     }
     if dir.join(END_TENSIONS_FILE).is_file() {
         stems.push(FAIRLEAD_TENSION_STEM);
+    }
+    if dir.join(WINCHES_FILE).is_file() {
+        stems.extend([WINCH_LENGTH_STEM, WINCH_TENSION_STEM]);
     }
     let h = match history {
         Ok(h) => h,
@@ -265,6 +358,7 @@ pub fn draw_plots(
             FAIRLEAD_TENSION_STEM => {
                 fairlead_tension_plot(dir, title, topology.as_ref().ok().and_then(Option::as_ref))
             }
+            WINCH_LENGTH_STEM | WINCH_TENSION_STEM => winch_plot(dir, stem),
             ENERGY_SPLIT_STEM => match &h.water {
                 Some(w) => energy_split_plot(&path, title, w, end_of_loading),
                 None => Ok(()),

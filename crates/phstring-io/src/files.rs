@@ -175,6 +175,14 @@ pub const END_TENSIONS_FILE: &str = "end_tensions.csv";
 /// and `.png`).
 pub const FAIRLEAD_TENSION_STEM: &str = "fairlead_tension";
 
+/// Stem of the plot of each winch's string length off the drum against time (`.svg` and
+/// `.png`), from `winches.csv`.
+pub const WINCH_LENGTH_STEM: &str = "winch_length";
+
+/// Stem of the plot of each winch's tension at the drum against time (`.svg` and `.png`),
+/// from `winches.csv`.
+pub const WINCH_TENSION_STEM: &str = "winch_tension";
+
 /// Configuration snapshots taken for the configuration plot (at `t = k T / 5`).
 pub const SNAPSHOTS: usize = 6;
 
@@ -256,6 +264,10 @@ pub const RUN_FILES: &[&str] = &[
     END_TENSIONS_FILE,
     "fairlead_tension.svg",
     "fairlead_tension.png",
+    "winch_length.svg",
+    "winch_length.png",
+    "winch_tension.svg",
+    "winch_tension.png",
     ELEMENTS_FILE,
     POINT_MASSES_FILE,
     ANIMATION_FILE,
@@ -453,6 +465,11 @@ mod tests {
         }
         assert!(RUN_FILES.contains(&format!("{ENERGY_SPLIT_STEM}.png").as_str()));
         assert!(RUN_FILES.contains(&format!("{ENERGY_SPLIT_STEM}.svg").as_str()));
+        for stem in [WINCH_LENGTH_STEM, WINCH_TENSION_STEM] {
+            for ext in ["svg", "png"] {
+                assert!(RUN_FILES.contains(&format!("{stem}.{ext}").as_str()));
+            }
+        }
     }
 
     #[test]

@@ -65,6 +65,9 @@ fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: u
     if dim >= 2 {
         plots.push("configuration");
     }
+    if dir.join("winches.csv").is_file() {
+        plots.extend(["winch_length", "winch_tension"]);
+    }
     if dim >= 2 {
         let gif = std::fs::read(dir.join("animation.gif")).unwrap();
         assert_eq!(&gif[..6], b"GIF89a", "animation.gif");
