@@ -265,12 +265,19 @@ fn describe_winches(
                 .collect();
             format!("the drum at [{}] m", exprs.join(", "))
         };
+        let payout = if w.external {
+            format!(
+                "payout speed an input (external: the FMU's winch.{}.speed; `run` holds the payout at 0)",
+                w.name
+            )
+        } else {
+            format!("payout = {} m", clip(&w.payout))
+        };
         format!(
-            "  winch:     {}: pays out string {} from {} ({drum}), payout = {} m, {} elements of {} m on the drum (can pay out {} m)",
+            "  winch:     {}: pays out string {} from {} ({drum}), {payout}, {} elements of {} m on the drum (can pay out {} m)",
             w.name,
             w.string,
             node(w.drum_node),
-            clip(&w.payout),
             w.reserve_elements,
             num(w.element_length),
             num(w.capacity)

@@ -121,6 +121,21 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
             format!("{text}\n[[winch]]\nname = \"second\"\nstring = \"rope\"\npayout = \"0\"\n"),
             "winch.1.string",
         ),
+        (
+            text.replace(
+                "string = \"rope\"\npayout",
+                "string = \"rope\"\nexternal = true\npayout",
+            ),
+            "winch.0.payout` cannot be given with `external = true`",
+        ),
+        (
+            text.replace("payout = \"-15 * (3*min(t/30,1)^2 - 2*min(t/30,1)^3)\"", ""),
+            "winch.0.payout` is missing",
+        ),
+        (
+            format!("{text}\n[[winch]]\nname = \"hoist\"\nstring = \"rope\"\npayout = \"0\"\n"),
+            "winch.1.name",
+        ),
     ];
     for (k, (scenario, key)) in cases.iter().enumerate() {
         let path = dir.join(format!("case{k}.toml"));

@@ -435,8 +435,14 @@ pub struct WinchSpec {
     /// Name of the `[[string]]` it pays out; its first path node is the drum.
     pub string: Spanned<String>,
     /// The length paid out since `t = 0` [m] (negative: hauled in), an expression of `t`
-    /// that is 0 at `t = 0`.
-    pub payout: Spanned<String>,
+    /// that is 0 at `t = 0`; required unless `external = true`, and not given with it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payout: Option<Spanned<String>>,
+    /// `external = true`: the payout speed [m/s] is an input of a front end (the FMU's
+    /// `winch.NAME.speed`, held over each communication step), starting at 0; commands
+    /// without an input (`phstring run`) hold the payout at 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<Spanned<bool>>,
     /// Cable on the drum [m] that it can pay out beyond the string's starting length
     /// (default 0: it can only haul in); rounded up to whole elements.
     #[serde(default, skip_serializing_if = "Option::is_none")]

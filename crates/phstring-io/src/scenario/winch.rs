@@ -4,6 +4,7 @@
 use std::sync::Arc;
 
 use phstring::{Material, Network, Winch};
+use toml::Spanned;
 
 use super::components::WinchComponent;
 use super::expr::Expr;
@@ -65,6 +66,19 @@ impl ScenarioFile {
                     ),
                 ));
             }
+            if let Some(j) =
+                (0..k).find(|&j| s.winch[j].get_ref().name.get_ref() == spec.name.get_ref())
+            {
+                return Err(self.invalid(
+                    &key("name"),
+                    spec.name.span(),
+                    format!(
+                        "= \"{}\" is already the name of winch.{j}: names must differ (outputs and FMU variables are named after them)",
+                        crate::text::clip(spec.name.get_ref())
+                    ),
+                ));
+            }
+            self.check_winch_payout(k, w)?;
             if let Some(j) = (0..k).find(|&j| s.winch[j].get_ref().string.get_ref() == name) {
                 return Err(self.invalid(
                     &key("string"),
@@ -77,6 +91,28 @@ impl ScenarioFile {
             }
         }
         Ok(())
+    }
+
+    /// Checks that winch `k` (table `w`) has exactly one of `payout` and `external = true`.
+    fn check_winch_payout(&self, k: usize, w: &Spanned<WinchSpec>) -> Result<(), ScenarioError> {
+        let spec = w.get_ref();
+        let key = format!("winch.{k}.payout");
+        match (&spec.payout, external(spec)) {
+            (Some(p), true) => Err(self.invalid(
+                &key,
+                p.span(),
+                format!(
+                    "cannot be given with `external = true`, which makes the payout speed an input of the FMU (winch.{}.speed): remove one of them",
+                    crate::text::clip(spec.name.get_ref())
+                ),
+            )),
+            (None, false) => Err(self.invalid(
+                &key,
+                w.span(),
+                "is missing: give the length paid out since t = 0 [m] as an expression of t, or `external = true` to set the payout speed from the FMU",
+            )),
+            _ => Ok(()),
+        }
     }
 
     /// The elements winch `k` parks on its drum: its `reserve` [m] over the string's element
@@ -115,18 +151,25 @@ impl ScenarioFile {
         for ws in strings {
             let spec = self.scenario.winch[ws.winch].get_ref();
             let key = |f: &str| format!("winch.{}.{f}", ws.winch);
-            let payout = Expr::new(spec.payout.get_ref(), t_check)
-                .map_err(|m| self.invalid(&key("payout"), spec.payout.span(), m))?;
-            let at_zero = payout.eval(0.0).unwrap_or(f64::NAN);
-            if at_zero != 0.0 {
-                return Err(self.invalid(
-                    &key("payout"),
-                    spec.payout.span(),
-                    format!(
-                        "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
-                    ),
-                ));
-            }
+            // An external winch's payout follows the speed its front end sets, 0 until then.
+            let payout = match &spec.payout {
+                None => None,
+                Some(p) => {
+                    let e = Expr::new(p.get_ref(), t_check)
+                        .map_err(|m| self.invalid(&key("payout"), p.span(), m))?;
+                    let at_zero = e.eval(0.0).unwrap_or(f64::NAN);
+                    if at_zero != 0.0 {
+                        return Err(self.invalid(
+                            &key("payout"),
+                            p.span(),
+                            format!(
+                                "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
+                            ),
+                        ));
+                    }
+                    Some(e)
+                }
+            };
             let mut drum = Vec::new();
             if let Some(d) = &spec.drum_position {
                 if d.get_ref().len() != D {
@@ -157,7 +200,11 @@ impl ScenarioFile {
                 reserve_elements: ws.reserve,
                 element_length: l,
                 capacity: ws.reserve as f64 * l,
-                payout: spec.payout.get_ref().clone(),
+                payout: spec
+                    .payout
+                    .as_ref()
+                    .map_or_else(String::new, |p| p.get_ref().clone()),
+                external: external(spec),
                 drum_position: drum.iter().map(|e| e.text().to_string()).collect(),
             });
             let drum_motion: Option<phstring::DrumFn> = (!drum.is_empty()).then(|| {
@@ -174,10 +221,18 @@ impl ScenarioFile {
                 name: spec.name.get_ref().clone(),
                 group: ws.group,
                 reserve: ws.reserve,
-                payout: Arc::new(move |t| payout.eval(t).unwrap_or(f64::NAN)),
+                payout: match payout {
+                    Some(e) => Arc::new(move |t| e.eval(t).unwrap_or(f64::NAN)),
+                    None => Arc::new(|_| 0.0),
+                },
                 drum_motion,
             });
         }
         Ok(network)
     }
+}
+
+/// Whether `spec` marks its payout speed as a front end's input (`external = true`).
+fn external(spec: &WinchSpec) -> bool {
+    spec.external.as_ref().is_some_and(|x| *x.get_ref())
 }
