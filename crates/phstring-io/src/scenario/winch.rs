@@ -32,7 +32,8 @@ impl ScenarioFile {
     }
 
     /// Checks the `[[winch]]` tables before the strings are built: a network's, each
-    /// naming a `[[string]]` of the file that no other winch names.
+    /// naming a `[[string]]` of the file that no other winch names, with a name of its own
+    /// and exactly one of `payout` and `external = true`.
     pub(super) fn check_winch_tables(&self, network: bool) -> Result<(), ScenarioError> {
         let s = &self.scenario;
         for (k, w) in s.winch.iter().enumerate() {
