@@ -485,3 +485,101 @@ def test_fmi3_hook_block_states_with_the_body_continue_bit_for_bit(tmp_path):
     for s in (a, b):
         s.terminate()
         s.freeInstance()
+
+
+def crane_fmu(tmp_path, version="2"):
+    """examples/crane_hoisting_2d.toml with the trolley at rest and the winch's payout speed
+    an FMU input (`external = true` instead of `payout`)."""
+    text = (ROOT / "examples" / "crane_hoisting_2d.toml").read_text()
+    payout = 'payout = "-15 * (3*min(t/30,1)^2 - 2*min(t/30,1)^3)"'
+    drum = 'drum_position = ["6 * (3*min(t/8,1)^2 - 2*min(t/8,1)^3)", "0"]'
+    assert payout in text and drum in text
+    scenario = tmp_path / "crane_external.toml"
+    scenario.write_text(text.replace(payout, "external = true").replace(drum, ""))
+    return build(tmp_path, scenario, f"crane{version}", version=version)
+
+
+@pytest.mark.parametrize("version", ["2", "3"])
+def test_a_winch_speed_input_and_its_outputs_are_described(tmp_path, version):
+    fmu = crane_fmu(tmp_path, version)
+    assert validate_fmu(str(fmu)) == []
+    v = {x.name: x for x in read_model_description(str(fmu)).modelVariables}
+    assert (v["winch.hoist.speed"].causality, v["winch.hoist.speed"].unit) == ("input", "m/s")
+    assert float(v["winch.hoist.speed"].start) == 0.0
+    units = {n: v[f"winch.hoist.{n}"].unit for n in ("payout", "length", "vmid", "tension", "power", "energy")}
+    assert units == {"payout": "m", "length": "m", "vmid": "m/s", "tension": "N", "power": "W", "energy": "J"}
+    assert all(v[f"winch.hoist.{n}"].causality == "output" for n in units)
+
+
+def test_the_crane_hauls_in_at_the_masters_speed_with_the_static_power(tmp_path):
+    """The master hauls the 5 t payload in through the winch's speed input: a smooth ramp to
+    0.3 m/s over 2 s (six periods of the payload's bounce on the rope, 0.34 s, so that it
+    starts nearly quasi-statically), then 0.3 m/s to t = 6 s, one element going onto the drum
+    at t = 4.33 s. The paid-out length is the master's sum of speed x H; over the constant
+    phase -0.3 m/s x the time since its start. The power is the tension times the speed and
+    the rope's stretch (the drum's reaction works on the drum node, which moves lambda per
+    metre paid out): per step against the FMU's own tension output, and, averaged over the
+    constant phase, against the static line tension g (m + rhoA l); at the cut the winch takes
+    back the element's strain energy T^2 L / (2 EA) and the weight's potential rhoA g L^2 / 2
+    of its upper node lifted L above the drum. The winch is the model's only port: its energy
+    is `supplied` and the change of H, and the balance stays at rounding."""
+    fmu = crane_fmu(tmp_path)
+    log = Log()
+    s, vr, _keep = slave_of(fmu, log)
+    get = lambda *names: np.array(s.getReal([vr[n] for n in names]))  # noqa: E731
+    w = lambda n: f"winch.hoist.{n}"  # noqa: E731
+    h_comm, ramp, v0 = 0.01, 2.0, -0.3  # s, s, m/s
+    ea, rho_a, m, g, el = 4.3e7, 4.1, 5000.0, 9.81, 1.0  # N, kg/m, kg, m/s^2, m
+    h0 = get("H")[0]
+    rows, paid = [], 0.0
+    for n in range(600):
+        t = n * h_comm
+        x = min((t + h_comm / 2) / ramp, 1.0)
+        speed = v0 * (3 * x**2 - 2 * x**3)
+        s.setReal([vr[w("speed")]], [speed])
+        s.doStep(t, h_comm)
+        paid += speed * h_comm
+        rows.append([t + h_comm, speed, paid, *get(w("payout"), w("length"), w("vmid"), w("tension"), w("power"),
+                                               w("energy"), "H", "supplied", "balance_error")])
+    s.terminate()
+    s.freeInstance()
+    r = np.array(rows)
+    t, speed, paid, payout, length, vmid, tension, power, energy, H, supplied, balance = r.T
+    # The payout is the held speeds' sum: 600 steps of rounding on at most 1.5 m.
+    assert np.abs(payout - paid).max() <= 1e-12
+    const = t > ramp + h_comm / 2
+    assert np.abs(payout[const] - payout[const][0] - v0 * (t[const] - t[const][0])).max() <= 1e-12
+    assert payout[-1] == pytest.approx(v0 * (6.0 - ramp / 2), abs=1e-12)  # the ramp pays half its time
+    assert np.abs(length - (25.0 + payout)).max() <= 1e-12
+    assert np.abs(vmid - speed).max() <= 1e-12
+    # The step where an element went onto the drum: the length off it fell below 24 m.
+    cut = np.flatnonzero(np.diff(np.floor(length)) < 0) + 1
+    assert len(cut) == 1 and t[cut[0]] == pytest.approx(4.34, abs=1e-9)
+    plain = const.copy()
+    plain[cut] = False
+    # Per step: power = -tension x stretch x speed, the stretch 1 + T/EA of the drum element.
+    # The tension is the element's at the step's end, the power the step's mean: they differ
+    # by the change of the tension over a step (the rope's vibrations left by the ramp), which
+    # bounds the difference, with the weight of the drum element's half (rhoA g L / 2 x speed).
+    quasi = -tension * (1.0 + tension / ea) * vmid
+    jump = np.abs(np.diff(tension))[plain[1:]].max()  # N per step
+    gap = np.abs(power - quasi)[plain]
+    print(f"tension jumps up to {jump:.1f} N per step; power - tension x speed up to {gap.max():.1f} W")
+    assert gap.max() <= (jump + rho_a * g * el / 2) * abs(v0)
+    # At the cut the winch takes back the element's energy.
+    k = cut[0]
+    taken = (quasi[k] - power[k]) * h_comm
+    element = tension[k] ** 2 * el / (2 * ea) + rho_a * g * el**2 / 2
+    print(f"at the cut the winch took {taken:.3f} J, the element's strain and weight {element:.3f} J")
+    assert abs(taken - element) <= (jump + rho_a * g * el / 2) * abs(v0) * h_comm + 1e-3 * element
+    # Averaged over the constant phase (the cut aside) against the static line tension: the
+    # vibrations' mean is the difference (the payload does not accelerate at constant speed).
+    weight = g * (m + rho_a * length[plain])
+    static = weight * (1.0 + weight / ea) * -v0
+    print(f"mean power {power[plain].mean():.2f} W against the static {static.mean():.2f} W")
+    assert power[plain].mean() == pytest.approx(static.mean(), rel=1e-3)
+    # The winch is the only port.
+    assert np.abs(energy - supplied).max() <= 1e-9 * np.abs(energy).max()
+    assert np.abs(H - h0 - energy).max() <= 1e-9 * np.abs(energy).max()
+    assert np.abs(balance).max() <= 1e-12 * np.abs(H).max()
+    print(f"winch energy {energy[-1]:.2f} J, max |balance_error| {np.abs(balance).max():.3e} J of H {np.abs(H).max():.4e} J")

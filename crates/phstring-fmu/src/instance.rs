@@ -14,7 +14,7 @@ use phstring_io::scenario::{Setup, StartError};
 use serde::{Deserialize, Serialize};
 
 use crate::error::FmuError;
-use crate::model::{BodyValue, Causality, ModelSpec, Quantity};
+use crate::model::{BodyValue, Causality, ModelSpec, Quantity, WinchValue};
 
 /// A rigid body's wrench: force [N] and torque [N·m], space axes.
 type Wrench = ([f64; 3], [f64; 3]);
@@ -121,6 +121,10 @@ impl Stepper {
         let (f, t) = (force.into(), torque.into());
         by_dim!(&mut self.0, s => s.set_body_wrench(body, f, t))
     }
+    /// Holds winch `winch`'s payout speed at `speed` [m/s] from the payout it has reached.
+    fn set_winch_speed(&mut self, winch: usize, speed: f64) -> Result<(), InputError> {
+        by_dim!(&mut self.0, s => s.set_winch_speed(winch, speed))
+    }
     /// Ramps motion `motion` from where it is to `target` [m] at time `t_target` [s].
     fn set_motion_target(
         &mut self,
@@ -154,6 +158,7 @@ fn value<const D: usize>(sim: &Simulation<D, Material>, q: Quantity) -> f64 {
             what,
             component,
         } => body_value(sim, body, what, component),
+        Quantity::Winch { winch, what } => winch_value(sim, winch, what),
         Quantity::Hamiltonian => e.hamiltonian(),
         Quantity::Kinetic => e.kinetic,
         Quantity::Potential => e.potential(),
@@ -166,7 +171,28 @@ fn value<const D: usize>(sim: &Simulation<D, Material>, q: Quantity) -> f64 {
         | Quantity::LoadForce { .. }
         | Quantity::MotionPosition { .. }
         | Quantity::BodyForce { .. }
-        | Quantity::BodyTorque { .. } => f64::NAN,
+        | Quantity::BodyTorque { .. }
+        | Quantity::WinchSpeed { .. } => f64::NAN,
+    }
+}
+
+/// Value `what` of winch `winch` of `sim` after its last step (NaN if there is no such
+/// winch).
+fn winch_value<const D: usize>(
+    sim: &Simulation<D, Material>,
+    winch: usize,
+    what: WinchValue,
+) -> f64 {
+    let Some(s) = sim.winch_samples().get(winch).copied() else {
+        return f64::NAN;
+    };
+    match what {
+        WinchValue::Payout => s.payout,
+        WinchValue::Length => s.length,
+        WinchValue::Speed => s.speed,
+        WinchValue::Tension => s.tension,
+        WinchValue::Power => s.power,
+        WinchValue::Energy => s.energy,
     }
 }
 
@@ -336,12 +362,14 @@ fn time_tol(h: f64, t: f64) -> f64 {
     1e-9 * h + 8.0 * f64::EPSILON * t.abs()
 }
 
-/// Whether `q` is read from the simulation's port samples (the string's ports and the
-/// bodies' wrench ports).
+/// Whether `q` is read from the simulation's port samples, values of its last step that its
+/// checkpoint does not hold (the string's ports, the bodies' wrench ports, the winches'
+/// speed and power).
 fn is_port(q: Quantity) -> bool {
     use BodyValue::*;
     match q {
         Quantity::PortOutput { .. } | Quantity::PortInput { .. } => true,
+        Quantity::Winch { what, .. } => matches!(what, WinchValue::Speed | WinchValue::Power),
         Quantity::Body { what, .. } => matches!(
             what,
             MidVelocity | MidAngularVelocity | ReactionForce | ReactionTorque
@@ -666,6 +694,9 @@ impl Instance {
         }
         for (motion, rest) in rests {
             sim.set_motion_ramp(motion, rest)?;
+        }
+        for (winch, speed) in input_speeds(&self.spec, values) {
+            sim.set_winch_speed(winch, speed)?;
         }
         Ok(sim)
     }
@@ -1055,6 +1086,18 @@ fn input_wrenches(spec: &ModelSpec, values: &[f64]) -> BTreeMap<usize, Wrench> {
     wrenches
 }
 
+/// Per winch whose payout speed is an input: its index and the speed [m/s] its variable in
+/// `values` (by value reference) holds.
+fn input_speeds(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
+    let winches = spec.variables.iter().enumerate();
+    winches
+        .filter_map(|(vr, var)| match var.quantity {
+            Quantity::WinchSpeed { winch } => Some((winch, values[vr])),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Per motion that is an input: its index and the position [m] its variable in `values`
 /// (by value reference) asks for.
 fn input_positions(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
@@ -1068,8 +1111,9 @@ fn input_positions(spec: &ModelSpec, values: &[f64]) -> Vec<(usize, f64)> {
 }
 
 /// Holds the inputs of `spec` (values `values`, by value reference) over the communication
-/// step from the simulation's time to `target` [s]: load forces and body wrenches at their
-/// values, motions on a ramp from where they are to their values.
+/// step from the simulation's time to `target` [s]: load forces, body wrenches and winch
+/// speeds at their values (a winch's payout continuing from where it is), motions on a ramp
+/// from where they are to their values.
 fn hold_inputs(
     spec: &ModelSpec,
     values: &[f64],
@@ -1081,6 +1125,9 @@ fn hold_inputs(
     }
     for (body, wrench) in input_wrenches(spec, values) {
         live.stepper.set_body_wrench(body, wrench)?;
+    }
+    for (winch, speed) in input_speeds(spec, values) {
+        live.stepper.set_winch_speed(winch, speed)?;
     }
     for (motion, x) in input_positions(spec, values) {
         live.stepper.set_motion_target(motion, x, target)?;

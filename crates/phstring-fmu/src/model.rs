@@ -6,6 +6,7 @@
 //! library refuses an instance whose GUID does not match.
 
 mod bodies;
+mod winches;
 
 use phstring::{Material, PortKind, Simulation};
 use phstring_io::checkpoint::fnv1a64_hex;
@@ -88,6 +89,19 @@ pub enum Quantity {
         /// Component (0 = x; for [`BodyValue::Orientation`] 0 = w, 1 = x, 2 = y, 3 = z).
         component: usize,
     },
+    /// The payout speed [m/s] of winch `winch` (index among the system's winches), held
+    /// over each communication step from the payout reached (an input).
+    WinchSpeed {
+        /// Winch index.
+        winch: usize,
+    },
+    /// A value of winch `winch` after the last internal step (an output).
+    Winch {
+        /// Winch index (among the system's winches).
+        winch: usize,
+        /// Which value.
+        what: WinchValue,
+    },
     /// `Ĥ` [J].
     Hamiltonian,
     /// `T̂` [J].
@@ -129,6 +143,23 @@ pub enum BodyValue {
     ReactionTorque,
 }
 
+/// Which value of a winch an output is (docs/method.md §23, `phstring::WinchSample`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WinchValue {
+    /// Length paid out since `t = 0` [m] (negative: hauled in).
+    Payout,
+    /// Reference length of string off the drum, beyond the drum point [m].
+    Length,
+    /// Mean payout speed over the last internal step [m/s].
+    Speed,
+    /// Tension of the element at the drum [N].
+    Tension,
+    /// Mean power the winch supplied over the last internal step [W] (negative: taken).
+    Power,
+    /// Energy the winch supplied since `t = 0` [J].
+    Energy,
+}
+
 /// One FMI scalar variable (all are `Real`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Variable {
@@ -136,7 +167,7 @@ pub struct Variable {
     pub name: String,
     /// Causality.
     pub causality: Causality,
-    /// Unit symbol: `N`, `m`, `m/s`, `J`, `kg/m`, `s`, `N.m`, `rad`, `rad/s`, `1`.
+    /// Unit symbol: `N`, `m`, `m/s`, `J`, `kg/m`, `s`, `N.m`, `rad`, `rad/s`, `W`, `1`.
     pub unit: &'static str,
     /// Description shown by tools.
     pub description: String,
@@ -194,7 +225,9 @@ impl ModelSpec {
         vars.extend(load_inputs(file, &v)?);
         vars.extend(motion_inputs(&v));
         vars.extend(bodies::wrench_inputs(file, &v)?);
+        vars.extend(winches::speed_inputs(&v));
         let body_vars = bodies::outputs(&v);
+        let winch_vars = winches::outputs(&v);
         let body_names = v.components.bodies.iter().map(|b| b.name.clone()).collect();
         // Outputs: the ports (one simulation is set up to learn them), energies, nodes.
         let boundary = v.problem.system.boundary();
@@ -221,6 +254,7 @@ impl ModelSpec {
         vars.extend(energy_outputs());
         vars.extend(node_outputs::<D>(&fmu_nodes, &components));
         vars.extend(body_vars);
+        vars.extend(winch_vars);
         let model_name = file.scenario.title.clone();
         let mut spec = Self {
             model_name: model_name.unwrap_or_else(|| file.path.display().to_string()),
@@ -678,7 +712,7 @@ fn node_outputs<const D: usize>(nodes: &[usize], c: &Components) -> Vec<Variable
 }
 
 /// The units used, with their SI base-unit exponents.
-const UNITS: [(&str, &str); 10] = [
+const UNITS: [(&str, &str); 11] = [
     ("N", "kg=\"1\" m=\"1\" s=\"-2\""),
     ("m", "m=\"1\""),
     ("m/s", "m=\"1\" s=\"-1\""),
@@ -688,6 +722,7 @@ const UNITS: [(&str, &str); 10] = [
     ("N.m", "kg=\"1\" m=\"2\" s=\"-2\""),
     ("rad", "rad=\"1\""),
     ("rad/s", "s=\"-1\" rad=\"1\""),
+    ("W", "kg=\"1\" m=\"2\" s=\"-3\""),
     ("1", ""),
 ];
 

@@ -1719,3 +1719,181 @@ mod bodies {
         );
     }
 }
+
+mod winches {
+    //! Winches in the FMU (docs/method.md §20, §23): the payout speed of a winch marked
+    //! `external = true` as an input, every winch's payout, length, speed, tension, power and
+    //! energy as outputs, against the library driven by `set_winch_speed`.
+
+    use super::*;
+
+    /// examples/crane_hoisting_2d.toml with the trolley at rest and the payout an input.
+    fn crane_text() -> String {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/crane_hoisting_2d.toml");
+        let text = std::fs::read_to_string(path).expect("examples/crane_hoisting_2d.toml");
+        let payout = "payout = \"-15 * (3*min(t/30,1)^2 - 2*min(t/30,1)^3)\"";
+        let drum = "drum_position = [\"6 * (3*min(t/8,1)^2 - 2*min(t/8,1)^3)\", \"0\"]";
+        assert!(text.contains(payout) && text.contains(drum));
+        text.replace(payout, "external = true").replace(drum, "")
+    }
+
+    /// The library's simulation of `text`, started as `phstring run` starts it.
+    fn library_run(text: &str) -> Simulation<2, Material> {
+        let file = parse(text, Path::new("scenario.toml"), &[]).unwrap();
+        let v = file.validate::<2>().unwrap();
+        let setup = v.map_problem(phstring_io::scenario::Built::new).unwrap();
+        setup.start(true, None).unwrap().0.problem
+    }
+
+    /// The crane's winch variables: the speed input (start 0) and the six outputs, with
+    /// their units, in both model descriptions (the unit `W` defined).
+    #[test]
+    fn variables_of_an_external_winch() {
+        use Causality::*;
+        let spec = spec_of(&crane_text());
+        let winch: Vec<_> = spec
+            .variables
+            .iter()
+            .filter(|v| v.name.starts_with("winch."))
+            .map(|v| (v.name.as_str(), v.causality, v.unit, v.start))
+            .collect();
+        assert_eq!(
+            winch,
+            [
+                ("winch.hoist.speed", Input, "m/s", Some(0.0)),
+                ("winch.hoist.payout", Output, "m", None),
+                ("winch.hoist.length", Output, "m", None),
+                ("winch.hoist.vmid", Output, "m/s", None),
+                ("winch.hoist.tension", Output, "N", None),
+                ("winch.hoist.power", Output, "W", None),
+                ("winch.hoist.energy", Output, "J", None),
+            ]
+        );
+        for xml in [
+            spec.model_description("crane"),
+            spec.model_description_fmi3("crane"),
+        ] {
+            assert!(xml.contains("name=\"winch.hoist.speed\""));
+            assert!(xml.contains("name=\"winch.hoist.power\""));
+            assert!(xml.contains("<Unit name=\"W\">"));
+        }
+        // A winch whose payout is an expression has the outputs and no input.
+        let plain = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/crane_hoisting_2d.toml"),
+        )
+        .unwrap();
+        let spec = spec_of(&plain);
+        let names: Vec<_> = spec
+            .variables
+            .iter()
+            .filter(|v| v.name.starts_with("winch."))
+            .map(|v| (v.name.as_str(), v.causality))
+            .collect();
+        assert_eq!(names.len(), 6);
+        assert!(names.iter().all(|(_, c)| *c == Output));
+    }
+
+    /// Speeds set by the master over communication steps of five internal steps are the
+    /// library's run with the same speeds held by `set_winch_speed`, bit for bit (the FMU
+    /// holds them with that call); the payout is the sum of speed × H to round-off, and the
+    /// winch's energy is `supplied` and `Ĥ(t) − Ĥ(0)` (its only port). A state saved mid-run
+    /// and restored reports the outputs of its last step (speed and power are not in the
+    /// simulation's checkpoint) and continues bit for bit.
+    #[test]
+    fn held_speeds_are_the_library_run_bit_for_bit_and_states_continue() {
+        let text = crane_text();
+        let (mut inst, _) = instance(&text);
+        initialize(&mut inst);
+        let mut sim = library_run(&text);
+        let h0 = get(&mut inst, "H");
+        assert_eq!(h0.to_bits(), sim.energies().hamiltonian().to_bits());
+        let h_comm = 0.05;
+        // Haul in: a ramp to 0.2 m/s over 1 s, then constant.
+        let speed = |n: usize| -0.2 * ((n as f64 + 0.5) * h_comm).min(1.0);
+        let names = [
+            "winch.hoist.payout",
+            "winch.hoist.length",
+            "winch.hoist.vmid",
+        ];
+        let more = [
+            "winch.hoist.tension",
+            "winch.hoist.power",
+            "winch.hoist.energy",
+            "H",
+        ];
+        let outputs = |inst: &mut Instance| {
+            names
+                .iter()
+                .chain(&more)
+                .map(|n| get(inst, n))
+                .collect::<Vec<f64>>()
+        };
+        let mut paid = 0.0;
+        let mut saved = None;
+        let mut after_save = Vec::new();
+        for n in 0..60 {
+            let t = n as f64 * h_comm;
+            assert_eq!(set(&mut inst, "winch.hoist.speed", speed(n)), Status::Ok);
+            assert_eq!(inst.do_step(t, h_comm), Status::Ok, "step {n}");
+            sim.set_winch_speed(0, speed(n)).unwrap();
+            while sim.time() < t + h_comm - 1e-12 {
+                sim.step_until(t + h_comm).unwrap();
+            }
+            paid += speed(n) * h_comm;
+            let w = sim.winch_samples()[0];
+            let lib = [
+                w.payout,
+                w.length,
+                w.speed,
+                w.tension,
+                w.power,
+                w.energy,
+                sim.energies().hamiltonian(),
+            ];
+            let fmu = outputs(&mut inst);
+            for (k, (a, b)) in fmu.iter().zip(lib).enumerate() {
+                assert_eq!(a.to_bits(), b.to_bits(), "step {n}, output {k}: {a} vs {b}");
+            }
+            // 60 steps of rounding on a payout of up to 0.5 m.
+            assert!((w.payout - paid).abs() <= 1e-13, "{} vs {paid}", w.payout);
+            assert!(
+                (w.speed - speed(n)).abs() <= 1e-12,
+                "{} vs {}",
+                w.speed,
+                speed(n)
+            );
+            let supplied = get(&mut inst, "supplied");
+            assert!((w.energy - supplied).abs() <= 1e-9 * supplied.abs().max(1.0));
+            assert!((fmu[6] - h0 - w.energy).abs() <= 1e-9 * w.energy.abs().max(1.0));
+            assert!(get(&mut inst, "balance_error").abs() <= 1e-12 * h0.abs());
+            if n == 30 {
+                saved = Some((inst.save().unwrap(), fmu));
+            } else if n > 30 {
+                after_save.push(fmu);
+            }
+        }
+        assert!(paid < -0.5 && get(&mut inst, "winch.hoist.energy") > 1e4);
+        let (state, at_save) = saved.unwrap();
+        let (mut other, _) = instance(&text);
+        initialize(&mut other);
+        assert_eq!(other.restore(&state), Status::Ok);
+        let restored = outputs(&mut other);
+        assert_eq!(
+            restored.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            at_save.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        for (k, row) in after_save.iter().enumerate() {
+            let n = 31 + k;
+            let t = n as f64 * h_comm;
+            assert_eq!(set(&mut other, "winch.hoist.speed", speed(n)), Status::Ok);
+            assert_eq!(other.do_step(t, h_comm), Status::Ok);
+            let again = outputs(&mut other);
+            assert_eq!(
+                again.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                row.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                "step {n}"
+            );
+        }
+    }
+}

@@ -62,6 +62,10 @@ pub struct OutputState {
     /// Bytes of `winches.csv`, if written (runs with winches).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub winches_bytes: Option<u64>,
+    /// Bytes of `winch_arclength.csv`, if written (runs with winches and `positions.csv`;
+    /// `None` in checkpoints written before it existed: a resume then does not write it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub winch_arclength_bytes: Option<u64>,
     /// The channel table (`output.channels`), if written: its file name and bytes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channels: Option<(String, u64)>,

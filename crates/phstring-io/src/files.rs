@@ -42,6 +42,18 @@ pub const WINCHES_FILE: &str = "winches.csv";
 pub const WINCHES_HEADER: &str =
     "t,winch,payout,length,speed,tension,power,energy,mass,motor_energy,drum_dissipated";
 
+/// The unstretched arc length of every node of each winch's string, at the times of
+/// `positions.csv` (header: [`WINCH_ARCLENGTH_HEADER`]); written by runs with winches that
+/// write `positions.csv`.
+pub const WINCH_ARCLENGTH_FILE: &str = "winch_arclength.csv";
+
+/// The header line of [`WINCH_ARCLENGTH_FILE`]: the time [s], the winch's name, the mesh
+/// node (as in `positions.csv`) and its unstretched arc length `s` [m] from the drum point
+/// along the string (docs/method.md §23): positive off the drum, the last node's the length
+/// off the drum of `winches.csv`; zero or negative for the drum node and the nodes parked on
+/// the drum. One row per node of the string, in path order (parked nodes first).
+pub const WINCH_ARCLENGTH_HEADER: &str = "t,winch,node,s";
+
 /// Energies, one row per step (header: [`headers`]).
 pub const ENERGY_FILE: &str = "energy.csv";
 /// Node positions, one row per node and frame (header: [`headers`]).
@@ -275,6 +287,7 @@ pub const RUN_FILES: &[&str] = &[
     SCENARIO_FILE,
     BODIES_FILE,
     WINCHES_FILE,
+    WINCH_ARCLENGTH_FILE,
 ];
 
 /// The channel table's file name when `output.channels_file` gives none.

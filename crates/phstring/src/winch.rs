@@ -264,6 +264,14 @@ impl<const D: usize> WinchModel<D> {
         (self.elements.len() - ws.drum) as f64 * self.l - ws.behind(payout)
     }
 
+    /// The unstretched arc length [m] of the string's node `j` (along its path, 0 = the
+    /// first parked node) from the drum point in `ws`: `(j − drum) L − b`, `b` the reference
+    /// length between the drum node and the drum point. For the last node it is
+    /// [`Self::length_off`] at the state's payout, in the same arithmetic.
+    pub fn arc_length(&self, ws: &WinchState, j: usize) -> f64 {
+        (j as f64 - ws.drum as f64) * self.l - ws.behind(ws.payout)
+    }
+
     /// Checks that the winch in `ws` can follow the payout `payout` [m] without running
     /// out of parked elements or hauling in all but half an element.
     pub fn check(&self, ws: &WinchState, payout: f64) -> Result<(), WinchLimit> {

@@ -267,6 +267,10 @@ fn describe_winches(
         };
         let drive = match &w.drum {
             Some(d) => format!("a drum with dynamics: {d}"),
+            None if w.external => format!(
+                "payout speed an input (external: the FMU's winch.{}.speed; `run` holds the payout at 0)",
+                w.name
+            ),
             None => format!("payout = {} m", clip(&w.payout)),
         };
         format!(

@@ -76,7 +76,8 @@ fn the_crane_hoists_through_its_winch_with_the_static_tension_times_the_speed() 
 }
 
 /// A run stopped after 1234 steps (mid-hoist, the mesh cut many times) and resumed from its
-/// checkpoint writes the same `winches.csv` and `energy.csv` as an uninterrupted one.
+/// checkpoint writes the same `winches.csv`, `energy.csv` and `winch_arclength.csv` as an
+/// uninterrupted one.
 #[test]
 fn a_resumed_winch_run_writes_what_an_uninterrupted_one_writes() {
     let dir = temp_dir("winch-resume");
@@ -86,17 +87,152 @@ fn a_resumed_winch_run_writes_what_an_uninterrupted_one_writes() {
         "output.animation=false",
     ];
     let (whole, parts) = crate::run_whole_and_resumed(CRANE, &dir, &sets, 1234);
-    for f in ["winches.csv", "energy.csv"] {
+    for f in ["winches.csv", "energy.csv", "winch_arclength.csv"] {
         let read = |d: &Path| std::fs::read_to_string(d.join(f)).unwrap();
         assert_eq!(read(&whole), read(&parts), "{f} differs");
     }
     assert_eq!(summary(&whole)["winches"], summary(&parts)["winches"]);
+    assert!(whole.join("winch_arclength.csv").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A winch whose payout speed is an FMU input (`external = true`) runs in `phstring run` at
+/// speed 0: `check` says so, and over 1 s the payout and the speed stay exactly 0 and the
+/// length off the drum 25 m in every row of `winches.csv` (the drum holds the cable).
+#[test]
+fn an_external_winch_runs_at_speed_zero_without_a_master() {
+    let dir = temp_dir("winch-external");
+    let text = std::fs::read_to_string(crate::workspace_root().join(CRANE)).unwrap();
+    let path = dir.join("external.toml");
+    std::fs::write(
+        &path,
+        text.replace(
+            "payout = \"-15 * (3*min(t/30,1)^2 - 2*min(t/30,1)^3)\"",
+            "external = true",
+        ),
+    )
+    .unwrap();
+    let o = phstring(&["check", path.to_str().unwrap()]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        said.contains("payout speed an input (external: the FMU's winch.hoist.speed; `run` holds the payout at 0)"),
+        "{said}"
+    );
+    let out = dir.join("run");
+    let sets = ["time.end=1", "output.plots=false", "output.animation=false"];
+    let o = run_with(path.to_str().unwrap(), &out, &sets, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = winch_rows(&out);
+    assert_eq!(rows.len(), 101);
+    // 25 elements of 25.029 m / 1.00116 / 25 = 1 m (to rounding).
+    assert!(
+        rows.iter()
+            .all(|r| r[1] == 0.0 && (r[2] - 25.0).abs() < 1e-9 && r[3] == 0.0)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `winch_arclength.csv` of the crane hauling in (12 s: 5.28 m hauled in, five elements put
+/// on the drum, the trolley travelling): at every frame of `positions.csv` one row per node
+/// of the rope in path order; the last node's arc length is the length off the drum of
+/// `winches.csv` at that time (the same number: to 1e-12 relative, round-off), each node's
+/// arc length is its arc length at `t = 0` plus the payout (a node keeps its place on the
+/// cable through the cuts), consecutive
+/// nodes differ by their element's reference length in `elements.csv` (1 m, to 1e-12 of the
+/// arc length, the rounding of `(j − drum) L − b`), the drum node (the last with `s ≤ 0`)
+/// lies within an element behind the drum point, and at the end the five nodes before it are
+/// parked on the drum.
+#[test]
+fn the_arc_length_of_a_winch_strings_nodes_runs_from_the_drum_point() {
+    let dir = temp_dir("winch-arclength");
+    let out = dir.join("run");
+    let sets = [
+        "time.end=12",
+        "output.plots=false",
+        "output.animation=false",
+    ];
+    let o = run_with(CRANE, &out, &sets, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("winch_arclength.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,winch,node,s"));
+    let rows: Vec<(f64, usize, f64)> = lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            assert_eq!(f[1], "hoist");
+            (
+                f[0].parse().unwrap(),
+                f[2].parse().unwrap(),
+                f[3].parse().unwrap(),
+            )
+        })
+        .collect();
+    let lengths: std::collections::HashMap<(usize, usize), f64> =
+        crate::numeric_rows(&out.join("elements.csv"))
+            .iter()
+            .map(|r| ((r[1] as usize, r[2] as usize), r[5]))
+            .collect();
+    let winches = winch_rows(&out);
+    let nodes = 26;
+    assert_eq!(rows.len() % nodes, 0);
+    assert_eq!(
+        rows.len() / nodes,
+        121,
+        "a frame every 10 steps over 12 s, and t = 0"
+    );
+    let mut on_drum_seen = 0;
+    let start = &rows[..nodes];
+    for frame in rows.chunks(nodes) {
+        let t = frame[0].0;
+        assert!(frame.iter().all(|r| r.0 == t));
+        let w = winches.iter().find(|r| r[0] == t).unwrap();
+        // A node keeps its place on the cable through the cuts: its s moves with the payout.
+        for (r, r0) in frame.iter().zip(start) {
+            assert_eq!(r.1, r0.1);
+            assert!(
+                (r.2 - (r0.2 + w[1])).abs() <= 1e-12 * w[2],
+                "t = {t}: node {}",
+                r.1
+            );
+        }
+        let last = frame[nodes - 1].2;
+        assert!(
+            (last - w[2]).abs() <= 1e-12 * w[2],
+            "t = {t}: {last} against {}",
+            w[2]
+        );
+        for pair in frame.windows(2) {
+            let l = lengths[&(pair[0].1, pair[1].1)];
+            let ds = pair[1].2 - pair[0].2;
+            assert!((ds - l).abs() <= 1e-12 * w[2], "t = {t}: {ds} against {l}");
+        }
+        // The drum node: the last with s ≤ 0, within an element behind the drum point.
+        let d = frame.iter().rposition(|r| r.2 <= 0.0).unwrap();
+        let l = lengths[&(frame[0].1, frame[1].1)];
+        assert!(
+            frame[d].2 >= -l * (1.0 + 1e-12),
+            "t = {t}: drum node at {}",
+            frame[d].2
+        );
+        on_drum_seen += d;
+    }
+    let end = &rows[rows.len() - nodes..];
+    let parked = end.iter().rposition(|r| r.2 <= 0.0).unwrap();
+    eprintln!(
+        "at t = 12 s: {parked} nodes on the drum, the drum node at s = {:.6} m, the last at {:.6} m",
+        end[parked].2,
+        end[nodes - 1].2
+    );
+    assert_eq!(parked, 5);
+    assert!(on_drum_seen > 0);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// What a winch table cannot be is refused with its key: a string the file lacks, a second
-/// winch on one string, a payout that is not 0 at `t = 0`, a drum held by a support, and a
-/// haul beyond the rope (at run time, by name).
+/// winch on one string, a payout that is not 0 at `t = 0`, a drum held by a support, a
+/// payout given with `external = true` or neither of them, a name used twice, and a haul
+/// beyond the rope (at run time, by name).
 #[test]
 fn winch_tables_that_cannot_work_are_refused_by_key() {
     let dir = temp_dir("winch-refusals");
@@ -120,6 +256,21 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
         (
             format!("{text}\n[[winch]]\nname = \"second\"\nstring = \"rope\"\npayout = \"0\"\n"),
             "winch.1.string",
+        ),
+        (
+            text.replace(
+                "string = \"rope\"\npayout",
+                "string = \"rope\"\nexternal = true\npayout",
+            ),
+            "winch.0.payout` cannot be given with `external = true`",
+        ),
+        (
+            text.replace("payout = \"-15 * (3*min(t/30,1)^2 - 2*min(t/30,1)^3)\"", ""),
+            "winch.0.payout` is missing",
+        ),
+        (
+            format!("{text}\n[[winch]]\nname = \"hoist\"\nstring = \"rope\"\npayout = \"0\"\n"),
+            "winch.1.name",
         ),
     ];
     // A drum with dynamics: refused with a payout, a torque or inertia without a radius,

@@ -30,8 +30,9 @@ use crate::body_shape::{BodyBox, BodyPose};
 use crate::checkpoint::OutputState;
 use crate::files::{
     BODIES_FILE, BODIES_PVD_FILE, ELEMENTS_FILE, END_TENSIONS_FILE, ENERGY_FILE, PARAVIEW_DIR,
-    POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE, PVD_FILE, WINCHES_FILE, body_frame_name,
-    elements_header, energy_header, frame_name, headers, num, remove_stale_temp_files,
+    POINT_MASSES_FILE, PORTS_FILE, POSITIONS_FILE, PVD_FILE, WINCH_ARCLENGTH_FILE, WINCHES_FILE,
+    body_frame_name, elements_header, energy_header, frame_name, headers, num,
+    remove_stale_temp_files,
 };
 use crate::plot::{GroupDrawing, PlotError, Topology};
 use crate::text::sanitize_text;
@@ -512,6 +513,8 @@ pub struct Writers {
     bodies: Option<Csv>,
     /// `winches.csv` (runs with winches).
     winches: Option<Csv>,
+    /// `winch_arclength.csv` (runs with winches that write `positions.csv`).
+    arclength: Option<Csv>,
     /// The channel table (`output.channels`) and how its rows are computed.
     channels: Option<Csv>,
     channel_model: Option<ChannelTable>,
@@ -577,6 +580,10 @@ impl Writers {
         let ports = Csv::create(dir.join(PORTS_FILE), &ports_header)?;
         let bodies = bodies::create(dir, sim)?;
         let winches = winches::create(dir, sim)?;
+        let arclength = match positions.is_some() {
+            true => winches::create_arclength(dir, sim)?,
+            false => None,
+        };
         write_topology(dir, sim)?;
         let pvd = if vtk_frames {
             let pdir = dir.join(PARAVIEW_DIR);
@@ -598,6 +605,7 @@ impl Writers {
             end_model: None,
             bodies,
             winches,
+            arclength,
             channels: None,
             channel_model: None,
             pvd,
@@ -720,6 +728,9 @@ impl Writers {
                 p.num(t).field(i).nums(r.as_slice()).end_line()?;
             }
             p.end_record()?;
+        }
+        if let Some(a) = &mut self.arclength {
+            winches::arc_rows(a, sim)?;
         }
         self.body_frame(sim)?;
         if let Some(pvd) = &mut self.pvd {
@@ -1017,6 +1028,10 @@ impl Writers {
             Some(n) => Some(PendingCsv::open(dir.join(WINCHES_FILE), n)?),
             None => None,
         };
+        let arclength = match state.winch_arclength_bytes {
+            Some(n) => Some(PendingCsv::open(dir.join(WINCH_ARCLENGTH_FILE), n)?),
+            None => None,
+        };
         let channels = match &state.channels {
             Some((name, n)) => Some(PendingCsv::open(dir.join(name), *n)?),
             None => None,
@@ -1025,6 +1040,7 @@ impl Writers {
         let ends = ends.map(PendingCsv::commit).transpose()?;
         let bodies = bodies.map(PendingCsv::commit).transpose()?;
         let winches = winches.map(PendingCsv::commit).transpose()?;
+        let arclength = arclength.map(PendingCsv::commit).transpose()?;
         let channels = channels.map(PendingCsv::commit).transpose()?;
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -1037,6 +1053,7 @@ impl Writers {
             end_model: None,
             bodies,
             winches,
+            arclength,
             channels,
             channel_model: None,
             pvd,
@@ -1079,6 +1096,10 @@ impl Writers {
             },
             winches_bytes: match &mut self.winches {
                 Some(w) => Some(w.len()?),
+                None => None,
+            },
+            winch_arclength_bytes: match &mut self.arclength {
+                Some(a) => Some(a.len()?),
                 None => None,
             },
             channels: match &mut self.channels {
@@ -1239,6 +1260,9 @@ impl Writers {
         if let Some(w) = &mut self.winches {
             w.flush()?;
         }
+        if let Some(a) = &mut self.arclength {
+            a.flush()?;
+        }
         if let Some(c) = &mut self.channels {
             c.flush()?;
         }
@@ -1264,6 +1288,7 @@ impl Writers {
             self.ends.as_ref(),
             self.bodies.as_ref(),
             self.winches.as_ref(),
+            self.arclength.as_ref(),
             self.channels.as_ref(),
         ]
         .into_iter()
@@ -1297,6 +1322,9 @@ impl Writers {
         }
         if let Some(w) = &mut self.winches {
             let _ = w.flush();
+        }
+        if let Some(a) = &mut self.arclength {
+            let _ = a.flush();
         }
         if let Some(c) = &mut self.channels {
             let _ = c.flush();

@@ -49,8 +49,11 @@ pub struct WinchComponent {
     pub element_length: f64,
     /// The most it can pay out from `t = 0` [m]: its reserve elements.
     pub capacity: f64,
-    /// The payout expression [m] (empty with a drum with dynamics).
+    /// The payout expression [m] (empty for an external winch or a drum with dynamics).
     pub payout: String,
+    /// `external = true`: the payout speed [m/s] is a front end's input (the FMU's
+    /// `winch.NAME.speed`); `phstring run` holds the payout at 0.
+    pub external: bool,
     /// The drum's position expressions [m], empty for a drum that stays.
     pub drum_position: Vec<String>,
     /// A drum with dynamics, described (`None`: the payout is prescribed).

@@ -435,9 +435,15 @@ pub struct WinchSpec {
     /// Name of the `[[string]]` it pays out; its first path node is the drum.
     pub string: Spanned<String>,
     /// The length paid out since `t = 0` [m] (negative: hauled in), an expression of `t`
-    /// that is 0 at `t = 0`. Required without `drum`, refused with it.
+    /// that is 0 at `t = 0`; required unless `external = true` or `[winch.drum]`, and not
+    /// given with either.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub payout: Option<Spanned<String>>,
+    /// `external = true`: the payout speed [m/s] is an input of a front end (the FMU's
+    /// `winch.NAME.speed`, held over each communication step), starting at 0; commands
+    /// without an input (`phstring run`) hold the payout at 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<Spanned<bool>>,
     /// A drum with dynamics (`[winch.drum]`): the payout follows from the rope's pull against
     /// the drum's inertia, motor, damping and brake.
     #[serde(default, skip_serializing_if = "Option::is_none")]

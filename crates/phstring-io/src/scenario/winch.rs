@@ -2,9 +2,9 @@
 //! first path node (docs/method.md §23, docs/scenario.md).
 
 use std::sync::Arc;
-use toml::Spanned;
 
 use phstring::{Material, Network, Winch, WinchDrum};
+use toml::Spanned;
 
 use super::components::WinchComponent;
 use super::expr::Expr;
@@ -32,7 +32,8 @@ impl ScenarioFile {
     }
 
     /// Checks the `[[winch]]` tables before the strings are built: a network's, each
-    /// naming a `[[string]]` of the file that no other winch names.
+    /// naming a `[[string]]` of the file that no other winch names, with a name of its own
+    /// and exactly one of `payout` and `external = true`.
     pub(super) fn check_winch_tables(&self, network: bool) -> Result<(), ScenarioError> {
         let s = &self.scenario;
         for (k, w) in s.winch.iter().enumerate() {
@@ -66,6 +67,19 @@ impl ScenarioFile {
                     ),
                 ));
             }
+            if let Some(j) =
+                (0..k).find(|&j| s.winch[j].get_ref().name.get_ref() == spec.name.get_ref())
+            {
+                return Err(self.invalid(
+                    &key("name"),
+                    spec.name.span(),
+                    format!(
+                        "= \"{}\" is already the name of winch.{j}: names must differ (outputs and FMU variables are named after them)",
+                        crate::text::clip(spec.name.get_ref())
+                    ),
+                ));
+            }
+            self.check_winch_payout(k, w)?;
             if let Some(j) = (0..k).find(|&j| s.winch[j].get_ref().string.get_ref() == name) {
                 return Err(self.invalid(
                     &key("string"),
@@ -78,6 +92,39 @@ impl ScenarioFile {
             }
         }
         Ok(())
+    }
+
+    /// Checks that winch `k` (table `w`) has exactly one drive: `payout`, `external = true`
+    /// or `[winch.drum]`.
+    fn check_winch_payout(&self, k: usize, w: &Spanned<WinchSpec>) -> Result<(), ScenarioError> {
+        let spec = w.get_ref();
+        let key = format!("winch.{k}.payout");
+        match (&spec.payout, external(spec), &spec.drum) {
+            (Some(p), true, _) => Err(self.invalid(
+                &key,
+                p.span(),
+                format!(
+                    "cannot be given with `external = true`, which makes the payout speed an input of the FMU (winch.{}.speed): remove one of them",
+                    crate::text::clip(spec.name.get_ref())
+                ),
+            )),
+            (_, true, Some(d)) => Err(self.invalid(
+                &format!("winch.{k}.drum"),
+                d.span(),
+                "cannot be given with `external = true`: a drum with dynamics moves its payout itself (hold its motor pull from Python with set_winch_force instead)",
+            )),
+            (Some(p), false, Some(_)) => Err(self.invalid(
+                &key,
+                p.span(),
+                "and [winch.drum] exclude each other: a drum with dynamics moves the payout itself",
+            )),
+            (None, false, None) => Err(self.invalid(
+                &key,
+                w.span(),
+                "is missing: give the length paid out since t = 0 [m] as an expression of t, `external = true` to set the payout speed from the FMU, or a [winch.drum]",
+            )),
+            _ => Ok(()),
+        }
     }
 
     /// The elements winch `k` parks on its drum: its `reserve` [m] over the string's element
@@ -150,6 +197,7 @@ impl ScenarioFile {
                 payout: payout
                     .as_ref()
                     .map_or(String::new(), |e| e.text().to_string()),
+                external: external(spec),
                 drum_position: drum.iter().map(|e| e.text().to_string()).collect(),
                 drum: dynamics.as_ref().map(|(_, text)| text.clone()),
             });
@@ -178,8 +226,8 @@ impl ScenarioFile {
         Ok(network)
     }
 
-    /// Winch `k`'s drive: its payout expression (checked 0 at `t = 0`), or its drum with
-    /// dynamics and a description of it; exactly one of the two.
+    /// Winch `k`'s drive: its payout expression (checked 0 at `t = 0`), its drum with
+    /// dynamics and a description of it, or neither (`external = true`).
     #[allow(clippy::type_complexity)]
     fn winch_drive(
         &self,
@@ -188,34 +236,27 @@ impl ScenarioFile {
     ) -> Result<(Option<Expr>, Option<(WinchDrum, String)>), ScenarioError> {
         let key = |f: &str| format!("winch.{k}.{f}");
         let t_check = self.first_mid_time();
-        match (&spec.payout, &spec.drum) {
-            (Some(p), None) => {
-                let payout = Expr::new(p.get_ref(), t_check)
-                    .map_err(|m| self.invalid(&key("payout"), p.span(), m))?;
-                let at_zero = payout.eval(0.0).unwrap_or(f64::NAN);
-                if at_zero != 0.0 {
-                    return Err(self.invalid(
-                        &key("payout"),
-                        p.span(),
-                        format!(
-                            "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
-                        ),
-                    ));
-                }
-                Ok((Some(payout), None))
-            }
-            (None, Some(d)) => Ok((None, Some(self.drum_dynamics(k, d.get_ref())?))),
-            (Some(p), Some(_)) => Err(self.invalid(
+        // The combinations are checked with the tables ([`Self::check_winch_payout`]).
+        if let Some(d) = &spec.drum {
+            return Ok((None, Some(self.drum_dynamics(k, d.get_ref())?)));
+        }
+        // An external winch's payout follows the speed its front end sets, 0 until then.
+        let Some(p) = &spec.payout else {
+            return Ok((None, None));
+        };
+        let payout = Expr::new(p.get_ref(), t_check)
+            .map_err(|m| self.invalid(&key("payout"), p.span(), m))?;
+        let at_zero = payout.eval(0.0).unwrap_or(f64::NAN);
+        if at_zero != 0.0 {
+            return Err(self.invalid(
                 &key("payout"),
                 p.span(),
-                "and [winch.drum] exclude each other: a drum with dynamics moves the payout itself",
-            )),
-            (None, None) => Err(self.invalid(
-                &key("payout"),
-                spec.name.span(),
-                "is missing: give the payout [m] as an expression of t, or a [winch.drum]",
-            )),
+                format!(
+                    "is {at_zero} m at t = 0: it is the length paid out since t = 0, so 0 then"
+                ),
+            ));
         }
+        Ok((Some(payout), None))
     }
 
     /// The drum of `[winch.drum]` of winch `k` and its description: `J/R²`, the motor's pull
@@ -300,4 +341,9 @@ impl ScenarioFile {
         };
         Ok((drum, text.join(", ")))
     }
+}
+
+/// Whether `spec` marks its payout speed as a front end's input (`external = true`).
+fn external(spec: &WinchSpec) -> bool {
+    spec.external.as_ref().is_some_and(|x| *x.get_ref())
 }

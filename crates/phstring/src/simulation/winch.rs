@@ -236,6 +236,27 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(())
     }
 
+    /// The unstretched arc length `s` [m] of every node of winch `winch`'s string, measured
+    /// from the drum point along the string (docs/method.md §23), as `(mesh node, s)` in path
+    /// order, into `out` (cleared first). The nodes off the drum have `s > 0`, the last
+    /// node's `s` is the length off the drum ([`WinchSample::length`]); the drum node,
+    /// behind the drum point by the model's cable still on the drum, and the nodes parked
+    /// on the drum have `s ≤ 0`. Consecutive nodes differ by the string's element length.
+    /// Returns `false` (and leaves `out` empty) if there is no such winch.
+    pub fn winch_arc_lengths(&self, winch: usize, out: &mut Vec<(usize, f64)>) -> bool {
+        out.clear();
+        let (Some(m), Some(ws)) = (self.sys.winches.get(winch), self.run.winches.get(winch)) else {
+            return false;
+        };
+        out.extend(
+            m.nodes
+                .iter()
+                .enumerate()
+                .map(|(j, &i)| (i, m.arc_length(ws, j))),
+        );
+        true
+    }
+
     /// The drum nodes' increments of the step to `at.t_next` (their paths), after checking
     /// that each winch can follow its payout there; the drums' data for the step.
     pub(super) fn winch_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
