@@ -543,3 +543,86 @@ fn anchor_handling_pays_chain_out_to_the_catenary_of_the_longer_chain() {
         "{energy} J of {supplied} J"
     );
 }
+
+/// Winches are listed, written and numbered in the order of their `[[winch]]` tables, not of
+/// their strings: two hoists whose tables come in the reverse order of their strings.
+#[test]
+fn winches_follow_the_order_of_their_tables() {
+    let dir = temp_dir("winch-order");
+    let text = r#"
+dimension = 2
+[[node]]
+name = "a_top"
+position = [0.0, 0.0]
+[[node]]
+name = "a_hook"
+position = [0.0, -10.0]
+[[node]]
+name = "b_top"
+position = [5.0, 0.0]
+[[node]]
+name = "b_hook"
+position = [5.0, -10.0]
+[materials.rope]
+law = "tension_only_linear"
+ea = 4.3e7
+rho_a = 4.1
+[[string]]
+name = "a"
+path = ["a_top", "a_hook"]
+elements = 10
+material = "rope"
+[[string]]
+name = "b"
+path = ["b_top", "b_hook"]
+elements = 10
+material = "rope"
+[[winch]]
+name = "second_string"
+string = "b"
+payout = "0.1 * t"
+reserve = 2.0
+[[winch]]
+name = "first_string"
+string = "a"
+payout = "0"
+[[point_mass]]
+node = "a_hook"
+kg = 500.0
+[[point_mass]]
+node = "b_hook"
+kg = 500.0
+[body_force]
+gravity = [0.0, -9.81]
+[time]
+h = 0.01
+end = 0.5
+"#;
+    let path = dir.join("two.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.join("run");
+    let o = run_with(path.to_str().unwrap(), &out, &["output.plots=false"], &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("winches.csv")).unwrap();
+    let names: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .take(2)
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
+    assert_eq!(names, ["second_string", "first_string"]);
+    let s = summary(&out);
+    assert_eq!(s["winches"][0]["name"], "second_string");
+    // energy.csv's winch0 is the paying-out winch (the first table).
+    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    let last: Vec<f64> = energy
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let w0 = s["winches"][0]["energy"].as_f64().unwrap();
+    assert_eq!(last[10], w0);
+    assert!(w0 < 0.0, "lowering takes energy: {w0}");
+}

@@ -160,7 +160,11 @@ impl ScenarioFile {
         report: &mut Vec<WinchComponent>,
     ) -> Result<Network<D, Material>, ScenarioError> {
         let t_check = self.first_mid_time();
-        for ws in strings {
+        // In file order (the strings are in theirs): the winches' outputs, `energy.csv`'s
+        // winch columns and Python's indices follow the `[[winch]]` tables.
+        let mut in_file_order: Vec<&WinchString> = strings.iter().collect();
+        in_file_order.sort_by_key(|ws| ws.winch);
+        for ws in in_file_order {
             let spec = self.scenario.winch[ws.winch].get_ref();
             let key = |f: &str| format!("winch.{}.{f}", ws.winch);
             let (payout, dynamics) = self.winch_drive(ws.winch, spec)?;
