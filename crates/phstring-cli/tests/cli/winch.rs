@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::{phstring, run_with, summary, temp_dir};
+use crate::{numeric_rows, phstring, run_with, summary, temp_dir};
 
 const CRANE: &str = "examples/crane_hoisting_2d.toml";
 
@@ -169,7 +169,7 @@ fn the_arc_length_of_a_winch_strings_nodes_runs_from_the_drum_point() {
         })
         .collect();
     let lengths: std::collections::HashMap<(usize, usize), f64> =
-        crate::numeric_rows(&out.join("elements.csv"))
+        numeric_rows(&out.join("elements.csv"))
             .iter()
             .map(|r| ((r[1] as usize, r[2] as usize), r[5]))
             .collect();
@@ -337,7 +337,7 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
 /// The final row of `bodies.csv` in `dir`: `(x, y, z, tilt [deg])` of the platform, and its
 /// first `z`.
 fn platform_end(dir: &Path) -> ([f64; 4], f64) {
-    let rows = crate::numeric_rows(&dir.join("bodies.csv"));
+    let rows = numeric_rows(&dir.join("bodies.csv"));
     let last = rows.last().unwrap();
     assert_eq!(last[0], 4.0);
     let tilt = 2.0 * last[7].abs().asin().to_degrees();
@@ -390,6 +390,21 @@ fn the_cable_robot_follows_its_winches_to_the_inverse_kinematics() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Runs `scenario` into a fresh folder (`tag`) with `sets` and no plots, animation or frames,
+/// checks that it succeeded and returns the output folder.
+fn run_ok(scenario: &str, tag: &str, sets: &[&str]) -> std::path::PathBuf {
+    let out = temp_dir(tag).join("run");
+    let mut all = vec![
+        "output.plots=false",
+        "output.animation=false",
+        "output.vtk=false",
+    ];
+    all.extend_from_slice(sets);
+    let o = run_with(scenario, &out, &all, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
 /// The constant-tension winch on the heaving vessel (`heave_compensated_winch_2d.toml`):
 /// over the last two heave periods (48–64 s) the drum's payout speed, fitted as a quadratic
 /// drift plus a sine at the heave's frequency, swings with the amplitude the rigid-rope law
@@ -399,15 +414,11 @@ fn the_cable_robot_follows_its_winches_to_the_inverse_kinematics() {
 /// `energy.csv` carries both in its winch columns.
 #[test]
 fn the_heave_compensating_winch_swings_its_payout_as_the_rigid_rope_law_asks() {
-    let dir = temp_dir("winch-heave");
-    let out = dir.join("run");
-    let o = run_with(
+    let out = run_ok(
         "examples/heave_compensated_winch_2d.toml",
-        &out,
-        &["output.plots=false", "output.animation=false"],
+        "winch-heave",
         &[],
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(out.join("winches.csv")).unwrap();
     let rows: Vec<Vec<f64>> = text
         .lines()
@@ -446,13 +457,7 @@ fn the_heave_compensating_winch_swings_its_payout_as_the_rigid_rope_law_asks() {
     let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
     let header: Vec<&str> = energy.lines().next().unwrap().split(',').collect();
     assert_eq!(header[10..], ["winch0_supplied", "winch0_dissipated"]);
-    let e_last: Vec<f64> = energy
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let e_last = numeric_rows(&out.join("energy.csv")).pop().unwrap();
     assert_eq!((e_last[10], e_last[11]), (last[6], last[9]));
     assert_eq!(e_last[9], dissipated);
 }
@@ -496,19 +501,7 @@ fn anchor_chain_at_rest() -> (f64, f64) {
 /// grounded length counts whole nodes), and the winch's energy is the run's whole supply.
 #[test]
 fn anchor_handling_pays_chain_out_to_the_catenary_of_the_longer_chain() {
-    let dir = temp_dir("winch-anchor");
-    let out = dir.join("run");
-    let o = run_with(
-        "examples/anchor_handling_2d.toml",
-        &out,
-        &[
-            "output.plots=false",
-            "output.animation=false",
-            "output.vtk=false",
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = run_ok("examples/anchor_handling_2d.toml", "winch-anchor", &[]);
     let text = std::fs::read_to_string(out.join("winches.csv")).unwrap();
     let tension = |l: &str| l.split(',').nth(5).unwrap().parse::<f64>().unwrap();
     let rows: Vec<&str> = text.lines().skip(1).collect();
@@ -600,9 +593,7 @@ end = 0.5
 "#;
     let path = dir.join("two.toml");
     std::fs::write(&path, text).unwrap();
-    let out = dir.join("run");
-    let o = run_with(path.to_str().unwrap(), &out, &["output.plots=false"], &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = run_ok(path.to_str().unwrap(), "winch-order-run", &[]);
     let csv = std::fs::read_to_string(out.join("winches.csv")).unwrap();
     let names: Vec<&str> = csv
         .lines()
@@ -614,14 +605,7 @@ end = 0.5
     let s = summary(&out);
     assert_eq!(s["winches"][0]["name"], "second_string");
     // energy.csv's winch0 is the paying-out winch (the first table).
-    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
-    let last: Vec<f64> = energy
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let last = numeric_rows(&out.join("energy.csv")).pop().unwrap();
     let w0 = s["winches"][0]["energy"].as_f64().unwrap();
     assert_eq!(last[10], w0);
     assert!(w0 < 0.0, "lowering takes energy: {w0}");

@@ -10,6 +10,19 @@ use crate::system::{Energies, Vector};
 use crate::winch::WinchState;
 use crate::winch_step::DrumStep;
 
+impl StepAt {
+    /// The error of winch `name` that cannot take this step, for `problem`.
+    fn winch_error(&self, name: &str, problem: String) -> StepError {
+        StepError::Winch {
+            step: self.step,
+            t: self.t,
+            at: self.t_next,
+            winch: name.to_string(),
+            problem,
+        }
+    }
+}
+
 /// One winch's output after a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WinchSample {
@@ -158,13 +171,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let Some((drum, j)) = &m.drum else {
                 continue;
             };
-            let fail = |problem: String| StepError::Winch {
-                step: at.step,
-                t: at.t,
-                at: at.t_next,
-                winch: m.name.clone(),
-                problem,
-            };
+            let fail = |problem: String| at.winch_error(&m.name, problem);
             let (a, other) = (m.drum_node(ws), m.nodes[ws.drum + 1]);
             if self.sys.attached.get(other).copied().flatten().is_some() {
                 return Err(fail(format!(
@@ -223,13 +230,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 Err(crate::winch::WinchLimit::NotFinite(next.1))
             };
             if let Err(limit) = limit {
-                return Err(StepError::Winch {
-                    step: at.step,
-                    t: at.t,
-                    at: at.t_next,
-                    winch: m.name.clone(),
-                    problem: limit.to_string(),
-                });
+                return Err(at.winch_error(&m.name, limit.to_string()));
             }
             self.drum_next[d.winch] = (next.0, next.1, 0.0, 0.0);
         }
@@ -266,13 +267,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
             let payout = (m.payout)(at.t_next);
             if let Err(limit) = m.check(ws, payout) {
-                return Err(StepError::Winch {
-                    step: at.step,
-                    t: at.t,
-                    at: at.t_next,
-                    winch: m.name.clone(),
-                    problem: limit.to_string(),
-                });
+                return Err(at.winch_error(&m.name, limit.to_string()));
             }
             let a = m.drum_node(ws);
             self.x[a] = m.path(ws, at.t_next).0 - self.run.state.r[a];

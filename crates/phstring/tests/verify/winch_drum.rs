@@ -5,20 +5,13 @@
 //! motion, with the exact balance on every step and each mechanism's share; and the statics
 //! at the length a winch has reached.
 
-use phstring::{
-    Boundary, MassMatrix, Material, Network, NetworkBuilder, PointMass, Simulation, State,
-    StepControl, StepParams, StepReport, StringSpec, Vector, Winch, WinchDrum,
-};
+use phstring::{Material, Network, Simulation, StepReport, WinchDrum};
 use std::sync::Arc;
 
-const G: f64 = 9.81;
-/// A 32 mm six-strand steel wire rope: axial stiffness [N] and mass per metre [kg/m].
-const EA: f64 = 4.3e7;
-const RHO_A: f64 = 4.1;
-/// The payload [kg], the rope off the drum at the start [m] and the element length [m].
-const PAYLOAD: f64 = 5000.0;
+use super::winch::{EA, G, L, PAYLOAD, RHO_A, fixed_step};
+
+/// The rope off the drum at the start [m].
 const ROPE: f64 = 20.0;
-const L: f64 = 1.0;
 
 /// The weight [N] hanging from the drum with `a` metres of rope off it.
 fn weight(a: f64) -> f64 {
@@ -28,55 +21,9 @@ fn weight(a: f64) -> f64 {
 /// A 2D hoist: the drum at the origin, 20 m of rope hanging in its static shape with the
 /// payload at its end, 30 elements more on the drum, the drum `drum`.
 fn drum_hoist(drum: WinchDrum) -> (Network<2, Material>, usize) {
-    let n_el = (ROPE / L) as usize;
-    let reserve = 30;
-    let mut b = NetworkBuilder::<2, Material>::new();
-    let top = b.node(Vector::<2>::zeros());
-    let hook = b.node(Vector::<2>::new(0.0, -ROPE));
-    let spec = StringSpec {
-        name: "rope".into(),
-        material: Material::tension_only_linear(EA),
-        rho_a: RHO_A,
-        mass: MassMatrix::Consistent,
-        body_force: Vector::<2>::new(0.0, -RHO_A * G),
-        prestretch: 1.0,
-    };
-    let g = b.string_on_drum(spec, &[top, hook], n_el, reserve).unwrap();
-    let nodes = b.group_nodes(g).unwrap().to_vec();
-    let masses = vec![PointMass {
-        node: hook,
-        mass: PAYLOAD,
-        weight: Vector::<2>::new(0.0, -PAYLOAD * G),
-    }];
-    let mut net = b.build(Boundary::default(), masses).unwrap();
-    let mut r = net.initial.r.clone();
-    // At rest in the static shape: the tension at `s` below the drum is `g (m + ρA (a − s))`.
-    for (j, &i) in nodes[reserve..].iter().enumerate() {
-        let s = j as f64 * L;
-        let y = s + G * ((PAYLOAD + RHO_A * ROPE) * s - 0.5 * RHO_A * s * s) / EA;
-        r[i] = Vector::<2>::new(0.0, -y);
-    }
-    net.initial = State::at_rest(&net.mesh, r);
-    net = net.with_winch(Winch {
-        name: "drum".into(),
-        group: g,
-        reserve,
-        payout: Arc::new(|_| 0.0),
-        drum_motion: None,
-        drum: Some(drum),
-    });
+    let (mut net, hook) = super::winch::hoist((ROPE / L) as usize, 30, |_| 0.0);
+    net.winches[0].drum = Some(drum);
     (net, hook)
-}
-
-fn fixed_step(h: f64) -> StepParams {
-    StepParams {
-        h,
-        control: StepControl {
-            adaptive: false,
-            ..Default::default()
-        },
-        ..StepParams::default()
-    }
 }
 
 /// The rigid-rope law of motion of the payout `p`: `(m + I + ρA (a₀ + p)) p̈ = g (m + ρA
