@@ -24,8 +24,17 @@ fn check_outputs(dir: &Path, dim: usize, steps: usize, stride: usize, n_nodes: u
     let wet = format!(
         "{dry},buoyancy,seabed,drag_dissipated,current_supplied,seabed_dissipated,friction_dissipated"
     );
+    // A run with winches adds two columns per winch after those.
+    let winches = h.iter().filter(|c| c.starts_with("winch")).count() / 2;
+    let tail: String = (0..winches)
+        .map(|k| format!(",winch{k}_supplied,winch{k}_dissipated"))
+        .collect();
     let header = h.join(",");
-    assert!(header == dry || header == wet, "{header}");
+    assert!(
+        header == format!("{dry}{tail}") || header == format!("{wet}{tail}"),
+        "{header}"
+    );
+    assert_eq!(winches > 0, dir.join("winches.csv").is_file());
     assert_eq!(rows.len(), steps + 1, "{}", dir.display());
     for row in &rows {
         for f in row.iter() {
