@@ -243,7 +243,7 @@ pub struct Simulation<const D: usize, M> {
     /// Per winch with a drum (else unused): its payout [m] and payout speed [m/s] at the end
     /// of the current step, the energy its damping and brake dissipated in it [J] and the
     /// energy its motor supplied in it [J].
-    drum_next: Vec<(f64, f64, f64, f64)>,
+    drum_next: Vec<winch::DrumNext>,
 }
 
 /// The prescribed motions' hold on the velocity state (docs/method.md §14, eq. (14.5)): after each
@@ -557,7 +557,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             winch_work: vec![0.0; winch_start.len()],
             winch_port: vec![(0, [0.0; 3], [0.0; 3]); winch_start.len()],
             drum_steps: Vec::with_capacity(n_drums),
-            drum_next: vec![(0.0, 0.0, 0.0, 0.0); winch_start.len()],
+            drum_next: vec![Default::default(); winch_start.len()],
             sys,
             params,
             run: Checkpoint {
@@ -1339,7 +1339,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let dissipated = if self.drum_steps.is_empty() {
             dissipated
         } else {
-            dissipated + self.drum_next.iter().map(|d| d.2).sum::<f64>()
+            dissipated + self.drum_next.iter().map(|d| d.dissipated).sum::<f64>()
         };
         let before = self.energies;
         let (balance_error, energy_scale) =

@@ -10,6 +10,19 @@ use crate::system::{Energies, Vector};
 use crate::winch::WinchState;
 use crate::winch_step::DrumStep;
 
+/// A drum's state at the end of the current step and its shares of the step.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct DrumNext {
+    /// Payout [m].
+    pub payout: f64,
+    /// Payout speed [m/s].
+    pub speed: f64,
+    /// Energy its damping and brake dissipated in the step [J].
+    pub dissipated: f64,
+    /// Energy its motor supplied in the step [J].
+    pub motor: f64,
+}
+
 impl StepAt {
     /// The error of winch `name` that cannot take this step, for `problem`.
     fn winch_error(&self, name: &str, problem: String) -> StepError {
@@ -150,7 +163,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let Some((drum, _)) = &m.drum else {
                 continue;
             };
-            let speed = if next { self.drum_next[k].1 } else { ws.speed };
+            let speed = if next {
+                self.drum_next[k].speed
+            } else {
+                ws.speed
+            };
             let u = ws.stretch * speed;
             let t = 0.5 * drum.inertia * u * u;
             e.kinetic += t;
@@ -232,7 +249,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             if let Err(limit) = limit {
                 return Err(at.winch_error(&m.name, limit.to_string()));
             }
-            self.drum_next[d.winch] = (next.0, next.1, 0.0, 0.0);
+            self.drum_next[d.winch] = DrumNext {
+                payout: next.0,
+                speed: next.1,
+                ..Default::default()
+            };
         }
         Ok(())
     }
@@ -280,17 +301,26 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub(super) fn winch_reaction_work(&mut self, h: f64) -> f64 {
         let mut total = 0.0;
         let inv_h = 1.0 / h;
-        for ((m, ws), w) in self
+        for (((m, ws), w), port) in self
             .sys
             .winches
             .iter()
             .zip(&self.run.winches)
             .zip(&mut self.winch_work)
-            .filter(|((m, _), _)| m.drum.is_none())
+            .zip(&mut self.winch_port)
         {
             let a = m.drum_node(ws);
-            *w = self.reaction[a].dot(&self.x[a]);
-            total += *w;
+            let (mut u, mut y) = ([0.0; 3], [0.0; 3]);
+            for k in 0..D {
+                u[k] = self.x[a][k] * inv_h;
+                y[k] = self.reaction[a][k];
+            }
+            *port = (a, u, y);
+            // A drum's supply is its own ([`crate::winch_step::shares`], below).
+            if m.drum.is_none() {
+                *w = self.reaction[a].dot(&self.x[a]);
+                total += *w;
+            }
         }
         // A drum's own storage is in `Ĥ`: the winch supplies the reaction's work over the
         // drum's motion and the motor's; the damping and brake dissipate.
@@ -301,23 +331,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let (supply, loss, motor) = crate::winch_step::shares(&self.sys, d, dp, h, reaction);
             total += supply;
             self.winch_work[d.winch] = supply;
-            self.drum_next[d.winch].2 = loss;
-            self.drum_next[d.winch].3 = motor;
-        }
-        for ((m, ws), port) in self
-            .sys
-            .winches
-            .iter()
-            .zip(&self.run.winches)
-            .zip(&mut self.winch_port)
-        {
-            let a = m.drum_node(ws);
-            let (mut u, mut y) = ([0.0; 3], [0.0; 3]);
-            for k in 0..D {
-                u[k] = self.x[a][k] * inv_h;
-                y[k] = self.reaction[a][k];
-            }
-            *port = (a, u, y);
+            self.drum_next[d.winch].dissipated = loss;
+            self.drum_next[d.winch].motor = motor;
         }
         total
     }
@@ -331,16 +346,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // The drums' new speeds first: `Ĥ` after the step has them all.
         for d in &self.drum_steps {
             let ws = &mut self.run.winches[d.winch];
-            ws.speed = self.drum_next[d.winch].1;
-            ws.dissipated += self.drum_next[d.winch].2;
-            ws.motor += self.drum_next[d.winch].3;
+            let next = &self.drum_next[d.winch];
+            ws.speed = next.speed;
+            ws.dissipated += next.dissipated;
+            ws.motor += next.motor;
         }
         for k in 0..self.sys.winches.len() {
             let m = &self.sys.winches[k];
             let ws = &mut self.run.winches[k];
             let (payout, rate) = match &m.drum {
                 None => m.payout_at(ws, t),
-                Some(_) => (self.drum_next[k].0, ws.speed),
+                Some(_) => (self.drum_next[k].payout, ws.speed),
             };
             let a = m.drum_node(ws);
             let state = &mut self.run.state;
