@@ -429,7 +429,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
     /// drag), added to `res` and `jac`, and their work to `work` (the elements' first);
     /// returns the squares of their forces (force scale).
     #[allow(clippy::too_many_arguments)]
-    fn water_terms(
+    fn water_terms<const MEASURE: bool>(
         &self,
         w: &WaterModel<D>,
         x: &[Vector<D>],
@@ -446,14 +446,18 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             if let Some(b) = w.resting_buoyancy(node, &self.r0[i], &x[i]) {
                 // [`WaterModel::node_step`]'s terms then, without adding its zeros.
                 res[i][D - 1] -= b;
-                scale2 += b * b;
+                if MEASURE {
+                    scale2 += b * b;
+                }
                 continue;
             }
             let axis = w.node_axis(node, self.r0);
             let st = w.node_step(node, &self.r0[i], &x[i], &axis, self.h);
             res[i] += st.res;
             node_work.add(&st.work);
-            scale2 += st.res.norm_squared();
+            if MEASURE {
+                scale2 += st.res.norm_squared();
+            }
             if let Some(j) = jac.as_deref_mut() {
                 j.diag[i] += st.jac;
             }
@@ -475,7 +479,9 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             if in_b {
                 res[b] -= half;
             }
-            scale2 += 2.0 * half.norm_squared();
+            if MEASURE {
+                scale2 += 2.0 * half.norm_squared();
+            }
             if let Some(j) = jac.as_deref_mut() {
                 // Rows a and b alike: ∂/∂x_a = ja, ∂/∂x_b = jb.
                 if in_a {
@@ -577,7 +583,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             // The element loop has taken the drag when fused.
             let drag_els = if fused { 0..0 } else { els.clone() };
             let j = jac.as_deref_mut();
-            let s2 = self.water_terms(w, x, res, j, nodes.clone(), drag_els, &mut work);
+            let s2 = self.water_terms::<MEASURE>(w, x, res, j, nodes.clone(), drag_els, &mut work);
             if MEASURE {
                 scale2 += s2;
             }

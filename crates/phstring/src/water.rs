@@ -561,6 +561,15 @@ impl<const D: usize> Bed<D> {
         }
     }
 
+    /// Whether the seabed is the level plane `z = p_z` (normal `e_z`, no grid) with isotropic
+    /// friction or none, where the step's contact terms are formed by component.
+    #[inline]
+    pub fn is_level(&self) -> bool {
+        self.grid.is_none()
+            && self.n == up::<D>()
+            && self.friction.is_none_or(|f| f.axial.is_none())
+    }
+
     /// Whether the seabed holds a line along axis `k` (the vertical, or an axis along which
     /// the seabed slopes).
     pub fn holds(&self, k: usize) -> bool {
@@ -1122,6 +1131,9 @@ impl<const D: usize> WaterModel<D> {
         inv_h: f64,
         (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
     ) {
+        if bed.is_level() {
+            return Self::level_contact_step(bed, w, r0, r1, x, inv_h, (res, jac, work));
+        }
         let (g0, g1) = (bed.gap(r0), bed.gap(r1));
         if g0 >= 0.0 && g1 >= 0.0 {
             // Off the seabed at both ends of the step: no contact, no damping, no friction.
@@ -1178,6 +1190,67 @@ impl<const D: usize> WaterModel<D> {
             };
             slip.friction(fr, x, axis, inv_h, (res, jac, work));
         }
+    }
+}
+
+impl<const D: usize> WaterModel<D> {
+    /// [`Self::contact_step`] on a level seabed with isotropic friction ([`Bed::is_level`]):
+    /// the same terms with `n = e_z`, formed by component. The gap is `z − p_z`, the slip
+    /// the increment's horizontal part.
+    #[inline(always)]
+    fn level_contact_step(
+        bed: &Bed<D>,
+        w: &WetNode,
+        r0: &Vector<D>,
+        r1: &Vector<D>,
+        x: &Vector<D>,
+        inv_h: f64,
+        (res, jac, work): (&mut Vector<D>, &mut Block<D>, &mut WaterWork),
+    ) {
+        let zi = D - 1;
+        let (g0, g1) = (r0[zi] - bed.p[zi], r1[zi] - bed.p[zi]);
+        if g0 >= 0.0 && g1 >= 0.0 {
+            return;
+        }
+        let (q, dq) = contact_quotient(g0, g1, w.stiffness);
+        res[zi] += q;
+        jac[(zi, zi)] += dq;
+        let pm = (-0.5 * (g0 + g1)).max(0.0);
+        if pm <= 0.0 {
+            return;
+        }
+        let xn = x[zi];
+        if w.damping > 0.0 {
+            let (rho, drho) = ramp(pm, bed.ramp);
+            let c = w.damping * rho;
+            res[zi] += c * xn * inv_h;
+            // ∂p_m/∂x_z = −½.
+            jac[(zi, zi)] += c * inv_h - 0.5 * w.damping * xn * inv_h * drho;
+            work.seabed_dissipated += c * xn * xn * inv_h;
+        }
+        let Some(fr) = &bed.friction else {
+            return;
+        };
+        let a = fr.coefficient * w.stiffness * pm;
+        if a <= 0.0 {
+            return;
+        }
+        let mut v = x * inv_h;
+        v[zi] = 0.0;
+        let law = slip_law(fr.slope, a, fr.static_scale, &v);
+        *res += v * law.coef;
+        // ∂(coef v)/∂x: the horizontal columns of dv/h; the vertical column from the
+        // Coulomb level, ∂a/∂x_z = −½ μ k.
+        for col in 0..zi {
+            for row in 0..D {
+                jac[(row, col)] += law.dv[(row, col)] * inv_h;
+            }
+        }
+        let dz = law.da * (-0.5 * fr.coefficient * w.stiffness);
+        for row in 0..D {
+            jac[(row, zi)] += v[row] * dz;
+        }
+        work.friction_dissipated += (1.0 / inv_h) * law.coef * v.norm_squared();
     }
 }
 
