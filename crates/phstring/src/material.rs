@@ -211,15 +211,18 @@ impl StoredEnergy for LinearElastic {
     }
     /// Exact form: with `a = C₀ − 1`, `b = C₁ − 1` (exact near 1) and `s = √C`,
     /// `q = EA/2 · (a/(s₀+1) + b/(s₁+1)) / (s₀+s₁)`, evaluated as
-    /// `EA/2 · ((a+b)(1+s₀) + a (C₁−C₀)/(s₀+s₁)) / ((s₀+1)(s₁+1)(s₀+s₁))` so that the
-    /// near-cancellation of the two terms happens exactly in `a + b`.
+    /// `EA/2 · ((a+b)(1+s₀)(s₀+s₁) + a (C₁−C₀)) / ((s₀+1)(s₁+1)(s₀+s₁)²)` so that the
+    /// near-cancellation of the two terms happens exactly in `a + b`; `∂q/∂C₁` is
+    /// `EA/2 / ((s₀+s₁)² s₁)`. Both share one reciprocal.
+    #[inline]
     fn quotient(&self, c0: f64, c1: f64) -> (f64, f64) {
         let (s0, s1) = (c0.sqrt(), c1.sqrt());
         let sum = s0 + s1;
         let (a, b) = (cm1(c0), cm1(c1));
-        let num = (a + b) * (1.0 + s0) + a * ((c1 - c0) / sum);
-        let q = 0.5 * self.ea * num / ((s0 + 1.0) * (s1 + 1.0) * sum);
-        (q, 0.5 * self.ea / (sum * sum * s1))
+        let num = (a + b) * (1.0 + s0) * sum + a * (c1 - c0);
+        let p = (s0 + 1.0) * (s1 + 1.0);
+        let inv = 0.5 * self.ea / (p * sum * sum * s1);
+        (num * s1 * inv, p * inv)
     }
 }
 
