@@ -26,7 +26,6 @@ use phstring::{Material, PhSystem, Vector};
 use serde::Serialize;
 
 use super::at::{AnyAt, AtCheckpoint, AtError, CheckpointInfo};
-use crate::checkpoint::CheckpointError;
 use crate::files::{LINEAR_AT_FILE, MANIFEST_FILE, atomic_write, num};
 use crate::output::OutputError;
 use crate::scenario::{AnySetup, ScenarioError, ScenarioFile, Setup};
@@ -41,9 +40,6 @@ pub enum ExportError {
     /// No equilibrium to linearize at.
     #[error(transparent)]
     Statics(#[from] StaticsError),
-    /// The checkpoint could not be read or does not fit the scenario.
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
     /// The modes for the modal form could not be computed.
     #[error(transparent)]
     Modes(#[from] phstring::modes::ModesError),
