@@ -665,12 +665,12 @@ const RHO_A: f64 = 6.5;
 const EA: f64 = 1.0e8;
 const G: f64 = 9.81;
 
-/// Writes [`LOWERING`] (with `edit` applied) into `dir` and runs it for 1200 steps (to
-/// `t` = 12 s, the 12 m paid out at 10 s), a checkpoint every 400 steps; returns the
-/// scenario and the last checkpoint, the one written at the stop.
-fn lowered_checkpoint(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+/// Writes the scenario `text` (the lowering, [`LOWERING`], or a variant) into `dir` and
+/// runs it for 1200 steps (to `t` = 12 s, the 12 m paid out at 10 s), a checkpoint every 400
+/// steps; returns the scenario and the last checkpoint, the one written at the stop.
+fn lowered_checkpoint(dir: &Path, text: &str) -> (std::path::PathBuf, std::path::PathBuf) {
     let scenario = dir.join("lowering.toml");
-    std::fs::write(&scenario, LOWERING).unwrap();
+    std::fs::write(&scenario, text).unwrap();
     let out = dir.join("run");
     let extra = ["--checkpoint-every", "400", "--stop-after-steps", "1200"];
     let o = run_with(scenario.to_str().unwrap(), &out, &[], &extra);
@@ -699,7 +699,7 @@ fn lowered_checkpoint(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
 #[test]
 fn statics_at_a_winch_checkpoint_hangs_the_paid_out_length() {
     let dir = temp_dir("winch-statics-at");
-    let (scenario, cp) = lowered_checkpoint(&dir);
+    let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
     let out = dir.join("statics");
     let o = phstring(&[
         "statics",
@@ -798,7 +798,7 @@ fn rod_with_tip_mass(mu: f64) -> f64 {
 #[test]
 fn linearize_at_a_winch_checkpoint_has_the_axial_mode_of_the_paid_out_length() {
     let dir = temp_dir("winch-linearize-at");
-    let (scenario, cp) = lowered_checkpoint(&dir);
+    let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
     let lin = |tag: &str, extra: &[&str]| {
         let out = dir.join(tag);
         let mut args = vec![
@@ -912,7 +912,7 @@ fn linearize_at_a_winch_checkpoint_has_the_axial_mode_of_the_paid_out_length() {
 #[test]
 fn analyses_at_a_checkpoint_of_another_scenario_are_refused() {
     let dir = temp_dir("winch-at-refused");
-    let (scenario, cp) = lowered_checkpoint(&dir);
+    let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
     let crane = dir.join("crane");
     let o = run_with(
         CRANE,
@@ -955,5 +955,56 @@ fn analyses_at_a_checkpoint_of_another_scenario_are_refused() {
             assert!(!out.exists(), "{command}: the folder was made");
         }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The lowering in water (the drum 5 m below the surface, 200 m deep; the wire 40 mm in
+/// diameter, the payload displacing 0.6 m³): `statics --at` the checkpoint at 12 m paid out
+/// hangs the wet weight of the paid-out length, the water lumped again over the elements
+/// that came off the drum: the drum's reaction is `g (m − ρ_w V + (ρA − ρ_w π d²/4) ℓ)`, ℓ
+/// the elements' length off the drum node (32 m), to `√(free components)` × the statics'
+/// tolerance (the dry weight is 6.4 kN more).
+#[test]
+fn statics_at_a_winch_checkpoint_in_water_hangs_the_wet_weight() {
+    let dir = temp_dir("winch-statics-at-wet");
+    let wet = LOWERING
+        .replace("position = [0.0, 0.0]", "position = [0.0, -5.0]")
+        .replace("position = [0.0, -20.01]", "position = [0.0, -25.01]")
+        .replace("rho_a = 6.5 ", "diameter = 0.04\nrho_a = 6.5 ")
+        .replace("kg = 5000.0", "kg = 5000.0\nvolume = 0.6")
+        .replace(
+            "[body_force]",
+            "[water]\ndensity = 1025.0\ndepth = 200.0\n\n[body_force]",
+        );
+    let (scenario, cp) = lowered_checkpoint(&dir, &wet);
+    let out = dir.join("statics");
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let w = &s["started_from"]["winches"][0];
+    assert!((w["length"].as_f64().unwrap() - 32.0).abs() < 1e-9, "{w}");
+    let ell = w["elements_length"].as_f64().unwrap();
+    let drum = w["drum_node"].as_u64().unwrap() as usize;
+    let rho_w = 1025.0;
+    let area = std::f64::consts::PI * 0.04 * 0.04 / 4.0;
+    let wet_weight = G * (PAYLOAD - rho_w * 0.6 + (RHO_A - rho_w * area) * ell);
+    let tol = (2.0 * ell.round()).sqrt() * s["tolerance"].as_f64().unwrap();
+    let lift = numeric_rows(&out.join("equilibrium.csv"))[drum][4];
+    eprintln!(
+        "statics at the wet checkpoint: drum reaction {lift:.6} N against the wet weight {wet_weight:.6} N ({:.1e} N; dry {:.1} N)",
+        lift - wet_weight,
+        G * (PAYLOAD + RHO_A * ell)
+    );
+    assert!(
+        (lift - wet_weight).abs() <= tol + 1e-12 * wet_weight,
+        "{lift}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
