@@ -56,11 +56,14 @@ enum Command {
     /// Run a scenario or MoorDyn deck for every combination of varied values, in parallel
     /// (over a deck, --vary motion=a.csv,b.csv is a load-case campaign: campaign.csv).
     Sweep(commands::sweep::SweepArgs),
-    /// Find the static equilibrium of a scenario under its loads at t = 0 (positions,
-    /// tensions, support reactions; CSV, ParaView, plot, summary.json).
+    /// Find the static equilibrium of a scenario under its loads at t = 0, or (--at) of the
+    /// system as a run's checkpoint holds it: its winches' lengths, its supports and loads
+    /// at its time (positions, tensions, support reactions; CSV, ParaView, plot,
+    /// summary.json).
     Statics(commands::statics::StaticsArgs),
     /// Write the linear port-Hamiltonian model about the static equilibrium (or a
-    /// checkpoint's positions): MatrixMarket and scipy .npz matrices and manifest.json.
+    /// checkpoint's positions on its winches' mesh, or with --equilibrium the equilibrium
+    /// there): MatrixMarket and scipy .npz matrices and manifest.json.
     Linearize(commands::linearize::LinearizeArgs),
     /// The lowest natural frequencies and mode shapes about the static equilibrium
     /// (modes.csv, ParaView frames, plot, summary.json).

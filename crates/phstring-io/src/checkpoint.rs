@@ -450,6 +450,34 @@ impl CheckpointFile {
         })
     }
 
+    /// Checks this checkpoint against `sim` ([`Self::check_against`]) and puts its state
+    /// into it ([`Simulation::restore`]: the state, the progress of the run and the winches'
+    /// meshes): how a resumed run and the analyses at a checkpoint (`statics --at`,
+    /// `linearize --at`) start. The flat record is turned into the simulation's one array at
+    /// a time (each freed as it goes), so that a large state is not held twice in full.
+    /// Returns the file's own parts that a resumed run continues: its counters and the
+    /// state of its output files.
+    pub fn restore_into<const D: usize>(
+        self,
+        sim: &mut Simulation<D, Material>,
+        settings: &crate::scenario::RunSettings,
+    ) -> Result<(Counters, OutputState), CheckpointError> {
+        self.check_against(sim, settings)?;
+        let Self {
+            path,
+            sim: flat,
+            counters,
+            outputs,
+            ..
+        } = self;
+        sim.restore(flat.into_checkpoint::<D>())
+            .map_err(|e| CheckpointError::Invalid {
+                path,
+                reason: e.to_string(),
+            })?;
+        Ok((counters, outputs))
+    }
+
     /// The water counters: present exactly for a run in water, one grounded length per
     /// string, finite and non-negative values, a node of the mesh, a time up to `t`.
     fn check_water<const D: usize>(

@@ -19,9 +19,14 @@ const STOPPED_LINEARIZE: &str = "interrupted before the model was written; nothi
 pub struct LinearizeArgs {
     /// Scenario file (TOML), or a MoorDyn input deck (told by its content).
     pub scenario: PathBuf,
-    /// Linearize at this checkpoint's positions instead of the equilibrium.
+    /// Linearize at this checkpoint's positions instead of the equilibrium, on the mesh it
+    /// holds (its winches' lengths).
     #[arg(long, value_name = "CHECKPOINT")]
     pub at: Option<PathBuf>,
+    /// With --at: about the equilibrium of the system as the checkpoint holds it (from its
+    /// positions) instead of its positions.
+    #[arg(long, requires = "at")]
+    pub equilibrium: bool,
     /// Also write the modal truncation to the K lowest natural modes (form `modal`).
     #[arg(long, value_name = "K", value_parser = at_least_one)]
     pub modes: Option<usize>,
@@ -44,7 +49,11 @@ pub fn linearize(args: LinearizeArgs) -> Result<()> {
         "_linear",
         at.as_slice(),
         |setup| match at {
-            Some(path) => Ok(phstring_io::drive::linearize::checkpoint_at(setup, path)?),
+            Some(path) => Ok(phstring_io::drive::linearize::checkpoint_at(
+                setup,
+                path,
+                args.equilibrium,
+            )?),
             None => Ok(LinearizeAt::Equilibrium),
         },
     )?;

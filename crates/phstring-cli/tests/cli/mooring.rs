@@ -276,7 +276,7 @@ fn cable_robot_modes_are_the_platform_on_its_stiffness() {
 }
 
 /// A MatrixMarket coordinate file (`linearize`'s `FORM/NAME.mtx`) as a dense matrix.
-fn read_mtx(p: &std::path::Path) -> nalgebra::DMatrix<f64> {
+pub(crate) fn read_mtx(p: &std::path::Path) -> nalgebra::DMatrix<f64> {
     let text = std::fs::read_to_string(p).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('%'));
     let dims: Vec<usize> = lines

@@ -549,3 +549,115 @@ fn statics_of_the_chain_on_the_slope_match_the_inclined_catenary() {
         "penetration {pen} m vs w cos²α/(kd) = {p} m"
     );
 }
+
+/// `statics --at` the checkpoint of a run without winches is the equilibrium at the
+/// checkpoint's time: a 1 t hook on 20 m of steel wire (EA = 1e8 N, 6.5 kg/m) hangs from a
+/// trolley moving at 0.5 m/s and is pulled down by `1000 t` N; at the checkpoint of `t` = 4 s
+/// the trolley is held where the run had it (x = 2 m, to 1e-12 m), the hook hangs straight
+/// below it (to 1e-9 m), the supports carry the weight plus the pull at 4 s, 4000 N (to
+/// `√(free components)` × the statics' tolerance), and the hook hangs the closed-form static
+/// length `ℓ + g((m + ρA ℓ)ℓ − ρA ℓ²/2)/EA + F ℓ/EA` below the trolley (to 1e-9 m).
+#[test]
+fn statics_at_a_checkpoint_takes_the_supports_and_loads_at_its_time() {
+    let dir = temp_dir("statics-at-time");
+    let scenario = dir.join("trolley.toml");
+    std::fs::write(
+        &scenario,
+        r#"
+title = "A 1 t hook on a travelling trolley, pulled down more and more"
+dimension = 2
+
+[[node]]
+name = "trolley"
+position = [0.0, 0.0]
+
+[[node]]
+name = "hook"
+position = [0.0, -20.01]
+
+[materials.wire]
+law = "tension_only_linear"
+ea = 1.0e8
+rho_a = 6.5
+
+[[string]]
+name = "wire"
+path = ["trolley", "hook"]
+elements = 20
+material = "wire"
+prestretch = 1.0005
+
+[[boundary]]
+node = "trolley"
+position = ["0.5*t", "0"]
+
+[[boundary]]
+node = "hook"
+force = ["0", "-1000*t"]
+
+[[point_mass]]
+node = "hook"
+kg = 1000.0
+
+[body_force]
+gravity = [0.0, -9.81]
+
+[time]
+h = 0.01
+end = 10.0
+
+[output]
+plots = false
+animation = false
+"#,
+    )
+    .unwrap();
+    let run = dir.join("run");
+    let o = phstring(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+        "--stop-after-steps",
+        "400",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let out = dir.join("statics");
+    let cp = run.join("checkpoint.json");
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = super::summary(&out);
+    let t = s["started_from"]["time"].as_f64().unwrap();
+    assert!((t - 4.0).abs() < 1e-9, "{t}");
+    assert!(s["started_from"]["winches"].as_array().unwrap().is_empty());
+    let rows = super::numeric_rows(&out.join("equilibrium.csv"));
+    let (trolley, hook) = (&rows[0], &rows[1]);
+    assert!((trolley[1] - 0.5 * t).abs() < 1e-12, "{trolley:?}");
+    assert!((hook[1] - trolley[1]).abs() < 1e-9, "{hook:?}");
+    let (g, m, rho_a, ea, ell) = (9.81, 1000.0, 6.5, 1.0e8, 20.0);
+    let pull = 1000.0 * t;
+    let load = g * (m + rho_a * ell) + pull;
+    let tol = (2.0 * ell).sqrt() * s["tolerance"].as_f64().unwrap();
+    let lift = s["total_reaction"][1].as_f64().unwrap();
+    let hang = ell + g * ((m + rho_a * ell) * ell - 0.5 * rho_a * ell * ell) / ea + pull * ell / ea;
+    let drop = trolley[2] - hook[2];
+    eprintln!(
+        "statics at t = {t} s: supports {lift:.6} N against {load:.6} N, hook {drop:.9} m below the trolley against {hang:.9} m"
+    );
+    assert!((lift - load).abs() <= tol + 1e-12 * load, "{lift}");
+    assert!((drop - hang).abs() < 1e-9, "{drop} against {hang}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

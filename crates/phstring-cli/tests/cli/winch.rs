@@ -610,3 +610,401 @@ end = 0.5
     assert_eq!(last[10], w0);
     assert!(w0 < 0.0, "lowering takes energy: {w0}");
 }
+
+/// A 5 t payload on 20 m of a steel wire (EA = 1e8 N, 6.5 kg/m, elements of 1 m, 20 m on the
+/// drum), lowered 12 m in 10 s by a smooth payout; `h` = 10 ms.
+const LOWERING: &str = r#"
+title = "A 5 t payload lowered 12 m on a steel wire"
+dimension = 2
+
+[[node]]
+name = "drum"
+position = [0.0, 0.0]
+
+[[node]]
+name = "hook"
+position = [0.0, -20.01]                # m: 20 m of wire and its static stretch
+
+[materials.wire]
+law = "tension_only_linear"
+ea = 1.0e8                              # N
+rho_a = 6.5                             # kg/m
+
+[[string]]
+name = "wire"
+path = ["drum", "hook"]
+elements = 20
+material = "wire"
+prestretch = 1.0005                     # about the static strain: 50.3 kN / EA
+
+[[winch]]
+name = "hoist"
+string = "wire"
+reserve = 20.0                          # m on the drum
+payout = "12 * (3*min(t/10,1)^2 - 2*min(t/10,1)^3)"
+
+[[point_mass]]
+node = "hook"
+kg = 5000.0
+
+[body_force]
+gravity = [0.0, -9.81]
+
+[time]
+h = 0.01
+end = 20.0
+
+[output]
+stride = 10
+plots = false
+animation = false
+"#;
+
+const PAYLOAD: f64 = 5000.0;
+const RHO_A: f64 = 6.5;
+const EA: f64 = 1.0e8;
+const G: f64 = 9.81;
+
+/// Writes the scenario `text` (the lowering, [`LOWERING`], or a variant) into `dir` and
+/// runs it for 1200 steps (to `t` = 12 s, the 12 m paid out at 10 s), a checkpoint every 400
+/// steps; returns the scenario and the last checkpoint, the one written at the stop.
+fn lowered_checkpoint(dir: &Path, text: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let scenario = dir.join("lowering.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.join("run");
+    let extra = ["--checkpoint-every", "400", "--stop-after-steps", "1200"];
+    let o = run_with(scenario.to_str().unwrap(), &out, &[], &extra);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (scenario, out.join("checkpoint.json"))
+}
+
+/// `statics --at` the checkpoint of a winch that has paid out 12 m (20 m → 32 m off the
+/// drum, 12 elements brought off it): the equilibrium is that of the checkpoint's mesh, the
+/// 32 elements from the drum node down, not the scenario's 20. `equilibrium.csv` has the
+/// checkpoint's node count; `summary.json` names the checkpoint, its time (12 s) and the
+/// winch's payout (12 m) and length off the drum (32 m, to 1e-9 m); the drum's reaction is
+/// the weight hanging from the drum node, `g (m + ρA ℓ)` with `ℓ` the elements' length off
+/// it, and the drum element's tension `g (m + ρA (ℓ − L/2))` (its node carries half of its
+/// weight), both to the statics' residual (the reaction balances the loads less the free
+/// components' residual: at most `√(free components)` × the tolerance, and rounding); the
+/// payload hangs the closed-form static length `ℓ + g ((m + ρA ℓ) ℓ − ρA ℓ²/2)/EA` below
+/// the drum node (to 1e-9 m: the residual moves it by at most about `√(free components)` ×
+/// the tolerance × `ℓ/EA`, 2e-11 m). The plain
+/// `statics` still solves at the scenario's 20 m.
+#[test]
+fn statics_at_a_winch_checkpoint_hangs_the_paid_out_length() {
+    let dir = temp_dir("winch-statics-at");
+    let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
+    let out = dir.join("statics");
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let from = &s["started_from"];
+    assert_eq!(from["checkpoint"].as_str().unwrap(), cp.to_str().unwrap());
+    assert!(
+        (from["time"].as_f64().unwrap() - 12.0).abs() < 1e-9,
+        "{from}"
+    );
+    let w = &from["winches"][0];
+    assert_eq!(w["name"], "hoist");
+    assert!((w["payout"].as_f64().unwrap() - 12.0).abs() < 1e-12, "{w}");
+    assert!((w["length"].as_f64().unwrap() - 32.0).abs() < 1e-9, "{w}");
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cp).unwrap()).unwrap();
+    let nodes = checkpoint["sim"]["r"].as_array().unwrap().len() / 2;
+    let rows = numeric_rows(&out.join("equilibrium.csv"));
+    assert_eq!(rows.len(), nodes);
+    assert_eq!(s["nodes"].as_u64().unwrap() as usize, nodes);
+    let drum = w["drum_node"].as_u64().unwrap() as usize;
+    let drum_element = w["drum_element"].as_u64().unwrap() as usize;
+    let ell = w["elements_length"].as_f64().unwrap();
+    assert!(
+        (ell - 32.0).abs() <= 1.0,
+        "{ell}: within an element of the length off"
+    );
+    // The nodes below the drum node, one per element off it, are the free ones.
+    let free = 2.0 * ell.round();
+    let tol = free.sqrt() * s["tolerance"].as_f64().unwrap();
+    let weight = G * (PAYLOAD + RHO_A * ell);
+    let lift = rows[drum][4];
+    let tension = numeric_rows(&out.join("tension.csv"))[drum_element][6];
+    let hang = ell + G * ((PAYLOAD + RHO_A * ell) * ell - 0.5 * RHO_A * ell * ell) / EA;
+    // The payload hangs lowest.
+    let hook = rows.iter().map(|r| r[2]).fold(f64::INFINITY, f64::min);
+    let drop = rows[drum][2] - hook;
+    eprintln!(
+        "statics at the checkpoint: drum reaction {lift:.6} N against {weight:.6} N ({:.1e} N), drum element tension {tension:.6} N ({:.1e} N), payload {drop:.9} m below the drum node against {hang:.9} m ({:.1e} m; tolerance {tol:.3e} N)",
+        lift - weight,
+        tension - (weight - G * RHO_A * 0.5),
+        drop - hang
+    );
+    assert!((lift - weight).abs() <= tol + 1e-12 * weight, "{lift}");
+    // Elements of L = 1 m: the drum node carries half of the drum element's weight.
+    let half = G * RHO_A * 0.5;
+    assert!((tension - (weight - half)).abs() <= tol + 1e-12 * weight);
+    assert!((drop - hang).abs() < 1e-9, "{drop} against {hang}");
+    // The scenario's own equilibrium hangs its 20 m.
+    let start = dir.join("start");
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--out",
+        start.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(summary(&start).get("started_from").is_none());
+    let start_lift = summary(&start)["total_reaction"][1].as_f64().unwrap();
+    let start_weight = G * (PAYLOAD + RHO_A * 20.0);
+    assert!((start_lift - start_weight).abs() < 1e-6 * start_weight);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The smallest root `β` of `β tan β = μ`: the axial mode of a rod fixed at one end with a
+/// tip mass `m`, `μ` its mass over `m`, is `ω = β c/ℓ` (`c = √(EA/ρA)`).
+fn rod_with_tip_mass(mu: f64) -> f64 {
+    let mut b = mu.sqrt();
+    for _ in 0..50 {
+        let f = b * b.tan() - mu;
+        let df = b.tan() + b / b.cos().powi(2);
+        b -= f / df;
+    }
+    b
+}
+
+/// `linearize --at` the same checkpoint (12 m paid out): the model is on the checkpoint's
+/// mesh, its reduced form's states the free components of the 32 nodes below the drum node
+/// (the 20 nodes still on the drum and the drum node held), and the manifest names the
+/// checkpoint and the winch's length. The vertical rope's vertical and horizontal components
+/// decouple in the tangent stiffness (to 1e-9 of its largest entry), and the lowest
+/// eigenvalue of the vertical part, `K_yy φ = ω² M_yy φ`, is the axial mode of the payload on
+/// the rope at its new length: `ω = β √(EA/ρA)/ℓ` with `β tan β = ρA ℓ/m` (24.83 rad/s
+/// here; at the scenario's 20 m it is 31.49 rad/s). The axial tangent of the linear law is
+/// exactly `EA/L` per element at any stretch, so the remaining difference is the chain's
+/// discretization, of the order of `(β L/ℓ)²/24` ≈ 2e-6 relative; asserted: 1e-4. With
+/// `--equilibrium` the model is taken about the equilibrium of that mesh: its static
+/// residual is within the statics' tolerance and its positions are those of `statics --at`.
+#[test]
+fn linearize_at_a_winch_checkpoint_has_the_axial_mode_of_the_paid_out_length() {
+    let dir = temp_dir("winch-linearize-at");
+    let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
+    let lin = |tag: &str, extra: &[&str]| {
+        let out = dir.join(tag);
+        let mut args = vec![
+            "linearize",
+            scenario.to_str().unwrap(),
+            "--at",
+            cp.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = phstring(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap())
+                .unwrap();
+        (out, m)
+    };
+    let (out, m) = lin("state", &[]);
+    assert_eq!(m["linearized_at"].as_str().unwrap(), cp.to_str().unwrap());
+    assert!((m["time"].as_f64().unwrap() - 12.0).abs() < 1e-9);
+    let w = &m["started_from"]["winches"][0];
+    assert!((w["length"].as_f64().unwrap() - 32.0).abs() < 1e-9, "{w}");
+    let ell = w["elements_length"].as_f64().unwrap();
+    let drum = w["drum_node"].as_u64().unwrap() as usize;
+    let nodes = m["nodes"].as_u64().unwrap() as usize;
+    let states: Vec<&str> = m["forms"]["reduced"]["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    // The free nodes: one below each element off the drum node (the payload's the last).
+    let free_nodes = ell.round() as usize;
+    assert_eq!(
+        states.len(),
+        2 * 2 * free_nodes,
+        "q and v of each free component"
+    );
+    let held = format!("q[{drum}].");
+    assert!(
+        !states.iter().any(|s| s.starts_with(&held)),
+        "drum node held"
+    );
+    assert!(nodes > free_nodes + 1, "parked nodes held");
+    let q = crate::mooring::read_mtx(&out.join("reduced/Q.mtx"));
+    let e = crate::mooring::read_mtx(&out.join("reduced/E.mtx"));
+    let n = 2 * free_nodes;
+    let ys: Vec<usize> = (0..n).filter(|&i| states[i].ends_with(".y")).collect();
+    let xs: Vec<usize> = (0..n).filter(|&i| states[i].ends_with(".x")).collect();
+    let k = q.view((0, 0), (n, n));
+    let largest = k.amax();
+    for &i in &xs {
+        for &j in &ys {
+            assert!(
+                k[(i, j)].abs() <= 1e-9 * largest,
+                "K[{i},{j}] = {}",
+                k[(i, j)]
+            );
+        }
+    }
+    let pick = |a: nalgebra::DMatrixView<f64>| {
+        nalgebra::DMatrix::from_fn(ys.len(), ys.len(), |i, j| a[(ys[i], ys[j])])
+    };
+    let k_yy = pick(k);
+    let m_yy = pick(e.view((n, n), (n, n)));
+    let l = m_yy.cholesky().expect("mass positive definite").l();
+    let l_inv = l.clone().try_inverse().unwrap();
+    let a = &l_inv * k_yy * l_inv.transpose();
+    let lowest = a.symmetric_eigenvalues().min().sqrt();
+    let mu = RHO_A * ell / PAYLOAD;
+    let axial = rod_with_tip_mass(mu) * (EA / RHO_A).sqrt() / ell;
+    let at_start = rod_with_tip_mass(RHO_A * 20.0 / PAYLOAD) * (EA / RHO_A).sqrt() / 20.0;
+    eprintln!(
+        "axial mode at the checkpoint: {lowest:.9} rad/s against the rod with a tip mass at {ell} m, {axial:.9} rad/s ({:.1e} relative; at the start's 20 m: {at_start:.6} rad/s)",
+        lowest / axial - 1.0
+    );
+    assert!((lowest / axial - 1.0).abs() < 1e-4);
+    // About the equilibrium at the checkpoint's length: that of `statics --at`.
+    let (out, m) = lin("equilibrium", &["--equilibrium"]);
+    assert_eq!(
+        m["linearized_at"].as_str().unwrap(),
+        format!("equilibrium at {}", cp.to_str().unwrap())
+    );
+    let st = dir.join("statics");
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        st.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let tol = summary(&st)["tolerance"].as_f64().unwrap();
+    assert!(m["static_residual"].as_f64().unwrap() <= tol, "{m}");
+    let at = numeric_rows(&out.join("at.csv"));
+    let eq = numeric_rows(&st.join("equilibrium.csv"));
+    assert_eq!(at.len(), eq.len());
+    for (a, b) in at.iter().zip(&eq) {
+        assert!((a[1] - b[1]).abs() < 1e-9 && (a[2] - b[2]).abs() < 1e-9);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `statics --at` and `linearize --at` refuse a checkpoint of another scenario by name and
+/// counts, before the output folder is made: the crane's (26 nodes in 2D, against the
+/// lowering's 41), and the lowering's own checkpoint against the same scenario with the drum
+/// 1 m to the side (the same counts, but its drum node is not where that winch's path puts
+/// it: not a mesh that winch produced).
+#[test]
+fn analyses_at_a_checkpoint_of_another_scenario_are_refused() {
+    let dir = temp_dir("winch-at-refused");
+    let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
+    let crane = dir.join("crane");
+    let o = run_with(
+        CRANE,
+        &crane,
+        &["output.plots=false"],
+        &["--stop-after-steps", "3"],
+    );
+    assert_eq!(o.status.code(), Some(130));
+    let crane_cp = crane.join("checkpoint.json");
+    let moved = dir.join("moved.toml");
+    std::fs::write(
+        &moved,
+        LOWERING
+            .replace("position = [0.0, 0.0]", "position = [1.0, 0.0]")
+            .replace("position = [0.0, -20.01]", "position = [1.0, -20.01]"),
+    )
+    .unwrap();
+    let size = format!(
+        "{} holds 52 position values, but the scenario has 41 nodes in 2D (82 values)",
+        crane_cp.display()
+    );
+    let off_path = format!(
+        "checkpoint {} is damaged or does not belong to this scenario: sim.winches[0] (winch \"hoist\"): its drum node",
+        cp.display()
+    );
+    for command in ["statics", "linearize"] {
+        for (s, at, expect) in [(&scenario, &crane_cp, &size), (&moved, &cp, &off_path)] {
+            let out = dir.join(format!("{command}-refused"));
+            let o = phstring(&[
+                command,
+                s.to_str().unwrap(),
+                "--at",
+                at.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(1), "{err}");
+            assert!(err.contains(expect.as_str()), "{command}: {err}");
+            assert!(!out.exists(), "{command}: the folder was made");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The lowering in water (the drum 5 m below the surface, 200 m deep; the wire 40 mm in
+/// diameter, the payload displacing 0.6 m³): `statics --at` the checkpoint at 12 m paid out
+/// hangs the wet weight of the paid-out length, the water lumped again over the elements
+/// that came off the drum: the drum's reaction is `g (m − ρ_w V + (ρA − ρ_w π d²/4) ℓ)`, ℓ
+/// the elements' length off the drum node (32 m), to `√(free components)` × the statics'
+/// tolerance (the dry weight is 6.4 kN more).
+#[test]
+fn statics_at_a_winch_checkpoint_in_water_hangs_the_wet_weight() {
+    let dir = temp_dir("winch-statics-at-wet");
+    let wet = LOWERING
+        .replace("position = [0.0, 0.0]", "position = [0.0, -5.0]")
+        .replace("position = [0.0, -20.01]", "position = [0.0, -25.01]")
+        .replace("rho_a = 6.5 ", "diameter = 0.04\nrho_a = 6.5 ")
+        .replace("kg = 5000.0", "kg = 5000.0\nvolume = 0.6")
+        .replace(
+            "[body_force]",
+            "[water]\ndensity = 1025.0\ndepth = 200.0\n\n[body_force]",
+        );
+    let (scenario, cp) = lowered_checkpoint(&dir, &wet);
+    let out = dir.join("statics");
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let w = &s["started_from"]["winches"][0];
+    assert!((w["length"].as_f64().unwrap() - 32.0).abs() < 1e-9, "{w}");
+    let ell = w["elements_length"].as_f64().unwrap();
+    let drum = w["drum_node"].as_u64().unwrap() as usize;
+    let rho_w = 1025.0;
+    let area = std::f64::consts::PI * 0.04 * 0.04 / 4.0;
+    let wet_weight = G * (PAYLOAD - rho_w * 0.6 + (RHO_A - rho_w * area) * ell);
+    let tol = (2.0 * ell.round()).sqrt() * s["tolerance"].as_f64().unwrap();
+    let lift = numeric_rows(&out.join("equilibrium.csv"))[drum][4];
+    eprintln!(
+        "statics at the wet checkpoint: drum reaction {lift:.6} N against the wet weight {wet_weight:.6} N ({:.1e} N; dry {:.1} N)",
+        lift - wet_weight,
+        G * (PAYLOAD + RHO_A * ell)
+    );
+    assert!(
+        (lift - wet_weight).abs() <= tol + 1e-12 * wet_weight,
+        "{lift}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

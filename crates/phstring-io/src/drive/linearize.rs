@@ -8,6 +8,11 @@
 //!
 //! `manifest.json` lists the state components, inputs and outputs in order with units, and
 //! the state it was linearized at; `at.csv` holds those positions.
+//!
+//! About the scenario's equilibrium, or (`--at CHECKPOINT`) on the system as a run's
+//! checkpoint holds it ([`super::at`]: its winches' meshes, with the nodes paid out since
+//! the start free and those hauled in held on the drum), about its positions or (with
+//! `--equilibrium`) the equilibrium of that system.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -15,12 +20,12 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use faer::sparse::SparseColMat;
-use phstring::Vector;
 use phstring::linear::{ForcePort, LinearPh, force_ports, full_model, reduced_model};
-use phstring::statics::StaticsError;
+use phstring::statics::{StaticsError, StaticsParams};
+use phstring::{Material, PhSystem, Vector};
 use serde::Serialize;
 
-use crate::checkpoint::{CheckpointError, CheckpointFile};
+use super::at::{AnyAt, AtCheckpoint, AtError, CheckpointInfo};
 use crate::files::{LINEAR_AT_FILE, MANIFEST_FILE, atomic_write, num};
 use crate::output::OutputError;
 use crate::scenario::{AnySetup, ScenarioError, ScenarioFile, Setup};
@@ -35,13 +40,14 @@ pub enum ExportError {
     /// No equilibrium to linearize at.
     #[error(transparent)]
     Statics(#[from] StaticsError),
-    /// The checkpoint could not be read or does not fit the scenario.
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
     /// The modes for the modal form could not be computed.
     #[error(transparent)]
     Modes(#[from] phstring::modes::ModesError),
-    /// The checkpoint's state does not fit the scenario's mesh.
+    /// The checkpoint does not fit the scenario, or what it holds is not covered.
+    #[error(transparent)]
+    At(#[from] AtError),
+    /// The state linearized at is not covered (a strain outside its law's domain, rigid
+    /// bodies at a checkpoint, the modal form with rigid bodies).
     #[error("{0}")]
     Mismatch(String),
     /// Writing failed.
@@ -66,32 +72,33 @@ impl ExportError {
 pub enum LinearizeAt {
     /// The static equilibrium of the scenario.
     Equilibrium,
-    /// The positions of a checkpoint (written by `phstring run`), read (and checked against
-    /// the scenario) by [`checkpoint_at`] before the output folder is touched.
-    Checkpoint(Box<CheckpointFile>),
+    /// The system as a checkpoint (written by `phstring run`) holds it: its mesh (the
+    /// winches' lengths), at its positions, or with `equilibrium` at the static equilibrium
+    /// of that system from them. Read and checked by [`checkpoint_at`] before the output
+    /// folder is touched.
+    Checkpoint {
+        /// The system and state at the checkpoint.
+        at: Box<AnyAt>,
+        /// Linearize about the equilibrium at the checkpoint's lengths instead of its state.
+        equilibrium: bool,
+    },
 }
 
-/// Reads the checkpoint at `path` and checks that its positions fit the mesh of `file`
-/// (node count × dimension), so that `linearize --at` fails on a bad checkpoint before its
-/// output folder is prepared.
-pub fn checkpoint_at(setup: &AnySetup, path: &Path) -> Result<LinearizeAt, ExportError> {
-    let cp = CheckpointFile::read(path)?;
-    let nodes = phstring::by_dim!(setup, s => s.problem.system.mesh().n_nodes());
-    check_positions(&cp, nodes, setup.dimension())?;
-    Ok(LinearizeAt::Checkpoint(Box::new(cp)))
-}
-
-/// Refuses a checkpoint whose positions are not `nodes` nodes in `d` dimensions.
-fn check_positions(cp: &CheckpointFile, nodes: usize, d: usize) -> Result<(), ExportError> {
-    if cp.sim.r.len() == nodes * d {
-        return Ok(());
-    }
-    Err(ExportError::Mismatch(format!(
-        "{} holds {} position values, but the scenario has {nodes} nodes in {d}D ({} values)",
-        cp.path.display(),
-        cp.sim.r.len(),
-        nodes * d
-    )))
+/// Reads the checkpoint at `path` and sets up the system as it holds it
+/// ([`read_at`](super::at::read_at): checked as a resume checks it, its positions node count
+/// × dimension first), so that `linearize --at` fails on a bad checkpoint before its output
+/// folder is prepared. With `equilibrium`, the model is taken about the equilibrium of that
+/// system.
+pub fn checkpoint_at(
+    setup: &AnySetup,
+    path: &Path,
+    equilibrium: bool,
+) -> Result<LinearizeAt, ExportError> {
+    let at = super::at::read_at(setup, path)?;
+    Ok(LinearizeAt::Checkpoint {
+        at: Box::new(at),
+        equilibrium,
+    })
 }
 
 /// One input or output of the model.
@@ -157,9 +164,11 @@ pub struct Manifest {
     pub inputs: Vec<PortEntry>,
     /// Outputs `y` in order: the velocities [m/s] conjugate to the inputs.
     pub outputs: Vec<PortEntry>,
-    /// Where it was linearized: `equilibrium` or the checkpoint file.
+    /// Where it was linearized: `equilibrium`, the checkpoint file, or `equilibrium at`
+    /// the checkpoint file.
     pub linearized_at: String,
-    /// Time of that state [s] (0 for the equilibrium).
+    /// Time of that state [s] (0 for the scenario's equilibrium; the checkpoint's time from
+    /// a checkpoint).
     pub time: f64,
     /// Norm of the static residual `K(r)S − F` over the free components there [N] (0 up to
     /// the tolerance at an equilibrium; the linear model leaves this constant force out).
@@ -175,6 +184,10 @@ pub struct Manifest {
     pub warnings: Vec<String>,
     /// The forms written.
     pub forms: std::collections::BTreeMap<&'static str, FormEntry>,
+    /// With `--at CHECKPOINT`: the checkpoint, its time and its winches' lengths (the mesh
+    /// linearized on); absent for the scenario's equilibrium.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub started_from: Option<CheckpointInfo>,
 }
 
 const FULL_EQUATIONS: &str = "x = (dr, dv, dC) on the free position and velocity components and every element strain; E = diag(I, M_rho, M_S), J = [[0, I, 0], [-I, 0, -2K(r)], [0, 2K(r)^T, 0]], R = diag(0, R_v, 0) with R_v the damping matrix (zero without damping), Q = diag(K_G, I, diag(W''(C_e))); strain components not generated by positions are conserved (zero-frequency modes)";
@@ -197,38 +210,98 @@ pub fn linearize(
     out: &Path,
     stop: Option<&AtomicBool>,
 ) -> Result<Manifest, ExportError> {
-    phstring::by_dim!(setup, s => linearize_dim(file, s, at, modal, out, stop))
+    let run = Run { modal, out, stop };
+    match at {
+        LinearizeAt::Equilibrium => {
+            phstring::by_dim!(setup, s => linearize_equilibrium(file, s, &run))
+        }
+        LinearizeAt::Checkpoint { at, equilibrium } => {
+            phstring::by_dim!(at.as_ref(), a => linearize_checkpoint(file, a, *equilibrium, &run))
+        }
+    }
 }
 
-fn linearize_dim<const D: usize>(
+/// What every form of `linearize` is asked for: the modal form's mode count, the output
+/// folder and the stop request.
+struct Run<'a> {
+    modal: Option<usize>,
+    out: &'a Path,
+    stop: Option<&'a AtomicBool>,
+}
+
+/// The state a model is linearized at: the positions [m], the time [s], what they are (the
+/// manifest's `linearized_at`) and, from a checkpoint, where it started.
+struct LinearState<const D: usize> {
+    r: Vec<Vector<D>>,
+    time: f64,
+    source: String,
+    started_from: Option<CheckpointInfo>,
+}
+
+fn linearize_equilibrium<const D: usize>(
     file: &ScenarioFile,
     v: &Setup<D>,
-    at: &LinearizeAt,
-    modal: Option<usize>,
-    out: &Path,
-    stop: Option<&AtomicBool>,
+    run: &Run,
 ) -> Result<Manifest, ExportError> {
     let sys = &v.problem.system;
     if !sys.bodies().is_empty() {
-        return linearize_bodies(file, v, at, modal, out, stop);
+        return linearize_bodies(file, v, run);
     }
-    let (r, time, source) = match at {
-        LinearizeAt::Equilibrium => {
-            let eq = v.equilibrium(true, stop)?;
-            (eq.state.r, 0.0, "equilibrium".to_string())
-        }
-        LinearizeAt::Checkpoint(cp) => {
-            check_positions(cp, sys.mesh().n_nodes(), D)?;
-            let r: Vec<Vector<D>> = cp
-                .sim
-                .r
-                .chunks(D)
-                .map(Vector::<D>::from_column_slice)
-                .collect();
-            let t = cp.sim.t_base + cp.sim.k as f64 * cp.sim.h_cur;
-            (r, t, cp.path.display().to_string())
-        }
+    let eq = v.equilibrium(true, run.stop)?;
+    let state = LinearState {
+        r: eq.state.r,
+        time: 0.0,
+        source: "equilibrium".to_string(),
+        started_from: None,
     };
+    linearize_state(file, sys, v.settings.step.solver, state, run)
+}
+
+/// The model of the system as checkpoint `at` holds it (its winches' meshes), about its
+/// positions or, with `equilibrium`, about the equilibrium of that system from them (open
+/// loop, as the scenario's equilibrium is taken).
+fn linearize_checkpoint<const D: usize>(
+    file: &ScenarioFile,
+    at: &AtCheckpoint<D>,
+    equilibrium: bool,
+    run: &Run,
+) -> Result<Manifest, ExportError> {
+    if !at.system.bodies().is_empty() {
+        return Err(ExportError::Mismatch(
+            "the linear model with rigid bodies is taken about the static equilibrium only, not at a checkpoint's state (yet): drop --at".into(),
+        ));
+    }
+    let (r, source) = if equilibrium {
+        let params = StaticsParams {
+            open_loop: true,
+            ..at.statics
+        };
+        let eq = phstring::statics::solve_from(&at.system, &at.state, &params, run.stop)?;
+        let source = format!("equilibrium at {}", at.info.checkpoint);
+        (eq.state.r, source)
+    } else {
+        (at.state.r.clone(), at.info.checkpoint.clone())
+    };
+    let state = LinearState {
+        r,
+        time: at.info.time,
+        source,
+        started_from: Some(at.info.clone()),
+    };
+    linearize_state(file, &at.system, at.statics.solver, state, run)
+}
+
+/// Linearizes `sys` at `at` (node forces only, no rigid bodies) and writes the forms, the
+/// positions and the manifest.
+fn linearize_state<const D: usize>(
+    file: &ScenarioFile,
+    sys: &PhSystem<D, Material>,
+    solver: phstring::SolverKind,
+    at: LinearState<D>,
+    run: &Run,
+) -> Result<Manifest, ExportError> {
+    let Run { modal, out, stop } = *run;
+    let r = at.r;
     let (res, _) = phstring::statics::static_residual(sys, &r).map_err(|e| {
         ExportError::Mismatch(format!(
             "element {e}'s strain is outside its law's domain at the state linearized at"
@@ -243,7 +316,7 @@ fn linearize_dim<const D: usize>(
     let mut warnings = Vec::new();
     let modal_model = match modal {
         Some(k) => {
-            let found = phstring::modes::modes(sys, &r, k, v.settings.step.solver, stop)?;
+            let found = phstring::modes::modes(sys, &r, k, solver, stop)?;
             let (_, free) = phstring::linear::free_dofs(sys);
             warnings.extend(super::modes::fewer_modes(
                 "--modes",
@@ -281,14 +354,15 @@ fn linearize_dim<const D: usize>(
         model: "E x' = (J - R) Q x + B u, y = B^T Q x, H = 1/2 x^T E^T Q x",
         inputs: ports.iter().map(|p| entry(p, "F", "N")).collect(),
         outputs: ports.iter().map(|p| entry(p, "v", "m/s")).collect(),
-        linearized_at: source,
-        time,
+        linearized_at: at.source,
+        time: at.time,
         static_residual,
         stable,
         positions: LINEAR_AT_FILE,
         requested_modes: modal,
         warnings,
         forms,
+        started_from: at.started_from,
     };
     let json = serde_json::to_string_pretty(&manifest).expect("plain data serializes");
     write(out, MANIFEST_FILE, json.as_bytes())?;
@@ -320,21 +394,14 @@ fn node_entry(p: &ForcePort, sym: &str, unit: &'static str) -> PortEntry {
 
 const BODY_EQUATIONS: &str = "x = (q, v): q the free position components and per rigid body its translation and its turn times its radius of gyration (rho w, w the body-axes Cayley vector), v their rates: E = diag(I, M), J = [[0, I], [-I, 0]], R = diag(0, R_v), Q = diag(K, I), so M q'' + R_v q' + K q = B u; inputs: the node force ports, then each body wrench's force and torque (space axes)";
 
-/// [`linearize_dim`] with rigid bodies: the reduced form about the equilibrium only.
+/// [`linearize_equilibrium`] with rigid bodies: the reduced form about the equilibrium only.
 fn linearize_bodies<const D: usize>(
     file: &ScenarioFile,
     v: &Setup<D>,
-    at: &LinearizeAt,
-    modal: Option<usize>,
-    out: &Path,
-    stop: Option<&AtomicBool>,
+    run: &Run,
 ) -> Result<Manifest, ExportError> {
+    let Run { modal, out, stop } = *run;
     let sys = &v.problem.system;
-    if !matches!(at, LinearizeAt::Equilibrium) {
-        return Err(ExportError::Mismatch(
-            "the linear model with rigid bodies is taken about the static equilibrium only, not at a checkpoint's state (yet): drop --at".into(),
-        ));
-    }
     if modal.is_some() {
         return Err(ExportError::Mismatch(
             "the modal form (--modes) does not cover rigid bodies yet: drop --modes (the reduced form has the bodies)".into(),
@@ -407,6 +474,7 @@ fn linearize_bodies<const D: usize>(
         requested_modes: None,
         warnings: vec!["with rigid bodies only the reduced form is written (the full mixed form does not cover them yet)".into()],
         forms,
+        started_from: None,
     };
     let json = serde_json::to_string_pretty(&manifest).expect("plain data serializes");
     write(out, MANIFEST_FILE, json.as_bytes())?;

@@ -3,6 +3,7 @@
 //!
 //! * [`run`]: a simulation (`phstring run`), with checkpoints and resume;
 //! * [`statics`]: the equilibrium (`phstring statics`);
+//! * [`at`]: the system as a run's checkpoint holds it (`statics --at`, `linearize --at`);
 //! * [`modes`]: the natural modes about it (`phstring modes`);
 //! * [`linearize`]: the linear model (`phstring linearize`);
 //! * [`mooring`]: a rigid body's mooring stiffness and offset–tension curve (`phstring
@@ -12,6 +13,7 @@
 //! * [`outdir`]: preparing and locking an output folder;
 //! * [`water`]: the `water` part of a run's summary.
 
+pub mod at;
 pub mod campaign;
 pub mod ends;
 pub mod linearize;

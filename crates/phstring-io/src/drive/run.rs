@@ -811,11 +811,7 @@ fn resume_writers<const D: usize>(
     cp: CheckpointFile,
 ) -> Result<Writers, RunError> {
     check_resume_folder(&cp, ctx.out)?;
-    cp.check_against(sim, &ctx.settings)?;
-    // The flat record is turned into the simulation's one array at a time (each freed as
-    // it goes), so that a large state is not held twice in full.
-    sim.restore(cp.sim.into_checkpoint::<D>())?;
-    let c = cp.counters;
+    let (c, outputs) = cp.restore_into(sim, &ctx.settings)?;
     info.steps = c.steps;
     info.total_newton_iterations = c.total_newton_iterations;
     info.max_balance_error = c.max_balance_error;
@@ -839,7 +835,7 @@ fn resume_writers<const D: usize>(
         s.stride,
         s.output.vtk,
         snapshot_times(s.t_end),
-        cp.outputs,
+        outputs,
         (sim.system().has_water(), sim.system().winches().len()),
     )?)
 }

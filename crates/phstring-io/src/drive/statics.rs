@@ -1,5 +1,7 @@
 //! `phstring statics`: the static equilibrium of a scenario under its loads at `t = 0`
-//! (docs/method.md §15), written as CSV, JSON, ParaView and a plot.
+//! (docs/method.md §15), or of the system as a run's checkpoint holds it (`--at`: its
+//! winches' lengths, its supports and loads at its time; docs/method.md §23), written as
+//! CSV, JSON, ParaView and a plot.
 //!
 //! Files written into the output folder:
 //! * `equilibrium.csv`: per node, the position [m] and the support reaction [N] (the force
@@ -10,7 +12,8 @@
 //!   reaction components;
 //! * `equilibrium.png` / `.svg`: the equilibrium (the two axes of largest extent in 3D);
 //! * `summary.json`: path, what became of the catenary first guess, iterations, residual,
-//!   tolerance, stability, energies, reactions.
+//!   tolerance, stability, energies, reactions; with `--at`, `started_from`: the
+//!   checkpoint, its time and its winches' lengths.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -21,6 +24,7 @@ use phstring::statics::{Equilibrium, StaticsError};
 use phstring::{Material, PhSystem, Vector};
 use serde::Serialize;
 
+use super::at::{AnyAt, AtCheckpoint, AtError, CheckpointInfo};
 use crate::files::{
     EQUILIBRIUM_FILE, EQUILIBRIUM_FRAME, SUMMARY_FILE, TENSION_FILE, atomic_write, num,
 };
@@ -42,6 +46,9 @@ pub enum StaticsRunError {
     /// Writing outputs failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The checkpoint of `--at` could not be read, does not fit, or is not covered.
+    #[error(transparent)]
+    At(#[from] AtError),
 }
 
 impl StaticsRunError {
@@ -101,6 +108,10 @@ pub struct StaticsInfo {
     /// `summary.json`); absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub deck: Option<crate::scenario::DeckSpec>,
+    /// With `--at CHECKPOINT`: the checkpoint it started from, its time and its winches'
+    /// lengths; absent for the scenario's own equilibrium.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub started_from: Option<CheckpointInfo>,
 }
 
 /// Solves the equilibrium of scenario `file` (validated and built: `setup`, from
@@ -123,10 +134,57 @@ fn statics_dim<const D: usize>(
 ) -> Result<StaticsInfo, StaticsRunError> {
     let start = Instant::now();
     let eq = v.equilibrium(false, stop)?;
-    let sys = &v.problem.system;
     let solve_s = start.elapsed().as_secs_f64();
-    let tension = tensions(sys, &eq);
-    write_files(out, sys, &eq, &tension)?;
+    write_all(file, &v.problem.system, &eq, solve_s, None, out)
+}
+
+/// The equilibrium of the system as checkpoint `at` holds it ([`read_at`](super::at::read_at):
+/// its winches' meshes, its supports where the run had them, its loads held at their values
+/// at its time), from its positions, written into `out` (which must exist) as [`statics`]
+/// writes the scenario's, with `summary.json` saying where it started. A scenario with
+/// feedback ports is refused: their check at rest takes their reference at `t = 0`.
+pub fn statics_at(
+    file: &ScenarioFile,
+    at: &AnyAt,
+    out: &Path,
+    stop: Option<&AtomicBool>,
+) -> Result<StaticsInfo, StaticsRunError> {
+    phstring::by_dim!(at, a => statics_at_dim(file, a, out, stop))
+}
+
+fn statics_at_dim<const D: usize>(
+    file: &ScenarioFile,
+    at: &AtCheckpoint<D>,
+    out: &Path,
+    stop: Option<&AtomicBool>,
+) -> Result<StaticsInfo, StaticsRunError> {
+    let feedback = at.system.boundary().feedback.len();
+    if feedback > 0 {
+        return Err(StaticsRunError::At(AtError::Unsupported {
+            path: at.info.checkpoint.clone().into(),
+            reason: format!(
+                "the scenario has {feedback} feedback port(s): statics --at does not cover them yet (their check at rest takes the reference at t = 0); use linearize --at, which leaves them open"
+            ),
+        }));
+    }
+    let start = Instant::now();
+    let eq = phstring::statics::solve_from(&at.system, &at.state, &at.statics, stop)?;
+    let solve_s = start.elapsed().as_secs_f64();
+    write_all(file, &at.system, &eq, solve_s, Some(at.info.clone()), out)
+}
+
+/// Writes the files of equilibrium `eq` of `sys` (found in `solve_s` seconds; from a
+/// checkpoint: `started_from`) into `out` and returns the summary.
+fn write_all<const D: usize>(
+    file: &ScenarioFile,
+    sys: &PhSystem<D, Material>,
+    eq: &Equilibrium<D>,
+    solve_s: f64,
+    started_from: Option<CheckpointInfo>,
+    out: &Path,
+) -> Result<StaticsInfo, StaticsRunError> {
+    let tension = tensions(sys, eq);
+    write_files(out, sys, eq, &tension)?;
     let (mut max, mut min) = ((f64::NEG_INFINITY, 0), (f64::INFINITY, 0));
     for (e, t) in tension.iter().enumerate() {
         if t.n > max.0 {
@@ -170,10 +228,11 @@ fn statics_dim<const D: usize>(
         min_tension_element: min.1,
         solve_s,
         deck: file.scenario.deck.clone(),
+        started_from,
     };
     let json = serde_json::to_string_pretty(&info).expect("plain data serializes");
     write(out, SUMMARY_FILE, json.as_bytes())?;
-    plot(out, &title, sys, &eq)?;
+    plot(out, &title, sys, eq)?;
     Ok(info)
 }
 

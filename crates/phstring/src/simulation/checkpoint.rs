@@ -601,8 +601,9 @@ impl FlatCheckpoint {
     /// node and element counts of the arrays in dimension `D`, finite values, at most two
     /// points of acceleration history, a positive last error, strains in the material's
     /// domain, the step size between the floor `h / 2^max_halvings` and `h`, the time within
-    /// `[0, t_end]`, and step, rejection and iteration counts a run to that time can reach.
-    /// `Err` names the field (`sim.<field>`) and its bad value or length.
+    /// `[0, t_end]`, step, rejection and iteration counts a run to that time can reach, and
+    /// each winch's drum node where its path puts it at that time (docs/method.md eq.
+    /// (23.1)). `Err` names the field (`sim.<field>`) and its bad value or length.
     pub fn check_fits<const D: usize, M: StoredEnergy>(
         &self,
         sim: &Simulation<D, M>,
@@ -695,6 +696,7 @@ impl FlatCheckpoint {
             ));
         }
         let fit = self.check_time(sim.params(), t_end)?;
+        sim.check_winch_positions(winches, r, fit.t)?;
         fit.check_count("sim.rejected", *rejected, fit.max_rejected)?;
         fit.check_count("sim.easy_streak", *easy_streak, *steps)?;
         fit.check_count("sim.total_newton", *total_newton, fit.max_iterations)?;

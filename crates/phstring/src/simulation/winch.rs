@@ -98,6 +98,39 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         Ok(())
     }
 
+    /// Checks that each winch's drum node in the flat positions `r` (`D` numbers per node,
+    /// lengths checked by the caller) sits where its path of `states` puts it at time `t`
+    /// [s] (eq. (23.1)): a step leaves it there up to rounding, so a checkpoint whose mesh is
+    /// not what the winches produced (another scenario's, or an edited one) is refused with
+    /// the distance [m] (tolerance `1e-9 (1 m + |X| + L)`, `X` the path's point).
+    pub(crate) fn check_winch_positions(
+        &self,
+        states: &[WinchState],
+        r: &[f64],
+        t: f64,
+    ) -> Result<(), String> {
+        for (k, (m, ws)) in self.sys.winches.iter().zip(states).enumerate() {
+            let node = m.drum_node(ws);
+            let Some(at) = r.get(D * node..D * (node + 1)) else {
+                continue;
+            };
+            let on_path = m.path_at(ws, t, (ws.payout, 0.0)).0;
+            let off = (Vector::<D>::from_column_slice(at) - on_path).norm();
+            let tol = 1e-9 * (1.0 + on_path.norm() + m.l);
+            // A NaN distance is refused too.
+            if off.is_nan() || off > tol {
+                return Err(format!(
+                    "sim.winches[{k}] (winch \"{}\"): its drum node {node} is {off:e} m from where its path puts it at t = {t} s (payout {} m, drum element {} of {}): the mesh is not what this winch produced",
+                    m.name,
+                    ws.payout,
+                    ws.drum,
+                    m.elements.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The payout [m] winch `winch` has reached (`None`: no such winch).
     pub(crate) fn winch_payout(&self, winch: usize) -> Option<f64> {
         self.run.winches.get(winch).map(|w| w.payout)
@@ -380,7 +413,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
 #[cfg(test)]
 mod tests {
     //! The Newton Jacobian with a winch drum's row and its coupling to the drum element's
-    //! other node against central finite differences.
+    //! other node against central finite differences; a checkpoint's drum node on its path.
 
     use super::super::{Simulation, StepAt, StepControl, StepParams};
     use crate::integrator::StepEquations;
@@ -520,5 +553,69 @@ mod tests {
             "the drum row is exercised"
         );
         assert!(worst < 1e-6, "Jacobian off by {worst:e} of its scale");
+    }
+
+    /// A checkpoint's drum node must lie on its winch's path (eq. (23.1)): after 3 s of a
+    /// 0.5 m/s payout from a drum travelling 0.2 m/s (elements brought off the drum), the
+    /// run's flat checkpoint fits; its drum node moved 1e-12 m (rounding) still fits, moved
+    /// 1 µm (a hundred times the tolerance `1e-9 (1 m + |X| + L)`) it is refused, naming the
+    /// winch and its drum node.
+    #[test]
+    fn a_checkpoint_whose_drum_node_is_off_its_path_is_refused() {
+        let (g, ea, rho_a, m) = (9.81, 4.3e7, 4.1, 5000.0);
+        let mut b = NetworkBuilder::<2, Material>::new();
+        let top = b.node(Vector::<2>::zeros());
+        let hook = b.node(Vector::<2>::new(0.0, -12.0));
+        let spec = StringSpec {
+            name: "rope".into(),
+            material: Material::tension_only_linear(ea),
+            rho_a,
+            mass: MassMatrix::Lumped,
+            body_force: Vector::<2>::new(0.0, -rho_a * g),
+            prestretch: 1.0,
+        };
+        let grp = b.string_on_drum(spec, &[top, hook], 12, 5).unwrap();
+        let masses = vec![PointMass {
+            node: hook,
+            mass: m,
+            weight: Vector::<2>::new(0.0, -m * g),
+        }];
+        let net = b.build(Boundary::default(), masses).unwrap();
+        let net = net.with_winch(Winch {
+            name: "hoist".into(),
+            group: grp,
+            reserve: 5,
+            payout: Arc::new(|t| 0.5 * t),
+            drum_motion: Some(Arc::new(|t| [0.2 * t, 0.0, 0.0])),
+            drum: None,
+        });
+        let params = StepParams {
+            h: 0.01,
+            control: StepControl {
+                adaptive: false,
+                ..Default::default()
+            },
+            ..StepParams::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap();
+        for _ in 0..300 {
+            sim.step().unwrap();
+        }
+        let ws = sim.run.winches[0];
+        assert!(ws.drum < 5, "elements came off the drum");
+        let d = sim.sys.winches[0].drum_node(&ws);
+        let flat = sim.flat_checkpoint();
+        assert!(flat.check_fits(&sim, 10.0).is_ok());
+        let mut near = flat.clone();
+        near.r[2 * d] += 1e-12;
+        assert!(near.check_fits(&sim, 10.0).is_ok());
+        let mut off = flat;
+        off.r[2 * d] += 1e-6;
+        let err = off.check_fits(&sim, 10.0).unwrap_err();
+        assert!(
+            err.contains(&format!("(winch \"hoist\"): its drum node {d} is "))
+                && err.contains("the mesh is not what this winch produced"),
+            "{err}"
+        );
     }
 }
