@@ -225,7 +225,7 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     /// The winch drums' data for the step (docs/method.md §23.6; empty: none).
     pub drums: &'a [crate::winch_step::DrumStep<D>],
     /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
-    nodes_x: Vec<Vector<D>>,
+    pub(crate) nodes_x: Vec<Vector<D>>,
     /// What the water did over the step at the increment of the last evaluation when that
     /// was a full one (`None` after a partial or failed one): the Newton solve ends on an
     /// evaluation at its result, so the step's [`Self::water_work`] is at hand.

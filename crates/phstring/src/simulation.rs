@@ -240,6 +240,9 @@ pub struct Simulation<const D: usize, M> {
     winch_port: Vec<(usize, [f64; 3], [f64; 3])>,
     /// The winch drums' data for the current step (docs/method.md §23.6).
     drum_steps: Vec<crate::winch_step::DrumStep<D>>,
+    /// The nodes' increments with the bodies' attached nodes and the drum nodes filled in
+    /// from their slots: the step equations' work vector, kept between steps.
+    nodes_x: Vec<Vector<D>>,
     /// Per winch with a drum (else unused): its payout [m] and payout speed [m/s] at the end
     /// of the current step, the energy its damping and brake dissipated in it [J] and the
     /// energy its motor supplied in it [J].
@@ -557,6 +560,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             winch_work: vec![0.0; winch_start.len()],
             winch_port: vec![(0, [0.0; 3], [0.0; 3]); winch_start.len()],
             drum_steps: Vec::with_capacity(n_drums),
+            nodes_x: Vec::new(),
             drum_next: vec![Default::default(); winch_start.len()],
             sys,
             params,
@@ -1512,6 +1516,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         eqs.wrenches = &self.body_wrenches;
         eqs.targets = &self.body_targets;
         eqs.drums = &self.drum_steps;
+        eqs.nodes_x = std::mem::take(&mut self.nodes_x);
         let result = newton::solve(
             &mut eqs,
             &mut self.x,
@@ -1540,6 +1545,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         } else {
             WaterWork::default()
         };
+        self.nodes_x = std::mem::take(&mut eqs.nodes_x);
         let stats = result.map_err(|e| self.newton_failure(e, at))?;
         Ok((stats, dissipated, water))
     }

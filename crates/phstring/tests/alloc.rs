@@ -292,11 +292,13 @@ fn network_solve_with_border_does_not_allocate() {
 
 /// A 2D hoist for the winch allocation tests: a 5 t payload on `n_el` elements of 1 m of
 /// 32 mm steel wire rope (EA = 4.3e7 N, 4.1 kg/m) hanging straight below a drum at the
-/// origin, `reserve` more elements on the drum, the winch paying out `payout(t)`.
+/// origin, `reserve` more elements on the drum, the winch paying out `payout(t)` (or, with
+/// `dynamics`, moved by the drum's dynamics).
 fn winch_hoist(
     n_el: usize,
     reserve: usize,
     payout: impl Fn(f64) -> f64 + Send + Sync + 'static,
+    dynamics: Option<phstring::WinchDrum>,
 ) -> phstring::Network<2, phstring::Material> {
     use phstring::{
         Boundary, MassMatrix, Material, NetworkBuilder, PointMass, StringSpec, Vector, Winch,
@@ -334,7 +336,7 @@ fn winch_hoist(
             reserve,
             payout: std::sync::Arc::new(payout),
             drum_motion: None,
-            drum: None,
+            drum: dynamics,
         })
 }
 
@@ -374,7 +376,7 @@ fn winch_step_loop_does_not_allocate() {
     };
     // 3 m out over 3 s (at up to 1.5 m/s) and back in over t = 4…7 s.
     let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
-    let net = winch_hoist(20, 10, payout);
+    let net = winch_hoist(20, 10, payout, None);
     let group = net.groups.len() - 1;
     let params = StepParams {
         h: 0.01,
@@ -404,7 +406,7 @@ fn winch_step_loop_in_water_allocates_only_at_cuts() {
         x * x * (3.0 - 2.0 * x)
     };
     let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
-    let net = winch_hoist(20, 10, payout);
+    let net = winch_hoist(20, 10, payout, None);
     let group = net.groups.len() - 1;
     let net = net
         .with_water(phstring::Water::new(1025.0))
@@ -428,4 +430,35 @@ fn winch_step_loop_in_water_allocates_only_at_cuts() {
     );
     assert!(cuts >= 4, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");
+}
+
+/// A winch with a drum with dynamics steps without allocating, its cuts included: the same
+/// hoist, its 2 t drum paying out against a tension controller (target 40 kN, damping
+/// 2e4 N·s/m) under the 5 t payload's 50 kN, at about (50 − 40) kN / 2e4 N·s/m = 0.5 m/s.
+/// The drum's payout is a Newton unknown, solved by the bordered solve's Schur complement
+/// in buffers sized once.
+#[test]
+fn drum_step_loop_does_not_allocate() {
+    let drum = phstring::WinchDrum {
+        inertia: 2000.0,
+        force: std::sync::Arc::new(|_| 40.0e3),
+        damping: 2.0e4,
+        brake: None,
+    };
+    let net = winch_hoist(20, 10, |_| 0.0, Some(drum));
+    let group = net.groups.len() - 1;
+    let params = StepParams {
+        h: 0.01,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    sim.step().unwrap();
+    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 599);
+    eprintln!(
+        "drum: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
+    );
+    // About 3 m paid out in 6 s: elements of 1 m come off the drum.
+    assert!(cuts >= 2, "{cuts} cuts");
+    assert_eq!(between, 0, "steps between cuts allocated {between} times");
+    assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
 }
