@@ -364,6 +364,27 @@ fn count_winch_allocations<M: phstring::StoredEnergy>(
     (cuts, at_cuts, between)
 }
 
+/// Steps `net` at `h` = 0.01 s (one warm-up step, then `steps`) and counts the allocations
+/// as [`count_winch_allocations`] does, printing them under `label`.
+fn winch_run_allocations(
+    net: phstring::Network<2, phstring::Material>,
+    group: usize,
+    steps: usize,
+    label: &str,
+) -> (usize, usize, usize) {
+    let params = StepParams {
+        h: 0.01,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(net, params).unwrap();
+    sim.step().unwrap();
+    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, steps);
+    eprintln!(
+        "{label}: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
+    );
+    (cuts, at_cuts, between)
+}
+
 /// A winch run steps without allocating, the steps that cut included: 20 m of rope under a
 /// 5 t payload, 3 m paid out in a smooth move of 3 s and hauled back in the same way,
 /// elements of 1 m coming off and going onto the drum (step-size control on).
@@ -378,16 +399,7 @@ fn winch_step_loop_does_not_allocate() {
     let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
     let net = winch_hoist(20, 10, payout, None);
     let group = net.groups.len() - 1;
-    let params = StepParams {
-        h: 0.01,
-        ..StepParams::default()
-    };
-    let mut sim = Simulation::new(net, params).unwrap();
-    sim.step().unwrap();
-    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
-    eprintln!(
-        "winch: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
-    );
+    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 799, "winch");
     // Two elements come off the drum (the first, at p = 0+, in the warm-up step) and two go
     // back on (the last stays off at p = 0, on the edge of its band: docs/method.md §23).
     assert!(cuts >= 4, "{cuts} cuts");
@@ -418,16 +430,7 @@ fn winch_step_loop_in_water_allocates_only_at_cuts() {
                 ..Default::default()
             },
         );
-    let params = StepParams {
-        h: 0.01,
-        ..StepParams::default()
-    };
-    let mut sim = Simulation::new(net, params).unwrap();
-    sim.step().unwrap();
-    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
-    eprintln!(
-        "winch in water: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
-    );
+    let (cuts, _, between) = winch_run_allocations(net, group, 799, "winch in water");
     assert!(cuts >= 4, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");
 }
@@ -447,16 +450,7 @@ fn drum_step_loop_does_not_allocate() {
     };
     let net = winch_hoist(20, 10, |_| 0.0, Some(drum));
     let group = net.groups.len() - 1;
-    let params = StepParams {
-        h: 0.01,
-        ..StepParams::default()
-    };
-    let mut sim = Simulation::new(net, params).unwrap();
-    sim.step().unwrap();
-    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 599);
-    eprintln!(
-        "drum: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
-    );
+    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 599, "drum");
     // About 3 m paid out in 6 s: elements of 1 m come off the drum.
     assert!(cuts >= 2, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");

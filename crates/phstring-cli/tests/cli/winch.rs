@@ -683,6 +683,24 @@ fn lowered_checkpoint(dir: &Path, text: &str) -> (std::path::PathBuf, std::path:
     (scenario, out.join("checkpoint.json"))
 }
 
+/// `phstring statics SCENARIO --at CHECKPOINT --out OUT`, which must succeed; returns `OUT`.
+fn statics_at(
+    scenario: &std::path::Path,
+    cp: &std::path::Path,
+    out: &std::path::Path,
+) -> std::path::PathBuf {
+    let o = phstring(&[
+        "statics",
+        scenario.to_str().unwrap(),
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out.to_path_buf()
+}
+
 /// `statics --at` the checkpoint of a winch that has paid out 12 m (20 m → 32 m off the
 /// drum, 12 elements brought off it): the equilibrium is that of the checkpoint's mesh, the
 /// 32 elements from the drum node down, not the scenario's 20. `equilibrium.csv` has the
@@ -700,16 +718,7 @@ fn lowered_checkpoint(dir: &Path, text: &str) -> (std::path::PathBuf, std::path:
 fn statics_at_a_winch_checkpoint_hangs_the_paid_out_length() {
     let dir = temp_dir("winch-statics-at");
     let (scenario, cp) = lowered_checkpoint(&dir, LOWERING);
-    let out = dir.join("statics");
-    let o = phstring(&[
-        "statics",
-        scenario.to_str().unwrap(),
-        "--at",
-        cp.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = statics_at(&scenario, &cp, &dir.join("statics"));
     let s = summary(&out);
     let from = &s["started_from"];
     assert_eq!(from["checkpoint"].as_str().unwrap(), cp.to_str().unwrap());
@@ -883,16 +892,7 @@ fn linearize_at_a_winch_checkpoint_has_the_axial_mode_of_the_paid_out_length() {
         m["linearized_at"].as_str().unwrap(),
         format!("equilibrium at {}", cp.to_str().unwrap())
     );
-    let st = dir.join("statics");
-    let o = phstring(&[
-        "statics",
-        scenario.to_str().unwrap(),
-        "--at",
-        cp.to_str().unwrap(),
-        "--out",
-        st.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let st = statics_at(&scenario, &cp, &dir.join("statics"));
     let tol = summary(&st)["tolerance"].as_f64().unwrap();
     assert!(m["static_residual"].as_f64().unwrap() <= tol, "{m}");
     let at = numeric_rows(&out.join("at.csv"));
@@ -977,16 +977,7 @@ fn statics_at_a_winch_checkpoint_in_water_hangs_the_wet_weight() {
             "[water]\ndensity = 1025.0\ndepth = 200.0\n\n[body_force]",
         );
     let (scenario, cp) = lowered_checkpoint(&dir, &wet);
-    let out = dir.join("statics");
-    let o = phstring(&[
-        "statics",
-        scenario.to_str().unwrap(),
-        "--at",
-        cp.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = statics_at(&scenario, &cp, &dir.join("statics"));
     let s = summary(&out);
     let w = &s["started_from"]["winches"][0];
     assert!((w["length"].as_f64().unwrap() - 32.0).abs() < 1e-9, "{w}");
