@@ -7,7 +7,7 @@
 
 use phstring::benchmarks::{paper_params, paper_pendulum};
 use phstring::testing::{CountingAllocator, allocations, live_bytes};
-use phstring::{Scheme, Simulation, SolverKind, StepParams};
+use phstring::{Scheme, Simulation, SolverKind, StepControl, StepParams};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -364,7 +364,10 @@ fn count_winch_allocations<M: phstring::StoredEnergy>(
 
 /// A winch run steps without allocating, the steps that cut included: 20 m of rope under a
 /// 5 t payload, 3 m paid out in a smooth move of 3 s and hauled back in the same way,
-/// elements of 1 m coming off and going onto the drum (step-size control on).
+/// elements of 1 m coming off and going onto the drum (step-size control on); with `dg`,
+/// with `dg4` (three sub-steps, the cut after them, the winch port's means) and with `dg4`
+/// under error control (the saved state, the embedded `dg` step, rejected attempts put
+/// back).
 #[test]
 fn winch_step_loop_does_not_allocate() {
     // Smooth 0 → 1 over [0, 1], at rest at both ends.
@@ -372,25 +375,46 @@ fn winch_step_loop_does_not_allocate() {
         let x = x.clamp(0.0, 1.0);
         x * x * (3.0 - 2.0 * x)
     };
-    // 3 m out over 3 s (at up to 1.5 m/s) and back in over t = 4…7 s.
-    let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
-    let net = winch_hoist(20, 10, payout);
-    let group = net.groups.len() - 1;
-    let params = StepParams {
-        h: 0.01,
-        ..StepParams::default()
-    };
-    let mut sim = Simulation::new(net, params).unwrap();
-    sim.step().unwrap();
-    let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
-    eprintln!(
-        "winch: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
-    );
-    // Two elements come off the drum (the first, at p = 0+, in the warm-up step) and two go
-    // back on (the last stays off at p = 0, on the edge of its band: docs/method.md §23).
-    assert!(cuts >= 4, "{cuts} cuts");
-    assert_eq!(between, 0, "steps between cuts allocated {between} times");
-    assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
+    let runs = [
+        ("dg", Scheme::DiscreteGradient, StepControl::default()),
+        ("dg4", Scheme::DiscreteGradient4, StepControl::default()),
+        (
+            "dg4 with error control",
+            Scheme::DiscreteGradient4,
+            StepControl::with_tolerance(1e-3, 1e-3),
+        ),
+    ];
+    for (name, scheme, control) in runs {
+        // 3 m out over 3 s (at up to 1.5 m/s) and back in over t = 4…7 s.
+        let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
+        let net = winch_hoist(20, 10, payout);
+        let group = net.groups.len() - 1;
+        let params = StepParams {
+            h: 0.01,
+            scheme,
+            control,
+            ..StepParams::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap();
+        sim.step().unwrap();
+        let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, 799);
+        eprintln!(
+            "winch, {name}: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps, {} rejected",
+            sim.rejected_steps()
+        );
+        // Two elements come off the drum (the first, at p = 0+, in the warm-up step) and two
+        // go back on (the last stays off at p = 0, on the edge of its band: docs/method.md
+        // §23).
+        assert!(cuts >= 4, "{name}: {cuts} cuts");
+        assert_eq!(
+            between, 0,
+            "{name}: steps between cuts allocated {between} times"
+        );
+        assert_eq!(
+            at_cuts, 0,
+            "{name}: {cuts} cut steps allocated {at_cuts} times"
+        );
+    }
 }
 
 /// The same winch run in water (buoyancy, drag and added mass on the rope, 32 mm, drag
