@@ -1150,8 +1150,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for (x, v) in self.x.iter_mut().zip(&self.run.state.v) {
             *x = v * eps;
         }
-        let n = self.x.len();
-        let mut res = vec![Vector::<D>::zeros(); n];
+        // The nodes only: a winch drum's slot (after the nodes) has no row here; its drum
+        // node is held.
+        let n = self.sys.mesh.n_nodes();
+        let mut res = vec![Vector::<D>::zeros(); self.x.len()];
         let mut eqs = StepEquations::new(
             &self.sys,
             Scheme::DiscreteGradient,
@@ -1162,16 +1164,28 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &mut self.reaction,
         );
         use crate::newton::NewtonProblem;
-        eqs.evaluate(&self.x, &mut res, None)
+        eqs.evaluate(&self.x[..n], &mut res[..n], None)
             .map_err(|s| StepError::InvalidStrain {
                 step: self.run.steps + 1,
                 t,
                 element: s.element,
                 c: s.c,
             })?;
-        // M a = −res on the free components; identity rows and columns elsewhere.
+        // M a = −res on the free components; identity rows and columns elsewhere (and for
+        // the drums' slots, whose right-hand side is 0).
         let mut m = crate::assembly::mass_blocks(&self.sys);
         crate::assembly::mask_fixed(&self.sys, &mut m);
+        let slots = self.x.len() - n;
+        if slots > 0 {
+            let nodes = std::mem::replace(
+                &mut m,
+                crate::linsolve::BlockJacobian::with_slots(&self.sys.mesh, slots),
+            );
+            (m.diag, m.off) = (nodes.diag, nodes.off);
+            for s in 0..slots {
+                m.border.own[s * slots + s] = crate::linsolve::Block::<D>::identity();
+            }
+        }
         for (r, free) in res.iter_mut().zip(&self.sys.free) {
             *r = Vector::from_fn(|k, _| if free[k] { -r[k] } else { 0.0 });
         }
@@ -1190,6 +1204,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
+        res.truncate(n);
         Ok(res)
     }
 

@@ -172,7 +172,9 @@ fn dg4_converges_across_cuts_at_a_reduced_order() {
 /// 0.79 m/s at most, five elements onto the drum) with error control, `rtol = atol = tol`,
 /// `time.h` = 0.05 s, against `dg4` at a fixed 2.5 ms. Guards the rejected-step rule: the run
 /// completes, rejecting some attempts, every accepted step keeps the balance within 1e-12
-/// of its energy scale with the mass off the drum `ρA` times the length (1e-12), and the
+/// of its energy scale with the mass off the drum `ρA` times the length (1e-12), the
+/// winch's total, the run's supply and `ΔĤ` are the accepted steps' sums (1e-12 of the
+/// energy moved: a rejected attempt's holds or cut would stay in them), and the
 /// payload's position at 10 s is within the tolerance asked of a position,
 /// `atol + rtol |r|`, of the reference. Returns the error [m], that tolerance [m], the steps
 /// and the rejected attempts.
@@ -195,7 +197,17 @@ fn controlled_hoist(scheme: Scheme, tol: f64) -> (f64, f64, usize, usize) {
         ..StepParams::default()
     };
     let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
-    let (worst, _, cuts, mass) = run_checked(&mut sim, t_end, 20.0);
+    let h0 = sim.energies().hamiltonian();
+    let (worst, (winch, scale), cuts, mass) = run_checked(&mut sim, t_end, 20.0);
+    // Nothing of a rejected attempt stays: the winch's total, the run's supply and `ΔĤ` are
+    // the accepted steps' sums.
+    let dh = sim.energies().hamiltonian() - h0;
+    assert!((sim.winch_samples()[0].energy - winch).abs() < 1e-12 * scale);
+    assert!((sim.supplied_energy() - winch).abs() < 1e-12 * scale);
+    assert!(
+        (dh - winch).abs() < 1e-12 * scale,
+        "ΔĤ {dh} J, winch {winch} J"
+    );
     let err = (sim.state().r[hook] - reference).norm();
     let allowed = tol + tol * reference.norm();
     eprintln!(

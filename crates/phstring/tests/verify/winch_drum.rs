@@ -345,3 +345,56 @@ fn a_slipping_brake_under_dg4_keeps_every_step_balanced() {
     );
     assert!((w.dissipated - dissipated).abs() < 1e-9 * dissipated);
 }
+
+/// The tension controller of the `dg4` test above under error control (`rtol = atol =
+/// 1e-4`, `time.h` = 0.05 s), with `dg` and with `dg4` (whose embedded `dg` step has the
+/// drum's row from its state before the step, and compares the drum's payout and speed):
+/// each run completes with every accepted step's balance within 1e-12 of its energy scale,
+/// the drum's dissipation the run's, and the payout at 3 s (1.2 m, two cuts) within the
+/// tolerance asked, `atol + rtol |p|`, of `dg4` at a fixed 2.5 ms.
+#[test]
+fn a_tension_controlled_drum_under_error_control_keeps_its_tolerance() {
+    let (target, damping, inertia, tol) = (4.5e4, 1.0e4, 500.0, 1e-4);
+    let drum = || WinchDrum {
+        inertia,
+        force: Arc::new(move |_| target),
+        damping,
+        brake: None,
+    };
+    let dg4 = phstring::Scheme::DiscreteGradient4;
+    let reference = {
+        let (net, _) = drum_hoist(drum());
+        let params = phstring::StepParams {
+            scheme: dg4,
+            ..fixed_step(2.5e-3)
+        };
+        let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
+        run_balanced(&mut sim, 3.0);
+        sim.winch_samples()[0].payout
+    };
+    for scheme in [phstring::Scheme::DiscreteGradient, dg4] {
+        let (net, _) = drum_hoist(drum());
+        let params = phstring::StepParams {
+            h: 0.05,
+            scheme,
+            control: phstring::StepControl::with_tolerance(tol, tol),
+            ..phstring::StepParams::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
+        let (worst, _, dissipated) = run_balanced(&mut sim, 3.0);
+        let w = sim.winch_samples()[0];
+        let allowed = tol * (1.0 + reference.abs());
+        eprintln!(
+            "{scheme:?} tension control with tol {tol:e}: {} steps, {} rejected; balance/scale {worst:.1e}; payout {:.6} m against {reference:.6} m (allowed {allowed:.1e})",
+            sim.steps(),
+            sim.rejected_steps(),
+            w.payout
+        );
+        assert!((w.dissipated - dissipated).abs() < 1e-9 * dissipated);
+        assert!(
+            (w.payout - reference).abs() < allowed,
+            "{scheme:?}: payout {} m",
+            w.payout
+        );
+    }
+}
