@@ -53,9 +53,10 @@ fn rigid_rope(inertia: f64, force: impl Fn(f64) -> f64, t: f64, n: usize) -> (f6
     (p, u)
 }
 
-/// Runs `sim` to `t_end` (the last step shortened to end there), checking every step's balance `Ĥₙ₊₁ − Ĥₙ = supplied −
-/// dissipated` against `1e-12` of its energy scale and that the winch is the only supply;
-/// returns the worst relative balance error and the sums of supplied and dissipated energy.
+/// Runs `sim` to `t_end` (the last step shortened to end there), checking every step's
+/// balance `Ĥₙ₊₁ − Ĥₙ = supplied − dissipated` against `1e-12` of its energy scale and that
+/// the winch is the only supply; returns the worst relative balance error and the sums of
+/// supplied and dissipated energy.
 fn run_balanced(sim: &mut Simulation<2, Material>, t_end: f64) -> (f64, f64, f64) {
     let (mut worst, mut supplied, mut dissipated) = (0.0_f64, 0.0, 0.0);
     while sim.time() < t_end - 1e-9 {
