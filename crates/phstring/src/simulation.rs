@@ -232,8 +232,13 @@ pub struct Simulation<const D: usize, M> {
     /// Per body with a held wrench (inputs), the wrench port it had before.
     held_wrenches: Vec<Option<Option<crate::body::BodyWrench>>>,
     /// Per winch, the payout [m] and the energy it supplied [J] in the last step (during a
-    /// step, the payout it started from).
+    /// step, the payout it started from and the energy so far).
     winch_step: Vec<(f64, f64)>,
+    /// The size [s] of the last accepted step, which the winches' rates are over.
+    winch_h: f64,
+    /// `dg4`: per winch, its port's `h_k`-weighted sums of the drum node's velocity and
+    /// reaction over the sub-steps (a buffer reused from step to step).
+    winch_port_sums: Vec<([f64; 3], [f64; 3])>,
     /// Per winch, the work of its drum node's reaction in the current step [J].
     winch_work: Vec<f64>,
     /// Per winch, its port in the last step: drum node, mid-step velocity, reaction.
@@ -376,31 +381,6 @@ impl HeldVelocities {
     }
 }
 
-/// Refuses the step parameters a run with winches does not take yet: the fourth-order
-/// composition and error control (docs/method.md §23).
-fn check_winch_params<const D: usize, M>(
-    sys: &PhSystem<D, M>,
-    params: &StepParams,
-) -> Result<(), SetupError> {
-    let Some(m) = sys.winches.first() else {
-        return Ok(());
-    };
-    let what = if params.scheme == Scheme::DiscreteGradient4 {
-        "the fourth-order scheme dg4"
-    } else if params.control.error_control() {
-        "error control (rtol, atol)"
-    } else {
-        return Ok(());
-    };
-    Err(SetupError::Winch {
-        index: 0,
-        name: m.name.clone(),
-        problem: format!(
-            "{what} does not cover winches yet: run with the scheme dg (the step size is then controlled for solvability)"
-        ),
-    })
-}
-
 /// Refuses step parameters out of range (step size, tolerances, step-size control).
 fn check_params(params: &StepParams) -> Result<(), SetupError> {
     if !(params.h > 0.0 && params.h.is_finite()) {
@@ -492,7 +472,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     .into(),
             });
         }
-        check_winch_params(&sys, &params)?;
         let mut sys = sys;
         let winch_start = sys.winch_start.clone();
         sys.place_winches(&winch_start);
@@ -557,6 +536,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             body_ports_prev: vec![Default::default(); sys.bodies.len()],
             held_wrenches: Vec::new(),
             winch_step: vec![(0.0, 0.0); winch_start.len()],
+            winch_h: params.h,
+            winch_port_sums: vec![([0.0; 3], [0.0; 3]); winch_start.len()],
             winch_work: vec![0.0; winch_start.len()],
             winch_port: vec![(0, [0.0; 3], [0.0; 3]); winch_start.len()],
             drum_steps: Vec::with_capacity(n_drums),
@@ -801,12 +782,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             match self.try_step(h, t_next) {
                 Ok(report) if tolerant => {
                     if let Some(report) = self.judge_accuracy(report, t, h, t_next, &mut tries)? {
-                        return Ok(report);
+                        return Ok(self.cut_winches(report));
                     }
                 }
                 Ok(mut report) => {
                     tries.mark(&mut report);
-                    return Ok(self.accept_fixed(report, h, t_next, t_end));
+                    let report = self.accept_fixed(report, h, t_next, t_end);
+                    return Ok(self.cut_winches(report));
                 }
                 Err(e) => self.after_failure(e, t, h, &mut tries)?,
             }
@@ -879,6 +861,21 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.run.k = 0;
         self.run.h_cur = next;
         Ok(Some(report))
+    }
+
+    /// After the step of `report` is accepted: the winches' cuts (docs/method.md §23), their
+    /// energy booked as the winches' supply in the report and the run's totals. Only here,
+    /// so that neither a `dg4` sub-step nor an attempt that error control rejects cuts.
+    fn cut_winches(&mut self, mut report: StepReport) -> StepReport {
+        if self.sys.winches.is_empty() {
+            return report;
+        }
+        let changes = self.winch_cuts(report.t, report.h);
+        self.run.supplied_total += changes;
+        report.after = self.energies;
+        report.supplied += changes;
+        report.winch += changes;
+        report
     }
 
     /// Without error control: accepts the step of `report` (by `h`, clipped to `t_next`
@@ -975,13 +972,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let c = self.params.control;
         let (rtol, atol, atol_v) = (c.rtol, c.atol, c.atol / self.params.h);
         let b = self.backup.take().expect("saved before the step");
-        let before = &b.run.as_ref().expect("saved before the step").state;
+        let saved = b.run.as_ref().expect("saved before the step");
+        let before = &saved.state;
         let mut err: f64 = 0.0;
         let mut embedded_iterations = 0;
         // The larger of the two, NaN kept.
         let worse = |err: f64, r: f64| if r <= err { err } else { r };
         if self.params.scheme == Scheme::DiscreteGradient4 {
-            let converged = match self.embedded_second_order(before, t, h) {
+            let converged = match self.embedded_second_order((before, &saved.winches), t, h) {
                 Ok(c) => c,
                 Err(e) => {
                     self.backup = Some(b);
@@ -1008,6 +1006,25 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         let e_v = mask(v2 - self.run.state.v[i]).norm();
                         let r_mag = before.r[i].norm().max(self.run.state.r[i].norm());
                         let v_mag = before.v[i].norm().max(self.run.state.v[i].norm());
+                        err = worse(
+                            err,
+                            crate::accuracy::ratio(e_r, e_v, r_mag, v_mag, rtol, atol, atol_v),
+                        );
+                    }
+                    // The drums' payouts and speeds (docs/method.md §23.6) likewise.
+                    let n = self.sys.mesh.n_nodes();
+                    for d in &self.drum_steps {
+                        let (ws0, ws) = (&saved.winches[d.winch], &self.run.winches[d.winch]);
+                        let dp = self.x[n + d.slot][0];
+                        let speed = if d.inertia > 0.0 {
+                            2.0 * dp * inv_h - ws0.speed
+                        } else {
+                            dp * inv_h
+                        };
+                        let e_r = (ws0.payout + dp - ws.payout).abs();
+                        let e_v = (speed - ws.speed).abs();
+                        let r_mag = ws0.payout.abs().max(ws.payout.abs());
+                        let v_mag = ws0.speed.abs().max(ws.speed.abs());
                         err = worse(
                             err,
                             crate::accuracy::ratio(e_r, e_v, r_mag, v_mag, rtol, atol, atol_v),
@@ -1048,12 +1065,16 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         ))
     }
 
-    /// The second-order DG step from `before` (at `t`) by `h`, started from the increment the
-    /// step just taken made; its increment is left in `self.x`. `Ok(Some(iterations))` if
-    /// Newton converged, `Ok(None)` if not, `Err` on a stop request. Nothing else changes.
+    /// The second-order DG step from `before` (at `t`, with the winch states `winches`) by
+    /// `h`, started from the increment the step just taken made; its increment (and the
+    /// drums' payout increments in their slots) is left in `self.x`. The drum nodes of
+    /// prescribed payouts move as in that step (no cut happens inside a step); a drum with
+    /// dynamics has its row (docs/method.md §23.6) from its state before the step.
+    /// `Ok(Some(iterations))` if Newton converged, `Ok(None)` if not, `Err` on a stop
+    /// request. Nothing else changes.
     fn embedded_second_order(
         &mut self,
-        before: &State<D>,
+        (before, winches): (&State<D>, &[crate::winch::WinchState]),
         t: f64,
         h: f64,
     ) -> Result<Option<usize>, StepError> {
@@ -1066,6 +1087,26 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         {
             *x = a - b;
         }
+        self.drum_steps.clear();
+        if self.sys.winches.iter().any(|m| m.drum.is_some()) {
+            let at = StepAt {
+                step: self.run.steps,
+                t,
+                h,
+                t_next: t + h,
+            };
+            let (sys, x) = (&self.sys, &mut self.x);
+            if Self::drum_data(sys, (winches, &before.r), &at, &mut self.drum_steps, x).is_err() {
+                return Ok(None);
+            }
+            // Started from the composition's payout increments.
+            let n = sys.mesh.n_nodes();
+            for d in &self.drum_steps {
+                let dp = self.run.winches[d.winch].payout - winches[d.winch].payout;
+                x[n + d.slot][0] = dp;
+                x[d.node] = d.base + d.axis * dp;
+            }
+        }
         let mut eqs = StepEquations::new(
             &self.sys,
             Scheme::DiscreteGradient,
@@ -1075,6 +1116,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &self.f_ext,
             &mut self.reaction,
         );
+        eqs.drums = &self.drum_steps;
         match newton::solve(
             &mut eqs,
             &mut self.x,
@@ -1112,8 +1154,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for (x, v) in self.x.iter_mut().zip(&self.run.state.v) {
             *x = v * eps;
         }
-        let n = self.x.len();
-        let mut res = vec![Vector::<D>::zeros(); n];
+        // The nodes only: a winch drum's slot (after the nodes) has no row here; its drum
+        // node is held.
+        let n = self.sys.mesh.n_nodes();
+        let mut res = vec![Vector::<D>::zeros(); self.x.len()];
         let mut eqs = StepEquations::new(
             &self.sys,
             Scheme::DiscreteGradient,
@@ -1124,16 +1168,28 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             &mut self.reaction,
         );
         use crate::newton::NewtonProblem;
-        eqs.evaluate(&self.x, &mut res, None)
+        eqs.evaluate(&self.x[..n], &mut res[..n], None)
             .map_err(|s| StepError::InvalidStrain {
                 step: self.run.steps + 1,
                 t,
                 element: s.element,
                 c: s.c,
             })?;
-        // M a = −res on the free components; identity rows and columns elsewhere.
+        // M a = −res on the free components; identity rows and columns elsewhere (and for
+        // the drums' slots, whose right-hand side is 0).
         let mut m = crate::assembly::mass_blocks(&self.sys);
         crate::assembly::mask_fixed(&self.sys, &mut m);
+        let slots = self.x.len() - n;
+        if slots > 0 {
+            let nodes = std::mem::replace(
+                &mut m,
+                crate::linsolve::BlockJacobian::with_slots(&self.sys.mesh, slots),
+            );
+            (m.diag, m.off) = (nodes.diag, nodes.off);
+            for s in 0..slots {
+                m.border.own[s * slots + s] = crate::linsolve::Block::<D>::identity();
+            }
+        }
         for (r, free) in res.iter_mut().zip(&self.sys.free) {
             *r = Vector::from_fn(|k, _| if free[k] { -r[k] } else { 0.0 });
         }
@@ -1152,6 +1208,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 node,
             });
         }
+        res.truncate(n);
         Ok(res)
     }
 
@@ -1162,6 +1219,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let t = self.time();
         let t_next = t_next.unwrap_or(self.run.t_base + (self.run.k + 1) as f64 * self.run.h_cur);
         let step_no = self.run.steps + 1;
+        if !self.sys.winches.is_empty() {
+            self.winch_begin();
+        }
         let report = if self.params.scheme == Scheme::DiscreteGradient4 {
             self.try_composed(t, h, t_next, step_no)?
         } else {
@@ -1222,6 +1282,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                         s.omega += p.omega * hk;
                         s.mean_power += p.mean_power * hk;
                     }
+                    self.winch_port_add(hk);
                     total = Some(match total {
                         None => r,
                         Some(a) => StepReport {
@@ -1243,6 +1304,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                                 w
                             },
                             energy_scale: a.energy_scale + r.energy_scale,
+                            winch: a.winch + r.winch,
                             ..a
                         },
                     });
@@ -1273,6 +1335,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             };
         }
         self.port_sums = sums;
+        self.winch_port_means(h);
         let mut r = total.expect("at least three sub-steps");
         r.t = t_next;
         r.h = h;
@@ -1295,14 +1358,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             return self.try_dg(t, h, t_next, step_no);
         }
         // The winches (docs/method.md §23): their drum nodes move with the payout inside
-        // the step; after it, their velocities are held and the strings cut.
-        // Each winch's payout before the step, into its step record (no allocation).
-        for (s, w) in self.winch_step.iter_mut().zip(&self.run.winches) {
-            s.0 = w.payout;
-        }
+        // the step; after it, their velocities are held (the cuts wait for the accepted
+        // step, [`Self::cut_winches`]).
         let start = self.energies;
         let mut report = self.try_dg(t, h, t_next, step_no)?;
-        let changes = self.winch_after(t_next);
+        let changes = self.winch_hold(t_next);
         self.run.supplied_total += changes;
         report.before = start;
         report.after = self.energies;

@@ -7,7 +7,7 @@
 
 use phstring::benchmarks::{paper_params, paper_pendulum};
 use phstring::testing::{CountingAllocator, allocations, live_bytes};
-use phstring::{Scheme, Simulation, SolverKind, StepParams};
+use phstring::{Scheme, Simulation, SolverKind, StepControl, StepParams};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -364,30 +364,39 @@ fn count_winch_allocations<M: phstring::StoredEnergy>(
     (cuts, at_cuts, between)
 }
 
-/// Steps `net` at `h` = 0.01 s (one warm-up step, then `steps`) and counts the allocations
-/// as [`count_winch_allocations`] does, printing them under `label`.
+/// Steps `net` with `params` (one warm-up step, then `steps`) and counts the allocations as
+/// [`count_winch_allocations`] does, printing them and the rejected steps under `label`.
 fn winch_run_allocations(
     net: phstring::Network<2, phstring::Material>,
     group: usize,
     steps: usize,
+    params: StepParams,
     label: &str,
 ) -> (usize, usize, usize) {
-    let params = StepParams {
-        h: 0.01,
-        ..StepParams::default()
-    };
     let mut sim = Simulation::new(net, params).unwrap();
     sim.step().unwrap();
     let (cuts, at_cuts, between) = count_winch_allocations(&mut sim, group, steps);
     eprintln!(
-        "{label}: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps"
+        "{label}: {cuts} cut steps with {at_cuts} allocations, {between} allocations in the other steps, {} rejected",
+        sim.rejected_steps()
     );
     (cuts, at_cuts, between)
 }
 
+/// The step parameters of the winch allocation tests: `h` = 0.01 s, the defaults otherwise.
+fn at_10_ms() -> StepParams {
+    StepParams {
+        h: 0.01,
+        ..StepParams::default()
+    }
+}
+
 /// A winch run steps without allocating, the steps that cut included: 20 m of rope under a
 /// 5 t payload, 3 m paid out in a smooth move of 3 s and hauled back in the same way,
-/// elements of 1 m coming off and going onto the drum (step-size control on).
+/// elements of 1 m coming off and going onto the drum (step-size control on); with `dg`,
+/// with `dg4` (three sub-steps, the cut after them, the winch port's means) and with `dg4`
+/// under error control (the saved state, the embedded `dg` step, rejected attempts put
+/// back).
 #[test]
 fn winch_step_loop_does_not_allocate() {
     // Smooth 0 → 1 over [0, 1], at rest at both ends.
@@ -395,16 +404,41 @@ fn winch_step_loop_does_not_allocate() {
         let x = x.clamp(0.0, 1.0);
         x * x * (3.0 - 2.0 * x)
     };
-    // 3 m out over 3 s (at up to 1.5 m/s) and back in over t = 4…7 s.
-    let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
-    let net = winch_hoist(20, 10, payout, None);
-    let group = net.groups.len() - 1;
-    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 799, "winch");
-    // Two elements come off the drum (the first, at p = 0+, in the warm-up step) and two go
-    // back on (the last stays off at p = 0, on the edge of its band: docs/method.md §23).
-    assert!(cuts >= 4, "{cuts} cuts");
-    assert_eq!(between, 0, "steps between cuts allocated {between} times");
-    assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
+    let runs = [
+        ("dg", Scheme::DiscreteGradient, StepControl::default()),
+        ("dg4", Scheme::DiscreteGradient4, StepControl::default()),
+        (
+            "dg4 with error control",
+            Scheme::DiscreteGradient4,
+            StepControl::with_tolerance(1e-3, 1e-3),
+        ),
+    ];
+    for (name, scheme, control) in runs {
+        // 3 m out over 3 s (at up to 1.5 m/s) and back in over t = 4…7 s.
+        let payout = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth((t - 4.0) / 3.0));
+        let net = winch_hoist(20, 10, payout, None);
+        let group = net.groups.len() - 1;
+        let params = StepParams {
+            h: 0.01,
+            scheme,
+            control,
+            ..StepParams::default()
+        };
+        let label = format!("winch, {name}");
+        let (cuts, at_cuts, between) = winch_run_allocations(net, group, 799, params, &label);
+        // Two elements come off the drum (the first, at p = 0+, in the warm-up step) and two
+        // go back on (the last stays off at p = 0, on the edge of its band: docs/method.md
+        // §23).
+        assert!(cuts >= 4, "{name}: {cuts} cuts");
+        assert_eq!(
+            between, 0,
+            "{name}: steps between cuts allocated {between} times"
+        );
+        assert_eq!(
+            at_cuts, 0,
+            "{name}: {cuts} cut steps allocated {at_cuts} times"
+        );
+    }
 }
 
 /// The same winch run in water (buoyancy, drag and added mass on the rope, 32 mm, drag
@@ -430,7 +464,7 @@ fn winch_step_loop_in_water_allocates_only_at_cuts() {
                 ..Default::default()
             },
         );
-    let (cuts, _, between) = winch_run_allocations(net, group, 799, "winch in water");
+    let (cuts, _, between) = winch_run_allocations(net, group, 799, at_10_ms(), "winch in water");
     assert!(cuts >= 4, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");
 }
@@ -450,7 +484,7 @@ fn drum_step_loop_does_not_allocate() {
     };
     let net = winch_hoist(20, 10, |_| 0.0, Some(drum));
     let group = net.groups.len() - 1;
-    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 599, "drum");
+    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 599, at_10_ms(), "drum");
     // About 3 m paid out in 6 s: elements of 1 m come off the drum.
     assert!(cuts >= 2, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");

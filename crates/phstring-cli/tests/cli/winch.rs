@@ -999,3 +999,62 @@ fn statics_at_a_winch_checkpoint_in_water_hangs_the_wet_weight() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The crane scenario with `time.scheme = "dg4"`, with error control (`time.rtol = time.atol
+/// = 1e-3`) and with both, to 12 s (5.3 m hauled in, five elements onto the drum while the
+/// trolley travels): each run from the command line completes with the balance within 1e-12
+/// of every step's energy scale, the payout the scenario's expression at 12 s (1e-12 m), the
+/// mass off the drum `ρA` times the length, and the winch's energy `ΔĤ` (no other port
+/// supplies); the controlled runs put the hook within the tolerance asked of a position,
+/// `atol + rtol |r|`, of the `dg4` run at the fixed `h` = 0.01 s.
+#[test]
+fn the_crane_runs_with_dg4_and_with_error_control() {
+    let p12 = {
+        let x: f64 = 12.0 / 30.0;
+        -15.0 * (3.0 * x * x - 2.0 * x * x * x)
+    };
+    // The hook (mesh node 1, the second `[[node]]`) in the final state.
+    let hook = |dir: &Path| -> [f64; 2] {
+        let rows = numeric_rows(&dir.join("positions.csv"));
+        let r = rows.iter().rev().find(|r| r[1] == 1.0).unwrap();
+        assert!((r[0] - 12.0).abs() < 1e-9, "the final state is written");
+        [r[2], r[3]]
+    };
+    let (end, tol) = ("time.end=12", 1e-3);
+    let dg4 = "time.scheme=\"dg4\"";
+    let runs: [(&str, &[&str]); 3] = [
+        ("winch-dg4", &[dg4, end]),
+        ("winch-tol", &["time.rtol=1e-3", "time.atol=1e-3", end]),
+        (
+            "winch-dg4-tol",
+            &[dg4, "time.rtol=1e-3", "time.atol=1e-3", end],
+        ),
+    ];
+    let mut base = [0.0; 2];
+    for (k, (tag, sets)) in runs.into_iter().enumerate() {
+        let out = run_ok(CRANE, tag, sets);
+        let s = summary(&out);
+        let err = s["max_relative_balance_error"].as_f64().unwrap();
+        let rows = winch_rows(&out);
+        let last = rows.last().unwrap();
+        let energy = s["winches"][0]["energy"].as_f64().unwrap();
+        let dh =
+            s["hamiltonian_final"].as_f64().unwrap() - s["hamiltonian_initial"].as_f64().unwrap();
+        let r = hook(&out);
+        if k == 0 {
+            base = r;
+        }
+        let off = ((r[0] - base[0]).powi(2) + (r[1] - base[1]).powi(2)).sqrt();
+        let allowed = tol * (1.0 + (base[0].powi(2) + base[1].powi(2)).sqrt());
+        eprintln!(
+            "{tag}: {} steps, {} rejected, balance/scale {err:.1e}, payout {:.9} m, winch {energy:.3} J = ΔĤ {dh:.3} J, hook {off:.2e} m from dg4 (allowed {allowed:.2e})",
+            s["steps"], s["rejected_steps"], last[1]
+        );
+        assert!(err < 1e-12, "{tag}: {err}");
+        assert!((last[0] - 12.0).abs() < 1e-9 && (last[1] - p12).abs() < 1e-12);
+        assert!((last[7] - 4.1 * last[2]).abs() < 1e-9 * last[7]);
+        assert!((energy - dh).abs() < 1e-9 * dh.abs(), "{tag}: {energy} J");
+        assert!(off < allowed, "{tag}: hook {off} m from the dg4 run");
+        let _ = std::fs::remove_dir_all(out.parent().unwrap());
+    }
+}

@@ -161,7 +161,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
 
     /// The winches' outputs after the last step.
     pub fn winch_samples(&self) -> Vec<WinchSample> {
-        let h = self.run.h_cur;
+        let h = self.winch_h;
         self.sys
             .winches
             .iter()
@@ -213,17 +213,38 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// their slots and drum nodes predicted at the drums' speeds; fails where a motor force
     /// is not finite or a drum element reaches a node held by a rigid body.
     fn drum_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
-        self.drum_steps.clear();
-        let n = self.sys.mesh.n_nodes();
-        let first = 2 * self.sys.bodies.len();
+        let (winches, r) = (&self.run.winches, &self.run.state.r);
+        Self::drum_data(
+            &self.sys,
+            (winches, r),
+            at,
+            &mut self.drum_steps,
+            &mut self.x,
+        )
+    }
+
+    /// The drums' data for the step `at` from the winch states `winches` and node positions
+    /// `r` [m] into `steps`, their slots and drum nodes in `x` predicted at the drums' speeds
+    /// (what [`Self::drum_prescribe`] does for the current state; `dg4`'s embedded
+    /// second-order step takes it from the state before the step).
+    pub(super) fn drum_data(
+        sys: &crate::system::PhSystem<D, M>,
+        (winches, r): (&[WinchState], &[Vector<D>]),
+        at: &StepAt,
+        steps: &mut Vec<DrumStep<D>>,
+        x: &mut [Vector<D>],
+    ) -> Result<(), StepError> {
+        steps.clear();
+        let n = sys.mesh.n_nodes();
+        let first = 2 * sys.bodies.len();
         let t_mid = at.t + 0.5 * at.h;
-        for (k, (m, ws)) in self.sys.winches.iter().zip(&self.run.winches).enumerate() {
+        for (k, (m, ws)) in sys.winches.iter().zip(winches).enumerate() {
             let Some((drum, j)) = &m.drum else {
                 continue;
             };
             let fail = |problem: String| at.winch_error(&m.name, problem);
             let (a, other) = (m.drum_node(ws), m.nodes[ws.drum + 1]);
-            if self.sys.attached.get(other).copied().flatten().is_some() {
+            if sys.attached.get(other).copied().flatten().is_some() {
                 return Err(fail(format!(
                     "its drum element reaches the node held by a rigid body (mesh node {other}): a drum with dynamics needs two elements off the drum"
                 )));
@@ -234,7 +255,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     "its motor force at t = {t_mid} s is {force} N (not finite)"
                 )));
             }
-            let base = m.path_at(ws, at.t_next, (ws.payout, 0.0)).0 - self.run.state.r[a];
+            let base = m.path_at(ws, at.t_next, (ws.payout, 0.0)).0 - r[a];
             let (axis, stretch) = (m.axis(ws), ws.stretch);
             let step = DrumStep {
                 winch: k,
@@ -250,10 +271,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 force: stretch * force,
             };
             let dp = ws.speed * at.h;
-            self.x[n + step.slot] = Vector::<D>::zeros();
-            self.x[n + step.slot][0] = dp;
-            self.x[a] = base + axis * dp;
-            self.drum_steps.push(step);
+            x[n + step.slot] = Vector::<D>::zeros();
+            x[n + step.slot][0] = dp;
+            x[a] = base + axis * dp;
+            steps.push(step);
         }
         Ok(())
     }
@@ -378,11 +399,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         total
     }
 
-    /// After a committed step to `t` [s]: per winch, its drum node's velocity held at the
-    /// payout rate and the string cut where the drum node has left its band, each change's
-    /// energy `Ĥ(after) − Ĥ(before)` booked as the winch's supply with the step's reaction
-    /// work. Returns the energy of the changes [J].
-    pub(super) fn winch_after(&mut self, t: f64) -> f64 {
+    /// After a committed step (or `dg4` sub-step) to `t` [s]: per winch, its payout and drum
+    /// speed brought to the step's end and its drum node's velocity held at the payout rate,
+    /// each hold's energy `Ĥ(after) − Ĥ(before)` booked as the winch's supply with the step's
+    /// reaction work (into the winch's total and the step record's energy). No cut: the
+    /// string is cut only once a whole step is accepted ([`Self::winch_cuts`]). Returns the
+    /// energy of the holds [J].
+    pub(super) fn winch_hold(&mut self, t: f64) -> f64 {
         let mut total = 0.0;
         // The drums' new speeds first: `Ĥ` after the step has them all.
         for d in &self.drum_steps {
@@ -400,21 +423,84 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 Some(_) => (self.drum_next[k].payout, ws.speed),
             };
             let a = m.drum_node(ws);
-            let state = &mut self.run.state;
-            state.v[a] = m.path_at(ws, t, (payout, rate)).1;
-            let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
-            m.cut(ws, (t, payout, rate), parts);
-            self.sys.place_winches(&self.run.winches);
+            self.run.state.v[a] = m.path_at(ws, t, (payout, rate)).1;
+            ws.payout = payout;
             let after = self.with_drums(self.sys.energies(&self.run.state), false);
             let de = after.hamiltonian() - self.energies.hamiltonian();
             self.energies = after;
             let step = self.winch_work[k] + de;
             self.run.winches[k].energy += step;
-            let before = self.winch_step[k].0;
-            self.winch_step[k] = (payout - before, step);
+            self.winch_step[k].1 += step;
             total += de;
         }
         total
+    }
+
+    /// After an accepted step to `t` [s] (never inside a `dg4` composition, never for an
+    /// attempt that error control may still reject): per winch, the string cut where the
+    /// drum node has left its band at the payout the step reached, each cut's energy
+    /// `Ĥ(after) − Ĥ(before)` booked as the winch's supply; then the step record holds the
+    /// payout moved and the energy supplied over the step `h` [s]. Returns the energy of the
+    /// cuts [J].
+    pub(super) fn winch_cuts(&mut self, t: f64, h: f64) -> f64 {
+        let mut total = 0.0;
+        for k in 0..self.sys.winches.len() {
+            let m = &self.sys.winches[k];
+            let ws = &mut self.run.winches[k];
+            let (payout, rate) = match &m.drum {
+                None => (ws.payout, m.payout_at(ws, t).1),
+                Some(_) => (ws.payout, ws.speed),
+            };
+            let drum = ws.drum;
+            let state = &mut self.run.state;
+            let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
+            m.cut(ws, (t, payout, rate), parts);
+            if ws.drum != drum {
+                self.sys.place_winches(&self.run.winches);
+                let after = self.with_drums(self.sys.energies(&self.run.state), false);
+                let de = after.hamiltonian() - self.energies.hamiltonian();
+                self.energies = after;
+                self.run.winches[k].energy += de;
+                self.winch_step[k].1 += de;
+                total += de;
+            }
+            let start = self.winch_step[k].0;
+            self.winch_step[k].0 = self.run.winches[k].payout - start;
+        }
+        self.winch_h = h;
+        total
+    }
+
+    /// Before an attempt at a step: each winch's step record set to the payout it starts
+    /// from and no energy yet, and its port's sums (for `dg4`'s means) cleared.
+    pub(super) fn winch_begin(&mut self) {
+        for (s, w) in self.winch_step.iter_mut().zip(&self.run.winches) {
+            *s = (w.payout, 0.0);
+        }
+        for s in &mut self.winch_port_sums {
+            *s = ([0.0; 3], [0.0; 3]);
+        }
+    }
+
+    /// `dg4`: adds the sub-step of size `hk` [s] just taken to the winch ports' sums.
+    pub(super) fn winch_port_add(&mut self, hk: f64) {
+        for (s, (_, u, y)) in self.winch_port_sums.iter_mut().zip(&self.winch_port) {
+            for k in 0..3 {
+                s.0[k] += u[k] * hk;
+                s.1[k] += y[k] * hk;
+            }
+        }
+    }
+
+    /// `dg4`: the winch ports' `h_k`-weighted means over the step of size `h` [s] (the drum
+    /// node is the same in every sub-step: no cut inside the composition).
+    pub(super) fn winch_port_means(&mut self, h: f64) {
+        for (p, s) in self.winch_port.iter_mut().zip(&self.winch_port_sums) {
+            for k in 0..3 {
+                p.1[k] = s.0[k] / h;
+                p.2[k] = s.1[k] / h;
+            }
+        }
     }
 }
 

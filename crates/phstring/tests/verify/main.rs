@@ -25,4 +25,5 @@ mod statics;
 mod water;
 mod winch;
 mod winch_checks;
+mod winch_dg4;
 mod winch_drum;

@@ -53,13 +53,14 @@ fn rigid_rope(inertia: f64, force: impl Fn(f64) -> f64, t: f64, n: usize) -> (f6
     (p, u)
 }
 
-/// Runs `sim` to `t_end`, checking every step's balance `Ĥₙ₊₁ − Ĥₙ = supplied −
-/// dissipated` against `1e-12` of its energy scale and that the winch is the only supply;
-/// returns the worst relative balance error and the sums of supplied and dissipated energy.
+/// Runs `sim` to `t_end` (the last step shortened to end there), checking every step's
+/// balance `Ĥₙ₊₁ − Ĥₙ = supplied − dissipated` against `1e-12` of its energy scale and that
+/// the winch is the only supply; returns the worst relative balance error and the sums of
+/// supplied and dissipated energy.
 fn run_balanced(sim: &mut Simulation<2, Material>, t_end: f64) -> (f64, f64, f64) {
     let (mut worst, mut supplied, mut dissipated) = (0.0_f64, 0.0, 0.0);
     while sim.time() < t_end - 1e-9 {
-        let r: StepReport = sim.step().unwrap_or_else(|e| panic!("{e}"));
+        let r: StepReport = sim.step_until(t_end).unwrap_or_else(|e| panic!("{e}"));
         let scale = r.before.magnitude + r.after.magnitude + r.winch.abs() + r.dissipated;
         let balance = r.after.hamiltonian() - r.before.hamiltonian() - r.supplied + r.dissipated;
         worst = worst.max(balance.abs() / scale);
@@ -264,4 +265,137 @@ fn statics_at_the_length_a_winch_has_reached_hangs_the_closed_form_rope() {
     assert!((drop - hang).abs() < 1e-9, "{drop} against {hang}");
     assert!((lift - weight(a)).abs() < 1e-9 * weight(a), "{lift} N");
     assert!((r[drum_node][0] - r[hook][0]).abs() < 1e-12);
+}
+
+/// A tension controller with inertia under `dg4` (motor pull `T_ref` = 45 kN, damping
+/// 1e4 N·s/m, a drum of 500 kg at the rope, `h` = 0.02 s): under 49.9 kN it pays out at up to
+/// 0.49 m/s, 2.6 m in 6 s (two elements off the drum). Guards the drum's unknown `Δp` in each
+/// sub-step, the backward one with its negative step and anti-damping: every step's balance
+/// within 1e-12 of its energy scale with the drum's shares summed over the sub-steps (the
+/// step's dissipation may be negative, the run's is not), the payout against the rigid-rope
+/// law within the model's cable behind the drum node (`ρA g L · 6 s/d`) and 0.2 % (the
+/// stretch `λ`), and the damping's total `Σ λ² d ṗ² h` against the run's dissipation.
+#[test]
+fn a_tension_controlled_drum_under_dg4_keeps_every_step_balanced() {
+    let (target, damping, inertia, h) = (4.5e4, 1.0e4, 500.0, 0.02);
+    let drum = WinchDrum {
+        inertia,
+        force: Arc::new(move |_| target),
+        damping,
+        brake: None,
+    };
+    let (net, _) = drum_hoist(drum);
+    let params = phstring::StepParams {
+        scheme: phstring::Scheme::DiscreteGradient4,
+        ..fixed_step(h)
+    };
+    let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
+    let h0 = sim.energies().hamiltonian();
+    let (worst, supplied, dissipated) = run_balanced(&mut sim, 6.0);
+    let w = sim.winch_samples()[0];
+    let (p, u) = rigid_rope(inertia, |u| target + damping * u, 6.0, 20000);
+    let de = sim.energies().hamiltonian() - h0;
+    eprintln!(
+        "dg4 tension control: balance/scale {worst:.1e}; payout {:.5} m (rigid {p:.5} m), speed {:.5} m/s (rigid {u:.5}); supplied {supplied:.1} J, dissipated {dissipated:.1} J (drum {:.1} J), ΔĤ {de:.1} J",
+        w.payout, w.speed, w.dissipated
+    );
+    let behind = RHO_A * G * L / damping * 6.0;
+    assert!(
+        (w.payout - p).abs() < behind + 2e-3 * p,
+        "payout {} m against {p} m",
+        w.payout
+    );
+    assert!(w.payout > 2.0, "two elements off the drum");
+    assert!(dissipated > 0.0 && (w.dissipated - dissipated).abs() < 1e-9 * dissipated);
+    assert!((de - (supplied - dissipated)).abs() < 1e-9 * supplied.abs());
+}
+
+/// The slipping brake of the test above (30 kN, slip speed 1 mm/s, a drum of 2 t at the rope)
+/// under `dg4` at `h` = 2 ms: the backward sub-step runs the brake backward (it gives energy
+/// back there, the damping exception of docs/method.md §19), every step's balance within
+/// 1e-12 of its energy scale, the brake's total dissipation the run's, and the payout at 2 s
+/// the rigid-rope law's within the rope's axial vibration (12 mm, as with `dg`).
+#[test]
+fn a_slipping_brake_under_dg4_keeps_every_step_balanced() {
+    let (hold, slip, inertia, h) = (3.0e4, 1e-3, 2000.0, 2e-3);
+    let drum = WinchDrum {
+        inertia,
+        force: Arc::new(|_| 0.0),
+        damping: 0.0,
+        brake: Some((hold, slip)),
+    };
+    let (net, _) = drum_hoist(drum);
+    let params = phstring::StepParams {
+        scheme: phstring::Scheme::DiscreteGradient4,
+        ..fixed_step(h)
+    };
+    let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
+    let (worst, _, dissipated) = run_balanced(&mut sim, 2.0);
+    let w = sim.winch_samples()[0];
+    let brake = |u: f64| hold * u / (u * u + slip * slip).sqrt();
+    let (p, _) = rigid_rope(inertia, brake, 2.0, 20000);
+    eprintln!(
+        "dg4 brake: balance/scale {worst:.1e}; payout {:.5} m (rigid rope {p:.5} m); dissipated {dissipated:.1} J; {} rejected",
+        w.payout,
+        sim.rejected_steps()
+    );
+    assert!(
+        (w.payout - p).abs() < 0.012,
+        "payout {} m against {p} m",
+        w.payout
+    );
+    assert!((w.dissipated - dissipated).abs() < 1e-9 * dissipated);
+}
+
+/// The tension controller of the `dg4` test above under error control (`rtol = atol =
+/// 1e-4`, `time.h` = 0.05 s), with `dg` and with `dg4` (whose embedded `dg` step has the
+/// drum's row from its state before the step, and compares the drum's payout and speed):
+/// each run completes with every accepted step's balance within 1e-12 of its energy scale,
+/// the drum's dissipation the run's, and the payout at 3 s (1.2 m, two cuts) within the
+/// tolerance asked, `atol + rtol |p|`, of `dg4` at a fixed 2.5 ms.
+#[test]
+fn a_tension_controlled_drum_under_error_control_keeps_its_tolerance() {
+    let (target, damping, inertia, tol) = (4.5e4, 1.0e4, 500.0, 1e-4);
+    let drum = || WinchDrum {
+        inertia,
+        force: Arc::new(move |_| target),
+        damping,
+        brake: None,
+    };
+    let dg4 = phstring::Scheme::DiscreteGradient4;
+    let reference = {
+        let (net, _) = drum_hoist(drum());
+        let params = phstring::StepParams {
+            scheme: dg4,
+            ..fixed_step(2.5e-3)
+        };
+        let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
+        run_balanced(&mut sim, 3.0);
+        sim.winch_samples()[0].payout
+    };
+    for scheme in [phstring::Scheme::DiscreteGradient, dg4] {
+        let (net, _) = drum_hoist(drum());
+        let params = phstring::StepParams {
+            h: 0.05,
+            scheme,
+            control: phstring::StepControl::with_tolerance(tol, tol),
+            ..phstring::StepParams::default()
+        };
+        let mut sim = Simulation::new(net, params).unwrap_or_else(|e| panic!("{e}"));
+        let (worst, _, dissipated) = run_balanced(&mut sim, 3.0);
+        let w = sim.winch_samples()[0];
+        let allowed = tol * (1.0 + reference.abs());
+        eprintln!(
+            "{scheme:?} tension control with tol {tol:e}: {} steps, {} rejected; balance/scale {worst:.1e}; payout {:.6} m against {reference:.6} m (allowed {allowed:.1e})",
+            sim.steps(),
+            sim.rejected_steps(),
+            w.payout
+        );
+        assert!((w.dissipated - dissipated).abs() < 1e-9 * dissipated);
+        assert!(
+            (w.payout - reference).abs() < allowed,
+            "{scheme:?}: payout {} m",
+            w.payout
+        );
+    }
 }
