@@ -519,22 +519,19 @@ mod tests {
     use crate::{Boundary, Material};
     use std::sync::Arc;
 
-    /// A 5 t payload on 12 m of 32 mm steel rope below a drum with inertia (2 t at the
-    /// rope), a motor pulling 40 kN, damping 2e4 N·s/m and a 30 kN brake, swinging
-    /// sideways so that the rope is not along the drum's path: after 30 steps of 10 ms, the
-    /// Jacobian of the next step's residual at a perturbed increment against central
-    /// differences, in the free rows and the drum's row.
-    #[test]
-    fn the_drum_rows_jacobian_matches_finite_differences() {
+    /// A 5 t payload at `hook` [m] on 12 elements of 32 mm wire rope (EA = 4.3e7 N, 4.1 kg/m)
+    /// from a drum at the origin with 5 more elements on it, without its winch: the network
+    /// and the rope's group.
+    fn hoist_on_drum(hook: Vector<2>, mass: MassMatrix) -> (crate::Network<2, Material>, usize) {
         let (g, ea, rho_a, m) = (9.81, 4.3e7, 4.1, 5000.0);
         let mut b = NetworkBuilder::<2, Material>::new();
         let top = b.node(Vector::<2>::zeros());
-        let hook = b.node(Vector::<2>::new(3.0, -11.6));
+        let hook = b.node(hook);
         let spec = StringSpec {
             name: "rope".into(),
             material: Material::tension_only_linear(ea),
             rho_a,
-            mass: MassMatrix::Consistent,
+            mass,
             body_force: Vector::<2>::new(0.0, -rho_a * g),
             prestretch: 1.0,
         };
@@ -544,7 +541,17 @@ mod tests {
             mass: m,
             weight: Vector::<2>::new(0.0, -m * g),
         }];
-        let mut net = b.build(Boundary::default(), masses).unwrap();
+        (b.build(Boundary::default(), masses).unwrap(), grp)
+    }
+
+    /// A 5 t payload on 12 m of 32 mm steel rope below a drum with inertia (2 t at the
+    /// rope), a motor pulling 40 kN, damping 2e4 N·s/m and a 30 kN brake, swinging
+    /// sideways so that the rope is not along the drum's path: after 30 steps of 10 ms, the
+    /// Jacobian of the next step's residual at a perturbed increment against central
+    /// differences, in the free rows and the drum's row.
+    #[test]
+    fn the_drum_rows_jacobian_matches_finite_differences() {
+        let (mut net, grp) = hoist_on_drum(Vector::<2>::new(3.0, -11.6), MassMatrix::Consistent);
         // Stretched 0.1 % along the chord, at rest.
         let r: Vec<_> = net.initial.r.iter().map(|x| x * 1.001).collect();
         net.initial = State::at_rest(&net.mesh, r);
@@ -649,34 +656,11 @@ mod tests {
         assert!(worst < 1e-6, "Jacobian off by {worst:e} of its scale");
     }
 
-    /// A checkpoint's drum node must lie on its winch's path (eq. (23.1)): after 3 s of a
-    /// 0.5 m/s payout from a drum travelling 0.2 m/s (elements brought off the drum), the
-    /// run's flat checkpoint fits; its drum node moved 1e-12 m (rounding) still fits, moved
-    /// 1 µm (a hundred times the tolerance `1e-9 (1 m + |X| + L)`) it is refused, naming the
-    /// winch and its drum node.
     /// A 5 t payload on 12 m of 32 mm wire rope (EA = 4.3e7 N, 4.1 kg/m, elements of 1 m, 5
     /// more on the drum), paid out at 0.5 m/s from a drum travelling at 0.2 m/s, `h` =
     /// 0.01 s, fixed steps.
     fn travelling_hoist() -> Simulation<2, Material> {
-        let (g, ea, rho_a, m) = (9.81, 4.3e7, 4.1, 5000.0);
-        let mut b = NetworkBuilder::<2, Material>::new();
-        let top = b.node(Vector::<2>::zeros());
-        let hook = b.node(Vector::<2>::new(0.0, -12.0));
-        let spec = StringSpec {
-            name: "rope".into(),
-            material: Material::tension_only_linear(ea),
-            rho_a,
-            mass: MassMatrix::Lumped,
-            body_force: Vector::<2>::new(0.0, -rho_a * g),
-            prestretch: 1.0,
-        };
-        let grp = b.string_on_drum(spec, &[top, hook], 12, 5).unwrap();
-        let masses = vec![PointMass {
-            node: hook,
-            mass: m,
-            weight: Vector::<2>::new(0.0, -m * g),
-        }];
-        let net = b.build(Boundary::default(), masses).unwrap();
+        let (net, grp) = hoist_on_drum(Vector::<2>::new(0.0, -12.0), MassMatrix::Lumped);
         let net = net.with_winch(Winch {
             name: "hoist".into(),
             group: grp,
@@ -696,6 +680,11 @@ mod tests {
         Simulation::new(net, params).unwrap()
     }
 
+    /// A checkpoint's drum node must lie on its winch's path (eq. (23.1)): after 3 s of a
+    /// 0.5 m/s payout from a drum travelling 0.2 m/s (elements brought off the drum), the
+    /// run's flat checkpoint fits; its drum node moved 1e-12 m (rounding) still fits, moved
+    /// 1 µm (a hundred times the tolerance `1e-9 (1 m + |X| + L)`) it is refused, naming the
+    /// winch and its drum node.
     #[test]
     fn a_checkpoint_whose_drum_node_is_off_its_path_is_refused() {
         let mut sim = travelling_hoist();
