@@ -1016,11 +1016,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     for d in &self.drum_steps {
                         let (ws0, ws) = (&saved.winches[d.winch], &self.run.winches[d.winch]);
                         let dp = self.x[n + d.slot][0];
-                        let speed = if d.inertia > 0.0 {
-                            2.0 * dp * inv_h - ws0.speed
-                        } else {
-                            dp * inv_h
-                        };
+                        let speed = d.speed_after(dp, h);
                         let e_r = (ws0.payout + dp - ws.payout).abs();
                         let e_v = (speed - ws.speed).abs();
                         let r_mag = ws0.payout.abs().max(ws.payout.abs());
@@ -1100,12 +1096,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 return Ok(None);
             }
             // Started from the composition's payout increments.
-            let n = sys.mesh.n_nodes();
+            let (nodes, slots) = x.split_at_mut(sys.mesh.n_nodes());
             for d in &self.drum_steps {
-                let dp = self.run.winches[d.winch].payout - winches[d.winch].payout;
-                x[n + d.slot][0] = dp;
-                x[d.node] = d.base + d.axis * dp;
+                slots[d.slot][0] = self.run.winches[d.winch].payout - winches[d.winch].payout;
             }
+            crate::winch_step::fill_drums(&self.drum_steps, slots, nodes);
         }
         let mut eqs = StepEquations::new(
             &self.sys,

@@ -37,6 +37,20 @@ pub(crate) struct DrumStep<const D: usize> {
     pub force: f64,
 }
 
+impl<const D: usize> DrumStep<D> {
+    /// The payout speed [m/s] at the end of a step of `h` [s] that paid out `dp` [m]: the
+    /// midpoint rule's `2Δp/h − ṗₙ`, or for a drum without inertia, which has no speed of its
+    /// own, the step's mean `Δp/h` (the midpoint value would alternate about it).
+    pub fn speed_after(&self, dp: f64, h: f64) -> f64 {
+        let u = dp / h;
+        if self.inertia > 0.0 {
+            2.0 * u - self.speed
+        } else {
+            u
+        }
+    }
+}
+
 /// The drum of winch `k` of `sys` (a winch with a drum).
 fn drum_of<const D: usize, M>(sys: &PhSystem<D, M>, k: usize) -> &WinchDrum {
     match &sys.winches[k].drum {

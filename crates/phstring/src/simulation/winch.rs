@@ -286,15 +286,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for d in &self.drum_steps {
             let (m, ws) = (&self.sys.winches[d.winch], &self.run.winches[d.winch]);
             let dp = self.x[n + d.slot][0];
-            // A drum without inertia has no speed of its own: it takes the step's mean (the
-            // midpoint rule's `2Δp/h − ṗₙ` would alternate about it).
-            let u = dp / at.h;
-            let speed = if d.inertia > 0.0 {
-                2.0 * u - ws.speed
-            } else {
-                u
-            };
-            let next = (ws.payout + dp, speed);
+            let next = (ws.payout + dp, d.speed_after(dp, at.h));
             let limit = if next.1.is_finite() {
                 m.check(ws, next.0)
             } else {
