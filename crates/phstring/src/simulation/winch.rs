@@ -439,10 +439,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         for k in 0..self.sys.winches.len() {
             let m = &self.sys.winches[k];
             let ws = &mut self.run.winches[k];
-            let (payout, rate) = match &m.drum {
-                None => (ws.payout, m.payout_at(ws, t).1),
-                Some(_) => (ws.payout, ws.speed),
-            };
+            // The payout the step reached, moving at the prescribed rate or the drum's speed.
+            let (payout, rate) = (ws.payout, m.payout_at(ws, t).1);
             let drum = ws.drum;
             let state = &mut self.run.state;
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
