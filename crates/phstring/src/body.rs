@@ -334,6 +334,11 @@ pub(crate) struct BodyModel {
     pub weight: Vec3,
     /// `(node, point in body axes)`.
     pub attachments: Vec<(usize, Vec3)>,
+    /// Per attachment, an increment [m] (space axes) its node makes over the current step
+    /// beside the body's motion at its point: a winch drum on the body paying out, whose drum
+    /// node slides along its path from the drum point (docs/method.md §23, "A drum on a rigid
+    /// body"). Empty, or zero for an attachment, where the nodes only move with the body.
+    pub offset: Vec<Vec3>,
     /// The wrench port's inputs.
     pub wrench: Option<BodyWrench>,
     /// The body's own mass [kg] (`mass` has the added mass too).
@@ -551,6 +556,7 @@ impl BodyModel {
             inertia,
             weight,
             attachments,
+            offset: Vec::new(),
             wrench: body.wrench.clone(),
             dry_mass: body.mass,
             dry_inertia: body.inertia,
@@ -976,13 +982,15 @@ fn check_point<const D: usize>(
 
 /// Checks that the bodies' states `states` (one per body of `models`, named `names`) carry
 /// their attached nodes: each such node of positions `r` [m] and velocities `v` [m/s] at its
-/// body point and moving with it (a state handed to a simulation, e.g. an equilibrium's).
+/// body point and moving with it (a state handed to a simulation, e.g. an equilibrium's). A
+/// winch's drum node on a body (`drum(node)`) slides along its path from the body point: the
+/// winch checks it.
 pub(crate) fn check_attached<const D: usize>(
     models: &[BodyModel],
     names: &[String],
     states: &[BodyState],
-    r: &[Vector<D>],
-    v: &[Vector<D>],
+    (r, v): (&[Vector<D>], &[Vector<D>]),
+    drum: impl Fn(usize) -> bool,
 ) -> Result<(), SetupError> {
     for (b, ((model, name), st)) in models.iter().zip(names).zip(states).enumerate() {
         let fail = |problem: String| SetupError::Body {
@@ -995,7 +1003,9 @@ pub(crate) fn check_attached<const D: usize>(
             let (Some(rn), Some(vn)) = (r.get(*node), v.get(*node)) else {
                 return Err(fail(format!("attachment node {node} is not in the state")));
             };
-            check_point(&fail, *node, s, st, omega, (rn, vn))?;
+            if !drum(*node) {
+                check_point(&fail, *node, s, st, omega, (rn, vn))?;
+            }
         }
     }
     Ok(())
@@ -1019,6 +1029,7 @@ mod tests {
             inertia,
             weight: Vec3::new(0.0, 0.0, -2000.0 * 9.81),
             attachments: vec![],
+            offset: Vec::new(),
             wrench: None,
             dry_mass: 2000.0,
             dry_inertia: inertia,

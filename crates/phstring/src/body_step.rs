@@ -31,7 +31,8 @@ pub(crate) fn rotation_slot<const D: usize>(w: &Vec3) -> Vector<D> {
     }
 }
 
-/// Writes the attached nodes' increments `Δa = Δx + R_n (cay(w) − I) s` into `x`.
+/// Writes the attached nodes' increments `Δa = Δx + R_n (cay(w) − I) s` into `x`, with an
+/// attachment's offset where it has one (a winch drum's payout on the body).
 pub(crate) fn fill_attachments<const D: usize, M>(
     sys: &PhSystem<D, M>,
     states: &[BodyState],
@@ -41,8 +42,9 @@ pub(crate) fn fill_attachments<const D: usize, M>(
     for (b, (model, st)) in sys.bodies.iter().zip(states).enumerate() {
         let (dx, w) = unknowns(slots, b);
         let turn = Turn::new(&st.orientation, &w);
-        for &(node, s) in &model.attachments {
-            x[node] = project(&(dx + turn.point(&s).moved));
+        for (k, &(node, s)) in model.attachments.iter().enumerate() {
+            let offset = model.offset.get(k).copied().unwrap_or_default();
+            x[node] = project(&(dx + turn.point(&s).moved + offset));
         }
     }
 }

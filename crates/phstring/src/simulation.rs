@@ -19,6 +19,8 @@ use crate::water::WaterWork;
 
 mod checkpoint;
 mod winch;
+#[cfg(test)]
+mod winch_body_tests;
 pub use checkpoint::{Checkpoint, CheckpointFit, FlatCheckpoint};
 pub use winch::WinchSample;
 
@@ -478,7 +480,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let border = crate::body_step::border_pattern(&sys);
         // A drum couples with whichever node its drum element reaches: the bordered solve
         // takes any coupling (docs/method.md §23.6).
-        let solver = if n_drums > 0 {
+        let on_bodies = sys.winches.iter().any(|w| w.body.is_some());
+        let solver = if n_drums > 0 || on_bodies {
             crate::linsolve::make_bordered_solver::<D>(params.solver, &sys.mesh, slots)?
         } else {
             crate::linsolve::make_border_solver::<D>(params.solver, &sys.mesh, &border)?
@@ -516,9 +519,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // starts with its payout's rate (docs/method.md §23).
         let mut winch_start = winch_start;
         for (m, ws) in sys.winches.iter().zip(&mut winch_start) {
-            m.align(ws, &state.r, &state.c, 0.0);
-            state.v[m.drum_node(ws)] = m.path(ws, 0.0).1;
+            m.align(ws, &state.r, &state.c, &m.frame(0.0, &state.bodies));
+            state.v[m.drum_node(ws)] = m.path(ws, 0.0, &state.bodies).1;
         }
+        sys.place_body_drums(&winch_start);
         let energies = sys.energies(&state);
         if !energies.hamiltonian().is_finite() {
             return Err(SetupError::DerivedNotFinite {

@@ -792,15 +792,15 @@ fn attach_water<const D: usize, M>(
 
 /// Checks the winches (docs/method.md §23): the
 /// checks of [`crate::winch::attach`], with the nodes that carry a support, load, port, point
-/// mass or body attachment claimed.
+/// mass or body attachment claimed (but a drum node on a body, `on_body`).
 #[allow(clippy::too_many_arguments)]
 fn attach_winches<const D: usize, M>(
     winches: &[crate::winch::Winch],
     mesh: &Mesh,
     groups: &[ElementGroup<D, M>],
-    boundary: &Boundary<D>,
-    point_masses: &[PointMass<D>],
+    (boundary, point_masses, bodies): (&Boundary<D>, &[PointMass<D>], &[RigidBody<D>]),
     initial: &State<D>,
+    on_body: &[Option<crate::winch::BodyDrum>],
 ) -> Result<Vec<(crate::winch::WinchModel<D>, crate::winch::WinchState)>, SetupError> {
     if winches.is_empty() {
         return Ok(Vec::new());
@@ -813,10 +813,20 @@ fn attach_winches<const D: usize, M>(
         .chain(boundary.motions.iter().map(|m| m.node))
         .chain(boundary.loads.iter().map(|l| l.node))
         .chain(boundary.feedback.iter().map(|f| f.node))
-        .chain(point_masses.iter().map(|p| p.node));
+        .chain(point_masses.iter().map(|p| p.node))
+        .chain(
+            bodies
+                .iter()
+                .flat_map(|b| b.attachments.iter().map(|a| a.node)),
+        );
     for i in nodes {
         if let Some(c) = claimed.get_mut(i) {
             *c = true;
+        }
+    }
+    for &(b, k, _) in on_body.iter().flatten() {
+        if let Some(c) = claimed.get_mut(bodies[b].attachments[k].node) {
+            *c = false;
         }
     }
     let info: Vec<_> = groups
@@ -829,9 +839,78 @@ fn attach_winches<const D: usize, M>(
             )
         })
         .collect();
-    crate::winch::attach(winches, mesh, &info, (&initial.r, &initial.v), |i| {
-        claimed[i]
-    })
+    crate::winch::attach(
+        winches,
+        mesh,
+        &info,
+        (&initial.r, &initial.v),
+        |i| claimed[i],
+        on_body,
+    )
+}
+
+/// The winches whose drum is a rigid body's point (docs/method.md §23, "A drum on a rigid
+/// body"): per winch, `(body, attachment, drum point in body axes)` where its string's first
+/// node is fixed to a body. Each such attachment is moved to the drum node (the first node
+/// off the drum), which starts at the same point, and the nodes on the drum are given the
+/// drum point's velocity. A drum on a body takes no drum motion of its own and no dynamics
+/// (not covered yet), and either is refused naming the winch.
+fn body_drums<const D: usize, M>(
+    winches: &[crate::winch::Winch],
+    mesh: &Mesh,
+    groups: &[ElementGroup<D, M>],
+    bodies: &mut [RigidBody<D>],
+    initial: &mut State<D>,
+) -> Result<Vec<Option<crate::winch::BodyDrum>>, SetupError> {
+    let mut out = Vec::with_capacity(winches.len());
+    for (k, w) in winches.iter().enumerate() {
+        let range = match groups.get(w.group) {
+            Some(g) if w.reserve < g.elements.len() => g.elements.clone(),
+            _ => {
+                // `winch::attach` names what is wrong with the group.
+                out.push(None);
+                continue;
+            }
+        };
+        let first = mesh.elements()[range.start][0];
+        let found = bodies.iter().enumerate().find_map(|(b, body)| {
+            let k = body.attachments.iter().position(|a| a.node == first)?;
+            Some((b, k))
+        });
+        let Some((b, j)) = found else {
+            out.push(None);
+            continue;
+        };
+        let problem = |problem: &str| SetupError::Winch {
+            index: k,
+            name: w.name.clone(),
+            problem: problem.into(),
+        };
+        if w.drum_motion.is_some() {
+            return Err(problem(
+                "its drum is a point of a rigid body and moves with the body: give it no drum motion of its own",
+            ));
+        }
+        if w.drum.is_some() {
+            return Err(problem(
+                "a drum with dynamics (inertia, motor, brake) on a rigid body is not covered yet: drive a drum on a body by its payout",
+            ));
+        }
+        let drum_node = mesh.elements()[range.start + w.reserve][0];
+        let point = crate::body::embed(&bodies[b].attachments[j].point);
+        bodies[b].attachments[j].node = drum_node;
+        // (A state of the wrong size is refused by the checks that follow.)
+        if let Some(&v0) = initial.v.get(first) {
+            for e in range.start..range.start + w.reserve {
+                let [_, next] = mesh.elements()[e];
+                if let Some(v) = initial.v.get_mut(next) {
+                    *v = v0;
+                }
+            }
+        }
+        out.push(Some((b, j, point)));
+    }
+    Ok(out)
 }
 
 /// Refuses nodal body forces that are not finite or whose squares overflow.
@@ -878,9 +957,17 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         } = problem.into();
         let mut groups = groups;
         let mut initial = initial;
+        let mut bodies = bodies;
         check_groups(&mesh, &groups)?;
-        let winch_data =
-            attach_winches(&winches, &mesh, &groups, &boundary, &point_masses, &initial)?;
+        let on_body = body_drums(&winches, &mesh, &groups, &mut bodies, &mut initial)?;
+        let winch_data = attach_winches(
+            &winches,
+            &mesh,
+            &groups,
+            (&boundary, &point_masses, &bodies),
+            &initial,
+            &on_body,
+        )?;
         for (m, ws) in &winch_data {
             groups[m.group].elements.start = m.drum_element(ws);
         }
@@ -888,7 +975,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let n = mesh.n_nodes();
         let mut free = free_components(&boundary, &initial, n)?;
         check_port_nodes(&boundary, n)?;
-        let rigid = crate::body::attach_bodies(
+        let mut rigid = crate::body::attach_bodies(
             &bodies,
             &mesh,
             &boundary,
@@ -897,6 +984,10 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             &initial.r,
             &initial.v,
         )?;
+        for &(b, _, _) in on_body.iter().flatten() {
+            let model = &mut rigid.models[b];
+            model.offset = vec![crate::body::Vec3::zeros(); model.attachments.len()];
+        }
         initial.bodies.clone_from(&rigid.states);
         for (e, &l) in mesh.lengths().iter().enumerate() {
             if !l.is_finite() {
@@ -988,8 +1079,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             &self.bodies,
             &self.body_names,
             &state.bodies,
-            &state.r,
-            &state.v,
+            (&state.r, &state.v),
+            |i| self.winch_node.get(i).copied().unwrap_or(false),
         )?;
         self.check_initial_energies(state)
     }
@@ -1382,6 +1473,30 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             let sets = (&mut self.constrained, &mut self.constrained_elements);
             constrained_sets(&self.mesh, &self.free, sets);
             self.lump_water_again();
+        }
+        self.place_body_drums(states);
+    }
+
+    /// Fixes each winch drum on a rigid body to the drum node of its state in `states`: the
+    /// body's attachment at the drum point holds that node (which slides along its path from
+    /// there), with no offset yet, and links the body to the drum element (docs/method.md
+    /// §23, "A drum on a rigid body").
+    pub(crate) fn place_body_drums(&mut self, states: &[crate::winch::WinchState]) {
+        for (m, ws) in self.winches.iter().zip(states) {
+            let Some((b, k, _)) = m.body else {
+                continue;
+            };
+            let node = m.drum_node(ws);
+            let old = self.bodies[b].attachments[k].0;
+            if old != node {
+                self.attached[old] = None;
+            }
+            self.attached[node] = Some((b, k));
+            self.bodies[b].attachments[k].0 = node;
+            self.bodies[b].offset[k] = crate::body::Vec3::zeros();
+            let links = &mut self.body_links[b][k];
+            links.clear();
+            links.push((m.drum_element(ws), m.nodes[ws.drum + 1], true));
         }
     }
 

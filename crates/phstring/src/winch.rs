@@ -11,11 +11,16 @@
 //! change. This module holds the plain data and the state transfers; the step that books
 //! their energy is in the simulation.
 
+use crate::body::{BodyState, Vec3, project};
 use crate::error::SetupError;
 use crate::mesh::Mesh;
 use nalgebra::SVector;
 use std::ops::Range;
 use std::sync::Arc;
+
+/// A drum on a rigid body: the body's index, the index of the body's attachment that holds
+/// the drum node, and the drum point in body axes [m].
+pub(crate) type BodyDrum = (usize, usize, Vec3);
 
 /// A winch's paid-out length [m] as a function of time `t` [s]: the length paid out since
 /// `t = 0` (negative: hauled in), 0 at `t = 0`.
@@ -183,6 +188,19 @@ pub(crate) struct WinchModel<const D: usize> {
     /// The drum's dynamics and its slot in the Newton vector (after the nodes); `None`: the
     /// payout is prescribed.
     pub drum: Option<(WinchDrum, usize)>,
+    /// A drum on a rigid body: the body, the body's attachment that holds the drum node, and
+    /// the drum point in body axes [m]; the drum point moves with the body, the path stays in
+    /// space axes. `None`: a drum of space (`drum_point`, `drum_motion`).
+    pub body: Option<BodyDrum>,
+}
+
+/// Where a winch's drum point is at one instant [m] and its velocity [m/s].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DrumFrame<const D: usize> {
+    /// The drum point [m].
+    pub point: SVector<f64, D>,
+    /// The drum point's velocity [m/s].
+    pub velocity: SVector<f64, D>,
 }
 
 impl<const D: usize> std::fmt::Debug for WinchModel<D> {
@@ -301,12 +319,32 @@ impl<const D: usize> WinchModel<D> {
         }
     }
 
+    /// The drum at time `t` [s] with the rigid bodies in `bodies` (a drum on a body moves
+    /// with it).
+    pub fn frame(&self, t: f64, bodies: &[BodyState]) -> DrumFrame<D> {
+        let Some((b, _, s)) = self.body else {
+            let (point, velocity) = self.drum_at(t);
+            return DrumFrame { point, velocity };
+        };
+        let st = &bodies[b];
+        let arm = st.orientation.transform_vector(&s);
+        DrumFrame {
+            point: project(&(st.position + arm)),
+            velocity: project(&(st.velocity + st.omega_space().cross(&arm))),
+        }
+    }
+
     /// The drum node's position [m] and velocity [m/s] at time `t` [s] on the path of `ws`:
     /// `X(t) + origin + direction λ (p(t) − p_cut)`, `X` the drum point, the velocity from
-    /// central differences of `X` and `p`.
-    pub fn path(&self, ws: &WinchState, t: f64) -> (SVector<f64, D>, SVector<f64, D>) {
+    /// central differences of `X` and `p` (on a rigid body `X` is its point, moving with it).
+    pub fn path(
+        &self,
+        ws: &WinchState,
+        t: f64,
+        bodies: &[BodyState],
+    ) -> (SVector<f64, D>, SVector<f64, D>) {
         let (p, rate) = self.payout_at(ws, t);
-        self.path_at(ws, t, (p, rate))
+        self.path_at(ws, &self.frame(t, bodies), (p, rate))
     }
 
     /// The payout [m] and its rate [m/s] at time `t` [s]: the prescribed payout's (a central
@@ -320,19 +358,18 @@ impl<const D: usize> WinchModel<D> {
         ((self.payout)(t), rate)
     }
 
-    /// The drum node's position [m] and velocity [m/s] on the path of `ws` at time `t` [s],
-    /// payout `p` [m] and payout rate `rate` [m/s].
+    /// The drum node's position [m] and velocity [m/s] on the path of `ws` with the drum at
+    /// `frame`, payout `p` [m] and payout rate `rate` [m/s].
     pub fn path_at(
         &self,
         ws: &WinchState,
-        t: f64,
+        frame: &DrumFrame<D>,
         (p, rate): (f64, f64),
     ) -> (SVector<f64, D>, SVector<f64, D>) {
         let axis = self.axis(ws);
-        let (x, xdot) = self.drum_at(t);
         (
-            x + vec_of::<D>(&ws.origin) + axis * (p - ws.payout_cut),
-            xdot + axis * rate,
+            frame.point + vec_of::<D>(&ws.origin) + axis * (p - ws.payout_cut),
+            frame.velocity + axis * rate,
         )
     }
 
@@ -345,21 +382,27 @@ impl<const D: usize> WinchModel<D> {
     /// direction and stretch there), from the drum node's position: how a run starts from a
     /// state that is not the layout's (an equilibrium), so that the first element that comes
     /// off the drum continues the string's own direction.
-    pub fn align(&self, ws: &mut WinchState, r: &[SVector<f64, D>], c: &[f64], t: f64) {
+    pub fn align(
+        &self,
+        ws: &mut WinchState,
+        r: &[SVector<f64, D>],
+        c: &[f64],
+        frame: &DrumFrame<D>,
+    ) {
         let (a, b) = (self.nodes[ws.drum], self.nodes[ws.drum + 1]);
         let behind = ws.behind(ws.payout);
-        let drum = self.drum_at(t).0;
-        self.new_path(ws, (r[a], r[b]), (c[self.drum_element(ws)], behind), drum);
+        self.new_path(ws, (r[a], r[b]), (c[self.drum_element(ws)], behind), frame);
     }
 
     /// Starts a new path for the drum node at its position `r` with the direction and
-    /// stretch of the drum element (whose other node is at `r_next`, strain `c`).
+    /// stretch of the drum element (whose other node is at `r_next`, strain `c`), from the
+    /// drum point of `frame`.
     fn new_path(
         &self,
         ws: &mut WinchState,
         (r, r_next): (SVector<f64, D>, SVector<f64, D>),
         (c, behind): (f64, f64),
-        drum: SVector<f64, D>,
+        frame: &DrumFrame<D>,
     ) {
         let chord = r_next - r;
         let n = chord.norm();
@@ -368,7 +411,7 @@ impl<const D: usize> WinchModel<D> {
         } else {
             vec_of::<D>(&ws.direction)
         };
-        ws.origin = arr_of(&(r - drum));
+        ws.origin = arr_of(&(r - frame.point));
         ws.direction = arr_of(&dir);
         ws.stretch = c.max(0.0).sqrt();
         ws.payout_cut = ws.payout;
@@ -385,13 +428,13 @@ impl<const D: usize> WinchModel<D> {
     pub fn cut(
         &self,
         ws: &mut WinchState,
-        (t, payout, rate): (f64, f64, f64),
+        (frame, payout, rate): (&DrumFrame<D>, f64, f64),
         (r, v, c): (&mut [SVector<f64, D>], &mut [SVector<f64, D>], &mut [f64]),
     ) {
         ws.payout = payout;
         let l = self.l;
         let last = self.elements.len() - 1;
-        let (drum, drum_v) = self.drum_at(t);
+        let (drum, drum_v) = (frame.point, frame.velocity);
         let along = |ws: &WinchState| drum_v + vec_of::<D>(&ws.direction) * (ws.stretch * rate);
         // The band `[−ε, L − ε]`, `ε = 1e-9 L`: a payout brought back to where a cut left the
         // drum node (`b = L` up to rounding) puts the element back, so that paying out and
@@ -414,7 +457,7 @@ impl<const D: usize> WinchModel<D> {
             c[e - 1] = c[e];
             let behind = ws.behind(payout) + l;
             ws.drum -= 1;
-            self.new_path(ws, (r[a], r[b]), (c[e - 1], behind), drum);
+            self.new_path(ws, (r[a], r[b]), (c[e - 1], behind), frame);
             v[a] = along(ws);
         }
         while ws.behind(payout) > l - eps && ws.drum < last {
@@ -429,7 +472,7 @@ impl<const D: usize> WinchModel<D> {
             v[a] = SVector::zeros();
             c[e] = 0.0;
             ws.drum += 1;
-            self.new_path(ws, (r[b], r[n]), (c[e + 1], behind), drum);
+            self.new_path(ws, (r[b], r[n]), (c[e + 1], behind), frame);
             v[b] = along(ws);
         }
     }
@@ -477,13 +520,16 @@ impl<const D: usize> WinchModel<D> {
 /// first `reserve` elements (and no more than all but one) at the drum point, no other
 /// element, support, load or port at its nodes but the last, and the payout 0 at `t = 0`.
 /// `body_force` and `is_string` are the groups' body forces and kinds; `claimed(i)` tells
-/// whether node `i` carries a support, load, port, point mass or body.
+/// whether node `i` carries a support, load, port, point mass or body; `on_body[k]` is winch
+/// `k`'s drum on a rigid body (body, attachment, drum point in body axes), whose nodes on the
+/// drum move with the drum point instead of starting at rest.
 pub(crate) fn attach<const D: usize>(
     winches: &[Winch],
     mesh: &Mesh,
     groups: &[(Range<usize>, SVector<f64, D>, bool)],
     (r, v): (&[SVector<f64, D>], &[SVector<f64, D>]),
     claimed: impl Fn(usize) -> bool,
+    on_body: &[Option<BodyDrum>],
 ) -> Result<Vec<(WinchModel<D>, WinchState)>, SetupError> {
     let problem = |k: usize, w: &Winch, problem: String| SetupError::Winch {
         index: k,
@@ -557,7 +603,13 @@ pub(crate) fn attach<const D: usize>(
             ));
         }
         let drum_point = r[nodes[0]];
-        check_start(w, &nodes, (r, v), drum_point).map_err(|p| problem(k, w, p))?;
+        let body = on_body.get(k).copied().flatten();
+        let drum_v = if body.is_some() {
+            v[nodes[0]]
+        } else {
+            SVector::zeros()
+        };
+        check_start(w, &nodes, (r, v), (drum_point, drum_v)).map_err(|p| problem(k, w, p))?;
         let last = nodes.len() - 1;
         for (j, &i) in nodes[..last].iter().enumerate() {
             let own = if j == 0 { 1 } else { 2 };
@@ -606,6 +658,7 @@ pub(crate) fn attach<const D: usize>(
             payout: w.payout.clone(),
             drum_motion: w.drum_motion.clone(),
             drum,
+            body,
         };
         out.push((model, state));
     }
@@ -643,16 +696,17 @@ fn check_start<const D: usize>(
     w: &Winch,
     nodes: &[usize],
     (r, v): (&[SVector<f64, D>], &[SVector<f64, D>]),
-    drum_point: SVector<f64, D>,
+    (drum_point, drum_v): (SVector<f64, D>, SVector<f64, D>),
 ) -> Result<(), String> {
     if let Some(j) = (1..=w.reserve).find(|&j| r[nodes[j]] != drum_point) {
         return Err(format!(
             "node {j} of its string is on the drum (within the reserve) but not at the drum point"
         ));
     }
-    if let Some(j) = (0..=w.reserve).find(|&j| v[nodes[j]] != SVector::<f64, D>::zeros()) {
+    if let Some(j) = (0..=w.reserve).find(|&j| v[nodes[j]] != drum_v) {
         return Err(format!(
-            "node {j} of its string is on the drum but does not start at rest"
+            "node {j} of its string is on the drum but does not start with the drum point's velocity {:?} m/s",
+            drum_v.as_slice()
         ));
     }
     let p0 = if w.drum.is_some() {

@@ -255,7 +255,9 @@ fn describe_winches(
     node: impl Fn(usize) -> String,
 ) {
     list(out, winches, "winches", |w| {
-        let drum = if w.drum_position.is_empty() {
+        let drum = if let Some((body, point)) = &w.on_body {
+            format!("a drum on body {body}, at {point:?} m in its axes")
+        } else if w.drum_position.is_empty() {
             "a fixed drum".to_string()
         } else {
             let exprs: Vec<String> = w

@@ -110,6 +110,7 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("crane_2d", 2, 3600, 10, 41),
         ("crane_hoisting_2d", 2, 4500, 10, 26),
         ("heave_compensated_winch_2d", 2, 6400, 10, 81),
+        ("crane_vessel_heave_compensation_2d", 2, 6000, 10, 81),
         ("platform_3d", 3, 1500, 10, 50),
         ("net_3d", 3, 1000, 10, 1321),
         ("slack_wire", 2, 2000, 20, 161),

@@ -23,6 +23,7 @@ mod riser;
 mod statics;
 mod water;
 mod winch;
+mod winch_body;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -56,6 +56,10 @@ pub struct WinchComponent {
     pub external: bool,
     /// The drum's position expressions [m], empty for a drum that stays.
     pub drum_position: Vec<String>,
+    /// A drum on a rigid body: the body's name and the drum point in body axes [m] (the
+    /// string's first path node `"BODY.POINT"`); the drum moves with the body.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub on_body: Option<(String, Vec<f64>)>,
     /// A drum with dynamics, described (`None`: the payout is prescribed).
     pub drum: Option<String>,
 }

@@ -661,6 +661,7 @@ impl ScenarioFile {
                 .fold(problem, |p, h| p.with_point_hydro(h));
         }
         let starts = bodies::with_bodies(&mut problem, drafts);
+        Self::report_body_drums(&problem, &winch_strings, &mut components.winches);
         let initial = self.initial_conditions((&problem).into(), layout == Layout::Network)?;
         if initial.changes_base() {
             // Every expression is evaluated at every node now, on the geometry's shape; with

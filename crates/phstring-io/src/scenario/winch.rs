@@ -203,6 +203,7 @@ impl ScenarioFile {
                     .map_or(String::new(), |e| e.text().to_string()),
                 external: external(spec),
                 drum_position: drum.iter().map(|e| e.text().to_string()).collect(),
+                on_body: None,
                 drum: dynamics.as_ref().map(|(_, text)| text.clone()),
             });
             let drum_motion: Option<phstring::DrumFn> = (!drum.is_empty()).then(|| {
@@ -228,6 +229,26 @@ impl ScenarioFile {
             });
         }
         Ok(network)
+    }
+
+    /// Fills in `report` (in the winches' file order) which winches have their drum on a
+    /// rigid body of `network`: the string's first path node is a body's point.
+    pub(super) fn report_body_drums<const D: usize>(
+        network: &Network<D, Material>,
+        strings: &[WinchString],
+        report: &mut [WinchComponent],
+    ) {
+        for ws in strings {
+            let first = network.groups[ws.group].elements.start;
+            let path_start = network.mesh.elements()[first][0];
+            let Some(entry) = report.get_mut(ws.winch) else {
+                continue;
+            };
+            entry.on_body = network.bodies.iter().find_map(|b| {
+                let a = b.attachments.iter().find(|a| a.node == path_start)?;
+                Some((b.name.clone(), a.point.iter().copied().collect()))
+            });
+        }
     }
 
     /// Winch `k`'s drive: its payout expression (checked 0 at `t = 0`), its drum with

@@ -696,7 +696,7 @@ impl FlatCheckpoint {
             ));
         }
         let fit = self.check_time(sim.params(), t_end)?;
-        sim.check_winch_positions(winches, r, fit.t)?;
+        sim.check_winch_positions(winches, r, &unflat_bodies(bodies), fit.t)?;
         fit.check_count("sim.rejected", *rejected, fit.max_rejected)?;
         fit.check_count("sim.easy_streak", *easy_streak, *steps)?;
         fit.check_count("sim.total_newton", *total_newton, fit.max_iterations)?;

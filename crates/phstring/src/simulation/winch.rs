@@ -100,13 +100,15 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
 
     /// Checks that each winch's drum node in the flat positions `r` (`D` numbers per node,
     /// lengths checked by the caller) sits where its path of `states` puts it at time `t`
-    /// [s] (eq. (23.1)): a step leaves it there up to rounding, so a checkpoint whose mesh is
-    /// not what the winches produced (another scenario's, or an edited one) is refused with
-    /// the distance [m] (tolerance `1e-9 (1 m + |X| + L)`, `X` the path's point).
+    /// [s] with the rigid bodies in `bodies` (eq. (23.1)): a step leaves it there up to
+    /// rounding, so a checkpoint whose mesh is not what the winches produced (another
+    /// scenario's, or an edited one) is refused with the distance [m] (tolerance
+    /// `1e-9 (1 m + |X| + L)`, `X` the path's point).
     pub(crate) fn check_winch_positions(
         &self,
         states: &[WinchState],
         r: &[f64],
+        bodies: &[crate::body::BodyState],
         t: f64,
     ) -> Result<(), String> {
         for (k, (m, ws)) in self.sys.winches.iter().zip(states).enumerate() {
@@ -114,7 +116,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let Some(at) = r.get(D * node..D * (node + 1)) else {
                 continue;
             };
-            let on_path = m.path_at(ws, t, (ws.payout, 0.0)).0;
+            if m.body.is_some_and(|(b, _, _)| b >= bodies.len()) {
+                continue;
+            }
+            let on_path = m.path_at(ws, &m.frame(t, bodies), (ws.payout, 0.0)).0;
             let off = (Vector::<D>::from_column_slice(at) - on_path).norm();
             let tol = 1e-9 * (1.0 + on_path.norm() + m.l);
             // A NaN distance is refused too.
@@ -255,7 +260,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     "its motor force at t = {t_mid} s is {force} N (not finite)"
                 )));
             }
-            let base = m.path_at(ws, at.t_next, (ws.payout, 0.0)).0 - r[a];
+            let base = m.path_at(ws, &m.frame(at.t_next, &[]), (ws.payout, 0.0)).0 - r[a];
             let (axis, stretch) = (m.axis(ws), ws.stretch);
             let step = DrumStep {
                 winch: k,
@@ -329,6 +334,17 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// that each winch can follow its payout there; the drums' data for the step.
     pub(super) fn winch_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
         for (m, ws) in self.sys.winches.iter().zip(&self.run.winches) {
+            if let Some((b, k, _)) = m.body {
+                // A drum on a body: the body moves its drum node with the drum point, and the
+                // payout slides it along its path (docs/method.md §23).
+                let payout = (m.payout)(at.t_next);
+                if let Err(limit) = m.check(ws, payout) {
+                    return Err(at.winch_error(&m.name, limit.to_string()));
+                }
+                let slide = m.axis(ws) * (payout - ws.payout);
+                self.sys.bodies[b].offset[k] = crate::body::embed(&slide);
+                continue;
+            }
             if m.drum_motion.is_some() {
                 // The nodes parked on a moving drum go with its drum point (they carry no
                 // mass, weight or element: held, their reactions and so their work are 0).
@@ -345,7 +361,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 return Err(at.winch_error(&m.name, limit.to_string()));
             }
             let a = m.drum_node(ws);
-            self.x[a] = m.path(ws, at.t_next).0 - self.run.state.r[a];
+            self.x[a] = m.path(ws, at.t_next, &[]).0 - self.run.state.r[a];
         }
         self.drum_prescribe(at)
     }
@@ -371,7 +387,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
             *port = (a, u, y);
             // A drum's supply is its own ([`crate::winch_step::shares`], below).
-            if m.drum.is_none() {
+            if let Some((b, k, _)) = m.body {
+                // On a body the reaction's work over the drum point's motion is the body's;
+                // the winch's is its work over the slide (docs/method.md §23).
+                let slide = &self.sys.bodies[b].offset[k];
+                *w = crate::body::embed(&self.reaction[a]).dot(slide);
+                total += *w;
+            } else if m.drum.is_none() {
                 *w = self.reaction[a].dot(&self.x[a]);
                 total += *w;
             }
@@ -415,8 +437,18 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 Some(_) => (self.drum_next[k].payout, ws.speed),
             };
             let a = m.drum_node(ws);
-            self.run.state.v[a] = m.path_at(ws, t, (payout, rate)).1;
+            let frame = m.frame(t, &self.run.state.bodies);
+            self.run.state.v[a] = m.path_at(ws, &frame, (payout, rate)).1;
             ws.payout = payout;
+            if let Some((b, k, _)) = m.body {
+                // The slide is done; the nodes on the drum (no mass, weight or element) go
+                // with the drum point.
+                self.sys.bodies[b].offset[k] = crate::body::Vec3::zeros();
+                for &i in &m.nodes[..ws.drum] {
+                    self.run.state.r[i] = frame.point;
+                    self.run.state.v[i] = Vector::<D>::zeros();
+                }
+            }
             let after = self.with_drums(self.sys.energies(&self.run.state), false);
             let de = after.hamiltonian() - self.energies.hamiltonian();
             self.energies = after;
@@ -443,8 +475,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let (payout, rate) = (ws.payout, m.payout_at(ws, t).1);
             let drum = ws.drum;
             let state = &mut self.run.state;
+            let frame = m.frame(t, &state.bodies);
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
-            m.cut(ws, (t, payout, rate), parts);
+            m.cut(ws, (&frame, payout, rate), parts);
             if ws.drum != drum {
                 self.sys.place_winches(&self.run.winches);
                 let after = self.with_drums(self.sys.energies(&self.run.state), false);

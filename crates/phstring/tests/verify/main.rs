@@ -24,6 +24,7 @@ mod solvers;
 mod statics;
 mod water;
 mod winch;
+mod winch_body;
 mod winch_checks;
 mod winch_dg4;
 mod winch_drum;
