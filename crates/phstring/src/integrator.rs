@@ -597,7 +597,14 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
             // Winch drums: their rows take the drum nodes' rows likewise.
             if !self.drums.is_empty() {
                 let j = jac.as_deref_mut();
-                s2 += crate::winch_step::terms(sys, self.drums, self.h, step.slots, res, j);
+                s2 += crate::winch_step::terms(
+                    sys,
+                    self.drums,
+                    (self.h, step.states),
+                    step.slots,
+                    res,
+                    j,
+                );
             }
             if MEASURE {
                 scale2 += s2;

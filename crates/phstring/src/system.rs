@@ -853,8 +853,8 @@ fn attach_winches<const D: usize, M>(
 /// body"): per winch, `(body, attachment, drum point in body axes)` where its string's first
 /// node is fixed to a body. Each such attachment is moved to the drum node (the first node
 /// off the drum), which starts at the same point, and the nodes on the drum are given the
-/// drum point's velocity. A drum on a body takes no drum motion of its own and no dynamics
-/// (not covered yet), and either is refused naming the winch.
+/// drum point's velocity. A drum on a body takes no drum motion of its own (refused naming
+/// the winch).
 fn body_drums<const D: usize, M>(
     winches: &[crate::winch::Winch],
     mesh: &Mesh,
@@ -889,11 +889,6 @@ fn body_drums<const D: usize, M>(
         if w.drum_motion.is_some() {
             return Err(problem(
                 "its drum is a point of a rigid body and moves with the body: give it no drum motion of its own",
-            ));
-        }
-        if w.drum.is_some() {
-            return Err(problem(
-                "a drum with dynamics (inertia, motor, brake) on a rigid body is not covered yet: drive a drum on a body by its payout",
             ));
         }
         let drum_node = mesh.elements()[range.start + w.reserve][0];

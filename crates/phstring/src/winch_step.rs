@@ -6,6 +6,8 @@
 //! A drum's slot holds `(Δp, 0, …)`: the components after the first are placeholders whose
 //! rows are `u = 0`.
 
+use crate::body::{BodyState, Mat3, Turn, Vec3, embed};
+use crate::body_step::{rotation_slot, unknowns};
 use crate::linsolve::{Block, BlockJacobian};
 use crate::system::{PhSystem, Vector};
 use crate::winch::WinchDrum;
@@ -22,8 +24,12 @@ pub(crate) struct DrumStep<const D: usize> {
     pub other: usize,
     /// The drum element.
     pub element: usize,
-    /// The drum node's increment at `Δp = 0` [m] (the drum's own motion).
+    /// The drum node's increment at `Δp = 0` [m] (the drum's own motion; 0 for a drum on a
+    /// rigid body, whose motion the body's slots give).
     pub base: Vector<D>,
+    /// A drum on a rigid body: the body and the drum point in body axes [m] (docs/method.md
+    /// §23.7); the drum node is the body's attached node, its slide `λ t̂ Δp` added.
+    pub body: Option<(usize, Vec3)>,
     /// The drum node's increment per metre paid out, `λ t̂` [m/m].
     pub axis: Vector<D>,
     /// The stretch `λ` of the path: the rope passes over the drum at `λ ṗ`.
@@ -67,14 +73,19 @@ fn resistance<const D: usize, M>(sys: &PhSystem<D, M>, d: &DrumStep<D>, u: f64) 
     (d.stretch * f, d.stretch * d.stretch * df)
 }
 
-/// Writes the drum nodes' increments `base + axis Δp` into `x` from the slots `slots`.
+/// Writes the drum nodes' increments `base + axis Δp` into `x` from the slots `slots` (on a
+/// rigid body, adds the slide `axis Δp` to the body's increment of the node, which `x` has).
 pub(crate) fn fill_drums<const D: usize>(
     drums: &[DrumStep<D>],
     slots: &[Vector<D>],
     x: &mut [Vector<D>],
 ) {
     for d in drums {
-        x[d.node] = d.base + d.axis * slots[d.slot][0];
+        let slide = d.axis * slots[d.slot][0];
+        x[d.node] = match d.body {
+            Some(_) => x[d.node] + slide,
+            None => d.base + slide,
+        };
     }
 }
 
@@ -88,7 +99,7 @@ pub(crate) fn fill_drums<const D: usize>(
 pub(crate) fn terms<const D: usize, M>(
     sys: &PhSystem<D, M>,
     drums: &[DrumStep<D>],
-    h: f64,
+    (h, bodies): (f64, &[BodyState]),
     slots: &[Vector<D>],
     res: &mut [Vector<D>],
     mut jac: Option<&mut BlockJacobian<D>>,
@@ -115,6 +126,16 @@ pub(crate) fn terms<const D: usize, M>(
         own[(0, 0)] =
             d.inertia * 2.0 * inv_h * inv_h + d.axis.dot(&(j.diag[d.node] * d.axis)) + df_r * inv_h;
         j.border.own[d.slot * slots_n + d.slot] = own;
+        if let Some((b, s)) = d.body {
+            let model = &sys.bodies[b];
+            let free_body = model.motion.is_none();
+            body_blocks(
+                d,
+                (b, &s, free_body),
+                (&bodies[b], slots, model.gyration()),
+                j,
+            );
+        }
         let free = sys.free[d.other];
         if !free.iter().any(|&f| f) {
             continue;
@@ -134,6 +155,60 @@ pub(crate) fn terms<const D: usize, M>(
         j.border.links.push((d.other, d.slot, row_blk, col_blk));
     }
     scale2
+}
+
+/// The blocks between the row and slot of drum `d` on rigid body `b` (drum point `s`, body
+/// axes) and the body's rows and slots: the drum node moves with the body's `(Δx, w)` and
+/// slides with `Δp`, so the drum's row depends on the body's slots through the node's
+/// residual `R_d`, `∂R_d/∂(Δx, w) = K_d [I, ∂(moved)/∂w]`, and the body's rows on `Δp`,
+/// `∂R_d/∂Δp = K_d λ t̂` (force row; the torque row, scaled by `1/r_g`, through its arm),
+/// unless its motion is prescribed (`free_body` false: its rows are `δu = 0`).
+fn body_blocks<const D: usize>(
+    d: &DrumStep<D>,
+    (b, s, free_body): (usize, &Vec3, bool),
+    (st, slots, gyration): (&BodyState, &[Vector<D>], f64),
+    j: &mut BlockJacobian<D>,
+) {
+    let n_slots = j.border.slots;
+    let (_, w) = unknowns(slots, b);
+    let turn = Turn::new(&st.orientation, &w);
+    let p = turn.point(s);
+    let k = crate::body_step::embed_block(&j.diag[d.node]);
+    let axis = embed(&d.axis);
+    // The drum's row against the body's slots.
+    let along = k.transpose() * axis;
+    let mut by_dx = Block::<D>::zeros();
+    let mut by_w = Block::<D>::zeros();
+    let along_w = p.dw.transpose() * along;
+    let (dx_row, w_row) = (
+        crate::body::project::<D>(&along),
+        rotation_slot::<D>(&along_w),
+    );
+    for c in 0..D {
+        by_dx[(0, c)] = dx_row[c];
+        by_w[(0, c)] = w_row[c];
+    }
+    j.border.own[d.slot * n_slots + 2 * b] += by_dx;
+    j.border.own[d.slot * n_slots + 2 * b + 1] += by_w;
+    if !free_body {
+        return;
+    }
+    // The body's rows against the drum's slot.
+    let pull = k * axis;
+    let half = Mat3::identity() - crate::body::skew(&w) * 0.5;
+    let turned = half * crate::body::skew(&p.mean) * turn.rot.transpose() * pull / gyration;
+    let (f_col, t_col) = (
+        crate::body::project::<D>(&pull),
+        rotation_slot::<D>(&turned),
+    );
+    let mut f_blk = Block::<D>::zeros();
+    let mut t_blk = Block::<D>::zeros();
+    for r in 0..D {
+        f_blk[(r, 0)] = f_col[r];
+        t_blk[(r, 0)] = t_col[r];
+    }
+    j.border.own[2 * b * n_slots + d.slot] += f_blk;
+    j.border.own[(2 * b + 1) * n_slots + d.slot] += t_blk;
 }
 
 /// The drum's share of a solved step with payout increment `dp` [m] over `h` [s] and the drum

@@ -260,7 +260,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     "its motor force at t = {t_mid} s is {force} N (not finite)"
                 )));
             }
-            let base = m.path_at(ws, &m.frame(at.t_next, &[]), (ws.payout, 0.0)).0 - r[a];
+            // On a body the body's slots move the drum node with the drum point.
+            let base = match m.body {
+                Some(_) => Vector::<D>::zeros(),
+                None => m.path_at(ws, &m.frame(at.t_next, &[]), (ws.payout, 0.0)).0 - r[a],
+            };
             let (axis, stretch) = (m.axis(ws), ws.stretch);
             let step = DrumStep {
                 winch: k,
@@ -269,6 +273,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 other,
                 element: m.drum_element(ws),
                 base,
+                body: m.body.map(|(b, _, s)| (b, s)),
                 axis,
                 stretch,
                 speed: ws.speed,
@@ -334,9 +339,10 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// that each winch can follow its payout there; the drums' data for the step.
     pub(super) fn winch_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
         for (m, ws) in self.sys.winches.iter().zip(&self.run.winches) {
-            if let Some((b, k, _)) = m.body {
+            if let (Some((b, k, _)), None) = (m.body, &m.drum) {
                 // A drum on a body: the body moves its drum node with the drum point, and the
-                // payout slides it along its path (docs/method.md §23).
+                // payout slides it along its path (docs/method.md §23.7); a drum with dynamics
+                // slides it by its own slot.
                 let payout = (m.payout)(at.t_next);
                 if let Err(limit) = m.check(ws, payout) {
                     return Err(at.winch_error(&m.name, limit.to_string()));
