@@ -61,8 +61,9 @@ pub(crate) fn predict<const D: usize>(states: &[BodyState], h: f64, slots: &mut 
 /// energy they supplied [J]. A wrench port's inputs are `wrenches` (force [N], torque [N·m]
 /// per body) plus its feedback law's wrench against `targets` (per body, the law's reference
 /// at the mid time; `None` without a law); a prescribed motion's output is the reaction wrench, formed from the attached
-/// nodes' residuals `reaction` (as the Newton solve left them) and the states `next` the step
-/// ends in (velocities held), with the impulse and the kinetic energy of the hold.
+/// nodes' residuals `reaction` (as the Newton solve left them, with `scratch` for the rows)
+/// and the states `next` the step ends in (velocities held), with the impulse and the
+/// kinetic energy of the hold.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn port_samples<const D: usize, M>(
     sys: &PhSystem<D, M>,
@@ -70,7 +71,7 @@ pub(crate) fn port_samples<const D: usize, M>(
     h: f64,
     slots: &[Vector<D>],
     (wrenches, targets): (&[(Vec3, Vec3)], &[Option<FeedbackTarget>]),
-    reaction: &[Vector<D>],
+    (reaction, scratch): (&[Vector<D>], &mut BodyScratch),
     next: &[BodyState],
     out: &mut [crate::body::BodyPortSample],
 ) -> f64 {
@@ -81,7 +82,8 @@ pub(crate) fn port_samples<const D: usize, M>(
         let (velocity, omega) = (dx / h, turned / h);
         let (force, torque, work) = if model.motion.is_some() {
             let water = sys.water.as_deref();
-            reaction_wrench(model, water, st, h, (&dx, &w), reaction, &next[b])
+            let parts = (reaction, &mut *scratch);
+            reaction_wrench(model, water, st, h, (&dx, &w), parts, &next[b])
         } else {
             // The work F·Δx + τ·R_n w, summed as the step's equations sum it.
             let (mut force, mut torque) = wrenches[b];
@@ -127,16 +129,18 @@ pub(crate) fn feedback_at<const D: usize>(
 /// The step of each of body `model`'s points under `turn`: its attachments in order, then its
 /// centre of buoyancy and its waterplane points where it has them (the rows of [`water_rows`]
 /// follow the attachments' in the same order).
-fn point_steps(model: &crate::body::BodyModel, turn: &Turn) -> Vec<PointStep> {
+fn point_steps<'m>(
+    model: &'m crate::body::BodyModel,
+    turn: &'m Turn,
+) -> impl Iterator<Item = PointStep> + 'm {
     let cb = model.buoyancy.map(|(_, s)| s);
     model
         .attachments
         .iter()
-        .map(|(_, s)| s)
-        .chain(cb.as_ref())
-        .chain(model.waterplane.iter().map(|(_, s, _)| s))
-        .map(|s| turn.point(s))
-        .collect()
+        .map(|(_, s)| *s)
+        .chain(cb)
+        .chain(model.waterplane.iter().map(|(_, s, _)| *s))
+        .map(|s| turn.point(&s))
 }
 
 /// Appends to `rows` the water's point rows of a body over a step from `st` with increment
@@ -189,21 +193,26 @@ fn reaction_wrench<const D: usize>(
     st: &BodyState,
     h: f64,
     (dx, w): (&Vec3, &Vec3),
-    reaction: &[Vector<D>],
+    (reaction, scratch): (&[Vector<D>], &mut BodyScratch),
     held: &BodyState,
 ) -> (Vec3, Vec3, f64) {
     let turn = Turn::new(&st.orientation, w);
-    let points = point_steps(model, &turn);
-    let mut rows: Vec<NodeRow> = model
-        .attachments
-        .iter()
-        .map(|&(node, _)| NodeRow {
-            res: embed(&reaction[node]),
-            diag: Mat3::zeros(),
-        })
-        .collect();
-    water_rows(model, st, dx, &points, &mut rows);
-    let mut dw = vec![Mat3::zeros(); rows.len()];
+    let BodyScratch {
+        rows,
+        dw_rows,
+        reaction_points: points,
+        ..
+    } = scratch;
+    points.clear();
+    points.extend(point_steps(model, &turn));
+    rows.clear();
+    rows.extend(model.attachments.iter().map(|&(node, _)| NodeRow {
+        res: embed(&reaction[node]),
+        diag: Mat3::zeros(),
+    }));
+    water_rows(model, st, dx, points, rows);
+    dw_rows.clear();
+    dw_rows.resize(rows.len(), Mat3::zeros());
     let zero = Vec3::zeros();
     // The drag acts as on a free body (its work is in the water's shares), so the reaction
     // is the motion's own force.
@@ -213,10 +222,10 @@ fn reaction_wrench<const D: usize>(
         h,
         (dx, w),
         &turn,
-        &rows,
-        &points,
+        rows,
+        points,
         (&applied, &zero),
-        &mut dw,
+        dw_rows,
     );
     // The rows with the reaction (F, τ) added are zero: F = force row, τ̃ = (I − ½ŵ)⁻¹ torque.
     let force = out.force;
@@ -428,6 +437,20 @@ pub(crate) struct BodyStep<'a, const D: usize> {
     pub wrenches: &'a [(Vec3, Vec3)],
     /// Per body, its feedback law's reference at the mid time (`None`, or empty: no law).
     pub targets: &'a [Option<FeedbackTarget>],
+    /// Buffers the rows reuse from one evaluation to the next.
+    pub scratch: &'a mut BodyScratch,
+}
+
+/// The buffers of the bodies' rows, kept between evaluations so that a step does not
+/// allocate: per body its turn and point steps, one body's attachment rows and torque
+/// derivatives at a time, and the point steps of a prescribed motion's reaction.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct BodyScratch {
+    turns: Vec<Turn>,
+    points: Vec<Vec<PointStep>>,
+    rows: Vec<NodeRow>,
+    dw_rows: Vec<Mat3>,
+    reaction_points: Vec<PointStep>,
 }
 
 impl<const D: usize> BodyStep<'_, D> {
@@ -435,25 +458,31 @@ impl<const D: usize> BodyStep<'_, D> {
     /// attached nodes' rows and columns are masked); returns the squares of their force terms
     /// (force scale).
     pub(crate) fn terms<M>(
-        &self,
+        &mut self,
         sys: &PhSystem<D, M>,
         res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
     ) -> f64 {
         let n = sys.mesh.n_nodes();
-        let turns: Vec<Turn> = sys
-            .bodies
-            .iter()
-            .zip(self.states)
-            .enumerate()
-            .map(|(b, (_, st))| Turn::new(&st.orientation, &unknowns(self.slots, b).1))
-            .collect();
-        let points: Vec<Vec<PointStep>> = sys
-            .bodies
-            .iter()
-            .zip(&turns)
-            .map(|(m, t)| point_steps(m, t))
-            .collect();
+        let BodyScratch {
+            turns,
+            points,
+            rows,
+            dw_rows,
+            ..
+        } = &mut *self.scratch;
+        turns.clear();
+        turns.extend(
+            self.states
+                .iter()
+                .enumerate()
+                .map(|(b, st)| Turn::new(&st.orientation, &unknowns(self.slots, b).1)),
+        );
+        points.resize_with(sys.bodies.len(), Vec::new);
+        for ((m, t), p) in sys.bodies.iter().zip(turns.iter()).zip(points.iter_mut()) {
+            p.clear();
+            p.extend(point_steps(m, t));
+        }
         let mut scale2 = 0.0;
         for (b, (model, st)) in sys.bodies.iter().zip(self.states).enumerate() {
             if model.motion.is_some() {
@@ -469,18 +498,18 @@ impl<const D: usize> BodyStep<'_, D> {
                 continue;
             }
             let (dx, w) = unknowns(self.slots, b);
-            let mut rows: Vec<NodeRow> = model
-                .attachments
-                .iter()
-                .map(|&(node, _)| NodeRow {
+            rows.clear();
+            rows.extend(model.attachments.iter().map(|&(node, _)| {
+                NodeRow {
                     res: embed(&res[node]),
                     diag: jac
                         .as_deref()
                         .map_or(Mat3::zeros(), |j| embed_block(&j.diag[node])),
-                })
-                .collect();
-            water_rows(model, st, &dx, &points[b], &mut rows);
-            let mut dw_rows = vec![Mat3::zeros(); rows.len()];
+                }
+            }));
+            water_rows(model, st, &dx, &points[b], rows);
+            dw_rows.clear();
+            dw_rows.resize(rows.len(), Mat3::zeros());
             let (mut f_port, mut torque) = self.wrenches.get(b).copied().unwrap_or_default();
             let fb = feedback_at::<D>(model, self.targets, b, st, self.h, (&dx, &w));
             if let Some(fb) = &fb {
@@ -495,10 +524,10 @@ impl<const D: usize> BodyStep<'_, D> {
                 self.h,
                 (&dx, &w),
                 &turns[b],
-                &rows,
+                rows,
                 &points[b],
                 applied,
-                &mut dw_rows,
+                dw_rows,
             );
             out.jac[0][0] -= d_drag;
             if let Some(fb) = &fb {
@@ -535,7 +564,7 @@ impl<const D: usize> BodyStep<'_, D> {
             let Some(j) = jac.as_deref_mut() else {
                 continue;
             };
-            add_body_blocks(sys, b, &out.jac, (&points, &dw_rows, inv_rg), j);
+            add_body_blocks(sys, b, &out.jac, (points, dw_rows, inv_rg), j);
         }
         scale2
     }

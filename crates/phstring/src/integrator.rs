@@ -226,6 +226,8 @@ pub(crate) struct StepEquations<'a, const D: usize, M> {
     pub drums: &'a [crate::winch_step::DrumStep<D>],
     /// With bodies: the nodes' increments with the attached nodes' filled in (workspace).
     pub(crate) nodes_x: Vec<Vector<D>>,
+    /// With bodies: the buffers of their rows (workspace).
+    pub(crate) body_scratch: crate::body_step::BodyScratch,
     /// What the water did over the step at the increment of the last evaluation when that
     /// was a full one (`None` after a partial or failed one): the Newton solve ends on an
     /// evaluation at its result, so the step's [`Self::water_work`] is at hand.
@@ -264,6 +266,7 @@ impl<'a, const D: usize, M> StepEquations<'a, D, M> {
             targets: &[],
             drums: &[],
             nodes_x: Vec::new(),
+            body_scratch: Default::default(),
             work: None,
         }
     }
@@ -328,19 +331,22 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         xt.extend_from_slice(&x[..n]);
         crate::body_step::fill_attachments(self.sys, self.bodies, &x[n..], &mut xt);
         crate::winch_step::fill_drums(self.drums, &x[n..], &mut xt);
-        let step = crate::body_step::BodyStep {
+        let mut scratch = std::mem::take(&mut self.body_scratch);
+        let mut step = crate::body_step::BodyStep {
             states: self.bodies,
             h: self.h,
             slots: &x[n..],
             wrenches: self.wrenches,
             targets: self.targets,
+            scratch: &mut scratch,
         };
         let out = if self.measure {
-            self.evaluate_range::<true>(&xt, res, jac, 0..n, Some(&step))
+            self.evaluate_range::<true>(&xt, res, jac, 0..n, Some(&mut step))
         } else {
-            self.evaluate_range::<false>(&xt, res, jac, 0..n, Some(&step))
+            self.evaluate_range::<false>(&xt, res, jac, 0..n, Some(&mut step))
         };
         self.nodes_x = xt;
+        self.body_scratch = scratch;
         out
     }
 }
@@ -506,7 +512,7 @@ impl<const D: usize, M: StoredEnergy> StepEquations<'_, D, M> {
         res: &mut [Vector<D>],
         mut jac: Option<&mut BlockJacobian<D>>,
         nodes: std::ops::Range<usize>,
-        bodies: Option<&crate::body_step::BodyStep<'_, D>>,
+        bodies: Option<&mut crate::body_step::BodyStep<'_, D>>,
     ) -> Result<(), StrainError> {
         let sys = self.sys;
         let n_el = sys.mesh.n_elements();
@@ -1085,6 +1091,7 @@ mod tests {
             targets: &[],
             drums: &[],
             nodes_x: Vec::new(),
+            body_scratch: Default::default(),
             work: None,
         };
         let n = x.len();

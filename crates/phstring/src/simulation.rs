@@ -250,6 +250,8 @@ pub struct Simulation<const D: usize, M> {
     /// The nodes' increments with the bodies' attached nodes and the drum nodes filled in
     /// from their slots: the step equations' work vector, kept between steps.
     nodes_x: Vec<Vector<D>>,
+    /// The buffers of the bodies' rows, kept between steps (no allocation in a step).
+    body_scratch: crate::body_step::BodyScratch,
     /// Per winch with a drum (else unused): its payout [m] and payout speed [m/s] at the end
     /// of the current step, the energy its damping and brake dissipated in it [J] and the
     /// energy its motor supplied in it [J].
@@ -546,6 +548,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             winch_port: vec![(0, [0.0; 3], [0.0; 3]); winch_start.len()],
             drum_steps: Vec::with_capacity(n_drums),
             nodes_x: Vec::new(),
+            body_scratch: Default::default(),
             drum_next: vec![Default::default(); winch_start.len()],
             sys,
             params,
@@ -1576,6 +1579,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         eqs.targets = &self.body_targets;
         eqs.drums = &self.drum_steps;
         eqs.nodes_x = std::mem::take(&mut self.nodes_x);
+        eqs.body_scratch = std::mem::take(&mut self.body_scratch);
         let result = newton::solve(
             &mut eqs,
             &mut self.x,
@@ -1605,6 +1609,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             WaterWork::default()
         };
         self.nodes_x = std::mem::take(&mut eqs.nodes_x);
+        self.body_scratch = std::mem::take(&mut eqs.body_scratch);
         let stats = result.map_err(|e| self.newton_failure(e, at))?;
         Ok((stats, dissipated, water))
     }
@@ -1950,7 +1955,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 h,
                 &self.x[n..],
                 (&self.body_wrenches, &self.body_targets),
-                &self.reaction,
+                (&self.reaction, &mut self.body_scratch),
                 &self.bodies_next,
                 &mut self.body_ports,
             )
