@@ -8,15 +8,18 @@
 //! factor), and the median time of a step that ends with a cut (an element comes off the
 //! drum), of the step after it and of the other steps (over the whole run, 510 elements
 //! off the drum at the median), and of the other steps of the last 2 % of the run (about
-//! 1000 elements off the drum). Each step size runs twice: with the payout prescribed, and
+//! 1000 elements off the drum). Each step size runs three times: with the payout prescribed;
 //! with a drum with dynamics (docs/method.md §23.6) whose tension controller (damping 1e5
 //! N·s/m, no inertia) follows the same payout speed through its target tension, the static
 //! weight less `d` times the speed (its payout is a Newton unknown, solved with the bordered
-//! solve); the drum's payout ends within 1 % of 1000 m.
+//! solve), the drum's payout ending within 1 % of 1000 m; and with the drum, its payout
+//! prescribed, on a 50 t vessel (a rigid body, docs/method.md §23.7) that heaves
+//! 0.5 m and rolls 1° from rest at an 8 s period, the drum point 2 m above its centre.
 
+use nalgebra::{UnitQuaternion, Vector3};
 use phstring::{
-    Boundary, MassMatrix, Material, NetworkBuilder, PointMass, Simulation, State, StepControl,
-    StepParams, StringSpec, Vector, Winch, WinchDrum,
+    Attachment, BodyMotion, BodyState, Boundary, MassMatrix, Material, NetworkBuilder, PointMass,
+    RigidBody, Simulation, State, StepControl, StepParams, StringSpec, Vector, Winch, WinchDrum,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -50,9 +53,41 @@ fn speed(t: f64) -> f64 {
 /// The tension controller's damping [N·s/m].
 const DAMPING: f64 = 1.0e5;
 
-/// The lowering run with step `h` [s], with the payout prescribed or followed by a
-/// drum's tension controller (`with_drum`): the simulation and the time the payout is done [s].
-fn setup(h: f64, with_drum: bool) -> (Simulation<2, Material>, f64) {
+/// How the winch of a run is driven and where it sits.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// The payout prescribed, the drum fixed.
+    Prescribed,
+    /// A drum's tension controller.
+    Drum,
+    /// The payout prescribed, the drum on a heaving, rolling vessel.
+    Vessel,
+}
+
+/// The vessel's pose at `t` [s]: heave `0.5 (1 − cos ωt)` m and roll `1° (1 − cos ωt)`,
+/// `ω = 2π/8 s⁻¹`, its centre 2 m below the drum point.
+fn vessel_pose(t: f64) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    let c = 1.0 - (std::f64::consts::TAU / 8.0 * t).cos();
+    (
+        Vector3::new(0.0, -2.0 + 0.5 * c, 0.0),
+        UnitQuaternion::from_euler_angles(0.0, 0.0, 1f64.to_radians() * c),
+    )
+}
+
+/// The vessel's velocity and angular velocity at `t` [s].
+fn vessel_twist(t: f64) -> (Vector3<f64>, Vector3<f64>) {
+    let w = std::f64::consts::TAU / 8.0;
+    let s = w * (w * t).sin();
+    (
+        Vector3::new(0.0, 0.5 * s, 0.0),
+        Vector3::new(0.0, 0.0, 1f64.to_radians() * s),
+    )
+}
+
+/// The lowering run with step `h` [s] of `kind`: the simulation and the time the payout is
+/// done [s].
+fn setup(h: f64, kind: Kind) -> (Simulation<2, Material>, f64) {
+    let with_drum = kind == Kind::Drum;
     let a = START as f64;
     // The static shape of the hanging rope below the drum, at unstretched distance `s`.
     let hanging = |s: f64| -(s + G * ((PAYLOAD + RHO_A * a) * s - 0.5 * RHO_A * s * s) / EA);
@@ -82,6 +117,27 @@ fn setup(h: f64, with_drum: bool) -> (Simulation<2, Material>, f64) {
         r[i] = Vector::<2>::new(0.0, hanging(j as f64));
     }
     net.initial = State::at_rest(&net.mesh, r);
+    if kind == Kind::Vessel {
+        let (x0, q0) = vessel_pose(0.0);
+        net = net.with_body(RigidBody {
+            name: "vessel".into(),
+            mass: 5e4,
+            inertia: nalgebra::Matrix3::from_diagonal_element(4e6),
+            weight: Vector::<2>::new(0.0, -5e4 * G),
+            attachments: vec![Attachment {
+                node: drum,
+                point: Vector::<2>::new(0.0, 2.0),
+            }],
+            initial: BodyState::new(x0, Vector3::zeros(), q0, Vector3::zeros()),
+            wrench: None,
+            hydro: None,
+            motion: Some(BodyMotion {
+                pose: Arc::new(vessel_pose),
+                twist: Arc::new(vessel_twist),
+            }),
+            feedback: None,
+        });
+    }
     net = net.with_winch(Winch {
         name: "lowering".into(),
         group: g,
@@ -113,8 +169,9 @@ fn main() {
     println!(
         "h [s]   payout      steps   wall [s]  real-time factor  cuts  Newton it/step  ms per step: cut  after  other (at 1000 elements: other)"
     );
-    for (h, drum) in [(0.05, false), (0.05, true), (0.02, false), (0.02, true)] {
-        let (mut sim, end) = setup(h, drum);
+    let kinds = [Kind::Prescribed, Kind::Drum, Kind::Vessel];
+    for (h, kind) in [0.05, 0.02].into_iter().flat_map(|h| kinds.map(|k| (h, k))) {
+        let (mut sim, end) = setup(h, kind);
         let steps = (end / h).round() as usize;
         let mut times = Vec::with_capacity(steps);
         let mut drum_nodes = Vec::with_capacity(steps);
@@ -128,7 +185,11 @@ fn main() {
         }
         let wall = t0.elapsed().as_secs_f64();
         let w = sim.winch_samples()[0];
-        let off = if drum { 1e-2 * PAYOUT } else { 1e-9 };
+        let off = if kind == Kind::Drum {
+            1e-2 * PAYOUT
+        } else {
+            1e-9
+        };
         assert!((w.payout - PAYOUT).abs() < off, "payout {}", w.payout);
         // Step k ends with a cut when the drum node of step k + 1 is another node.
         let mut cut = vec![false; steps];
@@ -151,7 +212,11 @@ fn main() {
         let (t_other, _) = median(&|k| !(cut[k] || after(k)));
         let last = steps / 50;
         let (t_late, _) = median(&|k| k + last >= steps && !(cut[k] || after(k)));
-        let kind = if drum { "drum" } else { "prescribed" };
+        let kind = match kind {
+            Kind::Prescribed => "prescribed",
+            Kind::Drum => "drum",
+            Kind::Vessel => "on vessel",
+        };
         println!(
             "{h:<6}  {kind:<10}  {steps:>6}  {wall:>8.2}  {:>16.0}  {n_cut:>4}  {:>14.2}  {:>16.3}  {:>5.3}  {:>5.3}  ({:.3})",
             end / wall,
