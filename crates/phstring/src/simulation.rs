@@ -2065,3 +2065,85 @@ impl Retries {
         report.rejected_local_node_iterations = self.local;
     }
 }
+
+/// Test support shared by the simulation's test modules.
+#[cfg(test)]
+mod test_support {
+    use super::{Simulation, StepAt, StepControl, StepParams};
+    use crate::Material;
+    use crate::integrator::StepEquations;
+    use crate::linsolve::BlockJacobian;
+    use crate::newton::NewtonProblem;
+    use crate::system::Vector;
+
+    /// Fixed steps of `h` [s], the defaults otherwise.
+    pub(crate) fn fixed_steps(h: f64) -> StepParams {
+        StepParams {
+            h,
+            control: StepControl {
+                adaptive: false,
+                ..Default::default()
+            },
+            ..StepParams::default()
+        }
+    }
+
+    impl<const D: usize> Simulation<D, Material> {
+        /// Prepares the next step of `h` [s] (loads, predictor, drums) and returns its
+        /// Jacobian at the increment `x` along the direction `dir`, and the central
+        /// difference of its residual along `dir` with step `eps`, per row of the Newton
+        /// vector.
+        pub(crate) fn jacobian_along(
+            &mut self,
+            h: f64,
+            (x, dir): (&[Vector<D>], &[Vector<D>]),
+            eps: f64,
+        ) -> (Vec<Vector<D>>, Vec<Vector<D>>) {
+            let n = self.sys.mesh.n_nodes();
+            let t = self.time();
+            let mut reaction = vec![Vector::<D>::zeros(); n];
+            let mut eqs = StepEquations::new(
+                &self.sys,
+                self.params.scheme,
+                h,
+                &self.run.state,
+                t + 0.5 * h,
+                &self.f_ext,
+                &mut reaction,
+            );
+            eqs.drums = &self.drum_steps;
+            let mut jac = BlockJacobian::with_slots(&self.sys.mesh, x.len() - n);
+            let mut res = vec![Vector::<D>::zeros(); x.len()];
+            eqs.evaluate(x, &mut res, Some(&mut jac)).unwrap();
+            let mut jd = vec![Vector::<D>::zeros(); x.len()];
+            jac.mul(&self.sys.mesh, dir, &mut jd);
+            let mut shifted = |s: f64| {
+                let xs: Vec<_> = x.iter().zip(dir).map(|(a, d)| a + d * s).collect();
+                let mut r = vec![Vector::<D>::zeros(); x.len()];
+                eqs.evaluate(&xs, &mut r, None).unwrap();
+                r
+            };
+            let (plus, minus) = (shifted(eps), shifted(-eps));
+            let fd = plus
+                .iter()
+                .zip(&minus)
+                .map(|(p, m)| (p - m) / (2.0 * eps))
+                .collect();
+            (jd, fd)
+        }
+
+        /// Brings the simulation to the start of its next step of `h` [s]: its loads
+        /// applied, the increment predicted (drum nodes, attached nodes, drums' data).
+        pub(crate) fn prepare_step(&mut self, h: f64) {
+            let t = self.time();
+            let at = StepAt {
+                step: self.run.steps + 1,
+                t,
+                h,
+                t_next: t + h,
+            };
+            self.apply_loads(&at).unwrap();
+            self.predict(&at).unwrap();
+        }
+    }
+}

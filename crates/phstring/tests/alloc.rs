@@ -491,113 +491,105 @@ fn drum_step_loop_does_not_allocate() {
     assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
 }
 
-/// A winch whose drum is on a rigid body steps without allocating, the cuts (which move the
-/// body's attachment to the new drum node and relink it) included: the hoist of
-/// [`winch_hoist`] with its drum on a 50 t vessel that heaves 0.5 m and rolls 2° from rest,
-/// 3 m paid out and hauled back in (smooth moves of 3 s each).
-#[test]
-fn body_drum_step_loop_does_not_allocate() {
-    use nalgebra::{UnitQuaternion, Vector3};
-    use phstring::{Attachment, BodyMotion, BodyState, RigidBody, Vector};
+/// The hoist of [`winch_hoist`], 3 m paid out and hauled back in (smooth moves of 3 s each),
+/// with a rigid body of `mass` [kg] (isotropic inertia `inertia` [kg·m²], in gravity) holding
+/// node `node` at its point `point` [m], starting in `initial`, moving as `motion` or free.
+fn hoist_with_body(
+    node: usize,
+    (mass, inertia): (f64, f64),
+    point: phstring::Vector<2>,
+    initial: phstring::BodyState,
+    motion: Option<phstring::BodyMotion>,
+) -> phstring::Network<2, phstring::Material> {
+    use phstring::{Attachment, RigidBody, Vector};
     let smooth = |x: f64| {
         let x = x.clamp(0.0, 1.0);
         x * x * (3.0 - 2.0 * x)
     };
-    let net = winch_hoist(
-        20,
-        10,
-        move |t| 3.0 * (smooth(t / 3.0) - smooth(t / 3.0 - 1.0)),
-        None,
-    );
-    let group = net.groups.len() - 1;
-    let w = std::f64::consts::TAU / 8.0;
-    let pose = move |t: f64| {
-        let heave = 0.5 * (1.0 - (w * t).cos());
-        let roll = 2f64.to_radians() * (1.0 - (w * t).cos());
-        (
-            Vector3::new(0.0, -2.0 + heave, 0.0),
-            UnitQuaternion::from_euler_angles(0.0, 0.0, roll),
-        )
-    };
-    let twist = move |t: f64| {
-        let s = (w * t).sin();
-        (
-            Vector3::new(0.0, 0.5 * w * s, 0.0),
-            Vector3::new(0.0, 0.0, 2f64.to_radians() * w * s),
-        )
-    };
-    let (x0, q0) = pose(0.0);
-    let net = net.with_body(RigidBody {
-        name: "vessel".into(),
-        mass: 5e4,
-        inertia: nalgebra::Matrix3::from_diagonal_element(4e6),
-        weight: Vector::<2>::new(0.0, -5e4 * 9.81),
-        attachments: vec![Attachment {
-            node: 0,
-            point: Vector::<2>::new(0.0, 2.0),
-        }],
-        initial: BodyState::new(x0, Vector3::zeros(), q0, Vector3::zeros()),
+    let out_and_in = move |t: f64| 3.0 * (smooth(t / 3.0) - smooth(t / 3.0 - 1.0));
+    winch_hoist(20, 10, out_and_in, None).with_body(RigidBody {
+        name: "body".into(),
+        mass,
+        inertia: nalgebra::Matrix3::from_diagonal_element(inertia),
+        weight: Vector::<2>::new(0.0, -mass * 9.81),
+        attachments: vec![Attachment { node, point }],
+        initial,
         wrench: None,
         hydro: None,
-        motion: Some(BodyMotion {
-            pose: std::sync::Arc::new(pose),
-            twist: std::sync::Arc::new(twist),
-        }),
+        motion,
         feedback: None,
-    });
-    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 599, at_10_ms(), "body drum");
+    })
+}
+
+/// Steps the winch run `net` (its winch's string the last group) for 600 steps of 10 ms and
+/// asserts at least 4 cuts and no allocation, cut steps included.
+fn assert_winch_run_does_not_allocate(net: phstring::Network<2, phstring::Material>, label: &str) {
+    let group = net.groups.len() - 1;
+    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 599, at_10_ms(), label);
     assert!(cuts >= 4, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");
     assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
 }
 
+/// A winch whose drum is on a rigid body steps without allocating, the cuts (which move the
+/// body's attachment to the new drum node and relink it) included: the hoist of
+/// [`hoist_with_body`] with its drum (node 0) on a 50 t vessel that heaves 0.5 m and rolls 2°
+/// from rest.
+#[test]
+fn body_drum_step_loop_does_not_allocate() {
+    use nalgebra::{UnitQuaternion, Vector3};
+    use phstring::{BodyMotion, BodyState, Vector};
+    let w = std::f64::consts::TAU / 8.0;
+    let pose = move |t: f64| {
+        let c = 1.0 - (w * t).cos();
+        (
+            Vector3::new(0.0, -2.0 + 0.5 * c, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 2f64.to_radians() * c),
+        )
+    };
+    let twist = move |t: f64| {
+        let s = w * (w * t).sin();
+        (
+            Vector3::new(0.0, 0.5 * s, 0.0),
+            Vector3::new(0.0, 0.0, 2f64.to_radians() * s),
+        )
+    };
+    let (x0, q0) = pose(0.0);
+    let motion = BodyMotion {
+        pose: std::sync::Arc::new(pose),
+        twist: std::sync::Arc::new(twist),
+    };
+    let start = BodyState::new(x0, Vector3::zeros(), q0, Vector3::zeros());
+    let net = hoist_with_body(
+        0,
+        (5e4, 4e6),
+        Vector::<2>::new(0.0, 2.0),
+        start,
+        Some(motion),
+    );
+    assert_winch_run_does_not_allocate(net, "body drum");
+}
+
 /// A free rigid body steps without allocating (its rows' buffers are kept between
-/// evaluations): the hoist of [`winch_hoist`] with a free 1 t block hanging from the hook by
-/// a point 0.5 m above its centre, started turning, while the winch pays out 3 m and hauls it
-/// back in.
+/// evaluations): the hoist of [`hoist_with_body`] with a free 1 t block hanging from the hook
+/// (node 1) by a point 0.5 m above its centre, started turning.
 #[test]
 fn free_body_step_loop_does_not_allocate() {
     use nalgebra::{UnitQuaternion, Vector3};
-    use phstring::{Attachment, BodyState, RigidBody, Vector};
-    let smooth = |x: f64| {
-        let x = x.clamp(0.0, 1.0);
-        x * x * (3.0 - 2.0 * x)
-    };
-    let net = winch_hoist(
-        20,
-        10,
-        move |t| 3.0 * (smooth(t / 3.0) - smooth(t / 3.0 - 1.0)),
-        None,
-    );
-    let group = net.groups.len() - 1;
-    // The hook is the string's last node (node 1 of the builder).
-    let hook = net.initial.r[1];
+    use phstring::{BodyState, Vector};
+    // The hook where the rope's static stretch under the 5 t payload puts it.
+    let (ea, rho_a, payload, a) = (4.3e7, 4.1, 5000.0, 20.0);
+    let y_hook = -(a + 9.81 * (payload + 0.5 * rho_a * a) * a / ea);
     let omega = Vector3::new(0.0, 0.0, 0.2);
     let arm = Vector3::new(0.0, 0.5, 0.0);
+    let start = BodyState::new(
+        Vector3::new(0.0, y_hook - 0.5, 0.0),
+        Vector3::zeros(),
+        UnitQuaternion::identity(),
+        omega,
+    );
+    let mut net = hoist_with_body(1, (1000.0, 200.0), Vector::<2>::new(0.0, 0.5), start, None);
     let v_hook = omega.cross(&arm);
-    let mut net = net.with_body(RigidBody {
-        name: "block".into(),
-        mass: 1000.0,
-        inertia: nalgebra::Matrix3::from_diagonal_element(200.0),
-        weight: Vector::<2>::new(0.0, -1000.0 * 9.81),
-        attachments: vec![Attachment {
-            node: 1,
-            point: Vector::<2>::new(0.0, 0.5),
-        }],
-        initial: BodyState::new(
-            Vector3::new(hook.x, hook.y - 0.5, 0.0),
-            Vector3::zeros(),
-            UnitQuaternion::identity(),
-            omega,
-        ),
-        wrench: None,
-        hydro: None,
-        motion: None,
-        feedback: None,
-    });
     net.initial.v[1] = Vector::<2>::new(v_hook.x, v_hook.y);
-    let (cuts, at_cuts, between) = winch_run_allocations(net, group, 599, at_10_ms(), "free body");
-    assert!(cuts >= 4, "{cuts} cuts");
-    assert_eq!(between, 0, "steps between cuts allocated {between} times");
-    assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
+    assert_winch_run_does_not_allocate(net, "free body");
 }

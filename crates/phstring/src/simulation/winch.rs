@@ -538,11 +538,9 @@ mod tests {
     //! The Newton Jacobian with a winch drum's row and its coupling to the drum element's
     //! other node against central finite differences; a checkpoint's drum node on its path.
 
-    use super::super::{Simulation, StepAt, StepControl, StepParams};
-    use crate::integrator::StepEquations;
-    use crate::linsolve::BlockJacobian;
+    use super::super::Simulation;
+    use super::super::test_support::fixed_steps;
     use crate::network::{NetworkBuilder, StringSpec};
-    use crate::newton::NewtonProblem;
     use crate::system::{MassMatrix, PointMass, State, Vector};
     use crate::winch::{Winch, WinchDrum};
     use crate::{Boundary, Material};
@@ -597,27 +595,12 @@ mod tests {
                 brake: Some((3.0e4, 0.05)),
             }),
         });
-        let params = StepParams {
-            h: 0.01,
-            control: StepControl {
-                adaptive: false,
-                ..Default::default()
-            },
-            ..StepParams::default()
-        };
-        let mut sim = Simulation::new(net, params).unwrap();
+        let mut sim = Simulation::new(net, fixed_steps(0.01)).unwrap();
         for _ in 0..30 {
             sim.step().unwrap();
         }
-        let (t, h) = (sim.time(), 0.01);
-        let at = StepAt {
-            step: 31,
-            t,
-            h,
-            t_next: t + h,
-        };
-        sim.apply_loads(&at).unwrap();
-        sim.predict(&at).unwrap();
+        let h = 0.01;
+        sim.prepare_step(h);
         let n = sim.sys.mesh.n_nodes();
         let slot = n + sim.drum_steps[0].slot;
         let mut x = sim.x.clone();
@@ -626,21 +609,6 @@ mod tests {
         for (i, xi) in x[..n].iter_mut().enumerate() {
             *xi += Vector::<2>::new(1e-3 * (i as f64).sin(), 7e-4 * (i as f64).cos());
         }
-        let mut reaction = vec![Vector::<2>::zeros(); n];
-        let mut eqs = StepEquations::new(
-            &sim.sys,
-            sim.params.scheme,
-            h,
-            &sim.run.state,
-            t + 0.5 * h,
-            &sim.f_ext,
-            &mut reaction,
-        );
-        eqs.drums = &sim.drum_steps;
-        let slots = x.len() - n;
-        let mut jac = BlockJacobian::with_slots(&sim.sys.mesh, slots);
-        let mut res = vec![Vector::<2>::zeros(); x.len()];
-        eqs.evaluate(&x, &mut res, Some(&mut jac)).unwrap();
         // A direction in the free components and the drum's payout.
         let mut dir = vec![Vector::<2>::zeros(); x.len()];
         for (i, d) in dir[..n].iter_mut().enumerate() {
@@ -651,29 +619,18 @@ mod tests {
             }
         }
         dir[slot][0] = 0.8;
-        let mut jd = vec![Vector::<2>::zeros(); x.len()];
-        jac.mul(&sim.sys.mesh, &dir, &mut jd);
-        let eps = 1e-7;
-        let shifted = |s: f64, eqs: &mut StepEquations<'_, 2, Material>| {
-            let xs: Vec<_> = x.iter().zip(&dir).map(|(a, d)| a + d * s).collect();
-            let mut r = vec![Vector::<2>::zeros(); x.len()];
-            eqs.evaluate(&xs, &mut r, None).unwrap();
-            r
-        };
-        let (plus, minus) = (shifted(eps, &mut eqs), shifted(-eps, &mut eqs));
+        let (jd, fd) = sim.jacobian_along(h, (&x, &dir), 1e-7);
         let scale = jd.iter().map(|v| v.norm()).fold(0.0, f64::max);
         let mut worst = 0.0_f64;
         for i in 0..x.len() {
             for k in 0..2 {
                 let free = if i < n { sim.sys.free[i][k] } else { k == 0 };
-                if !free {
-                    continue;
+                if free {
+                    worst = worst.max((jd[i][k] - fd[i][k]).abs() / scale);
                 }
-                let fd = (plus[i][k] - minus[i][k]) / (2.0 * eps);
-                worst = worst.max((jd[i][k] - fd).abs() / scale);
             }
         }
-        let drum_row = (plus[slot][0] - minus[slot][0]) / (2.0 * eps);
+        let drum_row = fd[slot][0];
         eprintln!(
             "drum row: J·d {:.6e}, differences {drum_row:.6e}; worst over the rows {worst:.2e} of {scale:.3e}",
             jd[slot][0]
@@ -698,15 +655,7 @@ mod tests {
             drum_motion: Some(Arc::new(|t| [0.2 * t, 0.0, 0.0])),
             drum: None,
         });
-        let params = StepParams {
-            h: 0.01,
-            control: StepControl {
-                adaptive: false,
-                ..Default::default()
-            },
-            ..StepParams::default()
-        };
-        Simulation::new(net, params).unwrap()
+        Simulation::new(net, fixed_steps(0.01)).unwrap()
     }
 
     /// A checkpoint's drum node must lie on its winch's path (eq. (23.1)): after 3 s of a

@@ -66,10 +66,34 @@ pub(super) fn hoist(
     reserve: usize,
     payout: impl Fn(f64) -> f64 + Send + Sync + 'static,
 ) -> (Network<2, Material>, usize) {
+    let zero = Vector::<2>::zeros();
+    let (net, g, _, hook) = rope_below(zero, zero, n_el, reserve);
+    let net = net.with_winch(Winch {
+        name: "hoist".into(),
+        group: g,
+        reserve,
+        payout: Arc::new(payout),
+        drum_motion: None,
+        drum: None,
+    });
+    (net, hook)
+}
+
+/// The rope of [`hoist`] without its winch: `n_el` elements of 1 m with the payload at their
+/// end and `reserve` elements on the drum, hanging in their static shape below the drum point
+/// `top` [m], moving at `v0` [m/s] (the drum point's velocity at `t = 0`: the nodes on the
+/// drum and the drum node move with it). Returns the network, the rope's group, its first
+/// path node (the drum) and the hook.
+pub(super) fn rope_below(
+    top: Vector<2>,
+    v0: Vector<2>,
+    n_el: usize,
+    reserve: usize,
+) -> (Network<2, Material>, usize, usize, usize) {
     let a = n_el as f64 * L;
     let mut b = NetworkBuilder::<2, Material>::new();
-    let drum = b.node(Vector::<2>::zeros());
-    let hook = b.node(Vector::<2>::new(0.0, -a));
+    let drum = b.node(top);
+    let hook = b.node(top + Vector::<2>::new(0.0, -a));
     let spec = StringSpec {
         name: "rope".into(),
         material: Material::tension_only_linear(EA),
@@ -90,18 +114,13 @@ pub(super) fn hoist(
     let mut net = b.build(Boundary::default(), masses).unwrap();
     let mut r = net.initial.r.clone();
     for (j, &i) in nodes[reserve..].iter().enumerate() {
-        r[i] = Vector::<2>::new(0.0, hanging(j as f64 * L, a));
+        r[i] = top + Vector::<2>::new(0.0, hanging(j as f64 * L, a));
     }
     net.initial = State::at_rest(&net.mesh, r);
-    net = net.with_winch(Winch {
-        name: "hoist".into(),
-        group: g,
-        reserve,
-        payout: Arc::new(payout),
-        drum_motion: None,
-        drum: None,
-    });
-    (net, hook)
+    for &i in &nodes[..=reserve] {
+        net.initial.v[i] = v0;
+    }
+    (net, g, drum, hook)
 }
 
 pub(super) fn fixed_step(h: f64) -> StepParams {
