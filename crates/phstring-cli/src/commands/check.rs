@@ -273,7 +273,10 @@ fn describe_winches(
                 "payout speed an input (external: the FMU's winch.{}.speed; `run` holds the payout at 0)",
                 w.name
             ),
-            None => format!("payout = {} m", clip(&w.payout)),
+            None => match &w.payout_table {
+                Some(file) => format!("payout [m] from the table {}", clip(file)),
+                None => format!("payout = {} m", clip(&w.payout)),
+            },
         };
         format!(
             "  winch:     {}: pays out string {} from {} ({drum}), {drive}, {} elements of {} m on the drum (can pay out {} m)",

@@ -24,6 +24,7 @@ mod statics;
 mod water;
 mod winch;
 mod winch_body;
+mod winch_table;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -49,8 +49,12 @@ pub struct WinchComponent {
     pub element_length: f64,
     /// The most it can pay out from `t = 0` [m]: its reserve elements.
     pub capacity: f64,
-    /// The payout expression [m] (empty for an external winch or a drum with dynamics).
+    /// The payout expression [m] (empty for a payout table, an external winch or a drum with
+    /// dynamics).
     pub payout: String,
+    /// The payout table's file, as the scenario names it (`payout_table`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub payout_table: Option<String>,
     /// `external = true`: the payout speed [m/s] is a front end's input (the FMU's
     /// `winch.NAME.speed`); `phstring run` holds the payout at 0.
     pub external: bool,

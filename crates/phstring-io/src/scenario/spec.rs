@@ -439,6 +439,11 @@ pub struct WinchSpec {
     /// given with either.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub payout: Option<Spanned<String>>,
+    /// The payout [m] from a table file (path relative to the scenario file): columns
+    /// `t, payout`, interpolated C¹ as a motion table, 0 at `t = 0`, held beyond the table's
+    /// ends; instead of `payout`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payout_table: Option<Spanned<String>>,
     /// `external = true`: the payout speed [m/s] is an input of a front end (the FMU's
     /// `winch.NAME.speed`, held over each communication step), starting at 0; commands
     /// without an input (`phstring run`) hold the payout at 0.

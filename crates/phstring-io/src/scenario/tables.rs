@@ -67,7 +67,8 @@ pub(super) fn column_text(file: &str, j: usize, name: &str) -> String {
 
 impl ScenarioFile {
     /// Every data file the scenario reads, as `(dotted key, the file as the key resolves
-    /// it)`: motion and force tables, platform tables and the bathymetry grid, in key order.
+    /// it)`: motion and force tables, platform tables, winch payout tables and the bathymetry
+    /// grid, in key order.
     pub fn data_files(&self) -> Vec<(String, PathBuf)> {
         let s = &self.scenario;
         let mut out = Vec::new();
@@ -87,6 +88,14 @@ impl ScenarioFile {
                 format!("platform.{k}.motion_table"),
                 self.table_file(f.get_ref()),
             ));
+        }
+        for (k, w) in s.winch.iter().enumerate() {
+            if let Some(f) = &w.get_ref().payout_table {
+                out.push((
+                    format!("winch.{k}.payout_table"),
+                    self.table_file(f.get_ref()),
+                ));
+            }
         }
         if let Some(f) = s
             .seabed

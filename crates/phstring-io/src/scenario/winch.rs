@@ -94,11 +94,30 @@ impl ScenarioFile {
         Ok(())
     }
 
-    /// Checks that winch `k` (table `w`) has exactly one drive: `payout`, `external = true`
-    /// or `[winch.drum]`.
+    /// Checks that winch `k` (table `w`) has exactly one drive: `payout`, `payout_table`,
+    /// `external = true` or `[winch.drum]`.
     fn check_winch_payout(&self, k: usize, w: &Spanned<WinchSpec>) -> Result<(), ScenarioError> {
         let spec = w.get_ref();
         let key = format!("winch.{k}.payout");
+        if let Some(table) = &spec.payout_table {
+            let clash = if spec.payout.is_some() {
+                Some("`payout`")
+            } else if external(spec) {
+                Some("`external = true`")
+            } else if spec.drum.is_some() {
+                Some("[winch.drum]")
+            } else {
+                None
+            };
+            if let Some(other) = clash {
+                return Err(self.invalid(
+                    &format!("winch.{k}.payout_table"),
+                    table.span(),
+                    format!("and {other} both drive the payout: give one of them"),
+                ));
+            }
+            return Ok(());
+        }
         match (&spec.payout, external(spec), &spec.drum) {
             (Some(p), true, _) => Err(self.invalid(
                 &key,
@@ -121,7 +140,7 @@ impl ScenarioFile {
             (None, false, None) => Err(self.invalid(
                 &key,
                 w.span(),
-                "is missing: give the length paid out since t = 0 [m] as an expression of t, `external = true` to set the payout speed from the FMU, or a [winch.drum]",
+                "is missing: give the length paid out since t = 0 [m] as an expression of t (or a `payout_table`), `external = true` to set the payout speed from the FMU, or a [winch.drum]",
             )),
             _ => Ok(()),
         }
@@ -198,9 +217,11 @@ impl ScenarioFile {
                 reserve_elements: ws.reserve,
                 element_length: l,
                 capacity: ws.reserve as f64 * l,
-                payout: payout
-                    .as_ref()
-                    .map_or(String::new(), |e| e.text().to_string()),
+                payout: match (&payout, &spec.payout_table) {
+                    (Some((_, text)), None) => text.clone(),
+                    _ => String::new(),
+                },
+                payout_table: spec.payout_table.as_ref().map(|f| f.get_ref().clone()),
                 external: external(spec),
                 drum_position: drum.iter().map(|e| e.text().to_string()).collect(),
                 on_body: None,
@@ -221,7 +242,7 @@ impl ScenarioFile {
                 group: ws.group,
                 reserve: ws.reserve,
                 payout: match payout {
-                    Some(p) => Arc::new(move |t| p.eval(t).unwrap_or(f64::NAN)),
+                    Some((p, _)) => p,
                     None => Arc::new(|_| 0.0),
                 },
                 drum_motion,
@@ -252,18 +273,28 @@ impl ScenarioFile {
     }
 
     /// Winch `k`'s drive: its payout expression (checked 0 at `t = 0`), its drum with
-    /// dynamics and a description of it, or neither (`external = true`).
+    /// dynamics and a description of it, or neither (`external = true`). A payout comes
+    /// with its text for the reports: the expression, or `table FILE`.
     #[allow(clippy::type_complexity)]
     fn winch_drive(
         &self,
         k: usize,
         spec: &WinchSpec,
-    ) -> Result<(Option<Expr>, Option<(WinchDrum, String)>), ScenarioError> {
+    ) -> Result<
+        (
+            Option<(phstring::PayoutFn, String)>,
+            Option<(WinchDrum, String)>,
+        ),
+        ScenarioError,
+    > {
         let key = |f: &str| format!("winch.{k}.{f}");
         let t_check = self.first_mid_time();
         // The combinations are checked with the tables ([`Self::check_winch_payout`]).
         if let Some(d) = &spec.drum {
             return Ok((None, Some(self.drum_dynamics(k, d.get_ref())?)));
+        }
+        if let Some(file) = &spec.payout_table {
+            return Ok((Some(self.payout_table(k, file)?), None));
         }
         // An external winch's payout follows the speed its front end sets, 0 until then.
         let Some(p) = &spec.payout else {
@@ -281,7 +312,41 @@ impl ScenarioFile {
                 ),
             ));
         }
-        Ok((Some(payout), None))
+        let text = payout.text().to_string();
+        let f: phstring::PayoutFn = Arc::new(move |t| payout.eval(t).unwrap_or(f64::NAN));
+        Ok((Some((f, text)), None))
+    }
+
+    /// Winch `k`'s payout from its `payout_table` (`file`): columns `t, payout [m]`, the C¹
+    /// interpolant of motion tables, 0 at `t = 0` (to 1e-9 of the table's largest payout,
+    /// at least 1e-9 m); with its text `table FILE`.
+    fn payout_table(
+        &self,
+        k: usize,
+        file: &Spanned<String>,
+    ) -> Result<(phstring::PayoutFn, String), ScenarioError> {
+        let key = format!("winch.{k}.payout_table");
+        let table = self.scenario_table(&key, file, 2)?;
+        let signal = table.signal(0);
+        let largest = table.values[0].iter().fold(1.0f64, |m, p| m.max(p.abs()));
+        let at_zero = signal.value(0.0);
+        // NaN (times so far apart that the interpolant overflows) fails too.
+        let at_rest = at_zero.abs() <= super::tables::START_TOLERANCE * largest;
+        if !at_rest {
+            let row = table.row_near(0.0);
+            return Err(self.invalid(
+                &key,
+                file.span(),
+                format!(
+                    "{}: the payout is {at_zero} m at t = 0 (row at t = {} s): it is the length paid out since t = 0, so 0 then",
+                    table.at_row(row),
+                    table.times[row]
+                ),
+            ));
+        }
+        let text = format!("table {}", crate::text::clip(file.get_ref()));
+        let f: phstring::PayoutFn = Arc::new(move |t| signal.value(t));
+        Ok((f, text))
     }
 
     /// The drum of `[winch.drum]` of winch `k` and its description: `J/R²`, the motor's pull
