@@ -338,6 +338,9 @@ pub(crate) struct BodyModel {
     /// beside the body's motion at its point: a winch drum on the body paying out, whose drum
     /// node slides along its path from the drum point (docs/method.md §23, "A drum on a rigid
     /// body"). Empty, or zero for an attachment, where the nodes only move with the body.
+    /// Set for every attempt at a step before its solve (the winches' prescribe), zero
+    /// between steps; an evaluation outside a step's solve (an error estimate) must set it
+    /// first.
     pub offset: Vec<Vec3>,
     /// The wrench port's inputs.
     pub wrench: Option<BodyWrench>,

@@ -814,19 +814,18 @@ fn attach_winches<const D: usize, M>(
         .chain(boundary.loads.iter().map(|l| l.node))
         .chain(boundary.feedback.iter().map(|f| f.node))
         .chain(point_masses.iter().map(|p| p.node))
-        .chain(
-            bodies
+        .chain(bodies.iter().enumerate().flat_map(|(b, body)| {
+            // A drum on a body: its attachment holds the drum node for the winch.
+            let drum = move |k: usize| on_body.iter().flatten().any(|d| (d.0, d.1) == (b, k));
+            body.attachments
                 .iter()
-                .flat_map(|b| b.attachments.iter().map(|a| a.node)),
-        );
+                .enumerate()
+                .filter(move |&(k, _)| !drum(k))
+                .map(|(_, a)| a.node)
+        }));
     for i in nodes {
         if let Some(c) = claimed.get_mut(i) {
             *c = true;
-        }
-    }
-    for &(b, k, _) in on_body.iter().flatten() {
-        if let Some(c) = claimed.get_mut(bodies[b].attachments[k].node) {
-            *c = false;
         }
     }
     let info: Vec<_> = groups

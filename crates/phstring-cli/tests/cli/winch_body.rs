@@ -41,7 +41,7 @@ fn module_heave(dir: &Path) -> f64 {
 
 /// The offshore crane lowers its 10 t module from the heaving, pitching vessel: its winch on
 /// the boom tip pays out the tip's rise, and from 20 s on the module heaves 2.8 cm (top to
-/// bottom, the lowering taken out) where the tip heaves 4.4 m; run again without the
+/// bottom, the lowering taken out) where the tip heaves 4.33 m; run again without the
 /// compensation (the payout the lowering alone) the module heaves as the tip does, within
 /// 2 %: the rope is stiff at these periods. Both runs keep every step's balance to 1e-12 of
 /// the energy scale; in the compensated run the winch's energy is its payout's work (the
@@ -107,8 +107,9 @@ fn the_crane_vessel_winch_takes_out_the_heave() {
     );
 }
 
-/// A drum on a body moves with the body: `drum_position` on it is refused naming the winch;
-/// a drum with dynamics (`[winch.drum]`) on it is taken.
+/// A drum on a body moves with the body: `drum_position` on it is refused naming the winch,
+/// and so is a point mass on its drum node (with no reserve, the body's point itself); a drum
+/// with dynamics (`[winch.drum]`) on it is taken.
 #[test]
 fn a_drum_on_a_body_refuses_a_motion_of_its_own() {
     let dir = temp_dir("winch-body-refusals");
@@ -130,6 +131,17 @@ fn a_drum_on_a_body_refuses_a_motion_of_its_own() {
     assert!(
         err.contains("winch 0 ('crane_winch')")
             && err.contains("its drum is a point of a rigid body and moves with the body"),
+        "{err}"
+    );
+    let loaded = text.replace("reserve = 20.0", "reserve = 0.0")
+        + "\n[[point_mass]]\nnode = \"vessel.tip\"\nkg = 100.0\n";
+    let path = dir.join("loaded.toml");
+    std::fs::write(&path, loaded).unwrap();
+    let o = phstring(&["check", path.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("winch 0 ('crane_winch')") && err.contains("carries something else"),
         "{err}"
     );
     let dynamics = text.replace(&payout, "[winch.drum]\ntension = \"1e5\"\ndamping = 1000.0");

@@ -105,10 +105,18 @@ fn a_payout_table_drives_the_winch_as_its_expression_does() {
 }
 
 /// A payout table beside `payout`, one not at 0 at `t = 0`, or with a second value column
-/// is refused by key, naming the file's row.
+/// is refused by key, naming the file's row; one 1e-12 m off 0 at `t = 0` (rounding) is
+/// taken.
 #[test]
 fn payout_tables_that_cannot_drive_a_winch_are_refused() {
     let dir = temp_dir("winch-table-refused");
+    let rounded = crane_with_table(
+        &dir,
+        "payout_table = \"hoist.csv\"",
+        "t,payout\n0,1e-12\n10,-1\n45,-2\n",
+    );
+    let o = phstring(&["check", rounded.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let ok_rows = "t,payout\n0,0\n10,-1\n45,-2\n";
     let cases = [
         (

@@ -319,7 +319,7 @@ impl ScenarioFile {
 
     /// Winch `k`'s payout from its `payout_table` (`file`): columns `t, payout [m]`, the C¹
     /// interpolant of motion tables, 0 at `t = 0` (to 1e-9 of the table's largest payout,
-    /// at least 1e-9 m); with its text `table FILE`.
+    /// at least 1e-9 m; what is left there is taken out); with its text `table FILE`.
     fn payout_table(
         &self,
         k: usize,
@@ -345,7 +345,9 @@ impl ScenarioFile {
             ));
         }
         let text = format!("table {}", crate::text::clip(file.get_ref()));
-        let f: phstring::PayoutFn = Arc::new(move |t| signal.value(t));
+        // Within the tolerance, the table's value at t = 0 is its rounding: taken out, so
+        // that the payout is 0 at t = 0 exactly, as a winch needs.
+        let f: phstring::PayoutFn = Arc::new(move |t| signal.value(t) - at_zero);
         Ok((f, text))
     }
 

@@ -452,7 +452,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 self.sys.bodies[b].offset[k] = crate::body::Vec3::zeros();
                 for &i in &m.nodes[..ws.drum] {
                     self.run.state.r[i] = frame.point;
-                    self.run.state.v[i] = Vector::<D>::zeros();
+                    self.run.state.v[i] = frame.velocity;
                 }
             }
             let after = self.with_drums(self.sys.energies(&self.run.state), false);
