@@ -13,94 +13,114 @@ use crate::{Boundary, Material};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use std::sync::Arc;
 
-/// A free 2 t block (3D) hung from a fixed point by 10 m of 32 mm wire rope (EA = 4.3e7 N,
-/// 4.1 kg/m, elements of 1 m) at its top, swinging and turning about all three axes, with a
-/// winch at a point 0.6 m off its centre paying out `payout(t)` of the same rope (15 m,
-/// stretched 0.1 %, 5 more on the drum) with a 500 kg hook (or, with `dynamics`, moved by
-/// that drum's dynamics); `h` = 5 ms, fixed steps.
+/// A free rigid body hung from a fixed point at the origin by 10 m of 32 mm wire rope
+/// (EA = 4.3e7 N, 4.1 kg/m, elements of 1 m) at its point `top`, starting in `start`, with a
+/// winch at its point `drum` paying out `payout(t)` of the same rope (`fall` elements,
+/// stretched 0.1 %, hanging straight down, 5 more on the drum) with a 500 kg hook (or, with
+/// `dynamics`, moved by that drum's dynamics); the body's mass [kg] and principal inertia
+/// [kg·m²] in `mass`; `h` = 5 ms, fixed steps.
+struct HungBody {
+    start: BodyState,
+    mass: (f64, Vector3<f64>),
+    top: Vector3<f64>,
+    drum: Vector3<f64>,
+    fall: usize,
+}
+
+impl HungBody {
+    /// The simulation of this body with its winch (see [`HungBody`]).
+    fn with_winch<const D: usize>(
+        &self,
+        dynamics: Option<WinchDrum>,
+        payout: fn(f64) -> f64,
+    ) -> Simulation<D, Material> {
+        let g = 9.81;
+        let st = &self.start;
+        let at = |p: Vector3<f64>| crate::body::project::<D>(&p);
+        let v_of = |s: &Vector3<f64>| {
+            let arm = st.orientation.transform_vector(s);
+            at(st.velocity + st.omega_space().cross(&arm))
+        };
+        let up = Vector::<D>::from_fn(|k, _| if k + 1 == D { 1.0 } else { 0.0 });
+        let mut b = NetworkBuilder::<D, Material>::new();
+        let fix = b.node(Vector::<D>::zeros());
+        let top_n = b.node(at(st.point(&self.top)));
+        let drum_n = b.node(at(st.point(&self.drum)));
+        let hook = b.node(at(st.point(&self.drum)) - up * (self.fall as f64 * 1.001));
+        let rope = |name: &str| StringSpec {
+            name: name.into(),
+            material: Material::tension_only_linear(4.3e7),
+            rho_a: 4.1,
+            mass: MassMatrix::Consistent,
+            body_force: up * (-4.1 * g),
+            prestretch: 1.0,
+        };
+        b.string(rope("hanger"), &[fix, top_n], 10).unwrap();
+        let reserve = 5;
+        let grp = b
+            .string_on_drum(rope("fall"), &[drum_n, hook], self.fall, reserve)
+            .unwrap();
+        let nodes = b.group_nodes(grp).unwrap().to_vec();
+        let masses = vec![PointMass {
+            node: hook,
+            mass: 500.0,
+            weight: up * (-500.0 * g),
+        }];
+        let boundary = Boundary {
+            fixed: vec![crate::Fixed::node(fix)],
+            ..Default::default()
+        };
+        let mut net = b.build(boundary, masses).unwrap();
+        net.initial.v[top_n] = v_of(&self.top);
+        for &i in &nodes[..=reserve] {
+            net.initial.v[i] = v_of(&self.drum);
+        }
+        let (mass, inertia) = self.mass;
+        let attach = |node, s| Attachment { node, point: at(s) };
+        let net = net
+            .with_body(RigidBody {
+                name: "body".into(),
+                mass,
+                inertia: Matrix3::from_diagonal(&inertia),
+                weight: up * (-mass * g),
+                attachments: vec![attach(top_n, self.top), attach(drum_n, self.drum)],
+                initial: *st,
+                wrench: None,
+                hydro: None,
+                motion: None,
+                feedback: None,
+            })
+            .with_winch(Winch {
+                name: "winch".into(),
+                group: grp,
+                reserve,
+                payout: Arc::new(payout),
+                drum_motion: None,
+                drum: dynamics,
+            });
+        Simulation::new(net, fixed_steps(0.005)).unwrap()
+    }
+}
+
+/// A free 2 t block (3D) of [`HungBody`], swinging and turning about all three axes, its top
+/// 0.5 m above its centre, its winch 0.6 m off its centre with 15 m of rope.
 fn block_with_a_winch(
     dynamics: Option<WinchDrum>,
     payout: fn(f64) -> f64,
 ) -> Simulation<3, Material> {
-    let g = 9.81;
-    let start = BodyState::new(
-        Vector3::new(0.3, 0.0, -10.6),
-        Vector3::new(0.2, -0.1, 0.0),
-        UnitQuaternion::from_euler_angles(0.05, -0.03, 0.2),
-        Vector3::new(0.1, -0.05, 0.3),
-    );
-    let (top_s, drum_s) = (Vector3::new(0.0, 0.0, 0.5), Vector3::new(0.6, 0.0, -0.5));
-    let (top, drum) = (start.point(&top_s), start.point(&drum_s));
-    let v_of = |s: &Vector3<f64>| {
-        let arm = start.orientation.transform_vector(s);
-        let v = start.velocity + start.omega_space().cross(&arm);
-        Vector::<3>::new(v.x, v.y, v.z)
+    let block = HungBody {
+        start: BodyState::new(
+            Vector3::new(0.3, 0.0, -10.6),
+            Vector3::new(0.2, -0.1, 0.0),
+            UnitQuaternion::from_euler_angles(0.05, -0.03, 0.2),
+            Vector3::new(0.1, -0.05, 0.3),
+        ),
+        mass: (2000.0, Vector3::new(300.0, 420.0, 250.0)),
+        top: Vector3::new(0.0, 0.0, 0.5),
+        drum: Vector3::new(0.6, 0.0, -0.5),
+        fall: 15,
     };
-    let at = |p: Vector3<f64>| Vector::<3>::new(p.x, p.y, p.z);
-    let mut b = NetworkBuilder::<3, Material>::new();
-    let fix = b.node(Vector::<3>::zeros());
-    let top_n = b.node(at(top));
-    let drum_n = b.node(at(drum));
-    let hook = b.node(at(drum) - Vector::<3>::new(0.0, 0.0, 15.0 * 1.001));
-    let rope = |name: &str| StringSpec {
-        name: name.into(),
-        material: Material::tension_only_linear(4.3e7),
-        rho_a: 4.1,
-        mass: MassMatrix::Consistent,
-        body_force: Vector::<3>::new(0.0, 0.0, -4.1 * g),
-        prestretch: 1.0,
-    };
-    b.string(rope("hanger"), &[fix, top_n], 10).unwrap();
-    let reserve = 5;
-    let grp = b
-        .string_on_drum(rope("fall"), &[drum_n, hook], 15, reserve)
-        .unwrap();
-    let nodes = b.group_nodes(grp).unwrap().to_vec();
-    let masses = vec![PointMass {
-        node: hook,
-        mass: 500.0,
-        weight: Vector::<3>::new(0.0, 0.0, -500.0 * g),
-    }];
-    let boundary = Boundary {
-        fixed: vec![crate::Fixed::node(fix)],
-        ..Default::default()
-    };
-    let mut net = b.build(boundary, masses).unwrap();
-    net.initial.v[top_n] = v_of(&top_s);
-    for &i in &nodes[..=reserve] {
-        net.initial.v[i] = v_of(&drum_s);
-    }
-    let net = net
-        .with_body(RigidBody {
-            name: "block".into(),
-            mass: 2000.0,
-            inertia: Matrix3::from_diagonal(&Vector3::new(300.0, 420.0, 250.0)),
-            weight: Vector::<3>::new(0.0, 0.0, -2000.0 * g),
-            attachments: vec![
-                Attachment {
-                    node: top_n,
-                    point: at(top_s),
-                },
-                Attachment {
-                    node: drum_n,
-                    point: at(drum_s),
-                },
-            ],
-            initial: start,
-            wrench: None,
-            hydro: None,
-            motion: None,
-            feedback: None,
-        })
-        .with_winch(Winch {
-            name: "winch".into(),
-            group: grp,
-            reserve,
-            payout: Arc::new(payout),
-            drum_motion: None,
-            drum: dynamics,
-        });
-    Simulation::new(net, fixed_steps(0.005)).unwrap()
+    block.with_winch(dynamics, payout)
 }
 
 /// 0.4 m/s paid out.
@@ -272,92 +292,22 @@ fn jacobian_after<const D: usize>(mut sim: Simulation<D, Material>, steps: usize
     worst
 }
 
-/// A free 3 t boom (2D, 8 m, `J` = 16 000 kg·m²) hung from a fixed point by 10 m of the wire
-/// rope at one end, started swinging, with a winch at its other end paying out 0.4 m/s of
-/// the rope (12 m, 5 more on the drum) with a 500 kg hook, driven by that payout or by
-/// `dynamics`; `h` = 5 ms, fixed steps.
+/// A free 3 t boom (2D, 8 m, `J` = 16 000 kg·m²) of [`HungBody`], hung at one end and
+/// started swinging, its winch at the other end with 12 m of rope paying out 0.4 m/s.
 fn boom_with_a_winch(dynamics: Option<WinchDrum>) -> Simulation<2, Material> {
-    let g = 9.81;
-    let start = BodyState::new(
-        Vector3::new(4.0, -10.5, 0.0),
-        Vector3::new(0.3, 0.0, 0.0),
-        UnitQuaternion::from_euler_angles(0.0, 0.0, 0.05),
-        Vector3::new(0.0, 0.0, 0.1),
-    );
-    let (top_s, drum_s) = (Vector3::new(-4.0, 0.5, 0.0), Vector3::new(4.0, -0.5, 0.0));
-    let (top, drum) = (start.point(&top_s), start.point(&drum_s));
-    let v_of = |s: &Vector3<f64>| {
-        let v = start.velocity
-            + start
-                .omega_space()
-                .cross(&start.orientation.transform_vector(s));
-        Vector::<2>::new(v.x, v.y)
+    let boom = HungBody {
+        start: BodyState::new(
+            Vector3::new(4.0, -10.5, 0.0),
+            Vector3::new(0.3, 0.0, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 0.05),
+            Vector3::new(0.0, 0.0, 0.1),
+        ),
+        mass: (3000.0, Vector3::new(16000.0, 16000.0, 16000.0)),
+        top: Vector3::new(-4.0, 0.5, 0.0),
+        drum: Vector3::new(4.0, -0.5, 0.0),
+        fall: 12,
     };
-    let mut b = NetworkBuilder::<2, Material>::new();
-    let fix = b.node(Vector::<2>::new(0.0, 0.0));
-    let top_n = b.node(Vector::<2>::new(top.x, top.y));
-    let drum_n = b.node(Vector::<2>::new(drum.x, drum.y));
-    let hook = b.node(Vector::<2>::new(drum.x, drum.y - 12.0 * 1.001));
-    let rope = |name: &str| StringSpec {
-        name: name.into(),
-        material: Material::tension_only_linear(4.3e7),
-        rho_a: 4.1,
-        mass: MassMatrix::Consistent,
-        body_force: Vector::<2>::new(0.0, -4.1 * g),
-        prestretch: 1.0,
-    };
-    b.string(rope("hanger"), &[fix, top_n], 10).unwrap();
-    let reserve = 5;
-    let grp = b
-        .string_on_drum(rope("fall"), &[drum_n, hook], 12, reserve)
-        .unwrap();
-    let nodes = b.group_nodes(grp).unwrap().to_vec();
-    let masses = vec![PointMass {
-        node: hook,
-        mass: 500.0,
-        weight: Vector::<2>::new(0.0, -500.0 * g),
-    }];
-    let boundary = Boundary {
-        fixed: vec![crate::Fixed::node(fix)],
-        ..Default::default()
-    };
-    let mut net = b.build(boundary, masses).unwrap();
-    net.initial.v[top_n] = v_of(&top_s);
-    for &i in &nodes[..=reserve] {
-        net.initial.v[i] = v_of(&drum_s);
-    }
-    let at = |s: Vector3<f64>| Vector::<2>::new(s.x, s.y);
-    let net = net
-        .with_body(RigidBody {
-            name: "boom".into(),
-            mass: 3000.0,
-            inertia: Matrix3::from_diagonal(&Vector3::new(16000.0, 16000.0, 16000.0)),
-            weight: Vector::<2>::new(0.0, -3000.0 * g),
-            attachments: vec![
-                Attachment {
-                    node: top_n,
-                    point: at(top_s),
-                },
-                Attachment {
-                    node: drum_n,
-                    point: at(drum_s),
-                },
-            ],
-            initial: start,
-            wrench: None,
-            hydro: None,
-            motion: None,
-            feedback: None,
-        })
-        .with_winch(Winch {
-            name: "winch".into(),
-            group: grp,
-            reserve,
-            payout: Arc::new(steady),
-            drum_motion: None,
-            drum: dynamics,
-        });
-    Simulation::new(net, fixed_steps(0.005)).unwrap()
+    boom.with_winch(dynamics, steady)
 }
 
 /// The Jacobian of [`a_drum_with_dynamics_on_a_body_has_the_jacobian_of_its_differences`]
