@@ -764,6 +764,17 @@ fn statics_at_a_winch_checkpoint_hangs_the_paid_out_length() {
     let half = G * RHO_A * 0.5;
     assert!((tension - (weight - half)).abs() <= tol + 1e-12 * weight);
     assert!((drop - hang).abs() < 1e-9, "{drop} against {hang}");
+    // The summary's extremes are those of the rope off the drum (the elements on the drum,
+    // N = 0, left out): the largest at the drum element, the smallest above the payload.
+    assert_eq!(
+        s["max_tension_element"].as_u64().unwrap() as usize,
+        drum_element
+    );
+    let least = s["min_tension"].as_f64().unwrap();
+    assert!(
+        least > G * PAYLOAD && least < G * (PAYLOAD + RHO_A),
+        "smallest tension {least} N"
+    );
     // The scenario's own equilibrium hangs its 20 m.
     let start = dir.join("start");
     let o = phstring(&[

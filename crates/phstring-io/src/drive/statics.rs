@@ -98,7 +98,8 @@ pub struct StaticsInfo {
     pub max_tension: f64,
     /// Element of the largest tension.
     pub max_tension_element: usize,
-    /// Smallest tension `N` [N] (negative: compression) and its element.
+    /// Smallest tension `N` [N] (negative: compression) and its element (both leave out
+    /// the elements on a winch's drum).
     pub min_tension: f64,
     /// Element of the smallest tension.
     pub min_tension_element: usize,
@@ -186,7 +187,9 @@ fn write_all<const D: usize>(
     let tension = tensions(sys, eq);
     write_files(out, sys, eq, &tension)?;
     let (mut max, mut min) = ((f64::NEG_INFINITY, 0), (f64::INFINITY, 0));
-    for (e, t) in tension.iter().enumerate() {
+    // Elements on a winch's drum are in no group's range: they carry nothing.
+    let active = |e: usize| sys.groups().iter().any(|g| g.elements.contains(&e));
+    for (e, t) in tension.iter().enumerate().filter(|(e, _)| active(*e)) {
         if t.n > max.0 {
             max = (t.n, e);
         }
