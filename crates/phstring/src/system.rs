@@ -1434,6 +1434,15 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             .collect()
     }
 
+    /// Per winch, its string's group and all the string's elements, those on the drum (outside
+    /// the group's current range) included.
+    pub fn winch_elements(&self) -> Vec<(usize, Range<usize>)> {
+        self.winches
+            .iter()
+            .map(|m| (m.group, m.elements.clone()))
+            .collect()
+    }
+
     /// Lumps the water again over the elements in the groups (after a winch changed them);
     /// nothing without water. The water was checked when the system was built, so its
     /// lumping cannot fail here; the added masses stay those of the start.

@@ -155,3 +155,76 @@ fn a_drum_on_a_body_refuses_a_motion_of_its_own() {
         "{out}"
     );
 }
+
+/// A winch on the hook block of `examples/hook_block_3d.toml` (a free body) paying out its
+/// left sling by 0.2 m over 4 s: the run stops at 3 s with a checkpoint (its drum node moved
+/// on by a cut), resumes to 5 s writing `winches.csv`, `energy.csv` and `bodies.csv` as the
+/// uninterrupted run writes them, byte for byte; and `statics --at` the checkpoint solves the
+/// system with the drum on the body, its smallest tension that of the slings off the drum
+/// (above 10 kN, not the 0 N of the element on the drum), which `tension.csv` lists under
+/// its string, `sling_left`, with N = 0.
+#[test]
+fn a_drum_on_a_free_body_resumes_and_solves_statics_at_its_checkpoint() {
+    let dir = temp_dir("winch-body-hook");
+    let text = std::fs::read_to_string(crate::workspace_root().join("examples/hook_block_3d.toml"))
+        .unwrap()
+        .replace("end = 20.0", "end = 5.0")
+        + "\n[[winch]]\nname = \"sling_winch\"\nstring = \"sling_left\"\n\
+           payout = \"0.2 * (3*min(t/4,1)^2 - 2*min(t/4,1)^3)\"\nreserve = 1.0\n";
+    let scenario = dir.join("hook_winch.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let path = scenario.to_str().unwrap();
+    let fast = [
+        "output.plots=false",
+        "output.animation=false",
+        "output.vtk=false",
+    ];
+    let (stopped, whole) = (dir.join("stopped"), dir.join("whole"));
+    let extra = ["--checkpoint-every", "100", "--stop-after-steps", "300"];
+    let o = run_with(path, &stopped, &fast, &extra);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let cp = stopped.join("checkpoint.json");
+    let statics = dir.join("statics");
+    let o = phstring(&[
+        "statics",
+        path,
+        "--at",
+        cp.to_str().unwrap(),
+        "--out",
+        statics.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run_with(path, &whole, &fast, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for file in ["winches.csv", "energy.csv", "bodies.csv"] {
+        let (a, b) = (stopped.join(file), whole.join(file));
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{file} of the resumed run"
+        );
+    }
+    let s = summary(&statics);
+    let least = s["min_tension"].as_f64().unwrap();
+    assert!(least > 1e4, "smallest tension {least} N");
+    let text = std::fs::read_to_string(statics.join("tension.csv")).unwrap();
+    let on_drum: Vec<&str> = text
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(6) == Some("0"))
+        .collect();
+    assert!(!on_drum.is_empty(), "no element on the drum");
+    assert!(
+        on_drum
+            .iter()
+            .all(|l| l.split(',').nth(1) == Some("sling_left")),
+        "{on_drum:?}"
+    );
+}

@@ -272,8 +272,13 @@ fn write(out: &Path, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
     atomic_write(&path, bytes).map_err(|cause| OutputError::Io { path, cause })
 }
 
+/// Each element's group: its string's for the elements on a winch's drum too (outside the
+/// group's range, with N = 0).
 fn group_of<const D: usize>(sys: &PhSystem<D, Material>) -> Vec<usize> {
     let mut g = vec![0; sys.mesh().n_elements()];
+    for (k, els) in sys.winch_elements() {
+        g[els].iter_mut().for_each(|x| *x = k);
+    }
     for (k, grp) in sys.groups().iter().enumerate() {
         g[grp.elements.clone()].iter_mut().for_each(|x| *x = k);
     }
