@@ -684,7 +684,7 @@ fn lowered_checkpoint(dir: &Path, text: &str) -> (std::path::PathBuf, std::path:
 }
 
 /// `phstring statics SCENARIO --at CHECKPOINT --out OUT`, which must succeed; returns `OUT`.
-fn statics_at(
+pub(crate) fn statics_at(
     scenario: &std::path::Path,
     cp: &std::path::Path,
     out: &std::path::Path,

@@ -189,16 +189,7 @@ fn a_drum_on_a_free_body_resumes_and_solves_statics_at_its_checkpoint() {
         String::from_utf8_lossy(&o.stderr)
     );
     let cp = stopped.join("checkpoint.json");
-    let statics = dir.join("statics");
-    let o = phstring(&[
-        "statics",
-        path,
-        "--at",
-        cp.to_str().unwrap(),
-        "--out",
-        statics.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let statics = crate::winch::statics_at(&scenario, &cp, &dir.join("statics"));
     let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run_with(path, &whole, &fast, &[]);

@@ -339,18 +339,6 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// that each winch can follow its payout there; the drums' data for the step.
     pub(super) fn winch_prescribe(&mut self, at: &StepAt) -> Result<(), StepError> {
         for (m, ws) in self.sys.winches.iter().zip(&self.run.winches) {
-            if let (Some((b, k, _)), None) = (m.body, &m.drum) {
-                // A drum on a body: the body moves its drum node with the drum point, and the
-                // payout slides it along its path (docs/method.md §23.7); a drum with dynamics
-                // slides it by its own slot.
-                let payout = (m.payout)(at.t_next);
-                if let Err(limit) = m.check(ws, payout) {
-                    return Err(at.winch_error(&m.name, limit.to_string()));
-                }
-                let slide = m.axis(ws) * (payout - ws.payout);
-                self.sys.bodies[b].offset[k] = crate::body::embed(&slide);
-                continue;
-            }
             if m.drum_motion.is_some() {
                 // The nodes parked on a moving drum go with its drum point (they carry no
                 // mass, weight or element: held, their reactions and so their work are 0).
@@ -366,8 +354,18 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             if let Err(limit) = m.check(ws, payout) {
                 return Err(at.winch_error(&m.name, limit.to_string()));
             }
-            let a = m.drum_node(ws);
-            self.x[a] = m.path(ws, at.t_next, &[]).0 - self.run.state.r[a];
+            match m.body {
+                // A drum on a body: the body moves its drum node with the drum point, and the
+                // payout slides it along its path (docs/method.md §23.7).
+                Some((b, k, _)) => {
+                    let slide = m.axis(ws) * (payout - ws.payout);
+                    self.sys.bodies[b].offset[k] = crate::body::embed(&slide);
+                }
+                None => {
+                    let a = m.drum_node(ws);
+                    self.x[a] = m.path(ws, at.t_next, &[]).0 - self.run.state.r[a];
+                }
+            }
         }
         self.drum_prescribe(at)
     }
@@ -392,17 +390,18 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 y[k] = self.reaction[a][k];
             }
             *port = (a, u, y);
-            // A drum's supply is its own ([`crate::winch_step::shares`], below).
-            if let Some((b, k, _)) = m.body {
+            *w = match (&m.drum, m.body) {
+                // A drum's supply is its own ([`crate::winch_step::shares`], below).
+                (Some(_), _) => continue,
                 // On a body the reaction's work over the drum point's motion is the body's;
-                // the winch's is its work over the slide (docs/method.md §23).
-                let slide = &self.sys.bodies[b].offset[k];
-                *w = crate::body::embed(&self.reaction[a]).dot(slide);
-                total += *w;
-            } else if m.drum.is_none() {
-                *w = self.reaction[a].dot(&self.x[a]);
-                total += *w;
-            }
+                // the winch's is its work over the slide (docs/method.md §23.7).
+                (None, Some((b, k, _))) => {
+                    let slide = &self.sys.bodies[b].offset[k];
+                    crate::body::embed(&self.reaction[a]).dot(slide)
+                }
+                (None, None) => self.reaction[a].dot(&self.x[a]),
+            };
+            total += *w;
         }
         // A drum's own storage is in `Ĥ`: the winch supplies the reaction's work over the
         // drum's motion and the motor's; the damping and brake dissipate.

@@ -72,6 +72,17 @@ fn run_balanced(sim: &mut Simulation<2, Material>, t_end: f64) -> (f64, f64, f64
     (worst, supplied, dissipated)
 }
 
+/// A drum of `inertia` [kg at the rope] held by a brake alone: holding force `hold` [N],
+/// slip speed `slip` [m/s], no motor, no damping.
+fn brake_drum(inertia: f64, hold: f64, slip: f64) -> WinchDrum {
+    WinchDrum {
+        inertia,
+        force: Arc::new(|_| 0.0),
+        damping: 0.0,
+        brake: Some((hold, slip)),
+    }
+}
+
 /// A brake that holds 30 kN lets the 5.08 t that hang from it (49.9 kN) slip: the drum (2 t
 /// at the rope) and the payload accelerate at `(W − F_b)/(m + I + ρA a)`, 2.9 m/s², the
 /// payout after 2 s is the rigid-rope law's (5.8 m) within the rope's axial vibration (the
@@ -81,13 +92,7 @@ fn run_balanced(sim: &mut Simulation<2, Material>, t_end: f64) -> (f64, f64, f64
 #[test]
 fn a_slipping_brake_lets_the_payload_fall_at_the_rate_of_its_excess_weight() {
     let (hold, slip, inertia) = (3.0e4, 1e-3, 2000.0);
-    let drum = WinchDrum {
-        inertia,
-        force: Arc::new(|_| 0.0),
-        damping: 0.0,
-        brake: Some((hold, slip)),
-    };
-    let (net, _) = drum_hoist(drum);
+    let (net, _) = drum_hoist(brake_drum(inertia, hold, slip));
     let mut sim = Simulation::new(net, fixed_step(2e-3)).unwrap_or_else(|e| panic!("{e}"));
     let h0 = sim.energies().hamiltonian();
     let (mut supplied, mut dissipated, mut slid) = (0.0, 0.0, 0.0);
@@ -318,13 +323,7 @@ fn a_tension_controlled_drum_under_dg4_keeps_every_step_balanced() {
 #[test]
 fn a_slipping_brake_under_dg4_keeps_every_step_balanced() {
     let (hold, slip, inertia, h) = (3.0e4, 1e-3, 2000.0, 2e-3);
-    let drum = WinchDrum {
-        inertia,
-        force: Arc::new(|_| 0.0),
-        damping: 0.0,
-        brake: Some((hold, slip)),
-    };
-    let (net, _) = drum_hoist(drum);
+    let (net, _) = drum_hoist(brake_drum(inertia, hold, slip));
     let params = phstring::StepParams {
         scheme: phstring::Scheme::DiscreteGradient4,
         ..fixed_step(h)
