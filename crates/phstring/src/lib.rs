@@ -96,6 +96,7 @@ pub mod system;
 pub mod testing;
 pub mod water;
 pub mod winch;
+mod winch_cut;
 mod winch_step;
 
 pub use bathymetry::Bathymetry;

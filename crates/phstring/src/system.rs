@@ -143,6 +143,19 @@ impl Energies {
     pub fn hamiltonian(&self) -> f64 {
         self.kinetic + self.internal + self.external + self.buoyancy + self.seabed
     }
+    /// These energies with the part `from` of them replaced by `to`, term by term (the
+    /// magnitude too): the energies after a change confined to that part.
+    pub(crate) fn replaced(&self, from: &Energies, to: &Energies) -> Energies {
+        let f = |x: f64, a: f64, b: f64| x - a + b;
+        Energies {
+            kinetic: f(self.kinetic, from.kinetic, to.kinetic),
+            internal: f(self.internal, from.internal, to.internal),
+            external: f(self.external, from.external, to.external),
+            buoyancy: f(self.buoyancy, from.buoyancy, to.buoyancy),
+            seabed: f(self.seabed, from.seabed, to.seabed),
+            magnitude: f(self.magnitude, from.magnitude, to.magnitude),
+        }
+    }
 }
 
 /// A point mass attached to a node (a payload, a clump weight): it adds `mass` to the node's
@@ -407,6 +420,22 @@ pub(crate) fn element_mass(mass: MassMatrix, rho_a: f64, l: f64) -> (f64, f64) {
         MassMatrix::Consistent => (rho_a * l / 3.0, rho_a * l / 6.0),
         MassMatrix::Lumped => (rho_a * l / 2.0, 0.0),
     }
+}
+
+/// The kinetic and stored energies [J] of an element of group `g` and reference length `l`
+/// [m] with its nodes' velocities `(va, vb)` [m/s] and strain `c`.
+#[inline]
+pub(crate) fn element_energies<const D: usize, M: StoredEnergy>(
+    g: &ElementGroup<D, M>,
+    l: f64,
+    (va, vb): (&Vector<D>, &Vector<D>),
+    c: f64,
+) -> (f64, f64) {
+    let (md, mo) = element_mass(g.mass, g.rho_a, l);
+    (
+        0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(vb),
+        l * g.law.w(c),
+    )
 }
 
 /// Checks that the groups cover the elements in order, each once, and each group's
@@ -995,13 +1024,16 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut point_mass = add_point_masses(&point_masses, &mut f_body, &mut node_mass)?;
         let water_model =
             attach_water(water.as_ref(), &hydro, &mesh, &mut groups, &mut point_mass)?;
-        // With winches the lumped water is built again whenever an element comes off or
-        // goes onto a drum (docs/method.md §23).
+        // With winches the lumped water is lumped again where an element comes off or goes
+        // onto a drum (docs/method.md §23), in lists with room for every node and element.
         let water_spec = match (&water, winch_data.is_empty()) {
             (Some(w), false) => Some(Box::new((w.clone(), hydro.clone()))),
             _ => None,
         };
-        let water = water_model;
+        let mut water = water_model;
+        if let (Some(w), Some(_)) = (water.as_deref_mut(), &water_spec) {
+            w.reserve_all(&mesh);
+        }
         let mut winch_node = vec![false; n];
         let (mut winch_models, mut winch_start) = (Vec::new(), Vec::new());
         for (m, ws) in winch_data {
@@ -1314,12 +1346,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         let mut internal = 0.0;
         let mut magnitude = 0.0;
         for (g, e, [a, b], l) in self.each_element() {
-            let (va, vb) = (v(a), v(b));
-            let (md, mo) = element_mass(g.mass, g.rho_a, l);
-            let (t, w) = (
-                0.5 * md * (va.norm_squared() + vb.norm_squared()) + mo * va.dot(&vb),
-                l * g.law.w(c(e)),
-            );
+            let (t, w) = element_energies(g, l, (&v(a), &v(b)), c(e));
             kinetic += t;
             internal += w;
             magnitude += t.abs() + w.abs();
@@ -1451,7 +1478,8 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             return;
         };
         let info = group_info(&self.groups);
-        if let Ok((model, _, _)) = crate::water::build(&spec.0, &spec.1, &self.mesh, &info) {
+        if let Ok((mut model, _, _)) = crate::water::build(&spec.0, &spec.1, &self.mesh, &info) {
+            model.reserve_all(&self.mesh);
             self.water = Some(Box::new(model));
         }
     }
@@ -1485,22 +1513,29 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// there), with no offset yet, and links the body to the drum element (docs/method.md
     /// §23, "A drum on a rigid body").
     pub(crate) fn place_body_drums(&mut self, states: &[crate::winch::WinchState]) {
-        for (m, ws) in self.winches.iter().zip(states) {
-            let Some((b, k, _)) = m.body else {
-                continue;
-            };
-            let node = m.drum_node(ws);
-            let old = self.bodies[b].attachments[k].0;
-            if old != node {
-                self.attached[old] = None;
-            }
-            self.attached[node] = Some((b, k));
-            self.bodies[b].attachments[k].0 = node;
-            self.bodies[b].offset[k] = crate::body::Vec3::zeros();
-            let links = &mut self.body_links[b][k];
-            links.clear();
-            links.push((m.drum_element(ws), m.nodes[ws.drum + 1], true));
+        for (k, ws) in states.iter().enumerate() {
+            self.place_body_drum(k, ws);
         }
+    }
+
+    /// [`Self::place_body_drums`] for winch `w` at state `ws` alone (nothing for a drum that
+    /// is not on a rigid body).
+    pub(crate) fn place_body_drum(&mut self, w: usize, ws: &crate::winch::WinchState) {
+        let m = &self.winches[w];
+        let Some((b, k, _)) = m.body else {
+            return;
+        };
+        let node = m.drum_node(ws);
+        let old = self.bodies[b].attachments[k].0;
+        if old != node {
+            self.attached[old] = None;
+        }
+        self.attached[node] = Some((b, k));
+        self.bodies[b].attachments[k].0 = node;
+        self.bodies[b].offset[k] = crate::body::Vec3::zeros();
+        let links = &mut self.body_links[b][k];
+        links.clear();
+        links.push((m.drum_element(ws), m.nodes[ws.drum + 1], true));
     }
 
     /// Refuses an analysis (`what`: "statics", "modes", …) that does not cover rigid bodies

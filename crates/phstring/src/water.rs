@@ -875,6 +875,69 @@ fn check_point(k: usize, p: &PointHydro, n: usize) -> Result<(), SetupError> {
     check_value("point Ca", Some(k), p.ca, false)
 }
 
+/// The sums a node's wet data is lumped from: displaced volume [m³], the largest diameter
+/// [m], `Σ ½ l_e d_e` [m²] and the points' drag `½ ρ_w CdA` [kg/m].
+type NodeSums = (f64, f64, f64, f64);
+
+/// The cross-section `π d²/4` [m²] of a line.
+fn area_of(h: &LineHydro) -> f64 {
+    0.25 * std::f64::consts::PI * h.diameter * h.diameter
+}
+
+/// Adds half of a line element of reference length `l` [m] to its node's sums.
+fn add_line(nd: &mut NodeSums, l: f64, h: &LineHydro) {
+    nd.0 += 0.5 * l * area_of(h);
+    nd.1 = nd.1.max(h.diameter);
+    nd.2 += 0.5 * l * h.diameter;
+}
+
+/// Adds point `p` to its node's sums (water density `rho` [kg/m³]).
+fn add_point(nd: &mut NodeSums, p: &PointHydro, rho: f64) {
+    nd.0 += p.volume;
+    if nd.1 == 0.0 {
+        // A point alone: the band is its volume's sphere diameter.
+        nd.1 = (6.0 * p.volume / std::f64::consts::PI).cbrt();
+    }
+    nd.3 += 0.5 * rho * p.cda;
+}
+
+/// The drag data of line element `e` of reference length `l` [m].
+fn wet_element(e: usize, l: f64, h: &LineHydro, rho: f64) -> WetElement {
+    WetElement {
+        e,
+        normal: 0.5 * rho * h.cd * h.diameter * l,
+        axial: 0.5 * rho * h.cd_axial * std::f64::consts::PI * h.diameter * l,
+        band: h.diameter,
+        axial_excess: rho * area_of(h) * (h.ca - h.ca_axial) * l,
+    }
+}
+
+/// Node `i`'s wet data from its sums and its neighbours along its line (`None`: water does
+/// nothing to it).
+fn wet_node<const D: usize>(
+    water: &Water<D>,
+    i: usize,
+    &(v, band, dl, drag): &NodeSums,
+    (prev, next): (Option<usize>, Option<usize>),
+) -> Option<WetNode> {
+    if !(v > 0.0 || dl > 0.0 || drag > 0.0) {
+        return None;
+    }
+    let (kb, cb) = water
+        .seabed
+        .as_ref()
+        .map_or((0.0, 0.0), |s| (s.stiffness, s.damping));
+    Some(WetNode {
+        node: i,
+        buoyancy: water.density * water.gravity * v,
+        band: if band > 0.0 { band } else { 1e-3 },
+        stiffness: kb * dl,
+        damping: cb * dl,
+        drag,
+        axis: (prev.unwrap_or(i), next.unwrap_or(i)),
+    })
+}
+
 /// The validated model, and the added masses: per group `ρ_w π d²/4 Ca` [kg/m] to add to
 /// `ρA`, per node `ρ_w V Ca` [kg] to add as point masses.
 pub(crate) type Built<const D: usize> = (WaterModel<D>, Vec<f64>, Vec<(usize, f64)>);
@@ -892,7 +955,7 @@ pub(crate) fn build<const D: usize>(
     }
     let bed = check_water(water)?;
     let n = mesh.n_nodes();
-    let (rho, g) = (water.density, water.gravity);
+    let rho = water.density;
     let mut node = vec![(0.0f64, 0.0f64, 0.0f64, 0.0f64); n]; // (V, band, d L, drag)
     // Each node's neighbours along a wet line, for its axis.
     let (mut prev, mut next) = (vec![None; n], vec![None; n]);
@@ -914,60 +977,31 @@ pub(crate) fn build<const D: usize>(
             });
         }
         check_line(gi, &h)?;
-        let area = 0.25 * std::f64::consts::PI * h.diameter * h.diameter;
-        added_rho_a[gi] = rho * area * h.ca;
+        added_rho_a[gi] = rho * area_of(&h) * h.ca;
         for e in grp.elements.clone() {
             let l = mesh.lengths()[e];
             let [a, b] = mesh.elements()[e];
             prev[b].get_or_insert(a);
             next[a].get_or_insert(b);
             for i in mesh.elements()[e] {
-                let nd = &mut node[i];
-                nd.0 += 0.5 * l * area;
-                nd.1 = nd.1.max(h.diameter);
-                nd.2 += 0.5 * l * h.diameter;
+                add_line(&mut node[i], l, &h);
             }
-            elements.push(WetElement {
-                e,
-                normal: 0.5 * rho * h.cd * h.diameter * l,
-                axial: 0.5 * rho * h.cd_axial * std::f64::consts::PI * h.diameter * l,
-                band: h.diameter,
-                axial_excess: rho * area * (h.ca - h.ca_axial) * l,
-            });
+            elements.push(wet_element(e, l, &h, rho));
         }
     }
     elements.sort_by_key(|w| w.e);
     let mut added_point = Vec::new();
     for (k, p) in hydro.points.iter().enumerate() {
         check_point(k, p, n)?;
-        let nd = &mut node[p.node];
-        nd.0 += p.volume;
-        if nd.1 == 0.0 {
-            // A point alone: the band is its volume's sphere diameter.
-            nd.1 = (6.0 * p.volume / std::f64::consts::PI).cbrt();
-        }
-        nd.3 += 0.5 * rho * p.cda;
+        add_point(&mut node[p.node], p, rho);
         if p.ca * p.volume > 0.0 {
             added_point.push((p.node, rho * p.volume * p.ca));
         }
     }
-    let (kb, cb) = water
-        .seabed
-        .as_ref()
-        .map_or((0.0, 0.0), |s| (s.stiffness, s.damping));
     let nodes = node
         .iter()
         .enumerate()
-        .filter(|(_, x)| x.0 > 0.0 || x.2 > 0.0 || x.3 > 0.0)
-        .map(|(i, &(v, band, dl, drag))| WetNode {
-            node: i,
-            buoyancy: rho * g * v,
-            band: if band > 0.0 { band } else { 1e-3 },
-            stiffness: kb * dl,
-            damping: cb * dl,
-            drag,
-            axis: (prev[i].unwrap_or(i), next[i].unwrap_or(i)),
-        })
+        .filter_map(|(i, sums)| wet_node(water, i, sums, (prev[i], next[i])))
         .collect();
     let model = WaterModel {
         rho,
@@ -1020,6 +1054,79 @@ impl<const D: usize> WaterModel<D> {
             r[w.axis.1] - r[w.axis.0]
         } else {
             Vector::zeros()
+        }
+    }
+
+    /// Room for a wet entry at every node and element of `mesh`, so that
+    /// [`Self::relump_string`] never allocates.
+    pub(crate) fn reserve_all(&mut self, mesh: &Mesh) {
+        self.nodes.reserve(mesh.n_nodes() - self.nodes.len());
+        self.elements
+            .reserve(mesh.n_elements() - self.elements.len());
+    }
+
+    /// Lumps the water again, as [`build`] lumps it, at the nodes `nodes` and the elements
+    /// `elements` of the string of group `group` after its active elements became `active`
+    /// (a winch's cut, docs/method.md §23): `elements` must hold every element that meets a
+    /// node in `nodes`, and no other group's element may meet them. Adds, replaces or
+    /// removes their entries in place.
+    pub(crate) fn relump_string(
+        &mut self,
+        (water, hydro): (&Water<D>, &Hydrodynamics),
+        mesh: &Mesh,
+        (group, active): (usize, &std::ops::Range<usize>),
+        (elements, nodes): (std::ops::Range<usize>, &[usize]),
+    ) {
+        let line = hydro
+            .lines
+            .iter()
+            .find(|(g, _)| *g == group)
+            .map(|(_, h)| h);
+        let wet = |e: usize| line.filter(|_| active.contains(&e));
+        for e in elements.clone() {
+            let at = self.elements.binary_search_by_key(&e, |w| w.e);
+            match (wet(e), at) {
+                (Some(h), Ok(k)) => {
+                    self.elements[k] = wet_element(e, mesh.lengths()[e], h, water.density)
+                }
+                (Some(h), Err(k)) => self
+                    .elements
+                    .insert(k, wet_element(e, mesh.lengths()[e], h, water.density)),
+                (None, Ok(k)) => {
+                    self.elements.remove(k);
+                }
+                (None, Err(_)) => {}
+            }
+        }
+        for &i in nodes {
+            let mut sums = (0.0, 0.0, 0.0, 0.0);
+            let (mut prev, mut next) = (None, None);
+            for e in elements.clone() {
+                let (Some(h), [a, b]) = (wet(e), mesh.elements()[e]) else {
+                    continue;
+                };
+                if b == i {
+                    prev.get_or_insert(a);
+                }
+                if a == i {
+                    next.get_or_insert(b);
+                }
+                if a == i || b == i {
+                    add_line(&mut sums, mesh.lengths()[e], h);
+                }
+            }
+            for p in hydro.points.iter().filter(|p| p.node == i) {
+                add_point(&mut sums, p, water.density);
+            }
+            let at = self.nodes.binary_search_by_key(&i, |w| w.node);
+            match (wet_node(water, i, &sums, (prev, next)), at) {
+                (Some(w), Ok(k)) => self.nodes[k] = w,
+                (Some(w), Err(k)) => self.nodes.insert(k, w),
+                (None, Ok(k)) => {
+                    self.nodes.remove(k);
+                }
+                (None, Err(_)) => {}
+            }
         }
     }
 

@@ -418,6 +418,26 @@ impl<const D: usize> WinchModel<D> {
         ws.behind_cut = behind;
     }
 
+    /// The drum element (index along the string) after [`Self::cut`] brings `ws` to
+    /// `payout` [m]: the drum node leaves the band `[−ε, L − ε]` of its distance behind the
+    /// drum point, `ε = 1e-9 L`, one element at a time (a payout brought back to where a cut
+    /// left the drum node, `b = L` up to rounding, puts the element back, so that paying out
+    /// and hauling in the same length returns the mesh it started from).
+    pub fn drum_after(&self, ws: &WinchState, payout: f64) -> usize {
+        let (l, last) = (self.l, self.elements.len() - 1);
+        let eps = 1e-9 * l;
+        let (mut behind, mut drum) = (ws.behind(payout), ws.drum);
+        while behind < -eps && drum > 0 {
+            behind += l;
+            drum -= 1;
+        }
+        while behind > l - eps && drum < last {
+            behind -= l;
+            drum += 1;
+        }
+        drum
+    }
+
     /// Brings `ws` to `payout` [m] after a step and cuts where the drum node has left its
     /// band: out past the drum point (paying out), an element comes off the drum, its new
     /// drum node `L λ` behind the old one on the path, with the old strain; more than an
@@ -431,16 +451,12 @@ impl<const D: usize> WinchModel<D> {
         (frame, payout, rate): (&DrumFrame<D>, f64, f64),
         (r, v, c): (&mut [SVector<f64, D>], &mut [SVector<f64, D>], &mut [f64]),
     ) {
+        let to = self.drum_after(ws, payout);
         ws.payout = payout;
         let l = self.l;
-        let last = self.elements.len() - 1;
         let (drum, drum_v) = (frame.point, frame.velocity);
         let along = |ws: &WinchState| drum_v + vec_of::<D>(&ws.direction) * (ws.stretch * rate);
-        // The band `[−ε, L − ε]`, `ε = 1e-9 L`: a payout brought back to where a cut left the
-        // drum node (`b = L` up to rounding) puts the element back, so that paying out and
-        // hauling in the same length returns the mesh it started from.
-        let eps = 1e-9 * l;
-        while ws.behind(payout) < -eps && ws.drum > 0 {
+        while ws.drum > to {
             let (a, b) = (self.nodes[ws.drum - 1], self.nodes[ws.drum]);
             let e = self.drum_element(ws);
             // The new element has the drum element's strain, and its chord fits it,
@@ -460,7 +476,7 @@ impl<const D: usize> WinchModel<D> {
             self.new_path(ws, (r[a], r[b]), (c[e - 1], behind), frame);
             v[a] = along(ws);
         }
-        while ws.behind(payout) > l - eps && ws.drum < last {
+        while ws.drum < to {
             let (a, b, n) = (
                 self.nodes[ws.drum],
                 self.nodes[ws.drum + 1],
@@ -496,7 +512,23 @@ impl<const D: usize> WinchModel<D> {
         if !(moved || always) {
             return false;
         }
-        *range = first..self.elements.end;
+        let all = 0..self.elements.len();
+        self.place_nodes(ws, mesh, range, (f_body, free), all);
+        true
+    }
+
+    /// [`Self::place`] of `ws` (always), its held flags and body forces set only at the
+    /// string's nodes `nodes` (indices along the string, not its last): where a cut moved
+    /// the drum element, the nodes between the old and the new drum nodes.
+    pub fn place_nodes(
+        &self,
+        ws: &WinchState,
+        mesh: &Mesh,
+        range: &mut Range<usize>,
+        (f_body, free): (&mut [SVector<f64, D>], &mut [[bool; D]]),
+        nodes: Range<usize>,
+    ) {
+        *range = self.elements.start + ws.drum..self.elements.end;
         let n_el = self.elements.len();
         let lengths = mesh.lengths();
         let half = |j: usize| -> SVector<f64, D> {
@@ -506,12 +538,12 @@ impl<const D: usize> WinchModel<D> {
                 SVector::zeros()
             }
         };
-        for (j, &i) in self.nodes[..n_el].iter().enumerate() {
+        for j in nodes {
+            let i = self.nodes[j];
             let before = if j > 0 { half(j - 1) } else { SVector::zeros() };
             f_body[i] = before + half(j);
             free[i] = [j > ws.drum; D];
         }
-        true
     }
 }
 

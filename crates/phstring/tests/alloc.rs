@@ -442,11 +442,11 @@ fn winch_step_loop_does_not_allocate() {
 }
 
 /// The same winch run in water (buoyancy, drag and added mass on the rope, 32 mm, drag
-/// coefficient 1.2): the steps between cuts allocate nothing. A cut step does: the water's
-/// lumped model is built again over the elements off the drum (docs/method.md §23, "In
-/// water"), a new model of its own vectors; the count is printed.
+/// coefficient 1.2) steps without allocating, its cuts included: a cut lumps the water again
+/// at the nodes between the old and the new drum node, in lists with room for every node
+/// and element (docs/method.md §23, "The cost of a cut").
 #[test]
-fn winch_step_loop_in_water_allocates_only_at_cuts() {
+fn winch_step_loop_in_water_does_not_allocate() {
     let smooth = |x: f64| {
         let x = x.clamp(0.0, 1.0);
         x * x * (3.0 - 2.0 * x)
@@ -464,9 +464,11 @@ fn winch_step_loop_in_water_allocates_only_at_cuts() {
                 ..Default::default()
             },
         );
-    let (cuts, _, between) = winch_run_allocations(net, group, 799, at_10_ms(), "winch in water");
+    let (cuts, at_cuts, between) =
+        winch_run_allocations(net, group, 799, at_10_ms(), "winch in water");
     assert!(cuts >= 4, "{cuts} cuts");
     assert_eq!(between, 0, "steps between cuts allocated {between} times");
+    assert_eq!(at_cuts, 0, "{cuts} cut steps allocated {at_cuts} times");
 }
 
 /// A winch with a drum with dynamics steps without allocating, its cuts included: the same

@@ -36,7 +36,7 @@ use crate::accuracy::AccelerationHistory;
 use crate::body::BodyState;
 use crate::error::SetupError;
 use crate::material::StoredEnergy;
-use crate::system::{State, Vector};
+use crate::system::{Energies, State, Vector};
 use crate::water::WaterWork;
 use crate::winch::WinchState;
 
@@ -85,6 +85,12 @@ pub struct Checkpoint<const D: usize> {
     pub water: WaterWork,
     /// The winches' states (docs/method.md §23), one per winch; empty without winches.
     pub winches: Vec<WinchState>,
+    /// The energies of `state` [J] as the run held them when [`Simulation::checkpoint`] took
+    /// the record (`None` in the running record). A winch's cut updates them in place
+    /// (docs/method.md §23, "The cost of a cut"), so they can differ from an evaluation of
+    /// `state` in the last bits; [`Simulation::restore`] takes them where they agree with
+    /// that evaluation to 1e-12 of their magnitude, so that a run continues bit for bit.
+    pub energies: Option<Energies>,
 }
 
 impl<const D: usize> Checkpoint<D> {
@@ -111,6 +117,7 @@ impl<const D: usize> Checkpoint<D> {
             err_prev: 1.0,
             water: WaterWork::default(),
             winches: Vec::new(),
+            energies: None,
         }
     }
 
@@ -140,6 +147,7 @@ impl<const D: usize> Checkpoint<D> {
             err_prev,
             water: _,
             winches: _,
+            energies: _,
         } = self;
         for (what, got, expected) in [
             ("positions", state.r.len(), n),
@@ -215,6 +223,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
             err_prev: 0.0,
             water: WaterWork::default(),
             winches: Vec::new(),
+            energies: None,
         };
         c.clone_from(self);
         c
@@ -240,6 +249,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
             err_prev,
             water,
             winches,
+            energies,
         } = self;
         state.clone_from(&source.state);
         *t_base = source.t_base;
@@ -258,6 +268,7 @@ impl<const D: usize> Clone for Checkpoint<D> {
         *err_prev = source.err_prev;
         *water = source.water;
         winches.clone_from(&source.winches);
+        *energies = source.energies;
     }
 }
 
@@ -329,6 +340,14 @@ pub struct FlatCheckpoint {
         serde(default, skip_serializing_if = "Vec::is_empty")
     )]
     pub winches: Vec<WinchState>,
+    /// [`Checkpoint::energies`] [J]: kinetic, internal, external, buoyancy, seabed and
+    /// magnitude; empty when missing (files written before it; then a restore evaluates
+    /// the state).
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Vec::is_empty")
+    )]
+    pub energies: Vec<f64>,
 }
 
 /// Numbers per rigid body in [`FlatCheckpoint::bodies`].
@@ -406,6 +425,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             err_prev,
             water,
             winches,
+            energies,
         } = cp;
         Self {
             r: flat(r),
@@ -432,6 +452,16 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             total_newton: *total_newton,
             water: *water,
             winches: winches.clone(),
+            energies: energies.map_or_else(Vec::new, |e| {
+                vec![
+                    e.kinetic,
+                    e.internal,
+                    e.external,
+                    e.buoyancy,
+                    e.seabed,
+                    e.magnitude,
+                ]
+            }),
         }
     }
 }
@@ -490,6 +520,7 @@ impl FlatCheckpoint {
             total_newton,
             water,
             winches,
+            energies,
         } = self;
         Checkpoint {
             state: State {
@@ -519,6 +550,17 @@ impl FlatCheckpoint {
             err_prev,
             water,
             winches,
+            energies: match energies[..] {
+                [kinetic, internal, external, buoyancy, seabed, magnitude] => Some(Energies {
+                    kinetic,
+                    internal,
+                    external,
+                    buoyancy,
+                    seabed,
+                    magnitude,
+                }),
+                _ => None,
+            },
         }
     }
 
@@ -551,6 +593,7 @@ impl FlatCheckpoint {
             total_newton: _,
             water,
             winches,
+            energies,
         } = self;
         if winches.iter().any(|w| {
             let numbers = [w.stretch, w.payout_cut, w.behind_cut, w.payout, w.energy];
@@ -558,13 +601,14 @@ impl FlatCheckpoint {
         }) {
             return Some("sim.winches");
         }
-        let arrays: [(&'static str, &[f64]); 6] = [
+        let arrays: [(&'static str, &[f64]); 7] = [
             ("sim.r", r),
             ("sim.v", v),
             ("sim.c", c),
             ("sim.bodies", bodies),
             ("sim.acc", acc),
             ("sim.v_mid", v_mid),
+            ("sim.energies", energies),
         ];
         let scalars = [
             ("sim.t_base", t_base),
@@ -632,8 +676,19 @@ impl FlatCheckpoint {
             total_newton,
             water,
             winches,
+            energies,
         } = self;
         sim.check_winch_states(winches)?;
+        if !(energies.is_empty() || energies.len() == 6) {
+            return Err(format!(
+                "sim.energies has {} numbers, not 6 (kinetic, internal, external, buoyancy, \
+                 seabed, magnitude) or none",
+                energies.len()
+            ));
+        }
+        if let Some(i) = energies.iter().position(|x| !x.is_finite()) {
+            return Err(format!("sim.energies[{i}] is not finite"));
+        }
         let (n, n_el) = (
             sim.system().mesh().n_nodes(),
             sim.system().mesh().n_elements(),

@@ -9,6 +9,7 @@ use crate::material::StoredEnergy;
 use crate::system::{Energies, Vector};
 use crate::winch::WinchState;
 use crate::winch_step::DrumStep;
+use std::ops::Range;
 
 /// A drum's state at the end of the current step and its shares of the step.
 #[derive(Debug, Clone, Copy, Default)]
@@ -212,6 +213,29 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             e.magnitude += t;
         }
         e
+    }
+
+    /// The part of `Ĥ` [J] a cut of winch `k` can change (docs/method.md §23, "The cost of a
+    /// cut"): its string's elements and nodes in `window` (string-local, [`cut_window`]) and
+    /// its drum's kinetic energy, as [`Self::with_drums`] and [`PhSystem::energies`]
+    /// evaluate them. An empty window (no cut) is not evaluated.
+    ///
+    /// [`cut_window`]: crate::winch_cut::cut_window
+    /// [`PhSystem::energies`]: crate::PhSystem::energies
+    fn cut_part(&self, k: usize, window: (Range<usize>, Range<usize>)) -> Energies {
+        let mut part = Energies::default();
+        if window.1.len() < 2 {
+            return part;
+        }
+        part = self.sys.winch_energies(k, window, &self.run.state);
+        if let Some((drum, _)) = &self.sys.winches[k].drum {
+            let ws = &self.run.winches[k];
+            let u = ws.stretch * ws.speed;
+            let t = 0.5 * drum.inertia * u * u;
+            part.kinetic += t;
+            part.magnitude += t;
+        }
+        part
     }
 
     /// The winch drums' data for the step `at` (docs/method.md §23.6) into `drum_steps`, with
@@ -478,16 +502,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let ws = &mut self.run.winches[k];
             // The payout the step reached, moving at the prescribed rate or the drum's speed.
             let (payout, rate) = (ws.payout, m.payout_at(ws, t).1);
-            let drum = ws.drum;
+            let from = ws.drum;
+            let window = crate::winch_cut::cut_window(from, m.drum_after(ws, payout));
+            let before = self.cut_part(k, window.clone());
+            let (m, ws) = (&self.sys.winches[k], &mut self.run.winches[k]);
             let state = &mut self.run.state;
             let frame = m.frame(t, &state.bodies);
             let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
             m.cut(ws, (&frame, payout, rate), parts);
-            if ws.drum != drum {
-                self.sys.place_winches(&self.run.winches);
-                let after = self.with_drums(self.sys.energies(&self.run.state), false);
-                let de = after.hamiltonian() - self.energies.hamiltonian();
-                self.energies = after;
+            if ws.drum != from {
+                let ws = *ws;
+                self.sys.place_cut(k, &ws, from);
+                let after = self.cut_part(k, window);
+                let de = after.hamiltonian() - before.hamiltonian();
+                self.energies = self.energies.replaced(&before, &after);
                 self.run.winches[k].energy += de;
                 self.winch_step[k].1 += de;
                 total += de;
