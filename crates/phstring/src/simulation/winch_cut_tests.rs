@@ -1,7 +1,8 @@
 //! A winch's cut in place (docs/method.md §23, "The cost of a cut") against a placement
 //! of the whole system: after every cut the system's data are those a restore builds from
 //! scratch (group ranges, held flags, body forces, constrained sets, the lumped water, bit
-//! for bit), and the energies updated in place are those of an evaluation of the state.
+//! for bit), and the energies updated in place are those of an evaluation of the state; a
+//! checkpoint taken at a cut resumes bit for bit.
 
 use super::Simulation;
 use super::test_support::fixed_steps;
@@ -152,4 +153,33 @@ fn a_cut_in_place_keeps_a_drums_kinetic_energy() {
         worst <= 1e-13,
         "energies off by {worst:e} of their magnitude"
     );
+}
+
+/// A run resumed from a checkpoint taken on a step that cut (its record through the flat
+/// form of a checkpoint file) reports the energies an uninterrupted run reports, bit for bit:
+/// the checkpoint carries the energies updated in place, which an evaluation of the state
+/// gives only to rounding.
+#[test]
+fn a_checkpoint_taken_at_a_cut_resumes_bit_for_bit() {
+    let mut sim = chain_over_water(None);
+    while sim.run.winches[0].drum == 8 {
+        sim.step().unwrap();
+    }
+    let cp = sim.checkpoint();
+    let held = cp.energies.expect("the run's energies");
+    let evaluated = sim.with_drums(sim.sys.energies(&sim.run.state), false);
+    eprintln!(
+        "at the cut: Ĥ held {:.17e} J, evaluated {:.17e} J",
+        held.hamiltonian(),
+        evaluated.hamiltonian()
+    );
+    let flat = crate::FlatCheckpoint::from(&cp);
+    let mut resumed = chain_over_water(None);
+    resumed.restore(flat.into_checkpoint()).unwrap();
+    assert_eq!(resumed.energies, sim.energies);
+    for _ in 0..300 {
+        let (a, b) = (sim.step().unwrap(), resumed.step().unwrap());
+        assert_eq!((a.before, a.after), (b.before, b.after), "at t = {} s", a.t);
+    }
+    assert_eq!(resumed.checkpoint(), sim.checkpoint());
 }
