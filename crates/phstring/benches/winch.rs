@@ -147,6 +147,7 @@ fn setup(h: f64, kind: Kind) -> (Simulation<2, Material>, f64) {
         payout: Arc::new(payout),
         drum_motion: None,
         drum: with_drum.then(|| WinchDrum {
+            derivative_time: 0.0,
             inertia: 0.0,
             // The static weight at the drum less `d` times the speed: at steady state the
             // controller pays out at the speed.

@@ -478,6 +478,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     .into(),
             });
         }
+        winch::check_drum_scheme(&sys, params.scheme)?;
         let mut sys = sys;
         let winch_start = sys.winch_start.clone();
         sys.place_winches(&winch_start);

@@ -38,8 +38,8 @@ pub type DrumForceFn = Arc<dyn Fn(f64) -> f64 + Send + Sync>;
 /// §23.6): the payout `p` moves by the rope's pull against the drum's inertia, its motor, its
 /// damping and its brake, all inside the exact step. With `force = T_ref(t)` and a damping
 /// `d`, it is a tension controller: at steady state the drum pays out at `(T − T_ref)/d`, a
-/// proportional law of the payout speed on the tension error, with the inertia as its
-/// derivative part.
+/// proportional law of the payout speed on the tension error; `derivative_time` adds a
+/// derivative part on the tension's rate.
 #[derive(Clone)]
 pub struct WinchDrum {
     /// The drum's inertia at the rope, `J/R²` [kg] (`J` the drum's and the motor's moment of
@@ -57,6 +57,13 @@ pub struct WinchDrum {
     /// Coulomb law `−F_b ṗ/√(ṗ² + s²)` (a resistance: the brake holds a pull `T < F_b` with a
     /// creep of about `s T/√(F_b² − T²)` and slips above it).
     pub brake: Option<(f64, f64)>,
+    /// The derivative time `τ` [s] of the tension controller (`≥ 0`, finite; 0: no
+    /// derivative part): the motor adds the pull `−τ dT/dt` to `force`, so that at zero
+    /// inertia the drum pays out at `λ d ṗ = (T − T_ref) + τ dT/dt` (`T` the rope's pull at
+    /// the drum; gains `1/d` and `τ/d`). `dT/dt` is taken inside the step between the mid
+    /// times of the previous accepted step and this one (docs/method.md §23.6); off on a
+    /// run's first step. Not with `dg4` (refused by name).
+    pub derivative_time: f64,
 }
 
 impl std::fmt::Debug for WinchDrum {
@@ -65,6 +72,7 @@ impl std::fmt::Debug for WinchDrum {
             .field("inertia", &self.inertia)
             .field("damping", &self.damping)
             .field("brake", &self.brake)
+            .field("derivative_time", &self.derivative_time)
             .finish_non_exhaustive()
     }
 }
@@ -153,6 +161,15 @@ pub struct WinchState {
     /// `energy`.
     #[cfg_attr(feature = "serde", serde(default))]
     pub motor: f64,
+    /// The rope's pull at the drum [N] over the last accepted step, `T_{n−½} = −t̂·R_d` at
+    /// its mid time (the drum's reaction along the rope), for the derivative part of a drum
+    /// with a derivative time (0 otherwise).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub pull: f64,
+    /// The size [s] of the step `pull` was taken over; 0 while no pull is known (before a
+    /// run's first step, or without a derivative time): the derivative part is off then.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub pull_step: f64,
 }
 
 impl WinchState {
@@ -670,6 +687,8 @@ pub(crate) fn attach<const D: usize>(
             speed: 0.0,
             dissipated: 0.0,
             motor: 0.0,
+            pull: 0.0,
+            pull_step: 0.0,
         };
         let drum = match &w.drum {
             None => None,
@@ -697,8 +716,8 @@ pub(crate) fn attach<const D: usize>(
     Ok(out)
 }
 
-/// Checks a drum's constants: a finite inertia and damping `≥ 0`, a brake's holding force
-/// `≥ 0` and slip speed `> 0`, the motor force finite at `t = 0`.
+/// Checks a drum's constants: a finite inertia, damping and derivative time `≥ 0`, a brake's
+/// holding force `≥ 0` and slip speed `> 0`, the motor force finite at `t = 0`.
 fn check_drum(d: &WinchDrum) -> Result<(), String> {
     let bad = |what: &str, v: f64| Err(format!("its drum's {what} is {v}"));
     if !(d.inertia.is_finite() && d.inertia >= 0.0) {
@@ -706,6 +725,9 @@ fn check_drum(d: &WinchDrum) -> Result<(), String> {
     }
     if !(d.damping.is_finite() && d.damping >= 0.0) {
         return bad("damping (N·s/m; must be ≥ 0)", d.damping);
+    }
+    if !(d.derivative_time.is_finite() && d.derivative_time >= 0.0) {
+        return bad("derivative time (s; must be ≥ 0)", d.derivative_time);
     }
     if let Some((hold, slip)) = d.brake {
         if !(hold.is_finite() && hold >= 0.0) {

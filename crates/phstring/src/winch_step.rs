@@ -41,9 +41,29 @@ pub(crate) struct DrumStep<const D: usize> {
     /// The motor's pull per unit payout at the mid time, `λ f(t_{n+½})` [N] (hauling in
     /// positive).
     pub force: f64,
+    /// The derivative part's gain `τ/Δt` (dimensionless): the drum's derivative time `τ` [s]
+    /// over the time between the previous accepted step's mid time and this step's,
+    /// `Δt = (h_{n−1} + h)/2`; 0 when the drum has none or no previous pull is known.
+    pub derivative: f64,
+    /// The previous accepted step's pull per unit payout, `λ T_{n−½}` [N] (0 with
+    /// `derivative` 0).
+    pub pull_before: f64,
 }
 
 impl<const D: usize> DrumStep<D> {
+    /// The motor's pull per unit payout [N] (hauling in positive) with the drum node's
+    /// residual along the path `along = λ t̂·R_d` [N] (the rope's pull `λ T = −along`): the
+    /// motor's `λ f` plus the derivative part's `−λ τ (T_{n+½} − T_{n−½})/Δt =
+    /// (τ/Δt)(along + λ T_{n−½})` (docs/method.md §23.6). Without a derivative part it is
+    /// `λ f` itself, untouched by `along`.
+    pub fn drive(&self, along: f64) -> f64 {
+        if self.derivative > 0.0 {
+            self.force + self.derivative * (along + self.pull_before)
+        } else {
+            self.force
+        }
+    }
+
     /// The payout speed [m/s] at the end of a step of `h` [s] that paid out `dp` [m]: the
     /// midpoint rule's `2Δp/h − ṗₙ`, or for a drum without inertia, which has no speed of its
     /// own, the step's mean `Δp/h` (the midpoint value would alternate about it).
@@ -94,8 +114,9 @@ pub(crate) fn fill_drums<const D: usize>(
 /// the drums' own force terms (force scale).
 ///
 /// Row: `g = m_d (2/h)(Δp/h − ṗ_n) + λ t̂·R_d + f + f_r(Δp/h)`, with `R_d` the drum node's
-/// residual (the rope's pull on the drum is `−λ t̂·R_d`), `f` the motor's pull and `f_r` the
-/// damping and brake.
+/// residual (the rope's pull on the drum is `−λ t̂·R_d`), `f` the motor's pull with its
+/// derivative part ([`DrumStep::drive`]) and `f_r` the damping and brake. The derivative
+/// part scales the pull's derivatives by `1 + τ/Δt`.
 pub(crate) fn terms<const D: usize, M>(
     sys: &PhSystem<D, M>,
     drums: &[DrumStep<D>],
@@ -113,25 +134,35 @@ pub(crate) fn terms<const D: usize, M>(
         let (f_r, df_r) = resistance(sys, d, u);
         let inertia = d.inertia * 2.0 * inv_h * (u - d.speed);
         let pull = d.axis.dot(&res[d.node]);
+        let drive = d.drive(pull);
         let mut row = Vector::<D>::zeros();
-        row[0] = inertia + pull + d.force + f_r;
+        row[0] = inertia + pull + drive + f_r;
         res[n + d.slot] = row;
         let mi = d.inertia * 2.0 * inv_h;
-        scale2 += mi * mi * (u * u + d.speed * d.speed) + d.force * d.force + f_r * f_r;
+        // The derivative part's two pulls, which cancel to its own (0 without one).
+        let (fd, fd_before) = (d.derivative * pull, d.derivative * d.pull_before);
+        scale2 += mi * mi * (u * u + d.speed * d.speed)
+            + d.force * d.force
+            + f_r * f_r
+            + fd * fd
+            + fd_before * fd_before;
         let Some(j) = jac.as_deref_mut() else {
             continue;
         };
         let slots_n = j.border.slots;
+        // The pull's derivatives, with the derivative part's share (1 without one).
+        let gain = 1.0 + d.derivative;
         let mut own = Block::<D>::identity();
-        own[(0, 0)] =
-            d.inertia * 2.0 * inv_h * inv_h + d.axis.dot(&(j.diag[d.node] * d.axis)) + df_r * inv_h;
+        own[(0, 0)] = d.inertia * 2.0 * inv_h * inv_h
+            + gain * d.axis.dot(&(j.diag[d.node] * d.axis))
+            + df_r * inv_h;
         j.border.own[d.slot * slots_n + d.slot] = own;
         if let Some((b, s)) = d.body {
             let model = &sys.bodies[b];
             let free_body = model.motion.is_none();
             body_blocks(
                 d,
-                (b, &s, free_body),
+                (b, &s, free_body, gain),
                 (&bodies[b], slots, model.gyration()),
                 j,
             );
@@ -142,7 +173,7 @@ pub(crate) fn terms<const D: usize, M>(
         }
         // The drum element's blocks: ∂R_d/∂x_o and ∂R_o/∂x_d (the drum node is its first).
         let (d_o, o_d) = (j.off[d.element][0], j.off[d.element][1]);
-        let along = d.axis.transpose() * d_o;
+        let along = d.axis.transpose() * d_o * gain;
         let across = o_d * d.axis;
         let mut row_blk = Block::<D>::zeros();
         let mut col_blk = Block::<D>::zeros();
@@ -162,10 +193,11 @@ pub(crate) fn terms<const D: usize, M>(
 /// slides with `Δp`, so the drum's row depends on the body's slots through the node's
 /// residual `R_d`, `∂R_d/∂(Δx, w) = K_d [I, ∂(moved)/∂w]`, and the body's rows on `Δp`,
 /// `∂R_d/∂Δp = K_d λ t̂` (force row; the torque row, scaled by `1/r_g`, through its arm),
-/// unless its motion is prescribed (`free_body` false: its rows are `δu = 0`).
+/// unless its motion is prescribed (`free_body` false: its rows are `δu = 0`). The drum's row
+/// takes the pull's derivatives times `gain`, `1 + τ/Δt` with a derivative part.
 fn body_blocks<const D: usize>(
     d: &DrumStep<D>,
-    (b, s, free_body): (usize, &Vec3, bool),
+    (b, s, free_body, gain): (usize, &Vec3, bool, f64),
     (st, slots, gyration): (&BodyState, &[Vector<D>], f64),
     j: &mut BlockJacobian<D>,
 ) {
@@ -176,7 +208,7 @@ fn body_blocks<const D: usize>(
     let k = crate::body_step::embed_block(&j.diag[d.node]);
     let axis = embed(&d.axis);
     // The drum's row against the body's slots.
-    let along = k.transpose() * axis;
+    let along = k.transpose() * axis * gain;
     let mut by_dx = Block::<D>::zeros();
     let mut by_w = Block::<D>::zeros();
     let along_w = p.dw.transpose() * along;
@@ -215,7 +247,7 @@ fn body_blocks<const D: usize>(
 /// node's residual (its reaction) `reaction` [N]: the energy the winch supplies (the reaction's
 /// work over the drum's own motion, `R·base`, and the motor's, `−f Δp`) and the energy the
 /// damping and brake dissipate, `f_r(Δp/h) Δp ≥ 0` [J]; and the motor's part of the supply,
-/// `−f Δp` [J].
+/// `−f Δp` [J], `f` with its derivative part at the converged reaction ([`DrumStep::drive`]).
 pub(crate) fn shares<const D: usize, M>(
     sys: &PhSystem<D, M>,
     d: &DrumStep<D>,
@@ -224,6 +256,6 @@ pub(crate) fn shares<const D: usize, M>(
     reaction: &Vector<D>,
 ) -> (f64, f64, f64) {
     let (f_r, _) = resistance(sys, d, dp / h);
-    let motor = -d.force * dp;
+    let motor = -d.drive(d.axis.dot(reaction)) * dp;
     (reaction.dot(&d.base) + motor, f_r * dp, motor)
 }

@@ -479,6 +479,7 @@ fn winch_step_loop_in_water_does_not_allocate() {
 #[test]
 fn drum_step_loop_does_not_allocate() {
     let drum = phstring::WinchDrum {
+        derivative_time: 0.0,
         inertia: 2000.0,
         force: std::sync::Arc::new(|_| 40.0e3),
         damping: 2.0e4,

@@ -274,7 +274,8 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
         ),
     ];
     // A drum with dynamics: refused with a payout, a torque or inertia without a radius,
-    // both a tension and a torque, a negative damping.
+    // both a tension and a torque, a negative damping, a negative or infinite derivative
+    // time, a derivative time with `dg4`.
     let heave = std::fs::read_to_string(
         crate::workspace_root().join("examples/heave_compensated_winch_2d.toml"),
     )
@@ -292,6 +293,23 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
             "tension = \"51020\"\ntorque = \"1000\"",
         ),
         drum("damping = 1000.0", "damping = -1000.0"),
+        drum(
+            "damping = 1000.0",
+            "damping = 1000.0\nderivative_time = -0.5",
+        ),
+        drum(
+            "damping = 1000.0",
+            "damping = 1000.0\nderivative_time = inf",
+        ),
+        (
+            drum(
+                "damping = 1000.0",
+                "damping = 1000.0\nderivative_time = 0.5",
+            )
+            .0
+            .replace("h = 0.01 ", "scheme = \"dg4\"\nh = 0.01 "),
+            "",
+        ),
     ]
     .into_iter()
     .zip([
@@ -299,6 +317,9 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
         "`winch.0.drum.inertia` needs the drum's radius",
         "`winch.0.drum.torque` and winch.drum.tension exclude each other",
         "`winch.0.drum.damping` = -1000 must be finite and ≥ 0",
+        "`winch.0.drum.derivative_time` = -0.5 must be finite and ≥ 0",
+        "`winch.0.drum.derivative_time` = inf must be finite and ≥ 0",
+        "`winch.0.drum.derivative_time` = 0.5 s is not supported with time.scheme = \"dg4\"",
     ]) {
         cases.push((scenario, key));
     }
@@ -1068,4 +1089,60 @@ fn the_crane_runs_with_dg4_and_with_error_control() {
         assert!(off < allowed, "{tag}: hook {off} m from the dg4 run");
         let _ = std::fs::remove_dir_all(out.parent().unwrap());
     }
+}
+
+/// The heave-compensating winch (`heave_compensated_winch_2d.toml`) with a derivative part
+/// in its tension controller (`--set winch.0.drum.derivative_time=0.5`), over 6 s: `check`
+/// lists it with the drum; the run completes, and its winch's energy less the damping's
+/// dissipation is `Ĥ(T) − Ĥ(0)` to 1e-9 (the derivative part's work is the motor's, part of
+/// the winch's energy); stopped after 237 steps and resumed from its checkpoint file, it writes
+/// the same `winches.csv` and `energy.csv` as the uninterrupted run (the previous pull is in
+/// the checkpoint); and its payout differs from the run without the key.
+#[test]
+fn a_drum_with_a_derivative_time_runs_resumes_and_reports() {
+    let dir = temp_dir("winch-pd");
+    let scenario = "examples/heave_compensated_winch_2d.toml";
+    let tau = "winch.0.drum.derivative_time=0.5";
+    let sets = [
+        "time.end=6",
+        "output.plots=false",
+        "output.animation=false",
+        "output.vtk=false",
+        tau,
+    ];
+    let path = crate::workspace_root().join(scenario);
+    let o = phstring(&["check", path.to_str().unwrap(), "--set", tau]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success() && text.contains("derivative time 0.5 s"),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let (whole, parts) = crate::run_whole_and_resumed(scenario, &dir, &sets, 237);
+    for f in ["winches.csv", "energy.csv"] {
+        let read = |d: &Path| std::fs::read_to_string(d.join(f)).unwrap();
+        assert_eq!(read(&whole), read(&parts), "{f} differs");
+    }
+    let s = summary(&whole);
+    let dh = s["hamiltonian_final"].as_f64().unwrap() - s["hamiltonian_initial"].as_f64().unwrap();
+    let dissipated = s["dissipated_energy"].as_f64().unwrap();
+    let last = numeric_rows(&whole.join("winches.csv")).pop().unwrap();
+    let (energy, motor) = (last[7], last[9]);
+    eprintln!(
+        "derivative time 0.5 s: winch {energy:.1} J (motor {motor:.1} J), damping {dissipated:.1} J, ΔĤ {dh:.1} J; payout {:.4} m",
+        last[2]
+    );
+    assert!(
+        (energy - dissipated - dh).abs() < 1e-9 * dh.abs().max(energy.abs()),
+        "winch {energy} J − damping {dissipated} J against ΔĤ {dh} J"
+    );
+    let plain = run_ok(scenario, "winch-pd-plain", &sets[..4]);
+    let plain_last = numeric_rows(&plain.join("winches.csv")).pop().unwrap();
+    assert!(
+        (plain_last[2] - last[2]).abs() > 1e-6,
+        "payout {} m with and without the derivative part",
+        last[2]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(plain.parent().unwrap());
 }

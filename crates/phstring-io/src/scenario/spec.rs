@@ -490,6 +490,11 @@ pub struct DrumSpec {
     /// The brake's slip speed [m/s] (default 1e-3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub brake_slip: Option<Spanned<f64>>,
+    /// The tension controller's derivative time `τ` [s] (default 0: none): the law becomes
+    /// `d ṗ = (T − T_ref) + τ dT/dt` at the rope, the rate taken inside the step; not with
+    /// `time.scheme = "dg4"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub derivative_time: Option<Spanned<f64>>,
 }
 
 /// A point mass at a node; gravity (`body_force.gravity`) acts on it.

@@ -352,7 +352,7 @@ impl ScenarioFile {
     }
 
     /// The drum of `[winch.drum]` of winch `k` and its description: `J/R²`, the motor's pull
-    /// (`tension`, or `torque/R`), damping and brake, each checked.
+    /// (`tension`, or `torque/R`), damping, derivative time and brake, each checked.
     fn drum_dynamics(&self, k: usize, d: &DrumSpec) -> Result<(WinchDrum, String), ScenarioError> {
         let key = |f: &str| format!("winch.{k}.drum.{f}");
         let t_check = self.first_mid_time();
@@ -388,6 +388,21 @@ impl ScenarioFile {
             None => 0.0,
         };
         let damping = value("damping", &d.damping, false)?.unwrap_or(0.0);
+        let derivative_time = value("derivative_time", &d.derivative_time, false)?.unwrap_or(0.0);
+        let dg4 = self.scenario.time.scheme.get_ref() == "dg4";
+        if let Some(tau) = d
+            .derivative_time
+            .as_ref()
+            .filter(|_| derivative_time > 0.0 && dg4)
+        {
+            return Err(self.invalid(
+                &key("derivative_time"),
+                tau.span(),
+                format!(
+                    "= {derivative_time} s is not supported with time.scheme = \"dg4\" (its backward sub-step makes the derivative of the rope's pull change sign): use dg or mp"
+                ),
+            ));
+        }
         let brake = match value("brake", &d.brake, false)? {
             Some(hold) => Some((
                 hold,
@@ -422,10 +437,14 @@ impl ScenarioFile {
         if damping > 0.0 {
             text.push(format!("damping {damping} N·s/m"));
         }
+        if derivative_time > 0.0 {
+            text.push(format!("derivative time {derivative_time} s"));
+        }
         if let Some((hold, slip)) = brake {
             text.push(format!("brake {hold} N (slip {slip} m/s)"));
         }
         let drum = WinchDrum {
+            derivative_time,
             inertia,
             force,
             damping,

@@ -596,7 +596,18 @@ impl FlatCheckpoint {
             energies,
         } = self;
         if winches.iter().any(|w| {
-            let numbers = [w.stretch, w.payout_cut, w.behind_cut, w.payout, w.energy];
+            let numbers = [
+                w.stretch,
+                w.payout_cut,
+                w.behind_cut,
+                w.payout,
+                w.energy,
+                w.speed,
+                w.dissipated,
+                w.motor,
+                w.pull,
+                w.pull_step,
+            ];
             !(numbers.iter().chain(&w.origin).chain(&w.direction)).all(|x| x.is_finite())
         }) {
             return Some("sim.winches");

@@ -22,6 +22,9 @@ pub(super) struct DrumNext {
     pub dissipated: f64,
     /// Energy its motor supplied in the step [J].
     pub motor: f64,
+    /// The rope's pull at the drum over the step, `−t̂·R_d` [N], and the step's size [s]:
+    /// recorded for a drum with a derivative time (the size 0 otherwise).
+    pub pull: (f64, f64),
 }
 
 impl StepAt {
@@ -66,6 +69,31 @@ pub struct WinchSample {
     pub port: (usize, [f64; 3], [f64; 3]),
 }
 
+/// Refuses a drum with a derivative time under `dg4` (docs/method.md §23.6): its backward
+/// sub-step runs the time between mid times negative, so the derivative part's gain
+/// `1 + τ/Δt` of the rope's pull in the drum's row passes through 0 for some `τ`.
+pub(super) fn check_drum_scheme<const D: usize, M>(
+    sys: &crate::system::PhSystem<D, M>,
+    scheme: crate::Scheme,
+) -> Result<(), crate::error::SetupError> {
+    if scheme != crate::Scheme::DiscreteGradient4 {
+        return Ok(());
+    }
+    for (index, m) in sys.winches.iter().enumerate() {
+        if let Some((drum, _)) = m.drum.as_ref().filter(|(d, _)| d.derivative_time > 0.0) {
+            return Err(crate::error::SetupError::Winch {
+                index,
+                name: m.name.clone(),
+                problem: format!(
+                    "its drum's derivative_time {} s is not supported with the scheme dg4 (its backward sub-step makes the derivative of the rope's pull change sign): use dg or mp, or derivative_time = 0",
+                    drum.derivative_time
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// Checks winch states from a checkpoint against the system: one per winch, each drum
     /// element inside its string, a positive stretch, a unit direction and the drum node
@@ -84,6 +112,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             let norm = ws.direction.iter().map(|x| x * x).sum::<f64>().sqrt();
             let behind = ws.behind(ws.payout);
             let fine = ws.drum < n_el
+                && ws.pull.is_finite()
+                && ws.pull_step.is_finite()
+                && ws.pull_step >= 0.0
                 && ws.stretch > 0.0
                 && ws.stretch.is_finite()
                 && (norm - 1.0).abs() < 1e-9
@@ -91,8 +122,8 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 && ws.origin.iter().all(|x| x.is_finite());
             if !fine {
                 return Err(format!(
-                    "sim.winches[{k}]: drum element {} of {n_el}, stretch {}, direction of norm {norm}, {behind} m behind the drum point: not a state of this winch",
-                    ws.drum, ws.stretch
+                    "sim.winches[{k}]: drum element {} of {n_el}, stretch {}, direction of norm {norm}, {behind} m behind the drum point, pull {} N over a step of {} s: not a state of this winch",
+                    ws.drum, ws.stretch, ws.pull, ws.pull_step
                 ));
             }
         }
@@ -303,6 +334,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 speed: ws.speed,
                 inertia: stretch * stretch * drum.inertia,
                 force: stretch * force,
+                derivative: 0.0,
+                pull_before: 0.0,
+            };
+            // The derivative part, once a previous pull is known (docs/method.md §23.6).
+            let tau = drum.derivative_time;
+            let step = if tau > 0.0 && ws.pull_step > 0.0 {
+                DrumStep {
+                    derivative: tau / (0.5 * (ws.pull_step + at.h)),
+                    pull_before: stretch * ws.pull,
+                    ..step
+                }
+            } else {
+                step
             };
             let dp = ws.speed * at.h;
             x[n + step.slot] = Vector::<D>::zeros();
@@ -438,6 +482,14 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.winch_work[d.winch] = supply;
             self.drum_next[d.winch].dissipated = loss;
             self.drum_next[d.winch].motor = motor;
+            if self.sys.winches[d.winch]
+                .drum
+                .as_ref()
+                .is_some_and(|(drum, _)| drum.derivative_time > 0.0)
+            {
+                let pull = -d.axis.dot(reaction) / d.stretch;
+                self.drum_next[d.winch].pull = (pull, h);
+            }
         }
         total
     }
@@ -457,6 +509,9 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             ws.speed = next.speed;
             ws.dissipated += next.dissipated;
             ws.motor += next.motor;
+            if next.pull.1 > 0.0 {
+                (ws.pull, ws.pull_step) = next.pull;
+            }
         }
         for k in 0..self.sys.winches.len() {
             let m = &self.sys.winches[k];
@@ -599,12 +654,13 @@ mod tests {
     }
 
     /// A 5 t payload on 12 m of 32 mm steel rope below a drum with inertia (2 t at the
-    /// rope), a motor pulling 40 kN, damping 2e4 N·s/m and a 30 kN brake, swinging
-    /// sideways so that the rope is not along the drum's path: after 30 steps of 10 ms, the
-    /// Jacobian of the next step's residual at a perturbed increment against central
-    /// differences, in the free rows and the drum's row.
-    #[test]
-    fn the_drum_rows_jacobian_matches_finite_differences() {
+    /// rope), a motor pulling 40 kN, damping 2e4 N·s/m, a 30 kN brake and the derivative time
+    /// `tau` [s], swinging sideways so that the rope is not along the drum's path: after 30
+    /// steps of 10 ms (so that the previous pull is known), the Jacobian of the next step's
+    /// residual at a perturbed increment against central differences, in the free rows and
+    /// the drum's row. Returns the worst difference over the rows relative to the Jacobian's
+    /// scale.
+    fn drum_jacobian_error(tau: f64) -> f64 {
         let (mut net, grp) = hoist_on_drum(Vector::<2>::new(3.0, -11.6), MassMatrix::Consistent);
         // Stretched 0.1 % along the chord, at rest.
         let r: Vec<_> = net.initial.r.iter().map(|x| x * 1.001).collect();
@@ -616,6 +672,7 @@ mod tests {
             payout: Arc::new(|_| 0.0),
             drum_motion: None,
             drum: Some(WinchDrum {
+                derivative_time: tau,
                 inertia: 2000.0,
                 force: Arc::new(|t| 4.0e4 + 1e3 * t),
                 damping: 2.0e4,
@@ -628,6 +685,11 @@ mod tests {
         }
         let h = 0.01;
         sim.prepare_step(h);
+        let expected = if tau > 0.0 { tau / h } else { 0.0 };
+        assert_eq!(
+            sim.drum_steps[0].derivative, expected,
+            "the derivative gain"
+        );
         let n = sim.sys.mesh.n_nodes();
         let slot = n + sim.drum_steps[0].slot;
         let mut x = sim.x.clone();
@@ -659,14 +721,28 @@ mod tests {
         }
         let drum_row = fd[slot][0];
         eprintln!(
-            "drum row: J·d {:.6e}, differences {drum_row:.6e}; worst over the rows {worst:.2e} of {scale:.3e}",
+            "derivative time {tau} s: drum row: J·d {:.6e}, differences {drum_row:.6e}; worst over the rows {worst:.2e} of {scale:.3e}",
             jd[slot][0]
         );
         assert!(
             jd[slot][0].abs() > 1e-3 * scale,
             "the drum row is exercised"
         );
-        assert!(worst < 1e-6, "Jacobian off by {worst:e} of its scale");
+        worst
+    }
+
+    /// The drum's row and its couplings (inertia, motor, damping and brake) against central
+    /// differences, without a derivative part and with a derivative time of 0.3 s (the
+    /// pull's derivatives times `1 + τ/h` = 31): worst over the rows ≤ 1e-6 of the scale.
+    #[test]
+    fn the_drum_rows_jacobian_matches_finite_differences() {
+        for tau in [0.0, 0.3] {
+            let worst = drum_jacobian_error(tau);
+            assert!(
+                worst < 1e-6,
+                "τ = {tau} s: Jacobian off by {worst:e} of its scale"
+            );
+        }
     }
 
     /// A 5 t payload on 12 m of 32 mm wire rope (EA = 4.3e7 N, 4.1 kg/m, elements of 1 m, 5

@@ -188,6 +188,7 @@ fn drum_on_a_free_turning_body_keeps_an_exact_balance() {
 #[test]
 fn drum_with_dynamics_on_a_free_turning_body_keeps_an_exact_balance() {
     let drum = WinchDrum {
+        derivative_time: 0.0,
         inertia: 300.0,
         force: Arc::new(|_| 4.0e3),
         damping: 2.0e3,
@@ -199,6 +200,25 @@ fn drum_with_dynamics_on_a_free_turning_body_keeps_an_exact_balance() {
         "the drum dissipated {} J",
         ws.dissipated
     );
+}
+
+/// The drum of [`drum_with_dynamics_on_a_free_turning_body_keeps_an_exact_balance`] with a
+/// derivative part (`τ` = 0.2 s, 40 times the step): its pull on the turning body's drum node
+/// enters its row with the gain `1 + τ/h`, its work is the motor's, and every step's balance
+/// holds to 1e-12 of the energy scale ([`free_block_run`], 2.8 m paid out, 3 cuts); the
+/// previous pull is recorded after every step.
+#[test]
+fn a_drum_with_a_derivative_part_on_a_free_turning_body_keeps_an_exact_balance() {
+    let drum = WinchDrum {
+        derivative_time: 0.2,
+        inertia: 300.0,
+        force: Arc::new(|_| 4.0e3),
+        damping: 2.0e3,
+        brake: Some((1.0e3, 0.02)),
+    };
+    let (ws, _) = free_block_run(Some(drum), 3);
+    assert_eq!(ws.pull_step, 0.005);
+    assert!(ws.pull > 0.0 && ws.dissipated > 0.0, "{ws:?}");
 }
 
 /// After 3 s (1.2 m paid out: the body holds the drum node that a cut brought off the drum),
@@ -219,14 +239,16 @@ fn a_drum_on_a_body_has_the_jacobian_of_its_differences() {
 /// Measured 8e-11, 3e-11 in the body's and the drum's rows.
 #[test]
 fn a_drum_with_dynamics_on_a_body_has_the_jacobian_of_its_differences() {
-    let worst = body_drum_jacobian(Some(jacobian_drum()), 400);
+    let worst = body_drum_jacobian(Some(jacobian_drum(0.0)), 400);
     assert!(worst < 1e-6, "Jacobian off by {worst:e} of the scale");
 }
 
 /// The drum of the Jacobian tests: 200 kg at the rope, a motor pulling 4.5 kN (growing
-/// 100 N/s), damping 2 kN·s/m and a 3 kN brake slipping at 5 cm/s.
-fn jacobian_drum() -> WinchDrum {
+/// 100 N/s), damping 2 kN·s/m, a 3 kN brake slipping at 5 cm/s and the derivative time `tau`
+/// [s].
+fn jacobian_drum(tau: f64) -> WinchDrum {
     WinchDrum {
+        derivative_time: tau,
         inertia: 200.0,
         force: Arc::new(|t| 4.5e3 + 100.0 * t),
         damping: 2.0e3,
@@ -321,8 +343,19 @@ fn boom_with_a_winch(dynamics: Option<WinchDrum>) -> Simulation<2, Material> {
 /// (measured 4e-10, 2e-11 in the body's and the drum's rows).
 #[test]
 fn a_drum_with_dynamics_on_a_body_in_2d_has_the_jacobian_of_its_differences() {
-    let worst = jacobian_after(boom_with_a_winch(Some(jacobian_drum())), 400, 0.005);
+    let worst = jacobian_after(boom_with_a_winch(Some(jacobian_drum(0.0))), 400, 0.005);
     assert!(worst < 1e-6, "Jacobian off by {worst:e} of the scale");
+}
+
+/// The drum's row with a derivative part (`τ` = 0.2 s, the pull's derivatives times
+/// `1 + τ/h` = 41 in the drum's row, through the body's slots too), on the free block (3D)
+/// after 2 s and the free boom (2D) after 2 s: below 1e-6 of the scale.
+#[test]
+fn a_drum_with_a_derivative_part_on_a_body_has_the_jacobian_of_its_differences() {
+    let worst = body_drum_jacobian(Some(jacobian_drum(0.2)), 400);
+    assert!(worst < 1e-6, "3D: Jacobian off by {worst:e} of the scale");
+    let worst = jacobian_after(boom_with_a_winch(Some(jacobian_drum(0.2))), 400, 0.005);
+    assert!(worst < 1e-6, "2D: Jacobian off by {worst:e} of the scale");
 }
 
 /// A flat checkpoint (the checkpoint file's form) of the block after cuts fits the run, with

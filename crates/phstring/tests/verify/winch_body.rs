@@ -89,6 +89,7 @@ fn drum_on_a_moving_vessel_is_the_moving_drum_at_its_point() {
 #[test]
 fn drum_with_dynamics_on_a_moving_vessel_is_the_moving_drum_at_its_point() {
     let drum = WinchDrum {
+        derivative_time: 0.0,
         inertia: 2000.0,
         force: Arc::new(|_| 45.0e3),
         damping: 1.0e4,
