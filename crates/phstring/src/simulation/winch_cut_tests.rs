@@ -144,6 +144,7 @@ fn a_cut_in_place_keeps_a_drums_kinetic_energy() {
         force: Arc::new(|t| 2.0e4 + 1e3 * t),
         damping: 4.0e4,
         brake: None,
+        derivative_time: 0.0,
     };
     let sim = chain_over_water(Some(drum()));
     let (cuts, worst) = compare_cuts(sim, chain_over_water(Some(drum())), 600);
