@@ -10,18 +10,21 @@
 //! off the drum at the median), and of the other steps of the last 2 % of the run (about
 //! 1000 elements off the drum); and what a cut adds to its step (the median cut step less
 //! the median other step) in the first 10 % of the run (10–110 elements off the drum) and
-//! in the last 2 %. Each step size runs three times: with the payout prescribed;
+//! in the last 2 %. Each step size runs four times: with the payout prescribed;
 //! with a drum with dynamics (docs/method.md §23.6) whose tension controller (damping 1e5
 //! N·s/m, no inertia) follows the same payout speed through its target tension, the static
 //! weight less `d` times the speed (its payout is a Newton unknown, solved with the bordered
 //! solve), the drum's payout ending within 1 % of 1000 m; and with the drum, its payout
 //! prescribed, on a 50 t vessel (a rigid body, docs/method.md §23.7) that heaves
-//! 0.5 m and rolls 1° from rest at an 8 s period, the drum point 2 m above its centre.
+//! 0.5 m and rolls 1° from rest at an 8 s period, the drum point 2 m above its centre; and
+//! with the payout prescribed and the rope in water (32 mm, drag coefficient 1.2, added mass
+//! coefficient 1, below the surface at the drum), whose water is lumped again at each cut.
 
 use nalgebra::{UnitQuaternion, Vector3};
 use phstring::{
-    Attachment, BodyMotion, BodyState, Boundary, MassMatrix, Material, NetworkBuilder, PointMass,
-    RigidBody, Simulation, State, StepControl, StepParams, StringSpec, Vector, Winch, WinchDrum,
+    Attachment, BodyMotion, BodyState, Boundary, LineHydro, MassMatrix, Material, NetworkBuilder,
+    PointMass, RigidBody, Simulation, State, StepControl, StepParams, StringSpec, Vector, Water,
+    Winch, WinchDrum,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -64,6 +67,9 @@ enum Kind {
     Drum,
     /// The payout prescribed, the drum on a heaving, rolling vessel.
     Vessel,
+    /// The payout prescribed, the rope in water (drag, buoyancy, added mass), lumped again
+    /// at each cut.
+    Water,
 }
 
 /// The vessel's pose at `t` [s]: heave `0.5 (1 − cos ωt)` m and roll `1° (1 − cos ωt)`,
@@ -140,6 +146,17 @@ fn setup(h: f64, kind: Kind) -> (Simulation<2, Material>, f64) {
             feedback: None,
         });
     }
+    if kind == Kind::Water {
+        net = net.with_water(Water::new(1025.0)).with_line_hydro(
+            g,
+            LineHydro {
+                diameter: 0.032,
+                cd: 1.2,
+                ca: 1.0,
+                ..Default::default()
+            },
+        );
+    }
     net = net.with_winch(Winch {
         name: "lowering".into(),
         group: g,
@@ -172,7 +189,7 @@ fn main() {
     println!(
         "h [s]   payout      steps   wall [s]  real-time factor  cuts  Newton it/step  ms per step: cut  after  other (at 1000 elements: other)  µs a cut adds: early  late"
     );
-    let kinds = [Kind::Prescribed, Kind::Drum, Kind::Vessel];
+    let kinds = [Kind::Prescribed, Kind::Drum, Kind::Vessel, Kind::Water];
     for (h, kind) in [0.05, 0.02].into_iter().flat_map(|h| kinds.map(|k| (h, k))) {
         let (mut sim, end) = setup(h, kind);
         let steps = (end / h).round() as usize;
@@ -225,6 +242,7 @@ fn main() {
             Kind::Prescribed => "prescribed",
             Kind::Drum => "drum",
             Kind::Vessel => "on vessel",
+            Kind::Water => "in water",
         };
         println!(
             "{h:<6}  {kind:<10}  {steps:>6}  {wall:>8.2}  {:>16.0}  {n_cut:>4}  {:>14.2}  {:>16.3}  {:>5.3}  {:>5.3}  ({:.3})  {:>6.1}  {:>6.1}",

@@ -675,14 +675,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.sys.place_winches(&self.run.winches);
         let e = self.with_drums(self.sys.energies(&self.run.state), false);
         // The record's own energies where they are those of its state (a cut updated them in
-        // place: they differ in the last bits), so that the run continues bit for bit.
+        // place: they differ in the last bits), so that the run continues bit for bit; every
+        // term, the magnitude included, within 1e-12 of the evaluation's magnitude.
         let agree = |h: &Energies| {
-            let parts = |x: &Energies| [x.kinetic, x.internal, x.external, x.buoyancy, x.seabed];
-            let tol = 1e-12 * e.magnitude.max(h.magnitude);
-            parts(h)
-                .iter()
-                .zip(parts(&e))
-                .all(|(a, b)| (a - b).abs() <= tol)
+            let tol = 1e-12 * e.magnitude;
+            let (a, b) = (h.to_array(), e.to_array());
+            a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
         };
         self.energies = held.filter(agree).unwrap_or(e);
         Ok(())

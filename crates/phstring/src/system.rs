@@ -143,6 +143,31 @@ impl Energies {
     pub fn hamiltonian(&self) -> f64 {
         self.kinetic + self.internal + self.external + self.buoyancy + self.seabed
     }
+    /// The terms as `[kinetic, internal, external, buoyancy, seabed, magnitude]` [J].
+    pub(crate) fn to_array(self) -> [f64; 6] {
+        [
+            self.kinetic,
+            self.internal,
+            self.external,
+            self.buoyancy,
+            self.seabed,
+            self.magnitude,
+        ]
+    }
+    /// The energies of the terms `[kinetic, internal, external, buoyancy, seabed,
+    /// magnitude]` [J] ([`Self::to_array`]).
+    pub(crate) fn from_array(
+        [kinetic, internal, external, buoyancy, seabed, magnitude]: [f64; 6],
+    ) -> Self {
+        Energies {
+            kinetic,
+            internal,
+            external,
+            buoyancy,
+            seabed,
+            magnitude,
+        }
+    }
     /// These energies with the part `from` of them replaced by `to`, term by term (the
     /// magnitude too): the energies after a change confined to that part.
     pub(crate) fn replaced(&self, from: &Energies, to: &Energies) -> Energies {
@@ -828,7 +853,7 @@ fn attach_winches<const D: usize, M>(
     mesh: &Mesh,
     groups: &[ElementGroup<D, M>],
     (boundary, point_masses, bodies): (&Boundary<D>, &[PointMass<D>], &[RigidBody<D>]),
-    initial: &State<D>,
+    (initial, water_points): (&State<D>, &[PointHydro]),
     on_body: &[Option<crate::winch::BodyDrum>],
 ) -> Result<Vec<(crate::winch::WinchModel<D>, crate::winch::WinchState)>, SetupError> {
     if winches.is_empty() {
@@ -843,6 +868,7 @@ fn attach_winches<const D: usize, M>(
         .chain(boundary.loads.iter().map(|l| l.node))
         .chain(boundary.feedback.iter().map(|f| f.node))
         .chain(point_masses.iter().map(|p| p.node))
+        .chain(water_points.iter().map(|p| p.node))
         .chain(bodies.iter().enumerate().flat_map(|(b, body)| {
             // A drum on a body: its attachment holds the drum node for the winch.
             let drum = move |k: usize| on_body.iter().flatten().any(|d| (d.0, d.1) == (b, k));
@@ -988,7 +1014,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             &mesh,
             &groups,
             (&boundary, &point_masses, &bodies),
-            &initial,
+            (&initial, &hydro.points),
             &on_body,
         )?;
         for (m, ws) in &winch_data {

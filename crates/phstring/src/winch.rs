@@ -569,7 +569,7 @@ impl<const D: usize> WinchModel<D> {
 /// first `reserve` elements (and no more than all but one) at the drum point, no other
 /// element, support, load or port at its nodes but the last, and the payout 0 at `t = 0`.
 /// `body_force` and `is_string` are the groups' body forces and kinds; `claimed(i)` tells
-/// whether node `i` carries a support, load, port, point mass or body; `on_body[k]` is winch
+/// whether node `i` carries a support, load, port, point mass, water point or body; `on_body[k]` is winch
 /// `k`'s drum on a rigid body (body, attachment, drum point in body axes), whose nodes on the
 /// drum move with the drum point instead of starting at rest.
 pub(crate) fn attach<const D: usize>(
@@ -667,7 +667,7 @@ pub(crate) fn attach<const D: usize>(
                     k,
                     w,
                     format!(
-                        "node {j} of its string (mesh node {i}) carries something else (an element of another string, a support, a load, a port, a point mass or a body): only the string's last node may"
+                        "node {j} of its string (mesh node {i}) carries something else (an element of another string, a support, a load, a port, a point mass, a water point or a body): only the string's last node may"
                     ),
                 ));
             }

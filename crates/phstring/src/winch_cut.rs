@@ -1,7 +1,7 @@
 //! A winch's cut in place (docs/method.md §23, "The cost of a cut"): the system's data and
 //! its energies change only at the string's elements and nodes between the drum element
-//! before the cut and the one after it, so a cut touches those and nothing else, whatever
-//! the number of elements.
+//! before the cut and the one after it, so a cut computes there alone, whatever the number
+//! of elements (the sorted lists it changes shift their later entries in memory).
 
 use std::ops::Range;
 
@@ -21,9 +21,10 @@ pub(crate) fn cut_window(from: usize, to: usize) -> (Range<usize>, Range<usize>)
 impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
     /// The part of [`Self::energies`] [J] that winch `k`'s string holds, at the system's
     /// current data, in its elements `els` (indices along the string; those on the drum hold
-    /// none) and at its nodes `nodes` (indices along the string, not its last): the
-    /// elements' kinetic and stored energies, the nodes' body-force potentials and their
-    /// buoyancy and contact potentials, each term evaluated as `energies` evaluates it.
+    /// none) and at its nodes `nodes` (indices along the string, not its last, which carry
+    /// no point mass or water point: refused at setup): the elements' kinetic and stored
+    /// energies, the nodes' body-force potentials and their buoyancy and contact
+    /// potentials, each term evaluated as `energies` evaluates it.
     pub(crate) fn winch_energies(
         &self,
         k: usize,

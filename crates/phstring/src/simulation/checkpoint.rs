@@ -341,8 +341,8 @@ pub struct FlatCheckpoint {
     )]
     pub winches: Vec<WinchState>,
     /// [`Checkpoint::energies`] [J]: kinetic, internal, external, buoyancy, seabed and
-    /// magnitude; empty when missing (files written before it; then a restore evaluates
-    /// the state).
+    /// magnitude; empty when missing (a file written before it, or a record without them;
+    /// a restore then evaluates the state).
     #[cfg_attr(
         feature = "serde",
         serde(default, skip_serializing_if = "Vec::is_empty")
@@ -452,16 +452,7 @@ impl<const D: usize> From<&Checkpoint<D>> for FlatCheckpoint {
             total_newton: *total_newton,
             water: *water,
             winches: winches.clone(),
-            energies: energies.map_or_else(Vec::new, |e| {
-                vec![
-                    e.kinetic,
-                    e.internal,
-                    e.external,
-                    e.buoyancy,
-                    e.seabed,
-                    e.magnitude,
-                ]
-            }),
+            energies: energies.map_or_else(Vec::new, |e| e.to_array().to_vec()),
         }
     }
 }
@@ -550,17 +541,9 @@ impl FlatCheckpoint {
             err_prev,
             water,
             winches,
-            energies: match energies[..] {
-                [kinetic, internal, external, buoyancy, seabed, magnitude] => Some(Energies {
-                    kinetic,
-                    internal,
-                    external,
-                    buoyancy,
-                    seabed,
-                    magnitude,
-                }),
-                _ => None,
-            },
+            energies: <[f64; 6]>::try_from(&energies[..])
+                .ok()
+                .map(Energies::from_array),
         }
     }
 
@@ -875,8 +858,11 @@ fn check_history<const D: usize>(history: &[(f64, Vec<f64>)], n: usize) -> Resul
 
 impl<const D: usize, M> Simulation<D, M> {
     /// The complete dynamic state in flat form (without a copy of the record in dimension
-    /// `D` first), for a checkpoint file.
+    /// `D` first), for a checkpoint file: as [`Self::checkpoint`], the run's energies
+    /// included.
     pub fn flat_checkpoint(&self) -> FlatCheckpoint {
-        FlatCheckpoint::from(&self.run)
+        let mut flat = FlatCheckpoint::from(&self.run);
+        flat.energies = self.energies.to_array().to_vec();
+        flat
     }
 }
