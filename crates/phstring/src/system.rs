@@ -1510,9 +1510,10 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
         }
     }
 
-    /// Puts the winches' states into the system: each string's group range, reference
-    /// lengths, held nodes and body forces; the constrained sets are rebuilt where a node
-    /// came off or went onto a drum.
+    /// Puts the winches' states into the system: each string's group range, held nodes and
+    /// body forces, over the whole string; where a node came off or went onto a drum the
+    /// constrained sets are rebuilt and the water lumped again (a restore; a cut after a
+    /// step places only what it changed, [`Self::place_cut`]).
     pub(crate) fn place_winches(&mut self, states: &[crate::winch::WinchState]) {
         let mut moved = false;
         for (m, ws) in self.winches.iter().zip(states) {
