@@ -19,10 +19,17 @@ use std::sync::Arc;
 /// (Cd 2.4, CdAx 1.15, Ca 1): paid out 5 m over 5 s and hauled back in the same way, so that
 /// the clump lands on the seabed and lifts off again; or with `drum`, a drum with dynamics.
 fn chain_over_water(drum: Option<WinchDrum>) -> Simulation<2, Material> {
+    let net = chain_network(drum, 5.0, 1);
+    Simulation::new(net, fixed_steps(0.01)).unwrap()
+}
+
+/// The chain of [`chain_over_water`] with `per_m` elements a metre, its 5 m paid out and
+/// hauled back over `time` [s] each way.
+fn chain_network(drum: Option<WinchDrum>, time: f64, per_m: usize) -> crate::Network<2, Material> {
     let (g, ea, rho_a, clump) = (9.81, 5.0e8, 115.0, 2000.0);
     let mut b = NetworkBuilder::<2, Material>::new();
     let top = b.node(Vector::<2>::new(0.0, 5.0));
-    let end = b.node(Vector::<2>::new(2.0, -8.85));
+    let end = b.node(Vector::<2>::new(2.0, -8.857));
     let spec = StringSpec {
         name: "chain".into(),
         material: Material::tension_only_linear(ea),
@@ -31,7 +38,9 @@ fn chain_over_water(drum: Option<WinchDrum>) -> Simulation<2, Material> {
         body_force: Vector::<2>::new(0.0, -rho_a * g),
         prestretch: 1.0,
     };
-    let group = b.string_on_drum(spec, &[top, end], 14, 8).unwrap();
+    let group = b
+        .string_on_drum(spec, &[top, end], 14 * per_m, 8 * per_m)
+        .unwrap();
     let masses = vec![PointMass {
         node: end,
         mass: clump,
@@ -41,8 +50,7 @@ fn chain_over_water(drum: Option<WinchDrum>) -> Simulation<2, Material> {
         let x = x.clamp(0.0, 1.0);
         x * x * (3.0 - 2.0 * x)
     };
-    let net = b
-        .build(Boundary::default(), masses)
+    b.build(Boundary::default(), masses)
         .unwrap()
         .with_water(Water::new(1025.0).with_seabed(Seabed::flat(10.0, 3e6, 1e5)))
         .with_line_hydro(
@@ -64,12 +72,11 @@ fn chain_over_water(drum: Option<WinchDrum>) -> Simulation<2, Material> {
         .with_winch(Winch {
             name: "drum".into(),
             group,
-            reserve: 8,
-            payout: Arc::new(move |t| 5.0 * (smooth(t / 5.0) - smooth(t / 5.0 - 1.2))),
+            reserve: 8 * per_m,
+            payout: Arc::new(move |t| 5.0 * (smooth(t / time) - smooth(t / time - 1.2))),
             drum_motion: None,
             drum,
-        });
-    Simulation::new(net, fixed_steps(0.01)).unwrap()
+        })
 }
 
 /// Steps `sim` and its `twin` (the same problem) for `steps` steps; after every step that
@@ -104,6 +111,13 @@ fn compare_cuts(
         assert_eq!(a.constrained, b.constrained, "constrained nodes");
         assert_eq!(a.constrained_elements, b.constrained_elements);
         assert_eq!(a.water, b.water, "the lumped water");
+        assert_eq!(a.attached, b.attached, "the nodes held by bodies");
+        assert_eq!(a.body_links, b.body_links, "the bodies' links");
+        let points = |s: &crate::PhSystem<2, Material>| {
+            let at = |m: &crate::body::BodyModel| m.attachments.clone();
+            s.bodies.iter().map(at).collect::<Vec<_>>()
+        };
+        assert_eq!(points(a), points(b), "the bodies' attachments");
         let e = sim.with_drums(sim.sys.energies(&sim.run.state), false);
         let h = sim.energies;
         let parts = |x: &crate::Energies| [x.kinetic, x.internal, x.external, x.buoyancy, x.seabed];
@@ -229,5 +243,60 @@ fn a_water_point_on_a_winch_strings_inner_node_is_refused() {
     assert!(
         err.contains(&format!("mesh node {inner}")) && err.contains("water point"),
         "{err}"
+    );
+}
+
+/// The chain's drum on a 40 t vessel that heaves 0.6 m and rolls 3° at a 6 s period: every
+/// cut in place leaves the system, the vessel's attachment and links included, as a
+/// placement from scratch does.
+#[test]
+fn cuts_of_a_drum_on_a_vessel_leave_the_system_as_a_placement_from_scratch() {
+    use crate::body::{Attachment, BodyMotion, BodyState, RigidBody};
+    use nalgebra::{UnitQuaternion, Vector3};
+    let w = std::f64::consts::TAU / 6.0;
+    let pose = move |t: f64| {
+        let c = 1.0 - (w * t).cos();
+        (
+            Vector3::new(0.0, 3.0 + 0.3 * c, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 1.5f64.to_radians() * c),
+        )
+    };
+    let twist = move |t: f64| {
+        let s = w * (w * t).sin();
+        (
+            Vector3::new(0.0, 0.3 * s, 0.0),
+            Vector3::new(0.0, 0.0, 1.5f64.to_radians() * s),
+        )
+    };
+    let on_vessel = || {
+        let (x0, q0) = pose(0.0);
+        let net = chain_network(None, 5.0, 1);
+        let top = net.mesh.elements()[net.groups[0].elements.start][0];
+        let net = net.with_body(RigidBody {
+            name: "vessel".into(),
+            mass: 4e4,
+            inertia: nalgebra::Matrix3::from_diagonal_element(3e6),
+            weight: Vector::<2>::new(0.0, -4e4 * 9.81),
+            attachments: vec![Attachment {
+                node: top,
+                point: Vector::<2>::new(0.0, 2.0),
+            }],
+            initial: BodyState::new(x0, Vector3::zeros(), q0, Vector3::zeros()),
+            wrench: None,
+            hydro: None,
+            motion: Some(BodyMotion {
+                pose: Arc::new(pose),
+                twist: Arc::new(twist),
+            }),
+            feedback: None,
+        });
+        Simulation::new(net, fixed_steps(0.01)).unwrap()
+    };
+    let (cuts, worst) = compare_cuts(on_vessel(), on_vessel(), 1150);
+    eprintln!("{cuts} cuts; energies off by {worst:.2e}");
+    assert!(cuts >= 9, "{cuts} cuts");
+    assert!(
+        worst <= 1e-13,
+        "energies off by {worst:e} of their magnitude"
     );
 }
