@@ -1408,14 +1408,7 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
                 magnitude += u.abs() + c;
             }
         }
-        Energies {
-            kinetic,
-            internal,
-            external,
-            buoyancy,
-            seabed,
-            magnitude,
-        }
+        Energies::from_array([kinetic, internal, external, buoyancy, seabed, magnitude])
     }
 
     /// Linear momentum `Σ M_ρ v̂` [kg·m/s].
