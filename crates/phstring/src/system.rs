@@ -704,6 +704,11 @@ fn check_port_nodes<const D: usize>(boundary: &Boundary<D>, n: usize) -> Result<
     Ok(())
 }
 
+/// Whether a node with the free flags `free` has a fixed or prescribed component.
+pub(crate) fn is_held<const D: usize>(free: &[bool; D]) -> bool {
+    free.iter().any(|f| !f)
+}
+
 /// The nodes with a fixed or prescribed component, and the elements touching them, into
 /// the two lists (emptied first; a refill within their capacity does not allocate).
 fn constrained_sets<const D: usize>(
@@ -711,7 +716,7 @@ fn constrained_sets<const D: usize>(
     free: &[[bool; D]],
     (constrained, constrained_elements): (&mut Vec<usize>, &mut Vec<usize>),
 ) {
-    let is_constrained = |i: usize| free[i].iter().any(|f| !f);
+    let is_constrained = |i: usize| is_held(&free[i]);
     constrained.clear();
     constrained.extend((0..free.len()).filter(|&i| is_constrained(i)));
     constrained_elements.clear();

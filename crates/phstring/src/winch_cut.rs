@@ -6,7 +6,7 @@
 use std::ops::Range;
 
 use crate::material::StoredEnergy;
-use crate::system::{Energies, PhSystem, State, element_energies};
+use crate::system::{Energies, PhSystem, State, element_energies, is_held};
 use crate::winch::WinchState;
 
 /// The string-local elements and nodes a cut of winch `k` from drum element `from` to `to`
@@ -79,14 +79,13 @@ impl<const D: usize, M: StoredEnergy> PhSystem<D, M> {
             (&mut self.f_body, &mut self.free),
             nodes.clone(),
         );
-        let is_held = |free: &[[bool; D]], i: usize| free[i].iter().any(|f| !f);
         for &i in &m.nodes[nodes.clone()] {
-            set_member(&mut self.constrained, i, is_held(&self.free, i));
+            set_member(&mut self.constrained, i, is_held(&self.free[i]));
         }
         for j in els.clone() {
             let e = m.elements.start + j;
             let [a, b] = self.mesh.elements()[e];
-            let held = is_held(&self.free, a) || is_held(&self.free, b);
+            let held = is_held(&self.free[a]) || is_held(&self.free[b]);
             set_member(&mut self.constrained_elements, e, held);
         }
         if let (Some(w), Some(spec)) = (self.water.as_deref_mut(), self.water_spec.as_deref()) {

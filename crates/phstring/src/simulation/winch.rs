@@ -249,16 +249,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     /// The part of `Ĥ` [J] a cut of winch `k` can change (docs/method.md §23, "The cost of a
     /// cut"): its string's elements and nodes in `window` (string-local, [`cut_window`]) and
     /// its drum's kinetic energy, as [`Self::with_drums`] and [`PhSystem::energies`]
-    /// evaluate them. An empty window (no cut) is not evaluated.
+    /// evaluate them.
     ///
     /// [`cut_window`]: crate::winch_cut::cut_window
     /// [`PhSystem::energies`]: crate::PhSystem::energies
     fn cut_part(&self, k: usize, window: (Range<usize>, Range<usize>)) -> Energies {
-        let mut part = Energies::default();
-        if window.1.len() < 2 {
-            return part;
-        }
-        part = self.sys.winch_energies(k, window, &self.run.state);
+        let mut part = self.sys.winch_energies(k, window, &self.run.state);
         if let Some((drum, _)) = &self.sys.winches[k].drum {
             let ws = &self.run.winches[k];
             let u = ws.stretch * ws.speed;
@@ -553,19 +549,21 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
     pub(super) fn winch_cuts(&mut self, t: f64, h: f64) -> f64 {
         let mut total = 0.0;
         for k in 0..self.sys.winches.len() {
-            let m = &self.sys.winches[k];
-            let ws = &mut self.run.winches[k];
-            // The payout the step reached, moving at the prescribed rate or the drum's speed.
-            let (payout, rate) = (ws.payout, m.payout_at(ws, t).1);
-            let from = ws.drum;
-            let window = crate::winch_cut::cut_window(from, m.drum_after(ws, payout));
-            let before = self.cut_part(k, window.clone());
-            let (m, ws) = (&self.sys.winches[k], &mut self.run.winches[k]);
-            let state = &mut self.run.state;
-            let frame = m.frame(t, &state.bodies);
-            let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
-            m.cut(ws, (&frame, payout, rate), parts);
-            if ws.drum != from {
+            let (m, ws) = (&self.sys.winches[k], &self.run.winches[k]);
+            // The payout the step reached (the state holds it already): a cut where the
+            // drum node has left its band there.
+            let (from, payout) = (ws.drum, ws.payout);
+            let to = m.drum_after(ws, payout);
+            if to != from {
+                let window = crate::winch_cut::cut_window(from, to);
+                let before = self.cut_part(k, window.clone());
+                let (m, ws) = (&self.sys.winches[k], &mut self.run.winches[k]);
+                // A new drum node moves at the prescribed rate or the drum's speed.
+                let rate = m.payout_at(ws, t).1;
+                let state = &mut self.run.state;
+                let frame = m.frame(t, &state.bodies);
+                let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
+                m.cut(ws, (&frame, payout, rate), parts);
                 let ws = *ws;
                 self.sys.place_cut(k, &ws, from);
                 let after = self.cut_part(k, window);
