@@ -673,6 +673,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.run = cp;
         self.run.energies = None;
         self.sys.place_winches(&self.run.winches);
+        self.refresh_contacts();
         let e = self.with_drums(self.sys.energies(&self.run.state), false);
         // The record's own energies where they are those of its state (a cut updated them in
         // place: they differ in the last bits), so that the run continues bit for bit; every
@@ -703,11 +704,20 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             self.run.clone_from(run);
             if !self.sys.winches.is_empty() {
                 self.sys.place_winches(&self.run.winches);
+                self.refresh_contacts();
             }
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
         self.body_ports.clone_from(&b.body_ports);
+    }
+
+    /// `dg4` with winches: the damped contacts of the system as now placed (a winch's cut
+    /// lumps nodes anew); O(N) on every cut, and nothing without `dg4` or winches.
+    fn refresh_contacts(&mut self) {
+        if self.params.scheme == Scheme::DiscreteGradient4 && !self.sys.winches.is_empty() {
+            self.contacts = crate::integrator::damped_contacts(&self.sys);
+        }
     }
 
     fn set_step_size(&mut self, h: f64) {

@@ -566,6 +566,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 m.cut(ws, (&frame, payout, rate), parts);
                 let ws = *ws;
                 self.sys.place_cut(k, &ws, from);
+                self.refresh_contacts();
                 let after = self.cut_part(k, window);
                 let de = after.hamiltonian() - before.hamiltonian();
                 self.energies = self.energies.replaced(&before, &after);

@@ -285,3 +285,30 @@ fn cuts_of_a_drum_on_a_vessel_leave_the_system_as_a_placement_from_scratch() {
     eprintln!("{cuts} cuts; energies off by {worst:.2e}");
     assert!(cuts >= 9, "{cuts} cuts");
 }
+
+/// With `dg4`, the damped seabed contacts that set how many triple jumps a step takes
+/// (docs/method.md §19) follow the cuts: after every cut of the chain paid out onto the
+/// seabed and hauled back, they are those of the system as placed, so that a node the cut
+/// lumps anew (the drum element's length changes its mass and contact) is not split by
+/// stale numbers.
+#[test]
+fn dg4_damped_contacts_follow_the_cuts() {
+    let mut params = fixed_steps(0.01);
+    params.scheme = crate::integrator::Scheme::DiscreteGradient4;
+    let mut sim = Simulation::new(chain_network(None), params).unwrap();
+    let (mut cuts, mut changed) = (0, 0);
+    let start = sim.contacts.clone();
+    for _ in 0..1150 {
+        let from = sim.run.winches[0].drum;
+        sim.step().unwrap();
+        if sim.run.winches[0].drum == from {
+            continue;
+        }
+        cuts += 1;
+        let placed = crate::integrator::damped_contacts(&sim.sys);
+        changed += usize::from(placed != start);
+        assert_eq!(sim.contacts, placed, "after cut {cuts}");
+    }
+    eprintln!("{cuts} cuts, {changed} with contacts other than the start's");
+    assert!(cuts >= 9 && changed >= 1, "{cuts} cuts, {changed} changed");
+}
