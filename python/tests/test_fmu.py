@@ -24,6 +24,14 @@ import damping_master  # noqa: E402
 H = 0.01  # s, the pendulum's time.h
 
 
+def unzip_dir(fmu):
+    """A fresh folder next to `fmu` (in pytest's temporary folders) to extract it into, so
+    that no extraction is left in the system's temporary folder."""
+    import tempfile
+
+    return tempfile.mkdtemp(dir=fmu.parent, prefix=f"{fmu.stem}_")
+
+
 def build(tmp_path, scenario, name, *sets, version="2"):
     """`phstring fmu` of examples/fmu/SCENARIO (or of a path) with `--set` for each of `sets`."""
     out = tmp_path / f"{name}.fmu"
@@ -147,13 +155,17 @@ def test_a_bad_parameter_is_refused_with_its_name(pendulum_any):
     fmi = "fmi3" if read_model_description(str(pendulum_any)).fmiVersion == "3.0" else "fmi2"
     log = Log(fmi)
     setter = "fmi3SetFloat64" if fmi == "fmi3" else "fmi2SetReal"
+    # Extracted here: simulate_fmu leaves its own extraction behind when it raises.
+    from fmpy import extract
+
+    unzipped = extract(str(pendulum_any), unzipdir=unzip_dir(pendulum_any))
     with pytest.raises(Exception, match=setter):
-        simulate_fmu(str(pendulum_any), stop_time=0.1, start_values={"EA": -1.0}, logger=log)
+        simulate_fmu(unzipped, stop_time=0.1, start_values={"EA": -1.0}, logger=log)
     assert any(s == 3 and "EA = -1" in m for s, m in log.messages), log.messages
     # Positive, but it does not fit the scenario: refused when the simulation is set up.
     log = Log(fmi)
     with pytest.raises(Exception, match=f"{fmi}ExitInitializationMode"):
-        simulate_fmu(str(pendulum_any), stop_time=0.1, start_values={"h": 1e-300}, logger=log)
+        simulate_fmu(unzipped, stop_time=0.1, start_values={"h": 1e-300}, logger=log)
     assert any(s == 3 and "time.h" in m for s, m in log.messages), log.messages
 
 
@@ -161,7 +173,7 @@ def slave_of(fmu, log):
     md = read_model_description(str(fmu))
     from fmpy import extract
 
-    s = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu)),
+    s = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu), unzipdir=unzip_dir(fmu)),
                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")
     from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
@@ -240,7 +252,7 @@ def test_fmi3_a_diverging_step_is_discarded_and_the_master_can_go_back(tmp_path)
     fmu = build(tmp_path, "pendulum.toml", "pendulum3", version="3")
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    s = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu)),
+    s = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu), unzipdir=unzip_dir(fmu)),
                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t3")
     s.instantiate()
     s.enterInitializationMode(startTime=0.0)
@@ -451,7 +463,7 @@ def test_fmi3_hook_block_states_with_the_body_continue_bit_for_bit(tmp_path):
     assert validate_fmu(str(fmu)) == []
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = extract(str(fmu))
+    unzipped = extract(str(fmu), unzipdir=unzip_dir(fmu))
 
     def slave(name):
         s = FMU3Slave(guid=md.guid, unzipDirectory=unzipped,

@@ -9,7 +9,7 @@ use std::path::Path;
 use crate::{phstring, temp_dir};
 
 /// Runs `example` into a fresh folder and returns it.
-fn run_example(example: &str, name: &str) -> std::path::PathBuf {
+fn run_example(example: &str, name: &str) -> crate::TestDir {
     let out = temp_dir(name);
     let o = crate::run_with(&format!("examples/{example}"), &out, &[], &["--force"]);
     assert!(

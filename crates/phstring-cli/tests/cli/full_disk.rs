@@ -3,22 +3,22 @@
 //! the files left incomplete. Run on a small tmpfs; skipped where mounting one is not
 //! permitted (not root, no mount namespace).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use super::{phstring, temp_dir};
 
 /// A tmpfs of `size` mounted on a fresh folder, unmounted when dropped.
-struct Tmpfs(PathBuf);
+struct Tmpfs(crate::TestDir);
 
 impl Tmpfs {
     /// `None` (with a note on stderr) where mounting is not permitted.
     fn mount(name: &str, size: &str) -> Option<Self> {
-        let dir = temp_dir(name).join("mnt");
+        let dir = temp_dir(name).sub("mnt");
         std::fs::create_dir_all(&dir).unwrap();
         let ok = Command::new("mount")
             .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
-            .arg(&dir)
+            .arg(&*dir)
             .output()
             .is_ok_and(|o| o.status.success());
         if !ok {
@@ -31,7 +31,7 @@ impl Tmpfs {
 
 impl Drop for Tmpfs {
     fn drop(&mut self) {
-        let _ = Command::new("umount").arg("-l").arg(&self.0).status();
+        let _ = Command::new("umount").arg("-l").arg(&*self.0).status();
     }
 }
 

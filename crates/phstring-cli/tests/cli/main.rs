@@ -30,12 +30,55 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-/// A fresh temporary folder for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
+/// A test's temporary folder, or a path inside it ([`TestDir::sub`]): the folder is
+/// removed when the test passes (the guard dropped without a panic) and kept for
+/// inspection when it fails. Dereferences to its path.
+pub struct TestDir {
+    path: PathBuf,
+    root: PathBuf,
+}
+
+impl TestDir {
+    /// The path `name` inside this folder (not created), with the guard of the folder.
+    pub fn sub(self, name: &str) -> TestDir {
+        let mut me = std::mem::ManuallyDrop::new(self);
+        TestDir {
+            path: me.path.join(name),
+            root: std::mem::take(&mut me.root),
+        }
+    }
+}
+
+impl std::ops::Deref for TestDir {
+    type Target = PathBuf;
+    fn deref(&self) -> &PathBuf {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for TestDir {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for TestDir {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.root);
+        }
+    }
+}
+
+/// A fresh temporary folder for one test (see [`TestDir`]).
+pub fn temp_dir(name: &str) -> TestDir {
     let d = std::env::temp_dir().join(format!("phstring-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TestDir {
+        path: d.clone(),
+        root: d,
+    }
 }
 
 /// Runs the binary with `args` in the workspace root.

@@ -1,7 +1,7 @@
 //! Runtime failures stop with a precise reason and intact outputs; checkpoints,
 //! resume and interrupts; determinism; output safety.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use crate::{phstring, temp_dir, workspace_root};
@@ -15,8 +15,8 @@ fn summary(dir: &Path) -> serde_json::Value {
 }
 
 /// Runs the paper example with `sets` into a fresh folder; returns (exit code, stderr, dir).
-fn run_paper(name: &str, sets: &[&str]) -> (Option<i32>, String, PathBuf) {
-    let out = temp_dir(name).join("out");
+fn run_paper(name: &str, sets: &[&str]) -> (Option<i32>, String, crate::TestDir) {
+    let out = temp_dir(name).sub("out");
     let o = crate::run_with("examples/paper_pendulum.toml", &out, sets, &[]);
     (
         o.status.code(),
@@ -355,7 +355,7 @@ fn nothing_is_written_outside_out() {
 /// runs.
 #[test]
 fn force_removes_a_stale_checkpoint() {
-    let out = temp_dir("stale-cp").join("o");
+    let out = temp_dir("stale-cp").sub("o");
     let o = phstring(&[
         "run",
         "examples/taut_string.toml",
