@@ -510,6 +510,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             }
         }
         for k in 0..self.sys.winches.len() {
+            // Off a body, the hold changes the drum node's velocity alone: the energy of
+            // the elements at that node (docs/method.md §23, "The cost of a cut"). On a
+            // body it also slides the drum point: `Ĥ` evaluated in full.
+            let on_body = self.sys.winches[k].body.is_some();
+            let window =
+                crate::winch_cut::cut_window(self.run.winches[k].drum, self.run.winches[k].drum);
+            let before = (!on_body).then(|| self.cut_part(k, window.clone()));
             let m = &self.sys.winches[k];
             let ws = &mut self.run.winches[k];
             let (payout, rate) = match &m.drum {
@@ -529,9 +536,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                     self.run.state.v[i] = frame.velocity;
                 }
             }
-            let after = self.with_drums(self.sys.energies(&self.run.state), false);
-            let de = after.hamiltonian() - self.energies.hamiltonian();
-            self.energies = after;
+            let de = match before {
+                Some(before) => {
+                    let after = self.cut_part(k, window);
+                    self.energies = self.energies.replaced(&before, &after);
+                    after.hamiltonian() - before.hamiltonian()
+                }
+                None => {
+                    let after = self.with_drums(self.sys.energies(&self.run.state), false);
+                    let de = after.hamiltonian() - self.energies.hamiltonian();
+                    self.energies = after;
+                    de
+                }
+            };
             let step = self.winch_work[k] + de;
             self.run.winches[k].energy += step;
             self.winch_step[k].1 += step;
