@@ -491,8 +491,9 @@ fn ramp(p: f64, delta: f64) -> (f64, f64) {
     } else if p >= delta {
         (1.0, 0.0)
     } else {
-        let x = p / delta;
-        (x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x) / delta)
+        let inv = 1.0 / delta;
+        let x = p * inv;
+        (x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x) * inv)
     }
 }
 
