@@ -217,7 +217,7 @@ fn check_estimates_the_outputs_and_warns_about_huge_ones() {
     assert!(stdout(&o).contains("in 17 files"), "{}", stdout(&o));
 
     // The 2 s run: the estimate within 10 % of the files written.
-    let dir = temp_dir("output-size").sub("o");
+    let dir = temp_dir("output-size").inside("o");
     let args = [
         "examples/paper_pendulum.toml",
         "--set",

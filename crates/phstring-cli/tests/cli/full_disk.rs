@@ -14,7 +14,7 @@ struct Tmpfs(crate::TestDir);
 impl Tmpfs {
     /// `None` (with a note on stderr) where mounting is not permitted.
     fn mount(name: &str, size: &str) -> Option<Self> {
-        let dir = temp_dir(name).sub("mnt");
+        let dir = temp_dir(name).inside("mnt");
         std::fs::create_dir_all(&dir).unwrap();
         let ok = Command::new("mount")
             .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])

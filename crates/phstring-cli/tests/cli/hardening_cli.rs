@@ -98,7 +98,7 @@ fn kill(sig: &str, child: &Child) {
 /// are replaced.
 #[test]
 fn force_deletes_only_exact_output_names() {
-    let out = temp_dir("force-exact").sub("o");
+    let out = temp_dir("force-exact").inside("o");
     assert!(run(&out, &["--set", "time.end=0.05"]).status.success());
     let user = [
         "figure1.png",
@@ -190,7 +190,7 @@ fn resume_refuses_to_write_through_a_symlink() {
 /// refused and the previous sweep stays as it was.
 #[test]
 fn sweep_force_validates_before_deleting() {
-    let out = temp_dir("sweep-validate").sub("o");
+    let out = temp_dir("sweep-validate").inside("o");
     let o = phstring(&[
         "sweep",
         PAPER,
@@ -229,7 +229,7 @@ fn sweep_force_validates_before_deleting() {
 /// written; once the lock is free, the leftover lock file blocks nothing.
 #[test]
 fn concurrent_runs_into_one_folder_are_refused() {
-    let out = temp_dir("lock").sub("o");
+    let out = temp_dir("lock").inside("o");
     std::fs::create_dir_all(&out).unwrap();
     let lock = std::fs::File::create(out.join(".phstring.lock")).unwrap();
     lock.try_lock().unwrap();
@@ -268,7 +268,7 @@ fn concurrent_runs_into_one_folder_are_refused() {
 /// The lock dies with the process, so a killed run does not block the next.
 #[test]
 fn lock_of_a_killed_run_does_not_block() {
-    let out = temp_dir("lock-kill").sub("o");
+    let out = temp_dir("lock-kill").inside("o");
     let mut args = vec!["run", PAPER, "-q", "--out", s(&out)];
     args.extend(LONG);
     let mut guard = Guard(Some(command(&args).stderr(Stdio::null()).spawn().unwrap()));
@@ -362,7 +362,7 @@ fn second_signal_exits_at_once() {
 /// SIGTERM stops a run like Ctrl-C, with a checkpoint and code 130.
 #[test]
 fn sigterm_stops_a_run_cleanly() {
-    let out = temp_dir("sigterm").sub("o");
+    let out = temp_dir("sigterm").inside("o");
     let mut args = vec!["run", PAPER, "-q", "--out", s(&out)];
     args.extend(ENDLESS);
     let mut guard = Guard(Some(command(&args).stderr(Stdio::piped()).spawn().unwrap()));
@@ -438,7 +438,7 @@ fn huge_sweep_is_refused_with_its_count() {
 /// `--jobs` is capped, so that `--jobs 100000` cannot spawn threads until the machine stalls.
 #[test]
 fn jobs_are_capped() {
-    let out = temp_dir("jobs").sub("o");
+    let out = temp_dir("jobs").inside("o");
     let o = phstring(&[
         "sweep",
         PAPER,
@@ -462,7 +462,7 @@ fn jobs_are_capped() {
 /// parallel runs. The machine's memory is set with PHSTRING_MEMORY_AVAILABLE.
 #[test]
 fn run_that_does_not_fit_in_memory_is_refused() {
-    let out = temp_dir("memory").sub("o");
+    let out = temp_dir("memory").inside("o");
     let o = command(&["check", PAPER, "--set", "mesh.elements=1000000"])
         .env("PHSTRING_MEMORY_AVAILABLE", "1e8")
         .output()
@@ -566,7 +566,7 @@ fn full_stderr_does_not_panic() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0));
-    let out = temp_dir("full").sub("o");
+    let out = temp_dir("full").inside("o");
     let o = command(&["run", PAPER, "--out", s(&out), "--set", "time.end=0.02"])
         .stdout(full())
         .stderr(full())
@@ -663,7 +663,7 @@ fn set_value_with_a_newline_is_refused() {
 /// and refuses a key varied twice or also given with `--set` (no duplicate columns).
 #[test]
 fn vary_quotes_escapes_and_duplicate_keys() {
-    let out = temp_dir("vary").sub("o");
+    let out = temp_dir("vary").inside("o");
     let o = phstring(&[
         "sweep",
         PAPER,

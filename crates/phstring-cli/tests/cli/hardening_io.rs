@@ -94,7 +94,7 @@ fn assert_no_non_finite(dir: &Path) {
 /// refused at validation or ends with a summary, the degenerate plot skipped with a warning.
 #[test]
 fn plot_hang_extreme_geometry_ends_with_a_summary() {
-    let out = temp_dir("hang").sub("o");
+    let out = temp_dir("hang").inside("o");
     let o = run(
         &out,
         &[
@@ -145,7 +145,7 @@ fn edit_valid(cp: &Path, to: &Path, edit: impl Fn(&mut CheckpointFile)) {
 /// a right checksum by the lengths checked against the scenario.
 #[test]
 fn damaged_checkpoint_is_refused_not_panicking() {
-    let out = temp_dir("damaged").sub("o");
+    let out = temp_dir("damaged").inside("o");
     let cp = interrupted_run(&out);
     let original = read(&cp);
     let bad = out.join("checkpoint.json");
@@ -187,7 +187,7 @@ fn damaged_checkpoint_is_refused_not_panicking() {
 /// a text edit (checksum) and as a valid file with wrong content (range checks).
 #[test]
 fn edited_checkpoint_numbers_are_refused() {
-    let out = temp_dir("edited").sub("o");
+    let out = temp_dir("edited").inside("o");
     let cp = interrupted_run(&out);
     let original = read(&cp);
     let bad = out.join("checkpoint.json");
@@ -292,7 +292,7 @@ fn edited_checkpoint_numbers_are_refused() {
     assert_eq!(read(&cp), original);
     assert!(resume(&cp).status.success());
     // A strain outside the material's domain (the paper's law needs C > 0).
-    let out = temp_dir("edited-domain").sub("o");
+    let out = temp_dir("edited-domain").inside("o");
     let o = run(
         &out,
         &["examples/paper_pendulum.toml", "--stop-after-steps", "5"],
@@ -485,7 +485,7 @@ fn non_finite_derived_quantities_are_refused_by_check_and_run() {
 /// finding that `ports.csv` was short).
 #[test]
 fn refused_resume_leaves_every_file_as_it_was() {
-    let out = temp_dir("refused-resume").sub("o");
+    let out = temp_dir("refused-resume").inside("o");
     let cp = interrupted_run(&out);
     // A crash after the checkpoint leaves positions.csv longer than recorded; ports.csv was
     // damaged (shorter than recorded).
@@ -615,7 +615,7 @@ fn stop_during_a_step_interrupts_with_a_checkpoint() {
 /// the remaining plots, lists them in summary.json, and the completed run stays completed.
 #[test]
 fn stop_during_plots_skips_them_and_lists_them() {
-    let out = temp_dir("stopplots").sub("o");
+    let out = temp_dir("stopplots").inside("o");
     let flag = Arc::new(AtomicBool::new(false));
     let opts = RunOptions {
         stop: Some(flag.clone()),
@@ -680,7 +680,7 @@ fn failed_write_leaves_a_fresh_failed_summary() {
 /// non-empty, and the next run removes them.
 #[test]
 fn stale_checkpoint_tmp_does_not_block_a_run() {
-    let out = temp_dir("staletmp").sub("o");
+    let out = temp_dir("staletmp").inside("o");
     std::fs::create_dir_all(&out).unwrap();
     for name in [
         "checkpoint.json.tmp",
@@ -723,7 +723,7 @@ fn stale_checkpoint_tmp_does_not_block_a_run() {
 /// nor the ParaView index.
 #[test]
 fn control_characters_in_titles_do_not_reach_plots() {
-    let out = temp_dir("ctrltitle").sub("o");
+    let out = temp_dir("ctrltitle").inside("o");
     let o = run(
         &out,
         &[

@@ -56,7 +56,7 @@ fn signalled_large(
     example: &str,
     extra: &[&str],
 ) -> (Output, crate::TestDir) {
-    let out = temp_dir(name).sub("o");
+    let out = temp_dir(name).inside("o");
     let mut args = vec![command, example, "--set", "mesh.elements=20000"];
     args.extend_from_slice(extra);
     args.extend_from_slice(&["--out", out.to_str().unwrap()]);
@@ -142,7 +142,7 @@ fn linearize_stops_in_the_modal_form_and_writes_nothing() {
 /// do not start; `sweep.csv` marks every run `interrupted`.
 #[test]
 fn sweep_stops_its_runs_and_marks_them_interrupted() {
-    let out = temp_dir("interrupt-sweep").sub("o");
+    let out = temp_dir("interrupt-sweep").inside("o");
     let o = signalled(&[
         "sweep",
         "examples/paper_pendulum.toml",

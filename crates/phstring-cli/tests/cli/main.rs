@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-/// A test's temporary folder, or a path inside it ([`TestDir::sub`]): the folder is
+/// A test's temporary folder, or a path inside it ([`TestDir::inside`]): the folder is
 /// removed when the test passes (the guard dropped without a panic) and kept for
 /// inspection when it fails. Dereferences to its path.
 pub struct TestDir {
@@ -40,7 +40,7 @@ pub struct TestDir {
 
 impl TestDir {
     /// The path `name` inside this folder (not created), with the guard of the folder.
-    pub fn sub(self, name: &str) -> TestDir {
+    pub fn inside(self, name: &str) -> TestDir {
         let mut me = std::mem::ManuallyDrop::new(self);
         TestDir {
             path: me.path.join(name),

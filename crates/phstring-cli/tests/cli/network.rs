@@ -16,7 +16,7 @@ fn stderr(o: &std::process::Output) -> String {
 
 /// Runs `example` for `end` seconds into a fresh folder; returns the folder.
 fn run_briefly(example: &str, end: &str) -> crate::TestDir {
-    let out = temp_dir(&format!("network-{example}")).sub("out");
+    let out = temp_dir(&format!("network-{example}")).inside("out");
     let o = phstring(&[
         "run",
         &format!("examples/{example}.toml"),
@@ -383,7 +383,7 @@ fn elements_below_the_rounding_of_their_coordinates_are_warned_about() {
     let o = phstring(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(stderr(&o).matches(warning).count(), 1, "{}", stderr(&o));
-    let out = temp_dir("short-elements").sub("out");
+    let out = temp_dir("short-elements").inside("out");
     let mut args = vec![
         "run",
         "examples/taut_string.toml",

@@ -32,7 +32,7 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
 /// A folder `case/` holding a copy of `example` as `scenario.toml` and a previous output
 /// (`energy.csv`), so that `--force` would clear it; returns the folder and the scenario.
 fn case_folder(name: &str, example: &str) -> (crate::TestDir, PathBuf) {
-    let case = temp_dir(name).sub("case");
+    let case = temp_dir(name).inside("case");
     std::fs::create_dir_all(&case).unwrap();
     let scenario = case.join("scenario.toml");
     std::fs::copy(workspace_root().join(example), &scenario).unwrap();

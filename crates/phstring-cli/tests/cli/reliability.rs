@@ -16,7 +16,7 @@ fn summary(dir: &Path) -> serde_json::Value {
 
 /// Runs the paper example with `sets` into a fresh folder; returns (exit code, stderr, dir).
 fn run_paper(name: &str, sets: &[&str]) -> (Option<i32>, String, crate::TestDir) {
-    let out = temp_dir(name).sub("out");
+    let out = temp_dir(name).inside("out");
     let o = crate::run_with("examples/paper_pendulum.toml", &out, sets, &[]);
     (
         o.status.code(),
@@ -355,7 +355,7 @@ fn nothing_is_written_outside_out() {
 /// runs.
 #[test]
 fn force_removes_a_stale_checkpoint() {
-    let out = temp_dir("stale-cp").sub("o");
+    let out = temp_dir("stale-cp").inside("o");
     let o = phstring(&[
         "run",
         "examples/taut_string.toml",

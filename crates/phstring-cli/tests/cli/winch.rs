@@ -414,7 +414,7 @@ fn the_cable_robot_follows_its_winches_to_the_inverse_kinematics() {
 /// Runs `scenario` into a fresh folder (`tag`) with `sets` and no plots, animation or frames,
 /// checks that it succeeded and returns the output folder.
 fn run_ok(scenario: &str, tag: &str, sets: &[&str]) -> crate::TestDir {
-    let out = temp_dir(tag).sub("run");
+    let out = temp_dir(tag).inside("run");
     let mut all = vec![
         "output.plots=false",
         "output.animation=false",
