@@ -43,7 +43,7 @@ impl TestDir {
     pub fn inside(self, name: &str) -> TestDir {
         let mut me = std::mem::ManuallyDrop::new(self);
         TestDir {
-            path: me.path.join(name),
+            path: std::mem::take(&mut me.path).join(name),
             root: std::mem::take(&mut me.root),
         }
     }
