@@ -316,8 +316,9 @@ fn dg4_damped_contacts_follow_the_cuts() {
 /// A winch's hold after every step (its drum node's velocity set to the payout rate) books
 /// the change of the energy of the elements at the drum node alone: after every step of
 /// the chain paid out onto the seabed and hauled back (prescribed, and a drum with
-/// dynamics), the run's energies are those of an evaluation of the state, every term within
-/// 1e-13 of their magnitude, and holds changed them on at least 100 steps.
+/// dynamics; with `dg`, and with `dg4`, whose sub-steps hold too), the run's energies are
+/// those of an evaluation of the state, every term within 1e-13 of their magnitude, and
+/// holds changed them on at least 100 steps.
 #[test]
 fn a_hold_updates_the_energies_in_place() {
     let drum = WinchDrum {
@@ -327,8 +328,18 @@ fn a_hold_updates_the_energies_in_place() {
         brake: None,
         derivative_time: 0.0,
     };
-    for (label, drum, steps) in [("prescribed", None, 1150), ("drum", Some(drum), 600)] {
-        let mut sim = chain_over_water(drum);
+    let dg4 = || {
+        let mut p = fixed_steps(0.01);
+        p.scheme = crate::integrator::Scheme::DiscreteGradient4;
+        p
+    };
+    let cases = [
+        ("prescribed", None, fixed_steps(0.01), 1150),
+        ("drum", Some(drum), fixed_steps(0.01), 600),
+        ("prescribed, dg4", None, dg4(), 1150),
+    ];
+    for (label, drum, params, steps) in cases {
+        let mut sim = Simulation::new(chain_network(drum), params).unwrap();
         let (mut worst, mut moved) = (0.0_f64, 0);
         for _ in 0..steps {
             let report = sim.step().unwrap();
