@@ -672,8 +672,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         let held = cp.energies;
         self.run = cp;
         self.run.energies = None;
-        self.sys.place_winches(&self.run.winches);
-        self.refresh_contacts();
+        self.place_winches();
         let e = self.with_drums(self.sys.energies(&self.run.state), false);
         // The record's own energies where they are those of its state (a cut updated them in
         // place: they differ in the last bits), so that the run continues bit for bit; every
@@ -703,13 +702,19 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         if let Some(run) = &b.run {
             self.run.clone_from(run);
             if !self.sys.winches.is_empty() {
-                self.sys.place_winches(&self.run.winches);
-                self.refresh_contacts();
+                self.place_winches();
             }
         }
         self.energies = b.energies;
         self.ports.clone_from(&b.ports);
         self.body_ports.clone_from(&b.body_ports);
+    }
+
+    /// Puts the run's winch states into the system (the whole of it,
+    /// [`PhSystem::place_winches`]) and the damped contacts with them.
+    fn place_winches(&mut self) {
+        self.sys.place_winches(&self.run.winches);
+        self.refresh_contacts();
     }
 
     /// `dg4` with winches: the damped contacts of the system as now placed (a winch's cut

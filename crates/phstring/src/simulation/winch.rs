@@ -513,10 +513,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
             // Off a body, the hold changes the drum node's velocity alone: the energy of
             // the elements at that node (docs/method.md §23, "The cost of a cut"). On a
             // body it also slides the drum point: `Ĥ` evaluated in full.
-            let on_body = self.sys.winches[k].body.is_some();
-            let window =
-                crate::winch_cut::cut_window(self.run.winches[k].drum, self.run.winches[k].drum);
-            let before = (!on_body).then(|| self.cut_part(k, window.clone()));
+            let before = self.sys.winches[k].body.is_none().then(|| {
+                let drum = self.run.winches[k].drum;
+                let window = crate::winch_cut::cut_window(drum, drum);
+                (window.clone(), self.cut_part(k, window))
+            });
             let m = &self.sys.winches[k];
             let ws = &mut self.run.winches[k];
             let (payout, rate) = match &m.drum {
@@ -537,7 +538,7 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 }
             }
             let de = match before {
-                Some(before) => {
+                Some((window, before)) => {
                     let after = self.cut_part(k, window);
                     self.energies = self.energies.replaced(&before, &after);
                     after.hamiltonian() - before.hamiltonian()
