@@ -119,10 +119,12 @@ fn measure_problem<const D: usize>(
     let mut iters = 0;
     let mut backtracks = 0;
     let t0 = Clock::start();
-    for _ in 0..target {
+    let mut steps = 0;
+    while steps < target || t0.seconds() < MIN_MEASURED {
         let report = sim.step().unwrap();
         iters += report.newton_iterations;
         backtracks += report.backtracks;
+        steps += 1;
     }
     let dt = t0.seconds();
     let rate = (iters * n_el) as f64 / dt;
@@ -255,8 +257,11 @@ fn measure_net<const D: usize>(
     sim.step().unwrap(); // warm-up
     let mut iters = 0;
     let t0 = Clock::start();
-    for _ in 0..3 {
+    // At least 3 steps and MIN_MEASURED s (see MIN_MEASURED).
+    let mut steps = 0;
+    while steps < 3 || t0.seconds() < MIN_MEASURED {
         iters += sim.step().unwrap().newton_iterations;
+        steps += 1;
     }
     let dt = t0.seconds();
     ((iters * n_el) as f64 / dt, dt / iters as f64, iters, n_el)
@@ -387,6 +392,10 @@ fn main() {
         );
     }
 }
+
+/// The shortest time [s] a rate is measured over: the CPU-time clock advances in ticks of a
+/// few ms, which a small problem's few steps can fall within (a rate of inf).
+const MIN_MEASURED: f64 = 0.3;
 
 /// Solvers measured on the net.
 const NET_SOLVERS: [SolverKind; 2] = [SolverKind::SparseLu, SolverKind::Network];
