@@ -582,6 +582,13 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 let frame = m.frame(t, &state.bodies);
                 let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
                 m.cut(ws, (&frame, payout, rate), parts);
+                // Nodes that came off the drum (parked through the step, their mid-step
+                // velocity zero) predict the next step from the velocity the cut gave them;
+                // with more than one element paid out in the step, all but the new drum
+                // node are free from now on.
+                for &i in &m.nodes[ws.drum..from.max(ws.drum)] {
+                    self.run.v_mid[i] = state.v[i];
+                }
                 let ws = *ws;
                 self.sys.place_cut(k, &ws, from);
                 self.refresh_contacts();
