@@ -782,3 +782,105 @@ fn a_deck_with_a_free_body_maps_and_finds_its_equilibrium() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A `--motion` table read as the user meant or flagged: with two coupled points (the spar
+/// deck without its third line) a 7-column table is a per-point table unless its header
+/// names the roll, as `roll` or OpenFAST's `PtfmRoll`: so a table with OpenFAST's platform
+/// column names moves the fairleads rigidly from their deck positions (the first starts at
+/// (5.2, 0, −70)), while the same rows without a header are absolute positions, which put
+/// both fairleads at the origin: the run warns (summary.json too), naming the point, its
+/// offset and the platform form. A 4-column table whose header names surge, sway and heave
+/// is refused, naming them. The water depth given by `--set` below an anchor is refused as
+/// in the deck, naming `water.depth` and the node.
+#[test]
+fn motion_tables_read_as_meant_or_flagged() {
+    let dir = temp_dir("deck-motion-meant");
+    let text = std::fs::read_to_string(workspace_root().join(SPAR)).unwrap();
+    // Without point 3 (an anchor), point 6 (a fairlead) and line 3; points 4 and 5 become
+    // 3 and 4 (MoorDyn numbers them in sequence).
+    let two: String = text
+        .lines()
+        .filter(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            !(w.first() == Some(&"3") || w.first() == Some(&"6") || l.starts_with("FairTen3"))
+        })
+        .map(|l| {
+            let l = l
+                .replace("4   Vessel", "3   Vessel")
+                .replace("5   Vessel", "4   Vessel")
+                .replace("1        4 ", "1        3 ")
+                .replace("2        5 ", "2        4 ");
+            format!("{l}\n")
+        })
+        .collect();
+    let deck = dir.join("two.dat");
+    std::fs::write(&deck, two).unwrap();
+    let deck = deck.to_str().unwrap();
+    let rows = "0,0,0,0,0,0,0\n1,0.5,0,0,0,0,0\n2,1.0,0,0,0,0,0\n";
+    let table = |name: &str, header: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, format!("{header}{rows}")).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let openfast = table(
+        "openfast.csv",
+        "Time,PtfmSurge,PtfmSway,PtfmHeave,PtfmRoll,PtfmPitch,PtfmYaw\n",
+    );
+    let bare = table("bare.csv", "");
+    let sets = [
+        "output.plots=false",
+        "output.animation=false",
+        "output.vtk=false",
+    ];
+    let start_of_point4 = |out: &Path| {
+        let mut r = csv::Reader::from_path(out.join("positions.csv")).unwrap();
+        let rec = r
+            .records()
+            .map(|r| r.unwrap())
+            .find(|r| &r[1] == "2")
+            .unwrap();
+        [2, 3, 4].map(|k| rec[k].parse::<f64>().unwrap())
+    };
+    let out = dir.join("openfast");
+    let o = run_with(deck, &out, &sets, &["--motion", &openfast]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let p = start_of_point4(&out);
+    assert!(
+        (p[0] - 5.2).abs() < 1e-9 && p[1].abs() < 1e-9 && (p[2] + 70.0).abs() < 1e-9,
+        "{p:?}"
+    );
+    assert_eq!(summary(&out)["warnings"].as_array().unwrap().len(), 0);
+    let out = dir.join("bare");
+    let o = run_with(deck, &out, &sets, &["--motion", &bare]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(start_of_point4(&out).iter().all(|x| x.abs() < 1e-9));
+    let warnings = summary(&out)["warnings"].to_string();
+    assert!(
+        warnings.contains(
+            "puts point 3 at (0, 0, 0) m at t = 0, 70.2 m from its deck position (5.2, 0, -70)"
+        ) && warnings.contains("point 4")
+            && stderr(&o).contains("warning: --motion"),
+        "{warnings}\n{}",
+        stderr(&o)
+    );
+    let surge = dir.join("surge.csv");
+    std::fs::write(&surge, "t,surge,sway,heave\n0,0,0,0\n1,1,0,0\n").unwrap();
+    let o = phstring(&["check", CHAIN_DEEP, "--motion", surge.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o)
+            .contains("has 4 columns and its header names platform motions (surge, sway, heave)"),
+        "{}",
+        stderr(&o)
+    );
+    let o = phstring(&["check", CHAIN_DEEP, "--set", "water.depth=100"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--set water.depth=100: `water.depth` = 100 m puts the seabed at z = -100 m, above the support at mesh node 0 (z = -320 m)"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The deep-water chain deck.
+const CHAIN_DEEP: &str = "examples/moordyn/chain_deep_320m_v2.dat";

@@ -14,6 +14,7 @@ use super::options::OPTION_NAMES;
 use super::shape::{Shape, lay_out};
 use super::{Attachment, Deck, LineType, LineValue, PointKind, SectionKind, Version};
 use crate::scenario::DeckSpec;
+use crate::text::num;
 
 /// A deck feature that phstring does not model but that `--ignore WORD` drops on purpose
 /// (the run then says so in `summary.json`'s `deck.ignored`).
@@ -311,11 +312,14 @@ pub struct VesselMotion {
 /// the time is column 1) and its position at `t = 0` [m].
 pub type PointColumns = (u32, [usize; 3], [f64; 3]);
 
-/// A `--motion` table whose number of columns fits neither form for the deck.
+/// A `--motion` table whose number of columns fits neither form for the deck, or whose
+/// header names platform motions (`surge` … `yaw`, OpenFAST's `PtfmSurge` …) with other than
+/// the platform table's 7 columns.
 #[derive(Debug, thiserror::Error)]
 #[error(
-    "--motion {}: has {got} columns; the deck's {coupled} coupled point(s) take a platform table of 7 (t, x, y, z, roll, pitch, yaw) or a per-point table of {} (t, then x, y, z of each coupled point in ID order)",
+    "--motion {}: has {got} columns{}; the deck's {coupled} coupled point(s) take a platform table of 7 (t, x, y, z, roll, pitch, yaw) or a per-point table of {} (t, then the absolute x, y, z of each coupled point in ID order)",
     path.display(),
+    platform_names.as_ref().map_or(String::new(), |n| format!(" and its header names platform motions ({n})")),
     1 + 3 * coupled
 )]
 pub struct MotionColumnsError {
@@ -325,6 +329,23 @@ pub struct MotionColumnsError {
     pub got: usize,
     /// The deck's coupled points.
     pub coupled: usize,
+    /// The header's names of platform motions, if any.
+    pub platform_names: Option<String>,
+}
+
+/// Whether a table's column name `h` names a platform degree of freedom: `surge`, `sway`,
+/// `heave`, `roll`, `pitch` or `yaw` (any case), also with OpenFAST's `Ptfm` prefix
+/// (`PtfmRoll`).
+fn names_platform_motion(h: &str) -> bool {
+    let h = h.trim().to_ascii_lowercase();
+    let h = h.strip_prefix("ptfm").unwrap_or(&h);
+    ["surge", "sway", "heave", "roll", "pitch", "yaw"].contains(&h)
+}
+
+/// Whether `h` names the platform's roll (`roll`, `PtfmRoll`, any case).
+fn names_roll(h: &str) -> bool {
+    let h = h.trim().to_ascii_lowercase();
+    h == "roll" || h == "ptfmroll"
 }
 
 impl VesselMotion {
@@ -358,10 +379,22 @@ impl VesselMotion {
             .map(|p| p.id)
             .collect();
         let columns = table.values.len() + 1;
-        let named_roll = table
+        let named_roll = table.header.iter().any(|h| names_roll(h));
+        let platform_names: Vec<&str> = table
             .header
             .iter()
-            .any(|h| h.trim().eq_ignore_ascii_case("roll"));
+            .map(|h| h.trim())
+            .filter(|h| names_platform_motion(h))
+            .collect();
+        let refuse = |platform_names: Option<String>| MotionColumnsError {
+            path: path.to_path_buf(),
+            got: columns,
+            coupled: coupled.len(),
+            platform_names,
+        };
+        if !platform_names.is_empty() && columns != 7 {
+            return Err(refuse(Some(platform_names.join(", "))).into());
+        }
         let per_point = columns == 1 + 3 * coupled.len()
             && !(columns == 7 && (named_roll || deck.version == Version::V1));
         if per_point {
@@ -388,13 +421,56 @@ impl VesselMotion {
         if columns == 7 {
             return Ok(Self::platform(path, &table));
         }
-        Err(MotionColumnsError {
-            path: path.to_path_buf(),
-            got: columns,
-            coupled: coupled.len(),
-        }
-        .into())
+        Err(refuse(None).into())
     }
+}
+
+/// The warnings for the coupled points that a per-point `motion` table puts at `t = 0`
+/// farther from their deck positions than 1 % of the span of their shortest line (and 1 m):
+/// most likely a table of platform offsets read as absolute positions.
+fn far_table_starts(deck: &Deck, motion: &VesselMotion) -> Vec<String> {
+    let Some(points) = &motion.points else {
+        return Vec::new();
+    };
+    let at = |id: u32| {
+        deck.points
+            .iter()
+            .find(|p| p.id == id)
+            .map(|p| phstring::Vector::<3>::from(p.position))
+    };
+    let span = |id: u32| {
+        deck.lines
+            .iter()
+            .filter_map(|l| match (&l.attach_a, &l.attach_b) {
+                (Attachment::Point(a), Attachment::Point(b)) if *a == id || *b == id => {
+                    Some((at(*a)? - at(*b)?).norm())
+                }
+                _ => None,
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut out = Vec::new();
+    for (id, _, start) in points {
+        let (Some(deck_at), start) = (at(*id), phstring::Vector::<3>::from(*start)) else {
+            continue;
+        };
+        let off = (start - deck_at).norm();
+        let limit = (0.01 * span(*id)).max(1.0);
+        if off > limit {
+            out.push(format!(
+                "--motion {}: the table puts point {id} at ({}, {}, {}) m at t = 0, {:.1} m from its deck position ({}, {}, {}): a per-point table (t, then x, y, z of each coupled point) holds absolute positions; a platform's offsets and rotations take a table of 7 columns whose header names the roll (t, x, y, z, roll, pitch, yaw, or OpenFAST's PtfmSurge … PtfmYaw)",
+                motion.path.display(),
+                num(start[0]),
+                num(start[1]),
+                num(start[2]),
+                off,
+                num(deck_at[0]),
+                num(deck_at[1]),
+                num(deck_at[2])
+            ));
+        }
+    }
+    out
 }
 
 /// [`map`] with the deck's coupled points carried by `motion`: they become the supports of
@@ -405,6 +481,7 @@ pub fn map_driven(
     ignore: &[Feature],
     motion: Option<&VesselMotion>,
 ) -> Result<Mapping, DeckError> {
+    let far = motion.map_or_else(Vec::new, |mv| far_table_starts(deck, mv));
     let moved;
     let deck = match motion {
         Some(mv) => {
@@ -448,6 +525,7 @@ pub fn map_driven(
                 Version::V1 => "v1".into(),
                 Version::V2 => "v2".into(),
             },
+            warnings: far,
             ..DeckSpec::default()
         },
         text: String::new(),
@@ -1345,6 +1423,9 @@ fn record_text(r: &DeckSpec) -> String {
     );
     if !r.converted.is_empty() {
         let _ = writeln!(out, "converted = {}", list(&r.converted));
+    }
+    if !r.warnings.is_empty() {
+        let _ = writeln!(out, "warnings = {}", list(&r.warnings));
     }
     if !r.ignored.is_empty() {
         let _ = writeln!(out, "ignored = {}", list(&r.ignored));

@@ -651,6 +651,7 @@ impl ScenarioFile {
             .map_err(|cause| self.setup_error(cause))?;
         problem = self.attach_winches(problem, &winch_strings, &mut components.winches)?;
         if let Some(water) = water {
+            self.supports_above_seabed(&water, &problem.boundary, &problem.initial.r)?;
             problem = line_hydro
                 .into_iter()
                 .fold(problem.with_water(water), |p, (g, h)| {
@@ -678,7 +679,9 @@ impl ScenarioFile {
                 .iter()
                 .sum();
         }
-        let warnings = rounding::short_element_warnings(&problem, layout == Layout::Single);
+        let mut warnings = rounding::short_element_warnings(&problem, layout == Layout::Single);
+        // A deck's own (its `--motion` table's first row far from the coupled points).
+        warnings.extend(s.deck.iter().flat_map(|d| d.warnings.iter().cloned()));
         components.point_masses = mass_report;
         components.supports = supports(&problem.boundary);
         components.motions = parts.motions;

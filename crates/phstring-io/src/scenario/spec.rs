@@ -109,6 +109,10 @@ pub struct DeckSpec {
     /// Features dropped on purpose with `--ignore`, with the deck lines they were on.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ignored: Vec<String>,
+    /// What in the deck or its `--motion` table looks like a mistake but runs (a table that
+    /// puts a coupled point far from its deck position); also the run's warnings.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// `[water]`: the water the strings with a `diameter` are in. Its surface is at height 0

@@ -2,7 +2,10 @@
 //! `cd_axial`, `ca`, `ca_axial` of a material) and the point masses' (`volume`, `cda`,
 //! `ca`): the library's [`Water`], [`LineHydro`] and [`PointHydro`] (docs/method.md §21).
 
-use phstring::{Bathymetry, Current, Friction, LineHydro, PointHydro, Seabed, Vector, Water};
+use phstring::{
+    Bathymetry, Boundary, Current, Friction, LineHydro, PointHydro, Seabed, SeabedSurface, Vector,
+    Water,
+};
 use toml::Spanned;
 
 use super::spec::{MaterialSpec, PointMassSpec, SeabedSpec, WaterSpec};
@@ -115,6 +118,49 @@ impl ScenarioFile {
             water = water.with_seabed(self.seabed::<D>(w, sb)?);
         }
         Ok(Some(water))
+    }
+
+    /// Refuses a support held in every component below a flat seabed (by more than 1e-9 of
+    /// the depth) at its position `r` [m]: its line would start inside the seabed, and the
+    /// contact would push it out with the penalty's force of the whole depth difference (an
+    /// anchor 220 m below a seabed given by `--set water.depth=100` ran with 1e10 N). Names
+    /// the node and `water.depth`.
+    pub(super) fn supports_above_seabed<const D: usize>(
+        &self,
+        water: &Water<D>,
+        boundary: &Boundary<D>,
+        r: &[Vector<D>],
+    ) -> Result<(), ScenarioError> {
+        let Some(SeabedSurface::Flat { depth }) = water.seabed.as_ref().map(|s| &s.surface) else {
+            return Ok(());
+        };
+        let Some(key) = self
+            .scenario
+            .water
+            .as_ref()
+            .and_then(|w| w.get_ref().depth.as_ref())
+        else {
+            return Ok(());
+        };
+        let deepest = boundary
+            .fixed
+            .iter()
+            .filter(|f| f.components.iter().all(|&c| c))
+            .map(|f| (f.node, r[f.node][D - 1]))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match deepest {
+            Some((node, z)) if z < -depth * (1.0 + 1e-9) => Err(self.invalid(
+                "water.depth",
+                key.span(),
+                format!(
+                    "= {} m puts the seabed at z = {} m, above the support at mesh node {node} (z = {} m): its line would start inside the seabed",
+                    num(*depth),
+                    num(-depth),
+                    num(z)
+                ),
+            )),
+            _ => Ok(()),
+        }
     }
 
     /// The magnitude [m/s²] of `gravity`, which must point straight down the vertical axis.
