@@ -231,7 +231,8 @@ fn the_arc_length_of_a_winch_strings_nodes_runs_from_the_drum_point() {
 
 /// What a winch table cannot be is refused with its key: a string the file lacks, a second
 /// winch on one string, a payout that is not 0 at `t = 0`, a drum held by a support, a
-/// payout given with `external = true` or neither of them, a name used twice, and a haul
+/// payout given with `external = true` or neither of them, a name used twice or with a
+/// comma (winches.csv names its rows by it), and a haul
 /// beyond the rope (at run time, by name).
 #[test]
 fn winch_tables_that_cannot_work_are_refused_by_key() {
@@ -271,6 +272,11 @@ fn winch_tables_that_cannot_work_are_refused_by_key() {
         (
             format!("{text}\n[[winch]]\nname = \"hoist\"\nstring = \"rope\"\npayout = \"0\"\n"),
             "winch.1.name",
+        ),
+        // A comma or a newline in the name would split winches.csv's rows.
+        (
+            text.replace("name = \"hoist\"", "name = \"a,b\""),
+            "winch.0.name` = \"a,b\" is not a valid name",
         ),
     ];
     // A drum with dynamics: refused with a payout, a torque or inertia without a radius,

@@ -67,6 +67,8 @@ impl ScenarioFile {
                     ),
                 ));
             }
+            // Outputs (winches.csv's rows) and FMU variables are named after it.
+            self.checked_name(&key("name"), spec.name.get_ref(), spec.name.span())?;
             if let Some(j) =
                 (0..k).find(|&j| s.winch[j].get_ref().name.get_ref() == spec.name.get_ref())
             {
