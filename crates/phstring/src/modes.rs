@@ -113,6 +113,14 @@ pub enum ModesError {
     /// The stop flag was set.
     #[error("interrupted")]
     Interrupted,
+    /// A rigid body's pose is prescribed (a motion).
+    #[error(
+        "rigid body '{name}' has a prescribed pose (a motion), which the statics hold: modes about a prescribed body are not available yet (give it no motion for the analysis)"
+    )]
+    Prescribed {
+        /// The body's name.
+        name: String,
+    },
 }
 
 /// The `count` lowest natural modes about the rest state at positions `r` [m] (at most the
@@ -248,6 +256,11 @@ pub fn modes_with_bodies<const D: usize, M: StoredEnergy>(
             expected: sys.bodies.len(),
         }
         .into());
+    }
+    if let Some(b) = sys.bodies.iter().position(|b| b.motion.is_some()) {
+        return Err(ModesError::Prescribed {
+            name: sys.body_names[b].clone(),
+        });
     }
     if stopped() {
         return Err(ModesError::Interrupted);

@@ -219,3 +219,22 @@ fn a_drum_on_a_free_body_resumes_and_solves_statics_at_its_checkpoint() {
         "{on_drum:?}"
     );
 }
+
+/// `modes` and `linearize` refuse a scenario whose rigid body has a prescribed pose (the
+/// crane vessel's heave), naming the body, as `mooring` does: the statics hold such a body,
+/// and taking its pose as free gave three spurious body modes near 2e-5 Hz.
+#[test]
+fn modes_and_linearize_refuse_a_prescribed_body() {
+    let dir = temp_dir("prescribed-body-modes");
+    for cmd in ["modes", "linearize"] {
+        let out = dir.join(cmd);
+        let o = phstring(&[cmd, VESSEL, "--out", out.to_str().unwrap(), "-q"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{cmd} ran");
+        assert!(
+            err.contains("rigid body 'vessel' has a prescribed pose (a motion)")
+                && err.contains("give it no motion for the analysis"),
+            "{cmd}: {err}"
+        );
+    }
+}

@@ -26,6 +26,14 @@ pub enum BodiesLinearError {
         /// Bodies.
         expected: usize,
     },
+    /// A body's pose is prescribed (a motion).
+    #[error(
+        "rigid body '{name}' has a prescribed pose (a motion), which the statics hold: the linear model about a prescribed body is not available yet (give it no motion for the analysis)"
+    )]
+    Prescribed {
+        /// The body's name.
+        name: String,
+    },
 }
 
 /// The reduced second-order model with rigid bodies about the rest state of node positions
@@ -49,6 +57,11 @@ pub fn reduced_model_with_bodies<const D: usize, M: StoredEnergy>(
         return Err(BodiesLinearError::Poses {
             got: poses.len(),
             expected: sys.bodies.len(),
+        });
+    }
+    if let Some(b) = sys.bodies.iter().position(|b| b.motion.is_some()) {
+        return Err(BodiesLinearError::Prescribed {
+            name: sys.body_names[b].clone(),
         });
     }
     let (n, tk) = body_hessian(sys, r, poses).ok_or(BodiesLinearError::Strain)?;
