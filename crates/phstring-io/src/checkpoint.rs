@@ -176,6 +176,10 @@ pub struct CheckpointFile {
     pub scenario_path: PathBuf,
     /// Scenario text as run (with `--set` overrides applied).
     pub scenario_text: String,
+    /// The data files the scenario reads (its tables, the bathymetry) with a fingerprint of
+    /// their contents: a resume reads them again, and refuses one that changed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub data_files: Vec<DataFile>,
     /// End of the loading phase marked in plots [s], if any.
     pub end_of_loading: Option<f64>,
     /// Simulation state: the core's record in flat form, which serializes, checks and
@@ -192,6 +196,39 @@ pub struct CheckpointFile {
     /// The file it was read from (empty if it was not read from a file).
     #[serde(skip)]
     pub path: PathBuf,
+}
+
+/// A data file a run reads (a table, the bathymetry), as a checkpoint records it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DataFile {
+    /// The scenario key that names it (`winch.0.payout_table`).
+    pub key: String,
+    /// The file, as the key resolves it, absolute.
+    pub path: PathBuf,
+    /// FNV-1a (64 bit, hex) of its bytes.
+    pub fnv: String,
+}
+
+/// The data files `file` reads ([`crate::scenario::ScenarioFile::data_files`]) with the
+/// fingerprints of their contents now; a file that cannot be read gets the fingerprint
+/// `unreadable`.
+pub fn data_files(file: &crate::scenario::ScenarioFile) -> Vec<DataFile> {
+    file.data_files()
+        .into_iter()
+        .map(|(key, path)| {
+            let fnv = std::fs::read(&path).map_or_else(
+                |_| "unreadable".to_string(),
+                |bytes| {
+                    let mut h = fnv::FnvHasher::default();
+                    h.write(&bytes);
+                    format!("{:016x}", h.finish())
+                },
+            );
+            // Absolute, as the checkpoint's scenario path is.
+            let path = std::path::absolute(&path).unwrap_or(path);
+            DataFile { key, path, fnv }
+        })
+        .collect()
 }
 
 /// Errors reading or writing checkpoints.
@@ -221,6 +258,17 @@ pub enum CheckpointError {
         path: PathBuf,
         /// What is wrong.
         reason: String,
+    },
+    /// A data file the run read differs now (or is gone, or the scenario names other files).
+    #[error(
+        "checkpoint {}: {what} since the checkpoint was written, so the resumed run would not continue this run; restore it, or start the run anew",
+        path.display()
+    )]
+    DataChanged {
+        /// Checkpoint file.
+        path: PathBuf,
+        /// What changed: the key and the file.
+        what: String,
     },
     /// The output folder holds another run (or none) than the one that wrote the checkpoint.
     #[error(
@@ -252,6 +300,8 @@ struct CheckpointView<'a> {
     run_id: &'a str,
     scenario_path: &'a Path,
     scenario_text: &'a str,
+    #[serde(skip_serializing_if = "<[DataFile]>::is_empty")]
+    data_files: &'a [DataFile],
     end_of_loading: Option<f64>,
     sim: &'a FlatCheckpoint,
     outputs: &'a OutputState,
@@ -281,12 +331,46 @@ impl CheckpointFile {
             run_id: &self.run_id,
             scenario_path: &self.scenario_path,
             scenario_text: &self.scenario_text,
+            data_files: &self.data_files,
             end_of_loading: self.end_of_loading,
             sim: &self.sim,
             outputs: &self.outputs,
             counters: &self.counters,
             checksum,
         }
+    }
+
+    /// Refuses a resume of this checkpoint by `file` (the scenario it holds) when a data file
+    /// the run read has changed: its fingerprint differs, it is gone, or the scenario names
+    /// another file for the key.
+    pub fn check_data_files(
+        &self,
+        file: &crate::scenario::ScenarioFile,
+    ) -> Result<(), CheckpointError> {
+        let now = data_files(file);
+        for was in &self.data_files {
+            let what = match now.iter().find(|d| d.key == was.key) {
+                None => format!("`{}` names no file now", was.key),
+                Some(d) if d.path != was.path => format!(
+                    "`{}` names {} instead of {}",
+                    was.key,
+                    d.path.display(),
+                    was.path.display()
+                ),
+                Some(d) if d.fnv == "unreadable" => {
+                    format!("`{}`: {} cannot be read", was.key, d.path.display())
+                }
+                Some(d) if d.fnv != was.fnv => {
+                    format!("`{}`: {} has changed", was.key, d.path.display())
+                }
+                Some(_) => continue,
+            };
+            return Err(CheckpointError::DataChanged {
+                path: self.path.clone(),
+                what,
+            });
+        }
+        Ok(())
     }
 
     /// The checksum of this checkpoint's content: FNV-1a (64 bit) over its JSON with an

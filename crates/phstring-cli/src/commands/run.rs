@@ -83,6 +83,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
         (_, Some(cp_path)) => {
             let cp = CheckpointFile::read(&cp_path)?;
             let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
+            cp.check_data_files(&file)?;
             let dir = out.unwrap_or_else(|| {
                 cp_path
                     .parent()

@@ -148,3 +148,76 @@ fn payout_tables_that_cannot_drive_a_winch_are_refused() {
         );
     }
 }
+
+/// A resume reads the scenario's tables again: a run of the crane with its payout table,
+/// started with paths relative to its folder and stopped after 200 steps, resumes from
+/// another working directory (the checkpoint holds the scenario's absolute path) and writes
+/// `energy.csv` and `winches.csv` as the uninterrupted run does, byte for byte; a table
+/// edited after the checkpoint (15 m hauled in becoming 10 m) is refused by the resume,
+/// naming the key and the file, instead of a run that jumped at the resume.
+#[test]
+fn a_resume_finds_its_tables_from_anywhere_and_refuses_a_changed_one() {
+    let dir = temp_dir("winch-table-resume");
+    let table = |scale: f64| {
+        let mut rows = String::from("t,payout\n");
+        for k in 0..=180 {
+            let t = 0.25 * k as f64;
+            rows.push_str(&format!("{t},{:.12}\n", scale * hoist(t)));
+        }
+        rows
+    };
+    crane_with_table(&dir, "payout_table = \"hoist.csv\"", &table(1.0));
+    let in_dir = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_phstring"))
+            .args(args)
+            .current_dir(&dir)
+            .env_remove("RUST_BACKTRACE")
+            .output()
+            .unwrap()
+    };
+    let run = |out: &str, extra: &[&str]| {
+        let mut args = vec!["run", "crane_table.toml", "--out", out, "-q"];
+        for s in [
+            "output.plots=false",
+            "output.animation=false",
+            "output.vtk=false",
+            "time.end=4",
+        ] {
+            args.extend(["--set", s]);
+        }
+        args.extend_from_slice(extra);
+        in_dir(&args)
+    };
+    let o = run("whole", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for part in ["part", "edited"] {
+        let o = run(part, &["--stop-after-steps", "200"]);
+        assert_eq!(
+            o.status.code(),
+            Some(130),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    // From the workspace root.
+    let cp = dir.join("part").join("checkpoint.json");
+    let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["energy.csv", "winches.csv"] {
+        let read = |d: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+        assert!(
+            read("whole") == read("part"),
+            "{f} differs after the resume"
+        );
+    }
+    std::fs::write(dir.join("hoist.csv"), table(2.0 / 3.0)).unwrap();
+    let cp = dir.join("edited").join("checkpoint.json");
+    let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("`winch.0.payout_table`")
+            && err.contains("hoist.csv has changed since the checkpoint was written"),
+        "{err}"
+    );
+}

@@ -465,6 +465,8 @@ struct RunContext<'a> {
     checkpoint_path: PathBuf,
     /// How the extremes of the lines are sampled (`None` without strings).
     lines: Option<LineWatch>,
+    /// The data files the scenario reads, fingerprinted at the start (for the checkpoints).
+    data_files: Vec<crate::checkpoint::DataFile>,
 }
 
 fn run_dim<const D: usize>(
@@ -497,6 +499,7 @@ fn run_dim<const D: usize>(
         checkpoint_path: out.join(CHECKPOINT),
         settings,
         lines: ends.clone().map(|e| LineWatch::new(e, sim.system())),
+        data_files: crate::checkpoint::data_files(file),
     };
     let mut info = new_info(&ctx, &sim, &components, resume.is_some());
     info.lines = ctx
@@ -851,8 +854,11 @@ fn write_checkpoint<const D: usize>(
         format: FORMAT.into(),
         version: env!("CARGO_PKG_VERSION").into(),
         run_id: ctx.run_id.clone(),
-        scenario_path: ctx.file.path.clone(),
+        // Absolute: a resume from another working directory finds the scenario's tables.
+        scenario_path: std::path::absolute(&ctx.file.path)
+            .unwrap_or_else(|_| ctx.file.path.clone()),
         scenario_text: ctx.file.text().to_string(),
+        data_files: ctx.data_files.clone(),
         end_of_loading: ctx.end_of_loading,
         sim: sim.flat_checkpoint(),
         outputs: writers.state()?,
