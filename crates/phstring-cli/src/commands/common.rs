@@ -285,7 +285,8 @@ pub fn prepare_scenario_command<T>(
         set_force.motion.as_deref(),
     )?;
     check_budget(&file)?;
-    let setup = file.setup()?;
+    // The scenario's warnings, as `run` prints them: the command may fail for what they say.
+    let (setup, _) = check_and_warn(&file)?;
     let read = read(&setup)?;
     let out = out.unwrap_or_else(|| default_out(scenario, suffix));
     let inputs: Vec<&Path> = std::iter::once(scenario)

@@ -884,3 +884,49 @@ fn motion_tables_read_as_meant_or_flagged() {
 
 /// The deep-water chain deck.
 const CHAIN_DEEP: &str = "examples/moordyn/chain_deep_320m_v2.dat";
+
+/// A line longer than its ends' horizontal plus vertical distance (the shallow chain made
+/// 400 m long for 338 m + 42 m) has extra length lying slack on the frictionless seabed,
+/// where its rest state is not unique: `statics` warns before it fails, naming the deck line
+/// and the way to run it, and the run from the layout that the warning names completes with
+/// its energy balance.
+#[test]
+fn a_line_longer_than_its_path_warns_and_runs_from_its_layout() {
+    let dir = temp_dir("deck-slack-extra");
+    let text = std::fs::read_to_string(workspace_root().join(SHALLOW)).unwrap();
+    assert!(text.contains("350.0     35 "));
+    let deck = dir.join("long.dat");
+    std::fs::write(&deck, text.replace("350.0     35 ", "400.0     35 ")).unwrap();
+    let deck = deck.to_str().unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.contains("350.0     35 "))
+        .unwrap()
+        + 1;
+    let out = dir.join("statics");
+    let o = phstring(&["statics", deck, "--out", out.to_str().unwrap()]);
+    assert!(
+        stderr(&o).contains(&format!(
+            "warning: {deck}:{line}: line 1 (400 m) is longer than its ends' horizontal plus vertical distance (380.0 m)"
+        )) && stderr(&o).contains("--set initial.equilibrium=false"),
+        "{}",
+        stderr(&o)
+    );
+    let out = dir.join("run");
+    let sets = [
+        "initial.equilibrium=false",
+        "time.end=1",
+        "output.plots=false",
+        "output.animation=false",
+        "output.vtk=false",
+    ];
+    let o = run_with(deck, &out, &sets, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    let balance = s["max_balance_error"].as_f64().unwrap();
+    let scale = s["hamiltonian_initial"].as_f64().unwrap().abs();
+    assert!(balance <= 1e-12 * scale, "balance {balance} J of {scale} J");
+}
+
+/// The shallow-water chain deck.
+const SHALLOW: &str = "examples/moordyn/chain_shallow_50m_v2.dat";

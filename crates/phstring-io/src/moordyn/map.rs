@@ -1072,6 +1072,25 @@ fn end_point(m: &Mapper, line: &super::Line, end: Attachment) -> Result<super::P
 
 /// The lines: one string each, of `NumSegs` elements through named nodes laid out by
 /// [`lay_out`], with its material.
+/// A warning for line `l` of unstretched `length` [m] between the points at `ends` when it
+/// is longer than their horizontal plus vertical distance: its extra length lies slack on
+/// the seabed, where (without friction in the statics) its rest state is not unique, so
+/// that the starting equilibrium may not be found.
+fn slack_on_the_seabed(m: &mut Mapper, l: &super::Line, ends: ([f64; 3], [f64; 3]), length: f64) {
+    let (a, b) = ends;
+    let path = (b[0] - a[0]).hypot(b[1] - a[1]) + (b[2] - a[2]).abs();
+    if length > path * (1.0 + 1e-9) {
+        m.record.warnings.push(format!(
+            "{}:{}: line {} ({} m) is longer than its ends' horizontal plus vertical distance ({:.1} m): its extra length lies slack on the seabed, where its rest state is not unique; if the starting equilibrium (or `statics`) is not found, run from the deck's layout with `--set initial.equilibrium=false`",
+            m.deck.file,
+            l.line,
+            l.id,
+            num(length),
+            path
+        ));
+    }
+}
+
 fn lines(m: &mut Mapper, materials: &BTreeMap<String, TypeMaterial>) -> Result<(), DeckError> {
     let mut written: Vec<String> = Vec::new();
     let lines = m.deck.lines.clone();
@@ -1096,6 +1115,7 @@ fn lines(m: &mut Mapper, materials: &BTreeMap<String, TypeMaterial>) -> Result<(
         } else {
             return m.unmappable(l.line, format!("line {} has UnstrLen 0", l.id));
         };
+        slack_on_the_seabed(m, l, (a.position, b.position), length);
         let n = l.segments;
         let shape = lay_out(a.position, b.position, length, n);
         let mat = &materials[&l.line_type];
