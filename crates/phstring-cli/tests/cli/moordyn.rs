@@ -930,3 +930,30 @@ fn a_line_longer_than_its_path_warns_and_runs_from_its_layout() {
 
 /// The shallow-water chain deck.
 const SHALLOW: &str = "examples/moordyn/chain_shallow_50m_v2.dat";
+
+/// A line whose UnstrLen is far below the distance between its ends (the shallow chain made
+/// 170 m long for 340.6 m: a typing error) starts stretched by 100 %: `check` warns, naming
+/// the deck line and the stretch, where the example's 350 m gives no warning.
+#[test]
+fn a_line_far_shorter_than_its_ends_apart_warns() {
+    let dir = temp_dir("deck-overstretch");
+    let text = std::fs::read_to_string(workspace_root().join(SHALLOW)).unwrap();
+    let deck = dir.join("short.dat");
+    std::fs::write(&deck, text.replace("350.0     35 ", "170.0     35 ")).unwrap();
+    let o = phstring(&["check", deck.to_str().unwrap()]);
+    let line = text
+        .lines()
+        .position(|l| l.contains("350.0     35 "))
+        .unwrap()
+        + 1;
+    assert!(
+        stderr(&o).contains(&format!(
+            "short.dat:{line}: line 1 (170 m) starts stretched by 100.4 % to reach its ends 340.6 m apart"
+        )),
+        "{}",
+        stderr(&o)
+    );
+    let o = phstring(&["check", SHALLOW]);
+    assert!(o.status.success());
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+}
