@@ -957,3 +957,29 @@ fn a_line_far_shorter_than_its_ends_apart_warns() {
     assert!(o.status.success());
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
+
+/// A motion table that ends before `time.end` while still moving holds its last row from
+/// there, so the platform stops at once: `check` warns, naming the key, the table's end and
+/// the end time; at the table's own end (a deck's default) it says nothing.
+#[test]
+fn a_table_that_ends_moving_before_the_run_warns() {
+    let table = "examples/moordyn/chain_deep_320m_motion.csv";
+    let o = phstring(&[
+        "check",
+        CHAIN_DEEP,
+        "--motion",
+        table,
+        "--set",
+        "time.end=400",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("`platform.0.motion_table`: table ")
+            && stderr(&o).contains("ends at t = 300 s with column")
+            && stderr(&o).contains("from there to time.end = 400 s it holds its last row"),
+        "{}",
+        stderr(&o)
+    );
+    let o = phstring(&["check", CHAIN_DEEP, "--motion", table]);
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+}

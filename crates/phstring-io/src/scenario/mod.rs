@@ -682,6 +682,7 @@ impl ScenarioFile {
         let mut warnings = rounding::short_element_warnings(&problem, layout == Layout::Single);
         // A deck's own (its `--motion` table's first row far from the coupled points).
         warnings.extend(s.deck.iter().flat_map(|d| d.warnings.iter().cloned()));
+        warnings.extend(self.table_end_warnings(settings.t_end));
         components.point_masses = mass_report;
         components.supports = supports(&problem.boundary);
         components.motions = parts.motions;

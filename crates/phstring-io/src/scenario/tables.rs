@@ -107,6 +107,52 @@ impl ScenarioFile {
         out
     }
 
+    /// Warnings for the tables that end before `t_end` [s] still changing: after its last
+    /// row a table holds that row (zero rate), so the motion, load or payout stops at once
+    /// there. (Read again here; a table that cannot be read was reported by its key.)
+    pub(super) fn table_end_warnings(&self, t_end: f64) -> Vec<String> {
+        let mut out = Vec::new();
+        for (key, path) in self.data_files() {
+            if key == "seabed.bathymetry" {
+                continue;
+            }
+            let Ok(table) = crate::tables::read_table_any(&path) else {
+                continue;
+            };
+            let (Some(&first), Some(&last)) = (table.times.first(), table.times.last()) else {
+                continue;
+            };
+            if t_end <= last + 1e-9 * t_end.abs().max(1.0) {
+                continue;
+            }
+            // The largest end rate relative to its column's range over the table's span.
+            let moving = (0..table.values.len())
+                .map(|j| {
+                    let col = &table.values[j];
+                    let range = col.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                    let rate = table.signal(j).rate(last);
+                    (
+                        j,
+                        rate,
+                        rate.abs() * (last - first) / range.max(f64::MIN_POSITIVE),
+                    )
+                })
+                .filter(|(_, _, rel)| *rel > 1e-6)
+                .max_by(|a, b| a.2.total_cmp(&b.2));
+            if let Some((j, rate, _)) = moving {
+                out.push(format!(
+                    "`{key}`: table {} ends at t = {} s with column {} still changing ({:.3e} per s); from there to time.end = {} s it holds its last row, so it stops at once",
+                    clip(&path.display().to_string()),
+                    num(last),
+                    j + 2,
+                    rate,
+                    num(t_end)
+                ));
+            }
+        }
+        out
+    }
+
     /// The file a table key names: relative to the scenario file's folder.
     fn table_file(&self, rel: &str) -> PathBuf {
         let rel = std::path::Path::new(rel);
