@@ -718,6 +718,15 @@ fn a_per_point_motion_table_moves_each_coupled_point() {
             .to_string()
             .contains("its three columns")
     );
+    // `check` names each point's own columns (point 5: the file's columns 5, 6, 7).
+    let o = phstring(&["check", SPAR, "--motion", path.to_str().unwrap()]);
+    let listed = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        listed.contains("\"point5\" x = table ")
+            && listed.contains("points.txt column 5 (x)")
+            && listed.contains("points.txt column 10 (z)"),
+        "{listed}"
+    );
     // Five columns fit neither form for three coupled points.
     std::fs::write(&path, "t x y z w\n0 1 2 3 4\n1 1 2 3 4\n").unwrap();
     let o = phstring(&["check", SPAR, "--motion", path.to_str().unwrap()]);

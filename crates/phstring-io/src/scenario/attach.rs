@@ -774,12 +774,19 @@ impl ScenarioFile {
                 }));
             }
             let table = self.scenario.boundary[k].motion_table.as_ref();
+            // The file's column of component i (1-based, the time first): `motion_columns`
+            // (validated) or the i-th after the time.
+            let columns = self.scenario.boundary[k].motion_columns.as_ref();
             for (i, signal) in e.tabled {
                 let file = table.map_or("", |f| f.get_ref().as_str());
+                let column = columns
+                    .and_then(|c| c.get_ref().get(i).copied())
+                    .and_then(|c| usize::try_from(c).ok())
+                    .unwrap_or(i + 2);
                 motions.push(MotionComponent {
                     node: e.node,
                     component: AXES[i],
-                    position: column_text(file, i + 1, AXES[i]),
+                    position: column_text(file, column - 1, AXES[i]),
                     external: false,
                 });
                 boundary.motions.push(Motion::sampled(e.node, i, signal));
