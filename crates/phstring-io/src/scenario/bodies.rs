@@ -242,14 +242,28 @@ impl ScenarioFile {
                     num(x[2])
                 )));
             }
+            if x[0] < 0.0 || x[1] < 0.0 {
+                return Err(bad(format!(
+                    "= {} kg·m² has a negative moment: a moment of inertia is never negative (in 2D only Izz is used)",
+                    nums(x)
+                )));
+            }
             return Ok(j);
         }
         let moments = j.symmetric_eigenvalues();
+        let mut m: Vec<f64> = moments.iter().copied().collect();
+        m.sort_by(f64::total_cmp);
         if !moments.iter().all(|&l| l > 0.0) {
-            let mut m: Vec<f64> = moments.iter().copied().collect();
-            m.sort_by(f64::total_cmp);
             return Err(bad(format!(
                 "= {} kg·m² is not positive definite (principal moments {} kg·m²): every moment of inertia must be positive",
+                nums(x),
+                nums(&m)
+            )));
+        }
+        // I₁ + I₂ ≥ I₃ for every mass distribution (equality for a flat one).
+        if m[0] + m[1] < m[2] * (1.0 - 1e-9) {
+            return Err(bad(format!(
+                "= {} kg·m² has the principal moments {} kg·m², whose two smaller add up to less than the largest: no body has them (I₁ + I₂ ≥ I₃)",
                 nums(x),
                 nums(&m)
             )));

@@ -165,7 +165,9 @@ impl ScenarioFile {
                 &format!("winch.{k}.reserve"),
                 r.span(),
                 format!(
-                    "= {m} m must be at least 0 and finite, and at most a million elements of {l} m"
+                    "= {} m must be at least 0 and finite, and at most a million elements of {} m",
+                    crate::text::num(m),
+                    crate::text::num(l)
                 ),
             ));
         }
