@@ -65,7 +65,7 @@ pub const OPTION_NAMES: &[&[&str]] = &[
 ];
 
 /// Whether `key` is one of the names of [`OPTION_NAMES`].
-fn known(key: &str) -> bool {
+pub(super) fn known(key: &str) -> bool {
     OPTION_NAMES
         .iter()
         .flat_map(|names| names.iter())

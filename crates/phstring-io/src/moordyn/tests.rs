@@ -848,3 +848,37 @@ fn bodies_are_read_with_their_starred_columns() {
         );
     }
 }
+
+/// A `---` in the remark of an option or data row does not make the row a section header
+/// (MoorDyn's test is any `---` on the line): a row that starts with a number, or an
+/// option row whose second field is an option name, is data and the remark is dropped.
+#[test]
+fn a_dashed_remark_on_a_data_row_is_not_a_header() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS")
+        .replace("50 WtrDpth\n", "50 WtrDpth\n1025 rho\n");
+    let dashed = base
+        .replace("50 WtrDpth\n", "50 WtrDpth --- water depth (m)\n")
+        .replace(
+            "1 Fixed 100 0 -50 0 0 0 0\n",
+            "1 Fixed 100 0 -50 0 0 0 0 --- anchor\n",
+        )
+        .replace("0.01 dtM\n", "0.01 dtM\nRK4 tScheme ---- time scheme\n");
+    let d = deck(&dashed);
+    assert_eq!(d.sections_present.len(), 5, "{:?}", d.sections_present);
+    assert_eq!(d.unsupported_sections().count(), 0);
+    assert_eq!(
+        d.options.water_depth().unwrap(),
+        Some(WaterDepth::Depth(50.0))
+    );
+    assert_eq!(d.options.water_density().unwrap(), Some(1025.0));
+    assert_eq!(d.options.t_scheme(), Some("RK4"));
+    let wtr = d.options.get("WtrDpth").unwrap();
+    assert_eq!(
+        (wtr.line, wtr.remark.as_str()),
+        (line_of(&dashed, "50 WtrDpth"), "")
+    );
+    assert_eq!(d.points, deck(&base).points);
+    // Lines that are headers stay headers, numbers in the title or not.
+    let titled = base.replace("--- LINES ---", "--- LINES 3 of them ---");
+    assert_eq!(deck(&titled).lines, deck(&base).lines);
+}
