@@ -882,3 +882,24 @@ fn a_dashed_remark_on_a_data_row_is_not_a_header() {
     let titled = base.replace("--- LINES ---", "--- LINES 3 of them ---");
     assert_eq!(deck(&titled).lines, deck(&base).lines);
 }
+
+/// OUTPUTS written OpenFAST-style: channel names separated by commas, or in double quotes.
+#[test]
+fn outputs_take_commas_and_quotes() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
+    let text = base.replace(
+        "FairTen1\n",
+        "FairTen1, AnchTen1,L1N10T\n\"Point2PX\" \"Point2PZ\",\"L1N3T\"\n",
+    );
+    let d = deck(&text);
+    let names: Vec<&str> = d.outputs.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "FairTen1", "AnchTen1", "L1N10T", "Point2PX", "Point2PZ", "L1N3T"
+        ]
+    );
+    let second = line_of(&text, "Point2PX");
+    assert_eq!(d.outputs[3].line, second);
+    assert_eq!(d.outputs[0].line, second - 1);
+}
