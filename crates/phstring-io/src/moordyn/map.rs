@@ -530,6 +530,10 @@ pub fn map_driven(
         },
         text: String::new(),
     };
+    // The reader's remarks (how the file was decoded, an option given twice, …).
+    for n in &deck.notes {
+        m.converted(n.line, &n.text);
+    }
     sections(&mut m)?;
     let settings = options(&mut m)?;
     if deck.lines.is_empty() {

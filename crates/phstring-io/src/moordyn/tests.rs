@@ -718,7 +718,7 @@ fn load_reads_files_and_names_them() {
     assert_eq!(
         load(&binary).unwrap_err().to_string(),
         format!(
-            "MoorDyn deck {} is not UTF-8 text (byte 6 is invalid)",
+            "MoorDyn deck {} is not UTF-8 text (byte 6, on line 2, is invalid)",
             binary.display()
         )
     );
@@ -902,4 +902,76 @@ fn outputs_take_commas_and_quotes() {
     let second = line_of(&text, "Point2PX");
     assert_eq!(d.outputs[3].line, second);
     assert_eq!(d.outputs[0].line, second - 1);
+}
+
+/// Decks exported on Windows: Latin-1 (`°`, `²` as single bytes) and UTF-16 with its
+/// byte-order mark are read as the same deck, with a note saying how; a file that is
+/// neither a deck nor UTF-8 is refused naming the line of the bad byte.
+#[test]
+fn latin1_and_utf16_decks_are_read_with_a_note() {
+    let dir = crate::test_util::temp_dir("moordyn", "encodings");
+    let text = CHAIN_V1.replacen('\n', " at 20 \u{b0}C, EA in N/m\u{b2}\n", 1);
+    let utf8 = dir.join("utf8.dat");
+    std::fs::write(&utf8, &text).unwrap();
+    let want = load(&utf8).unwrap();
+    assert!(want.notes.is_empty(), "{:?}", want.notes);
+    let latin1: Vec<u8> = text
+        .chars()
+        .map(|c| u8::try_from(c as u32).unwrap())
+        .collect();
+    let path = dir.join("latin1.dat");
+    std::fs::write(&path, &latin1).unwrap();
+    let d = load(&path).unwrap();
+    assert_eq!(
+        (&d.title, &d.lines, &d.options.entries),
+        (&want.title, &want.lines, &want.options.entries)
+    );
+    assert_eq!(d.notes.len(), 1, "{:?}", d.notes);
+    assert_eq!(
+        d.notes[0].line, 1,
+        "the first byte that is not UTF-8 is on line 1"
+    );
+    assert!(
+        d.notes[0].text.contains("read as Latin-1"),
+        "{}",
+        d.notes[0].text
+    );
+    for (name, big) in [("le", false), ("be", true)] {
+        let mut bytes = if big {
+            vec![0xfe, 0xff]
+        } else {
+            vec![0xff, 0xfe]
+        };
+        for u in text.encode_utf16() {
+            bytes.extend(if big {
+                u.to_be_bytes()
+            } else {
+                u.to_le_bytes()
+            });
+        }
+        let path = dir.join(format!("utf16{name}.dat"));
+        std::fs::write(&path, &bytes).unwrap();
+        let d = load(&path).unwrap();
+        assert_eq!(
+            (&d.title, &d.lines, &d.options.entries),
+            (&want.title, &want.lines, &want.options.entries)
+        );
+        assert_eq!(d.notes.len(), 1, "{:?}", d.notes);
+        assert!(
+            d.notes[0].text.contains("read as UTF-16"),
+            "{}",
+            d.notes[0].text
+        );
+    }
+    // Not UTF-8 and not a deck: refused with the line of the bad byte.
+    let binary = dir.join("binary.dat");
+    std::fs::write(&binary, b"title\nnotes\n\xb0 --- LINES ---\n").unwrap();
+    assert_eq!(
+        load(&binary).unwrap_err().to_string(),
+        format!(
+            "MoorDyn deck {} is not UTF-8 text (byte 12, on line 3, is invalid)",
+            binary.display()
+        )
+    );
+    std::fs::remove_dir_all(dir).unwrap();
 }
