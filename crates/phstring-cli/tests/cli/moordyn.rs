@@ -901,6 +901,50 @@ fn edited_deep(
     path.to_str().unwrap().to_string()
 }
 
+/// A deck as written on Windows by hand, checked: Latin-1 bytes (`°` in the title), a `---`
+/// in the remark of WtrDpth and the water density given twice. The deck is read (no
+/// unknown section), WtrDpth and every option after it count (the seabed at 320 m), and
+/// `check` prints how the file was read and which density is used.
+#[test]
+fn check_reads_a_latin1_deck_with_dashed_remarks_and_a_repeated_option() {
+    let dir = temp_dir("deck-latin1");
+    let deck = edited_deep(
+        &dir,
+        "deep.dat",
+        |t| {
+            t.replace(
+                "(the OC3-Hywind depth)",
+                "(the OC3-Hywind depth, 10 \u{b0}C)",
+            )
+            .replace(
+                "320       WtrDpth    water depth (m)",
+                "320       WtrDpth    --- water depth (m)",
+            )
+            .replace(
+                "1025      rho",
+                "2000      WtrDnsty   first try\n1025      rho",
+            )
+        },
+        |t| t.chars().map(|c| u8::try_from(c as u32).unwrap()).collect(),
+    );
+    let o = phstring(&["check", &deck]);
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(o.status.success(), "{err}");
+    for expected in [
+        "deck.dat:2: the file is not UTF-8 (byte 0xB0, offset 138, is the first that is not); read as Latin-1",
+        "deck.dat:23: option WtrDnsty is given twice, on line 22 (`2000 WtrDnsty`) and line 23 (`1025 rho`): the later, 1025, is used",
+        "option WtrDpth = 320",
+        "seabed:    flat at −320 m, stiffness 3000000 Pa/m",
+    ] {
+        let expected = expected.replace("deck.dat", &deck);
+        assert!(out.contains(&expected), "missing {expected:?} in\n{out}");
+    }
+    assert!(
+        !out.contains("no WtrDpth") && !err.contains("section"),
+        "{out}\n{err}"
+    );
+}
+
 /// OUTPUTS written OpenFAST-style (commas, quotes) with names longer than the `.out`
 /// column: every channel written, the header and each row with as many whitespace-separated
 /// fields; a channel that is not written (an acceleration) is a warning that `run` prints

@@ -343,8 +343,8 @@ pub struct Deck {
     pub outputs: Vec<OutputChannel>,
     /// Every section header, in file order, read or not ([`SectionKind::is_read`]).
     pub sections_present: Vec<Section>,
-    /// Remarks: how a file that is not UTF-8 was read ([`load`]), a missing closing line;
-    /// the mapping lists them under `converted`.
+    /// Remarks: how a file that is not UTF-8 was read ([`load`]), an option given more
+    /// than once, a missing closing line; the mapping lists them under `converted`.
     pub notes: Vec<Note>,
 }
 
@@ -434,6 +434,7 @@ pub fn parse(text: &str, file: &str) -> Result<Deck, DeckError> {
         Some(b) => tables::outputs(file, &b.rows)?,
         None => Vec::new(),
     };
+    notes.extend(options::repeated(&options));
     Ok(Deck {
         file: file.to_string(),
         title: l.title.map(|(_, t)| t.to_string()).unwrap_or_default(),

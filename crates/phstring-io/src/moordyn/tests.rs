@@ -883,27 +883,6 @@ fn a_dashed_remark_on_a_data_row_is_not_a_header() {
     assert_eq!(deck(&titled).lines, deck(&base).lines);
 }
 
-/// OUTPUTS written OpenFAST-style: channel names separated by commas, or in double quotes.
-#[test]
-fn outputs_take_commas_and_quotes() {
-    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
-    let text = base.replace(
-        "FairTen1\n",
-        "FairTen1, AnchTen1,L1N10T\n\"Point2PX\" \"Point2PZ\",\"L1N3T\"\n",
-    );
-    let d = deck(&text);
-    let names: Vec<&str> = d.outputs.iter().map(|o| o.name.as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "FairTen1", "AnchTen1", "L1N10T", "Point2PX", "Point2PZ", "L1N3T"
-        ]
-    );
-    let second = line_of(&text, "Point2PX");
-    assert_eq!(d.outputs[3].line, second);
-    assert_eq!(d.outputs[0].line, second - 1);
-}
-
 /// Decks exported on Windows: Latin-1 (`°`, `²` as single bytes) and UTF-16 with its
 /// byte-order mark are read as the same deck, with a note saying how; a file that is
 /// neither a deck nor UTF-8 is refused naming the line of the bad byte.
@@ -974,4 +953,67 @@ fn latin1_and_utf16_decks_are_read_with_a_note() {
         )
     );
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// OUTPUTS written OpenFAST-style: channel names separated by commas, or in double quotes.
+#[test]
+fn outputs_take_commas_and_quotes() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
+    let text = base.replace(
+        "FairTen1\n",
+        "FairTen1, AnchTen1,L1N10T\n\"Point2PX\" \"Point2PZ\",\"L1N3T\"\n",
+    );
+    let d = deck(&text);
+    let names: Vec<&str> = d.outputs.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "FairTen1", "AnchTen1", "L1N10T", "Point2PX", "Point2PZ", "L1N3T"
+        ]
+    );
+    let second = line_of(&text, "Point2PX");
+    assert_eq!(d.outputs[3].line, second);
+    assert_eq!(d.outputs[0].line, second - 1);
+}
+
+/// An option given twice (under the same name or another of its names): the later line
+/// counts, and a note names both lines and the value used.
+#[test]
+fn a_repeated_option_is_noted_with_both_lines() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
+    let text = base.replace(
+        "50 WtrDpth\n",
+        "2000 WtrDnsty\n50 WtrDpth\n60 wtrdpth depth\n1025 rho\n70 WtrDpth\n",
+    );
+    let d = deck(&text);
+    assert_eq!(d.options.water_density().unwrap(), Some(1025.0));
+    assert_eq!(
+        d.options.water_depth().unwrap(),
+        Some(WaterDepth::Depth(70.0))
+    );
+    let (dens, rho) = (line_of(&text, "2000 WtrDnsty"), line_of(&text, "1025 rho"));
+    let (d50, d60, d70) = (
+        line_of(&text, "50 WtrDpth"),
+        line_of(&text, "60 wtrdpth"),
+        line_of(&text, "70 WtrDpth"),
+    );
+    let texts: Vec<(usize, &str)> = d.notes.iter().map(|n| (n.line, n.text.as_str())).collect();
+    assert_eq!(
+        texts,
+        [
+            (
+                rho,
+                &*format!(
+                    "option WtrDnsty is given twice, on line {dens} (`2000 WtrDnsty`) and line {rho} (`1025 rho`): the later, 1025, is used"
+                )
+            ),
+            (
+                d70,
+                &*format!(
+                    "option WtrDpth is given 3 times, on line {d50} (`50 WtrDpth`), line {d60} (`60 wtrdpth`) and line {d70} (`70 WtrDpth`): the last, 70, is used"
+                )
+            ),
+        ]
+    );
+    assert!(deck(&base).notes.is_empty());
 }
