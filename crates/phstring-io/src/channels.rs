@@ -194,9 +194,11 @@ pub fn parse(name: &str) -> Result<Channel, String> {
             let q = quantity(&let2).ok_or_else(|| unknown_quantity(name, &let2))?;
             Ok(channel(Object::Point(point), q))
         }
-        "R" | "ROD" | "B" | "BODY" => Err(format!(
-            "`{name}` reads a {}, which phstring's deck mapping refuses",
-            if let1.starts_with('R') { "rod" } else { "body" }
+        "R" | "ROD" => Err(format!(
+            "`{name}` reads a rod; phstring does not model rods (the deck mapping refuses them)"
+        )),
+        "B" | "BODY" => Err(format!(
+            "`{name}` reads a body; phstring does not write body channels yet"
         )),
         _ => Err(format!(
             "`{name}`: the object must be FairTen<i>, AnchTen<i>, L<i>…, Line<i>…, P<k>…, Point<k>… or Con<k>…"

@@ -116,6 +116,8 @@ pub enum RowError {
         got: usize,
         /// Columns expected.
         want: usize,
+        /// The line is one field that holds a `;` (a table separated by semicolons).
+        semicolons: bool,
     },
     /// A field that is not a number (after the header line).
     NotANumber {
@@ -145,10 +147,19 @@ pub enum RowError {
 impl fmt::Display for RowError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Columns { got, want } => write!(
+            Self::Columns {
+                got,
+                want,
+                semicolons,
+            } => write!(
                 f,
-                "has {got} columns, the table needs {want} (time, then {})",
-                want - 1
+                "has {got} columns, the table needs {want} (time, then {}){}",
+                want - 1,
+                if *semicolons {
+                    "; `;` is not a separator: separate the columns by commas, spaces or tabs"
+                } else {
+                    ""
+                }
             ),
             Self::NotANumber { column, field } => {
                 write!(f, "column {column} \"{}\" is not a number", clip(field))
@@ -256,6 +267,7 @@ pub fn parse_table(text: &str, path: &Path, columns: usize) -> Result<Table, Tab
                 RowError::Columns {
                     got: f.len(),
                     want: columns,
+                    semicolons: f.len() == 1 && f[0].contains(';'),
                 },
             ));
         }
@@ -335,6 +347,16 @@ mod tests {
         assert_eq!(
             message("0, 1, 2\n1, 2\n", 3),
             "m.csv:2: has 2 columns, the table needs 3 (time, then 2)"
+        );
+        // A table written with semicolons (a spreadsheet's CSV in some locales) is one
+        // column per line: the message says `;` is not a separator.
+        assert_eq!(
+            message("t;x\n0;1\n1;2\n", 2),
+            "m.csv:1: has 1 columns, the table needs 2 (time, then 1); `;` is not a separator: separate the columns by commas, spaces or tabs"
+        );
+        assert_eq!(
+            message("0 1;2\n", 3),
+            "m.csv:1: has 2 columns, the table needs 3 (time, then 2)"
         );
         assert_eq!(
             message("t x\n0 1\n1 abc\n", 2),

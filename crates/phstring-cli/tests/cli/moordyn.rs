@@ -992,3 +992,131 @@ fn a_table_that_ends_moving_before_the_run_warns() {
     let o = phstring(&["check", CHAIN_DEEP, "--motion", table]);
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
+
+/// The chain deck in 320 m of water, edited: `edit` applied to its text, written to `dir`
+/// as `name` in the bytes `encode` makes of it.
+fn edited_deep(
+    dir: &Path,
+    name: &str,
+    edit: impl Fn(String) -> String,
+    encode: impl Fn(&str) -> Vec<u8>,
+) -> String {
+    let text = std::fs::read_to_string(workspace_root().join(CHAIN_DEEP)).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, encode(&edit(text))).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// A deck as written on Windows by hand, checked: Latin-1 bytes (`°` in the title), a `---`
+/// in the remark of WtrDpth and the water density given twice. The deck is read (no
+/// unknown section), WtrDpth and every option after it count (the seabed at 320 m), and
+/// `check` prints how the file was read and which density is used.
+#[test]
+fn check_reads_a_latin1_deck_with_dashed_remarks_and_a_repeated_option() {
+    let dir = temp_dir("deck-latin1");
+    let deck = edited_deep(
+        &dir,
+        "deep.dat",
+        |t| {
+            t.replace(
+                "(the OC3-Hywind depth)",
+                "(the OC3-Hywind depth, 10 \u{b0}C)",
+            )
+            .replace(
+                "320       WtrDpth    water depth (m)",
+                "320       WtrDpth    --- water depth (m)",
+            )
+            .replace(
+                "1025      rho",
+                "2000      WtrDnsty   first try\n1025      rho",
+            )
+        },
+        |t| t.chars().map(|c| u8::try_from(c as u32).unwrap()).collect(),
+    );
+    let o = phstring(&["check", &deck]);
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(o.status.success(), "{err}");
+    for expected in [
+        "deck.dat:2: the file is not UTF-8 (byte 0xB0, offset 138, is the first that is not); read as Latin-1",
+        "deck.dat:23: option WtrDnsty is given twice, on line 22 (`2000 WtrDnsty`) and line 23 (`1025 rho`): the later, 1025, is used",
+        "option WtrDpth = 320",
+        "seabed:    flat at −320 m, stiffness 3000000 Pa/m",
+    ] {
+        let expected = expected.replace("deck.dat", &deck);
+        assert!(out.contains(&expected), "missing {expected:?} in\n{out}");
+    }
+    assert!(
+        !out.contains("no WtrDpth") && !err.contains("section"),
+        "{out}\n{err}"
+    );
+}
+
+/// OUTPUTS written OpenFAST-style (commas, quotes) with names longer than the `.out`
+/// column: every channel written, the header and each row with as many whitespace-separated
+/// fields; a channel that is not written (an acceleration) is a warning that `run` prints
+/// and summary.json lists.
+#[test]
+fn openfast_style_outputs_with_long_names_run_and_the_rest_warn() {
+    let dir = temp_dir("deck-outputs");
+    let deck = edited_deep(
+        &dir,
+        "deep.dat",
+        |t| {
+            t.replace(
+                "FairTen1\nAnchTen1\n",
+                "FairTen000000000000000001, \"Point0000000000000002PX\",AnchTen1\nL1N10AX\n",
+            )
+        },
+        |t| t.as_bytes().to_vec(),
+    );
+    let out = dir.join("run");
+    let sets = [
+        "time.end=0.005",
+        "output.plots=false",
+        "output.animation=false",
+    ];
+    let o = phstring(&[
+        "run",
+        &deck,
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        sets[0],
+        "--set",
+        sets[1],
+        "--set",
+        sets[2],
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let warning = format!("{deck}:32: channel L1N10AX is not written: accelerations");
+    assert!(err.contains(&format!("warning: {warning}")), "{err}");
+    let s = summary(&out);
+    let listed = s["warnings"].as_array().unwrap();
+    assert!(
+        listed
+            .iter()
+            .any(|w| w.as_str().unwrap().starts_with(&warning)),
+        "{listed:?}"
+    );
+    let text = std::fs::read_to_string(out.join("deep.out")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let fields = |l: &str| l.split_whitespace().count();
+    assert_eq!(
+        lines[0].split_whitespace().collect::<Vec<_>>(),
+        [
+            "Time",
+            "FairTen000000000000000001",
+            "Point0000000000000002PX",
+            "AnchTen1"
+        ]
+    );
+    assert_eq!(fields(lines[1]), 4, "{}", lines[1]);
+    assert!(lines.len() > 3, "{text}");
+    for row in &lines[2..] {
+        assert_eq!(fields(row), 4, "{row}");
+    }
+    // The fairlead's x, the second channel, is the vessel point's 35 m.
+    let x: f64 = lines[2].split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!((x - 35.0).abs() < 1e-9, "{x}");
+}

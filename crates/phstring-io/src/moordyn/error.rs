@@ -29,13 +29,15 @@ pub enum DeckError {
         /// File.
         path: PathBuf,
     },
-    /// The file is not UTF-8 text.
-    #[error("MoorDyn deck {} is not UTF-8 text (byte {valid_up_to} is invalid)", path.display())]
+    /// The file is not UTF-8 text, nor UTF-16 with a byte-order mark, nor a deck in Latin-1.
+    #[error("MoorDyn deck {} is not UTF-8 text (byte {valid_up_to}, on line {line}, is invalid)", path.display())]
     NotText {
         /// File.
         path: PathBuf,
         /// Bytes before the first invalid one.
         valid_up_to: usize,
+        /// 1-based line of the first invalid byte.
+        line: usize,
     },
     /// No dashed header line names a MoorDyn section.
     #[error(

@@ -51,12 +51,27 @@ fn strip_comment(line: &str) -> &str {
 }
 
 /// The title of a dashed header line (`---- LINE TYPES ----` → `LINE TYPES`), or `None`
-/// when the line holds no `---` (MoorDyn's test for a header).
+/// when the line is not a header. MoorDyn takes any line holding `---` for a header; so does
+/// this reader, except for a line that is data with a dashed remark (`320 WtrDpth ---
+/// water depth (m)`): one whose first field is a number, or whose second field is an option
+/// name (`RK4 tScheme --- scheme`).
 pub(super) fn header_title(text: &str) -> Option<&str> {
-    if !text.contains("---") {
+    if !text.contains("---") || dashed_remark(text).is_some() {
         return None;
     }
     Some(text.trim_matches(|c: char| c == '-' || c.is_whitespace()))
+}
+
+/// The data before the `---` of a row that holds one but is no header (see
+/// [`header_title`]), trimmed; `None` for any other row.
+fn dashed_remark(text: &str) -> Option<&str> {
+    let at = text.find("---")?;
+    let mut fields = text.split_whitespace();
+    let first = fields.next()?;
+    let option = fields
+        .next()
+        .is_some_and(|second| !first.contains("---") && super::options::known(second));
+    (number(first).is_some() || option).then(|| text[..at].trim_end())
 }
 
 /// Section titles and what they name (upper case, single spaces).
@@ -141,7 +156,8 @@ pub(super) fn layout(text: &str) -> Layout<'_> {
         match blocks.last_mut() {
             Some(b) => b.rows.push(Row {
                 line,
-                text: stripped,
+                // A dashed remark is dropped, as a comment is.
+                text: dashed_remark(stripped).unwrap_or(stripped),
             }),
             None if title.is_none() => title = Some((line, raw.trim())),
             None => {}

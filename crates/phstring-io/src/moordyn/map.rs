@@ -530,6 +530,10 @@ pub fn map_driven(
         },
         text: String::new(),
     };
+    // The reader's remarks (how the file was decoded, an option given twice, …).
+    for n in &deck.notes {
+        m.converted(n.line, &n.text);
+    }
     sections(&mut m)?;
     let settings = options(&mut m)?;
     if deck.lines.is_empty() {
@@ -1257,7 +1261,8 @@ fn string_text(m: &mut Mapper, l: &super::Line, shape: &Shape, material: &str, e
 /// The OUTPUTS section: the channels phstring writes go to `output.channels` (a
 /// MoorDyn-style table named after the deck); a channel naming a line, node or point the
 /// deck does not have is refused with its line, as MoorDyn refuses it; a channel phstring
-/// does not write is dropped with a note. The lines' output flags are not needed.
+/// does not write is dropped with a warning (which the run prints). The lines' output flags
+/// are not needed.
 fn outputs(m: &mut Mapper) -> Result<(), DeckError> {
     let table = out_file_name(&m.deck.file);
     for o in m.deck.outputs.clone() {
@@ -1275,7 +1280,8 @@ fn outputs(m: &mut Mapper) -> Result<(), DeckError> {
                 m.row(o.line, entry, format!("column {} of {table}", o.name));
             }
             Err(why) => {
-                m.converted(o.line, format!("channel {} is not written: {why}", o.name));
+                let warning = format!("{}: channel {} is not written: {why}", m.at(o.line), o.name);
+                m.record.warnings.push(warning);
                 m.row(o.line, entry, format!("not written: {why}"));
             }
         }

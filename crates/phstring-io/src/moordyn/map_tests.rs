@@ -565,10 +565,11 @@ fn deck_with_outputs(outputs: &str) -> String {
 }
 
 /// The OUTPUTS channels: those written become `output.channels` with MoorDyn's file name;
-/// those phstring does not write are dropped with a note at their line; a channel naming a
-/// line, node or point the deck lacks is refused at its line, as MoorDyn refuses it.
+/// those phstring does not write are dropped with a warning at their line (which the run
+/// prints); a channel naming a line, node or point the deck lacks is refused at its line,
+/// as MoorDyn refuses it.
 #[test]
-fn output_channels_are_written_dropped_with_a_note_or_refused() {
+fn output_channels_are_written_dropped_with_a_warning_or_refused() {
     let text = deck_with_outputs("FairTen1 L1N2T L1N4PZ\nL1N2AX L1N2FX Point3PZ\nPoint2FZ L1NAFX");
     let (m, file) = mapped(&text, &[]);
     let channels: Vec<&str> = file
@@ -585,11 +586,18 @@ fn output_channels_are_written_dropped_with_a_note_or_refused() {
     let out_line = line_of(&text, "L1N2AX");
     let notes: Vec<&String> = m
         .record
-        .converted
+        .warnings
         .iter()
         .filter(|c| c.starts_with(&format!("deck.dat:{out_line}: channel")))
         .collect();
-    assert_eq!(notes.len(), 3, "{:?}", m.record.converted);
+    assert_eq!(notes.len(), 3, "{:?}", m.record.warnings);
+    // The generated scenario carries them, and its validation makes them the run's warnings.
+    let deck_record = file.scenario.deck.as_ref().unwrap();
+    assert_eq!(deck_record.warnings, m.record.warnings);
+    let run_warnings = file.check_with_warnings().unwrap();
+    for n in &notes {
+        assert!(run_warnings.contains(n), "{n} not in {run_warnings:?}");
+    }
     assert!(notes[0].contains("L1N2AX is not written: accelerations"));
     assert!(notes[1].contains("L1N2FX is not written: the net force on an interior node"));
     assert!(notes[2].contains("Point3PZ is not written: point 3 has no line"));
@@ -1070,4 +1078,37 @@ fn the_heave_period_of_a_tethered_body_grows_with_its_added_mass() {
         "{}",
         added / still
     );
+}
+
+/// A body channel on a deck whose free body is mapped is not refused nor said to be: it is
+/// not written, with a warning saying so.
+#[test]
+fn a_body_channel_is_a_warning_that_body_channels_are_not_written() {
+    let text = "--- MoorDyn input ---\ntethered buoy\n\
+         --- LINE TYPES ---\nName Diam MassDen EA BA/-zeta EI Cd Ca CdAx CaAx\n\
+         (-) (m) (kg/m) (N) (N-s) (-) (-) (-) (-) (-)\ntether 0.1 1.0 1e8 0 0 0 0 0 0\n\
+         --- BODIES ---\nID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca\n\
+         (#) (word) (m) (m) (m) (deg) (deg) (deg) (kg) (m) (kg-m^2) (m^3) (m^2) (-)\n\
+         1 Free 0 0 -44.5 0 0 0 2.0e5 1.0 1e6 400 0 0\n\
+         --- POINTS ---\nID Attachment X Y Z Mass Volume CdA Ca\n(#) (word) (m) (m) (m) (kg) (m^3) (m^2) (-)\n\
+         1 Fixed 0 0 -100 0 0 0 0\n2 Body1 0 0 -5 0 0 0 0\n\
+         --- LINES ---\nID LineType AttachA AttachB UnstrLen NumSegs Outputs\n(#) (name) (#) (#) (m) (-) (-)\n\
+         1 tether 1 2 50 1 -\n\
+         --- OPTIONS ---\n0.005 dtM\n200 WtrDpth\n--- OUTPUTS ---\nAnchTen1\nBody1PX\n--- END ---\n";
+    let (m, file) = mapped(text, &[]);
+    let line = line_of(text, "Body1PX");
+    assert_eq!(
+        m.record.warnings,
+        [format!(
+            "deck.dat:{line}: channel Body1PX is not written: `Body1PX` reads a body; phstring does not write body channels yet"
+        )]
+    );
+    let channels: Vec<&str> = file
+        .scenario
+        .output
+        .channels
+        .iter()
+        .map(|c| c.get_ref().as_str())
+        .collect();
+    assert_eq!(channels, ["AnchTen1"]);
 }

@@ -343,7 +343,8 @@ pub struct Deck {
     pub outputs: Vec<OutputChannel>,
     /// Every section header, in file order, read or not ([`SectionKind::is_read`]).
     pub sections_present: Vec<Section>,
-    /// Remarks (missing closing line, …).
+    /// Remarks: how a file that is not UTF-8 was read ([`load`]), an option given more
+    /// than once, a missing closing line; the mapping lists them under `converted`.
     pub notes: Vec<Note>,
 }
 
@@ -354,9 +355,14 @@ impl Deck {
     }
 }
 
-/// Reads the deck at `path` (at most [`MAX_DECK_BYTES`]).
+/// Reads the deck at `path` (at most [`MAX_DECK_BYTES`]): UTF-8, or else UTF-16 with a
+/// byte-order mark, or else Latin-1 when the text then looks like a deck
+/// ([`looks_like_moordyn`]); the first note of [`Deck::notes`] says when it was not UTF-8.
 pub fn load(path: &Path) -> Result<Deck, DeckError> {
-    parse(&load_text(path)?, &path.display().to_string())
+    let (text, note) = load_text(path)?;
+    let mut deck = parse(&text, &path.display().to_string())?;
+    deck.notes.splice(0..0, note);
+    Ok(deck)
 }
 
 /// Whether `text` looks like a MoorDyn deck: its dashed header lines name at least two
@@ -428,6 +434,7 @@ pub fn parse(text: &str, file: &str) -> Result<Deck, DeckError> {
         Some(b) => tables::outputs(file, &b.rows)?,
         None => Vec::new(),
     };
+    notes.extend(options::repeated(&options));
     Ok(Deck {
         file: file.to_string(),
         title: l.title.map(|(_, t)| t.to_string()).unwrap_or_default(),
@@ -584,7 +591,7 @@ pub fn load_scenario_driven(
         )),
         None => Ok(()),
     };
-    let text = match load_text(path) {
+    let (text, note) = match load_text(path) {
         Ok(t) => t,
         // Let the scenario reader report what is wrong with the file.
         Err(_) => {
@@ -600,7 +607,8 @@ pub fn load_scenario_driven(
         .iter()
         .map(|w| Feature::from_word(w))
         .collect::<Result<Vec<_>, _>>()?;
-    let deck = parse(&text, &path.display().to_string())?;
+    let mut deck = parse(&text, &path.display().to_string())?;
+    deck.notes.splice(0..0, note);
     let vessel = motion
         .map(|p| VesselMotion::for_deck(p, &deck))
         .transpose()?;
@@ -626,8 +634,12 @@ fn plain(path: &Path, sets: &[String], ignore: &[String]) -> Result<Loaded, Load
     })
 }
 
-/// The text of `path`, at most [`MAX_DECK_BYTES`], if it is UTF-8.
-fn load_text(path: &Path) -> Result<String, DeckError> {
+/// The text of `path` (at most [`MAX_DECK_BYTES`]) and, when it is not UTF-8, a note saying
+/// how it was read: as UTF-16 when it starts with a UTF-16 byte-order mark (`FF FE` little
+/// endian, `FE FF` big endian), else as Latin-1 (one character per byte; decks exported on
+/// Windows carry `°` or `²` in titles and unit rows) when the text then looks like a deck.
+/// A file that is none of these is refused naming the byte and its line.
+fn load_text(path: &Path) -> Result<(String, Option<Note>), DeckError> {
     use std::io::Read as _;
     let read_err = |cause| DeckError::Read {
         path: path.to_path_buf(),
@@ -644,8 +656,62 @@ fn load_text(path: &Path) -> Result<String, DeckError> {
             path: path.to_path_buf(),
         });
     }
-    String::from_utf8(bytes).map_err(|e| DeckError::NotText {
+    let e = match String::from_utf8(bytes) {
+        Ok(text) => return Ok((text, None)),
+        Err(e) => e,
+    };
+    let valid_up_to = e.utf8_error().valid_up_to();
+    let bytes = e.into_bytes();
+    if let Some((text, order)) = utf16(&bytes) {
+        let text_note =
+            format!("the file is UTF-16 ({order}, with its byte-order mark); read as UTF-16");
+        return Ok((
+            text,
+            Some(Note {
+                line: 1,
+                text: text_note,
+            }),
+        ));
+    }
+    let line = 1 + bytes[..valid_up_to].iter().filter(|&&b| b == b'\n').count();
+    let latin1: String = bytes.iter().map(|&b| char::from(b)).collect();
+    if looks_like_moordyn(&latin1) {
+        let text = format!(
+            "the file is not UTF-8 (byte 0x{:02X}, offset {valid_up_to}, is the first that is not); read as Latin-1, one character per byte",
+            bytes[valid_up_to]
+        );
+        return Ok((latin1, Some(Note { line, text })));
+    }
+    Err(DeckError::NotText {
         path: path.to_path_buf(),
-        valid_up_to: e.utf8_error().valid_up_to(),
+        valid_up_to,
+        line,
     })
+}
+
+/// `bytes` decoded as UTF-16 when they start with a byte-order mark (`FF FE`: little endian,
+/// `FE FF`: big endian) and the rest is valid UTF-16 of whole code units; the text (without
+/// the mark) and the byte order in words.
+fn utf16(bytes: &[u8]) -> Option<(String, &'static str)> {
+    let (big, order) = match bytes {
+        [0xFF, 0xFE, ..] => (false, "little endian"),
+        [0xFE, 0xFF, ..] => (true, "big endian"),
+        _ => return None,
+    };
+    let body = &bytes[2..];
+    if !body.len().is_multiple_of(2) {
+        return None;
+    }
+    let units: Vec<u16> = body
+        .chunks_exact(2)
+        .map(|p| {
+            let pair = [p[0], p[1]];
+            if big {
+                u16::from_be_bytes(pair)
+            } else {
+                u16::from_le_bytes(pair)
+            }
+        })
+        .collect();
+    String::from_utf16(&units).ok().map(|t| (t, order))
 }

@@ -65,7 +65,7 @@ pub const OPTION_NAMES: &[&[&str]] = &[
 ];
 
 /// Whether `key` is one of the names of [`OPTION_NAMES`].
-fn known(key: &str) -> bool {
+pub(super) fn known(key: &str) -> bool {
     OPTION_NAMES
         .iter()
         .flat_map(|names| names.iter())
@@ -231,4 +231,52 @@ pub(super) fn read_options(file: &str, rows: &[Row]) -> Result<Options, DeckErro
         file: file.to_string(),
         entries,
     })
+}
+
+/// A note for every option given more than once (under one name or several of its names,
+/// [`OPTION_NAMES`]): it names each line and the value used, the last one's (as MoorDyn
+/// does); at the line of the last, in line order.
+pub(super) fn repeated(options: &Options) -> Vec<super::Note> {
+    let group = |key: &str| {
+        OPTION_NAMES
+            .iter()
+            .find(|names| names.iter().any(|n| n.eq_ignore_ascii_case(key)))
+            .map_or_else(|| key.to_ascii_lowercase(), |names| names[0].to_string())
+    };
+    let mut seen: Vec<(String, Vec<&DeckOption>)> = Vec::new();
+    for o in &options.entries {
+        let g = group(&o.key);
+        match seen.iter_mut().find(|(k, _)| *k == g) {
+            Some((_, list)) => list.push(o),
+            None => seen.push((g, vec![o])),
+        }
+    }
+    let mut notes: Vec<super::Note> = seen
+        .into_iter()
+        .filter(|(_, list)| list.len() > 1)
+        .map(|(g, list)| {
+            let name = if known(&g) { g } else { list[0].key.clone() };
+            let at: Vec<String> = list
+                .iter()
+                .map(|o| format!("line {} (`{} {}`)", o.line, o.value, o.key))
+                .collect();
+            let (init, last) = at.split_at(at.len() - 1);
+            let used = list[list.len() - 1];
+            let (times, which) = match list.len() {
+                2 => ("twice".to_string(), "later"),
+                n => (format!("{n} times"), "last"),
+            };
+            super::Note {
+                line: used.line,
+                text: format!(
+                    "option {name} is given {times}, on {} and {}: the {which}, {}, is used",
+                    init.join(", "),
+                    last[0],
+                    used.value
+                ),
+            }
+        })
+        .collect();
+    notes.sort_by_key(|n| n.line);
+    notes
 }

@@ -556,8 +556,9 @@ pub(super) fn lines(
     Ok(out)
 }
 
-/// Reads the OUTPUTS rows: every word is a channel; a row `END` ends the list, and
-/// anything after it is refused.
+/// Reads the OUTPUTS rows: every word is a channel, words separated by spaces, tabs or
+/// commas and each may stand in double quotes (OpenFAST's `"FairTen1", "AnchTen1"`); a row
+/// `END` ends the list, and anything after it is refused.
 pub(super) fn outputs(file: &str, rows: &[Row]) -> Result<Vec<OutputChannel>, DeckError> {
     let mut out = Vec::new();
     let mut ended = false;
@@ -569,7 +570,12 @@ pub(super) fn outputs(file: &str, rows: &[Row]) -> Result<Vec<OutputChannel>, De
                 text: row.text.to_string(),
             });
         }
-        for word in row.fields() {
+        let words = row
+            .text
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .map(|w| w.trim_matches('"'))
+            .filter(|w| !w.is_empty());
+        for word in words {
             if word.eq_ignore_ascii_case("END") {
                 ended = true;
             } else if ended {

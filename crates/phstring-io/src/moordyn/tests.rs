@@ -718,7 +718,7 @@ fn load_reads_files_and_names_them() {
     assert_eq!(
         load(&binary).unwrap_err().to_string(),
         format!(
-            "MoorDyn deck {} is not UTF-8 text (byte 6 is invalid)",
+            "MoorDyn deck {} is not UTF-8 text (byte 6, on line 2, is invalid)",
             binary.display()
         )
     );
@@ -847,4 +847,173 @@ fn bodies_are_read_with_their_starred_columns() {
             "{row}: {e}"
         );
     }
+}
+
+/// A `---` in the remark of an option or data row does not make the row a section header
+/// (MoorDyn's test is any `---` on the line): a row that starts with a number, or an
+/// option row whose second field is an option name, is data and the remark is dropped.
+#[test]
+fn a_dashed_remark_on_a_data_row_is_not_a_header() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS")
+        .replace("50 WtrDpth\n", "50 WtrDpth\n1025 rho\n");
+    let dashed = base
+        .replace("50 WtrDpth\n", "50 WtrDpth --- water depth (m)\n")
+        .replace(
+            "1 Fixed 100 0 -50 0 0 0 0\n",
+            "1 Fixed 100 0 -50 0 0 0 0 --- anchor\n",
+        )
+        .replace("0.01 dtM\n", "0.01 dtM\nRK4 tScheme ---- time scheme\n");
+    let d = deck(&dashed);
+    assert_eq!(d.sections_present.len(), 5, "{:?}", d.sections_present);
+    assert_eq!(d.unsupported_sections().count(), 0);
+    assert_eq!(
+        d.options.water_depth().unwrap(),
+        Some(WaterDepth::Depth(50.0))
+    );
+    assert_eq!(d.options.water_density().unwrap(), Some(1025.0));
+    assert_eq!(d.options.t_scheme(), Some("RK4"));
+    let wtr = d.options.get("WtrDpth").unwrap();
+    assert_eq!(
+        (wtr.line, wtr.remark.as_str()),
+        (line_of(&dashed, "50 WtrDpth"), "")
+    );
+    assert_eq!(d.points, deck(&base).points);
+    // Lines that are headers stay headers, numbers in the title or not.
+    let titled = base.replace("--- LINES ---", "--- LINES 3 of them ---");
+    assert_eq!(deck(&titled).lines, deck(&base).lines);
+}
+
+/// Decks exported on Windows: Latin-1 (`°`, `²` as single bytes) and UTF-16 with its
+/// byte-order mark are read as the same deck, with a note saying how; a file that is
+/// neither a deck nor UTF-8 is refused naming the line of the bad byte.
+#[test]
+fn latin1_and_utf16_decks_are_read_with_a_note() {
+    let dir = crate::test_util::temp_dir("moordyn", "encodings");
+    let text = CHAIN_V1.replacen('\n', " at 20 \u{b0}C, EA in N/m\u{b2}\n", 1);
+    let utf8 = dir.join("utf8.dat");
+    std::fs::write(&utf8, &text).unwrap();
+    let want = load(&utf8).unwrap();
+    assert!(want.notes.is_empty(), "{:?}", want.notes);
+    let latin1: Vec<u8> = text
+        .chars()
+        .map(|c| u8::try_from(c as u32).unwrap())
+        .collect();
+    let path = dir.join("latin1.dat");
+    std::fs::write(&path, &latin1).unwrap();
+    let d = load(&path).unwrap();
+    assert_eq!(
+        (&d.title, &d.lines, &d.options.entries),
+        (&want.title, &want.lines, &want.options.entries)
+    );
+    assert_eq!(d.notes.len(), 1, "{:?}", d.notes);
+    assert_eq!(
+        d.notes[0].line, 1,
+        "the first byte that is not UTF-8 is on line 1"
+    );
+    assert!(
+        d.notes[0].text.contains("read as Latin-1"),
+        "{}",
+        d.notes[0].text
+    );
+    for (name, big) in [("le", false), ("be", true)] {
+        let mut bytes = if big {
+            vec![0xfe, 0xff]
+        } else {
+            vec![0xff, 0xfe]
+        };
+        for u in text.encode_utf16() {
+            bytes.extend(if big {
+                u.to_be_bytes()
+            } else {
+                u.to_le_bytes()
+            });
+        }
+        let path = dir.join(format!("utf16{name}.dat"));
+        std::fs::write(&path, &bytes).unwrap();
+        let d = load(&path).unwrap();
+        assert_eq!(
+            (&d.title, &d.lines, &d.options.entries),
+            (&want.title, &want.lines, &want.options.entries)
+        );
+        assert_eq!(d.notes.len(), 1, "{:?}", d.notes);
+        assert!(
+            d.notes[0].text.contains("read as UTF-16"),
+            "{}",
+            d.notes[0].text
+        );
+    }
+    // Not UTF-8 and not a deck: refused with the line of the bad byte.
+    let binary = dir.join("binary.dat");
+    std::fs::write(&binary, b"title\nnotes\n\xb0 --- LINES ---\n").unwrap();
+    assert_eq!(
+        load(&binary).unwrap_err().to_string(),
+        format!(
+            "MoorDyn deck {} is not UTF-8 text (byte 12, on line 3, is invalid)",
+            binary.display()
+        )
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// OUTPUTS written OpenFAST-style: channel names separated by commas, or in double quotes.
+#[test]
+fn outputs_take_commas_and_quotes() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
+    let text = base.replace(
+        "FairTen1\n",
+        "FairTen1, AnchTen1,L1N10T\n\"Point2PX\" \"Point2PZ\",\"L1N3T\"\n",
+    );
+    let d = deck(&text);
+    let names: Vec<&str> = d.outputs.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "FairTen1", "AnchTen1", "L1N10T", "Point2PX", "Point2PZ", "L1N3T"
+        ]
+    );
+    let second = line_of(&text, "Point2PX");
+    assert_eq!(d.outputs[3].line, second);
+    assert_eq!(d.outputs[0].line, second - 1);
+}
+
+/// An option given twice (under the same name or another of its names): the later line
+/// counts, and a note names both lines and the value used.
+#[test]
+fn a_repeated_option_is_noted_with_both_lines() {
+    let base = small_v2("LINE TYPES", "POINTS", "LINES", "OPTIONS", "OUTPUTS");
+    let text = base.replace(
+        "50 WtrDpth\n",
+        "2000 WtrDnsty\n50 WtrDpth\n60 wtrdpth depth\n1025 rho\n70 WtrDpth\n",
+    );
+    let d = deck(&text);
+    assert_eq!(d.options.water_density().unwrap(), Some(1025.0));
+    assert_eq!(
+        d.options.water_depth().unwrap(),
+        Some(WaterDepth::Depth(70.0))
+    );
+    let (dens, rho) = (line_of(&text, "2000 WtrDnsty"), line_of(&text, "1025 rho"));
+    let (d50, d60, d70) = (
+        line_of(&text, "50 WtrDpth"),
+        line_of(&text, "60 wtrdpth"),
+        line_of(&text, "70 WtrDpth"),
+    );
+    let texts: Vec<(usize, &str)> = d.notes.iter().map(|n| (n.line, n.text.as_str())).collect();
+    assert_eq!(
+        texts,
+        [
+            (
+                rho,
+                &*format!(
+                    "option WtrDnsty is given twice, on line {dens} (`2000 WtrDnsty`) and line {rho} (`1025 rho`): the later, 1025, is used"
+                )
+            ),
+            (
+                d70,
+                &*format!(
+                    "option WtrDpth is given 3 times, on line {d50} (`50 WtrDpth`), line {d60} (`60 wtrdpth`) and line {d70} (`70 WtrDpth`): the last, 70, is used"
+                )
+            ),
+        ]
+    );
+    assert!(deck(&base).notes.is_empty());
 }

@@ -95,13 +95,7 @@ impl ChannelTable {
 
     /// The two title rows (names, then units), without the final line break.
     pub fn header(&self) -> String {
-        let mut names = format!("{:>TIME_WIDTH$}", "Time");
-        let mut units = format!("{:>TIME_WIDTH$}", "(s)");
-        for (n, u) in self.names.iter().zip(&self.units) {
-            names.push_str(&format!("{n:>WIDTH$}"));
-            units.push_str(&format!("{u:>WIDTH$}"));
-        }
-        format!("{names}\n{units}")
+        header(&self.names, &self.units)
     }
 
     /// The channel values in the state of `sim`, in column order.
@@ -135,12 +129,39 @@ impl ChannelTable {
     /// One row of the table at time `t` [s] in the state of `sim`, and its values.
     pub fn row<const D: usize>(&self, t: f64, sim: &Simulation<D, Material>) -> (String, Vec<f64>) {
         let values = self.values(sim);
-        let mut row = format!("{t:>TIME_WIDTH$.4}");
-        for v in &values {
-            row.push_str(&format!("{:>WIDTH$}", scientific(*v)));
-        }
-        (row, values)
+        (row(t, &values), values)
     }
+}
+
+/// The two title rows of a table of channels `names` in `units`, without the final line
+/// break.
+fn header(names: &[String], units: &[&str]) -> String {
+    let mut title = format!("{:>TIME_WIDTH$}", "Time");
+    let mut unit_row = format!("{:>TIME_WIDTH$}", "(s)");
+    for (n, u) in names.iter().zip(units) {
+        cell(&mut title, n);
+        cell(&mut unit_row, u);
+    }
+    format!("{title}\n{unit_row}")
+}
+
+/// The row of the values `values` at time `t` [s].
+fn row(t: f64, values: &[f64]) -> String {
+    let mut row = format!("{t:>TIME_WIDTH$.4}");
+    for v in values {
+        cell(&mut row, &scientific(*v));
+    }
+    row
+}
+
+/// Appends `text` to `row` right-aligned in a column of [`WIDTH`] characters, after a space
+/// when it fills the column, so that every column is separated from the one before it
+/// (channel names may be longer than the column).
+fn cell(row: &mut String, text: &str) {
+    if text.chars().count() >= WIDTH {
+        row.push(' ');
+    }
+    row.push_str(&format!("{text:>WIDTH$}"));
 }
 
 /// Component `k` of `x` (0 past the dimension: a 2D run has no `z`).
@@ -268,5 +289,45 @@ mod tests {
         assert_eq!(scientific(0.0), "0.0000000e+00");
         assert_eq!(scientific(1.5e-120), "1.5000000e-120");
         assert_eq!(format!("{:>TIME_WIDTH$.4}", 1.502), "    1.5020");
+    }
+
+    /// Names as long as the column or longer (the deck reader accepts them) stay separated
+    /// from their neighbours: the title row, the units row and every value row have as
+    /// many whitespace-separated fields, one per channel and the time; names shorter than
+    /// the column keep MoorDyn's layout.
+    #[test]
+    fn long_channel_names_stay_separated_from_their_neighbours() {
+        let names: Vec<String> = [
+            "FairTen000000000000000001",
+            "Point0000000000000002PX",
+            "L1N0000000000000010T",
+            "AnchTen1",
+        ]
+        .map(String::from)
+        .to_vec();
+        let units = ["N", "m", "N", "N"];
+        let head = header(&names, &units);
+        let rows: Vec<&str> = head.lines().collect();
+        let title: Vec<&str> = rows[0].split_whitespace().collect();
+        assert_eq!(title[0], "Time");
+        assert_eq!(
+            title[1..],
+            names.iter().map(String::as_str).collect::<Vec<_>>()[..]
+        );
+        assert_eq!(rows[1].split_whitespace().count(), 5, "{}", rows[1]);
+        for t in [0.0, 1.502, 123_456.75] {
+            let values = [-5.3525604e5, 1.5e-120, -1.0e300, f64::NAN];
+            let r = row(t, &values);
+            let fields: Vec<f64> = r.split_whitespace().map(|f| f.parse().unwrap()).collect();
+            assert_eq!(fields.len(), title.len(), "{r}");
+            assert_eq!(fields[0], t);
+            assert_eq!(fields[1], -5.3525604e5);
+        }
+        // A short name keeps its 20-character column.
+        let short = header(&["AnchTen1".to_string()], &["N"]);
+        assert_eq!(
+            short,
+            format!("      Time{:>20}\n       (s){:>20}", "AnchTen1", "N")
+        );
     }
 }

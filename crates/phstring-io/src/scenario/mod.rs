@@ -146,12 +146,14 @@ pub enum ScenarioError {
         count: usize,
     },
     /// The file is not UTF-8 text.
-    #[error("scenario file {} is not UTF-8 text (byte {valid_up_to} is invalid); is it a TOML file?", path.display())]
+    #[error("scenario file {} is not UTF-8 text (byte {valid_up_to}, on line {line}, is invalid); is it a TOML file?", path.display())]
     NotText {
         /// File.
         path: PathBuf,
         /// Bytes before the first invalid one.
         valid_up_to: usize,
+        /// 1-based line of the first invalid byte.
+        line: usize,
     },
     /// TOML syntax or type error (unknown key, wrong type, missing key).
     #[error("{}: {}", origin, clip_lines(message))]
@@ -236,9 +238,16 @@ pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError>
             path: path.to_path_buf(),
         });
     }
-    let text = String::from_utf8(bytes).map_err(|e| ScenarioError::NotText {
-        path: path.to_path_buf(),
-        valid_up_to: e.utf8_error().valid_up_to(),
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid_up_to = e.utf8_error().valid_up_to();
+        ScenarioError::NotText {
+            path: path.to_path_buf(),
+            valid_up_to,
+            line: 1 + e.as_bytes()[..valid_up_to]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count(),
+        }
     })?;
     parse(&text, path, sets)
 }
