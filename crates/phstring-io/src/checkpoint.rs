@@ -172,8 +172,13 @@ pub struct CheckpointFile {
     /// [`RUN_ID_FILE`](crate::files::RUN_ID_FILE), and a resume into a folder with another
     /// id is refused.
     pub run_id: String,
-    /// Scenario file name (for messages).
+    /// Scenario file, absolute (its tables are found from it).
     pub scenario_path: PathBuf,
+    /// The scenario file as the run was given it (relative to its working directory), for a
+    /// resume of a run whose folders were moved since: used when the absolute path's folder
+    /// is gone. Empty in checkpoints written before it was kept.
+    #[serde(default, skip_serializing_if = "is_empty_path")]
+    pub scenario_path_given: PathBuf,
     /// Scenario text as run (with `--set` overrides applied).
     pub scenario_text: String,
     /// The data files the scenario reads (its tables, the bathymetry) with a fingerprint of
@@ -198,6 +203,11 @@ pub struct CheckpointFile {
     pub path: PathBuf,
 }
 
+/// Whether `p` is the empty path (a field a checkpoint leaves out).
+fn is_empty_path(p: &Path) -> bool {
+    p.as_os_str().is_empty()
+}
+
 /// A data file a run reads (a table, the bathymetry), as a checkpoint records it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DataFile {
@@ -216,14 +226,8 @@ pub fn data_files(file: &crate::scenario::ScenarioFile) -> Vec<DataFile> {
     file.data_files()
         .into_iter()
         .map(|(key, path)| {
-            let fnv = std::fs::read(&path).map_or_else(
-                |_| "unreadable".to_string(),
-                |bytes| {
-                    let mut h = fnv::FnvHasher::default();
-                    h.write(&bytes);
-                    format!("{:016x}", h.finish())
-                },
-            );
+            let fnv =
+                std::fs::read(&path).map_or_else(|_| "unreadable".to_string(), |b| fnv1a64_hex(&b));
             // Absolute, as the checkpoint's scenario path is.
             let path = std::path::absolute(&path).unwrap_or(path);
             DataFile { key, path, fnv }
@@ -299,6 +303,8 @@ struct CheckpointView<'a> {
     version: &'a str,
     run_id: &'a str,
     scenario_path: &'a Path,
+    #[serde(skip_serializing_if = "is_empty_path")]
+    scenario_path_given: &'a Path,
     scenario_text: &'a str,
     #[serde(skip_serializing_if = "<[DataFile]>::is_empty")]
     data_files: &'a [DataFile],
@@ -330,6 +336,7 @@ impl CheckpointFile {
             version: &self.version,
             run_id: &self.run_id,
             scenario_path: &self.scenario_path,
+            scenario_path_given: &self.scenario_path_given,
             scenario_text: &self.scenario_text,
             data_files: &self.data_files,
             end_of_loading: self.end_of_loading,
@@ -340,9 +347,21 @@ impl CheckpointFile {
         }
     }
 
+    /// The scenario path a resume parses the checkpoint's scenario with: the absolute one
+    /// while its folder exists, else the one the run was given (folders moved since).
+    pub fn scenario_path_for_resume(&self) -> &Path {
+        let here = self.scenario_path.parent().is_some_and(Path::exists);
+        if here || self.scenario_path_given.as_os_str().is_empty() {
+            &self.scenario_path
+        } else {
+            &self.scenario_path_given
+        }
+    }
+
     /// Refuses a resume of this checkpoint by `file` (the scenario it holds) when a data file
-    /// the run read has changed: its fingerprint differs, it is gone, or the scenario names
-    /// another file for the key.
+    /// the run read has changed: its fingerprint differs, it cannot be read, or the scenario
+    /// names no file for the key (a file found elsewhere, the folders moved, is the same
+    /// file if its fingerprint is).
     pub fn check_data_files(
         &self,
         file: &crate::scenario::ScenarioFile,
@@ -351,12 +370,6 @@ impl CheckpointFile {
         for was in &self.data_files {
             let what = match now.iter().find(|d| d.key == was.key) {
                 None => format!("`{}` names no file now", was.key),
-                Some(d) if d.path != was.path => format!(
-                    "`{}` names {} instead of {}",
-                    was.key,
-                    d.path.display(),
-                    was.path.display()
-                ),
                 Some(d) if d.fnv == "unreadable" => {
                     format!("`{}`: {} cannot be read", was.key, d.path.display())
                 }

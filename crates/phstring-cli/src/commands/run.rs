@@ -82,7 +82,7 @@ pub fn run(args: RunArgs, quiet: bool) -> Result<()> {
     let (file, setup, out, resume, early, _lock) = match (scenario, resume) {
         (_, Some(cp_path)) => {
             let cp = CheckpointFile::read(&cp_path)?;
-            let file = scenario::parse(&cp.scenario_text, &cp.scenario_path, &[])?;
+            let file = scenario::parse(&cp.scenario_text, cp.scenario_path_for_resume(), &[])?;
             cp.check_data_files(&file)?;
             let dir = out.unwrap_or_else(|| {
                 cp_path

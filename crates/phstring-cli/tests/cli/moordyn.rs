@@ -799,8 +799,8 @@ fn a_deck_with_a_free_body_maps_and_finds_its_equilibrium() {
 /// (5.2, 0, −70)), while the same rows without a header are absolute positions, which put
 /// both fairleads at the origin: the run warns (summary.json too), naming the point, its
 /// offset and the platform form. A 4-column table whose header names surge, sway and heave
-/// is refused, naming them. The water depth given by `--set` below an anchor is refused as
-/// in the deck, naming `water.depth` and the node.
+/// is refused, naming them. A water depth given by `--set` that puts the seabed above an
+/// anchor is refused as in the deck, naming `water.depth` and the node.
 #[test]
 fn motion_tables_read_as_meant_or_flagged() {
     let dir = temp_dir("deck-motion-meant");
@@ -915,12 +915,26 @@ fn a_line_longer_than_its_path_warns_and_runs_from_its_layout() {
     let out = dir.join("statics");
     let o = phstring(&["statics", deck, "--out", out.to_str().unwrap()]);
     assert!(
+        !o.status.success(),
+        "the statics of the slack line were found"
+    );
+    assert!(
         stderr(&o).contains(&format!(
             "warning: {deck}:{line}: line 1 (400 m) is longer than its ends' horizontal plus vertical distance (380.0 m)"
         )) && stderr(&o).contains("--set initial.equilibrium=false"),
         "{}",
         stderr(&o)
     );
+    // The same line from an anchor 20 m above the seabed hangs in the water: no warning.
+    let hanging = dir.join("hanging.dat");
+    let raised = text
+        .replace("350.0     35 ", "400.0     35 ")
+        .replace("358.0   0.0   -50.0", "358.0   0.0   -30.0");
+    assert_ne!(raised, text.replace("350.0     35 ", "400.0     35 "));
+    std::fs::write(&hanging, raised).unwrap();
+    let o = phstring(&["check", hanging.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
     let out = dir.join("run");
     let sets = [
         "initial.equilibrium=false",
@@ -984,12 +998,13 @@ fn a_table_that_ends_moving_before_the_run_warns() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("`platform.0.motion_table`: table ")
-            && stderr(&o).contains("ends at t = 300 s with column")
+            && stderr(&o).contains("table chain_deep_320m_motion.csv ends at t = 300 s with its column 6 still changing")
             && stderr(&o).contains("from there to time.end = 400 s it holds its last row"),
         "{}",
         stderr(&o)
     );
     let o = phstring(&["check", CHAIN_DEEP, "--motion", table]);
+    assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
 

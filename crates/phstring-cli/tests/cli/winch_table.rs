@@ -152,7 +152,8 @@ fn payout_tables_that_cannot_drive_a_winch_are_refused() {
 /// A resume reads the scenario's tables again: a run of the crane with its payout table,
 /// started with paths relative to its folder and stopped after 200 steps, resumes from
 /// another working directory (the checkpoint holds the scenario's absolute path) and writes
-/// `energy.csv` and `winches.csv` as the uninterrupted run does, byte for byte; a table
+/// `energy.csv` and `winches.csv` as the uninterrupted run does, byte for byte, and after the
+/// whole folder was renamed, from the path it was given; a table
 /// edited after the checkpoint (15 m hauled in becoming 10 m) is refused by the resume,
 /// naming the key and the file, instead of a run that jumped at the resume.
 #[test]
@@ -190,7 +191,7 @@ fn a_resume_finds_its_tables_from_anywhere_and_refuses_a_changed_one() {
     };
     let o = run("whole", &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for part in ["part", "edited"] {
+    for part in ["part", "edited", "moved"] {
         let o = run(part, &["--stop-after-steps", "200"]);
         assert_eq!(
             o.status.code(),
@@ -210,6 +211,23 @@ fn a_resume_finds_its_tables_from_anywhere_and_refuses_a_changed_one() {
             "{f} differs after the resume"
         );
     }
+    // The whole project moved (a renamed folder): the checkpoint's absolute path is gone,
+    // the path the run was given, from the new folder, finds the same files.
+    let moved = dir.with_extension("moved");
+    std::fs::rename(&dir, &moved).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_phstring"))
+        .args(["run", "--resume", "moved/checkpoint.json", "-q"])
+        .current_dir(&moved)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .unwrap();
+    std::fs::rename(&moved, &dir).unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |d: &str| std::fs::read(dir.join(d).join("energy.csv")).unwrap();
+    assert!(
+        read("whole") == read("moved"),
+        "energy.csv differs after the move"
+    );
     std::fs::write(dir.join("hoist.csv"), table(2.0 / 3.0)).unwrap();
     let cp = dir.join("edited").join("checkpoint.json");
     let o = phstring(&["run", "--resume", cp.to_str().unwrap(), "-q"]);

@@ -857,6 +857,7 @@ fn write_checkpoint<const D: usize>(
         // Absolute: a resume from another working directory finds the scenario's tables.
         scenario_path: std::path::absolute(&ctx.file.path)
             .unwrap_or_else(|_| ctx.file.path.clone()),
+        scenario_path_given: ctx.file.path.clone(),
         scenario_text: ctx.file.text().to_string(),
         data_files: ctx.data_files.clone(),
         end_of_loading: ctx.end_of_loading,

@@ -396,7 +396,8 @@ impl VesselMotion {
             return Err(refuse(Some(platform_names.join(", "))).into());
         }
         let per_point = columns == 1 + 3 * coupled.len()
-            && !(columns == 7 && (named_roll || deck.version == Version::V1));
+            && !(columns == 7
+                && (named_roll || !platform_names.is_empty() || deck.version == Version::V1));
         if per_point {
             let points = coupled
                 .iter()
@@ -546,7 +547,7 @@ pub fn map_driven(
     points(&mut m, settings.depth)?;
     bodies::bodies(&mut m, settings.density)?;
     platform(&mut m)?;
-    lines(&mut m, &materials)?;
+    lines(&mut m, &materials, settings.depth)?;
     outputs(&mut m)?;
     settings_text(&mut m, &settings);
     let mut scenario = header(&m);
@@ -1074,20 +1075,29 @@ fn end_point(m: &Mapper, line: &super::Line, end: Attachment) -> Result<super::P
     }
 }
 
-/// The lines: one string each, of `NumSegs` elements through named nodes laid out by
-/// [`lay_out`], with its material.
 /// The strain beyond which a line that starts straight between its ends is taken for a
 /// typing error (10 %: steel ropes and chains break near 2 %, fibre ropes near 15–20 %).
 const OVERSTRETCH: f64 = 0.1;
 
-/// A warning for line `l` of unstretched `length` [m] between the points at `ends` when it
-/// is longer than their horizontal plus vertical distance: its extra length lies slack on
+/// A warning for line `l` of unstretched `length` [m] between the points at `ends`, one of
+/// them on the seabed at the water depth `depth` [m], when it is longer than their
+/// horizontal plus vertical distance: its extra length lies slack on
 /// the seabed, where (without friction in the statics) its rest state is not unique, so
 /// that the starting equilibrium may not be found.
-fn slack_on_the_seabed(m: &mut Mapper, l: &super::Line, ends: ([f64; 3], [f64; 3]), length: f64) {
+fn slack_on_the_seabed(
+    m: &mut Mapper,
+    l: &super::Line,
+    (ends, depth): (([f64; 3], [f64; 3]), Option<f64>),
+    length: f64,
+) {
     let (a, b) = ends;
+    // Only a line with an end on the seabed (within 1 % of the depth): a slack line between
+    // two points in the water hangs as a catenary, whose rest state is unique.
+    let Some(depth) = depth.filter(|d| a[2].min(b[2]) <= -0.99 * d) else {
+        return;
+    };
     let path = (b[0] - a[0]).hypot(b[1] - a[1]) + (b[2] - a[2]).abs();
-    if length > path * (1.0 + 1e-9) {
+    if length > path * (1.0 + 1e-9) && depth > 0.0 {
         m.record.warnings.push(format!(
             "{}:{}: line {} ({} m) is longer than its ends' horizontal plus vertical distance ({:.1} m): its extra length lies slack on the seabed, where its rest state is not unique; if the starting equilibrium (or `statics`) is not found, run from the deck's layout with `--set initial.equilibrium=false`",
             m.deck.file,
@@ -1099,7 +1109,13 @@ fn slack_on_the_seabed(m: &mut Mapper, l: &super::Line, ends: ([f64; 3], [f64; 3
     }
 }
 
-fn lines(m: &mut Mapper, materials: &BTreeMap<String, TypeMaterial>) -> Result<(), DeckError> {
+/// The lines: one string each, of `NumSegs` elements through named nodes laid out by
+/// [`lay_out`], with its material; `depth` [m] the deck's water depth, if any.
+fn lines(
+    m: &mut Mapper,
+    materials: &BTreeMap<String, TypeMaterial>,
+    depth: Option<f64>,
+) -> Result<(), DeckError> {
     let mut written: Vec<String> = Vec::new();
     let lines = m.deck.lines.clone();
     for l in &lines {
@@ -1123,7 +1139,7 @@ fn lines(m: &mut Mapper, materials: &BTreeMap<String, TypeMaterial>) -> Result<(
         } else {
             return m.unmappable(l.line, format!("line {} has UnstrLen 0", l.id));
         };
-        slack_on_the_seabed(m, l, (a.position, b.position), length);
+        slack_on_the_seabed(m, l, ((a.position, b.position), depth), length);
         let n = l.segments;
         let shape = lay_out(a.position, b.position, length, n);
         if shape.stretch > 1.0 + OVERSTRETCH {

@@ -112,10 +112,13 @@ impl ScenarioFile {
     /// there. (Read again here; a table that cannot be read was reported by its key.)
     pub(super) fn table_end_warnings(&self, t_end: f64) -> Vec<String> {
         let mut out = Vec::new();
+        let mut seen: Vec<PathBuf> = Vec::new();
         for (key, path) in self.data_files() {
-            if key == "seabed.bathymetry" {
+            // Once per file (a deck's coupled points share one table), by its first key.
+            if key == "seabed.bathymetry" || seen.contains(&path) {
                 continue;
             }
+            seen.push(path.clone());
             let Ok(table) = crate::tables::read_table_any(&path) else {
                 continue;
             };
@@ -141,8 +144,10 @@ impl ScenarioFile {
                 .max_by(|a, b| a.2.total_cmp(&b.2));
             if let Some((j, rate, _)) = moving {
                 out.push(format!(
-                    "`{key}`: table {} ends at t = {} s with column {} still changing ({:.3e} per s); from there to time.end = {} s it holds its last row, so it stops at once",
-                    clip(&path.display().to_string()),
+                    "`{key}`: table {} ends at t = {} s with its column {} still changing ({:.3e} per s); from there to time.end = {} s it holds its last row, so it stops at once",
+                    // The file's name alone: the same in a resumed run, whose scenario
+                    // path is absolute.
+                    clip(&path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())),
                     num(last),
                     j + 2,
                     rate,
