@@ -153,7 +153,8 @@ fn payout_tables_that_cannot_drive_a_winch_are_refused() {
 /// started with paths relative to its folder and stopped after 200 steps, resumes from
 /// another working directory (the checkpoint holds the scenario's absolute path) and writes
 /// `energy.csv` and `winches.csv` as the uninterrupted run does, byte for byte, and after the
-/// whole folder was renamed, from the path it was given; a table
+/// whole folder was renamed, from the path it was given, and from a checkpoint without the
+/// fingerprints (as written before them); a table
 /// edited after the checkpoint (15 m hauled in becoming 10 m) is refused by the resume,
 /// naming the key and the file, instead of a run that jumped at the resume.
 #[test]
@@ -191,7 +192,7 @@ fn a_resume_finds_its_tables_from_anywhere_and_refuses_a_changed_one() {
     };
     let o = run("whole", &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for part in ["part", "edited", "moved"] {
+    for part in ["part", "edited", "moved", "old"] {
         let o = run(part, &["--stop-after-steps", "200"]);
         assert_eq!(
             o.status.code(),
@@ -211,6 +212,24 @@ fn a_resume_finds_its_tables_from_anywhere_and_refuses_a_changed_one() {
             "{f} differs after the resume"
         );
     }
+    // A checkpoint as written before the fingerprints: the scenario path as given, no data
+    // files; resumed from the folder it was given in, as then.
+    let cp = dir.join("old").join("checkpoint.json");
+    let mut c = phstring_io::checkpoint::CheckpointFile::read(&cp).unwrap();
+    assert_eq!(c.data_files.len(), 1);
+    c.scenario_path = c.scenario_path_given.clone();
+    c.scenario_path_given = std::path::PathBuf::new();
+    c.data_files.clear();
+    c.write(&cp).unwrap();
+    let text = std::fs::read_to_string(&cp).unwrap();
+    assert!(!text.contains("data_files") && !text.contains("scenario_path_given"));
+    let o = in_dir(&["run", "--resume", "old/checkpoint.json", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |d: &str| std::fs::read(dir.join(d).join("energy.csv")).unwrap();
+    assert!(
+        read("whole") == read("old"),
+        "energy.csv differs after the old resume"
+    );
     // The whole project moved (a renamed folder): the checkpoint's absolute path is gone,
     // the path the run was given, from the new folder, finds the same files.
     let moved = dir.with_extension("moved");
