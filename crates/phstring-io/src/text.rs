@@ -11,6 +11,14 @@ use std::borrow::Cow;
 /// Longest user text echoed in a message, in bytes (about; cut at a character boundary).
 pub const CLIP: usize = 200;
 
+/// The 1-based line of byte `offset` of `bytes` (the newlines before it, plus one).
+pub fn line_of_byte(bytes: &[u8], offset: usize) -> usize {
+    1 + bytes[..offset.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
 /// `text`, or its first [`CLIP`] bytes followed by `… (N bytes)` when it is longer.
 pub fn clip(text: &str) -> Cow<'_, str> {
     if text.len() <= CLIP {

@@ -1081,23 +1081,23 @@ const OVERSTRETCH: f64 = 0.1;
 
 /// A warning for line `l` of unstretched `length` [m] between the points at `ends`, one of
 /// them on the seabed at the water depth `depth` [m], when it is longer than their
-/// horizontal plus vertical distance: its extra length lies slack on
-/// the seabed, where (without friction in the statics) its rest state is not unique, so
-/// that the starting equilibrium may not be found.
+/// horizontal plus vertical distance: its extra length lies slack on the seabed, where
+/// (without friction in the statics) its rest state is not unique, so that the starting
+/// equilibrium may not be found.
 fn slack_on_the_seabed(
     m: &mut Mapper,
     l: &super::Line,
-    (ends, depth): (([f64; 3], [f64; 3]), Option<f64>),
+    (a, b): ([f64; 3], [f64; 3]),
+    depth: Option<f64>,
     length: f64,
 ) {
-    let (a, b) = ends;
     // Only a line with an end on the seabed (within 1 % of the depth): a slack line between
     // two points in the water hangs as a catenary, whose rest state is unique.
-    let Some(depth) = depth.filter(|d| a[2].min(b[2]) <= -0.99 * d) else {
+    if !depth.is_some_and(|d| a[2].min(b[2]) <= -0.99 * d) {
         return;
-    };
+    }
     let path = (b[0] - a[0]).hypot(b[1] - a[1]) + (b[2] - a[2]).abs();
-    if length > path * (1.0 + 1e-9) && depth > 0.0 {
+    if length > path * (1.0 + 1e-9) {
         m.record.warnings.push(format!(
             "{}:{}: line {} ({} m) is longer than its ends' horizontal plus vertical distance ({:.1} m): its extra length lies slack on the seabed, where its rest state is not unique; if the starting equilibrium (or `statics`) is not found, run from the deck's layout with `--set initial.equilibrium=false`",
             m.deck.file,
@@ -1139,7 +1139,7 @@ fn lines(
         } else {
             return m.unmappable(l.line, format!("line {} has UnstrLen 0", l.id));
         };
-        slack_on_the_seabed(m, l, ((a.position, b.position), depth), length);
+        slack_on_the_seabed(m, l, (a.position, b.position), depth, length);
         let n = l.segments;
         let shape = lay_out(a.position, b.position, length, n);
         if shape.stretch > 1.0 + OVERSTRETCH {

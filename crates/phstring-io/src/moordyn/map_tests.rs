@@ -18,6 +18,15 @@ fn mapped(text: &str, ignore: &[Feature]) -> (Mapping, ScenarioFile) {
     (m, file)
 }
 
+/// The names of the output channels a generated scenario writes.
+fn channel_names(s: &crate::scenario::Scenario) -> Vec<&str> {
+    s.output
+        .channels
+        .iter()
+        .map(|c| c.get_ref().as_str())
+        .collect()
+}
+
 /// The refusal of deck `text`.
 fn refused(text: &str) -> String {
     let deck = parse(text, "deck.dat").unwrap_or_else(|e| panic!("{e}"));
@@ -134,12 +143,7 @@ fn the_chain_deck_maps_value_by_value() {
     let keys: Vec<&str> = d.not_needed.keys().map(String::as_str).collect();
     assert_eq!(keys, ["CdScaleIC", "TmaxIC", "threshIC"]);
     // The OUTPUTS channels become columns of deck.out, MoorDyn's main output file.
-    let channels: Vec<&str> = s
-        .output
-        .channels
-        .iter()
-        .map(|c| c.get_ref().as_str())
-        .collect();
+    let channels = channel_names(s);
     assert_eq!(
         channels,
         ["FairTen1", "FairTen2", "FairTen3", "Con4pX", "L1N10T"]
@@ -572,13 +576,7 @@ fn deck_with_outputs(outputs: &str) -> String {
 fn output_channels_are_written_dropped_with_a_warning_or_refused() {
     let text = deck_with_outputs("FairTen1 L1N2T L1N4PZ\nL1N2AX L1N2FX Point3PZ\nPoint2FZ L1NAFX");
     let (m, file) = mapped(&text, &[]);
-    let channels: Vec<&str> = file
-        .scenario
-        .output
-        .channels
-        .iter()
-        .map(|c| c.get_ref().as_str())
-        .collect();
+    let channels = channel_names(&file.scenario);
     assert_eq!(
         channels,
         ["FairTen1", "L1N2T", "L1N4PZ", "Point2FZ", "L1NAFX"]
@@ -1103,12 +1101,6 @@ fn a_body_channel_is_a_warning_that_body_channels_are_not_written() {
             "deck.dat:{line}: channel Body1PX is not written: `Body1PX` reads a body; phstring does not write body channels yet"
         )]
     );
-    let channels: Vec<&str> = file
-        .scenario
-        .output
-        .channels
-        .iter()
-        .map(|c| c.get_ref().as_str())
-        .collect();
+    let channels = channel_names(&file.scenario);
     assert_eq!(channels, ["AnchTen1"]);
 }

@@ -673,7 +673,7 @@ fn load_text(path: &Path) -> Result<(String, Option<Note>), DeckError> {
             }),
         ));
     }
-    let line = 1 + bytes[..valid_up_to].iter().filter(|&&b| b == b'\n').count();
+    let line = crate::text::line_of_byte(&bytes, valid_up_to);
     let latin1: String = bytes.iter().map(|&b| char::from(b)).collect();
     if looks_like_moordyn(&latin1) {
         let text = format!(

@@ -243,10 +243,7 @@ pub fn load(path: &Path, sets: &[String]) -> Result<ScenarioFile, ScenarioError>
         ScenarioError::NotText {
             path: path.to_path_buf(),
             valid_up_to,
-            line: 1 + e.as_bytes()[..valid_up_to]
-                .iter()
-                .filter(|&&b| b == b'\n')
-                .count(),
+            line: crate::text::line_of_byte(e.as_bytes(), valid_up_to),
         }
     })?;
     parse(&text, path, sets)

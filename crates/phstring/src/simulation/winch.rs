@@ -582,10 +582,11 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
                 let frame = m.frame(t, &state.bodies);
                 let parts = (&mut state.r[..], &mut state.v[..], &mut state.c[..]);
                 m.cut(ws, (&frame, payout, rate), parts);
-                // Nodes that came off the drum (parked through the step, their mid-step
-                // velocity zero) predict the next step from the velocity the cut gave them;
-                // with more than one element paid out in the step, all but the new drum
-                // node are free from now on.
+                // The nodes a payout brought off the drum (the new drum node, held, and
+                // with more than one element the free nodes between it and the old one):
+                // parked through the step, their mid-step velocity is zero, so they predict
+                // the next step from the velocity the cut gave them. The old drum node keeps
+                // its own; hauling in, the range is empty.
                 for &i in &m.nodes[ws.drum..from.max(ws.drum)] {
                     self.run.v_mid[i] = state.v[i];
                 }

@@ -37,63 +37,49 @@ fn chain_spec() -> StringSpec<2, Material> {
 
 /// The network of [`chain_over_water`].
 fn chain_network(drum: Option<WinchDrum>) -> crate::Network<2, Material> {
+    let (g, clump, time) = (9.81, 2000.0, 5.0);
     let mut b = NetworkBuilder::<2, Material>::new();
-    let (group, end, clump) = add_chain(&mut b);
-    b.build(Boundary::default(), vec![clump])
+    let top = b.node(Vector::<2>::new(0.0, 5.0));
+    let end = b.node(Vector::<2>::new(2.0, -8.857));
+    let group = b.string_on_drum(chain_spec(), &[top, end], 14, 8).unwrap();
+    let masses = vec![PointMass {
+        node: end,
+        mass: clump,
+        weight: Vector::<2>::new(0.0, -clump * g),
+    }];
+    b.build(Boundary::default(), masses)
         .unwrap()
         .with_water(Water::new(1025.0).with_seabed(Seabed::flat(10.0, 3e6, 1e5)))
-        .with_line_hydro(group, chain_hydro())
+        .with_line_hydro(
+            group,
+            LineHydro {
+                diameter: 0.136,
+                cd: 2.4,
+                cd_axial: 1.15,
+                ca: 1.0,
+                ca_axial: 0.0,
+            },
+        )
         .with_point_hydro(PointHydro {
             node: end,
             volume: 0.3,
             cda: 0.5,
             ca: 1.0,
         })
-        .with_winch(chain_winch(group, drum))
+        .with_winch(Winch {
+            name: "drum".into(),
+            group,
+            reserve: 8,
+            payout: Arc::new(move |t| 5.0 * (smooth(t / time) - smooth(t / time - 1.2))),
+            drum_motion: None,
+            drum,
+        })
 }
 
-/// Adds [`chain_over_water`]'s chain to `b`: its group, end node and clump.
-fn add_chain(b: &mut NetworkBuilder<2, Material>) -> (usize, usize, PointMass<2>) {
-    let (g, clump) = (9.81, 2000.0);
-    let top = b.node(Vector::<2>::new(0.0, 5.0));
-    let end = b.node(Vector::<2>::new(2.0, -8.857));
-    let group = b.string_on_drum(chain_spec(), &[top, end], 14, 8).unwrap();
-    let mass = PointMass {
-        node: end,
-        mass: clump,
-        weight: Vector::<2>::new(0.0, -clump * g),
-    };
-    (group, end, mass)
-}
-
-/// The chain's drag and added mass (Cd 2.4, CdAx 1.15, Ca 1).
-fn chain_hydro() -> LineHydro {
-    LineHydro {
-        diameter: 0.136,
-        cd: 2.4,
-        cd_axial: 1.15,
-        ca: 1.0,
-        ca_axial: 0.0,
-    }
-}
-
-/// `C¹` step from 0 to 1 over `x ∈ [0, 1]`.
+/// `C¹` step from 0 to 1 over `x ∈ [0, 1]` (the payouts' ramps).
 fn smooth(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
-}
-
-/// The chain's winch (8 elements in reserve): 5 m paid out over 5 s and hauled back.
-fn chain_winch(group: usize, drum: Option<WinchDrum>) -> Winch {
-    let time = 5.0;
-    Winch {
-        name: "drum".into(),
-        group,
-        reserve: 8,
-        payout: Arc::new(move |t| 5.0 * (smooth(t / time) - smooth(t / time - 1.2))),
-        drum_motion: None,
-        drum,
-    }
 }
 
 /// Steps `sim` and its `twin` (the same problem) for `steps` steps; after every step that
@@ -392,10 +378,9 @@ fn a_hold_updates_the_energies_in_place() {
 }
 
 /// Two winches over 10 m of water with a seabed: 36 mm wire ropes (EA = 1e8 N, 6 kg/m,
-/// 0.1 m elements, the linear law, prestretched) from drums 5 m above the water, each with a 500 kg hook 3 m
-/// down, drag
-/// and added mass on the ropes; one paid out 2 m and the other 5 m over 2.5 s and hauled
-/// back, in steps of 0.05 s, so that the fast drum element moves by up to two elements in one
+/// 0.1 m elements, the linear law, prestretched) from drums 5 m above the water, each with
+/// a 500 kg hook 3 m down, drag and added mass on the ropes; one paid out 2 m and the other
+/// 5 m over 2.5 s and hauled back, in steps of 0.05 s, so that the fast drum element moves by up to two elements in one
 /// step. Every cut in place, of one winch or of both at once, leaves the system as a
 /// placement from scratch does; and the nodes that come off the drum together predict the
 /// next step from their new velocity (with the zero mid-step velocity of the step they were
