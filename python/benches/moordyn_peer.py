@@ -24,11 +24,15 @@ How each code is run and measured (the same for every deck):
   machine).
 * **Error.** The fairlead tension histories (MoorDyn: `|Fnet|` of the line's fairlead node,
   what its `.out` channel FAIRTEN writes; phstring: end_tensions.csv's FairTen) over the
-  first ERROR_WINDOW s of the motion, against the same code's run on the same mesh at a much
-  smaller step (MoorDyn: `dtM` / 8; phstring: the deck's `dtM`, while it is timed at 4 to
-  100 times that): the largest difference over the window and the lines, relative to the
-  largest reference tension. The table names, for phstring, the largest step whose error is
-  no larger than MoorDyn's at the deck's `dtM`.
+  first ERROR_WINDOW s of the motion, against the same code's run on the same mesh at an
+  eighth of the deck's `dtM` (REF_FACTOR): the largest difference over the lines and the
+  sample times, relative to the largest reference tension. Both codes are sampled at the
+  same times, every SAMPLE s (the coupling interval, at which MoorDyn's values exist); a
+  phstring run whose steps do not land on a sample time is interpolated linearly there.
+* **phstring's runs.** Fixed steps at multiples of `dtM` (PH_STEPS), and error control
+  (`time.rtol = 0`, `time.atol` from PH_TOLERANCES, `time.h` a multiple of `dtM` from
+  PH_CAPS as the largest step). The table names the fastest run whose error is no larger
+  than MoorDyn's at the deck's `dtM`; every run is printed above it.
 * **Start.** MoorDyn's `Init` can end with the lines still moving; its lines settle for
   SETTLE s with the vessel held (not timed) before the motion starts. phstring starts from
   its static equilibrium.
@@ -64,10 +68,20 @@ SETTLE = 200.0
 # The errors are measured over the first ERROR_WINDOW s of the motion (the references at
 # small steps are costly), the times over the whole table.
 ERROR_WINDOW = 60.0
+# Both codes' tensions are compared every SAMPLE s [s]. Sampled every 0.1 s, MoorDyn's error
+# on the shallow chain reads 4.3e-4; every 0.01 s, 1.1e-3: its largest deviations fall
+# between the coarser samples, as phstring's do.
+SAMPLE = DT_COUPLING
+# Each code's reference runs at its deck's dtM / REF_FACTOR.
+REF_FACTOR = 8
 # phstring's steps, in multiples of the deck's dtM (its reference runs at dtM); each
 # divides the tables' 300 s and 600 s into whole steps at the decks' dtM of 0.5, 1 and
 # 2 ms, as a fixed-step run needs (phstring refuses a step that does not).
 PH_STEPS = (4, 5, 6, 8, 10, 12, 15, 16, 20, 24, 25, 30, 40, 50, 100)
+# phstring with error control: the absolute tolerances of its positions [m] (`time.atol`,
+# with `time.rtol = 0`) and the largest steps (`time.h`, in multiples of dtM) tried.
+PH_TOLERANCES = (1e-7, 2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 7e-6, 1e-5, 2e-5, 4e-5, 7e-5, 1e-4)
+PH_CAPS = (10, 20)
 
 
 def deck_path(name):
@@ -282,11 +296,12 @@ def binary():
 QUIET = ["output.vtk=false", "output.plots=false", "output.animation=false", "output.positions=false"]
 
 
-def phstring_run(name, t_end, out, h=None, bin_path=None):
+def phstring_run(name, t_end, out, h=None, bin_path=None, sets=()):
     """`phstring run` of deck `name` with `--motion` its table to `t_end` [s] (time.h = `h`
-    when given) into `out`, which is removed once read. Returns a dict: `t`, `fair`, `anch` (end_tensions.csv's FairTen and
-    AnchTen columns, N), `loop_s` (summary.json's time_loop_s), `h`."""
-    sets = QUIET + [f"time.end={t_end}"]
+    when given, and the `--set` assignments `sets`) into `out`, which is removed once read.
+    Returns a dict: `t`, `fair`, `anch` (end_tensions.csv's FairTen and AnchTen columns, N),
+    `loop_s` (summary.json's time_loop_s), `h`, `steps`."""
+    sets = QUIET + [f"time.end={t_end}"] + list(sets)
     if h is not None:
         sets.append(f"time.h={h}")
     args = [bin_path or binary(), "run", str(deck_path(name)), "--motion", str(table_path(name)),
@@ -306,6 +321,7 @@ def phstring_run(name, t_end, out, h=None, bin_path=None):
         "anch": rows[:, anch],
         "loop_s": summary["time_loop_s"],
         "h": summary["scenario"]["time"]["h"],
+        "steps": summary["steps"],
     }
 
 
@@ -347,6 +363,17 @@ def deck_dtm(name):
     raise ValueError(f"{deck_path(name)} has no dtM")
 
 
+def ph_configs(dtm):
+    """phstring's runs of a deck with step `dtm` [s]: `(label, h, sets)`, the fixed steps of
+    PH_STEPS, then error control at each cap of PH_CAPS and tolerance of PH_TOLERANCES."""
+    runs = [(f"h = {f * dtm * 1e3:g} ms", f * dtm, ()) for f in PH_STEPS]
+    for cap in PH_CAPS:
+        for atol in PH_TOLERANCES:
+            label = f"atol {atol:g} m, h ≤ {cap * dtm * 1e3:g} ms"
+            runs.append((label, cap * dtm, ("time.rtol=0", f"time.atol={atol}")))
+    return runs
+
+
 def bench(name, repeat):
     """Times both codes over the deck's whole table and measures their errors over its first
     ERROR_WINDOW s (see the module's docstring)."""
@@ -355,34 +382,37 @@ def bench(name, repeat):
     dtm = deck_dtm(name)
     work = pathlib.Path(tempfile.mkdtemp(prefix="ph-peer-"))
     try:
-        md_ref = moordyn_run(name, window, dtm_factor=8.0, settle=SETTLE)
-        ph_ref = phstring_run(name, window, work / "ref", h=dtm)
-        shutil.rmtree(work / "ref", ignore_errors=True)  # phstring_run removes it already
+        md_ref = moordyn_run(name, window, dtm_factor=REF_FACTOR, settle=SETTLE, sample=SAMPLE)
+        h_ref = dtm / REF_FACTOR
+        stride = f"output.row_stride={round(SAMPLE / h_ref)}"
+        ph_ref = phstring_run(name, window, work / "ref", h=h_ref, sets=[stride])
+        configs = ph_configs(dtm)
         md_times, md_err = [], None
-        ph_times = {f * dtm: [] for f in PH_STEPS}
-        ph_err = {}
+        ph_times = {label: [] for label, _, _ in configs}
+        ph_err, ph_steps = {}, {}
         for k in range(repeat):
             for who in ("ph", "md") if k % 2 == 0 else ("md", "ph"):
                 if who == "md":
-                    md = moordyn_run(name, t_end, settle=SETTLE)
+                    md = moordyn_run(name, t_end, settle=SETTLE, sample=SAMPLE)
                     md_times.append(md["loop_s"])
                     md_err = relative_error(md, md_ref)
                     continue
-                for h in ph_times:
+                for label, h, sets in configs:
                     try:
-                        r = phstring_run(name, t_end, work / "run", h=h)
+                        r = phstring_run(name, t_end, work / "run", h=h, sets=sets)
                     except subprocess.CalledProcessError:
                         continue
                     finally:
                         shutil.rmtree(work / "run", ignore_errors=True)
-                    ph_times[h].append(r["loop_s"])
-                    ph_err[h] = relative_error(r, ph_ref)
-        rows = [(h, min(ts) / t_end, ph_err[h]) for h, ts in ph_times.items() if ts]
+                    ph_times[label].append(r["loop_s"])
+                    ph_err[label] = relative_error(r, ph_ref)
+                    ph_steps[label] = r["steps"]
+        rows = [(label, min(ts) / t_end, ph_err[label], ph_steps[label]) for label, ts in ph_times.items() if ts]
         ok = [r for r in rows if r[2] <= md_err]
         return {
             "name": name, "t_end": t_end, "dtm": dtm,
             "md_per_s": min(md_times) / t_end, "md_err": md_err,
-            "ph_rows": rows, "best": max(ok, key=lambda r: r[0]) if ok else None,
+            "ph_rows": rows, "best": min(ok, key=lambda r: r[1]) if ok else None,
         }
     finally:
         shutil.rmtree(work, ignore_errors=True)
@@ -391,20 +421,20 @@ def bench(name, repeat):
 def table(results):
     out = [
         "| deck | simulated | MoorDyn dtM | MoorDyn wall/sim s | MoorDyn error "
-        "| phstring h | phstring wall/sim s | phstring error | speed-up |",
+        "| phstring run | phstring wall/sim s | phstring error | speed-up |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         b = r["best"]
         if b is None:
-            h, per, err = r["ph_rows"][0]
+            label, per, err, _ = min(r["ph_rows"], key=lambda row: row[2])
             speed = "none at MoorDyn's error"
         else:
-            h, per, err = b
+            label, per, err, _ = b
             speed = f"{r['md_per_s'] / per:.1f}×"
         out.append(
             f"| {r['name']} | {r['t_end']:.0f} s | {r['dtm'] * 1e3:g} ms | {r['md_per_s'] * 1e3:.2f} ms "
-            f"| {r['md_err']:.1e} | {h * 1e3:g} ms | {per * 1e3:.2f} ms | {err:.1e} | {speed} |"
+            f"| {r['md_err']:.1e} | {label} | {per * 1e3:.2f} ms | {err:.1e} | {speed} |"
         )
     return "\n".join(out)
 
@@ -420,8 +450,9 @@ def main():
     results = []
     for name in a.decks.split(","):
         r = bench(name, a.repeat)
-        for h, per, err in r["ph_rows"]:
-            print(f"# {name}: phstring h = {h:g} s: {per * 1e3:.3f} ms per simulated s, error {err:.2e}", flush=True)
+        for label, per, err, steps in r["ph_rows"]:
+            print(f"# {name}: phstring {label}: {per * 1e3:.3f} ms per simulated s, {steps} steps, "
+                  f"error {err:.2e}", flush=True)
         print(f"# {name}: MoorDyn dtM = {r['dtm']:g} s: {r['md_per_s'] * 1e3:.3f} ms per simulated s, "
               f"error {r['md_err']:.2e}", flush=True)
         results.append(r)
