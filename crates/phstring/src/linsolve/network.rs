@@ -208,6 +208,10 @@ pub struct NetworkSolver<const D: usize> {
     /// `interior_nodes`) its pivot's inverse `D'_k⁻¹` and the junction coupling `r` before its
     /// elimination, for [`LinearSolver::solve_again`]; empty otherwise.
     kept: Vec<[Block<D>; 2]>,
+    /// Whether the last [`LinearSolver::solve`] found the junctions uncoupled (every
+    /// segment's coupling blocks zero, no border): the reduced system was then solved block
+    /// by block with the inverses of `jdiag`, not factored.
+    apart: bool,
 }
 
 impl<const D: usize> std::fmt::Debug for NetworkSolver<D> {
@@ -452,6 +456,7 @@ impl<const D: usize> NetworkSolver<D> {
             link_pairs,
             own_pairs,
             kept: Vec::new(),
+            apart: false,
         }
     }
 
@@ -699,7 +704,16 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
                 rhs[j1] -= bo * yp;
             }
         }
-        lu.solve_indexed(rhs, &self.rows);
+        if self.apart {
+            for (r, &j) in self.junctions.iter().enumerate() {
+                let inv = self.jdiag[r]
+                    .try_inverse()
+                    .ok_or(LinearSolveError::Singular { block: j })?;
+                rhs[j] = inv * rhs[j];
+            }
+        } else {
+            lu.solve_indexed(rhs, &self.rows);
+        }
         for &j in &self.rows {
             if !finite(&rhs[j]) {
                 return Err(LinearSolveError::Singular { block: j });
@@ -797,33 +811,57 @@ impl<const D: usize> NetworkSolver<D> {
             }
             return Ok(());
         };
-        red.clear();
         for (r, &j) in self.junctions.iter().enumerate() {
             self.jdiag[r] = jac.diag[j];
         }
+        // The reduced system is cleared at the first nonzero coupling: when every segment's
+        // couplings are zero (its end junctions are supports, whose rows and columns are
+        // the identity's) and there is no border, it is block diagonal and solved so.
+        let mut coupled = self.n_slots > 0;
+        if coupled {
+            red.clear();
+        }
         for s in 0..self.segments.len() {
             if let Some(blocks) = self.eliminate(s, jac, rhs)? {
+                let zero = blocks.iter().all(|b| b.iter().all(|&v| v == 0.0));
+                if zero && !coupled {
+                    continue;
+                }
+                if !coupled {
+                    red.clear();
+                    coupled = true;
+                }
                 red.add_coupling(self.segments[s].coupling, &blocks);
             }
         }
-        for (r, blk) in self.jdiag.iter().enumerate() {
-            red.add_diag(r, blk);
-        }
-        self.add_border(red, jac)?;
-        match red {
-            Reduced::Block { lu, .. } => {
-                lu.factor().map_err(|r| LinearSolveError::Singular {
-                    block: self.rows[r],
-                })?;
-                lu.solve_indexed(rhs, &self.rows);
+        self.apart = !coupled;
+        if self.apart {
+            for (r, &j) in self.junctions.iter().enumerate() {
+                let inv = self.jdiag[r]
+                    .try_inverse()
+                    .ok_or(LinearSolveError::Singular { block: j })?;
+                rhs[j] = inv * rhs[j];
             }
-            Reduced::Faer(red) => {
-                for (r, &j) in self.rows.iter().enumerate() {
-                    red.lu.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
+        } else {
+            for (r, blk) in self.jdiag.iter().enumerate() {
+                red.add_diag(r, blk);
+            }
+            self.add_border(red, jac)?;
+            match red {
+                Reduced::Block { lu, .. } => {
+                    lu.factor().map_err(|r| LinearSolveError::Singular {
+                        block: self.rows[r],
+                    })?;
+                    lu.solve_indexed(rhs, &self.rows);
                 }
-                red.lu.factor_and_solve()?;
-                for (r, &j) in self.rows.iter().enumerate() {
-                    rhs[j].copy_from_slice(&red.lu.rhs[r * D..(r + 1) * D]);
+                Reduced::Faer(red) => {
+                    for (r, &j) in self.rows.iter().enumerate() {
+                        red.lu.rhs[r * D..(r + 1) * D].copy_from_slice(rhs[j].as_slice());
+                    }
+                    red.lu.factor_and_solve()?;
+                    for (r, &j) in self.rows.iter().enumerate() {
+                        rhs[j].copy_from_slice(&red.lu.rhs[r * D..(r + 1) * D]);
+                    }
                 }
             }
         }
@@ -1121,6 +1159,79 @@ mod tests {
         check_with_shuffle(&m, 70);
         // Crossings one element apart: segments without interior nodes.
         check_with_shuffle(&grid_net(4, 3, 1, 1), 80);
+    }
+
+    /// `lines` strings of `segs` elements between supports, numbered as a MoorDyn deck's
+    /// network is: the end points first (anchors `0..lines`, then the fairleads), then each
+    /// line's interior nodes.
+    fn moored(lines: usize, segs: usize) -> Mesh {
+        let mut els = Vec::new();
+        let mut next = 2 * lines;
+        for l in 0..lines {
+            let mut prev = l;
+            for _ in 0..segs - 1 {
+                els.push([prev, next]);
+                prev = next;
+                next += 1;
+            }
+            els.push([prev, lines + l]);
+        }
+        mesh(next, els)
+    }
+
+    /// `jac` with the rows and columns of the nodes `held` those of the identity, as the
+    /// masking of a support leaves them.
+    fn hold<const D: usize>(mesh: &Mesh, jac: &mut BlockJacobian<D>, held: &[usize]) {
+        for &i in held {
+            jac.diag[i] = Block::identity();
+        }
+        for (&[a, b], off) in mesh.elements().iter().zip(&mut jac.off) {
+            if held.contains(&a) || held.contains(&b) {
+                *off = [Block::zeros(); 2];
+            }
+        }
+    }
+
+    /// Three lines between supports: the junctions are solved apart (no junction LU); with
+    /// one fairlead free still apart (its Schur-complemented block is no longer the
+    /// identity); with both ends of the third line free the reduced system is factored after
+    /// two uncoupled segments. Each solve and `solve_again` agrees with the sparse LU.
+    #[test]
+    fn lines_between_supports_solve_their_junctions_apart_and_match_sparse_lu() {
+        let m = moored(3, 20);
+        let mut rng = Rng(0x5EA);
+        let cases: [(&[usize], bool); 3] = [
+            (&[0, 1, 2, 3, 4, 5], true),
+            (&[0, 1, 2, 3, 4], true),
+            (&[0, 1, 3, 4], false),
+        ];
+        for (held, apart) in cases {
+            for kind in [JunctionLu::Block, JunctionLu::Simplicial] {
+                let mut net = NetworkSolver::<3>::with_junction_lu(&m, kind);
+                net.keep_factors();
+                let mut jac = random_jac::<3>(&m, &mut rng);
+                hold(&m, &mut jac, held);
+                let (b1, b2) = (
+                    random_rhs::<3>(m.n_nodes(), &mut rng),
+                    random_rhs::<3>(m.n_nodes(), &mut rng),
+                );
+                let mut lu = SparseLu::<3>::new(&m);
+                for (b, again) in [(&b1, false), (&b2, true)] {
+                    let mut x_lu = b.clone();
+                    lu.solve(&jac, &mut x_lu).unwrap();
+                    let mut x = b.clone();
+                    if again {
+                        net.solve_again(&jac, &mut x).unwrap();
+                    } else {
+                        net.solve(&jac, &mut x).unwrap();
+                    }
+                    let x_lu = flat(&x_lu);
+                    let diff = (&flat(&x) - &x_lu).norm() / x_lu.norm();
+                    assert!(diff <= 1e-10, "held {held:?}, again {again}: {diff:e}");
+                }
+                assert_eq!(net.apart, apart, "held {held:?}");
+            }
+        }
     }
 
     #[test]
