@@ -80,7 +80,7 @@ REF_FACTOR = 8
 PH_STEPS = (4, 5, 6, 8, 10, 12, 15, 16, 20, 24, 25, 30, 40, 50, 100)
 # phstring with error control: the absolute tolerances of its positions [m] (`time.atol`,
 # with `time.rtol = 0`) and the largest steps (`time.h`, in multiples of dtM) tried.
-PH_TOLERANCES = (1e-7, 2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 7e-6, 1e-5, 2e-5, 4e-5, 7e-5, 1e-4)
+PH_TOLERANCES = (2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 7e-6, 1e-5, 2e-5, 4e-5, 7e-5, 1e-4, 1.5e-4, 2e-4, 3e-4)
 PH_CAPS = (10, 20)
 
 
