@@ -158,7 +158,10 @@ impl FaerReduced {
 /// rows of the two end junctions (diagonal, coupling and right-hand side). The reduced system
 /// on the junctions is solved by a sparse LU ([`JunctionLu`], by default the crate's block
 /// LU; symbolic analysis at construction, numeric refactorization per call), then the
-/// interior nodes are back-substituted. Pivot blocks are inverted in closed form without
+/// interior nodes are back-substituted. When no segment couples its two end junctions and
+/// there is no border (every string runs between supports, whose rows and columns are the
+/// identity's: a mooring deck's lines), the reduced system is block diagonal and each
+/// junction is solved with its own block's inverse instead. Pivot blocks are inverted in closed form without
 /// pivoting between blocks, which is safe for the mass-dominated Newton matrices of the time
 /// stepper; [`super::SparseLu`] is the oracle.
 ///
@@ -633,6 +636,22 @@ impl<const D: usize> Front<D> {
     }
 }
 
+/// Solves the reduced system of uncoupled `junctions` in place: each junction's unknowns by
+/// the inverse of its Schur-complemented diagonal block (`jdiag`, indexed like `junctions`).
+fn solve_apart<const D: usize>(
+    junctions: &[usize],
+    jdiag: &[Block<D>],
+    rhs: &mut [SVector<f64, D>],
+) -> Result<(), LinearSolveError> {
+    for (blk, &j) in jdiag.iter().zip(junctions) {
+        let inv = blk
+            .try_inverse()
+            .ok_or(LinearSolveError::Singular { block: j })?;
+        rhs[j] = inv * rhs[j];
+    }
+    Ok(())
+}
+
 /// Whether all entries of `x` are finite.
 fn finite<const D: usize>(x: &SVector<f64, D>) -> bool {
     x.iter().all(|v| v.is_finite())
@@ -705,12 +724,7 @@ impl<const D: usize> LinearSolver<D> for NetworkSolver<D> {
             }
         }
         if self.apart {
-            for (r, &j) in self.junctions.iter().enumerate() {
-                let inv = self.jdiag[r]
-                    .try_inverse()
-                    .ok_or(LinearSolveError::Singular { block: j })?;
-                rhs[j] = inv * rhs[j];
-            }
+            solve_apart(&self.junctions, &self.jdiag, rhs)?;
         } else {
             lu.solve_indexed(rhs, &self.rows);
         }
@@ -836,12 +850,7 @@ impl<const D: usize> NetworkSolver<D> {
         }
         self.apart = !coupled;
         if self.apart {
-            for (r, &j) in self.junctions.iter().enumerate() {
-                let inv = self.jdiag[r]
-                    .try_inverse()
-                    .ok_or(LinearSolveError::Singular { block: j })?;
-                rhs[j] = inv * rhs[j];
-            }
+            solve_apart(&self.junctions, &self.jdiag, rhs)?;
         } else {
             for (r, blk) in self.jdiag.iter().enumerate() {
                 red.add_diag(r, blk);
