@@ -38,7 +38,7 @@ How each code is run and measured (the same for every deck):
   its static equilibrium.
 * **Outputs.** phstring writes energy.csv, ports.csv and end_tensions.csv every step
   (`output.row_stride` thins them), outside the time measured; positions, plots and
-  ParaView files are off. MoorDyn writes nothing (its values are read through its API every 0.1 s).
+  ParaView files are off. MoorDyn writes nothing (its values are read through its API every SAMPLE s).
 """
 
 import argparse
@@ -74,7 +74,7 @@ ERROR_WINDOW = 60.0
 SAMPLE = DT_COUPLING
 # Each code's reference runs at its deck's dtM / REF_FACTOR.
 REF_FACTOR = 8
-# phstring's steps, in multiples of the deck's dtM (its reference runs at dtM); each
+# phstring's steps, in multiples of the deck's dtM (its reference runs at dtM / REF_FACTOR); each
 # divides the tables' 300 s and 600 s into whole steps at the decks' dtM of 0.5, 1 and
 # 2 ms, as a fixed-step run needs (phstring refuses a step that does not).
 PH_STEPS = (4, 5, 6, 8, 10, 12, 15, 16, 20, 24, 25, 30, 40, 50, 100)
@@ -384,7 +384,11 @@ def bench(name, repeat):
     try:
         md_ref = moordyn_run(name, window, dtm_factor=REF_FACTOR, settle=SETTLE, sample=SAMPLE)
         h_ref = dtm / REF_FACTOR
-        stride = f"output.row_stride={round(SAMPLE / h_ref)}"
+        per_sample = round(SAMPLE / h_ref)
+        # The reference's rows must fall on the sample times (every REF_FACTOR · SAMPLE / dtM
+        # steps): a dtM that does not divide REF_FACTOR · SAMPLE would shift them.
+        assert abs(per_sample * h_ref - SAMPLE) <= 1e-9 * SAMPLE, f"{name}: dtM {dtm} s"
+        stride = f"output.row_stride={per_sample}"
         ph_ref = phstring_run(name, window, work / "ref", h=h_ref, sets=[stride])
         configs = ph_configs(dtm)
         md_times, md_err = [], None

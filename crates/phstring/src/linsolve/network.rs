@@ -7,8 +7,8 @@
 //! inverses, no pivoting between blocks, as [`super::BlockTridiagonal`]), which adds
 //! Schur-complement blocks to the junction rows; the reduced junction system is solved with
 //! a sparse LU whose symbolic analysis was done at construction ([`super::block_lu`] by
-//! default, faer's scalar sparse LU on request), and the interior nodes are recovered by
-//! back substitution.
+//! default, faer's scalar sparse LU on request), or block by block when no segment couples
+//! two junctions, and the interior nodes are recovered by back substitution.
 //!
 //! With a border (the rigid bodies' slots, [`NetworkSolver::with_border`]), the slots are
 //! unknowns of the reduced system too, and every node a slot couples with is made a junction
@@ -159,11 +159,11 @@ impl FaerReduced {
 /// on the junctions is solved by a sparse LU ([`JunctionLu`], by default the crate's block
 /// LU; symbolic analysis at construction, numeric refactorization per call), then the
 /// interior nodes are back-substituted. When no segment couples its two end junctions and
-/// there is no border (every string runs between supports, whose rows and columns are the
-/// identity's: a mooring deck's lines), the reduced system is block diagonal and each
-/// junction is solved with its own block's inverse instead. Pivot blocks are inverted in closed form without
-/// pivoting between blocks, which is safe for the mass-dominated Newton matrices of the time
-/// stepper; [`super::SparseLu`] is the oracle.
+/// there is no border (every string has an end at a support fixed in every direction, whose
+/// rows and columns are the identity's: a mooring deck's lines), the reduced system is block
+/// diagonal and each junction is solved with its own block's inverse instead. Pivot blocks
+/// are inverted in closed form without pivoting between blocks, which is safe for the
+/// mass-dominated Newton matrices of the time stepper; [`super::SparseLu`] is the oracle.
 ///
 /// **Border** ([`NetworkSolver::with_border`]): the slots of a [`super::Border`] (unknowns
 /// `n_nodes..`, the rigid bodies') are rows of the reduced system after the junctions, with
@@ -211,7 +211,7 @@ pub struct NetworkSolver<const D: usize> {
     /// `interior_nodes`) its pivot's inverse `D'_k⁻¹` and the junction coupling `r` before its
     /// elimination, for [`LinearSolver::solve_again`]; empty otherwise.
     kept: Vec<[Block<D>; 2]>,
-    /// Whether the last [`LinearSolver::solve`] found the junctions uncoupled (every
+    /// Whether the last successful [`LinearSolver::solve`] found the junctions uncoupled (every
     /// segment's coupling blocks zero, no border): the reduced system was then solved block
     /// by block with the inverses of `jdiag`, not factored.
     apart: bool,
@@ -829,8 +829,9 @@ impl<const D: usize> NetworkSolver<D> {
             self.jdiag[r] = jac.diag[j];
         }
         // The reduced system is cleared at the first nonzero coupling: when every segment's
-        // couplings are zero (its end junctions are supports, whose rows and columns are
-        // the identity's) and there is no border, it is block diagonal and solved so.
+        // couplings are zero (an end junction of each is a support fixed in every direction,
+        // whose rows and columns are the identity's) and there is no border, it is block
+        // diagonal and solved so.
         let mut coupled = self.n_slots > 0;
         if coupled {
             red.clear();
@@ -1202,29 +1203,36 @@ mod tests {
     }
 
     /// Three lines between supports: the junctions are solved apart (no junction LU); with
-    /// one fairlead free still apart (its Schur-complemented block is no longer the
-    /// identity); with both ends of the third line free the reduced system is factored after
-    /// two uncoupled segments. Each solve and `solve_again` agrees with the sparse LU.
+    /// one fairlead free, or all three, still apart (the free junctions' Schur-complemented
+    /// blocks are no longer the identity; a line's coupling is then zero from its end's
+    /// blocks, not its start's); with both ends of the third line free the reduced system is
+    /// cleared and factored after two uncoupled segments. One solver per junction LU goes
+    /// through the cases in an order that switches between the two ways both ways, with a
+    /// reduced system left from a factored solve. Each solve and `solve_again` agrees with
+    /// the sparse LU.
     #[test]
     fn lines_between_supports_solve_their_junctions_apart_and_match_sparse_lu() {
         let m = moored(3, 20);
         let mut rng = Rng(0x5EA);
-        let cases: [(&[usize], bool); 3] = [
+        let cases: [(&[usize], bool); 6] = [
+            (&[0, 1, 3, 4], false),
             (&[0, 1, 2, 3, 4, 5], true),
             (&[0, 1, 2, 3, 4], true),
             (&[0, 1, 3, 4], false),
+            (&[0, 1, 2], true),
+            (&[3, 4, 5], true),
         ];
-        for (held, apart) in cases {
-            for kind in [JunctionLu::Block, JunctionLu::Simplicial] {
-                let mut net = NetworkSolver::<3>::with_junction_lu(&m, kind);
-                net.keep_factors();
+        for kind in [JunctionLu::Block, JunctionLu::Simplicial] {
+            let mut net = NetworkSolver::<3>::with_junction_lu(&m, kind);
+            net.keep_factors();
+            let mut lu = SparseLu::<3>::new(&m);
+            for (held, apart) in cases {
                 let mut jac = random_jac::<3>(&m, &mut rng);
                 hold(&m, &mut jac, held);
                 let (b1, b2) = (
                     random_rhs::<3>(m.n_nodes(), &mut rng),
                     random_rhs::<3>(m.n_nodes(), &mut rng),
                 );
-                let mut lu = SparseLu::<3>::new(&m);
                 for (b, again) in [(&b1, false), (&b2, true)] {
                     let mut x_lu = b.clone();
                     lu.solve(&jac, &mut x_lu).unwrap();
