@@ -838,11 +838,10 @@ impl<const D: usize> NetworkSolver<D> {
         }
         for s in 0..self.segments.len() {
             if let Some(blocks) = self.eliminate(s, jac, rhs)? {
-                let zero = blocks.iter().all(|b| b.iter().all(|&v| v == 0.0));
-                if zero && !coupled {
-                    continue;
-                }
                 if !coupled {
+                    if blocks.iter().all(|b| b.iter().all(|&v| v == 0.0)) {
+                        continue;
+                    }
                     red.clear();
                     coupled = true;
                 }
