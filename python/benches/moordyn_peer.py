@@ -31,7 +31,8 @@ How each code is run and measured (the same for every deck):
   phstring run whose steps do not land on a sample time is interpolated linearly there.
 * **phstring's runs.** Fixed steps at multiples of `dtM` (PH_STEPS), and error control
   (`time.rtol = 0`, `time.atol` from PH_TOLERANCES, `time.h` a multiple of `dtM` from
-  PH_CAPS as the largest step). The table names the fastest run whose error is no larger
+  PH_CAPS as the largest step), also with the error per step (`time.error_per_step`, `time.atol`
+  from PH_TOLERANCES_PER_STEP). The table names the fastest run whose error is no larger
   than MoorDyn's at the deck's `dtM`; every run is printed above it.
 * **Start.** MoorDyn's `Init` can end with the lines still moving; its lines settle for
   SETTLE s with the vessel held (not timed) before the motion starts. phstring starts from
@@ -82,6 +83,11 @@ PH_STEPS = (4, 5, 6, 8, 10, 12, 15, 16, 20, 24, 25, 30, 40, 50, 100)
 # with `time.rtol = 0`) and the largest steps (`time.h`, in multiples of dtM) tried.
 PH_TOLERANCES = (2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 7e-6, 1e-5, 2e-5, 4e-5, 7e-5, 1e-4, 1.5e-4, 2e-4, 3e-4)
 PH_CAPS = (10, 20)
+# The same with `time.error_per_step = true` (the tolerance bounds each step's local error,
+# not its error per unit step): tighter tolerances give the same error.
+PH_TOLERANCES_PER_STEP = (
+    1e-7, 2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 1e-5, 1.5e-5, 2e-5, 3e-5, 5e-5, 1e-4,
+)
 
 
 def deck_path(name):
@@ -365,12 +371,17 @@ def deck_dtm(name):
 
 def ph_configs(dtm):
     """phstring's runs of a deck with step `dtm` [s]: `(label, h, sets)`, the fixed steps of
-    PH_STEPS, then error control at each cap of PH_CAPS and tolerance of PH_TOLERANCES."""
+    PH_STEPS, then error control at each cap of PH_CAPS and tolerance of PH_TOLERANCES (error
+    per unit step) and of PH_TOLERANCES_PER_STEP (error per step)."""
     runs = [(f"h = {f * dtm * 1e3:g} ms", f * dtm, ()) for f in PH_STEPS]
     for cap in PH_CAPS:
         for atol in PH_TOLERANCES:
             label = f"atol {atol:g} m, h ≤ {cap * dtm * 1e3:g} ms"
             runs.append((label, cap * dtm, ("time.rtol=0", f"time.atol={atol}")))
+        for atol in PH_TOLERANCES_PER_STEP:
+            label = f"atol {atol:g} m per step, h ≤ {cap * dtm * 1e3:g} ms"
+            sets = ("time.rtol=0", f"time.atol={atol}", "time.error_per_step=true")
+            runs.append((label, cap * dtm, sets))
     return runs
 
 

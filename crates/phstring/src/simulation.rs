@@ -154,6 +154,11 @@ pub struct StepControl {
     /// [m/s] (`h_max` = [`StepParams::h`]: a velocity error that moves a node by `atol` in one
     /// largest step).
     pub atol: f64,
+    /// Error control: the tolerance bounds each step's local error (`true`), instead of its
+    /// error per unit step, the local error times `h_max / h` (`false`, the default). Per
+    /// step, a short transient is taken with fewer small steps; the global error then grows
+    /// like `tol^(2/3)` instead of in proportion to the tolerance (docs/method.md §19).
+    pub error_per_step: bool,
 }
 
 impl StepControl {
@@ -181,6 +186,7 @@ impl Default for StepControl {
             easy_iterations: 6,
             rtol: 0.0,
             atol: 0.0,
+            error_per_step: false,
         }
     }
 }
@@ -858,8 +864,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         // The embedded solve is part of the step's work.
         report.newton_iterations += embedded_iterations;
         self.run.total_newton += embedded_iterations;
-        // The local error is O(h³), the error per unit step O(h²).
-        let p = 1;
+        // The local error is O(h³) (p = 2), the error per unit step O(h²) (p = 1).
+        let p = if self.params.control.error_per_step {
+            2
+        } else {
+            1
+        };
         // step_error maps NaN to infinity.
         if err > 1.0 && h > floor * (1.0 + 1e-12) {
             // Rejected for accuracy: back to the state before the step.
@@ -1092,7 +1102,12 @@ impl<const D: usize, M: StoredEnergy> Simulation<D, M> {
         self.backup = Some(b);
         // Error per unit step (relative to the largest step): a step of h/k may make 1/k of
         // the error of a step of h, so that the global error is proportional to the tolerance.
-        let err = err * (self.params.h / h);
+        // Or, as asked, the error of the step itself.
+        let err = if self.params.control.error_per_step {
+            err
+        } else {
+            err * (self.params.h / h)
+        };
         Ok((
             if err.is_nan() { f64::INFINITY } else { err },
             embedded_iterations,

@@ -49,6 +49,43 @@ fn dg4_and_error_control_run_with_exact_balance() {
     }
 }
 
+/// `time.error_per_step = true` from the command line: the paper pendulum with error control
+/// at 1e-6 completes with its balance at round-off in fewer steps than with the error per
+/// unit step, and summary.json's scenario records the key.
+#[test]
+fn error_per_step_runs_with_exact_balance_in_fewer_steps() {
+    let dir = temp_dir("per-step");
+    let mut steps = Vec::new();
+    for (name, per_step) in [("unit", "false"), ("step", "true")] {
+        let out = dir.join(name);
+        let set = format!("time.error_per_step={per_step}");
+        let o = run(&out, &["time.rtol=1e-6", "time.atol=1e-6", &set], &[]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let s = summary(&out);
+        assert_eq!(s["status"], "completed", "{name}");
+        assert!(
+            s["max_balance_error"].as_f64().unwrap() <= 1e-11,
+            "{name}: {s}"
+        );
+        assert_eq!(
+            s["scenario"]["time"]["error_per_step"].as_bool(),
+            Some(per_step == "true"),
+            "{name}"
+        );
+        steps.push(s["steps"].as_u64().unwrap());
+    }
+    assert!(
+        steps[1] < steps[0],
+        "per step {} vs per unit step {}",
+        steps[1],
+        steps[0]
+    );
+}
+
 /// An error-controlled run interrupted after 700 steps and resumed writes the same
 /// `energy.csv` as an uninterrupted one (the controller's history is in the checkpoint).
 #[test]
@@ -61,7 +98,8 @@ fn error_control_resumes_bit_for_bit() {
     assert_eq!(read(&whole), read(&parts));
 }
 
-/// Bad `time.scheme`, `time.rtol` and `time.atol` are refused with their key.
+/// Bad `time.scheme`, `time.rtol` and `time.atol` are refused with their key, and so is
+/// `time.error_per_step` without error control or not a boolean.
 #[test]
 fn bad_accuracy_keys_name_the_key() {
     let dir = temp_dir("bad-accuracy");
@@ -69,6 +107,8 @@ fn bad_accuracy_keys_name_the_key() {
         ("time.scheme=\"rk4\"", "time.scheme"),
         ("time.rtol=-1e-3", "time.rtol"),
         ("time.atol=nan", "time.atol"),
+        ("time.error_per_step=true", "time.error_per_step"),
+        ("time.error_per_step=1", "error_per_step"),
     ] {
         let o = run(&dir.join("out"), &[set], &[]);
         let err = String::from_utf8_lossy(&o.stderr);

@@ -142,6 +142,23 @@ impl ScenarioFile {
         })
     }
 
+    /// `time.error_per_step`: given `true`, error control must be on.
+    fn error_per_step(&self) -> Result<bool, ScenarioError> {
+        let t = &self.scenario.time;
+        let Some(e) = &t.error_per_step else {
+            return Ok(false);
+        };
+        let on = |x: &Option<toml::Spanned<f64>>| x.as_ref().is_some_and(|v| *v.get_ref() > 0.0);
+        if *e.get_ref() && !on(&t.rtol) && !on(&t.atol) {
+            return Err(self.invalid(
+                "time.error_per_step",
+                e.span(),
+                "= true needs error control: give time.atol (and/or time.rtol) > 0".to_string(),
+            ));
+        }
+        Ok(*e.get_ref())
+    }
+
     /// `[newton]`: tolerances, iteration limit, solver and predictor names.
     fn newton(&self) -> Result<Newton, ScenarioError> {
         let s = &self.scenario.newton;
@@ -311,6 +328,7 @@ impl ScenarioFile {
                     max_halvings: time.max_halvings,
                     rtol: self.non_negative("time.rtol", self.scenario.time.rtol.as_ref())?,
                     atol: self.non_negative("time.atol", self.scenario.time.atol.as_ref())?,
+                    error_per_step: self.error_per_step()?,
                     ..Default::default()
                 },
             },

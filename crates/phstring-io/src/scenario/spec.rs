@@ -717,6 +717,10 @@ pub struct TimeSpec {
     /// `atol / time.h` [m/s]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub atol: Option<Spanned<f64>>,
+    /// Error control: the tolerances bound each step's local error (`true`) instead of its
+    /// error per unit step (`false`, the default); needs `rtol` or `atol`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error_per_step: Option<Spanned<bool>>,
     /// Static settling: end the run once the kinetic energy has stayed below a threshold.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle: Option<Spanned<SettleSpec>>,

@@ -123,3 +123,47 @@ fn error_control_tracks_the_tolerance() {
     let slope = (errs[0] / errs[4]).log10() / 4.0;
     assert!((0.7..=1.3).contains(&slope), "slope {slope} ({errs:?})");
 }
+
+/// Error control per step (`StepControl::error_per_step`) on the paper pendulum of
+/// [`error_control_tracks_the_tolerance`]: the tip error at T = 1 s still falls with the
+/// tolerance (monotone over 1e-5 … 1e-8), more slowly, as `tol^(2/3)` in theory (a local
+/// error `O(h³)` per step, `N ∝ tol^(−1/3)` steps): the log–log slope lies between 0.5 and
+/// 0.85. At each tolerance it takes fewer steps than the error per unit step.
+#[test]
+fn error_per_step_falls_as_two_thirds_of_the_tolerance_with_fewer_steps() {
+    let tip = |scheme: Scheme, h: f64, tol: f64, per_step: bool| -> (Vector<2>, usize) {
+        let params = StepParams {
+            h,
+            scheme,
+            control: StepControl {
+                error_per_step: per_step,
+                ..StepControl::with_tolerance(tol, tol)
+            },
+            ..paper_params()
+        };
+        let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
+        let s = sim.run_until(1.0, &mut ()).unwrap();
+        (sim.state().r[30], s.steps)
+    };
+    let (reference, _) = tip(Scheme::DiscreteGradient4, 1e-4, 0.0, false);
+    let tols = [1e-5, 1e-6, 1e-7, 1e-8];
+    let mut errs = Vec::new();
+    for tol in tols {
+        let (r, steps) = tip(Scheme::DiscreteGradient, 0.01, tol, true);
+        let (_, unit_steps) = tip(Scheme::DiscreteGradient, 0.01, tol, false);
+        let e = (r - reference).norm();
+        eprintln!(
+            "tol {tol:e}: tip error {e:.3e} m in {steps} steps (per unit step: {unit_steps})"
+        );
+        assert!(
+            steps < unit_steps,
+            "tol {tol:e}: {steps} steps, per unit step {unit_steps}"
+        );
+        errs.push(e);
+    }
+    for (w, t) in errs.windows(2).zip(&tols) {
+        assert!(w[1] < w[0], "not monotone at {t:e}: {errs:?}");
+    }
+    let slope = (errs[0] / errs[3]).log10() / 3.0;
+    assert!((0.5..=0.85).contains(&slope), "slope {slope} ({errs:?})");
+}
