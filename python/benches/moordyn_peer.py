@@ -86,7 +86,7 @@ PH_CAPS = (10, 20)
 # The same with `time.error_per_step = true` (the tolerance bounds each step's local error,
 # not its error per unit step): tighter tolerances give the same error.
 PH_TOLERANCES_PER_STEP = (
-    1e-7, 2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 1e-5, 1.5e-5, 2e-5, 3e-5, 5e-5, 1e-4,
+    1e-7, 2e-7, 4e-7, 7e-7, 1e-6, 2e-6, 4e-6, 1e-5, 1.5e-5, 2e-5, 2.5e-5, 3e-5, 5e-5, 1e-4,
 )
 
 

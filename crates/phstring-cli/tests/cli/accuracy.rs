@@ -13,6 +13,24 @@ fn run(out: &Path, sets: &[&str], extra: &[&str]) -> std::process::Output {
     crate::run_with("examples/paper_pendulum.toml", out, sets, extra)
 }
 
+/// The summary of the paper pendulum run into `out` with `sets` (case `name`), after checking
+/// that it completed with its energy balance at round-off (≤ 1e-11 J on every step).
+fn run_completed(out: &Path, sets: &[&str], name: &str) -> serde_json::Value {
+    let o = run(out, sets, &[]);
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s = summary(out);
+    assert_eq!(s["status"], "completed", "{name}");
+    assert!(
+        s["max_balance_error"].as_f64().unwrap() <= 1e-11,
+        "{name}: {s}"
+    );
+    s
+}
+
 /// The paper pendulum with `dg4` and with error control: completed, the balance at
 /// round-off, and error control takes more steps than `time.h` alone where the tolerance
 /// asks for it.
@@ -27,19 +45,7 @@ fn dg4_and_error_control_run_with_exact_balance() {
             vec!["time.scheme=\"dg4\"", "time.rtol=1e-6", "time.atol=1e-6"],
         ),
     ] {
-        let out = dir.join(name);
-        let o = run(&out, &sets, &[]);
-        assert!(
-            o.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let s = summary(&out);
-        assert_eq!(s["status"], "completed", "{name}");
-        assert!(
-            s["max_balance_error"].as_f64().unwrap() <= 1e-11,
-            "{name}: {s}"
-        );
+        let s = run_completed(&dir.join(name), &sets, name);
         let steps = s["steps"].as_u64().unwrap();
         if name.ends_with("tol") {
             assert!(steps > 1000, "{name}: {steps} steps");
@@ -57,20 +63,9 @@ fn error_per_step_runs_with_exact_balance_in_fewer_steps() {
     let dir = temp_dir("per-step");
     let mut steps = Vec::new();
     for (name, per_step) in [("unit", "false"), ("step", "true")] {
-        let out = dir.join(name);
         let set = format!("time.error_per_step={per_step}");
-        let o = run(&out, &["time.rtol=1e-6", "time.atol=1e-6", &set], &[]);
-        assert!(
-            o.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let s = summary(&out);
-        assert_eq!(s["status"], "completed", "{name}");
-        assert!(
-            s["max_balance_error"].as_f64().unwrap() <= 1e-11,
-            "{name}: {s}"
-        );
+        let sets: [&str; 3] = ["time.rtol=1e-6", "time.atol=1e-6", &set];
+        let s = run_completed(&dir.join(name), &sets, name);
         assert_eq!(
             s["scenario"]["time"]["error_per_step"].as_bool(),
             Some(per_step == "true"),
