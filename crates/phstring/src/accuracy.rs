@@ -3,8 +3,8 @@
 //!
 //! The error of a step is measured per node, on positions and velocities, relative to
 //! `atol + rtol · |value|`; the largest ratio over the free components, times `h_max / h`
-//! (error per unit step), is the step's error `err`; the step is accepted if `err ≤ 1`. Two
-//! estimates:
+//! (error per unit step; without that factor with `StepControl::error_per_step`), is the
+//! step's error `err`; the step is accepted if `err ≤ 1`. Two estimates:
 //!
 //! * `dg` and `mp` (order 2): the local error of the scheme, which is the trapezoidal rule on
 //!   `ṙ = v` and `v̇ = a` (exactly so for a linear system), is `−h³/12 ȧ` in the positions and
@@ -110,7 +110,8 @@ pub const MAX_GROWTH: f64 = 5.0;
 pub const MAX_CUT: f64 = 0.2;
 
 /// The next step size factor after an accepted step with error `err` (previous accepted step:
-/// `err_prev`), for an error of order `p + 1` in `h` (the error per unit step of §19: `p = 1`):
+/// `err_prev`), for an error of order `p + 1` in `h` (the error per unit step of §19: `p = 1`;
+/// the error per step: `p = 2`):
 /// the PI controller
 /// `0.9 err^(−0.7/(p+1)) err_prev^(0.4/(p+1))` (Gustafsson; Hairer–Wanner IV.2), limited to
 /// `[0.2, 5]`.

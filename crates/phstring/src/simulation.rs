@@ -156,8 +156,9 @@ pub struct StepControl {
     pub atol: f64,
     /// Error control: the tolerance bounds each step's local error (`true`), instead of its
     /// error per unit step, the local error times `h_max / h` (`false`, the default). Per
-    /// step, a short transient is taken with fewer small steps; the global error then grows
-    /// like `tol^(2/3)` instead of in proportion to the tolerance (docs/method.md §19).
+    /// step, a short transient is taken with fewer small steps; with `dg` and `mp` the global
+    /// error then scales like `tol^(2/3)` instead of in proportion to the tolerance
+    /// (docs/method.md §19). No effect without error control (`rtol = atol = 0`).
     pub error_per_step: bool,
 }
 

@@ -93,8 +93,8 @@ fn error_control_resumes_bit_for_bit() {
     assert_eq!(read(&whole), read(&parts));
 }
 
-/// Bad `time.scheme`, `time.rtol` and `time.atol` are refused with their key, and so is
-/// `time.error_per_step` without error control or not a boolean.
+/// Bad `time.scheme`, `time.rtol` and `time.atol` are refused with their key, and
+/// `time.error_per_step` without error control or not a boolean with the reason.
 #[test]
 fn bad_accuracy_keys_name_the_key() {
     let dir = temp_dir("bad-accuracy");
@@ -102,8 +102,8 @@ fn bad_accuracy_keys_name_the_key() {
         ("time.scheme=\"rk4\"", "time.scheme"),
         ("time.rtol=-1e-3", "time.rtol"),
         ("time.atol=nan", "time.atol"),
-        ("time.error_per_step=true", "time.error_per_step"),
-        ("time.error_per_step=1", "error_per_step"),
+        ("time.error_per_step=true", "needs error control"),
+        ("time.error_per_step=1", "expected a boolean"),
     ] {
         let o = run(&dir.join("out"), &[set], &[]);
         let err = String::from_utf8_lossy(&o.stderr);
