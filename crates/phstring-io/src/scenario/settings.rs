@@ -142,14 +142,13 @@ impl ScenarioFile {
         })
     }
 
-    /// `time.error_per_step`: given `true`, error control must be on.
-    fn error_per_step(&self) -> Result<bool, ScenarioError> {
-        let t = &self.scenario.time;
-        let Some(e) = &t.error_per_step else {
+    /// `time.error_per_step` for the step control `control` (its tolerances read): given
+    /// `true`, error control must be on.
+    fn error_per_step(&self, control: &StepControl) -> Result<bool, ScenarioError> {
+        let Some(e) = &self.scenario.time.error_per_step else {
             return Ok(false);
         };
-        let on = |x: &Option<toml::Spanned<f64>>| x.as_ref().is_some_and(|v| *v.get_ref() > 0.0);
-        if *e.get_ref() && !on(&t.rtol) && !on(&t.atol) {
+        if *e.get_ref() && !control.error_control() {
             return Err(self.invalid(
                 "time.error_per_step",
                 e.span(),
@@ -316,6 +315,14 @@ impl ScenarioFile {
         };
         self.output_channels()?;
         let output = self.scenario.output.clone();
+        let mut control = StepControl {
+            adaptive: self.scenario.time.adaptive,
+            max_halvings: time.max_halvings,
+            rtol: self.non_negative("time.rtol", self.scenario.time.rtol.as_ref())?,
+            atol: self.non_negative("time.atol", self.scenario.time.atol.as_ref())?,
+            ..Default::default()
+        };
+        control.error_per_step = self.error_per_step(&control)?;
         Ok(RunSettings {
             step: StepParams {
                 h: time.h,
@@ -323,14 +330,7 @@ impl ScenarioFile {
                 newton: newton.params,
                 solver: newton.solver,
                 predictor: newton.predictor,
-                control: StepControl {
-                    adaptive: self.scenario.time.adaptive,
-                    max_halvings: time.max_halvings,
-                    rtol: self.non_negative("time.rtol", self.scenario.time.rtol.as_ref())?,
-                    atol: self.non_negative("time.atol", self.scenario.time.atol.as_ref())?,
-                    error_per_step: self.error_per_step()?,
-                    ..Default::default()
-                },
+                control,
             },
             t_end: time.t_end,
             settle: match &self.scenario.time.settle {

@@ -88,23 +88,31 @@ fn balance_holds_for_every_substep_configuration() {
     }
 }
 
+/// `(tip position [m], steps)` of the paper pendulum (30 elements) at T = 1 s with `scheme`,
+/// largest step `h` [s] and error control at `rtol = atol = tol` (0: off), per step with
+/// `per_step`.
+fn pendulum_tip(scheme: Scheme, h: f64, tol: f64, per_step: bool) -> (Vector<2>, usize) {
+    let params = StepParams {
+        h,
+        scheme,
+        control: StepControl {
+            error_per_step: per_step,
+            ..StepControl::with_tolerance(tol, tol)
+        },
+        ..paper_params()
+    };
+    let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
+    let s = sim.run_until(1.0, &mut ()).unwrap();
+    (sim.state().r[30], s.steps)
+}
+
 /// The tip of the paper pendulum at T = 1 s against a converged reference (dg4, h = 1e-4 s):
 /// with error control (`dg`, `rtol = atol = tol`) the error falls with the tolerance, about
 /// in proportion: monotone, within a factor 30 of `tol` at every tolerance, and a log–log
 /// slope between 0.7 and 1.3 over 1e-3 … 1e-7.
 #[test]
 fn error_control_tracks_the_tolerance() {
-    let tip = |scheme: Scheme, h: f64, tol: f64| -> (Vector<2>, usize) {
-        let params = StepParams {
-            h,
-            scheme,
-            control: StepControl::with_tolerance(tol, tol),
-            ..paper_params()
-        };
-        let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
-        let s = sim.run_until(1.0, &mut ()).unwrap();
-        (sim.state().r[30], s.steps)
-    };
+    let tip = |scheme: Scheme, h: f64, tol: f64| pendulum_tip(scheme, h, tol, false);
     let (reference, _) = tip(Scheme::DiscreteGradient4, 1e-4, 0.0);
     let tols = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
     let mut errs = Vec::new();
@@ -132,20 +140,7 @@ fn error_control_tracks_the_tolerance() {
 /// (at 1e-8 that run alone would take about 115 000 steps).
 #[test]
 fn error_per_step_falls_as_two_thirds_of_the_tolerance_with_fewer_steps() {
-    let tip = |scheme: Scheme, h: f64, tol: f64, per_step: bool| -> (Vector<2>, usize) {
-        let params = StepParams {
-            h,
-            scheme,
-            control: StepControl {
-                error_per_step: per_step,
-                ..StepControl::with_tolerance(tol, tol)
-            },
-            ..paper_params()
-        };
-        let mut sim = Simulation::new(paper_pendulum(30), params).unwrap();
-        let s = sim.run_until(1.0, &mut ()).unwrap();
-        (sim.state().r[30], s.steps)
-    };
+    let tip = pendulum_tip;
     let (reference, _) = tip(Scheme::DiscreteGradient4, 1e-4, 0.0, false);
     let tols = [1e-5, 1e-6, 1e-7, 1e-8];
     let mut errs = Vec::new();
