@@ -313,5 +313,9 @@ fn network_toml(u: &mut Unstructured) -> Result<String> {
         let tol = float(number(u, &[1e-3, 1e-6, 1e-9])?);
         let _ = writeln!(t, "rtol = {tol}\natol = {tol}");
     }
+    // Error per step: with the tolerances above, or without them (refused, never a panic).
+    if u.ratio(1, 4)? {
+        let _ = writeln!(t, "error_per_step = {}", u.ratio(1, 2)?);
+    }
     Ok(t)
 }
