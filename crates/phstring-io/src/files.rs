@@ -456,6 +456,54 @@ pub fn push_num(out: &mut Vec<u8>, x: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn numbers_are_written_as_documented() {
+        let cases = [
+            (0.1, "0.1"),
+            (-909926.4183654375, "-909926.4183654375"),
+            (1.2e-7, "1.2e-7"),
+            (1e300, "1e300"),
+            (-2.5e17, "-2.5e17"),
+            (0.0, "0"),
+            (-0.0, "0"),
+            (f64::NAN, "NaN"),
+            (f64::INFINITY, "inf"),
+            (f64::NEG_INFINITY, "-inf"),
+        ];
+        for (x, text) in cases {
+            assert_eq!(num(x), text, "{x:e}");
+        }
+    }
+
+    proptest! {
+        /// Every finite number reads back to itself, with no `+` in its exponent, in plain
+        /// notation at ordinary magnitudes and in scientific notation far from them.
+        #[test]
+        fn numbers_read_back_exactly(bits in any::<u64>(), ordinary in -1e15f64..1e15, small in -1e-3f64..1e-3) {
+            for x in [f64::from_bits(bits), ordinary, small] {
+                number_reads_back(x)?;
+            }
+        }
+    }
+
+    /// The checks of `numbers_read_back_exactly` on one number `x`.
+    fn number_reads_back(x: f64) -> Result<(), TestCaseError> {
+        if x.is_finite() && x != 0.0 {
+            let text = num(x);
+            prop_assert_eq!(text.parse::<f64>().unwrap(), x);
+            prop_assert!(!text.contains('+'), "{}", text);
+            let a = x.abs();
+            if (1e-4..1e15).contains(&a) {
+                prop_assert!(!text.contains('e'), "{}", text);
+            }
+            if !(1e-6..1e17).contains(&a) {
+                prop_assert!(text.contains('e'), "{}", text);
+            }
+        }
+        Ok(())
+    }
 
     #[test]
     fn paper_figures_are_their_stems_as_svg_and_png() {
