@@ -228,8 +228,9 @@ pub struct Seabed<const D: usize> {
     /// `−c d v_n` on the normal velocity `v_n` while in contact (ramped, see
     /// [`Self::damping_ramp`]).
     pub damping: f64,
-    /// Penetration [m] over which the damping ramps from 0 to full (a C¹ ramp, so that the
-    /// damping force is continuous where contact starts), > 0.
+    /// Penetration [m] over which the damping ramps from 0 to full (a C¹ ramp in the deeper
+    /// of a step's two end penetrations, so that the damping force is continuous where
+    /// contact starts and monotone in the step's increment), > 0.
     pub damping_ramp: f64,
     /// Friction, none by default.
     pub friction: Option<Friction>,
@@ -1257,9 +1258,6 @@ impl<const D: usize> WaterModel<D> {
             *jac += ddg * q;
         }
         let pm = (-0.5 * (g0 + g1)).max(0.0);
-        if pm <= 0.0 {
-            return;
-        }
         // The normal at the mid-step position; on a grid it turns with the node,
         // ∂n/∂x = ½ ∂n/∂r.
         let (n, dn) = match &bed.grid {
@@ -1275,16 +1273,22 @@ impl<const D: usize> WaterModel<D> {
             Some(d) => n.transpose() + x.transpose() * d,
         };
         if w.damping > 0.0 {
-            let (rho, drho) = ramp(pm, bed.ramp);
+            // Ramped by the deeper end's penetration; ∂p₁/∂x = −∇g(r₁)ᵀ where that is the end.
+            let (pd, deeper) = if g1 < g0 { (-g1, true) } else { (-g0, false) };
+            let (rho, drho) = ramp(pd, bed.ramp);
             let c = w.damping * rho;
             *res += n * (c * xn * inv_h);
-            // ∂p_m/∂x = −½ ∇g(r₁)ᵀ.
-            *jac +=
-                n * (dxn * (c * inv_h) - grad1.transpose() * (0.5 * w.damping * xn * inv_h * drho));
+            *jac += n * (dxn * (c * inv_h));
+            if deeper {
+                *jac -= n * (grad1.transpose() * (w.damping * xn * inv_h * drho));
+            }
             if let Some(d) = &dn {
                 *jac += d * (c * xn * inv_h);
             }
             work.seabed_dissipated += c * xn * xn * inv_h;
+        }
+        if pm <= 0.0 {
+            return;
         }
         if let Some(fr) = &bed.friction {
             let slip = Slip {
@@ -1323,18 +1327,19 @@ impl<const D: usize> WaterModel<D> {
         let (q, dq) = contact_quotient(g0, g1, w.stiffness);
         res[zi] += q;
         jac[(zi, zi)] += dq;
+        let xn = x[zi];
+        if w.damping > 0.0 {
+            // Ramped by the deeper end's penetration (∂/∂x_z = −1 where that is the end).
+            let (pd, dpd) = if g1 < g0 { (-g1, -1.0) } else { (-g0, 0.0) };
+            let (rho, drho) = ramp(pd, bed.ramp);
+            let c = w.damping * rho;
+            res[zi] += c * xn * inv_h;
+            jac[(zi, zi)] += c * inv_h + w.damping * xn * inv_h * drho * dpd;
+            work.seabed_dissipated += c * xn * xn * inv_h;
+        }
         let pm = (-0.5 * (g0 + g1)).max(0.0);
         if pm <= 0.0 {
             return;
-        }
-        let xn = x[zi];
-        if w.damping > 0.0 {
-            let (rho, drho) = ramp(pm, bed.ramp);
-            let c = w.damping * rho;
-            res[zi] += c * xn * inv_h;
-            // ∂p_m/∂x_z = −½.
-            jac[(zi, zi)] += c * inv_h - 0.5 * w.damping * xn * inv_h * drho;
-            work.seabed_dissipated += c * xn * xn * inv_h;
         }
         let Some(fr) = &bed.friction else {
             return;
