@@ -1924,6 +1924,38 @@ mod tests {
         (model, node)
     }
 
+    /// The seabed damping, ramped in over the first millimetre of penetration, adds to a
+    /// node's step equation a term monotone in its normal increment, so that contact and
+    /// damping together cannot give a step two solutions: a node 0.2–0.8 mm into a level
+    /// seabed, with a spar line's contact stiffness and damping per node (45 m of 0.09 m
+    /// line, kBot 3e6 Pa/m, cBot 3e5 Pa·s/m), rising or sinking up to 3 mm in a 20 ms step.
+    /// With the ramp on the mid-step penetration this fails: the node 0.5 mm in, rising
+    /// about 0.47 mm, meets a force that falls as it rises further.
+    #[test]
+    fn seabed_damping_is_monotone_in_the_normal_increment() {
+        let (mut model, mut node) = friction_node(Friction::new(0.6, 1e5), false);
+        if let Some(bed) = model.bed.as_mut() {
+            bed.friction = None;
+        }
+        node.stiffness = 3e6 * 0.09 * 45.0;
+        node.damping = 3e5 * 0.09 * 45.0;
+        let (h, axis) = (0.02, Vector::<3>::zeros());
+        for p0 in [2e-4, 5e-4, 8e-4] {
+            let r0 = Vector::<3>::new(0.3, -0.2, -50.0 - p0);
+            let mut last = f64::NEG_INFINITY;
+            for k in -3000..=3000 {
+                let x = Vector::<3>::new(0.0, 0.0, f64::from(k) * 1e-6);
+                let f = model.node_step(&node, &r0, &x, &axis, h).res[2];
+                assert!(
+                    f >= last,
+                    "p0 = {p0} m, x_z = {} m: {f} N after {last} N",
+                    x[2]
+                );
+                last = f;
+            }
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(256))]
         /// The friction (21.5)–(21.5b) is a resistance at every state: over any step its
