@@ -115,9 +115,8 @@ fn every_example_runs_and_writes_complete_outputs() {
         ("net_3d", 3, 1000, 10, 1321),
         ("slack_wire", 2, 2000, 20, 161),
         ("mooring_line", 2, 2000, 20, 181),
-        ("spread_mooring_3d", 3, 1201, 20, 153),
-        // Its platform table's accelerations take a few halved steps.
-        ("spread_mooring_platform", 3, 606, 20, 153),
+        ("spread_mooring_3d", 3, 1200, 20, 153),
+        ("spread_mooring_platform", 3, 600, 20, 153),
         ("chain_on_slope_2d", 2, 1500, 20, 161),
         // Ends early: it settles (time.settle) at step 2078.
         ("riser_in_current", 2, 2078, 10, 51),
