@@ -33,8 +33,9 @@ How each code is run and measured (the same for every deck):
   (`time.rtol = 0`, `time.atol` from PH_TOLERANCES, `time.h` a multiple of `dtM` from
   PH_CAPS as the largest step), also with the error per step (`time.error_per_step`, `time.atol`
   from PH_TOLERANCES_PER_STEP); the fixed steps and the runs with the error per step also
-  with a looser Newton tolerance from a better start (FAST_NEWTON). The table names the fastest run whose error is no larger
-  than MoorDyn's at the deck's `dtM`; every run is printed above it.
+  with a looser Newton tolerance from a better start (FAST_NEWTON). The table names the
+  fastest run whose error is no larger than MoorDyn's at the deck's `dtM`; every run is
+  printed above it.
 * **Start.** MoorDyn's `Init` can end with the lines still moving; its lines settle for
   SETTLE s with the vessel held (not timed) before the motion starts. phstring starts from
   its static equilibrium.
@@ -384,8 +385,9 @@ def ph_configs(dtm):
     per unit step) and of PH_TOLERANCES_PER_STEP (error per step)."""
     runs, fast = [], []
     for f in PH_STEPS:
-        runs.append((f"h = {f * dtm * 1e3:g} ms", f * dtm, ()))
-        fast.append((f"h = {f * dtm * 1e3:g} ms{FAST_LABEL}", f * dtm, FAST_NEWTON))
+        label = f"h = {f * dtm * 1e3:g} ms"
+        runs.append((label, f * dtm, ()))
+        fast.append((label + FAST_LABEL, f * dtm, FAST_NEWTON))
     for cap in PH_CAPS:
         for atol in PH_TOLERANCES:
             label = f"atol {atol:g} m, h ≤ {cap * dtm * 1e3:g} ms"

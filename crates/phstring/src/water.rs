@@ -498,6 +498,18 @@ fn ramp(p: f64, delta: f64) -> (f64, f64) {
     }
 }
 
+/// `(ρ, ∂ρ/∂g₁)` of the seabed damping's [`ramp`] over `delta` [m] at the deeper end's
+/// penetration `max(−g₀, −g₁)` of a step with gaps `g₀`, `g₁` [m] (docs/method.md §21): its
+/// force is then monotone in the step's normal increment.
+fn deeper_ramp(g0: f64, g1: f64, delta: f64) -> (f64, f64) {
+    if g1 < g0 {
+        let (rho, drho) = ramp(-g1, delta);
+        (rho, -drho)
+    } else {
+        (ramp(-g0, delta).0, 0.0)
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // The validated model the step evaluates.
 
@@ -1273,14 +1285,13 @@ impl<const D: usize> WaterModel<D> {
             Some(d) => n.transpose() + x.transpose() * d,
         };
         if w.damping > 0.0 {
-            // Ramped by the deeper end's penetration; ∂p₁/∂x = −∇g(r₁)ᵀ where that is the end.
-            let (pd, deeper) = if g1 < g0 { (-g1, true) } else { (-g0, false) };
-            let (rho, drho) = ramp(pd, bed.ramp);
+            let (rho, drho) = deeper_ramp(g0, g1, bed.ramp);
             let c = w.damping * rho;
             *res += n * (c * xn * inv_h);
             *jac += n * (dxn * (c * inv_h));
-            if deeper {
-                *jac -= n * (grad1.transpose() * (w.damping * xn * inv_h * drho));
+            if drho != 0.0 {
+                // ∂g₁/∂x = ∇g(r₁)ᵀ.
+                *jac += n * (grad1.transpose() * (w.damping * xn * inv_h * drho));
             }
             if let Some(d) = &dn {
                 *jac += d * (c * xn * inv_h);
@@ -1329,12 +1340,11 @@ impl<const D: usize> WaterModel<D> {
         jac[(zi, zi)] += dq;
         let xn = x[zi];
         if w.damping > 0.0 {
-            // Ramped by the deeper end's penetration (∂/∂x_z = −1 where that is the end).
-            let (pd, dpd) = if g1 < g0 { (-g1, -1.0) } else { (-g0, 0.0) };
-            let (rho, drho) = ramp(pd, bed.ramp);
+            // ∂g₁/∂x_z = 1.
+            let (rho, drho) = deeper_ramp(g0, g1, bed.ramp);
             let c = w.damping * rho;
             res[zi] += c * xn * inv_h;
-            jac[(zi, zi)] += c * inv_h + w.damping * xn * inv_h * drho * dpd;
+            jac[(zi, zi)] += c * inv_h + w.damping * xn * inv_h * drho;
             work.seabed_dissipated += c * xn * xn * inv_h;
         }
         let pm = (-0.5 * (g0 + g1)).max(0.0);
